@@ -1,0 +1,277 @@
+//! The ray tree as indented lines, shared by `rayterm inspect` and the TUI's
+//! debug pane. Long lists of light samples fold into a summary line.
+
+use glam::Vec3;
+
+use super::tree::{LightNode, PixelTree, RayNode};
+use crate::bvh::TraversalStats;
+use crate::render::recorder::{LightSample, RayKind};
+
+/// Lists longer than this fold unless expanded.
+pub const FOLD_AT: usize = 4;
+
+/// What a line describes, so the TUI can colour it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LineKind {
+    Header,
+    Ray,
+    Detail,
+    Light,
+    Occluded,
+    Visible,
+    Fold,
+    Result,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct TreeLine {
+    pub depth: usize,
+    pub kind: LineKind,
+    pub text: String,
+    /// Set on a foldable list's summary line: its id and whether it is open.
+    pub fold: Option<(usize, bool)>,
+}
+
+fn v(x: Vec3) -> String {
+    format!("({:.4}, {:.4}, {:.4})", x.x, x.y, x.z)
+}
+
+fn bvh(s: &TraversalStats) -> String {
+    format!(
+        "bvh: {} nodes visited, {} boxes hit, {} missed, {} leaves, {} triangle tests",
+        s.nodes_visited, s.boxes_hit, s.boxes_missed, s.leaves, s.triangle_tests
+    )
+}
+
+struct Out<'a> {
+    lines: Vec<TreeLine>,
+    next_fold: usize,
+    expanded: &'a dyn Fn(usize) -> bool,
+}
+
+impl Out<'_> {
+    fn push(&mut self, depth: usize, kind: LineKind, text: String) {
+        self.lines.push(TreeLine {
+            depth,
+            kind,
+            text,
+            fold: None,
+        });
+    }
+}
+
+/// Flattens the tree; `expanded(id)` says which folds are open.
+pub fn lines(tree: &PixelTree, expanded: &dyn Fn(usize) -> bool) -> Vec<TreeLine> {
+    let mut out = Out {
+        lines: Vec::new(),
+        next_fold: 0,
+        expanded,
+    };
+    out.push(
+        0,
+        LineKind::Header,
+        format!(
+            "pixel ({}, {}) sample {} seed {} of {} at {}x{}",
+            tree.x, tree.y, tree.sample, tree.seed, tree.scene, tree.width, tree.height
+        ),
+    );
+    out.push(
+        0,
+        LineKind::Result,
+        format!("sample colour {}", v(tree.color)),
+    );
+    if let (Some(b), Some(a)) = (tree.pixel_before_bloom, tree.pixel_after_bloom) {
+        out.push(
+            0,
+            LineKind::Result,
+            format!("pixel colour {} before bloom, {} after", v(b), v(a)),
+        );
+    }
+    ray(&mut out, &tree.root, 0);
+    out.lines
+}
+
+fn ray(out: &mut Out, n: &RayNode, d: usize) {
+    let kind = match n.kind {
+        RayKind::Camera => "camera ray",
+        RayKind::Reflection => "reflection ray",
+        RayKind::Glossy => "glossy ray",
+        RayKind::Transmission => "transmitted ray",
+    };
+    out.push(
+        d,
+        LineKind::Ray,
+        format!(
+            "{kind} o={} d={} weight {}",
+            v(n.origin),
+            v(n.dir),
+            v(n.weight)
+        ),
+    );
+    out.push(d + 1, LineKind::Detail, bvh(&n.bvh));
+    if let Some(h) = &n.hit {
+        out.push(
+            d + 1,
+            LineKind::Detail,
+            format!(
+                "hit t={:.6} at {} mesh {} material {} triangle {}",
+                h.t,
+                v(h.point),
+                h.mesh,
+                h.material,
+                h.triangle
+            ),
+        );
+        out.push(
+            d + 2,
+            LineKind::Detail,
+            format!("barycentric {}", v(h.barycentric)),
+        );
+        out.push(
+            d + 2,
+            LineKind::Detail,
+            format!(
+                "normal: geometric {} shading {}",
+                v(h.geometric_normal),
+                v(h.shading_normal)
+            ),
+        );
+        if let Some(vn) = h.vertex_normals {
+            out.push(
+                d + 2,
+                LineKind::Detail,
+                format!("vertex normals {} {} {}", v(vn[0]), v(vn[1]), v(vn[2])),
+            );
+        }
+        if let Some(uv) = h.uv {
+            let texel = h
+                .texel
+                .map_or(String::new(), |t| format!(" texel {}", v(t)));
+            out.push(
+                d + 2,
+                LineKind::Detail,
+                format!("uv ({:.4}, {:.4}){texel}", uv.x, uv.y),
+            );
+        }
+        out.push(
+            d + 2,
+            LineKind::Detail,
+            format!("kd {} ks {} Ns {}", v(h.kd), v(h.ks), h.ns),
+        );
+    }
+    if let Some(m) = &n.miss {
+        let text = match (&m.face, m.uv) {
+            (Some(f), Some(uv)) => format!(
+                "miss: environment face {f} uv ({:.4}, {:.4}) colour {}",
+                uv.x,
+                uv.y,
+                v(m.color)
+            ),
+            _ => format!("miss: background {}", v(m.color)),
+        };
+        out.push(d + 1, LineKind::Detail, text);
+    }
+    for l in &n.lights {
+        light(out, l, d + 1);
+    }
+    for c in &n.children {
+        ray(out, c, d + 1);
+    }
+    out.push(
+        d + 1,
+        LineKind::Result,
+        format!(
+            "radiance {} contributes {} to the pixel",
+            v(n.color),
+            v(n.contribution)
+        ),
+    );
+}
+
+fn sample_line(s: &LightSample) -> (LineKind, String) {
+    match (&s.shadow_ray, &s.occluder) {
+        (None, _) => (
+            LineKind::Detail,
+            format!(
+                "point {} colour {}: behind the surface",
+                v(s.point),
+                v(s.color)
+            ),
+        ),
+        (Some(r), Some((mesh, tri))) => (
+            LineKind::Occluded,
+            format!(
+                "point {} colour {}: shadow ray o={} d={} occluded by {mesh} triangle {tri}",
+                v(s.point),
+                v(s.color),
+                v(r.origin),
+                v(r.dir)
+            ),
+        ),
+        (Some(r), None) => (
+            LineKind::Visible,
+            format!(
+                "point {} colour {}: shadow ray o={} d={} clear; diffuse {} specular {}",
+                v(s.point),
+                v(s.color),
+                v(r.origin),
+                v(r.dir),
+                v(s.diffuse),
+                v(s.specular)
+            ),
+        ),
+    }
+}
+
+fn light(out: &mut Out, l: &LightNode, d: usize) {
+    let visible = l.samples.iter().filter(|s| s.visible).count();
+    out.push(
+        d,
+        LineKind::Light,
+        format!(
+            "light {} ({}): {} of {} samples visible; diffuse {} specular {}",
+            l.index,
+            l.kind,
+            visible,
+            l.samples.len(),
+            v(l.diffuse),
+            v(l.specular)
+        ),
+    );
+    if l.bvh != TraversalStats::default() {
+        out.push(d + 1, LineKind::Detail, format!("shadow {}", bvh(&l.bvh)));
+    }
+    if l.samples.len() > FOLD_AT {
+        let id = out.next_fold;
+        out.next_fold += 1;
+        let open = (out.expanded)(id);
+        let mean_colour = l.samples.iter().map(|s| s.color).sum::<Vec3>() / l.samples.len() as f32;
+        out.lines.push(TreeLine {
+            depth: d + 1,
+            kind: LineKind::Fold,
+            text: format!(
+                "{} {} samples, mean colour {}, {} occluded",
+                if open { "[-]" } else { "[+]" },
+                l.samples.len(),
+                v(mean_colour),
+                l.samples.iter().filter(|s| s.occluder.is_some()).count()
+            ),
+            fold: Some((id, open)),
+        });
+        if !open {
+            return;
+        }
+    }
+    for s in &l.samples {
+        let (kind, text) = sample_line(s);
+        out.push(d + 1, kind, text);
+    }
+}
+
+/// Plain text, two spaces per level.
+pub fn to_text(tree: &PixelTree, expand_all: bool) -> String {
+    lines(tree, &|_| expand_all)
+        .iter()
+        .map(|l| format!("{}{}\n", "  ".repeat(l.depth), l.text))
+        .collect()
+}

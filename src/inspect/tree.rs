@@ -1,0 +1,183 @@
+//! Building the ray tree of one sample of one pixel from the integrator's hooks.
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::bvh::{Bvh, Hit, TraversalStats};
+use crate::geometry::Ray;
+use crate::render::recorder::{HitInfo, LightSample, MissInfo, RayKind, Recorder};
+use crate::render::Tracer;
+
+/// One traced ray and everything that happened along it.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct RayNode {
+    pub kind: RayKind,
+    pub origin: Vec3,
+    pub dir: Vec3,
+    /// Factor of this ray's radiance in the pixel colour.
+    pub weight: Vec3,
+    pub bvh: TraversalStats,
+    pub hit: Option<HitInfo>,
+    pub miss: Option<MissInfo>,
+    pub lights: Vec<LightNode>,
+    pub children: Vec<RayNode>,
+    /// Radiance returned along the ray.
+    pub color: Vec3,
+    /// `weight * color`: what this ray adds to the pixel.
+    pub contribution: Vec3,
+}
+
+/// One light's part in shading a hit.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct LightNode {
+    pub index: usize,
+    pub kind: String,
+    pub samples: Vec<LightSample>,
+    /// BVH work of this light's shadow rays, summed.
+    pub bvh: TraversalStats,
+    pub diffuse: Vec3,
+    pub specular: Vec3,
+}
+
+/// The tree of one sample of one pixel.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct PixelTree {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub x: u32,
+    pub y: u32,
+    pub sample: u32,
+    pub seed: u64,
+    /// The sample's value: exactly what the renderer adds to the film.
+    pub color: Vec3,
+    /// Pixel colour of the whole image before and after bloom, when known.
+    pub pixel_before_bloom: Option<Vec3>,
+    pub pixel_after_bloom: Option<Vec3>,
+    pub root: RayNode,
+}
+
+/// Builds the tree from the hooks, with a stack of open rays.
+#[derive(Default)]
+pub struct TreeRecorder {
+    stack: Vec<RayNode>,
+    done: Option<RayNode>,
+}
+
+impl TreeRecorder {
+    pub fn into_root(self) -> Option<RayNode> {
+        self.done
+    }
+
+    fn light(&mut self) -> Option<&mut LightNode> {
+        self.stack.last_mut().and_then(|n| n.lights.last_mut())
+    }
+}
+
+impl Recorder for TreeRecorder {
+    const ACTIVE: bool = true;
+
+    fn intersect(&mut self, bvh: &Bvh, ray: &Ray) -> Option<Hit> {
+        let mut st = TraversalStats::default();
+        let h = bvh.intersect::<true>(ray, &mut st);
+        if let Some(n) = self.stack.last_mut() {
+            n.bvh += st;
+        }
+        h
+    }
+
+    fn occluded(&mut self, bvh: &Bvh, ray: &Ray) -> Option<u32> {
+        let mut st = TraversalStats::default();
+        let h = bvh.occluded::<true>(ray, &mut st);
+        if let Some(l) = self.light() {
+            l.bvh += st;
+        }
+        h
+    }
+
+    fn begin_ray(&mut self, kind: RayKind, ray: &Ray, weight: Vec3) {
+        self.stack.push(RayNode {
+            kind,
+            origin: ray.origin,
+            dir: ray.dir,
+            weight,
+            bvh: TraversalStats::default(),
+            hit: None,
+            miss: None,
+            lights: Vec::new(),
+            children: Vec::new(),
+            color: Vec3::ZERO,
+            contribution: Vec3::ZERO,
+        });
+    }
+
+    fn hit(&mut self, info: HitInfo) {
+        if let Some(n) = self.stack.last_mut() {
+            n.hit = Some(info);
+        }
+    }
+
+    fn miss(&mut self, info: MissInfo) {
+        if let Some(n) = self.stack.last_mut() {
+            n.miss = Some(info);
+        }
+    }
+
+    fn begin_light(&mut self, index: usize, kind: &'static str) {
+        if let Some(n) = self.stack.last_mut() {
+            n.lights.push(LightNode {
+                index,
+                kind: kind.to_string(),
+                samples: Vec::new(),
+                bvh: TraversalStats::default(),
+                diffuse: Vec3::ZERO,
+                specular: Vec3::ZERO,
+            });
+        }
+    }
+
+    fn light_sample(&mut self, s: LightSample) {
+        if let Some(l) = self.light() {
+            l.samples.push(s);
+        }
+    }
+
+    fn end_light(&mut self, diffuse: Vec3, specular: Vec3) {
+        if let Some(l) = self.light() {
+            l.diffuse = diffuse;
+            l.specular = specular;
+        }
+    }
+
+    fn end_ray(&mut self, color: Vec3) {
+        let Some(mut n) = self.stack.pop() else {
+            return;
+        };
+        n.color = color;
+        n.contribution = n.weight * color;
+        match self.stack.last_mut() {
+            Some(parent) => parent.children.push(n),
+            None => self.done = Some(n),
+        }
+    }
+}
+
+/// Replays sample `k` of pixel `(x, y)` through the integrator with a tree recorder.
+pub fn inspect_pixel(tracer: &Tracer, x: u32, y: u32, k: u32) -> PixelTree {
+    let mut rec = TreeRecorder::default();
+    let color = tracer.sample(x, y, k, &mut rec);
+    let root = rec.into_root().expect("every sample traces a camera ray");
+    PixelTree {
+        scene: tracer.scene.name.clone(),
+        width: tracer.width,
+        height: tracer.height,
+        x,
+        y,
+        sample: k,
+        seed: tracer.seed,
+        color,
+        pixel_before_bloom: None,
+        pixel_after_bloom: None,
+        root,
+    }
+}

@@ -1,0 +1,12 @@
+//! rayterm: a ray tracer that lives in the terminal.
+//!
+//! Data flows `scene::load` → `bvh::build` → `render::Plan` →
+//! `render::Tracer::sample` (generic over a recorder) → `render::Film` →
+//! `render::post`; the CLI, the TUI, the inspector and the reports consume it.
+
+pub mod bvh;
+pub mod cli;
+pub mod geometry;
+pub mod inspect;
+pub mod render;
+pub mod scene;

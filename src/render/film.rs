@@ -1,0 +1,161 @@
+//! The progressive film: per-pixel running mean and variance (Welford, f64),
+//! from which each pixel knows its standard error. Non-finite samples are
+//! never averaged in; they are counted and their first occurrences kept.
+
+use glam::{DVec3, Vec3};
+
+/// Rec. 709 luminance weights.
+pub const LUMA: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
+
+/// How many non-finite samples are listed individually.
+const MAX_LISTED: usize = 1000;
+
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PixelStats {
+    pub mean: DVec3,
+    /// Sum of squared deviations of the luminance (Welford's M2).
+    pub m2: f64,
+    pub n: u32,
+}
+
+impl PixelStats {
+    #[inline]
+    pub fn add(&mut self, c: Vec3) {
+        let c = c.as_dvec3();
+        self.n += 1;
+        let n = self.n as f64;
+        let lum_old = self.mean.dot(LUMA.as_dvec3());
+        self.mean += (c - self.mean) / n;
+        let lum = c.dot(LUMA.as_dvec3());
+        self.m2 += (lum - lum_old) * (lum - self.mean.dot(LUMA.as_dvec3()));
+    }
+
+    /// Sample variance of the luminance.
+    pub fn variance(&self) -> f64 {
+        if self.n < 2 {
+            0.0
+        } else {
+            self.m2 / (self.n - 1) as f64
+        }
+    }
+
+    /// Standard error of the mean luminance.
+    pub fn std_error(&self) -> f64 {
+        if self.n < 2 {
+            0.0
+        } else {
+            (self.variance() / self.n as f64).sqrt()
+        }
+    }
+}
+
+/// A sample that was NaN or infinite.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct BadSample {
+    pub x: u32,
+    pub y: u32,
+    pub sample: u32,
+}
+
+#[derive(Clone, Debug)]
+pub struct Film {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<PixelStats>,
+    /// Samples per pixel attempted so far (the next pass starts at this index).
+    pub spp: u32,
+    pub bad_count: u64,
+    pub bad: Vec<BadSample>,
+}
+
+/// Offset in relative error so black pixels do not dominate it.
+const REL_EPS: f64 = 0.01;
+
+impl Film {
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            pixels: vec![PixelStats::default(); width as usize * height as usize],
+            spp: 0,
+            bad_count: 0,
+            bad: Vec::new(),
+        }
+    }
+
+    /// Adds one sample, or records it as bad when not finite.
+    pub fn add(&mut self, x: u32, y: u32, sample: u32, c: Vec3) {
+        if c.is_finite() {
+            self.pixels[(y * self.width + x) as usize].add(c);
+        } else {
+            self.record_bad(BadSample { x, y, sample });
+        }
+    }
+
+    pub fn record_bad(&mut self, b: BadSample) {
+        self.bad_count += 1;
+        if self.bad.len() < MAX_LISTED {
+            self.bad.push(b);
+        }
+    }
+
+    pub fn mean(&self, x: u32, y: u32) -> Vec3 {
+        self.pixels[(y * self.width + x) as usize].mean.as_vec3()
+    }
+
+    /// Linear mean image, row-major.
+    pub fn image(&self) -> Vec<Vec3> {
+        self.pixels.iter().map(|p| p.mean.as_vec3()).collect()
+    }
+
+    /// Mean over pixels of the standard error relative to the luminance
+    /// (`se / (lum + 0.01)`); 0 for a deterministic image after one pass.
+    pub fn relative_error(&self) -> f64 {
+        if self.pixels.is_empty() {
+            return 0.0;
+        }
+        let sum: f64 = self
+            .pixels
+            .iter()
+            .map(|p| p.std_error() / (p.mean.dot(LUMA.as_dvec3()).abs() + REL_EPS))
+            .sum();
+        sum / self.pixels.len() as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn welford_matches_two_pass() {
+        let xs = [0.1f32, 0.5, 0.25, 0.9, 0.3];
+        let mut p = PixelStats::default();
+        for x in xs {
+            p.add(Vec3::splat(x));
+        }
+        let m: f64 = xs.iter().map(|&x| x as f64).sum::<f64>() / 5.0;
+        let v: f64 = xs.iter().map(|&x| (x as f64 - m).powi(2)).sum::<f64>() / 4.0;
+        assert!((p.mean.x - m).abs() < 1e-12);
+        // Luminance of a grey is the grey (weights sum to 1 up to f32 rounding).
+        assert!((p.variance() - v).abs() < 1e-6, "{} vs {v}", p.variance());
+    }
+
+    #[test]
+    fn bad_samples_are_not_averaged() {
+        let mut f = Film::new(2, 1);
+        f.add(0, 0, 0, Vec3::ONE);
+        f.add(0, 0, 1, Vec3::NAN);
+        f.add(1, 0, 0, Vec3::INFINITY);
+        assert_eq!(f.mean(0, 0), Vec3::ONE);
+        assert_eq!(f.bad_count, 2);
+        assert_eq!(
+            f.bad[1],
+            BadSample {
+                x: 1,
+                y: 0,
+                sample: 0
+            }
+        );
+    }
+}

@@ -1,0 +1,403 @@
+//! The one shading code path: Whitted ray tracing with Phong lights, hard or
+//! sampled shadows, mirror and glossy reflection, textures and environment.
+//!
+//! Generic over a [`Recorder`]: the renderer passes a ray counter, the
+//! inspector a tree builder. Both run exactly this code.
+
+use glam::{Vec2, Vec3};
+
+use super::plan::Plan;
+use super::recorder::{HitInfo, LightSample, MissInfo, RayKind, Recorder};
+use crate::bvh::{Bvh, Hit};
+use crate::geometry::offset::{hit_point, offset_origin, SHADOW_EPSILON};
+use crate::geometry::sampling::{jittered, phong_lobe, Rng};
+use crate::geometry::Ray;
+use crate::scene::camera::CameraFrame;
+use crate::scene::texture::{cube_face_uv, FACE_NAMES};
+use crate::scene::{Environment, Light, Material, Scene};
+
+/// Sub-pixel strata per side: consecutive runs of `JITTER_GRID²` samples of
+/// a pixel cover every stratum once.
+const JITTER_GRID: u32 = 4;
+/// Tries to draw a glossy direction above the surface before using the mirror direction.
+const GLOSSY_TRIES: u32 = 8;
+
+/// Everything needed to shade samples of one image.
+pub struct Tracer<'a> {
+    pub scene: &'a Scene,
+    pub bvh: &'a Bvh,
+    pub plan: &'a Plan,
+    pub frame: CameraFrame,
+    pub width: u32,
+    pub height: u32,
+    pub seed: u64,
+    pub max_depth: u32,
+}
+
+/// Shading point, as the lights and reflections need it.
+struct Surface<'m> {
+    p: Vec3,
+    err: Vec3,
+    ng: Vec3,
+    n: Vec3,
+    v: Vec3,
+    kd: Vec3,
+    mat: &'m Material,
+}
+
+impl<'a> Tracer<'a> {
+    pub fn new(
+        scene: &'a Scene,
+        bvh: &'a Bvh,
+        plan: &'a Plan,
+        width: u32,
+        height: u32,
+        seed: u64,
+    ) -> Self {
+        Self {
+            scene,
+            bvh,
+            plan,
+            frame: scene.camera.frame(width, height),
+            width,
+            height,
+            seed,
+            max_depth: scene.settings.max_depth,
+        }
+    }
+
+    /// Sample `k` of pixel `(x, y)`: the same value whoever asks, in any order.
+    pub fn sample<R: Recorder>(&self, x: u32, y: u32, k: u32, rec: &mut R) -> Vec3 {
+        let pixel = y as u64 * self.width as u64 + x as u64;
+        let mut rng = Rng::for_sample(pixel, k as u64, self.seed);
+        let off = if self.plan.supersampling {
+            // A per-pixel permutation of strata, fixed for each run of 16 samples.
+            let block = k / (JITTER_GRID * JITTER_GRID);
+            let mut prng = Rng::for_sample(pixel, block as u64, self.seed ^ 0x5bd1_e995);
+            let shift = prng.next_u32();
+            let stratum = (k.wrapping_add(shift)) % (JITTER_GRID * JITTER_GRID);
+            jittered(stratum, JITTER_GRID, rng.next_vec2())
+        } else {
+            Vec2::splat(0.5)
+        };
+        let ray = self
+            .frame
+            .ray(x as f64 + off.x as f64, y as f64 + off.y as f64);
+        self.trace(&ray, 0, RayKind::Camera, Vec3::ONE, &mut rng, rec)
+    }
+
+    fn closest<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Option<Hit> {
+        if self.plan.bvh {
+            rec.intersect(self.bvh, ray)
+        } else {
+            self.bvh.intersect_brute(ray)
+        }
+    }
+
+    fn blocked<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Option<u32> {
+        rec.shadow_ray();
+        if self.plan.bvh {
+            rec.occluded(self.bvh, ray)
+        } else {
+            self.bvh.occluded_brute(ray)
+        }
+    }
+
+    /// Radiance along `ray`. `weight` is the ray's factor in the pixel colour.
+    fn trace<R: Recorder>(
+        &self,
+        ray: &Ray,
+        depth: u32,
+        kind: RayKind,
+        weight: Vec3,
+        rng: &mut Rng,
+        rec: &mut R,
+    ) -> Vec3 {
+        rec.begin_ray(kind, ray, weight);
+        let color = match self.closest(ray, rec) {
+            None => self.miss(ray, rec),
+            Some(hit) => self.shade(ray, &hit, depth, weight, rng, rec),
+        };
+        rec.end_ray(color);
+        color
+    }
+
+    fn miss<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Vec3 {
+        let (color, face) = match &self.scene.environment {
+            Environment::CubeMap(cube) if self.plan.environment => (cube.lookup(ray.dir), true),
+            Environment::Color(c) => (*c, false),
+            Environment::CubeMap(_) => (Vec3::ZERO, false),
+        };
+        if R::ACTIVE {
+            let (f, uv) = cube_face_uv(ray.dir);
+            rec.miss(MissInfo {
+                face: face.then(|| FACE_NAMES[f].to_string()),
+                uv: face.then_some(uv),
+                color,
+            });
+        }
+        color
+    }
+
+    fn shade<R: Recorder>(
+        &self,
+        ray: &Ray,
+        hit: &Hit,
+        depth: u32,
+        weight: Vec3,
+        rng: &mut Rng,
+        rec: &mut R,
+    ) -> Vec3 {
+        let scene = self.scene;
+        let geo = &scene.geometry;
+        let prim = hit.prim as usize;
+        let idx = geo.indices[prim];
+        let verts = idx.map(|i| geo.positions[i as usize]);
+        let (p, err) = hit_point(verts, hit.u, hit.v);
+        let b = Vec3::new(1.0 - hit.u - hit.v, hit.u, hit.v);
+        let mut ng = (verts[1] - verts[0]).cross(verts[2] - verts[0]).normalize();
+        if ng.dot(ray.dir) > 0.0 {
+            ng = -ng;
+        }
+        let mesh = &scene.meshes[geo.tri_mesh[prim] as usize];
+        let mat = &scene.materials[geo.tri_material[prim] as usize];
+        let mut n = ng;
+        if self.plan.smooth_normals && mesh.smooth {
+            let vn = idx.map(|i| geo.normals[i as usize]);
+            let s = (vn[0] * b.x + vn[1] * b.y + vn[2] * b.z).normalize_or_zero();
+            if s != Vec3::ZERO && s.is_finite() {
+                // Keep the interpolated normal on the viewer's side of the surface.
+                n = if s.dot(ng) < 0.0 { -s } else { s };
+            }
+        }
+        let mut kd = mat.kd;
+        let mut uv = None;
+        let mut texel = None;
+        if self.plan.textures && mesh.textured {
+            let t = idx.map(|i| geo.uvs[i as usize]);
+            let st = t[0] * b.x + t[1] * b.y + t[2] * b.z;
+            uv = Some(st);
+            if let Some(tex) = mat.texture {
+                let tex = &scene.textures[tex as usize];
+                let c = if self.plan.bilinear {
+                    tex.bilinear(st)
+                } else {
+                    tex.nearest(st)
+                };
+                texel = Some(c);
+                kd = c;
+            }
+        }
+        let v = -ray.dir.normalize();
+        if R::ACTIVE {
+            rec.hit(HitInfo {
+                t: hit.t,
+                point: p,
+                triangle: hit.prim,
+                mesh: mesh.name.clone(),
+                material: mat.name.clone(),
+                barycentric: b,
+                geometric_normal: ng,
+                shading_normal: n,
+                vertex_normals: mesh.smooth.then(|| idx.map(|i| geo.normals[i as usize])),
+                uv,
+                texel,
+                kd,
+                ks: mat.ks,
+                ns: mat.ns,
+            });
+        }
+        let s = Surface {
+            p,
+            err,
+            ng,
+            n,
+            v,
+            kd,
+            mat,
+        };
+        let mut color = kd * scene.settings.ambient;
+        for (i, light) in scene.lights.iter().enumerate() {
+            color += self.light(&s, i, light, rng, rec);
+        }
+        if self.plan.reflections && mat.reflective() && depth < self.max_depth {
+            color += self.reflect(ray, &s, depth, weight, rng, rec);
+        }
+        if mat.dissolve < 1.0 && depth < self.max_depth {
+            let o = offset_origin(p, err, ng, ray.dir);
+            let through = Ray::new(o, ray.dir);
+            let w = 1.0 - mat.dissolve;
+            let behind = self.trace(
+                &through,
+                depth + 1,
+                RayKind::Transmission,
+                weight * w,
+                rng,
+                rec,
+            );
+            color = color * mat.dissolve + behind * w;
+        }
+        color
+    }
+
+    /// One light's Phong contribution, averaged over its samples.
+    fn light<R: Recorder>(
+        &self,
+        s: &Surface,
+        index: usize,
+        light: &Light,
+        rng: &mut Rng,
+        rec: &mut R,
+    ) -> Vec3 {
+        rec.begin_light(index, light.kind());
+        let n_samples = match light {
+            Light::Point { .. } => 1,
+            _ if !self.plan.area_sampling => 1,
+            Light::Segment { .. } => self.scene.settings.light_samples.max(1),
+            Light::Parallelogram { .. } => {
+                let m = (self.scene.settings.light_samples as f32).sqrt().ceil() as u32;
+                m.max(1) * m.max(1)
+            }
+        };
+        let grid = (n_samples as f32).sqrt() as u32;
+        let (mut diffuse, mut specular) = (Vec3::ZERO, Vec3::ZERO);
+        for k in 0..n_samples {
+            let st = match light {
+                Light::Point { .. } => Vec2::ZERO,
+                _ if !self.plan.area_sampling => Vec2::splat(0.5),
+                Light::Segment { .. } => {
+                    Vec2::new((k as f32 + rng.next_f32()) / n_samples as f32, 0.0)
+                }
+                Light::Parallelogram { .. } => jittered(k, grid, rng.next_vec2()),
+            };
+            let (lp, lc) = light.point_at(st);
+            let (d, sp) = self.light_point(s, lp, lc, rec);
+            diffuse += d;
+            specular += sp;
+        }
+        let inv = 1.0 / n_samples as f32;
+        let (diffuse, specular) = (diffuse * inv, specular * inv);
+        rec.end_light(diffuse, specular);
+        diffuse + specular
+    }
+
+    /// Diffuse and specular terms from one point of a light, shadow-tested.
+    fn light_point<R: Recorder>(
+        &self,
+        s: &Surface,
+        lp: Vec3,
+        lc: Vec3,
+        rec: &mut R,
+    ) -> (Vec3, Vec3) {
+        let to_light = lp - s.p;
+        let dist = to_light.length();
+        let l = to_light / dist;
+        let facing = s.ng.dot(to_light) > 0.0 && s.n.dot(l) > 0.0 && dist > 0.0 && l.is_finite();
+        if !facing {
+            if R::ACTIVE {
+                rec.light_sample(LightSample {
+                    point: lp,
+                    color: lc,
+                    shadow_ray: None,
+                    visible: false,
+                    occluder: None,
+                    diffuse: Vec3::ZERO,
+                    specular: Vec3::ZERO,
+                });
+            }
+            return (Vec3::ZERO, Vec3::ZERO);
+        }
+        let mut shadow_ray = None;
+        let mut occluder = None;
+        if self.plan.shadows {
+            let o = offset_origin(s.p, s.err, s.ng, to_light);
+            let ray = Ray::segment(o, lp - o, 1.0 - SHADOW_EPSILON);
+            occluder = self.blocked(&ray, rec);
+            shadow_ray = Some(ray);
+        }
+        let visible = occluder.is_none();
+        let (mut d, mut sp) = (Vec3::ZERO, Vec3::ZERO);
+        if visible {
+            d = s.kd * s.n.dot(l) * lc;
+            if self.plan.specular && s.mat.reflective() {
+                let r = (2.0 * s.n.dot(l)) * s.n - l;
+                sp = s.mat.ks * r.dot(s.v).max(0.0).powf(s.mat.ns) * lc;
+            }
+        }
+        if R::ACTIVE {
+            let geo = &self.scene.geometry;
+            rec.light_sample(LightSample {
+                point: lp,
+                color: lc,
+                shadow_ray,
+                visible,
+                occluder: occluder.map(|t| {
+                    (
+                        self.scene.meshes[geo.tri_mesh[t as usize] as usize]
+                            .name
+                            .clone(),
+                        t,
+                    )
+                }),
+                diffuse: d,
+                specular: sp,
+            });
+        }
+        (d, sp)
+    }
+
+    /// Mirror or glossy reflection, weighted by ks.
+    fn reflect<R: Recorder>(
+        &self,
+        ray: &Ray,
+        s: &Surface,
+        depth: u32,
+        weight: Vec3,
+        rng: &mut Rng,
+        rec: &mut R,
+    ) -> Vec3 {
+        let d = ray.dir.normalize();
+        let mut r = d - 2.0 * d.dot(s.n) * s.n;
+        if r.dot(s.ng) <= 0.0 {
+            // The interpolated normal sent the mirror ray into the surface: use the true one.
+            r = d - 2.0 * d.dot(s.ng) * s.ng;
+        }
+        let ks = s.mat.ks;
+        if self.plan.glossy && s.mat.glossy() {
+            let n = self.scene.settings.glossy_samples.max(1);
+            let w = ks / n as f32;
+            let mut sum = Vec3::ZERO;
+            for _ in 0..n {
+                // Rejection keeps the lobe's shape above the surface (the
+                // estimator of the lobe renormalised to the upper hemisphere).
+                let mut dir = r;
+                for _ in 0..GLOSSY_TRIES {
+                    let (g, _pdf) = phong_lobe(r, s.mat.ns, rng.next_vec2());
+                    if g.dot(s.ng) > 0.0 {
+                        dir = g;
+                        break;
+                    }
+                }
+                let o = offset_origin(s.p, s.err, s.ng, dir);
+                sum += self.trace(
+                    &Ray::new(o, dir),
+                    depth + 1,
+                    RayKind::Glossy,
+                    weight * w,
+                    rng,
+                    rec,
+                );
+            }
+            return sum * w;
+        }
+        let o = offset_origin(s.p, s.err, s.ng, r);
+        ks * self.trace(
+            &Ray::new(o, r),
+            depth + 1,
+            RayKind::Reflection,
+            weight * ks,
+            rng,
+            rec,
+        )
+    }
+}

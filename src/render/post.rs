@@ -1,0 +1,107 @@
+//! Post-processing of the linear mean image: bloom and tone mapping.
+
+use glam::Vec3;
+
+use super::film::LUMA;
+use crate::scene::BloomSettings;
+
+/// Adds a glow around pixels brighter than the threshold: the bright part is
+/// blurred with a separable Gaussian and added back with `strength`.
+/// Returns whether anything was over the threshold (nothing changes otherwise).
+pub fn bloom(img: &mut [Vec3], width: usize, height: usize, s: &BloomSettings) -> bool {
+    let bright: Vec<Vec3> = img
+        .iter()
+        .map(|c| {
+            if c.dot(LUMA) > s.threshold {
+                *c
+            } else {
+                Vec3::ZERO
+            }
+        })
+        .collect();
+    if bright.iter().all(|c| *c == Vec3::ZERO) {
+        return false;
+    }
+    let r = s.radius as i64;
+    let kernel: Vec<f32> = (-r..=r)
+        .map(|i| (-(i * i) as f32 / (2.0 * s.sigma * s.sigma)).exp())
+        .collect();
+    let norm: f32 = kernel.iter().sum();
+    let kernel: Vec<f32> = kernel.iter().map(|k| k / norm).collect();
+    let blur = |src: &[Vec3], dx: i64, dy: i64| -> Vec<Vec3> {
+        let mut out = vec![Vec3::ZERO; src.len()];
+        for y in 0..height as i64 {
+            for x in 0..width as i64 {
+                let mut acc = Vec3::ZERO;
+                for (k, w) in kernel.iter().enumerate() {
+                    let o = k as i64 - r;
+                    let sx = (x + o * dx).clamp(0, width as i64 - 1);
+                    let sy = (y + o * dy).clamp(0, height as i64 - 1);
+                    acc += src[(sy * width as i64 + sx) as usize] * *w;
+                }
+                out[(y * width as i64 + x) as usize] = acc;
+            }
+        }
+        out
+    };
+    let glow = blur(&blur(&bright, 1, 0), 0, 1);
+    for (c, g) in img.iter_mut().zip(glow) {
+        *c += g * s.strength;
+    }
+    true
+}
+
+/// Linear value to 8-bit sRGB, clamped.
+#[inline]
+pub fn encode_srgb(x: f32) -> u8 {
+    let x = if x.is_finite() {
+        x.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let s = if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0 + 0.5) as u8
+}
+
+pub fn to_rgb8(img: &[Vec3], width: u32, height: u32) -> image::RgbImage {
+    let mut out = image::RgbImage::new(width, height);
+    for (p, c) in out.pixels_mut().zip(img) {
+        *p = image::Rgb([encode_srgb(c.x), encode_srgb(c.y), encode_srgb(c.z)]);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bloom_leaves_dim_images_unchanged() {
+        let mut img: Vec<Vec3> = (0..64).map(|i| Vec3::splat(i as f32 / 100.0)).collect();
+        let before = img.clone();
+        assert!(!bloom(&mut img, 8, 8, &BloomSettings::default()));
+        assert_eq!(img, before);
+    }
+
+    #[test]
+    fn bloom_spreads_bright_pixels() {
+        let mut img = vec![Vec3::ZERO; 81];
+        img[40] = Vec3::splat(10.0);
+        assert!(bloom(&mut img, 9, 9, &BloomSettings::default()));
+        assert!(img[39].x > 0.0 && img[31].x > 0.0);
+        assert!((img[39].x - img[41].x).abs() < 1e-6);
+    }
+
+    #[test]
+    fn srgb_endpoints() {
+        assert_eq!(encode_srgb(0.0), 0);
+        assert_eq!(encode_srgb(1.0), 255);
+        assert_eq!(encode_srgb(2.0), 255);
+        assert_eq!(encode_srgb(f32::NAN), 0);
+        assert_eq!(encode_srgb(0.214_041_14), 128);
+    }
+}

@@ -1,0 +1,151 @@
+//! What the integrator reports as it shades, and the cheap recorder used
+//! when nobody is watching.
+//!
+//! The integrator calls these hooks from the one shading code path. The
+//! inspector's recorder builds a ray tree from them; [`RayCounter`] only
+//! counts rays, and every hook it does not override is an empty inline
+//! function, so recording costs nothing when off. Hooks whose arguments are
+//! expensive to gather are guarded by [`Recorder::ACTIVE`], a constant.
+
+use glam::{Vec2, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::bvh::{Bvh, Hit, TraversalStats};
+use crate::geometry::Ray;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RayKind {
+    Camera,
+    Reflection,
+    Glossy,
+    Transmission,
+}
+
+/// Everything known about a hit, gathered only for active recorders.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct HitInfo {
+    pub t: f32,
+    pub point: Vec3,
+    pub triangle: u32,
+    pub mesh: String,
+    pub material: String,
+    /// Weights of the triangle's three vertices.
+    pub barycentric: Vec3,
+    pub geometric_normal: Vec3,
+    pub shading_normal: Vec3,
+    pub vertex_normals: Option<[Vec3; 3]>,
+    pub uv: Option<Vec2>,
+    pub texel: Option<Vec3>,
+    /// Diffuse colour used (texel or kd).
+    pub kd: Vec3,
+    pub ks: Vec3,
+    pub ns: f32,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct MissInfo {
+    /// Cube face (`posx` ...) and its coordinates, when an environment map was used.
+    pub face: Option<String>,
+    pub uv: Option<Vec2>,
+    pub color: Vec3,
+}
+
+/// One shadow-tested point on a light.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct LightSample {
+    pub point: Vec3,
+    pub color: Vec3,
+    /// `None` when the light is behind the surface and no ray was traced.
+    pub shadow_ray: Option<Ray>,
+    pub visible: bool,
+    /// Mesh and triangle that blocked the light.
+    pub occluder: Option<(String, u32)>,
+    pub diffuse: Vec3,
+    pub specular: Vec3,
+}
+
+pub trait Recorder {
+    /// Whether the integrator should gather details for the hooks below.
+    const ACTIVE: bool;
+
+    /// Closest hit; the inspector's recorder counts the BVH work here.
+    #[inline(always)]
+    fn intersect(&mut self, bvh: &Bvh, ray: &Ray) -> Option<Hit> {
+        bvh.intersect::<false>(ray, &mut TraversalStats::default())
+    }
+
+    /// Any hit; returns the blocking triangle (leaf order index mapped back).
+    #[inline(always)]
+    fn occluded(&mut self, bvh: &Bvh, ray: &Ray) -> Option<u32> {
+        bvh.occluded::<false>(ray, &mut TraversalStats::default())
+    }
+
+    /// A ray starts; `weight` is its factor in the pixel's colour.
+    #[inline(always)]
+    fn begin_ray(&mut self, _kind: RayKind, _ray: &Ray, _weight: Vec3) {}
+    #[inline(always)]
+    fn hit(&mut self, _info: HitInfo) {}
+    #[inline(always)]
+    fn miss(&mut self, _info: MissInfo) {}
+    #[inline(always)]
+    fn begin_light(&mut self, _index: usize, _kind: &'static str) {}
+    #[inline(always)]
+    fn light_sample(&mut self, _s: LightSample) {}
+    /// A shadow ray was traced (counted by [`RayCounter`]).
+    #[inline(always)]
+    fn shadow_ray(&mut self) {}
+    /// The light's averaged diffuse and specular terms.
+    #[inline(always)]
+    fn end_light(&mut self, _diffuse: Vec3, _specular: Vec3) {}
+    /// The ray's radiance.
+    #[inline(always)]
+    fn end_ray(&mut self, _color: Vec3) {}
+}
+
+/// Counts rays for Mrays/s and records nothing else.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RayCounter {
+    pub rays: u64,
+}
+
+impl Recorder for RayCounter {
+    const ACTIVE: bool = false;
+
+    #[inline(always)]
+    fn begin_ray(&mut self, _kind: RayKind, _ray: &Ray, _weight: Vec3) {
+        self.rays += 1;
+    }
+
+    #[inline(always)]
+    fn shadow_ray(&mut self) {
+        self.rays += 1;
+    }
+}
+
+/// Counts rays and the BVH work of every traversal, for the TUI's BVH panel.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct WorkCounter {
+    pub rays: u64,
+    pub work: TraversalStats,
+}
+
+impl Recorder for WorkCounter {
+    const ACTIVE: bool = false;
+
+    fn intersect(&mut self, bvh: &Bvh, ray: &Ray) -> Option<Hit> {
+        bvh.intersect::<true>(ray, &mut self.work)
+    }
+
+    fn occluded(&mut self, bvh: &Bvh, ray: &Ray) -> Option<u32> {
+        bvh.occluded::<true>(ray, &mut self.work)
+    }
+
+    fn begin_ray(&mut self, _kind: RayKind, _ray: &Ray, _weight: Vec3) {
+        self.rays += 1;
+    }
+
+    fn shadow_ray(&mut self) {
+        self.rays += 1;
+    }
+}

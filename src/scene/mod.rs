@@ -1,0 +1,218 @@
+//! Scenes: geometry, materials, textures, lights, camera and environment,
+//! loaded from built-in names, TOML scene files or bare OBJ files.
+
+pub mod bezier;
+pub mod builtin;
+pub mod camera;
+pub mod file;
+pub mod light;
+pub mod material;
+pub mod obj;
+pub mod source;
+pub mod texture;
+
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+use glam::{Vec2, Vec3};
+
+pub use camera::Camera;
+pub use light::Light;
+pub use material::Material;
+pub use texture::{CubeMap, Texture};
+
+use crate::geometry::Aabb;
+
+/// All triangles of a scene in one indexed soup.
+///
+/// Normals and UVs are per vertex; a mesh without them has `smooth` / `textured`
+/// cleared in its [`MeshInfo`] and zeros in those slots.
+#[derive(Clone, Debug, Default)]
+pub struct Geometry {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
+    pub indices: Vec<[u32; 3]>,
+    pub tri_material: Vec<u32>,
+    pub tri_mesh: Vec<u32>,
+}
+
+impl Geometry {
+    pub fn triangle(&self, i: usize) -> [Vec3; 3] {
+        self.indices[i].map(|v| self.positions[v as usize])
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        self.indices
+            .iter()
+            .flatten()
+            .fold(Aabb::EMPTY, |b, &v| b.grow(self.positions[v as usize]))
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len()
+    }
+}
+
+/// One named mesh of the scene (an OBJ object or a whole file).
+#[derive(Clone, Debug)]
+pub struct MeshInfo {
+    pub name: String,
+    pub smooth: bool,
+    pub textured: bool,
+}
+
+/// What a ray that leaves the scene sees.
+#[derive(Clone, Debug)]
+pub enum Environment {
+    Color(Vec3),
+    CubeMap(Box<CubeMap>),
+}
+
+/// Which BVH builder to use.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    serde::Deserialize,
+    serde::Serialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Builder {
+    /// Binned surface area heuristic.
+    #[default]
+    Sah,
+    /// Object median on the largest axis.
+    Median,
+}
+
+impl std::fmt::Display for Builder {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Builder::Sah => "sah",
+            Builder::Median => "median",
+        })
+    }
+}
+
+/// Render defaults a scene can set; the CLI and TUI override them.
+#[derive(Clone, Debug)]
+pub struct Settings {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub max_depth: u32,
+    pub builder: Builder,
+    /// Constant light added as `kd * ambient`, so surfaces no light reaches are not pitch black.
+    pub ambient: Vec3,
+    /// Samples per area light per shading point (rounded up to a square for parallelograms).
+    pub light_samples: u32,
+    /// Glossy reflection directions per glossy hit.
+    pub glossy_samples: u32,
+    pub bloom: BloomSettings,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BloomSettings {
+    pub threshold: f32,
+    pub sigma: f32,
+    pub radius: u32,
+    pub strength: f32,
+}
+
+impl Default for BloomSettings {
+    fn default() -> Self {
+        Self {
+            threshold: 1.0,
+            sigma: 4.0,
+            radius: 12,
+            strength: 0.6,
+        }
+    }
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            width: 1280,
+            height: 720,
+            spp: 16,
+            max_depth: 5,
+            builder: Builder::Sah,
+            ambient: Vec3::ZERO,
+            light_samples: 16,
+            glossy_samples: 1,
+            bloom: BloomSettings::default(),
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub name: String,
+    pub description: String,
+    pub geometry: Geometry,
+    pub meshes: Vec<MeshInfo>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub lights: Vec<Light>,
+    pub camera: Camera,
+    pub environment: Environment,
+    pub settings: Settings,
+    /// Non-fatal problems found while loading (missing MTL or texture, degenerate triangles).
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    pub fn has_textures(&self) -> bool {
+        self.materials.iter().any(|m| m.texture.is_some())
+    }
+
+    pub fn has_vertex_normals(&self) -> bool {
+        self.meshes.iter().any(|m| m.smooth)
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        self.geometry.bounds()
+    }
+
+    /// Applies `f` to every position (and the camera and lights), for the
+    /// stability battery's scale and offset cases.
+    pub fn transform(&mut self, scale: f32, offset: Vec3) {
+        let f = |p: Vec3| p * scale + offset;
+        for p in &mut self.geometry.positions {
+            *p = f(*p);
+        }
+        self.camera.eye = f(self.camera.eye);
+        self.camera.target = f(self.camera.target);
+        for l in &mut self.lights {
+            l.transform(scale, offset);
+        }
+    }
+}
+
+/// Loads `spec`: a built-in name (`cornell`, `teapot:32`, ...), a `.toml` scene
+/// file or a bare `.obj`.
+pub fn load(spec: &str) -> Result<Scene> {
+    if let Some(scene) = builtin::load(spec)? {
+        return Ok(scene);
+    }
+    let path = Path::new(spec);
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("toml") => file::load_path(path),
+        Some("obj") => obj::load_bare(path),
+        _ if !path.exists() => {
+            bail!("unknown scene '{spec}': not a built-in (see `rayterm scenes`) and no such file")
+        }
+        _ => bail!("{spec}: a scene must be a built-in name, a .toml scene file or a .obj mesh"),
+    }
+    .with_context(|| format!("loading scene '{spec}'"))
+}

@@ -1,0 +1,180 @@
+//! Textures (linear RGB, repeat wrapping, nearest or bilinear lookup) and
+//! cube maps in the OpenGL face convention.
+
+use glam::{Vec2, Vec3};
+
+#[derive(Clone, Debug)]
+pub struct Texture {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    /// Row 0 is the top of the image; values are linear (sRGB decoded).
+    pub texels: Vec<Vec3>,
+}
+
+/// sRGB transfer function, decoded to linear.
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+impl Texture {
+    pub fn from_image(name: &str, img: &image::DynamicImage) -> Self {
+        let rgb = img.to_rgb8();
+        let lut: Vec<f32> = (0..256).map(|i| srgb_to_linear(i as f32 / 255.0)).collect();
+        let texels = rgb
+            .pixels()
+            .map(|p| Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
+            .collect();
+        Self {
+            name: name.to_string(),
+            width: rgb.width(),
+            height: rgb.height(),
+            texels,
+        }
+    }
+
+    pub fn decode(name: &str, bytes: &[u8]) -> Result<Self, image::ImageError> {
+        Ok(Self::from_image(name, &image::load_from_memory(bytes)?))
+    }
+
+    #[inline]
+    fn texel(&self, x: i64, y: i64) -> Vec3 {
+        let x = x.rem_euclid(self.width as i64) as usize;
+        let y = y.rem_euclid(self.height as i64) as usize;
+        self.texels[y * self.width as usize + x]
+    }
+
+    /// Texel coordinates of `uv` (OBJ convention: v = 0 at the bottom).
+    #[inline]
+    fn coords(&self, uv: Vec2) -> (f32, f32) {
+        let u = if uv.x.is_finite() { uv.x } else { 0.0 };
+        let v = if uv.y.is_finite() { uv.y } else { 0.0 };
+        (
+            (u - u.floor()) * self.width as f32,
+            (1.0 - (v - v.floor())) * self.height as f32,
+        )
+    }
+
+    pub fn nearest(&self, uv: Vec2) -> Vec3 {
+        let (x, y) = self.coords(uv);
+        self.texel(x as i64, y as i64)
+    }
+
+    pub fn bilinear(&self, uv: Vec2) -> Vec3 {
+        let (x, y) = self.coords(uv);
+        self.bilinear_px(x, y)
+    }
+
+    /// Bilinear lookup at pixel coordinates (texel centres at +0.5).
+    fn bilinear_px(&self, x: f32, y: f32) -> Vec3 {
+        let (x, y) = (x - 0.5, y - 0.5);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let top = self.texel(x0, y0).lerp(self.texel(x0 + 1, y0), fx);
+        let bottom = self.texel(x0, y0 + 1).lerp(self.texel(x0 + 1, y0 + 1), fx);
+        top.lerp(bottom, fy)
+    }
+
+    /// Bilinear lookup clamped to the edge (cube faces must not wrap around).
+    fn bilinear_clamped(&self, s: f32, t: f32) -> Vec3 {
+        let (w, h) = (self.width as f32, self.height as f32);
+        let x = (s * w).clamp(0.5, w - 0.5);
+        let y = (t * h).clamp(0.5, h - 0.5);
+        self.bilinear_px(x, y)
+    }
+}
+
+/// Cube-map faces in the OpenGL order +X, -X, +Y, -Y, +Z, -Z.
+pub const FACE_NAMES: [&str; 6] = ["posx", "negx", "posy", "negy", "posz", "negz"];
+
+#[derive(Clone, Debug)]
+pub struct CubeMap {
+    pub faces: [Texture; 6],
+}
+
+/// Face and (s, t) in [0,1]^2 (t from the top row) for a direction, as in
+/// the OpenGL specification's major-axis table.
+pub fn cube_face_uv(d: Vec3) -> (usize, Vec2) {
+    let a = d.abs();
+    let (face, ma, sc, tc) = if a.x >= a.y && a.x >= a.z {
+        if d.x >= 0.0 {
+            (0, a.x, -d.z, -d.y)
+        } else {
+            (1, a.x, d.z, -d.y)
+        }
+    } else if a.y >= a.z {
+        if d.y >= 0.0 {
+            (2, a.y, d.x, d.z)
+        } else {
+            (3, a.y, d.x, -d.z)
+        }
+    } else if d.z >= 0.0 {
+        (4, a.z, d.x, -d.y)
+    } else {
+        (5, a.z, -d.x, -d.y)
+    };
+    let ma = if ma > 0.0 { ma } else { 1.0 };
+    (
+        face,
+        Vec2::new((sc / ma + 1.0) * 0.5, (tc / ma + 1.0) * 0.5),
+    )
+}
+
+impl CubeMap {
+    pub fn lookup(&self, d: Vec3) -> Vec3 {
+        let (face, st) = cube_face_uv(d);
+        self.faces[face].bilinear_clamped(st.x, st.y)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tex(w: u32, h: u32, f: impl Fn(u32, u32) -> Vec3) -> Texture {
+        Texture {
+            name: "t".into(),
+            width: w,
+            height: h,
+            texels: (0..h)
+                .flat_map(|y| (0..w).map(move |x| (x, y)))
+                .map(|(x, y)| f(x, y))
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn nearest_and_bilinear_with_repeat() {
+        let t = tex(2, 2, |x, y| Vec3::splat((x + 2 * y) as f32));
+        // v = 0.75 is the top row (y = 0) in OBJ convention.
+        assert_eq!(t.nearest(Vec2::new(0.25, 0.75)), Vec3::splat(0.0));
+        assert_eq!(t.nearest(Vec2::new(0.75, 0.25)), Vec3::splat(3.0));
+        assert_eq!(t.nearest(Vec2::new(1.25, 1.75)), Vec3::splat(0.0));
+        assert_eq!(t.nearest(Vec2::new(-0.75, 0.75)), Vec3::splat(0.0));
+        // Halfway between texel centres of the top row.
+        assert!((t.bilinear(Vec2::new(0.5, 0.75)).x - 0.5).abs() < 1e-6);
+        // Across the wrap: between x=1 and x=0 of the top row.
+        assert!((t.bilinear(Vec2::new(0.0, 0.75)).x - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn cube_faces_follow_opengl() {
+        assert_eq!(cube_face_uv(Vec3::X).0, 0);
+        assert_eq!(cube_face_uv(Vec3::NEG_X).0, 1);
+        assert_eq!(cube_face_uv(Vec3::Y).0, 2);
+        assert_eq!(cube_face_uv(Vec3::NEG_Y).0, 3);
+        assert_eq!(cube_face_uv(Vec3::Z).0, 4);
+        assert_eq!(cube_face_uv(Vec3::NEG_Z).0, 5);
+        // +Z face: +x to the right (s grows), +y up (t shrinks).
+        let (_, a) = cube_face_uv(Vec3::new(0.5, 0.5, 1.0));
+        assert!(a.x > 0.5 && a.y < 0.5);
+        // Zero direction does not produce NaN.
+        let (_, z) = cube_face_uv(Vec3::ZERO);
+        assert!(z.is_finite());
+    }
+}
