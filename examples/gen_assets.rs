@@ -798,7 +798,7 @@ fn cornell_box() -> String {
         Object {
             name: "tall_box",
             material: "mirror",
-            triangles: block((-0.33, -0.26), 0.3, 1.2, 17.0),
+            triangles: block((-0.33, -0.26), 0.3, 1.2, 45.0),
         },
         Object {
             name: "light_panel",

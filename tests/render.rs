@@ -1,0 +1,262 @@
+//! End-to-end rendering: golden image, builders, scale invariance, CLI.
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+use common::*;
+use glam::Vec3;
+use rayterm::render::{post, Feature, Features};
+use rayterm::scene::{self, Builder};
+
+/// Deterministic: one pass is exact.
+fn exact() -> Features {
+    Features::all().without(&[Feature::Supersampling, Feature::Bloom])
+}
+
+fn rgb8(img: &[Vec3], w: u32, h: u32) -> image::RgbImage {
+    post::to_rgb8(img, w, h)
+}
+
+/// Fraction of pixels whose 8-bit channels differ by more than `tol`.
+fn differing(a: &image::RgbImage, b: &image::RgbImage, tol: u8) -> f64 {
+    let n = a
+        .pixels()
+        .zip(b.pixels())
+        .filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > tol))
+        .count();
+    n as f64 / (a.width() * a.height()) as f64
+}
+
+#[test]
+fn cornell_matches_golden_image() {
+    let s = scene::load("cornell").unwrap();
+    let r = render(&s, 160, 160, 1, exact(), Builder::Sah, 1);
+    let got = rgb8(&r.image, 160, 160);
+    let golden_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/cornell-160.png");
+    if std::env::var_os("RAYTERM_BLESS").is_some() {
+        got.save(&golden_path).unwrap();
+    }
+    let golden = image::open(&golden_path).unwrap().to_rgb8();
+    let mean_err: f64 = got
+        .pixels()
+        .zip(golden.pixels())
+        .flat_map(|(p, q)| p.0.into_iter().zip(q.0).map(|(x, y)| x.abs_diff(y) as f64))
+        .sum::<f64>()
+        / (160.0 * 160.0 * 3.0);
+    assert!(mean_err < 0.5, "mean error {mean_err} levels");
+    assert!(differing(&got, &golden, 8) < 0.002);
+}
+
+#[test]
+fn both_builders_give_the_same_image() {
+    for spec in ["cornell", "teapot:6", "mirrors"] {
+        let s = scene::load(spec).unwrap();
+        let a = rgb8(
+            &render(&s, 96, 72, 1, exact(), Builder::Sah, 3).image,
+            96,
+            72,
+        );
+        let b = rgb8(
+            &render(&s, 96, 72, 1, exact(), Builder::Median, 3).image,
+            96,
+            72,
+        );
+        let brute = rgb8(
+            &render(
+                &s,
+                96,
+                72,
+                1,
+                exact().without(&[Feature::Bvh]),
+                Builder::Sah,
+                3,
+            )
+            .image,
+            96,
+            72,
+        );
+        assert!(differing(&a, &b, 1) < 0.002, "{spec}: sah vs median");
+        assert!(
+            differing(&a, &brute, 1) < 0.002,
+            "{spec}: sah vs brute force"
+        );
+    }
+}
+
+/// Fraction of pixels in flat regions of `a` (all four neighbours within
+/// `tol`) that differ in `b`: acne and leaks show there, while the rounding
+/// of vertex positions far from the origin only moves edges.
+fn differing_in_flat_regions(a: &image::RgbImage, b: &image::RgbImage, tol: u8) -> f64 {
+    let (w, h) = a.dimensions();
+    let close = |p: &image::Rgb<u8>, q: &image::Rgb<u8>| {
+        p.0.iter().zip(q.0).all(|(x, y)| x.abs_diff(y) <= tol)
+    };
+    let mut flat = 0;
+    let mut bad = 0;
+    for y in 1..h - 1 {
+        for x in 1..w - 1 {
+            let p = a.get_pixel(x, y);
+            let is_flat = [(0, 1), (2, 1), (1, 0), (1, 2)]
+                .iter()
+                .all(|&(dx, dy)| close(p, a.get_pixel(x + dx - 1, y + dy - 1)));
+            if is_flat {
+                flat += 1;
+                if !close(p, b.get_pixel(x, y)) {
+                    bad += 1;
+                }
+            }
+        }
+    }
+    bad as f64 / flat as f64
+}
+
+#[test]
+fn no_acne_or_leaks_at_any_scale() {
+    let base = scene::load("cornell").unwrap();
+    let reference = rgb8(
+        &render(&base, 120, 120, 1, exact(), Builder::Sah, 1).image,
+        120,
+        120,
+    );
+    for (scale, offset) in [
+        (1e-3, Vec3::ZERO),
+        (1e3, Vec3::ZERO),
+        (1.0, Vec3::new(1e4, -2e4, 3e4)),
+    ] {
+        let mut s = base.clone();
+        s.transform(scale, offset);
+        let img = rgb8(
+            &render(&s, 120, 120, 1, exact(), Builder::Sah, 1).image,
+            120,
+            120,
+        );
+        let d = differing_in_flat_regions(&reference, &img, 2);
+        assert!(
+            d < 0.001,
+            "scale {scale} offset {offset}: {:.3}% of flat pixels differ",
+            d * 100.0
+        );
+    }
+}
+
+#[test]
+fn textures_change_the_textured_cube() {
+    let s = scene::load("cube-textured").unwrap();
+    assert!(s.has_textures());
+    let on = render(&s, 64, 48, 1, exact(), Builder::Sah, 1).image;
+    let off = render(
+        &s,
+        64,
+        48,
+        1,
+        exact().without(&[Feature::Textures]),
+        Builder::Sah,
+        1,
+    )
+    .image;
+    let changed = on
+        .iter()
+        .zip(&off)
+        .filter(|(a, b)| (**a - **b).abs().max_element() > 0.05)
+        .count();
+    assert!(changed > 100, "only {changed} pixels changed");
+}
+
+#[test]
+fn every_builtin_scene_loads_and_renders_finite() {
+    for (name, _) in scene::builtin::SCENES {
+        let s = scene::load(name).unwrap();
+        assert!(s.geometry.triangle_count() > 0, "{name}");
+        let r = render(&s, 32, 24, 2, Features::all(), Builder::Sah, 1);
+        assert_eq!(r.film.bad_count, 0, "{name} has NaN samples");
+        assert!(
+            r.image.iter().any(|c| c.max_element() > 0.01),
+            "{name} is black"
+        );
+    }
+    assert_eq!(
+        scene::load("cornell").unwrap().geometry.triangle_count(),
+        32
+    );
+    let t4 = scene::load("teapot:4").unwrap().geometry.triangle_count();
+    let t8 = scene::load("teapot:8").unwrap().geometry.triangle_count();
+    assert!(t8 > 3 * t4 && t4 > 900, "teapot:4 {t4}, teapot:8 {t8}");
+}
+
+fn rayterm(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_rayterm"))
+        .args(args)
+        .output()
+        .expect("run rayterm")
+}
+
+#[test]
+fn cli_renders_a_png_and_prints_a_summary() {
+    let dir = std::env::temp_dir().join(format!("rayterm-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("c.png");
+    let o = rayterm(&[
+        "render",
+        "cornell",
+        "-o",
+        out.to_str().unwrap(),
+        "--size",
+        "64x48",
+        "--spp",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    for part in [
+        "cornell",
+        "32 triangles",
+        "build",
+        "render",
+        "Mrays/s",
+        "2 spp",
+    ] {
+        assert!(stdout.contains(part), "summary lacks '{part}': {stdout}");
+    }
+    let img = image::open(&out).unwrap();
+    assert_eq!((img.width(), img.height()), (64, 48));
+    // No temporary file is left beside the output.
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .collect();
+    assert_eq!(leftovers.len(), 1);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn cli_errors_name_the_problem() {
+    let o = rayterm(&["render", "no-such-scene", "-o", "/tmp/x.png"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown scene 'no-such-scene'"));
+
+    let dir = std::env::temp_dir().join(format!("rayterm-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let toml = dir.join("bad.toml");
+    std::fs::write(
+        &toml,
+        "[camera]\neye = [0, 0, 1]\ntarget = [0, 0, 0]\nzoom = 2\n",
+    )
+    .unwrap();
+    let o = rayterm(&["render", toml.to_str().unwrap(), "-o", "/tmp/x.png"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("bad.toml:4:1") && err.contains("zoom"),
+        "{err}"
+    );
+
+    let obj = dir.join("bad.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n").unwrap();
+    let o = rayterm(&["render", obj.to_str().unwrap(), "-o", "/tmp/x.png"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(err.contains("bad.obj:4"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}
