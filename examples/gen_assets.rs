@@ -65,7 +65,6 @@ fn main() -> Result<()> {
         ("cornell.obj", cornell_box()),
         ("cornell.mtl", CORNELL_MTL.to_string()),
         ("mirrors.mtl", MIRRORS_MTL.to_string()),
-        ("teapot.mtl", TEAPOT_MTL.to_string()),
         (
             "sphere_mirror.obj",
             sphere.to_obj("mirror sphere", Some(("mirrors.mtl", "mirror"))),
@@ -947,23 +946,6 @@ illum 3
 newmtl floor_mirror
 Kd 0.150000 0.150000 0.170000
 Ks 0.800000 0.800000 0.800000
-Ns 100000.000000
-d 1.000000
-illum 3
-";
-
-const TEAPOT_MTL: &str = "\
-# rayterm: materials for the teapot (data/teapot.bpt)
-newmtl porcelain
-Kd 0.800000 0.780000 0.720000
-Ks 0.350000 0.350000 0.350000
-Ns 120.000000
-d 1.000000
-illum 2
-
-newmtl chrome
-Kd 0.050000 0.050000 0.050000
-Ks 0.900000 0.900000 0.900000
 Ns 100000.000000
 d 1.000000
 illum 3
