@@ -34,6 +34,9 @@ pub struct Tracer<'a> {
     pub max_depth: u32,
 }
 
+/// A monomorphised `Tracer::trace`.
+type TraceFn<'a, R> = fn(&Tracer<'a>, &Ray, u32, RayKind, Vec3, &mut Rng, &mut R) -> Vec3;
+
 /// Shading point, as the lights and reflections need it.
 struct Surface<'m> {
     p: Vec3,
@@ -83,7 +86,15 @@ impl<'a> Tracer<'a> {
         let ray = self
             .frame
             .ray(x as f64 + off.x as f64, y as f64 + off.y as f64);
-        self.trace(&ray, 0, RayKind::Camera, Vec3::ONE, &mut rng, rec)
+        // The stages the plan may leave out are compile-time parameters, so
+        // a scene without textures or vertex normals runs code without them.
+        let trace: TraceFn<'a, R> = match (self.plan.textures, self.plan.smooth_normals) {
+            (false, false) => Self::trace::<R, false, false>,
+            (false, true) => Self::trace::<R, false, true>,
+            (true, false) => Self::trace::<R, true, false>,
+            (true, true) => Self::trace::<R, true, true>,
+        };
+        trace(self, &ray, 0, RayKind::Camera, Vec3::ONE, &mut rng, rec)
     }
 
     fn closest<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Option<Hit> {
@@ -104,7 +115,7 @@ impl<'a> Tracer<'a> {
     }
 
     /// Radiance along `ray`. `weight` is the ray's factor in the pixel colour.
-    fn trace<R: Recorder>(
+    fn trace<R: Recorder, const TEX: bool, const SMOOTH: bool>(
         &self,
         ray: &Ray,
         depth: u32,
@@ -116,7 +127,7 @@ impl<'a> Tracer<'a> {
         rec.begin_ray(kind, ray, weight);
         let color = match self.closest(ray, rec) {
             None => self.miss(ray, rec),
-            Some(hit) => self.shade(ray, &hit, depth, weight, rng, rec),
+            Some(hit) => self.shade::<R, TEX, SMOOTH>(ray, &hit, depth, weight, rng, rec),
         };
         rec.end_ray(color);
         color
@@ -139,7 +150,7 @@ impl<'a> Tracer<'a> {
         color
     }
 
-    fn shade<R: Recorder>(
+    fn shade<R: Recorder, const TEX: bool, const SMOOTH: bool>(
         &self,
         ray: &Ray,
         hit: &Hit,
@@ -162,7 +173,7 @@ impl<'a> Tracer<'a> {
         let mesh = &scene.meshes[geo.tri_mesh[prim] as usize];
         let mat = &scene.materials[geo.tri_material[prim] as usize];
         let mut n = ng;
-        if self.plan.smooth_normals && mesh.smooth {
+        if SMOOTH && mesh.smooth {
             let vn = idx.map(|i| geo.normals[i as usize]);
             let s = (vn[0] * b.x + vn[1] * b.y + vn[2] * b.z).normalize_or_zero();
             if s != Vec3::ZERO && s.is_finite() {
@@ -173,7 +184,7 @@ impl<'a> Tracer<'a> {
         let mut kd = mat.kd;
         let mut uv = None;
         let mut texel = None;
-        if self.plan.textures && mesh.textured {
+        if TEX && mesh.textured {
             let t = idx.map(|i| geo.uvs[i as usize]);
             let st = t[0] * b.x + t[1] * b.y + t[2] * b.z;
             uv = Some(st);
@@ -221,13 +232,13 @@ impl<'a> Tracer<'a> {
             color += self.light(&s, i, light, rng, rec);
         }
         if self.plan.reflections && mat.reflective() && depth < self.max_depth {
-            color += self.reflect(ray, &s, depth, weight, rng, rec);
+            color += self.reflect::<R, TEX, SMOOTH>(ray, &s, depth, weight, rng, rec);
         }
         if mat.dissolve < 1.0 && depth < self.max_depth {
             let o = offset_origin(p, err, ng, ray.dir);
             let through = Ray::new(o, ray.dir);
             let w = 1.0 - mat.dissolve;
-            let behind = self.trace(
+            let behind = self.trace::<R, TEX, SMOOTH>(
                 &through,
                 depth + 1,
                 RayKind::Transmission,
@@ -347,7 +358,7 @@ impl<'a> Tracer<'a> {
     }
 
     /// Mirror or glossy reflection, weighted by ks.
-    fn reflect<R: Recorder>(
+    fn reflect<R: Recorder, const TEX: bool, const SMOOTH: bool>(
         &self,
         ray: &Ray,
         s: &Surface,
@@ -379,7 +390,7 @@ impl<'a> Tracer<'a> {
                     }
                 }
                 let o = offset_origin(s.p, s.err, s.ng, dir);
-                sum += self.trace(
+                sum += self.trace::<R, TEX, SMOOTH>(
                     &Ray::new(o, dir),
                     depth + 1,
                     RayKind::Glossy,
@@ -391,7 +402,7 @@ impl<'a> Tracer<'a> {
             return sum * w;
         }
         let o = offset_origin(s.p, s.err, s.ng, r);
-        ks * self.trace(
+        ks * self.trace::<R, TEX, SMOOTH>(
             &Ray::new(o, r),
             depth + 1,
             RayKind::Reflection,
