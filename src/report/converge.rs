@@ -8,28 +8,28 @@
 //! `relMSE = mean over pixels of (x - ref)^2 / (ref^2 + 0.01)`, and the
 //! "relative error" is its square root.
 
+mod metrics;
 mod plot;
+mod reference;
+mod report;
 
-use std::fmt::Write as _;
-use std::io::Cursor;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use glam::Vec3;
-use image::codecs::hdr::{HdrDecoder, HdrEncoder};
-use image::Rgb;
 use indicatif::{ProgressBar, ProgressStyle};
 
+pub use metrics::{estimated_rel_mse, fit_log_log, luminance, rel_mse, rmse};
 pub use plot::draw as plot;
+pub use reference::{default_cache_dir, load_reference, save_reference};
 
 use crate::bvh::Bvh;
-use crate::render::film::LUMA;
 use crate::render::{pass, Film, Plan, Tracer};
-use crate::scene::{Environment, Scene, Settings};
+use crate::scene::{Scene, Settings};
+use metrics::log_lerp;
+use reference::{quantised, reference_key};
 
-/// Offset in relMSE so black pixels do not dominate it.
-const REL_EPS: f64 = 0.01;
 /// A rendered reference has this many times the samples of the largest budget...
 const REFERENCE_FACTOR: u32 = 64;
 /// ...but at most this many samples per pixel unless asked for more.
@@ -47,195 +47,6 @@ const MAX_COMPARE_SPP: u32 = 4096;
 const ASYMPTOTIC_SLOPE: f64 = -0.5;
 /// A run that overshoots a time by at most this factor still counts as at it.
 const TIME_SLACK: f64 = 1.25;
-
-/// Luminance of a linear colour.
-#[inline]
-pub fn luminance(c: Vec3) -> f64 {
-    c.as_dvec3().dot(LUMA.as_dvec3())
-}
-
-fn mean_over<F: Fn(f64, f64) -> f64>(img: &[Vec3], reference: &[Vec3], f: F) -> f64 {
-    assert_eq!(
-        img.len(),
-        reference.len(),
-        "image and reference differ in size"
-    );
-    if img.is_empty() {
-        return 0.0;
-    }
-    let sum: f64 = img
-        .iter()
-        .zip(reference)
-        .map(|(&x, &r)| f(luminance(x), luminance(r)))
-        .sum();
-    sum / img.len() as f64
-}
-
-/// Root mean squared error of the luminance. Panics when the sizes differ.
-pub fn rmse(img: &[Vec3], reference: &[Vec3]) -> f64 {
-    mean_over(img, reference, |x, r| (x - r) * (x - r)).sqrt()
-}
-
-/// Mean of `(x - ref)^2 / (ref^2 + 0.01)` over pixels, on luminance.
-/// Panics when the sizes differ.
-pub fn rel_mse(img: &[Vec3], reference: &[Vec3]) -> f64 {
-    mean_over(img, reference, |x, r| (x - r) * (x - r) / (r * r + REL_EPS))
-}
-
-/// The film's own estimate of its relMSE: the squared standard error of each
-/// pixel's mean over its squared luminance. `None` before every pixel has
-/// two samples, when there is no variance to go on.
-pub fn estimated_rel_mse(film: &Film) -> Option<f64> {
-    if film.pixels.is_empty() || film.pixels.iter().any(|p| p.n < 2) {
-        return None;
-    }
-    let sum: f64 = film
-        .pixels
-        .iter()
-        .map(|p| {
-            let lum = p.mean.dot(LUMA.as_dvec3());
-            p.variance() / p.n as f64 / (lum * lum + REL_EPS)
-        })
-        .sum();
-    Some(sum / film.pixels.len() as f64)
-}
-
-/// Radiance's RGBE truncates the mantissa; adding half a step first makes
-/// it round, so a stored reference is unbiased.
-fn round_for_rgbe(c: Vec3) -> Rgb<f32> {
-    let mx = c.max_element();
-    if mx <= 0.0 || !mx.is_finite() {
-        return Rgb([c.x.max(0.0), c.y.max(0.0), c.z.max(0.0)]);
-    }
-    let half = (mx.log2().floor() + 1.0).exp2() / 512.0;
-    let r = |v: f32| if v > 0.0 { v + half } else { 0.0 };
-    Rgb([r(c.x), r(c.y), r(c.z)])
-}
-
-fn encode_hdr(width: u32, height: u32, img: &[Vec3]) -> Result<Vec<u8>> {
-    let px: Vec<Rgb<f32>> = img.iter().map(|&c| round_for_rgbe(c)).collect();
-    let mut bytes = Vec::new();
-    HdrEncoder::new(&mut bytes)
-        .encode(&px, width as usize, height as usize)
-        .context("encoding Radiance HDR")?;
-    Ok(bytes)
-}
-
-fn decode_hdr(bytes: &[u8]) -> Result<(u32, u32, Vec<Vec3>)> {
-    let img = image::DynamicImage::from_decoder(HdrDecoder::new(Cursor::new(bytes))?)?;
-    let rgb = match img {
-        image::DynamicImage::ImageRgb32F(i) => i,
-        other => other.to_rgb32f(),
-    };
-    let (w, h) = rgb.dimensions();
-    let px = rgb.pixels().map(|p| Vec3::from_array(p.0)).collect();
-    Ok((w, h, px))
-}
-
-/// Loads a linear reference image (Radiance .hdr), row-major from the top.
-pub fn load_reference(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
-    let bytes =
-        std::fs::read(path).with_context(|| format!("cannot read reference {}", path.display()))?;
-    decode_hdr(&bytes).with_context(|| {
-        format!(
-            "{} is not a Radiance .hdr image (a reference must be linear)",
-            path.display()
-        )
-    })
-}
-
-/// Saves a linear image as Radiance .hdr, atomically (temporary file, rename).
-pub fn save_reference(path: &Path, width: u32, height: u32, img: &[Vec3]) -> Result<()> {
-    let bytes = encode_hdr(width, height, img)?;
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    }
-    let tmp = path.with_extension(format!("{}.tmp", std::process::id()));
-    std::fs::write(&tmp, bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| {
-        let _ = std::fs::remove_file(&tmp);
-        format!("cannot rename to {}", path.display())
-    })
-}
-
-/// What an image looks like after a trip through a .hdr file.
-fn quantised(width: u32, height: u32, img: &[Vec3]) -> Result<Vec<Vec3>> {
-    Ok(decode_hdr(&encode_hdr(width, height, img)?)?.2)
-}
-
-/// `$XDG_CACHE_HOME/rayterm`, else `~/.cache/rayterm`.
-pub fn default_cache_dir() -> Option<PathBuf> {
-    let base = std::env::var_os("XDG_CACHE_HOME")
-        .filter(|v| !v.is_empty())
-        .map(PathBuf::from)
-        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))?;
-    Some(base.join("rayterm"))
-}
-
-/// FNV-1a, 64 bit: a hash that stays the same across builds, for cache names.
-struct Fnv(u64);
-
-impl Fnv {
-    fn bytes(&mut self, b: &[u8]) {
-        for &x in b {
-            self.0 = (self.0 ^ x as u64).wrapping_mul(0x100_0000_01b3);
-        }
-    }
-
-    fn vec3s(&mut self, v: &[Vec3]) {
-        for c in v {
-            for x in c.to_array() {
-                self.bytes(&x.to_bits().to_le_bytes());
-            }
-        }
-    }
-}
-
-impl std::fmt::Write for Fnv {
-    fn write_str(&mut self, s: &str) -> std::fmt::Result {
-        self.bytes(s.as_bytes());
-        Ok(())
-    }
-}
-
-/// Everything that decides a reference's pixels.
-fn reference_key(scene: &Scene, plan: &Plan, width: u32, height: u32, spp: u32, seed: u64) -> u64 {
-    let mut h = Fnv(0xcbf2_9ce4_8422_2325);
-    let _ = write!(
-        h,
-        "rayterm reference 1 {} {width}x{height} {spp} {seed} {:?} {} {:?} {:?} {:?} {:?} {:?}",
-        env!("CARGO_PKG_VERSION"),
-        plan.features,
-        plan.explain(),
-        scene.settings,
-        scene.lights,
-        scene.materials,
-        scene.camera,
-        scene.meshes,
-    );
-    let g = &scene.geometry;
-    h.vec3s(&g.positions);
-    h.vec3s(&g.normals);
-    for uv in &g.uvs {
-        h.bytes(&uv.x.to_bits().to_le_bytes());
-        h.bytes(&uv.y.to_bits().to_le_bytes());
-    }
-    for (i, (&m, &o)) in g.indices.iter().zip(g.tri_material.iter().zip(&g.tri_mesh)) {
-        let _ = write!(h, "{i:?}{m},{o};");
-    }
-    let mut textures: Vec<_> = scene.textures.iter().collect();
-    match &scene.environment {
-        Environment::Color(c) => {
-            let _ = write!(h, "env {c:?}");
-        }
-        Environment::CubeMap(cube) => textures.extend(cube.faces.iter()),
-    }
-    for t in textures {
-        let _ = write!(h, "tex {}x{}", t.width, t.height);
-        h.vec3s(&t.texels);
-    }
-    h.0
-}
 
 /// How one run is limited.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -295,7 +106,8 @@ impl Strategy {
     }
 
     /// E.g. `L16 jittered`: light samples per hit (`L`), glossy directions
-    /// per hit (`G`), and the kind of sampling, where the scene uses them.
+    /// per hit (`G`), and whether pixel and light samples are stratified,
+    /// where the scene uses them.
     pub fn label(&self, uses: Uses) -> String {
         let mut parts = Vec::new();
         if uses.area_lights {
@@ -304,14 +116,19 @@ impl Strategy {
         if uses.glossy {
             parts.push(format!("G{}", self.glossy_samples));
         }
-        parts.push(
-            if self.stratify {
-                "jittered"
-            } else {
-                "independent"
-            }
-            .to_string(),
-        );
+        if uses.area_lights || uses.supersampling {
+            parts.push(
+                if self.stratify {
+                    "jittered"
+                } else {
+                    "independent"
+                }
+                .to_string(),
+            );
+        }
+        if parts.is_empty() {
+            return "nothing sampled".into();
+        }
         parts.join(" ")
     }
 
@@ -411,35 +228,6 @@ pub struct Reach {
     pub seconds: f64,
     /// Inside the measured range (interpolated) rather than extrapolated.
     pub measured: bool,
-}
-
-/// Least-squares slope and intercept of `ln y` against `ln x` over the
-/// positive pairs; `None` with fewer than two distinct `x`.
-pub fn fit_log_log(xy: &[(f64, f64)]) -> Option<(f64, f64)> {
-    let pts: Vec<(f64, f64)> = xy
-        .iter()
-        .filter(|(x, y)| *x > 0.0 && *y > 0.0)
-        .map(|(x, y)| (x.ln(), y.ln()))
-        .collect();
-    let n = pts.len() as f64;
-    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
-    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    if pts.len() < 2 || sxx < 1e-12 {
-        return None;
-    }
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let slope = sxy / sxx;
-    Some((slope, my - slope * mx))
-}
-
-/// `y` at `x` on the straight line through two points in log-log space.
-fn log_lerp(x: f64, (x0, y0): (f64, f64), (x1, y1): (f64, f64)) -> f64 {
-    if (x1 / x0).ln().abs() < 1e-12 {
-        return y0;
-    }
-    let t = (x / x0).ln() / (x1 / x0).ln();
-    (y0.ln() + t * (y1 / y0).ln()).exp()
 }
 
 /// One strategy's points, in budget order.
@@ -925,282 +713,9 @@ impl Subject<'_> {
     }
 }
 
-fn pct(x: f64) -> String {
-    format!("{:.3} %", 100.0 * x)
-}
-
-/// Number with three significant digits.
-fn sig3(x: f64) -> String {
-    if x == 0.0 {
-        return "0".into();
-    }
-    let digits = (2 - x.abs().log10().floor() as i32).max(0) as usize;
-    format!("{x:.digits$}")
-}
-
-/// Up to three significant digits, without trailing zeros: `1`, `0.5`.
-fn short(x: f64) -> String {
-    let s = sig3(x);
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
-}
-
-impl Study {
-    /// Times the strategies are compared at: the scene's own budgets.
-    pub fn comparison_times(&self) -> Vec<f64> {
-        self.series
-            .first()
-            .map(|s| {
-                s.points
-                    .iter()
-                    .map(|p| match p.budget {
-                        Budget::Seconds(t) => t,
-                        Budget::Spp(_) => p.seconds,
-                    })
-                    .collect()
-            })
-            .unwrap_or_default()
-    }
-
-    /// The strategy that reaches the target first, and where.
-    pub fn fastest_to_target(&self) -> Option<(&Series, Reach)> {
-        self.series
-            .iter()
-            .filter_map(|s| s.reach(self.target).map(|r| (s, r)))
-            .min_by(|a, b| a.1.seconds.total_cmp(&b.1.seconds))
-    }
-
-    /// The conclusion, in a sentence or two.
-    pub fn conclusion(&self) -> String {
-        let size = format!("{}x{}", self.width, self.height);
-        if self.exact {
-            let e = self.series[0].points[0].rel_err();
-            return if e == 0.0 {
-                "Nothing in this scene is sampled: one pass is exact (error 0), so no more passes, budgets or reference renders are needed.".to_string()
-            } else {
-                format!(
-                    "Nothing in this scene is sampled: one pass is final, yet it differs from the given reference by {} relative error.",
-                    pct(e)
-                )
-            };
-        }
-        let t = format!("{} %", short(100.0 * self.target));
-        let main = &self.series[0];
-        let how = |r: &Reach| {
-            format!(
-                "about {:.0} spp, {:.2} s at {size} on this machine ({})",
-                r.spp.ceil(),
-                r.seconds,
-                if r.measured {
-                    "measured"
-                } else {
-                    "extrapolated"
-                }
-            )
-        };
-        let mut out = match main.reach(self.target) {
-            Some(r) => format!(
-                "To reach {t} error with the scene's settings ({}) you need {}.",
-                main.label,
-                how(&r)
-            ),
-            None => format!(
-                "The scene's settings ({}) show no falling error, so no sample count for {t} can be given.",
-                main.label
-            ),
-        };
-        if self.series.len() > 1 {
-            match self.fastest_to_target() {
-                Some((s, _)) if std::ptr::eq(s, main) => {
-                    out += " None of the other settings compared gets there sooner.";
-                }
-                Some((s, r)) => {
-                    let _ = write!(
-                        out,
-                        " {} ({}) gets there first: {}.",
-                        s.label,
-                        s.strategy.options(self.uses),
-                        how(&r)
-                    );
-                }
-                None => {}
-            }
-        }
-        out
-    }
-
-    /// The text report: per-budget table, slopes, the equal-time comparison
-    /// and the conclusion.
-    pub fn text(&self) -> String {
-        let mut o = String::new();
-        let _ = writeln!(
-            o,
-            "converge {} at {}x{}, {} seed{} per budget",
-            self.scene,
-            self.width,
-            self.height,
-            self.seeds,
-            if self.seeds == 1 { "" } else { "s" }
-        );
-        let _ = writeln!(
-            o,
-            "reference: {}{}{}",
-            self.reference.source,
-            self.reference
-                .spp
-                .map(|s| format!(", {s} spp"))
-                .unwrap_or_default(),
-            if self.reference.seconds > 0.0 {
-                format!(", {:.1} s", self.reference.seconds)
-            } else {
-                String::new()
-            }
-        );
-        let _ = writeln!(
-            o,
-            "errors on luminance: rel err = sqrt(relMSE), relMSE = mean (x - ref)^2 / (ref^2 + 0.01); est = the film's own estimate\n"
-        );
-        for (i, s) in self.series.iter().enumerate() {
-            if i > 0 && self.series.len() > 1 && i == 1 {
-                let _ = writeln!(o, "compared strategies:");
-            }
-            let _ = writeln!(
-                o,
-                "{}{}:",
-                s.label,
-                if i == 0 {
-                    " (the scene's settings)"
-                } else {
-                    ""
-                }
-            );
-            let _ = writeln!(
-                o,
-                "  {:>8} {:>8} {:>9} {:>8} {:>10} {:>10} {:>10} {:>10} {:>8}",
-                "budget",
-                "spp",
-                "time s",
-                "Mrays/s",
-                "RMSE",
-                "relMSE",
-                "rel err",
-                "est err",
-                "est/true"
-            );
-            for p in &s.points {
-                let _ = writeln!(
-                    o,
-                    "  {:>8} {:>8} {:>9.4} {:>8.2} {:>10.3e} {:>10.3e} {:>10} {:>10} {:>8}",
-                    p.budget.to_string(),
-                    sig3(p.spp),
-                    p.seconds,
-                    p.mrays_per_s(),
-                    p.rmse,
-                    p.rel_mse,
-                    pct(p.rel_err()),
-                    p.est_err().map(pct).unwrap_or_else(|| "-".into()),
-                    p.ratio()
-                        .map(|r| format!("{r:.2}"))
-                        .unwrap_or_else(|| "-".into()),
-                );
-            }
-            if !self.exact {
-                let slope = |x: Option<f64>| x.map(|v| format!("{v:.2}")).unwrap_or("-".into());
-                let _ = writeln!(
-                    o,
-                    "  slope of log(rel err): {} against log(time), {} against log(spp)\n",
-                    slope(s.slope_time()),
-                    slope(s.slope_spp())
-                );
-            }
-        }
-        if self.series.len() > 1 {
-            let w = self
-                .series
-                .iter()
-                .map(|s| s.label.len())
-                .max()
-                .unwrap_or(0)
-                .max(10);
-            let _ = write!(o, "rel err at equal time (* = lowest):\n  {:>9}", "time s");
-            for s in &self.series {
-                let _ = write!(o, " {:>w$}", s.label);
-            }
-            o.push('\n');
-            for t in self.comparison_times() {
-                let errs: Vec<Option<f64>> = self.series.iter().map(|s| s.error_at(t)).collect();
-                let best = errs.iter().flatten().copied().fold(f64::INFINITY, f64::min);
-                let _ = write!(o, "  {t:>9.4}");
-                for e in &errs {
-                    let cell = match e {
-                        Some(e) => format!("{}{}", pct(*e), if *e == best { "*" } else { " " }),
-                        None => "- ".into(),
-                    };
-                    let _ = write!(o, " {cell:>w$}");
-                }
-                o.push('\n');
-            }
-            let _ = writeln!(
-                o,
-                "  (interpolated in log-log between each strategy's measured points; - = outside them)\n"
-            );
-        }
-        for n in &self.notes {
-            let _ = writeln!(o, "note: {n}");
-        }
-        let _ = writeln!(o, "{}", self.conclusion());
-        o
-    }
-
-    /// Every measured point as CSV, one row per strategy and budget.
-    pub fn csv(&self) -> String {
-        let mut o = String::from(
-            "strategy,light_samples,glossy_samples,stratified,budget,seeds,spp,seconds,mrays_per_s,rmse,rel_mse,rel_err,est_rel_mse,est_over_true\n",
-        );
-        let opt = |x: Option<f64>| x.map(|v| format!("{v:e}")).unwrap_or_default();
-        for s in &self.series {
-            for p in &s.points {
-                let _ = writeln!(
-                    o,
-                    "{},{},{},{},{},{},{},{},{},{:e},{:e},{:e},{},{}",
-                    s.label,
-                    s.strategy.light_samples,
-                    s.strategy.glossy_samples,
-                    s.strategy.stratify,
-                    p.budget.to_string().replace(' ', ""),
-                    self.seeds,
-                    p.spp,
-                    p.seconds,
-                    p.mrays_per_s(),
-                    p.rmse,
-                    p.rel_mse,
-                    p.rel_err(),
-                    opt(p.est_rel_mse),
-                    opt(p.ratio()),
-                );
-            }
-        }
-        o
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn log_log_fit_recovers_a_power_law() {
-        let pts: Vec<(f64, f64)> = [1.0, 2.0, 4.0, 8.0, 16.0]
-            .iter()
-            .map(|&x| (x, 3.0 * f64::powf(x, -0.5)))
-            .collect();
-        let (s, c) = fit_log_log(&pts).unwrap();
-        assert!((s + 0.5).abs() < 1e-12 && (c - 3f64.ln()).abs() < 1e-12);
-        assert_eq!(fit_log_log(&pts[..1]), None);
-    }
 
     fn series(errs: &[(f64, f64, f64)]) -> Series {
         Series {
@@ -1272,41 +787,5 @@ mod tests {
             supersampling: false,
         };
         assert!(Strategy::alternatives(base, none).is_empty());
-    }
-
-    #[test]
-    fn hdr_round_trip_rounds_to_within_half_a_step() {
-        let img: Vec<Vec3> = (0..64)
-            .map(|i| {
-                Vec3::new(
-                    0.013 * i as f32,
-                    0.5 + 0.001 * i as f32,
-                    3.7 / (i + 1) as f32,
-                )
-            })
-            .collect();
-        let back = quantised(8, 8, &img).unwrap();
-        let mut bias = 0.0;
-        for (a, b) in img.iter().zip(&back) {
-            // One RGBE step is at most 1/128 of the largest component.
-            let step = a.max_element() / 128.0;
-            assert!((*a - *b).abs().max_element() <= step, "{a} -> {b}");
-            bias += (luminance(*b) - luminance(*a)) / luminance(*a).max(1e-3);
-        }
-        assert!(
-            (bias / 64.0).abs() < 1e-3,
-            "mean relative bias {}",
-            bias / 64.0
-        );
-    }
-
-    #[test]
-    fn metrics_on_luminance() {
-        let r = vec![Vec3::splat(0.5), Vec3::ZERO];
-        let x = vec![Vec3::splat(0.6), Vec3::splat(0.1)];
-        assert!((rmse(&x, &r) - 0.1).abs() < 1e-6);
-        let expected = (0.01 / 0.26 + 0.01 / 0.01) / 2.0;
-        assert!((rel_mse(&x, &r) - expected).abs() < 1e-6);
-        assert_eq!(rmse(&r, &r), 0.0);
     }
 }

@@ -269,7 +269,7 @@ pub fn draw(study: &Study) -> RgbImage {
     entry(&mut c, "slope -0.5", GREY, 2, DASHED);
     entry(
         &mut c,
-        &format!("target {} %", super::short(target)),
+        &format!("target {} %", super::report::short(target)),
         GREY,
         1,
         DOTTED,
