@@ -37,6 +37,11 @@ pub enum Command {
     /// Print the ray tree of one pixel: every ray the renderer traced for it.
     Inspect(InspectArgs),
     /// Measure error against run time: reference, budgets, strategy comparison.
+    ///
+    /// Renders the scene (at 64x64 unless --size says otherwise) at each
+    /// budget, several seeds each, against a reference image; reports time,
+    /// Mrays/s, RMSE, relMSE and the film's own error estimate, and compares
+    /// sampling strategies at equal time.
     Converge(ConvergeArgs),
 }
 
@@ -160,7 +165,6 @@ pub struct InspectArgs {
 
 #[derive(Args, Debug)]
 pub struct ConvergeArgs {
-    /// Scene options; the image size defaults to 64x64 here.
     #[command(flatten)]
     pub scene: SceneOpts,
     /// Reference image (Radiance .hdr) instead of a rendered or cached one.
@@ -168,7 +172,7 @@ pub struct ConvergeArgs {
     pub reference: Option<PathBuf>,
     /// Samples per pixel of a rendered reference [default: 64x the largest
     /// --spp budget, at most 1024].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..), conflicts_with = "reference")]
     pub reference_spp: Option<u32>,
     /// Budgets in samples per pixel, comma separated.
     #[arg(
