@@ -22,6 +22,7 @@ impl Cli {
     pub fn threads(&self) -> Option<usize> {
         match &self.command {
             Command::Render(a) => a.threads,
+            Command::Converge(a) => a.threads,
             Command::Scenes | Command::Inspect(_) => None,
         }
     }
@@ -35,6 +36,13 @@ pub enum Command {
     Scenes,
     /// Print the ray tree of one pixel: every ray the renderer traced for it.
     Inspect(InspectArgs),
+    /// Measure error against run time: reference, budgets, strategy comparison.
+    ///
+    /// Renders the scene (at 64x64 unless --size says otherwise) at each
+    /// budget, several seeds each, against a reference image; reports time,
+    /// Mrays/s, RMSE, relMSE and the film's own error estimate, and compares
+    /// sampling strategies at equal time.
+    Converge(ConvergeArgs),
 }
 
 /// `WxH`, e.g. `1280x720`.
@@ -76,6 +84,15 @@ pub struct SceneOpts {
     /// Run every enabled stage even where the scene does not need it.
     #[arg(long)]
     pub no_plan: bool,
+    /// Samples per area light per shading point (default: the scene's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub light_samples: Option<u32>,
+    /// Glossy reflection directions per glossy hit (default: the scene's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=256))]
+    pub glossy_samples: Option<u32>,
+    /// Independent uniform samples instead of jittered (stratified) ones.
+    #[arg(long)]
+    pub independent: bool,
 }
 
 #[derive(Args, Debug)]
@@ -144,4 +161,50 @@ pub struct InspectArgs {
     /// Show every light sample instead of folding long lists.
     #[arg(long)]
     pub expand: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct ConvergeArgs {
+    #[command(flatten)]
+    pub scene: SceneOpts,
+    /// Reference image (Radiance .hdr) instead of a rendered or cached one.
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Samples per pixel of a rendered reference [default: 64x the largest
+    /// --spp budget, at most 1024].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..), conflicts_with = "reference")]
+    pub reference_spp: Option<u32>,
+    /// Budgets in samples per pixel, comma separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "1,2,4,8,16",
+        conflicts_with = "times"
+    )]
+    pub spp: Vec<u32>,
+    /// Budgets in seconds instead, comma separated.
+    #[arg(long, value_delimiter = ',')]
+    pub times: Vec<f64>,
+    /// Independent runs (seeds) per budget.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub seeds: u32,
+    /// Relative error (root relMSE) the conclusion is about.
+    #[arg(long, default_value_t = 0.01)]
+    pub target: f64,
+    /// Only the scene's own settings: no strategy comparison.
+    #[arg(long)]
+    pub no_compare: bool,
+    /// Write every measured point as CSV.
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// Write a log-log plot of error against time as PNG.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Where rendered references are cached [default: $XDG_CACHE_HOME/rayterm,
+    /// else ~/.cache/rayterm].
+    #[arg(long)]
+    pub cache_dir: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
 }

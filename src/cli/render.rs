@@ -45,6 +45,10 @@ pub fn prepare(o: &SceneOpts) -> Result<Prepared> {
     if let Some(b) = o.builder {
         scene.settings.builder = b;
     }
+    let st = &mut scene.settings;
+    st.light_samples = o.light_samples.unwrap_or(st.light_samples);
+    st.glossy_samples = o.glossy_samples.unwrap_or(st.glossy_samples);
+    st.stratify &= !o.independent;
     let (width, height) = o
         .size
         .unwrap_or((scene.settings.width, scene.settings.height));

@@ -73,7 +73,9 @@ impl<'a> Tracer<'a> {
     pub fn sample<R: Recorder>(&self, x: u32, y: u32, k: u32, rec: &mut R) -> Vec3 {
         let pixel = y as u64 * self.width as u64 + x as u64;
         let mut rng = Rng::for_sample(pixel, k as u64, self.seed);
-        let off = if self.plan.supersampling {
+        let off = if self.plan.supersampling && !self.scene.settings.stratify {
+            rng.next_vec2()
+        } else if self.plan.supersampling {
             // A per-pixel permutation of strata, fixed for each run of 16 samples.
             let block = k / (JITTER_GRID * JITTER_GRID);
             let mut prng = Rng::for_sample(pixel, block as u64, self.seed ^ 0x5bd1_e995);
@@ -271,14 +273,17 @@ impl<'a> Tracer<'a> {
             }
         };
         let grid = (n_samples as f32).sqrt() as u32;
+        let stratify = self.scene.settings.stratify;
         let (mut diffuse, mut specular) = (Vec3::ZERO, Vec3::ZERO);
         for k in 0..n_samples {
             let st = match light {
                 Light::Point { .. } => Vec2::ZERO,
                 _ if !self.plan.area_sampling => Vec2::splat(0.5),
+                Light::Segment { .. } if !stratify => Vec2::new(rng.next_f32(), 0.0),
                 Light::Segment { .. } => {
                     Vec2::new((k as f32 + rng.next_f32()) / n_samples as f32, 0.0)
                 }
+                Light::Parallelogram { .. } if !stratify => rng.next_vec2(),
                 Light::Parallelogram { .. } => jittered(k, grid, rng.next_vec2()),
             };
             let (lp, lc) = light.point_at(st);

@@ -113,6 +113,9 @@ pub struct Settings {
     pub light_samples: u32,
     /// Glossy reflection directions per glossy hit.
     pub glossy_samples: u32,
+    /// Jittered sub-pixel positions and area-light samples; independent
+    /// uniform samples when false, to measure what stratification buys.
+    pub stratify: bool,
     pub bloom: BloomSettings,
 }
 
@@ -146,6 +149,7 @@ impl Default for Settings {
             ambient: Vec3::ZERO,
             light_samples: 16,
             glossy_samples: 1,
+            stratify: true,
             bloom: BloomSettings::default(),
         }
     }

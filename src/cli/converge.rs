@@ -1,0 +1,74 @@
+//! `rayterm converge`: error against run time, as a table, CSV and plot.
+
+use std::process::ExitCode;
+
+use anyhow::{bail, Context, Result};
+
+use super::args::ConvergeArgs;
+use super::render::prepare;
+use crate::render::output::save_png_atomic;
+use crate::report::converge::{self, Budget, Config, ReferenceSource, Subject};
+
+/// Small enough that a whole study takes seconds; `--size` changes it.
+const DEFAULT_SIZE: (u32, u32) = (64, 64);
+
+pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
+    let mut opts = a.scene.clone();
+    opts.size = opts.size.or(Some(DEFAULT_SIZE));
+    let p = prepare(&opts)?;
+    let mut budgets = if a.times.is_empty() {
+        if a.spp.contains(&0) {
+            bail!("--spp budgets must be at least 1");
+        }
+        a.spp.iter().map(|&n| Budget::Spp(n)).collect::<Vec<_>>()
+    } else {
+        if a.times.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
+            bail!("--times must be positive numbers of seconds");
+        }
+        a.times.iter().map(|&t| Budget::Seconds(t)).collect()
+    };
+    let key = |b: &Budget| match b {
+        Budget::Spp(n) => *n as f64,
+        Budget::Seconds(t) => *t,
+    };
+    budgets.sort_by(|x, y| key(x).total_cmp(&key(y)));
+    budgets.dedup();
+    if !(a.target > 0.0 && a.target < 1.0) {
+        bail!("--target must be a fraction between 0 and 1 (0.01 for 1 %)");
+    }
+    let reference = match a.reference {
+        Some(f) => ReferenceSource::File(f),
+        None => ReferenceSource::Render {
+            spp: a.reference_spp,
+            cache: a.cache_dir.or_else(converge::default_cache_dir),
+        },
+    };
+    let cfg = Config {
+        width: p.width,
+        height: p.height,
+        budgets,
+        seeds: a.seeds,
+        seed: p.seed,
+        compare: !a.no_compare,
+        reference,
+        target: a.target,
+        verbose: true,
+    };
+    let subject = Subject {
+        scene: &p.scene,
+        bvh: &p.bvh,
+        plan: &p.plan,
+    };
+    let study = subject.study(&cfg)?;
+    print!("{}", study.text());
+    if let Some(path) = &a.csv {
+        std::fs::write(path, study.csv())
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        eprintln!("wrote {}", path.display());
+    }
+    if let Some(path) = &a.plot {
+        save_png_atomic(&converge::plot(&study), path)?;
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}

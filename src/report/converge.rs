@@ -1,0 +1,791 @@
+//! Error against run time: renders a scene at a series of budgets, each an
+//! independent run with several seeds, measures the true error against a
+//! reference image and the film's own estimate of it, and compares sampling
+//! strategies at equal time.
+//!
+//! Errors are taken on Rec. 709 luminance, the quantity whose variance the
+//! film tracks, so that the estimate and the truth measure the same thing:
+//! `relMSE = mean over pixels of (x - ref)^2 / (ref^2 + 0.01)`, and the
+//! "relative error" is its square root.
+
+mod metrics;
+mod plot;
+mod reference;
+mod report;
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{bail, Result};
+use glam::Vec3;
+use indicatif::{ProgressBar, ProgressStyle};
+
+pub use metrics::{estimated_rel_mse, fit_log_log, luminance, rel_mse, rmse};
+pub use plot::draw as plot;
+pub use reference::{default_cache_dir, load_reference, save_reference};
+
+use crate::bvh::Bvh;
+use crate::render::{pass, Film, Plan, Tracer};
+use crate::scene::{Scene, Settings};
+use metrics::log_lerp;
+use reference::{quantised, reference_key};
+
+/// A rendered reference has this many times the samples of the largest budget...
+const REFERENCE_FACTOR: u32 = 64;
+/// ...but at most this many samples per pixel unless asked for more.
+const REFERENCE_MAX_SPP: u32 = 1024;
+/// Reference seeds lie this far from the study's, so they never coincide.
+const REFERENCE_SEED_OFFSET: u64 = 1 << 32;
+/// Light samples per hit compared for scenes with area lights.
+const LIGHT_SAMPLES: [u32; 4] = [1, 4, 16, 64];
+/// Glossy directions per hit compared for scenes with glossy materials.
+const GLOSSY_SAMPLES: [u32; 3] = [1, 4, 16];
+/// Compared strategies double their spp until they reach the scene's
+/// largest time, or this many spp.
+const MAX_COMPARE_SPP: u32 = 4096;
+/// Error against samples or time once strata are used up: Monte Carlo's.
+const ASYMPTOTIC_SLOPE: f64 = -0.5;
+/// A run that overshoots a time by at most this factor still counts as at it.
+const TIME_SLACK: f64 = 1.25;
+
+/// How one run is limited.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Budget {
+    Spp(u32),
+    Seconds(f64),
+}
+
+impl std::fmt::Display for Budget {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Budget::Spp(n) => write!(f, "{n} spp"),
+            Budget::Seconds(s) => write!(f, "{s} s"),
+        }
+    }
+}
+
+/// The sampling settings a strategy varies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Strategy {
+    pub light_samples: u32,
+    pub glossy_samples: u32,
+    pub stratify: bool,
+}
+
+/// Which sampled effects the plan runs, so labels name only those.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Uses {
+    pub area_lights: bool,
+    pub glossy: bool,
+    pub supersampling: bool,
+}
+
+impl Uses {
+    pub fn of(scene: &Scene, plan: &Plan) -> Self {
+        Self {
+            area_lights: plan.area_sampling && scene.lights.iter().any(|l| l.is_area()),
+            glossy: plan.glossy,
+            supersampling: plan.supersampling,
+        }
+    }
+}
+
+impl Strategy {
+    pub fn of(s: &Settings) -> Self {
+        Self {
+            light_samples: s.light_samples,
+            glossy_samples: s.glossy_samples,
+            stratify: s.stratify,
+        }
+    }
+
+    pub fn apply(&self, s: &mut Settings) {
+        s.light_samples = self.light_samples;
+        s.glossy_samples = self.glossy_samples;
+        s.stratify = self.stratify;
+    }
+
+    /// E.g. `L16 jittered`: light samples per hit (`L`), glossy directions
+    /// per hit (`G`), and whether pixel and light samples are stratified,
+    /// where the scene uses them.
+    pub fn label(&self, uses: Uses) -> String {
+        let mut parts = Vec::new();
+        if uses.area_lights {
+            parts.push(format!("L{}", self.light_samples));
+        }
+        if uses.glossy {
+            parts.push(format!("G{}", self.glossy_samples));
+        }
+        if uses.area_lights || uses.supersampling {
+            parts.push(
+                if self.stratify {
+                    "jittered"
+                } else {
+                    "independent"
+                }
+                .to_string(),
+            );
+        }
+        if parts.is_empty() {
+            return "nothing sampled".into();
+        }
+        parts.join(" ")
+    }
+
+    /// The command-line options that select this strategy.
+    pub fn options(&self, uses: Uses) -> String {
+        let mut o = Vec::new();
+        if uses.area_lights {
+            o.push(format!("--light-samples {}", self.light_samples));
+        }
+        if uses.glossy {
+            o.push(format!("--glossy-samples {}", self.glossy_samples));
+        }
+        if !self.stratify {
+            o.push("--independent".to_string());
+        }
+        o.join(" ")
+    }
+
+    /// The strategies worth comparing with `base` on a scene that uses `uses`:
+    /// light samples per hit, glossy samples per hit, independent sampling.
+    pub fn alternatives(base: Strategy, uses: Uses) -> Vec<Strategy> {
+        let mut out = Vec::new();
+        if uses.area_lights {
+            out.extend(LIGHT_SAMPLES.iter().map(|&l| Strategy {
+                light_samples: l,
+                ..base
+            }));
+        }
+        if uses.glossy {
+            out.extend(GLOSSY_SAMPLES.iter().map(|&g| Strategy {
+                glossy_samples: g,
+                ..base
+            }));
+        }
+        if uses.area_lights || uses.supersampling {
+            out.push(Strategy {
+                stratify: !base.stratify,
+                ..base
+            });
+        }
+        let mut seen = vec![base];
+        out.retain(|s| {
+            let new = !seen.contains(s);
+            seen.push(*s);
+            new
+        });
+        out
+    }
+}
+
+/// One budget of one strategy, averaged over seeds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Point {
+    pub budget: Budget,
+    /// Mean samples per pixel reached.
+    pub spp: f64,
+    /// Median wall time of a run (robust to a run slowed by other work).
+    pub seconds: f64,
+    /// Mean rays traced by a run.
+    pub rays: f64,
+    /// Root of the mean squared error over seeds.
+    pub rmse: f64,
+    pub rel_mse: f64,
+    /// The films' own relMSE estimate; `None` with one sample per pixel.
+    pub est_rel_mse: Option<f64>,
+}
+
+impl Point {
+    /// Relative error: the square root of relMSE.
+    pub fn rel_err(&self) -> f64 {
+        self.rel_mse.sqrt()
+    }
+
+    pub fn est_err(&self) -> Option<f64> {
+        self.est_rel_mse.map(f64::sqrt)
+    }
+
+    /// Estimated over true relative error.
+    pub fn ratio(&self) -> Option<f64> {
+        let e = self.est_err()?;
+        (self.rel_mse > 0.0).then(|| e / self.rel_err())
+    }
+
+    pub fn mrays_per_s(&self) -> f64 {
+        if self.seconds > 0.0 {
+            self.rays / self.seconds / 1e6
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Where a series reaches a target error.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reach {
+    pub spp: f64,
+    pub seconds: f64,
+    /// Inside the measured range (interpolated) rather than extrapolated.
+    pub measured: bool,
+}
+
+/// One strategy's points, in budget order.
+#[derive(Clone, Debug)]
+pub struct Series {
+    pub strategy: Strategy,
+    pub label: String,
+    pub points: Vec<Point>,
+}
+
+impl Series {
+    fn pairs(&self, x: impl Fn(&Point) -> f64) -> Vec<(f64, f64)> {
+        self.points.iter().map(|p| (x(p), p.rel_err())).collect()
+    }
+
+    /// Slope of log(relative error) against log(time).
+    pub fn slope_time(&self) -> Option<f64> {
+        fit_log_log(&self.pairs(|p| p.seconds)).map(|f| f.0)
+    }
+
+    /// Slope of log(relative error) against log(spp).
+    pub fn slope_spp(&self) -> Option<f64> {
+        fit_log_log(&self.pairs(|p| p.spp)).map(|f| f.0)
+    }
+
+    /// Relative error at `seconds`, interpolated in log-log between the
+    /// measured points around it; `None` outside the measured times (beyond
+    /// the slack a timed run may overshoot by).
+    pub fn error_at(&self, seconds: f64) -> Option<f64> {
+        let mut pts = self.pairs(|p| p.seconds);
+        pts.retain(|(t, e)| *t > 0.0 && *e > 0.0);
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let (first, last) = (*pts.first()?, *pts.last()?);
+        if seconds <= first.0 {
+            return (seconds * TIME_SLACK >= first.0).then_some(first.1);
+        }
+        if seconds >= last.0 {
+            return (seconds <= last.0 * TIME_SLACK).then_some(last.1);
+        }
+        let i = pts.iter().position(|p| p.0 >= seconds)?;
+        Some(log_lerp(seconds, pts[i - 1], pts[i]))
+    }
+
+    /// Where the relative error falls to `target`: interpolated where the
+    /// measured points cross it, else extrapolated from the last point along
+    /// the slope of the last three, or -0.5 where that is steeper.
+    pub fn reach(&self, target: f64) -> Option<Reach> {
+        let pts = &self.points;
+        if let Some(p) = pts.first().filter(|p| p.rel_err() <= target) {
+            return Some(Reach {
+                spp: p.spp,
+                seconds: p.seconds,
+                measured: true,
+            });
+        }
+        for w in pts.windows(2) {
+            let (a, b) = (&w[0], &w[1]);
+            if b.rel_err() > target {
+                continue;
+            }
+            if b.rel_err() == 0.0 {
+                return Some(Reach {
+                    spp: b.spp,
+                    seconds: b.seconds,
+                    measured: true,
+                });
+            }
+            // Invert the log-log line through the two points.
+            let at = |x0: f64, x1: f64| log_lerp(target, (a.rel_err(), x0), (b.rel_err(), x1));
+            return Some(Reach {
+                spp: at(a.spp, b.spp),
+                seconds: at(a.seconds, b.seconds),
+                measured: true,
+            });
+        }
+        let last = pts.last()?;
+        let tail = Series {
+            points: pts[pts.len().saturating_sub(3)..].to_vec(),
+            ..self.clone()
+        };
+        // Never faster than -0.5: beyond a block of strata, samples are
+        // independent, so a steeper tail is a transient.
+        let s_spp = tail.slope_spp()?.max(ASYMPTOTIC_SLOPE);
+        let s_time = tail.slope_time()?.max(ASYMPTOTIC_SLOPE);
+        if s_spp >= 0.0 || s_time >= 0.0 {
+            return None;
+        }
+        let k = target / last.rel_err();
+        Some(Reach {
+            spp: last.spp * k.powf(1.0 / s_spp),
+            seconds: last.seconds * k.powf(1.0 / s_time),
+            measured: false,
+        })
+    }
+}
+
+/// Where the reference comes from.
+#[derive(Clone, Debug)]
+pub enum ReferenceSource {
+    /// A linear .hdr image of the study's size.
+    File(PathBuf),
+    /// An image known some other way (computed exactly, say).
+    Image(Vec<Vec3>),
+    /// Rendered with the scene's settings at `spp` (default: 64x the largest
+    /// spp budget, at most 1024) and cached in `cache` when given.
+    Render {
+        spp: Option<u32>,
+        cache: Option<PathBuf>,
+    },
+}
+
+#[derive(Clone, Debug)]
+pub struct Config {
+    pub width: u32,
+    pub height: u32,
+    /// All in spp or all in seconds.
+    pub budgets: Vec<Budget>,
+    pub seeds: u32,
+    /// Seed of the first run; run `i` uses `seed + i`.
+    pub seed: u64,
+    /// Compare the strategies of [`Strategy::alternatives`] too.
+    pub compare: bool,
+    pub reference: ReferenceSource,
+    /// The relative error the conclusion is about.
+    pub target: f64,
+    /// Progress on stderr.
+    pub verbose: bool,
+}
+
+#[derive(Clone, Debug)]
+pub struct ReferenceInfo {
+    /// Where it came from, in words.
+    pub source: String,
+    pub spp: Option<u32>,
+    /// Seconds spent rendering it in this run (0 when loaded).
+    pub seconds: f64,
+}
+
+#[derive(Clone, Debug)]
+pub struct Study {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub seeds: u32,
+    pub uses: Uses,
+    /// Nothing is sampled: one pass was rendered and is the answer.
+    pub exact: bool,
+    pub reference: ReferenceInfo,
+    /// The scene's own settings first, then the compared strategies.
+    pub series: Vec<Series>,
+    /// Passes rendered for the study, the reference's not counted.
+    pub passes: u64,
+    pub target: f64,
+    /// Caveats found while measuring.
+    pub notes: Vec<String>,
+}
+
+struct Run {
+    film: Film,
+    seconds: f64,
+    rays: u64,
+}
+
+/// Renders one independent run: passes of one sample until the budget is met.
+fn run_once(tracer: &Tracer, budget: Budget, passes: &mut u64) -> Run {
+    let mut film = Film::new(tracer.width, tracer.height);
+    let start = Instant::now();
+    let mut rays = 0;
+    loop {
+        rays += pass::render_pass(tracer, &mut film, 1, &|| false);
+        *passes += 1;
+        let done = match budget {
+            Budget::Spp(n) => film.spp >= n,
+            Budget::Seconds(t) => start.elapsed().as_secs_f64() >= t,
+        };
+        if done {
+            break;
+        }
+    }
+    Run {
+        film,
+        seconds: start.elapsed().as_secs_f64(),
+        rays,
+    }
+}
+
+/// The study's subject: a scene ready to trace.
+pub struct Subject<'a> {
+    pub scene: &'a Scene,
+    pub bvh: &'a Bvh,
+    pub plan: &'a Plan,
+}
+
+impl Subject<'_> {
+    fn measure(
+        &self,
+        strategy: Strategy,
+        budget: Budget,
+        cfg: &Config,
+        reference: &[Vec3],
+        passes: &mut u64,
+        bar: &ProgressBar,
+    ) -> Point {
+        bar.set_message(format!(
+            "{}: {budget}",
+            strategy.label(Uses::of(self.scene, self.plan))
+        ));
+        let mut scene = self.scene.clone();
+        strategy.apply(&mut scene.settings);
+        let n = cfg.seeds as f64;
+        let (mut spp, mut rays, mut mse, mut rel) = (0.0, 0.0, 0.0, 0.0);
+        let mut times = Vec::new();
+        let mut est = Some(0.0);
+        for i in 0..cfg.seeds {
+            let seed = cfg.seed.wrapping_add(i as u64);
+            let tracer = Tracer::new(&scene, self.bvh, self.plan, cfg.width, cfg.height, seed);
+            let r = run_once(&tracer, budget, passes);
+            let img = r.film.image();
+            spp += r.film.spp as f64 / n;
+            times.push(r.seconds);
+            rays += r.rays as f64 / n;
+            mse += rmse(&img, reference).powi(2) / n;
+            rel += rel_mse(&img, reference) / n;
+            est = est.zip(estimated_rel_mse(&r.film)).map(|(a, b)| a + b / n);
+        }
+        times.sort_by(f64::total_cmp);
+        Point {
+            budget,
+            spp,
+            seconds: times[times.len() / 2],
+            rays,
+            rmse: mse.sqrt(),
+            rel_mse: rel,
+            est_rel_mse: est,
+        }
+    }
+
+    fn reference(
+        &self,
+        cfg: &Config,
+        notes: &mut Vec<String>,
+        bar: &ProgressBar,
+    ) -> Result<(Vec<Vec3>, ReferenceInfo)> {
+        let (w, h) = (cfg.width, cfg.height);
+        match &cfg.reference {
+            ReferenceSource::Image(img) => {
+                if img.len() != (w * h) as usize {
+                    bail!("reference has {} pixels, the study {w}x{h}", img.len());
+                }
+                let info = ReferenceInfo {
+                    source: "given image".into(),
+                    spp: None,
+                    seconds: 0.0,
+                };
+                Ok((img.clone(), info))
+            }
+            ReferenceSource::File(path) => {
+                let (rw, rh, img) = load_reference(path)?;
+                if (rw, rh) != (w, h) {
+                    bail!(
+                        "reference {} is {rw}x{rh} but the study renders {w}x{h}: pass --size {rw}x{rh}",
+                        path.display()
+                    );
+                }
+                let info = ReferenceInfo {
+                    source: path.display().to_string(),
+                    spp: None,
+                    seconds: 0.0,
+                };
+                Ok((img, info))
+            }
+            ReferenceSource::Render { spp, cache } => {
+                let largest = cfg.budgets.iter().fold(0, |m, b| match b {
+                    Budget::Spp(n) => m.max(*n),
+                    Budget::Seconds(_) => m,
+                });
+                let spp = spp.unwrap_or(if largest > 0 {
+                    (largest.saturating_mul(REFERENCE_FACTOR)).min(REFERENCE_MAX_SPP)
+                } else {
+                    REFERENCE_MAX_SPP
+                });
+                let seed = cfg.seed.wrapping_add(REFERENCE_SEED_OFFSET);
+                let key = reference_key(self.scene, self.plan, w, h, spp, seed);
+                let slug: String = self
+                    .scene
+                    .name
+                    .chars()
+                    .map(|c| {
+                        if c.is_ascii_alphanumeric() || c == '-' {
+                            c
+                        } else {
+                            '_'
+                        }
+                    })
+                    .take(40)
+                    .collect();
+                let file = cache
+                    .as_ref()
+                    .map(|d| d.join(format!("{slug}-{w}x{h}-{spp}spp-{key:016x}.hdr")));
+                if let Some(f) = file.as_ref().filter(|f| f.exists()) {
+                    match load_reference(f) {
+                        Ok((rw, rh, img)) if (rw, rh) == (w, h) => {
+                            let info = ReferenceInfo {
+                                source: format!("cached {}", f.display()),
+                                spp: Some(spp),
+                                seconds: 0.0,
+                            };
+                            return Ok((img, info));
+                        }
+                        _ => notes.push(format!(
+                            "cached reference {} was unreadable; rendered anew",
+                            f.display()
+                        )),
+                    }
+                }
+                let tracer = Tracer::new(self.scene, self.bvh, self.plan, w, h, seed);
+                let mut film = Film::new(w, h);
+                let start = Instant::now();
+                // Several samples per pass keep the pass overhead small.
+                while film.spp < spp {
+                    bar.set_message(format!("reference: {}/{spp} spp", film.spp));
+                    let n = (spp - film.spp).min(8);
+                    pass::render_pass(&tracer, &mut film, n, &|| false);
+                }
+                let seconds = start.elapsed().as_secs_f64();
+                let img = quantised(w, h, &film.image())?;
+                let source = match &file {
+                    Some(f) => match save_reference(f, w, h, &img) {
+                        Ok(()) => format!("rendered, cached as {}", f.display()),
+                        Err(e) => {
+                            notes.push(format!("reference not cached: {e:#}"));
+                            "rendered".into()
+                        }
+                    },
+                    None => "rendered (not cached)".into(),
+                };
+                Ok((
+                    img,
+                    ReferenceInfo {
+                        source,
+                        spp: Some(spp),
+                        seconds,
+                    },
+                ))
+            }
+        }
+    }
+
+    /// Runs the study described by `cfg`.
+    pub fn study(&self, cfg: &Config) -> Result<Study> {
+        if cfg.budgets.is_empty() {
+            bail!("no budgets to measure");
+        }
+        if cfg.seeds == 0 {
+            bail!("at least one seed is needed");
+        }
+        let uses = Uses::of(self.scene, self.plan);
+        let base = Strategy::of(&self.scene.settings);
+        let mut notes = Vec::new();
+        let bar = if cfg.verbose {
+            let b = ProgressBar::new_spinner().with_style(
+                ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("valid template"),
+            );
+            b.enable_steady_tick(std::time::Duration::from_millis(200));
+            b
+        } else {
+            ProgressBar::hidden()
+        };
+        let mut passes = 0;
+        let mut study = Study {
+            scene: self.scene.name.clone(),
+            width: cfg.width,
+            height: cfg.height,
+            seeds: cfg.seeds,
+            uses,
+            exact: self.plan.deterministic,
+            reference: ReferenceInfo {
+                source: String::new(),
+                spp: None,
+                seconds: 0.0,
+            },
+            series: Vec::new(),
+            passes: 0,
+            target: cfg.target,
+            notes: Vec::new(),
+        };
+        if self.plan.deterministic {
+            // One pass is the answer: it is its own reference unless one is given.
+            let tracer = Tracer::new(
+                self.scene, self.bvh, self.plan, cfg.width, cfg.height, cfg.seed,
+            );
+            let r = run_once(&tracer, Budget::Spp(1), &mut passes);
+            let img = r.film.image();
+            let (reference, info) = match cfg.reference {
+                ReferenceSource::Render { .. } => (
+                    img.clone(),
+                    ReferenceInfo {
+                        source: "the one pass (nothing is sampled)".into(),
+                        spp: Some(1),
+                        seconds: 0.0,
+                    },
+                ),
+                _ => self.reference(cfg, &mut notes, &bar)?,
+            };
+            study.reference = info;
+            study.series.push(Series {
+                strategy: base,
+                label: base.label(uses),
+                points: vec![Point {
+                    budget: Budget::Spp(1),
+                    spp: 1.0,
+                    seconds: r.seconds,
+                    rays: r.rays as f64,
+                    rmse: rmse(&img, &reference),
+                    rel_mse: rel_mse(&img, &reference),
+                    est_rel_mse: Some(0.0),
+                }],
+            });
+            bar.finish_and_clear();
+            study.passes = passes;
+            study.notes = notes;
+            return Ok(study);
+        }
+        let (reference, info) = self.reference(cfg, &mut notes, &bar)?;
+        study.reference = info;
+        let mut main = Series {
+            strategy: base,
+            label: base.label(uses),
+            points: Vec::new(),
+        };
+        for &b in &cfg.budgets {
+            main.points
+                .push(self.measure(base, b, cfg, &reference, &mut passes, &bar));
+        }
+        let t_max = main.points.iter().map(|p| p.seconds).fold(0.0, f64::max);
+        let max_spp = main.points.iter().map(|p| p.spp).fold(0.0, f64::max);
+        if let Some(r) = study.reference.spp {
+            if matches!(cfg.reference, ReferenceSource::Render { .. })
+                && (r as f64) < REFERENCE_FACTOR as f64 * max_spp
+            {
+                notes.push(format!(
+                    "the reference has {:.0}x the samples of the largest budget ({}x advised): its own noise adds about {:.1} % to the relMSE measured there (--reference-spp to raise it)",
+                    r as f64 / max_spp,
+                    REFERENCE_FACTOR,
+                    100.0 * max_spp / r as f64
+                ));
+            }
+        }
+        study.series.push(main);
+        if cfg.compare {
+            for s in Strategy::alternatives(base, uses) {
+                let mut series = Series {
+                    strategy: s,
+                    label: s.label(uses),
+                    points: Vec::new(),
+                };
+                if matches!(cfg.budgets[0], Budget::Seconds(_)) {
+                    for &b in &cfg.budgets {
+                        series
+                            .points
+                            .push(self.measure(s, b, cfg, &reference, &mut passes, &bar));
+                    }
+                } else {
+                    // Double the spp until the run takes as long as the scene's largest budget.
+                    let mut n = 1;
+                    loop {
+                        let p = self.measure(s, Budget::Spp(n), cfg, &reference, &mut passes, &bar);
+                        let done = p.seconds >= t_max || n >= MAX_COMPARE_SPP;
+                        series.points.push(p);
+                        if done {
+                            break;
+                        }
+                        n *= 2;
+                    }
+                }
+                study.series.push(series);
+            }
+        }
+        bar.finish_and_clear();
+        study.passes = passes;
+        study.notes = notes;
+        Ok(study)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn series(errs: &[(f64, f64, f64)]) -> Series {
+        Series {
+            strategy: Strategy {
+                light_samples: 1,
+                glossy_samples: 1,
+                stratify: true,
+            },
+            label: "x".into(),
+            points: errs
+                .iter()
+                .map(|&(spp, seconds, e)| Point {
+                    budget: Budget::Spp(spp as u32),
+                    spp,
+                    seconds,
+                    rays: 0.0,
+                    rmse: e,
+                    rel_mse: e * e,
+                    est_rel_mse: None,
+                })
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn reach_interpolates_inside_and_extrapolates_outside() {
+        // err = 0.1 / sqrt(spp), time = spp / 100.
+        let s = series(&[(1.0, 0.01, 0.1), (4.0, 0.04, 0.05), (16.0, 0.16, 0.025)]);
+        let r = s.reach(0.05 / 2f64.sqrt()).unwrap();
+        assert!(r.measured && (r.spp - 8.0).abs() < 1e-9 && (r.seconds - 0.08).abs() < 1e-9);
+        let r = s.reach(0.01).unwrap();
+        assert!(!r.measured && (r.spp - 100.0).abs() < 1e-6 && (r.seconds - 1.0).abs() < 1e-6);
+        assert_eq!(
+            s.error_at(0.02).map(|e| (e * 1e6).round()),
+            Some((0.1 / 2f64.sqrt() * 1e6).round())
+        );
+        assert_eq!(s.error_at(0.001), None);
+        assert_eq!(s.error_at(1.0), None);
+    }
+
+    #[test]
+    fn alternatives_cover_light_glossy_and_stratification_once() {
+        let base = Strategy {
+            light_samples: 16,
+            glossy_samples: 1,
+            stratify: true,
+        };
+        let uses = Uses {
+            area_lights: true,
+            glossy: true,
+            supersampling: true,
+        };
+        let alts = Strategy::alternatives(base, uses);
+        let labels: Vec<String> = alts.iter().map(|s| s.label(uses)).collect();
+        assert_eq!(
+            labels,
+            [
+                "L1 G1 jittered",
+                "L4 G1 jittered",
+                "L64 G1 jittered",
+                "L16 G4 jittered",
+                "L16 G16 jittered",
+                "L16 G1 independent"
+            ]
+        );
+        let none = Uses {
+            area_lights: false,
+            glossy: false,
+            supersampling: false,
+        };
+        assert!(Strategy::alternatives(base, none).is_empty());
+    }
+}

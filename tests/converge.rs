@@ -1,0 +1,300 @@
+//! `rayterm converge` against known answers: convergence rates and the
+//! film's error estimate on a scene whose exact image comes from quadrature,
+//! deterministic scenes, the reference cache and the command's outputs.
+
+mod common;
+mod exact;
+
+use common::*;
+use exact::*;
+use rayterm::bvh::{self, Bvh};
+use rayterm::render::{Feature, Features, Plan};
+use rayterm::report::converge::{
+    fit_log_log, load_reference, rmse, Budget, Config, ReferenceSource, Study, Subject,
+};
+use rayterm::scene::{self, Builder, Scene};
+
+fn config(w: u32, h: u32, budgets: &[u32], reference: ReferenceSource) -> Config {
+    Config {
+        width: w,
+        height: h,
+        budgets: budgets.iter().map(|&n| Budget::Spp(n)).collect(),
+        seeds: 2,
+        seed: 5,
+        compare: false,
+        reference,
+        target: 0.01,
+        verbose: false,
+    }
+}
+
+fn study(s: &Scene, features: Features, cfg: &Config) -> Study {
+    let bvh: Bvh = bvh::build(&s.geometry, Builder::Sah);
+    let plan = Plan::new(s, features);
+    Subject {
+        scene: s,
+        bvh: &bvh,
+        plan: &plan,
+    }
+    .study(cfg)
+    .expect("study runs")
+}
+
+/// The parallelogram light over a plane with `light_samples` per hit.
+fn plane(light_samples: u32, stratify: bool) -> Scene {
+    let mut s = plane_under(parallelogram());
+    s.settings.light_samples = light_samples;
+    s.settings.stratify = stratify;
+    s
+}
+
+#[test]
+fn independent_error_falls_as_one_over_root_spp_and_the_estimate_tracks_it() {
+    let (w, h) = (16, 16);
+    let s = plane(1, false);
+    let exact = exact_image(&s, w, h);
+    let cfg = config(
+        w,
+        h,
+        &[1, 2, 4, 8, 16, 32, 64],
+        ReferenceSource::Image(exact),
+    );
+    let st = study(&s, features(), &cfg);
+    let series = &st.series[0];
+    let slope = series.slope_spp().unwrap();
+    assert!((-0.6..=-0.4).contains(&slope), "slope {slope}");
+    assert!(
+        series.points[0].est_rel_mse.is_none(),
+        "one sample has no variance"
+    );
+    for p in &series.points[1..] {
+        let r = p.ratio().unwrap();
+        assert!(
+            (0.5..=2.0).contains(&r),
+            "{}: estimated / true error {r}",
+            p.budget
+        );
+    }
+    assert_eq!(st.passes, 2 * (1 + 2 + 4 + 8 + 16 + 32 + 64));
+}
+
+/// Slope of RMSE against light samples per hit at one sample per pixel.
+fn slope_over_light_samples(stratify: bool) -> f64 {
+    let (w, h) = (16, 16);
+    let exact = exact_image(&plane(1, true), w, h);
+    let pts: Vec<(f64, f64)> = [1u32, 4, 16, 64, 256]
+        .iter()
+        .map(|&n| {
+            let r = render(&plane(n, stratify), w, h, 1, features(), Builder::Sah, 11);
+            (n as f64, rmse(&r.image, &exact))
+        })
+        .collect();
+    fit_log_log(&pts).unwrap().0
+}
+
+#[test]
+fn jittered_light_sampling_converges_faster_than_independent() {
+    // Stratification works within a hit's light samples (a sqrt(N) x sqrt(N)
+    // grid), so the rates show along that axis.
+    let ind = slope_over_light_samples(false);
+    let jit = slope_over_light_samples(true);
+    assert!((-0.6..=-0.4).contains(&ind), "independent slope {ind}");
+    assert!(jit < -0.65, "jittered slope {jit} (independent {ind})");
+}
+
+#[test]
+fn estimate_is_within_a_factor_of_two_with_jittered_light_samples() {
+    let (w, h) = (16, 16);
+    let s = plane(16, true);
+    let exact = exact_image(&s, w, h);
+    let cfg = config(w, h, &[2, 4, 8, 16, 32], ReferenceSource::Image(exact));
+    let st = study(&s, features(), &cfg);
+    for p in &st.series[0].points {
+        let r = p.ratio().unwrap();
+        assert!(
+            (0.5..=2.0).contains(&r),
+            "{}: estimated / true error {r}",
+            p.budget
+        );
+    }
+}
+
+#[test]
+fn deterministic_scene_is_exact_after_one_pass() -> anyhow::Result<()> {
+    let s = scene::load("cornell")?;
+    let features = Features::all().without(&[Feature::Supersampling]);
+    let (w, h) = (24, 24);
+    let render_cfg = config(
+        w,
+        h,
+        &[1, 2, 4, 8],
+        ReferenceSource::Render {
+            spp: None,
+            cache: None,
+        },
+    );
+    let st = study(&s, features, &render_cfg);
+    assert!(st.exact);
+    assert_eq!(st.passes, 1, "no wasted passes");
+    assert_eq!(st.series.len(), 1);
+    let p = &st.series[0].points[..];
+    assert_eq!(p.len(), 1);
+    assert_eq!(
+        (p[0].spp, p[0].rmse, p[0].est_rel_mse),
+        (1.0, 0.0, Some(0.0))
+    );
+    assert!(st.conclusion().contains("exact"), "{}", st.conclusion());
+    // Another seed's pass is the same image: error 0 against it as well.
+    let other = render(&s, w, h, 1, features, Builder::Sah, 1234).image;
+    let st = study(
+        &s,
+        features,
+        &config(w, h, &[4], ReferenceSource::Image(other)),
+    );
+    assert_eq!((st.passes, st.series[0].points[0].rel_mse), (1, 0.0));
+    // With supersampling the same scene is sampled and not exact.
+    let st = study(&s, Features::all(), &render_cfg);
+    assert!(!st.exact && st.series[0].points[0].rel_mse > 0.0);
+    Ok(())
+}
+
+#[test]
+fn rendered_reference_is_cached_and_reused() -> anyhow::Result<()> {
+    let dir = std::env::temp_dir().join(format!("rayterm-converge-cache-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let s = plane(4, true);
+    let cfg = config(
+        8,
+        8,
+        &[1, 2],
+        ReferenceSource::Render {
+            spp: Some(32),
+            cache: Some(dir.clone()),
+        },
+    );
+    let first = study(&s, features(), &cfg);
+    let second = study(&s, features(), &cfg);
+    assert!(
+        first.reference.source.starts_with("rendered"),
+        "{}",
+        first.reference.source
+    );
+    assert!(
+        second.reference.source.starts_with("cached"),
+        "{}",
+        second.reference.source
+    );
+    let errs = |st: &Study| {
+        st.series[0]
+            .points
+            .iter()
+            .map(|p| p.rel_mse)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(errs(&first), errs(&second), "same reference, same runs");
+    // A change of settings is a different reference.
+    let third = study(&plane(1, true), features(), &cfg);
+    assert!(third.reference.source.starts_with("rendered"));
+    let files: Vec<_> = std::fs::read_dir(&dir)?.collect::<Result<_, _>>()?;
+    assert_eq!(files.len(), 2);
+    let (w, h, img) = load_reference(&files[0].path())?;
+    assert_eq!((w, h, img.len()), (8, 8, 64));
+    std::fs::remove_dir_all(&dir)?;
+    Ok(())
+}
+
+#[test]
+fn strategies_are_compared_and_reported() {
+    let (w, h) = (8, 8);
+    let s = plane(16, true);
+    let exact = exact_image(&s, w, h);
+    let mut cfg = config(w, h, &[1, 2, 4], ReferenceSource::Image(exact));
+    cfg.compare = true;
+    let st = study(&s, features(), &cfg);
+    let labels: Vec<&str> = st.series.iter().map(|s| s.label.as_str()).collect();
+    assert_eq!(
+        labels,
+        [
+            "L16 jittered",
+            "L1 jittered",
+            "L4 jittered",
+            "L64 jittered",
+            "L16 independent"
+        ]
+    );
+    let text = st.text();
+    assert!(
+        text.contains("rel err at equal time") && text.contains('*'),
+        "{text}"
+    );
+    assert!(text.contains("To reach 1 % error"), "{text}");
+    let csv = st.csv();
+    let rows = st.series.iter().map(|s| s.points.len()).sum::<usize>();
+    assert_eq!(csv.lines().count(), rows + 1);
+    assert!(csv.lines().all(|l| l.split(',').count() == 14), "{csv}");
+    let img = rayterm::report::converge::plot(&st);
+    // Every strategy's colour appears in the plot.
+    let colours: std::collections::HashSet<[u8; 3]> = img.pixels().map(|p| p.0).collect();
+    assert!(
+        colours.len() > st.series.len() + 2,
+        "{} colours",
+        colours.len()
+    );
+}
+
+#[test]
+fn command_writes_table_csv_and_plot() {
+    let dir = std::env::temp_dir().join(format!("rayterm-converge-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (csv, png) = (dir.join("err.csv"), dir.join("err.png"));
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_rayterm"))
+        .args([
+            "converge",
+            "cornell-area",
+            "--size",
+            "12x12",
+            "--spp",
+            "1,2",
+            "--seeds",
+            "1",
+        ])
+        .arg("--csv")
+        .arg(&csv)
+        .arg("--plot")
+        .arg(&png)
+        .arg("--cache-dir")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("L16 jittered (the scene's settings)"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("128 spp"),
+        "reference is 64x the largest budget: {stdout}"
+    );
+    assert!(std::fs::read_to_string(&csv)
+        .unwrap()
+        .starts_with("strategy,"));
+    assert_eq!(image::open(&png).unwrap().width(), 960);
+    let exact = std::process::Command::new(env!("CARGO_BIN_EXE_rayterm"))
+        .args([
+            "converge",
+            "cornell",
+            "--size",
+            "12x12",
+            "--no",
+            "supersampling",
+        ])
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&exact.stdout).contains("one pass is exact"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
