@@ -66,6 +66,42 @@ pub fn jittered(k: u32, n: u32, r: Vec2) -> Vec2 {
     ((Vec2::new(i as f32, j as f32) + r) / n as f32).min(Vec2::splat(1.0 - f32::EPSILON))
 }
 
+/// Element `i` of a pseudo-random permutation of `0..len` chosen by `seed`
+/// (Kensler, "Correlated Multi-Jittered Sampling", 2013): visits every
+/// stratum once per `len` samples, in an order with no structure.
+pub fn permute(mut i: u32, len: u32, seed: u32) -> u32 {
+    let p = seed;
+    let mut w = len.wrapping_sub(1);
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    loop {
+        i ^= p;
+        i = i.wrapping_mul(0xe170_893d);
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i = i.wrapping_mul(0x0929_eb3f);
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | p >> 27);
+        i = i.wrapping_mul(0x6935_fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dc_b303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e50_1cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860_a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < len {
+            return (i.wrapping_add(p)) % len;
+        }
+    }
+}
+
 /// Orthonormal basis around a unit vector (Duff et al., JCGT 2017).
 pub fn onb(n: Vec3) -> (Vec3, Vec3) {
     let sign = 1.0f32.copysign(n.z);
@@ -118,6 +154,19 @@ mod tests {
         let mut r = Rng::for_sample(1, 2, 3);
         let m: f64 = (0..100_000).map(|_| r.next_f32() as f64).sum::<f64>() / 100_000.0;
         assert!((m - 0.5).abs() < 0.005);
+    }
+
+    #[test]
+    fn permute_is_a_permutation() {
+        for seed in [0u32, 1, 0xdead_beef, 12345] {
+            let mut seen: Vec<u32> = (0..16).map(|i| permute(i, 16, seed)).collect();
+            seen.sort_unstable();
+            assert_eq!(seen, (0..16).collect::<Vec<_>>());
+        }
+        assert_ne!(
+            (0..16).map(|i| permute(i, 16, 1)).collect::<Vec<_>>(),
+            (0..16).map(|i| permute(i, 16, 2)).collect::<Vec<_>>()
+        );
     }
 
     #[test]

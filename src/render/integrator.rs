@@ -10,7 +10,7 @@ use super::plan::Plan;
 use super::recorder::{HitInfo, LightSample, MissInfo, RayKind, Recorder};
 use crate::bvh::{Bvh, Hit};
 use crate::geometry::offset::{hit_point, offset_origin, SHADOW_EPSILON};
-use crate::geometry::sampling::{jittered, phong_lobe, Rng};
+use crate::geometry::sampling::{jittered, permute, phong_lobe, Rng};
 use crate::geometry::Ray;
 use crate::scene::camera::CameraFrame;
 use crate::scene::texture::{cube_face_uv, FACE_NAMES};
@@ -76,11 +76,11 @@ impl<'a> Tracer<'a> {
         let off = if self.plan.supersampling && !self.scene.settings.stratify {
             rng.next_vec2()
         } else if self.plan.supersampling {
-            // A per-pixel permutation of strata, fixed for each run of 16 samples.
-            let block = k / (JITTER_GRID * JITTER_GRID);
-            let mut prng = Rng::for_sample(pixel, block as u64, self.seed ^ 0x5bd1_e995);
-            let shift = prng.next_u32();
-            let stratum = (k.wrapping_add(shift)) % (JITTER_GRID * JITTER_GRID);
+            // Each run of 16 samples visits the 16 strata once, in a random
+            // order per pixel and run, so any prefix is spread over the pixel.
+            let n = JITTER_GRID * JITTER_GRID;
+            let run = Rng::for_sample(pixel, (k / n) as u64, self.seed ^ 0x5bd1_e995).next_u32();
+            let stratum = permute(k % n, n, run);
             jittered(stratum, JITTER_GRID, rng.next_vec2())
         } else {
             Vec2::splat(0.5)
