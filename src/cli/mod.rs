@@ -1,6 +1,7 @@
 //! Command line: argument parsing and dispatch.
 
 mod args;
+mod debug;
 mod inspect;
 mod render;
 mod scenes;
