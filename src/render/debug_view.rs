@@ -94,7 +94,7 @@ const PALETTE: [Vec3; 6] = [
 pub fn draw(tracer: &Tracer, view: DebugView) -> Result<DebugImage> {
     let (w, h) = (tracer.width, tracer.height);
     let bvh = tracer.bvh;
-    let boxes = match view {
+    let (boxes, summary) = match view {
         DebugView::Heat(measure) => {
             let values = heat(tracer, measure);
             let (max, mean) = heat_summary(&values);
@@ -151,7 +151,6 @@ pub fn draw(tracer: &Tracer, view: DebugView) -> Result<DebugImage> {
             &tracer.scene.settings.bloom,
         );
     }
-    let (boxes, summary) = boxes;
     for (i, b) in boxes.iter().enumerate() {
         overlay::draw_box(
             &mut image,
