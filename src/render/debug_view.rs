@@ -79,8 +79,9 @@ pub struct DebugImage {
     pub summary: String,
 }
 
-/// Box outline colours, bright and far apart in hue so neighbours differ.
-const PALETTE: [Vec3; 6] = [
+/// Box outline colours, bright and far apart in hue so neighbours differ
+/// (box `i` gets `BOX_COLORS[i % 6]`).
+pub const BOX_COLORS: [Vec3; 6] = [
     Vec3::new(1.0, 0.85, 0.0),
     Vec3::new(0.0, 0.9, 1.0),
     Vec3::new(1.0, 0.1, 0.8),
@@ -158,7 +159,7 @@ pub fn draw(tracer: &Tracer, view: DebugView) -> Result<DebugImage> {
             h,
             &tracer.frame,
             b,
-            PALETTE[i % PALETTE.len()],
+            BOX_COLORS[i % BOX_COLORS.len()],
         );
     }
     Ok(DebugImage { image, summary })
