@@ -1,6 +1,7 @@
 //! Bounding volume hierarchy: builders, node layout, traversal, statistics.
 
 pub mod build;
+pub mod debug;
 pub mod node;
 pub mod stats;
 pub mod traverse;

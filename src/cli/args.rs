@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
+use crate::render::debug_view::DebugView;
 use crate::render::Feature;
 use crate::scene::Builder;
 
@@ -117,6 +118,10 @@ pub struct RenderArgs {
     /// Print the scene plan (stage, on/off, reason) before rendering.
     #[arg(long)]
     pub explain: bool,
+    /// Write a BVH debug view instead: bvh-level:K (boxes of level K over the
+    /// image), bvh-leaves, bvh-heat (nodes visited per pixel) or bvh-heat:tests.
+    #[arg(long, value_name = "VIEW", conflicts_with_all = ["spp", "time", "target_error"])]
+    pub debug: Option<DebugView>,
 }
 
 /// `X,Y`, e.g. `400,300`.

@@ -2,6 +2,8 @@
 
 use std::process::ExitCode;
 
+use std::io::Write;
+
 use anyhow::{bail, Result};
 
 use super::args::{InspectArgs, Worst};
@@ -56,11 +58,13 @@ pub fn run(a: InspectArgs) -> Result<ExitCode> {
         tree.pixel_before_bloom = Some(before);
         tree.pixel_after_bloom = Some(img[(y * p.width + x) as usize]);
     }
-    if a.json {
-        println!("{}", serde_json::to_string_pretty(&tree)?);
+    let text = if a.json {
+        serde_json::to_string_pretty(&tree)? + "\n"
     } else {
-        print!("{}", to_text(&tree, a.expand));
-    }
+        to_text(&tree, a.expand)
+    };
+    // A closed pipe (`| head`) is an error to return, not a panic.
+    std::io::stdout().lock().write_all(text.as_bytes())?;
     Ok(ExitCode::SUCCESS)
 }
 

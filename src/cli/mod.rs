@@ -2,6 +2,7 @@
 
 mod args;
 mod converge;
+mod debug;
 mod inspect;
 mod render;
 mod scenes;
@@ -31,9 +32,17 @@ pub fn main() -> ExitCode {
     };
     match result {
         Ok(code) => code,
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("rayterm: {e:#}");
             ExitCode::FAILURE
         }
     }
+}
+
+/// The reader of our output went away (`rayterm inspect ... | head`): not a failure.
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain()
+        .filter_map(|c| c.downcast_ref::<std::io::Error>())
+        .any(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
 }

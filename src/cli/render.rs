@@ -81,6 +81,9 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     if a.explain {
         eprintln!("plan for {}:\n{}", p.scene.name, p.plan.explain());
     }
+    if let Some(view) = a.debug {
+        return super::debug::run(&p, view, &a.output);
+    }
     let mut stop = match (a.spp, a.time, a.target_error) {
         (_, Some(t), _) if !(t > 0.0 && t.is_finite()) => {
             bail!("--time must be a positive number of seconds")

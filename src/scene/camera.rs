@@ -111,10 +111,37 @@ impl CameraFrame {
         if z <= 1e-9 {
             return None;
         }
+        Some(self.image_pos(d))
+    }
+
+    /// Image positions of the ends of segment `a`–`b` after cutting away the
+    /// part behind the near plane (`depth < near`), or `None` when all of it is
+    /// behind. Cutting in 3D first keeps points behind the eye from projecting
+    /// through it to the wrong side of the image.
+    pub fn project_clip(&self, a: Vec3, b: Vec3, near: f64) -> Option<((f64, f64), (f64, f64))> {
+        let (a, b) = (a.as_dvec3() - self.eye, b.as_dvec3() - self.eye);
+        let (za, zb) = (a.dot(self.fwd), b.dot(self.fwd));
+        if za < near && zb < near || !(za.is_finite() && zb.is_finite()) {
+            return None;
+        }
+        let cut = |p: DVec3, zp: f64, q: DVec3, zq: f64| {
+            if zp >= near {
+                p
+            } else {
+                p + (q - p) * ((near - zp) / (zq - zp))
+            }
+        };
+        let (a2, b2) = (cut(a, za, b, zb), cut(b, zb, a, za));
+        Some((self.image_pos(a2), self.image_pos(b2)))
+    }
+
+    /// Image position of a camera-relative point in front of the eye.
+    fn image_pos(&self, d: DVec3) -> (f64, f64) {
+        let z = d.dot(self.fwd);
         let sx = d.dot(self.right) / z;
         let sy = d.dot(self.upv) / z;
         let x = (sx / (self.h * self.aspect) + 1.0) * 0.5 * self.width;
         let y = (1.0 - sy / self.h) * 0.5 * self.height;
-        Some((x, y))
+        (x, y)
     }
 }

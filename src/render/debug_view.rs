@@ -1,0 +1,242 @@
+//! The BVH debug views of a rendered image: level or leaf boxes drawn over
+//! the shaded image, or a heat map of each camera ray's traversal work.
+//! `rayterm render --debug VIEW` writes them; the TUI draws the same data.
+
+use std::fmt;
+use std::str::FromStr;
+
+use anyhow::{bail, Result};
+use glam::Vec3;
+
+use super::{overlay, pass, post, Film, Tracer};
+use crate::bvh::debug::HeatMeasure;
+use crate::bvh::debug::{boxes_at_level, heat_color, heat_map, heat_summary, leaf_boxes};
+
+/// Per pixel (row-major), the traversal work of the camera ray through the
+/// pixel centre: what the heat map shows.
+pub fn heat(tracer: &Tracer, measure: HeatMeasure) -> Vec<u32> {
+    heat_map(
+        tracer.bvh,
+        &tracer.frame,
+        tracer.width,
+        tracer.height,
+        measure,
+    )
+}
+
+/// A debug view, as `--debug` names it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DebugView {
+    /// `bvh-level:K`
+    Level(usize),
+    /// `bvh-leaves`
+    Leaves,
+    /// `bvh-heat` (nodes visited) or `bvh-heat:tests`
+    Heat(HeatMeasure),
+}
+
+const VIEWS: &str = "bvh-level:K, bvh-leaves, bvh-heat or bvh-heat:tests";
+
+impl FromStr for DebugView {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (name, arg) = match s.split_once(':') {
+            Some((n, a)) => (n, Some(a)),
+            None => (s, None),
+        };
+        match (name, arg) {
+            ("bvh-level", Some(k)) => k.trim().parse().map(DebugView::Level).map_err(|_| {
+                format!("'{s}': the level must be a whole number from 0, as in bvh-level:3")
+            }),
+            ("bvh-level", None) => Err("bvh-level needs a level, as in bvh-level:3".into()),
+            ("bvh-leaves", None) => Ok(DebugView::Leaves),
+            ("bvh-heat", None | Some("nodes")) => Ok(DebugView::Heat(HeatMeasure::NodesVisited)),
+            ("bvh-heat", Some("tests")) => Ok(DebugView::Heat(HeatMeasure::TriangleTests)),
+            ("bvh-heat", Some(m)) => Err(format!(
+                "'{s}': unknown measure '{m}' (bvh-heat counts nodes; bvh-heat:tests counts triangle tests)"
+            )),
+            _ => Err(format!("unknown debug view '{s}': expected {VIEWS}")),
+        }
+    }
+}
+
+impl fmt::Display for DebugView {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            DebugView::Level(k) => write!(f, "bvh-level:{k}"),
+            DebugView::Leaves => f.write_str("bvh-leaves"),
+            DebugView::Heat(HeatMeasure::NodesVisited) => f.write_str("bvh-heat"),
+            DebugView::Heat(HeatMeasure::TriangleTests) => f.write_str("bvh-heat:tests"),
+        }
+    }
+}
+
+/// A debug view drawn at the tracer's resolution, and what it shows in words.
+pub struct DebugImage {
+    /// Linear RGB, row-major.
+    pub image: Vec<Vec3>,
+    pub summary: String,
+}
+
+/// Box outline colours, bright and far apart in hue so neighbours differ
+/// (box `i` gets `BOX_COLORS[i % 6]`).
+pub const BOX_COLORS: [Vec3; 6] = [
+    Vec3::new(1.0, 0.85, 0.0),
+    Vec3::new(0.0, 0.9, 1.0),
+    Vec3::new(1.0, 0.1, 0.8),
+    Vec3::new(0.3, 1.0, 0.1),
+    Vec3::new(1.0, 0.35, 0.0),
+    Vec3::new(0.45, 0.3, 1.0),
+];
+
+/// Draws `view`: boxes over one shaded sample per pixel (with bloom where
+/// the plan has it), or the heat map with a legend.
+pub fn draw(tracer: &Tracer, view: DebugView) -> Result<DebugImage> {
+    let (w, h) = (tracer.width, tracer.height);
+    let bvh = tracer.bvh;
+    let (boxes, summary) = match view {
+        DebugView::Heat(measure) => {
+            let values = heat(tracer, measure);
+            let (max, mean) = heat_summary(&values);
+            let mut image: Vec<Vec3> = values.iter().map(|&v| heat_color(v, max)).collect();
+            overlay::legend(&mut image, w, h, max);
+            return Ok(DebugImage {
+                image,
+                summary: format!(
+                    "{} per camera ray: max {max}, mean {mean:.2} per pixel",
+                    measure.label()
+                ),
+            });
+        }
+        DebugView::Level(k) => {
+            let depth = bvh.stats.depth;
+            if k >= depth {
+                bail!(
+                    "bvh-level:{k}: this BVH has {}",
+                    match depth {
+                        0 => "no levels (the scene has no triangles)".to_string(),
+                        1 => "only level 0".to_string(),
+                        d => format!("levels 0 to {}", d - 1),
+                    }
+                );
+            }
+            let b = boxes_at_level(bvh, k);
+            let summary = format!(
+                "{} {} at level {k} of 0..{}",
+                b.len(),
+                if b.len() == 1 { "box" } else { "boxes" },
+                depth - 1
+            );
+            (b, summary)
+        }
+        DebugView::Leaves => {
+            let b = leaf_boxes(bvh);
+            let summary = format!(
+                "{} leaf boxes, {:.2} triangles per leaf on average, {} at most",
+                b.len(),
+                bvh.stats.mean_leaf,
+                bvh.stats.max_leaf
+            );
+            (b, summary)
+        }
+    };
+    let mut film = Film::new(w, h);
+    pass::render_pass(tracer, &mut film, 1, &|| false);
+    let mut image = film.image();
+    if tracer.plan.bloom {
+        post::bloom(
+            &mut image,
+            w as usize,
+            h as usize,
+            &tracer.scene.settings.bloom,
+        );
+    }
+    for (i, b) in boxes.iter().enumerate() {
+        overlay::draw_box(
+            &mut image,
+            w,
+            h,
+            &tracer.frame,
+            b,
+            BOX_COLORS[i % BOX_COLORS.len()],
+        );
+    }
+    Ok(DebugImage { image, summary })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::{Features, Plan};
+    use crate::scene;
+
+    #[test]
+    fn parses_every_view_and_rejects_bad_ones() {
+        for s in ["bvh-level:3", "bvh-leaves", "bvh-heat", "bvh-heat:tests"] {
+            let v: DebugView = s.parse().unwrap();
+            assert_eq!(v.to_string(), s);
+        }
+        assert_eq!(
+            "bvh-heat:nodes".parse(),
+            Ok(DebugView::Heat(HeatMeasure::NodesVisited))
+        );
+        for bad in [
+            "bvh-level:x",
+            "bvh-level:-1",
+            "bvh-level",
+            "bvh",
+            "bvh-heat:t",
+        ] {
+            let e = bad.parse::<DebugView>().unwrap_err();
+            assert!(e.contains("bvh-"), "{bad}: {e}");
+        }
+        assert!("bvh-level:x"
+            .parse::<DebugView>()
+            .unwrap_err()
+            .contains("whole number"));
+    }
+
+    #[test]
+    fn heat_counts_the_work_of_each_camera_ray() {
+        let s = scene::load("cornell").unwrap();
+        let bvh = crate::bvh::build(&s.geometry, s.settings.builder);
+        let plan = Plan::new(&s, Features::all());
+        let t = Tracer::new(&s, &bvh, &plan, 24, 24, 1);
+        let nodes = heat(&t, HeatMeasure::NodesVisited);
+        let tests = heat(&t, HeatMeasure::TriangleTests);
+        assert_eq!(nodes.len(), 24 * 24);
+        let (max, mean) = heat_summary(&nodes);
+        // The box fills the (square) view, so every ray enters the root and tests its
+        // two children; no ray visits more than every node.
+        assert!(max >= 1 && (max as usize) <= bvh.nodes.len(), "{max}");
+        assert!(nodes.iter().all(|&n| n >= 3), "a ray skipped the root");
+        assert!(mean >= 3.0 && mean <= max as f64, "{mean}");
+        assert!(heat_summary(&tests).0 >= 1);
+        // The same count the traversal reports for that ray.
+        let mut st = crate::bvh::TraversalStats::default();
+        bvh.intersect::<true>(&t.frame.ray(5.5, 7.5), &mut st);
+        assert_eq!(nodes[7 * 24 + 5], st.nodes_visited);
+        assert_eq!(tests[7 * 24 + 5], st.triangle_tests);
+    }
+
+    #[test]
+    fn level_past_the_deepest_is_an_error() {
+        let s = scene::load("cornell").unwrap();
+        let bvh = crate::bvh::build(&s.geometry, s.settings.builder);
+        let plan = Plan::new(&s, Features::all());
+        let t = Tracer::new(&s, &bvh, &plan, 16, 16, 1);
+        let e = draw(&t, DebugView::Level(bvh.stats.depth))
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("levels 0 to"), "{e}");
+        let root = draw(&t, DebugView::Level(0)).unwrap();
+        assert_eq!(root.image.len(), 256);
+        assert!(
+            root.summary.starts_with("1 box at level 0"),
+            "{}",
+            root.summary
+        );
+    }
+}
