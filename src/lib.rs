@@ -10,3 +10,4 @@ pub mod geometry;
 pub mod inspect;
 pub mod render;
 pub mod scene;
+pub mod tui;

@@ -6,6 +6,7 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::render::Feature;
 use crate::scene::Builder;
+use crate::tui::color::ColorMode;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -14,15 +15,16 @@ use crate::scene::Builder;
     about = "A ray tracer that lives in the terminal"
 )]
 pub struct Cli {
+    /// Without a command, the TUI opens on the Cornell box.
     #[command(subcommand)]
-    pub command: Command,
+    pub command: Option<Command>,
 }
 
 impl Cli {
     pub fn threads(&self) -> Option<usize> {
         match &self.command {
-            Command::Render(a) => a.threads,
-            Command::Scenes | Command::Inspect(_) => None,
+            Some(Command::Render(a)) => a.threads,
+            _ => None,
         }
     }
 }
@@ -35,6 +37,8 @@ pub enum Command {
     Scenes,
     /// Print the ray tree of one pixel: every ray the renderer traced for it.
     Inspect(InspectArgs),
+    /// Explore a scene in the terminal (the default command).
+    Tui(TuiArgs),
 }
 
 /// `WxH`, e.g. `1280x720`.
@@ -144,4 +148,39 @@ pub struct InspectArgs {
     /// Show every light sample instead of folding long lists.
     #[arg(long)]
     pub expand: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct TuiArgs {
+    /// Built-in name (see `rayterm scenes`), a .toml scene file or a .obj mesh.
+    #[arg(default_value = "cornell")]
+    pub scene: String,
+    /// Size of PNG exports (`p`), WIDTHxHEIGHT (default: the scene's).
+    #[arg(long, value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Colours (default: truecolor when COLORTERM says so, else 256).
+    #[arg(long, value_enum)]
+    pub color: Option<ColorMode>,
+    /// BVH builder (default: the scene's, else sah).
+    #[arg(long, value_enum)]
+    pub builder: Option<Builder>,
+    /// Start with a feature off (repeatable).
+    #[arg(long = "no", value_enum, value_name = "FEATURE")]
+    pub off: Vec<Feature>,
+    /// Seed of the random numbers.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+impl TuiArgs {
+    pub fn scene_opts(&self) -> SceneOpts {
+        SceneOpts {
+            scene: self.scene.clone(),
+            size: self.size,
+            builder: self.builder,
+            off: self.off.clone(),
+            seed: self.seed,
+            no_plan: false,
+        }
+    }
 }
