@@ -2,10 +2,13 @@
 //! upper half block (foreground = top pixel, background = bottom pixel), in
 //! truecolor or quantized to the xterm 256-colour or the 16 ANSI colours.
 
+use std::sync::OnceLock;
+
 use glam::Vec3;
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::style::Color;
+use rayon::prelude::*;
 
 use crate::render::post::encode_srgb;
 
@@ -48,7 +51,7 @@ pub fn srgb(c: Vec3) -> [u8; 3] {
 }
 
 /// Squared distance in sRGB with weights for the eye's sensitivity (green
-/// most, red and blue less); fixed weights keep the cube search separable.
+/// most, red and blue less), for the 16-colour dither.
 fn dist(a: [u8; 3], b: [u8; 3]) -> u32 {
     const W: [u32; 3] = [5, 8, 5];
     (0..3)
@@ -75,24 +78,73 @@ pub fn palette256(i: u8) -> [u8; 3] {
     }
 }
 
-/// The nearest entry of the cube and grey ramp (16..=255; the first 16 vary
-/// between terminals). Exact under [`dist`]: the cube's channels are
-/// independent, and the grey distance is a parabola in the grey level.
-pub fn quantize256(c: [u8; 3]) -> u8 {
-    let level = |v: u8| {
-        (0..6)
-            .min_by_key(|&i| (CUBE[i] as i32 - v as i32).abs())
-            .unwrap_or(0)
+/// CIELAB (D65) of an sRGB colour: distances in it follow perceived
+/// differences, which keeps hues right where the cube is coarse.
+fn lab(c: [u8; 3]) -> [f32; 3] {
+    let lin = |v: u8| {
+        let v = v as f32 / 255.0;
+        if v <= 0.040_45 {
+            v / 12.92
+        } else {
+            ((v + 0.055) / 1.055).powf(2.4)
+        }
     };
-    let cube = 16 + 36 * level(c[0]) + 6 * level(c[1]) + level(c[2]);
-    let mean = (5.0 * c[0] as f32 + 8.0 * c[1] as f32 + 5.0 * c[2] as f32) / 18.0;
-    let grey = 232 + ((mean - 8.0) / 10.0).round().clamp(0.0, 23.0) as usize;
-    let (cube, grey) = (cube as u8, grey as u8);
-    if dist(c, palette256(grey)) < dist(c, palette256(cube)) {
-        grey
-    } else {
-        cube
-    }
+    let [r, g, b] = c.map(lin);
+    let x = (0.4124 * r + 0.3576 * g + 0.1805 * b) / 0.9505;
+    let y = 0.2126 * r + 0.7152 * g + 0.0722 * b;
+    let z = (0.0193 * r + 0.1192 * g + 0.9505 * b) / 1.089;
+    let f = |t: f32| {
+        if t > 0.008_856 {
+            t.cbrt()
+        } else {
+            7.787 * t + 16.0 / 116.0
+        }
+    };
+    let (fx, fy, fz) = (f(x), f(y), f(z));
+    [116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)]
+}
+
+/// Bits per channel of the 256-colour lookup table's index.
+const TABLE_BITS: u32 = 6;
+
+/// The entry of the cube and grey ramp (16..=255; the first 16 vary between
+/// terminals) nearest in CIELAB to `c`, by full search.
+fn nearest256(c: [u8; 3], palette: &[[f32; 3]]) -> u8 {
+    let l = lab(c);
+    let d = |p: &[f32; 3]| (0..3).map(|i| (l[i] - p[i]).powi(2)).sum::<f32>();
+    (0..palette.len())
+        .min_by(|&a, &b| d(&palette[a]).total_cmp(&d(&palette[b])))
+        .map_or(16, |i| 16 + i as u8)
+}
+
+/// Representative colour of a table cell: the middle of its range.
+fn cell_colour(k: usize) -> [u8; 3] {
+    let n = 1usize << TABLE_BITS;
+    let mid = |v: usize| ((v << (8 - TABLE_BITS)) + (1 << (7 - TABLE_BITS))) as u8;
+    [mid(k / (n * n)), mid(k / n % n), mid(k % n)]
+}
+
+/// The nearest palette entry for every cell of a 64x64x64 grid of colours,
+/// computed once (in parallel) on first use.
+fn table256() -> &'static [u8] {
+    static TABLE: OnceLock<Vec<u8>> = OnceLock::new();
+    TABLE.get_or_init(|| {
+        let palette: Vec<[f32; 3]> = (16..=255).map(|i| lab(palette256(i))).collect();
+        (0..1usize << (3 * TABLE_BITS))
+            .into_par_iter()
+            .map(|k| nearest256(cell_colour(k), &palette))
+            .collect()
+    })
+}
+
+/// The 256-colour palette entry for `c`: the one nearest in CIELAB to the
+/// middle of `c`'s table cell (at most 2 steps away in each channel).
+pub fn quantize256(c: [u8; 3]) -> u8 {
+    let s = 8 - TABLE_BITS;
+    let k = ((c[0] as usize >> s) << (2 * TABLE_BITS))
+        | ((c[1] as usize >> s) << TABLE_BITS)
+        | (c[2] as usize >> s);
+    table256()[k]
 }
 
 /// The 16 ANSI colours with xterm's default RGB.
@@ -234,12 +286,25 @@ mod tests {
 
     #[test]
     fn quantize256_is_the_nearest_entry() {
+        let palette: Vec<[f32; 3]> = (16..=255).map(|i| lab(palette256(i))).collect();
+        let de = |a: [u8; 3], b: [u8; 3]| {
+            let (a, b) = (lab(a), lab(b));
+            (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f32>().sqrt()
+        };
         for r in (0..=255).step_by(15) {
             for g in (0..=255).step_by(17) {
                 for b in (0..=255).step_by(19) {
                     let c = [r as u8, g as u8, b as u8];
-                    let best = (16..=255u8).map(|i| dist(c, palette256(i))).min().unwrap();
-                    assert_eq!(dist(c, palette256(quantize256(c))), best, "{c:?}");
+                    let q = palette256(quantize256(c));
+                    let best = palette256(nearest256(c, &palette));
+                    // The table answers for the middle m of c's cell, so by
+                    // the triangle inequality it is at most 2 ΔE(c, m) worse.
+                    let k = (r as usize >> 2) << 12 | (g as usize >> 2) << 6 | b as usize >> 2;
+                    let m = cell_colour(k);
+                    let slack = 2.0 * de(c, m) + 1e-3;
+                    assert!(de(c, q) <= de(c, best) + slack, "{c:?}: {q:?} vs {best:?}");
+                    // Cells' middles are answered exactly.
+                    assert_eq!(quantize256(m), nearest256(m, &palette), "{m:?}");
                 }
             }
         }

@@ -127,6 +127,18 @@ use Key as K;
 
 pub const ROWS: &[Row] = &[
     Row {
+        mode: Mode::Any,
+        keys: &[(K::Char('?'), A::Help)],
+        help: "this help",
+        hint: Some("help"),
+    },
+    Row {
+        mode: Mode::Any,
+        keys: &[(K::Char('q'), A::Quit), (K::Ctrl('c'), A::Quit)],
+        help: "quit",
+        hint: Some("quit"),
+    },
+    Row {
         mode: Mode::View,
         keys: &[
             (K::Left, A::Orbit(-1, 0)),
@@ -293,18 +305,6 @@ pub const ROWS: &[Row] = &[
         help: "run the numerical stability battery on this scene",
         hint: Some("stability"),
     },
-    Row {
-        mode: Mode::Any,
-        keys: &[(K::Char('?'), A::Help)],
-        help: "this help",
-        hint: Some("help"),
-    },
-    Row {
-        mode: Mode::Any,
-        keys: &[(K::Char('q'), A::Quit), (K::Ctrl('c'), A::Quit)],
-        help: "quit",
-        hint: Some("quit"),
-    },
 ];
 
 /// What `key` does in `mode`.
@@ -339,12 +339,16 @@ pub fn hints(mode: Mode) -> Vec<(String, &'static str)> {
         .filter(|r| r.mode.overlaps(mode))
         .filter_map(|r| {
             let hint = r.hint?;
-            // Long key lists are shortened to their first and last key.
-            let label = match r.keys {
-                [(k, _)] => k.label(),
-                [(a, _), .., (b, _)] if r.keys.len() > 4 => format!("{}..{}", a.label(), b.label()),
-                _ => r.keys.iter().map(|(k, _)| k.label()).collect::<String>(),
+            // Single characters run together (`wsad`), longer names take a
+            // slash (`v/Tab`); long lists show their first four keys.
+            let labels: Vec<String> = r.keys.iter().take(4).map(|(k, _)| k.label()).collect();
+            let sep = if labels.iter().all(|l| l.chars().count() == 1) {
+                ""
+            } else {
+                "/"
             };
+            let more = if r.keys.len() > 4 { "…" } else { "" };
+            let label = labels.join(sep) + more;
             Some((label, hint))
         })
         .collect()

@@ -15,6 +15,8 @@ use super::app::App;
 
 /// Below this the layout cannot show every panel.
 pub const MIN_SIZE: (u16, u16) = (80, 24);
+/// Height of a render panel with a readable chart.
+const RENDER_WITH_CHART: u16 = 16;
 
 pub use viewport::paint_view;
 
@@ -30,7 +32,7 @@ pub fn draw(f: &mut Frame, app: &mut App) {
         Constraint::Length(1),
     ])
     .areas(area);
-    let side = (area.width / 4).clamp(32, 44);
+    let side = (area.width * 2 / 7).clamp(32, 46);
     let [left, right] =
         Layout::horizontal([Constraint::Min(0), Constraint::Length(side)]).areas(main);
     let [view, debug] = Layout::vertical([
@@ -38,16 +40,22 @@ pub fn draw(f: &mut Frame, app: &mut App) {
         Constraint::Length((left.height * 3 / 10).max(6)),
     ])
     .areas(left);
-    let [bvh, features, render] = Layout::vertical([
+    // Reasons get lines of their own when that leaves the render panel
+    // room for its chart.
+    let mut features = panels::feature_lines(app, right.width, true);
+    if 5 + 1 + features.len() as u16 + RENDER_WITH_CHART > right.height {
+        features = panels::feature_lines(app, right.width, false);
+    }
+    let [bvh, features_area, render] = Layout::vertical([
         Constraint::Length(5),
-        Constraint::Length(12),
+        Constraint::Length(1 + features.len() as u16),
         Constraint::Min(0),
     ])
     .areas(right);
     viewport::draw(f, view, app);
     debug::draw(f, debug, app);
     panels::bvh(f, bvh, app);
-    panels::features(f, features, app);
+    panels::features(f, features_area, features);
     panels::render(f, render, app);
     bars::status(f, status, app);
     bars::hints(f, hints, app);

@@ -43,7 +43,7 @@ pub fn bvh(f: &mut Frame, area: Rect, app: &App) {
     };
     let per_ray = match app.current_frame().and_then(|f| f.per_ray) {
         Some(p) if app.plan.bvh => format!(
-            "per ray: {:.1} nodes, {:.1} tri tests",
+            "per ray: {:.1} nodes, {:.1} tests",
             p.nodes, p.triangle_tests
         ),
         _ if !app.plan.bvh => "per ray: BVH off (brute force)".into(),
@@ -51,16 +51,20 @@ pub fn bvh(f: &mut Frame, area: Rect, app: &App) {
     };
     let text = vec![
         Line::from(format!(
-            "nodes {}  leaves {}  depth {}",
+            "nodes {} leaves {} depth {}",
             s.nodes, s.leaves, s.depth
         )),
         Line::from(format!(
-            "leaf max {} mean {:.1}  SAH cost {:.1}",
+            "leaf max {} mean {:.1} SAH {:.1}",
             s.max_leaf, s.mean_leaf, s.sah_cost
         )),
         Line::from(format!(
-            "build {:.1} ms ({} tris/s)",
-            s.build_ms,
+            "build {} ms, {} tris/s",
+            if s.build_ms < 10.0 {
+                format!("{:.2}", s.build_ms)
+            } else {
+                format!("{:.0}", s.build_ms)
+            },
             si(s.triangles_per_second())
         )),
         Line::from(per_ray),
@@ -68,29 +72,54 @@ pub fn bvh(f: &mut Frame, area: Rect, app: &App) {
     f.render_widget(Paragraph::new(text).block(panel(title)), area);
 }
 
-pub fn features(f: &mut Frame, area: Rect, app: &App) {
-    let lines: Vec<Line> = Feature::ALL
-        .iter()
-        .map(|&feat| {
-            let key = keys::key_for(Action::Toggle(feat)).map_or(" ".into(), |k| k.label());
-            let (state, style) = match app.feature_state(feat) {
-                FeatureState::On => ("on".to_string(), Style::new().fg(Color::Green)),
-                FeatureState::Off => ("off".to_string(), Style::new().fg(Color::DarkGray)),
-                FeatureState::NotNeeded(why) => {
-                    (format!("not needed: {why}"), Style::new().fg(Color::Yellow))
-                }
-                FeatureState::Needs(g) => (
-                    format!("off: needs {}", g.name()),
-                    Style::new().fg(Color::Yellow),
-                ),
-            };
-            Line::from(vec![
-                Span::styled(key, Style::new().add_modifier(Modifier::BOLD)),
-                Span::raw(format!(" {:<14} ", feat.name())),
+/// The features panel's lines for a panel `width` wide. With `wrap`, a
+/// reason too long for the line goes on its own indented line.
+pub fn feature_lines(app: &App, width: u16, wrap: bool) -> Vec<Line<'static>> {
+    let mut lines = Vec::new();
+    for feat in Feature::ALL {
+        let key = keys::key_for(Action::Toggle(feat)).map_or(" ".into(), |k| k.label());
+        // The state, and for features not needed the reason.
+        let (state, why, style) = match app.feature_state(feat) {
+            FeatureState::On => ("on".to_string(), "", Style::new().fg(Color::Green)),
+            FeatureState::Off => ("off".to_string(), "", Style::new().fg(Color::DarkGray)),
+            FeatureState::NotNeeded(why) => (
+                "not needed:".to_string(),
+                why,
+                Style::new().fg(Color::Yellow),
+            ),
+            FeatureState::Needs(g) => (
+                format!("off: needs {}", g.name()),
+                "",
+                Style::new().fg(Color::Yellow),
+            ),
+        };
+        let name = format!(" {:<14} ", feat.name());
+        let head = Span::styled(key, Style::new().add_modifier(Modifier::BOLD));
+        let full = if why.is_empty() {
+            state.clone()
+        } else {
+            format!("{state} {why}")
+        };
+        let fits = 1 + name.len() + full.chars().count() <= width as usize;
+        if wrap && !fits {
+            lines.push(Line::from(vec![
+                head,
+                Span::raw(name),
                 Span::styled(state, style),
-            ])
-        })
-        .collect();
+            ]));
+            lines.push(Line::from(Span::styled(format!("  {why}"), style)));
+        } else {
+            lines.push(Line::from(vec![
+                head,
+                Span::raw(name),
+                Span::styled(full, style),
+            ]));
+        }
+    }
+    lines
+}
+
+pub fn features(f: &mut Frame, area: Rect, lines: Vec<Line<'static>>) {
     f.render_widget(
         Paragraph::new(lines).block(panel(" Features ".into())),
         area,
@@ -101,10 +130,8 @@ pub fn render(f: &mut Frame, area: Rect, app: &App) {
     let block = panel(" Render ".into());
     let inner = block.inner(area);
     f.render_widget(block, area);
-    let [text_area, chart_area] =
-        Layout::vertical([Constraint::Length(4), Constraint::Min(0)]).areas(inner);
     let bytes = format!("terminal {}B/s", si(app.bytes_per_sec));
-    let mut text = match app.current_frame() {
+    let text = match app.current_frame() {
         None => vec![Line::from("starting..."), Line::from(bytes)],
         Some(s) if s.coarse => vec![
             Line::from(format!("coarse preview in {:.1} ms", s.pass_ms)),
@@ -112,35 +139,30 @@ pub fn render(f: &mut Frame, area: Rect, app: &App) {
         ],
         Some(s) => {
             let error = if s.exact {
-                "error: exact (nothing is sampled)".to_string()
+                "error: exact (nothing sampled)".to_string()
             } else if s.spp < 2 {
                 "error: needs 2 spp".to_string()
             } else {
                 format!("error {:.2}% (estimated)", s.error * 100.0)
             };
-            let spp = if s.done && !s.exact {
-                format!("{} spp (done)", s.spp)
-            } else {
-                format!("{} spp", s.spp)
-            };
+            let done = if s.done && !s.exact { " (done)" } else { "" };
             let mut v = vec![
-                Line::from(format!(
-                    "{spp}  pass {:.1} ms  {:.1} Mrays/s",
-                    s.pass_ms, s.mrays
-                )),
+                Line::from(format!("{} spp{done} · {:.1} ms/pass", s.spp, s.pass_ms)),
+                Line::from(format!("{:.1} Mrays/s · {:.1} s", s.mrays, s.elapsed)),
                 Line::from(error),
-                Line::from(format!("{bytes}  {:.1} s", s.elapsed)),
+                Line::from(bytes),
             ];
             if s.bad_samples > 0 {
                 v.push(Line::styled(
-                    format!("{} NaN/Inf samples dropped (n finds one)", s.bad_samples),
+                    format!("{} NaN/Inf samples (n finds one)", s.bad_samples),
                     Style::new().fg(Color::Red),
                 ));
             }
             v
         }
     };
-    text.truncate(text_area.height as usize);
+    let [text_area, chart_area] =
+        Layout::vertical([Constraint::Length(text.len() as u16), Constraint::Min(0)]).areas(inner);
     f.render_widget(Paragraph::new(text), text_area);
     if chart_area.height >= 6 {
         if let Some(s) = app.current_frame().filter(|s| s.history.len() >= 2) {
