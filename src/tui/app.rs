@@ -123,6 +123,8 @@ pub struct App {
     pub rebuilding: bool,
     pub bytes_per_sec: f64,
     bytes_mark: (Instant, u64),
+    /// Generation and time of the last pass that asked for a redraw.
+    shown: (u64, Instant),
     /// Where the image is drawn on screen, set when drawing (for mouse clicks).
     pub viewport: Rect,
     pub debug_area: Rect,
@@ -177,6 +179,7 @@ impl App {
             rebuilding: false,
             bytes_per_sec: 0.0,
             bytes_mark: (Instant::now(), 0),
+            shown: (0, Instant::now()),
             viewport: Rect::default(),
             debug_area: Rect::default(),
             quit: false,
@@ -582,10 +585,7 @@ impl App {
         let mut changed = false;
         loop {
             match self.worker.rx.try_recv() {
-                Ok(m) => {
-                    self.on_msg(m);
-                    changed = true;
-                }
+                Ok(m) => changed |= self.on_msg(m),
                 Err(std::sync::mpsc::TryRecvError::Empty) => break,
                 Err(std::sync::mpsc::TryRecvError::Disconnected) => {
                     bail!("the render worker stopped unexpectedly")
@@ -612,9 +612,23 @@ impl App {
         Ok(changed)
     }
 
-    fn on_msg(&mut self, m: Msg) {
+    /// Takes a message from the worker; true when the screen should be
+    /// redrawn for it.
+    fn on_msg(&mut self, m: Msg) -> bool {
         match m {
-            Msg::Frame(f) => self.frame = Some(f),
+            Msg::Frame(f) => {
+                // Late passes change the image less and less: they are shown
+                // less often, which saves terminal bandwidth.
+                let due = f.coarse
+                    || f.done
+                    || f.generation != self.shown.0
+                    || self.shown.1.elapsed() >= refresh_interval(f.spp);
+                if due {
+                    self.shown = (f.generation, Instant::now());
+                }
+                self.frame = Some(f);
+                due
+            }
             Msg::Bvh(b) => {
                 self.status = format!(
                     "BVH rebuilt with the {} builder in {:.1} ms",
@@ -624,6 +638,7 @@ impl App {
                 self.rebuilding = false;
                 self.tree = None;
                 self.level = self.level.min(self.bvh.stats.depth.saturating_sub(1));
+                true
             }
         }
     }
@@ -640,7 +655,9 @@ impl App {
                 return Ok(false);
             }
             match self.worker.rx.recv_timeout(left) {
-                Ok(m) => self.on_msg(m),
+                Ok(m) => {
+                    self.on_msg(m);
+                }
                 Err(std::sync::mpsc::RecvTimeoutError::Timeout) => return Ok(false),
                 Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
                     bail!("the render worker stopped unexpectedly")
@@ -668,6 +685,13 @@ impl App {
     pub fn cancel_export(&mut self) -> bool {
         self.export.take().is_some()
     }
+}
+
+/// How often a pass at `spp` samples per pixel is worth showing: every
+/// frame up to 32 spp, then less often as each pass changes less, up to
+/// twice a second.
+fn refresh_interval(spp: u32) -> Duration {
+    Duration::from_millis((33 * spp as u64 / 32).min(500))
 }
 
 /// The help, generated from the key table.

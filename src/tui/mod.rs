@@ -14,13 +14,13 @@ pub mod keys;
 pub mod widgets;
 pub mod worker;
 
-use std::io::{self, BufWriter, Stdout, Write};
+use std::io::{self, BufWriter, IsTerminal, Stdout, Write};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Once};
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use ratatui::backend::CrosstermBackend;
 use ratatui::crossterm::event::{self, DisableMouseCapture, EnableMouseCapture};
 use ratatui::crossterm::terminal::{
@@ -41,6 +41,9 @@ const POLL_IDLE: Duration = Duration::from_millis(250);
 
 /// Opens the TUI on the scene; returns when the user quits.
 pub fn run(opts: &SceneOpts, color: Option<ColorMode>) -> Result<ExitCode> {
+    if !io::stdout().is_terminal() {
+        bail!("the TUI needs an interactive terminal; `rayterm render` writes images without one");
+    }
     let p = prepare(opts)?;
     let color =
         color.unwrap_or_else(|| ColorMode::detect(std::env::var("COLORTERM").ok().as_deref()));

@@ -287,3 +287,26 @@ fn export_writes_a_png_in_the_background() {
     assert!(app.status.contains(&path.display().to_string()));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_click_selects_the_pixel_under_it() {
+    use ratatui::crossterm::event::{Event, KeyModifiers, MouseButton, MouseEvent, MouseEventKind};
+    let mut app = app("cornell", &[]);
+    let mut t = terminal(100, 30);
+    settle(&mut t, &mut app);
+    let v = app.viewport;
+    let click = |column, row| {
+        Event::Mouse(MouseEvent {
+            kind: MouseEventKind::Down(MouseButton::Left),
+            column,
+            row,
+            modifiers: KeyModifiers::NONE,
+        })
+    };
+    app.handle_event(&click(v.x + 5, v.y + 3));
+    let s = app.selected.unwrap();
+    assert_eq!((s.x, s.y), (5, 6), "cell row 3 holds pixel rows 6 and 7");
+    // Clicks outside the viewport select nothing new.
+    app.handle_event(&click(v.x + v.width + 2, v.y));
+    assert_eq!(app.selected.map(|s| (s.x, s.y)), Some((5, 6)));
+}
