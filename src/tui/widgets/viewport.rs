@@ -9,6 +9,7 @@ use ratatui::widgets::{Block, Borders, Paragraph};
 use ratatui::Frame;
 
 use super::rays;
+use crate::scene::camera::CameraFrame;
 use crate::tui::app::{App, Overlay};
 use crate::tui::color::{self, ColorMode};
 use crate::tui::worker::Snapshot;
@@ -75,16 +76,27 @@ pub fn paint_view(buf: &mut Buffer, area: Rect, s: &Snapshot, mode: ColorMode) {
 fn draw_overlays(img: &mut [Vec3], w: u32, h: u32, app: &mut App) -> Option<String> {
     let camera = app.camera;
     let frame = camera.frame(w, h);
-    let reach = app.reach;
+    let legend = draw_bvh(img, w, h, &frame, app);
     if app.show_rays {
+        let reach = app.reach;
         if let Some(tree) = app.tree() {
             rays::draw(img, w, h, &camera, &frame, tree, reach);
         }
     }
+    legend
+}
+
+/// The BVH overlay: box outlines of one level or of the leaves, or a heat map.
+fn draw_bvh(
+    _img: &mut [Vec3],
+    _w: u32,
+    _h: u32,
+    _frame: &CameraFrame,
+    app: &App,
+) -> Option<String> {
     match app.overlay {
         Overlay::Off => None,
-        // MERGE(bvhdebug): draw the level and leaf boxes and the heat maps
-        // here with `bvh::debug` and `render::overlay`.
+        // MERGE(bvhdebug): draw with `bvh::debug` and `render::overlay` here.
         _ => Some(format!(
             "BVH overlay ({}) needs the BVH debug views, not in this build",
             app.overlay_name()
