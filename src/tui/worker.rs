@@ -393,3 +393,59 @@ fn run(mut w: Worker, rx: Receiver<Cmd>, tx: Sender<Msg>, latest: Arc<AtomicU64>
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::Feature;
+
+    fn worker(features: Features) -> Worker {
+        let scene = Arc::new(crate::scene::load("cornell").unwrap());
+        let bvh = Arc::new(bvh::build(&scene.geometry, Builder::Sah));
+        let mut w = Worker::new(scene.clone(), bvh, 1);
+        w.apply(Cmd::View(
+            1,
+            View {
+                camera: scene.camera,
+                features,
+                width: 16,
+                height: 12,
+            },
+        ));
+        w
+    }
+
+    #[test]
+    fn a_coarse_preview_comes_first_then_one_sample_per_pass() {
+        let mut w = worker(Features::all());
+        let s = w.step(&|| false).unwrap();
+        assert!(s.coarse && s.spp == 0);
+        assert_eq!(s.image.len(), 16 * 12);
+        // Each 4x4 block of the preview is one coarse pixel.
+        assert_eq!(s.image[0], s.image[3 * 16 + 3]);
+        for spp in 1..=3 {
+            let s = w.step(&|| false).unwrap();
+            assert!(!s.coarse);
+            assert_eq!((s.spp, s.generation), (spp, 1));
+        }
+        assert!(w.step(&|| false).unwrap().per_ray.is_some());
+    }
+
+    #[test]
+    fn cancelled_passes_send_nothing() {
+        let mut w = worker(Features::all());
+        assert!(w.step(&|| true).is_none());
+    }
+
+    #[test]
+    fn deterministic_views_stop_after_one_pass() {
+        let mut w = worker(Features::all().without(&[Feature::Supersampling]));
+        let mut last = None;
+        while let Some(s) = w.step(&|| false) {
+            last = Some(s);
+        }
+        let s = last.unwrap();
+        assert!(s.exact && s.done && s.spp == 1);
+        assert!(w.idle());
+    }
+}
