@@ -310,3 +310,23 @@ fn a_click_selects_the_pixel_under_it() {
     app.handle_event(&click(v.x + v.width + 2, v.y));
     assert_eq!(app.selected.map(|s| (s.x, s.y)), Some((5, 6)));
 }
+
+#[test]
+fn no_command_means_the_tui() {
+    use crate::cli::{Cli, Command};
+    use clap::Parser;
+    assert!(Cli::try_parse_from(["rayterm"]).unwrap().command.is_none());
+    let cli = Cli::try_parse_from(["rayterm", "tui", "teapot", "--color", "16", "--no", "bloom"]);
+    match cli.unwrap().command {
+        Some(Command::Tui(a)) => {
+            assert_eq!(a.scene, "teapot");
+            assert_eq!(a.color, Some(ColorMode::Ansi16));
+            assert_eq!(a.scene_opts().off, vec![Feature::Bloom]);
+        }
+        other => panic!("{other:?}"),
+    }
+    let Some(Command::Tui(a)) = Cli::try_parse_from(["rayterm", "tui"]).unwrap().command else {
+        panic!("tui parses");
+    };
+    assert_eq!((a.scene.as_str(), a.seed), ("cornell", 1));
+}
