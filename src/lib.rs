@@ -11,3 +11,4 @@ pub mod inspect;
 pub mod render;
 pub mod report;
 pub mod scene;
+pub mod tui;

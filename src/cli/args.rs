@@ -7,6 +7,7 @@ use clap::{Args, Parser, Subcommand};
 use crate::render::debug_view::DebugView;
 use crate::render::Feature;
 use crate::scene::Builder;
+use crate::tui::color::ColorMode;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -15,16 +16,17 @@ use crate::scene::Builder;
     about = "A ray tracer that lives in the terminal"
 )]
 pub struct Cli {
+    /// Without a command, the TUI opens on the Cornell box.
     #[command(subcommand)]
-    pub command: Command,
+    pub command: Option<Command>,
 }
 
 impl Cli {
     pub fn threads(&self) -> Option<usize> {
         match &self.command {
-            Command::Render(a) => a.threads,
-            Command::Converge(a) => a.threads,
-            Command::Scenes | Command::Inspect(_) => None,
+            Some(Command::Render(a)) => a.threads,
+            Some(Command::Converge(a)) => a.threads,
+            _ => None,
         }
     }
 }
@@ -44,6 +46,8 @@ pub enum Command {
     /// Mrays/s, RMSE, relMSE and the film's own error estimate, and compares
     /// sampling strategies at equal time.
     Converge(ConvergeArgs),
+    /// Explore a scene in the terminal (the default command).
+    Tui(TuiArgs),
 }
 
 /// `WxH`, e.g. `1280x720`.
@@ -94,6 +98,23 @@ pub struct SceneOpts {
     /// Independent uniform samples instead of jittered (stratified) ones.
     #[arg(long)]
     pub independent: bool,
+}
+
+impl SceneOpts {
+    /// Options as the command line would give them with only `scene` set.
+    pub fn new(scene: &str) -> Self {
+        Self {
+            scene: scene.to_string(),
+            size: None,
+            builder: None,
+            off: Vec::new(),
+            seed: 1,
+            no_plan: false,
+            light_samples: None,
+            glossy_samples: None,
+            independent: false,
+        }
+    }
 }
 
 #[derive(Args, Debug)]
@@ -212,4 +233,38 @@ pub struct ConvergeArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
+}
+
+#[derive(Args, Debug)]
+pub struct TuiArgs {
+    /// Built-in name (see `rayterm scenes`), a .toml scene file or a .obj mesh.
+    #[arg(default_value = "cornell")]
+    pub scene: String,
+    /// Size of PNG exports (`p`), WIDTHxHEIGHT (default: the scene's).
+    #[arg(long, value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Colours (default: truecolor when COLORTERM says so, else 256).
+    #[arg(long, value_enum)]
+    pub color: Option<ColorMode>,
+    /// BVH builder (default: the scene's, else sah).
+    #[arg(long, value_enum)]
+    pub builder: Option<Builder>,
+    /// Start with a feature off (repeatable).
+    #[arg(long = "no", value_enum, value_name = "FEATURE")]
+    pub off: Vec<Feature>,
+    /// Seed of the random numbers.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+impl TuiArgs {
+    pub fn scene_opts(&self) -> SceneOpts {
+        SceneOpts {
+            size: self.size,
+            builder: self.builder,
+            off: self.off.clone(),
+            seed: self.seed,
+            ..SceneOpts::new(&self.scene)
+        }
+    }
 }

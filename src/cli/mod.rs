@@ -12,6 +12,9 @@ use std::process::ExitCode;
 use clap::Parser;
 
 pub use args::{parse_size, Cli, Command};
+pub(crate) use args::{SceneOpts, Worst};
+pub(crate) use inspect::find_worst;
+pub(crate) use render::{prepare, Prepared};
 
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
@@ -24,11 +27,18 @@ pub fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     }
-    let result = match cli.command {
+    // No command opens the TUI exactly as `rayterm tui` does.
+    let command = cli.command.unwrap_or_else(|| {
+        Cli::parse_from(["rayterm", "tui"])
+            .command
+            .expect("`rayterm tui` parses")
+    });
+    let result = match command {
         Command::Render(a) => render::run(a),
         Command::Scenes => scenes::run(),
         Command::Inspect(a) => inspect::run(a),
         Command::Converge(a) => converge::run(a),
+        Command::Tui(a) => crate::tui::run(&a.scene_opts(), a.color),
     };
     match result {
         Ok(code) => code,

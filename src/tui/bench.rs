@@ -1,0 +1,176 @@
+//! The TUI's speed: milliseconds per progressive pass through the worker's
+//! code path, and bytes written to the terminal per frame.
+
+use std::io;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{bail, Result};
+use ratatui::backend::CrosstermBackend;
+use ratatui::layout::Rect;
+use ratatui::{Terminal, TerminalOptions, Viewport};
+use serde::Serialize;
+
+use super::color::ColorMode;
+use super::widgets::paint_view;
+use super::worker::{Cmd, View, Worker};
+use super::CountingWriter;
+use crate::cli::{prepare, SceneOpts};
+
+/// What [`measure_pass`] measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct TuiPassStats {
+    pub scene: String,
+    pub triangles: usize,
+    /// Image size in pixels: the terminal's columns by twice its rows.
+    pub width: u32,
+    pub height: u32,
+    pub threads: usize,
+    /// Full passes measured (fewer than asked when the scene is exact after one).
+    pub passes: u32,
+    /// The first pass, which also counts BVH work for the panel.
+    pub first_pass_ms: f64,
+    /// Render time of the later passes (one sample per pixel each).
+    pub pass_ms_mean: f64,
+    pub pass_ms_median: f64,
+    pub pass_ms_min: f64,
+    /// Whole worker step of the later passes: render, error estimate,
+    /// worst pixels and snapshot.
+    pub step_ms_mean: f64,
+    pub mrays_per_s: f64,
+    /// Bytes written to the terminal for the first frame (every cell) and
+    /// per later frame (changed cells only), in truecolor and 256 colours.
+    pub first_frame_bytes: u64,
+    pub frame_bytes_mean: f64,
+    pub frame_bytes_mean_256: f64,
+}
+
+/// A terminal of `cols x rows` that counts what it would write.
+type Counting = Terminal<CrosstermBackend<CountingWriter<io::Sink>>>;
+
+fn counting_terminal(cols: u16, rows: u16) -> Result<(Counting, Arc<AtomicU64>)> {
+    let count = Arc::new(AtomicU64::new(0));
+    let backend = CrosstermBackend::new(CountingWriter {
+        inner: io::sink(),
+        count: count.clone(),
+    });
+    let t = Terminal::with_options(
+        backend,
+        TerminalOptions {
+            viewport: Viewport::Fixed(Rect::new(0, 0, cols, rows)),
+        },
+    )?;
+    Ok((t, count))
+}
+
+/// Renders `passes` progressive passes of `scene_spec` at the size of a
+/// `cols x rows` terminal (two pixels per cell), with every feature the
+/// scene uses (shadows included), and draws each into a counting terminal
+/// filled by the viewport.
+pub fn measure_pass(scene_spec: &str, cols: u16, rows: u16, passes: u32) -> Result<TuiPassStats> {
+    if cols == 0 || rows == 0 || passes == 0 {
+        bail!("measure_pass needs a non-empty terminal and at least one pass");
+    }
+    let p = prepare(&SceneOpts::new(scene_spec))?;
+    let (width, height) = (cols as u32, rows as u32 * 2);
+    let scene = Arc::new(p.scene);
+    let mut worker = Worker::new(scene.clone(), Arc::new(p.bvh), p.seed);
+    worker.apply(Cmd::View(
+        1,
+        View {
+            camera: scene.camera,
+            features: p.plan.features,
+            width,
+            height,
+        },
+    ));
+    let (mut term, bytes) = counting_terminal(cols, rows)?;
+    let (mut term256, bytes256) = counting_terminal(cols, rows)?;
+    let (mut pass_ms, mut step_ms, mut frame_bytes, mut frame_bytes_256) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut rays = Vec::new();
+    while (pass_ms.len() as u32) < passes {
+        let start = Instant::now();
+        let Some(s) = worker.step(&|| false) else {
+            break;
+        };
+        let step = start.elapsed().as_secs_f64() * 1e3;
+        if s.coarse {
+            continue;
+        }
+        pass_ms.push(s.pass_ms);
+        step_ms.push(step);
+        rays.push(s.mrays * s.pass_ms * 1e3);
+        for (t, count, mode, out) in [
+            (&mut term, &bytes, ColorMode::Truecolor, &mut frame_bytes),
+            (
+                &mut term256,
+                &bytes256,
+                ColorMode::Palette256,
+                &mut frame_bytes_256,
+            ),
+        ] {
+            let before = count.load(Ordering::Relaxed);
+            t.draw(|f| {
+                let area = f.area();
+                paint_view(f.buffer_mut(), area, &s, mode);
+            })?;
+            out.push(count.load(Ordering::Relaxed) - before);
+        }
+    }
+    if pass_ms.is_empty() {
+        bail!("no pass was rendered");
+    }
+    let later = |v: &[f64]| -> Vec<f64> {
+        if v.len() > 1 {
+            v[1..].to_vec()
+        } else {
+            v.to_vec()
+        }
+    };
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let mut sorted = later(&pass_ms);
+    sorted.sort_by(f64::total_cmp);
+    let later_bytes = |v: &[u64]| -> f64 {
+        let v: Vec<f64> = v.iter().map(|&b| b as f64).collect();
+        mean(&later(&v))
+    };
+    let pass_mean = mean(&sorted);
+    Ok(TuiPassStats {
+        scene: scene.name.clone(),
+        triangles: scene.geometry.triangle_count(),
+        width,
+        height,
+        threads: rayon::current_num_threads(),
+        passes: pass_ms.len() as u32,
+        first_pass_ms: pass_ms[0],
+        pass_ms_mean: pass_mean,
+        pass_ms_median: sorted[sorted.len() / 2],
+        pass_ms_min: sorted[0],
+        step_ms_mean: mean(&later(&step_ms)),
+        mrays_per_s: later(&rays).iter().sum::<f64>() / (later(&pass_ms).iter().sum::<f64>() * 1e3),
+        first_frame_bytes: frame_bytes[0],
+        frame_bytes_mean: later_bytes(&frame_bytes),
+        frame_bytes_mean_256: later_bytes(&frame_bytes_256),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn measures_passes_and_bytes() {
+        let s = measure_pass("cornell", 40, 12, 3).unwrap();
+        assert_eq!((s.width, s.height, s.passes), (40, 24, 3));
+        assert!(s.pass_ms_mean > 0.0 && s.mrays_per_s > 0.0);
+        // The first frame paints every cell: at least the half block per cell.
+        assert!(
+            s.first_frame_bytes >= 40 * 12 * 3,
+            "{}",
+            s.first_frame_bytes
+        );
+        assert!(s.frame_bytes_mean <= s.first_frame_bytes as f64);
+    }
+}

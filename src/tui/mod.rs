@@ -1,0 +1,172 @@
+//! The terminal UI: explore a scene with a progressively rendered viewport,
+//! BVH, feature and render panels, and the selected pixel's ray tree.
+//!
+//! `app` holds the state and actions, `keys` the one key table, `worker`
+//! renders on its own thread, `widgets` draw, `color` turns pixels into
+//! half-block cells, `export` writes PNGs in the background and `bench`
+//! measures the pass time and terminal bandwidth.
+
+pub mod app;
+pub mod bench;
+pub mod color;
+pub mod export;
+pub mod keys;
+pub mod widgets;
+pub mod worker;
+
+use std::io::{self, BufWriter, IsTerminal, Stdout, Write};
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Once};
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context, Result};
+use ratatui::backend::CrosstermBackend;
+use ratatui::crossterm::event::{self, DisableMouseCapture, EnableMouseCapture};
+use ratatui::crossterm::terminal::{
+    disable_raw_mode, enable_raw_mode, EnterAlternateScreen, LeaveAlternateScreen,
+};
+use ratatui::crossterm::{cursor, execute};
+use ratatui::Terminal;
+
+use crate::cli::{prepare, SceneOpts};
+use app::App;
+use color::ColorMode;
+
+/// At most this many frames per second are drawn.
+const FRAME: Duration = Duration::from_millis(33);
+/// How often the loop looks for new passes while rendering, and while idle.
+const POLL_BUSY: Duration = Duration::from_millis(8);
+const POLL_IDLE: Duration = Duration::from_millis(250);
+
+/// Opens the TUI on the scene; returns when the user quits.
+pub fn run(opts: &SceneOpts, color: Option<ColorMode>) -> Result<ExitCode> {
+    if !io::stdout().is_terminal() {
+        bail!("the TUI needs an interactive terminal; `rayterm render` writes images without one");
+    }
+    let p = prepare(opts)?;
+    let color =
+        color.unwrap_or_else(|| ColorMode::detect(std::env::var("COLORTERM").ok().as_deref()));
+    let mut app = App::new(p, color)?;
+    let bytes = Arc::new(AtomicU64::new(0));
+    let guard = TerminalGuard::enter()?;
+    let writer = CountingWriter {
+        inner: BufWriter::with_capacity(1 << 16, io::stdout()),
+        count: bytes.clone(),
+    };
+    let result = Terminal::new(CrosstermBackend::new(writer))
+        .context("cannot set up the terminal")
+        .and_then(|mut t| event_loop(&mut t, &mut app, &bytes));
+    drop(guard);
+    if app.cancel_export() {
+        eprintln!("rayterm: an unfinished PNG export was cancelled");
+    }
+    result.map(|()| ExitCode::SUCCESS)
+}
+
+fn event_loop<W: Write>(
+    terminal: &mut Terminal<CrosstermBackend<W>>,
+    app: &mut App,
+    bytes: &AtomicU64,
+) -> Result<()> {
+    let mut dirty = true;
+    let mut last_draw = Instant::now() - FRAME;
+    loop {
+        dirty |= app.poll()?;
+        dirty |= app.note_bytes(bytes.load(Ordering::Relaxed));
+        if dirty && last_draw.elapsed() >= FRAME {
+            terminal.draw(|f| widgets::draw(f, app))?;
+            last_draw = Instant::now();
+            dirty = false;
+        }
+        let idle = app.current_frame().is_some_and(|f| f.done) && app.export_progress().is_none();
+        let wait = if dirty {
+            FRAME.saturating_sub(last_draw.elapsed())
+        } else if idle {
+            POLL_IDLE
+        } else {
+            POLL_BUSY
+        };
+        if event::poll(wait)? {
+            // Take every pending event before drawing again.
+            loop {
+                app.handle_event(&event::read()?);
+                if app.quit || !event::poll(Duration::ZERO)? {
+                    break;
+                }
+            }
+            dirty = true;
+        }
+        if app.quit {
+            return Ok(());
+        }
+    }
+}
+
+/// Counts the bytes written to the terminal, for the bandwidth readout.
+pub struct CountingWriter<W> {
+    pub inner: W,
+    pub count: Arc<AtomicU64>,
+}
+
+impl<W: Write> Write for CountingWriter<W> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.count.fetch_add(n as u64, Ordering::Relaxed);
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// Whether the terminal is in the TUI's state (raw mode, alternate screen).
+static ACTIVE: AtomicBool = AtomicBool::new(false);
+
+/// Puts the terminal back; safe to call more than once and from a panic.
+fn restore() {
+    if ACTIVE.swap(false, Ordering::SeqCst) {
+        let mut out: Stdout = io::stdout();
+        let _ = disable_raw_mode();
+        let _ = execute!(out, DisableMouseCapture, LeaveAlternateScreen, cursor::Show);
+    }
+}
+
+/// Raw mode, alternate screen, mouse capture and a hidden cursor while it
+/// lives; the terminal is restored when it drops, and by a panic hook
+/// before any panic message is printed.
+struct TerminalGuard;
+
+impl TerminalGuard {
+    fn enter() -> Result<Self> {
+        static HOOK: Once = Once::new();
+        HOOK.call_once(|| {
+            let previous = std::panic::take_hook();
+            std::panic::set_hook(Box::new(move |info| {
+                restore();
+                previous(info);
+            }));
+        });
+        enable_raw_mode().context("cannot switch the terminal to raw mode")?;
+        ACTIVE.store(true, Ordering::SeqCst);
+        let guard = TerminalGuard;
+        execute!(
+            io::stdout(),
+            EnterAlternateScreen,
+            EnableMouseCapture,
+            cursor::Hide
+        )
+        .context("cannot set up the terminal")?;
+        Ok(guard)
+    }
+}
+
+impl Drop for TerminalGuard {
+    fn drop(&mut self) {
+        restore();
+    }
+}
+
+#[cfg(test)]
+mod tests;

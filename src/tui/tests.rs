@@ -1,0 +1,329 @@
+//! The app driven without a real terminal: ratatui's test backend, with the
+//! worker thread waited on with a timeout.
+
+use std::time::Duration;
+
+use ratatui::backend::TestBackend;
+use ratatui::style::Color;
+use ratatui::Terminal;
+
+use super::app::App;
+use super::color::ColorMode;
+use super::keys::Key;
+use super::widgets;
+use crate::cli::{prepare, SceneOpts};
+use crate::render::Feature;
+
+const WAIT: Duration = Duration::from_secs(30);
+
+fn app(spec: &str, off: &[Feature]) -> App {
+    let p = prepare(&SceneOpts {
+        size: Some((24, 16)),
+        off: off.to_vec(),
+        ..SceneOpts::new(spec)
+    })
+    .unwrap();
+    App::new(p, ColorMode::Truecolor).unwrap()
+}
+
+fn terminal(w: u16, h: u16) -> Terminal<TestBackend> {
+    Terminal::new(TestBackend::new(w, h)).unwrap()
+}
+
+/// Draws, waits for a full pass of the view that drawing asked for, and
+/// draws again.
+fn settle(t: &mut Terminal<TestBackend>, app: &mut App) -> String {
+    t.draw(|f| widgets::draw(f, app)).unwrap();
+    assert!(app.wait_frame(WAIT).unwrap(), "no pass within {WAIT:?}");
+    t.draw(|f| widgets::draw(f, app)).unwrap();
+    text(t)
+}
+
+fn text(t: &Terminal<TestBackend>) -> String {
+    let b = t.backend().buffer();
+    (0..b.area.height)
+        .map(|y| {
+            (0..b.area.width)
+                .map(|x| b[(x, y)].symbol())
+                .collect::<String>()
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+fn line_with<'a>(screen: &'a str, needle: &str) -> &'a str {
+    screen
+        .lines()
+        .find(|l| l.contains(needle))
+        .unwrap_or_else(|| panic!("no line with {needle:?} in\n{screen}"))
+}
+
+#[test]
+fn a_frame_shows_every_panel() {
+    let mut app = app("cornell", &[]);
+    let mut t = terminal(100, 30);
+    let s = settle(&mut t, &mut app);
+    for title in [
+        "BVH: sah, 32 triangles",
+        "Features",
+        "Render",
+        "Ray tree",
+        "cornell",
+    ] {
+        assert!(s.contains(title), "{title:?} missing in\n{s}");
+    }
+    assert!(s.contains("spp") && s.contains("Mrays/s"), "{s}");
+    assert!(s.contains("per ray:"), "{s}");
+    // The viewport is half blocks with two colours each.
+    let b = t.backend().buffer();
+    let v = app.viewport;
+    let cell = &b[(v.x + v.width / 2, v.y + v.height / 2)];
+    assert_eq!(cell.symbol(), "▀");
+    assert!(matches!(cell.fg, Color::Rgb(..)) && matches!(cell.bg, Color::Rgb(..)));
+    assert_eq!(app.view_size, (v.width as u32, 2 * v.height as u32));
+}
+
+#[test]
+fn toggling_a_feature_changes_the_features_panel() {
+    let mut app = app("cornell", &[]);
+    let mut t = terminal(100, 30);
+    let s = settle(&mut t, &mut app);
+    assert!(line_with(&s, "shadows").contains("shadows        on"));
+    let before = app.generation();
+    app.handle_key(Key::Char('1'));
+    assert!(
+        app.generation() > before,
+        "toggling shadows restarts rendering"
+    );
+    let s = settle(&mut t, &mut app);
+    assert!(
+        line_with(&s, "shadows").contains("shadows        off"),
+        "{s}"
+    );
+    // Cornell has no textures: the panel says so, and toggling says so.
+    assert!(line_with(&s, "textures").contains("not needed"), "{s}");
+    let before = app.generation();
+    app.handle_key(Key::Char('4'));
+    assert_eq!(
+        app.generation(),
+        before,
+        "a feature the scene does not need changes nothing"
+    );
+    assert!(
+        app.status.contains("not needed: no textures in scene"),
+        "{}",
+        app.status
+    );
+}
+
+#[test]
+fn selecting_a_pixel_fills_the_debug_pane() {
+    let mut app = app("cornell", &[]);
+    let mut t = terminal(100, 30);
+    let s = settle(&mut t, &mut app);
+    assert!(!s.contains("camera ray"));
+    app.handle_key(Key::Char('v'));
+    let s = settle(&mut t, &mut app);
+    assert!(s.contains("camera ray"), "{s}");
+    let (w, h) = app.view_size;
+    assert!(s.contains(&format!("pixel ({}, {})", w / 2, h / 2)), "{s}");
+    // In select mode the arrows move the cursor, not the camera.
+    let g = app.generation();
+    app.handle_key(Key::Right);
+    app.handle_key(Key::Char('j'));
+    assert_eq!(app.generation(), g);
+    let s = settle(&mut t, &mut app);
+    assert!(
+        s.contains(&format!("pixel ({}, {})", w / 2 + 1, h / 2 + 1)),
+        "{s}"
+    );
+}
+
+#[test]
+fn folds_open_and_close() {
+    // The area light's 16 samples fold into one line.
+    let mut app = app("cornell-area", &[]);
+    let mut t = terminal(120, 40);
+    settle(&mut t, &mut app);
+    let (w, h) = app.view_size;
+    app.select(w / 2, h * 7 / 8, 0);
+    let lines = app.debug_lines();
+    let folded = lines.len();
+    assert!(lines.iter().any(|l| l.text.starts_with("[+] 16 samples")));
+    // Enter opens the first fold below the cursor and scrolls to it.
+    app.handle_key(Key::Enter);
+    let s = settle(&mut t, &mut app);
+    assert!(s.contains("[-] 16 samples"), "{s}");
+    assert_eq!(app.debug_lines().len(), folded + 16);
+    app.handle_key(Key::Char(' '));
+    assert_eq!(app.debug_lines().len(), folded);
+}
+
+#[test]
+fn rays_are_drawn_into_the_view() {
+    let mut app = app("cornell", &[]);
+    let mut t = terminal(100, 30);
+    settle(&mut t, &mut app);
+    let (w, h) = app.view_size;
+    // A pixel whose shadow ray was traced (lit by the light or blocked).
+    let has_shadow_ray = |app: &mut App| {
+        let tree = app.tree().unwrap();
+        tree.root
+            .lights
+            .iter()
+            .flat_map(|l| &l.samples)
+            .any(|s| s.shadow_ray.is_some())
+    };
+    let found = (0..h).rev().step_by(3).any(|y| {
+        app.select(w / 3, y, 0);
+        has_shadow_ray(&mut app)
+    });
+    assert!(found, "no pixel with a shadow ray");
+    let count = |t: &Terminal<TestBackend>| {
+        let b = t.backend().buffer();
+        let ray = [Color::Rgb(255, 255, 255), Color::Rgb(255, 0, 0)];
+        b.content()
+            .iter()
+            .filter(|c| ray.contains(&c.fg) || ray.contains(&c.bg))
+            .count()
+    };
+    settle(&mut t, &mut app);
+    let before = count(&t);
+    app.handle_key(Key::Char('o'));
+    settle(&mut t, &mut app);
+    assert!(count(&t) > before + 3, "{before} -> {}", count(&t));
+}
+
+#[test]
+fn a_small_terminal_shows_a_message() {
+    let mut app = app("cornell", &[]);
+    let mut t = terminal(60, 20);
+    t.draw(|f| widgets::draw(f, &mut app)).unwrap();
+    assert!(
+        text(&t).contains("terminal too small (need 80x24"),
+        "{}",
+        text(&t)
+    );
+    let mut t = terminal(80, 24);
+    let s = settle(&mut t, &mut app);
+    assert!(s.contains("Features") && s.contains("Ray tree"), "{s}");
+}
+
+#[test]
+fn help_lists_every_binding() {
+    let mut app = app("cornell", &[]);
+    let mut t = terminal(140, 60);
+    settle(&mut t, &mut app);
+    app.handle_key(Key::Char('?'));
+    t.draw(|f| widgets::draw(f, &mut app)).unwrap();
+    let s = text(&t);
+    for r in super::keys::ROWS {
+        assert!(s.contains(r.help), "{:?} missing from the help", r.help);
+    }
+    // Keys go to the popup while it is open.
+    let g = app.generation();
+    app.handle_key(Key::Char('w'));
+    assert_eq!(app.generation(), g);
+    app.handle_key(Key::Esc);
+    assert!(app.popup.is_none());
+}
+
+#[test]
+fn deterministic_scenes_say_exact() {
+    let mut app = app("cornell", &[Feature::Supersampling]);
+    let mut t = terminal(100, 30);
+    let s = settle(&mut t, &mut app);
+    assert!(s.contains("exact"), "{s}");
+    assert!(app.current_frame().unwrap().done);
+}
+
+#[test]
+fn the_builder_switch_rebuilds() {
+    let mut app = app("cornell", &[]);
+    let mut t = terminal(100, 30);
+    settle(&mut t, &mut app);
+    app.handle_key(Key::Char('b'));
+    let s = settle(&mut t, &mut app);
+    assert!(s.contains("BVH: median"), "{s}");
+    assert!(
+        app.status.contains("rebuilt with the median builder"),
+        "{}",
+        app.status
+    );
+}
+
+#[test]
+fn worst_pixel_keys_select_a_pixel() {
+    let mut app = app("cornell", &[]);
+    let mut t = terminal(100, 30);
+    settle(&mut t, &mut app);
+    app.handle_key(Key::Char('B'));
+    assert!(app.selected.is_some(), "{}", app.status);
+    app.handle_key(Key::Char('n'));
+    assert!(app.status.contains("no pixel had a NaN"), "{}", app.status);
+}
+
+#[test]
+fn export_writes_a_png_in_the_background() {
+    let dir = std::env::temp_dir().join(format!("rayterm-tui-export-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut app = app("cornell", &[]);
+    app.export_dir = dir.clone();
+    let mut t = terminal(100, 30);
+    settle(&mut t, &mut app);
+    app.handle_key(Key::Char('p'));
+    let end = std::time::Instant::now() + WAIT;
+    while app.export_progress().is_some() && std::time::Instant::now() < end {
+        std::thread::sleep(Duration::from_millis(10));
+        app.poll().unwrap();
+    }
+    assert!(app.status.starts_with("saved "), "{}", app.status);
+    let path = dir.join("rayterm-cornell-001.png");
+    let img = image::open(&path).unwrap();
+    assert_eq!((img.width(), img.height()), (24, 16));
+    assert!(app.status.contains(&path.display().to_string()));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_click_selects_the_pixel_under_it() {
+    use ratatui::crossterm::event::{Event, KeyModifiers, MouseButton, MouseEvent, MouseEventKind};
+    let mut app = app("cornell", &[]);
+    let mut t = terminal(100, 30);
+    settle(&mut t, &mut app);
+    let v = app.viewport;
+    let click = |column, row| {
+        Event::Mouse(MouseEvent {
+            kind: MouseEventKind::Down(MouseButton::Left),
+            column,
+            row,
+            modifiers: KeyModifiers::NONE,
+        })
+    };
+    app.handle_event(&click(v.x + 5, v.y + 3));
+    let s = app.selected.unwrap();
+    assert_eq!((s.x, s.y), (5, 6), "cell row 3 holds pixel rows 6 and 7");
+    // Clicks outside the viewport select nothing new.
+    app.handle_event(&click(v.x + v.width + 2, v.y));
+    assert_eq!(app.selected.map(|s| (s.x, s.y)), Some((5, 6)));
+}
+
+#[test]
+fn no_command_means_the_tui() {
+    use crate::cli::{Cli, Command};
+    use clap::Parser;
+    assert!(Cli::try_parse_from(["rayterm"]).unwrap().command.is_none());
+    let cli = Cli::try_parse_from(["rayterm", "tui", "teapot", "--color", "16", "--no", "bloom"]);
+    match cli.unwrap().command {
+        Some(Command::Tui(a)) => {
+            assert_eq!(a.scene, "teapot");
+            assert_eq!(a.color, Some(ColorMode::Ansi16));
+            assert_eq!(a.scene_opts().off, vec![Feature::Bloom]);
+        }
+        other => panic!("{other:?}"),
+    }
+    let Some(Command::Tui(a)) = Cli::try_parse_from(["rayterm", "tui"]).unwrap().command else {
+        panic!("tui parses");
+    };
+    assert_eq!((a.scene.as_str(), a.seed), ("cornell", 1));
+}

@@ -1,0 +1,253 @@
+//! The side panels: BVH statistics, feature toggles and render progress
+//! with its error chart.
+
+use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::symbols::Marker;
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Axis, Block, Borders, Chart, Dataset, GraphType, Paragraph};
+use ratatui::Frame;
+
+use crate::render::Feature;
+use crate::tui::app::{App, FeatureState};
+use crate::tui::keys::{self, Action};
+
+fn panel(title: String) -> Block<'static> {
+    Block::new()
+        .borders(Borders::TOP)
+        .title(title)
+        .title_style(Style::new().add_modifier(Modifier::BOLD))
+}
+
+/// `1234567` as `1.23M`.
+pub fn si(x: f64) -> String {
+    let (v, unit) = match x.abs() {
+        a if a >= 1e9 => (x / 1e9, "G"),
+        a if a >= 1e6 => (x / 1e6, "M"),
+        a if a >= 1e3 => (x / 1e3, "k"),
+        _ => (x, ""),
+    };
+    if unit.is_empty() {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.2}{unit}")
+    }
+}
+
+pub fn bvh(f: &mut Frame, area: Rect, app: &App) {
+    let s = &app.bvh.stats;
+    let title = if app.rebuilding {
+        format!(" BVH: rebuilding with {}... ", app.builder)
+    } else {
+        format!(" BVH: {}, {} triangles ", s.builder, s.triangles)
+    };
+    let per_ray = match app.current_frame().and_then(|f| f.per_ray) {
+        Some(p) if app.plan.bvh => format!(
+            "per ray: {:.1} nodes, {:.1} tests",
+            p.nodes, p.triangle_tests
+        ),
+        _ if !app.plan.bvh => "per ray: BVH off (brute force)".into(),
+        _ => "per ray: measuring...".into(),
+    };
+    let text = vec![
+        Line::from(format!(
+            "nodes {} leaves {} depth {}",
+            s.nodes, s.leaves, s.depth
+        )),
+        Line::from(format!(
+            "leaf max {} mean {:.1} SAH {:.1}",
+            s.max_leaf, s.mean_leaf, s.sah_cost
+        )),
+        Line::from(format!(
+            "build {} ms, {} tris/s",
+            if s.build_ms < 10.0 {
+                format!("{:.2}", s.build_ms)
+            } else {
+                format!("{:.0}", s.build_ms)
+            },
+            si(s.triangles_per_second())
+        )),
+        Line::from(per_ray),
+    ];
+    f.render_widget(Paragraph::new(text).block(panel(title)), area);
+}
+
+/// The features panel's lines for a panel `width` wide. With `wrap`, a
+/// reason too long for the line goes on its own indented line.
+pub fn feature_lines(app: &App, width: u16, wrap: bool) -> Vec<Line<'static>> {
+    let mut lines = Vec::new();
+    for feat in Feature::ALL {
+        let key = keys::key_for(Action::Toggle(feat)).map_or(" ".into(), |k| k.label());
+        // The state, and for features not needed the reason.
+        let (state, why, style) = match app.feature_state(feat) {
+            FeatureState::On => ("on".to_string(), "", Style::new().fg(Color::Green)),
+            FeatureState::Off => ("off".to_string(), "", Style::new().fg(Color::DarkGray)),
+            FeatureState::NotNeeded(why) => (
+                "not needed:".to_string(),
+                why,
+                Style::new().fg(Color::Yellow),
+            ),
+            FeatureState::Needs(g) => (
+                format!("off: needs {}", g.name()),
+                "",
+                Style::new().fg(Color::Yellow),
+            ),
+        };
+        let name = format!(" {:<14} ", feat.name());
+        let head = Span::styled(key, Style::new().add_modifier(Modifier::BOLD));
+        let full = if why.is_empty() {
+            state.clone()
+        } else {
+            format!("{state} {why}")
+        };
+        let fits = 1 + name.len() + full.chars().count() <= width as usize;
+        if wrap && !fits {
+            lines.push(Line::from(vec![
+                head,
+                Span::raw(name),
+                Span::styled(state, style),
+            ]));
+            lines.push(Line::from(Span::styled(format!("  {why}"), style)));
+        } else {
+            lines.push(Line::from(vec![
+                head,
+                Span::raw(name),
+                Span::styled(full, style),
+            ]));
+        }
+    }
+    lines
+}
+
+pub fn features(f: &mut Frame, area: Rect, lines: Vec<Line<'static>>) {
+    f.render_widget(
+        Paragraph::new(lines).block(panel(" Features ".into())),
+        area,
+    );
+}
+
+pub fn render(f: &mut Frame, area: Rect, app: &App) {
+    let block = panel(" Render ".into());
+    let inner = block.inner(area);
+    f.render_widget(block, area);
+    let bytes = format!("terminal {}B/s", si(app.bytes_per_sec));
+    let text = match app.current_frame() {
+        None => vec![Line::from("starting..."), Line::from(bytes)],
+        Some(s) if s.coarse => vec![
+            Line::from(format!("coarse preview in {:.1} ms", s.pass_ms)),
+            Line::from(bytes),
+        ],
+        Some(s) => {
+            let error = if s.exact {
+                "error: exact (nothing sampled)".to_string()
+            } else if s.spp < 2 {
+                "error: needs 2 spp".to_string()
+            } else {
+                format!("error {:.2}% (estimated)", s.error * 100.0)
+            };
+            let done = if s.done && !s.exact { " (done)" } else { "" };
+            let mut v = vec![
+                Line::from(format!("{} spp{done} · {:.1} ms/pass", s.spp, s.pass_ms)),
+                Line::from(format!("{:.1} Mrays/s · {:.1} s", s.mrays, s.elapsed)),
+                Line::from(error),
+                Line::from(bytes),
+            ];
+            if s.bad_samples > 0 {
+                v.push(Line::styled(
+                    format!("{} NaN/Inf samples (n finds one)", s.bad_samples),
+                    Style::new().fg(Color::Red),
+                ));
+            }
+            v
+        }
+    };
+    let [text_area, chart_area] =
+        Layout::vertical([Constraint::Length(text.len() as u16), Constraint::Min(0)]).areas(inner);
+    f.render_widget(Paragraph::new(text), text_area);
+    if chart_area.height >= 6 {
+        if let Some(s) = app.current_frame().filter(|s| s.history.len() >= 2) {
+            error_chart(f, chart_area, &s.history);
+        }
+    }
+}
+
+/// Decades spanning `lo..hi` (log10 values), at least one wide.
+fn decades(lo: f64, hi: f64) -> [f64; 2] {
+    let (a, b) = (lo.floor(), hi.ceil());
+    if b > a {
+        [a, b]
+    } else {
+        [a, a + 1.0]
+    }
+}
+
+/// `10^e` formatted with `unit`, e.g. `0.1s`, `10%`.
+fn decade_label(e: f64, unit: &str) -> String {
+    let v = 10f64.powf(e);
+    if e < 0.0 {
+        format!("{v:.*}{unit}", (-e) as usize)
+    } else {
+        format!("{v:.0}{unit}")
+    }
+}
+
+/// Estimated error (%) against elapsed seconds, both on log axes.
+fn error_chart(f: &mut Frame, area: Rect, history: &[(f64, f64)]) {
+    let data: Vec<(f64, f64)> = history
+        .iter()
+        .filter(|(t, e)| *t > 0.0 && *e > 0.0)
+        .map(|(t, e)| (t.log10(), (e * 100.0).log10()))
+        .collect();
+    let (Some(x0), Some(x1)) = (data.first().map(|p| p.0), data.last().map(|p| p.0)) else {
+        return;
+    };
+    let (y0, y1) = data
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p.1), b.max(p.1))
+        });
+    let (xb, yb) = (decades(x0, x1), decades(y0, y1));
+    let labels = |b: [f64; 2], unit: &str| -> Vec<String> {
+        (b[0] as i32..=b[1] as i32)
+            .map(|e| decade_label(e as f64, unit))
+            .collect()
+    };
+    let chart = Chart::new(vec![Dataset::default()
+        .marker(Marker::Braille)
+        .graph_type(GraphType::Line)
+        .style(Style::new().fg(Color::Cyan))
+        .data(&data)])
+    .x_axis(
+        Axis::default()
+            .title("time")
+            .bounds(xb)
+            .labels(labels(xb, "s")),
+    )
+    .y_axis(
+        Axis::default()
+            .title("error")
+            .bounds(yb)
+            .labels(labels(yb, "%")),
+    );
+    f.render_widget(chart, area);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decade_labels() {
+        assert_eq!(decade_label(-2.0, "s"), "0.01s");
+        assert_eq!(decade_label(0.0, "%"), "1%");
+        assert_eq!(decade_label(1.0, "%"), "10%");
+        assert_eq!(decades(-0.5, 0.3), [-1.0, 1.0]);
+        assert_eq!(decades(2.0, 2.0), [2.0, 3.0]);
+    }
+
+    #[test]
+    fn si_prefixes() {
+        assert_eq!(si(950.0), "950");
+        assert_eq!(si(1_234_567.0), "1.23M");
+    }
+}
