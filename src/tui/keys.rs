@@ -442,8 +442,8 @@ mod tests {
 
     #[test]
     fn readme_key_table_matches() {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/README-tui.md");
-        let readme = std::fs::read_to_string(path).expect("docs/README-tui.md exists");
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/README.md");
+        let readme = std::fs::read_to_string(path).expect("README.md exists");
         assert!(
             readme.contains(&markdown_table()),
             "the key table in {path} is out of date; it should read:\n{}",
