@@ -73,6 +73,7 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 #[derive(Args, Debug, Clone)]
 pub struct SceneOpts {
     /// Built-in name (see `rayterm scenes`), a .toml scene file or a .obj mesh.
+    #[arg(default_value = "cornell")]
     pub scene: String,
     /// Image size, WIDTHxHEIGHT (default: the scene's).
     #[arg(long, value_parser = parse_size)]
@@ -237,34 +238,10 @@ pub struct ConvergeArgs {
 
 #[derive(Args, Debug)]
 pub struct TuiArgs {
-    /// Built-in name (see `rayterm scenes`), a .toml scene file or a .obj mesh.
-    #[arg(default_value = "cornell")]
-    pub scene: String,
-    /// Size of PNG exports (`p`), WIDTHxHEIGHT (default: the scene's).
-    #[arg(long, value_parser = parse_size)]
-    pub size: Option<(u32, u32)>,
+    /// The scene; `--size` is the size of PNG exports (`p`).
+    #[command(flatten)]
+    pub scene: SceneOpts,
     /// Colours (default: truecolor when COLORTERM says so, else 256).
     #[arg(long, value_enum)]
     pub color: Option<ColorMode>,
-    /// BVH builder (default: the scene's, else sah).
-    #[arg(long, value_enum)]
-    pub builder: Option<Builder>,
-    /// Start with a feature off (repeatable).
-    #[arg(long = "no", value_enum, value_name = "FEATURE")]
-    pub off: Vec<Feature>,
-    /// Seed of the random numbers.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-}
-
-impl TuiArgs {
-    pub fn scene_opts(&self) -> SceneOpts {
-        SceneOpts {
-            size: self.size,
-            builder: self.builder,
-            off: self.off.clone(),
-            seed: self.seed,
-            ..SceneOpts::new(&self.scene)
-        }
-    }
 }

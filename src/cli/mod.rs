@@ -38,7 +38,7 @@ pub fn main() -> ExitCode {
         Command::Scenes => scenes::run(),
         Command::Inspect(a) => inspect::run(a),
         Command::Converge(a) => converge::run(a),
-        Command::Tui(a) => crate::tui::run(&a.scene_opts(), a.color),
+        Command::Tui(a) => crate::tui::run(&a.scene, a.color),
     };
     match result {
         Ok(code) => code,

@@ -316,14 +316,14 @@ fn no_command_means_the_tui() {
     let cli = Cli::try_parse_from(["rayterm", "tui", "teapot", "--color", "16", "--no", "bloom"]);
     match cli.unwrap().command {
         Some(Command::Tui(a)) => {
-            assert_eq!(a.scene, "teapot");
+            assert_eq!(a.scene.scene, "teapot");
             assert_eq!(a.color, Some(ColorMode::Ansi16));
-            assert_eq!(a.scene_opts().off, vec![Feature::Bloom]);
+            assert_eq!(a.scene.off, vec![Feature::Bloom]);
         }
         other => panic!("{other:?}"),
     }
     let Some(Command::Tui(a)) = Cli::try_parse_from(["rayterm", "tui"]).unwrap().command else {
         panic!("tui parses");
     };
-    assert_eq!((a.scene.as_str(), a.seed), ("cornell", 1));
+    assert_eq!((a.scene.scene.as_str(), a.scene.seed), ("cornell", 1));
 }
