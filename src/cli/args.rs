@@ -22,7 +22,7 @@ impl Cli {
     pub fn threads(&self) -> Option<usize> {
         match &self.command {
             Command::Render(a) => a.threads,
-            Command::Scenes | Command::Inspect(_) => None,
+            Command::Scenes | Command::Inspect(_) | Command::Stability(_) => None,
         }
     }
 }
@@ -35,6 +35,8 @@ pub enum Command {
     Scenes,
     /// Print the ray tree of one pixel: every ray the renderer traced for it.
     Inspect(InspectArgs),
+    /// Run the numerical stability battery; exits non-zero when a case fails.
+    Stability(StabilityArgs),
 }
 
 /// `WxH`, e.g. `1280x720`.
@@ -144,4 +146,17 @@ pub struct InspectArgs {
     /// Show every light sample instead of folding long lists.
     #[arg(long)]
     pub expand: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct StabilityArgs {
+    /// Scene for the scale and offset cases.
+    #[arg(default_value = "cornell")]
+    pub scene: String,
+    /// Image size of the rendered cases, WIDTHxHEIGHT.
+    #[arg(long, value_parser = parse_size, default_value = "96x96")]
+    pub size: (u32, u32),
+    /// Print the rows as JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
 }

@@ -4,6 +4,7 @@ mod args;
 mod inspect;
 mod render;
 mod scenes;
+mod stability;
 
 use std::process::ExitCode;
 
@@ -26,6 +27,7 @@ pub fn main() -> ExitCode {
         Command::Render(a) => render::run(a),
         Command::Scenes => scenes::run(),
         Command::Inspect(a) => inspect::run(a),
+        Command::Stability(a) => stability::run(a),
     };
     match result {
         Ok(code) => code,

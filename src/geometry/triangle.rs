@@ -22,8 +22,11 @@ pub struct RayShear {
 }
 
 impl RayShear {
+    /// Direction components below [`PARALLEL`](super::ray::PARALLEL) count
+    /// as zero, as in the box test, so the two agree on grazing rays.
     #[inline]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        let dir = super::ray::flush(dir);
         let a = dir.abs();
         let kz = if a.x > a.y {
             if a.x > a.z {
