@@ -4,18 +4,18 @@
 //! passes when it is at most its limit, so CI can run the battery and the
 //! TUI can show the same table.
 
-mod degenerate;
+pub mod degenerate;
 pub mod grazing;
-mod hygiene;
-mod reintersect;
+pub mod hygiene;
+pub mod reintersect;
 pub mod scale;
-mod stiff;
-mod topology;
-mod watertight;
+pub mod stiff;
+pub mod topology;
+pub mod watertight;
 
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use glam::Vec3;
 use serde::Serialize;
 
@@ -93,6 +93,11 @@ impl Default for Options {
 /// Runs every case on `scene_spec` (the scale and offset cases use it; the
 /// others use their own geometry) and returns the rows in table order.
 pub fn run_battery(scene_spec: &str, o: &Options) -> Result<Vec<Row>> {
+    // Below this, pixel centres sit on the scene's symmetry lines and edges
+    // fill whole pixels, so image differences measure ties, not precision.
+    if o.width < 16 || o.height < 16 {
+        bail!("the stability battery needs images of at least 16x16");
+    }
     let scene = crate::scene::load(scene_spec)?;
     let mut rows = scale_offset(&scene, o).context("scale and offset cases")?;
     rows.extend(watertight(o).context("watertightness cases")?);

@@ -12,7 +12,7 @@ use super::{soup, Options, Row};
 use crate::bvh::{self, Bvh, TraversalStats};
 use crate::geometry::sampling::Rng;
 use crate::geometry::triangle::{intersect, RayShear};
-use crate::geometry::{gamma, Ray};
+use crate::geometry::Ray;
 use crate::scene::Builder;
 
 /// Components a grazing direction is made of: zeros of both signs and
@@ -133,12 +133,22 @@ impl std::ops::AddAssign for Grazing {
 /// Checks every ray against the BVH, brute force and every box above each
 /// triangle it hits.
 ///
-/// A hit's `t` from the triangle test carries an absolute rounding error of
-/// a few ulps of the distance to the triangle's vertices, so it can land a
-/// hair before the box's (accurate) entry distance; a box counts as missing
-/// a hit only when it also rejects `tmax = t + γ₁₆ · reach`, a bound on that
-/// error.
+/// The triangle test works in f32: a ray within f32 resolution of a
+/// triangle's plane can be reported hitting it where, exactly, it crosses
+/// the plane outside the triangle, and a hit's `t` carries a rounding error
+/// that is large for big triangles seen edge-on. So each hit is also judged
+/// exactly (in f64, where the ray meets the plane): it is *real* when that
+/// point lies in the triangle's box. The BVH agrees when it returns brute
+/// force's `t`; or when brute force's closer hit is not real, or lies,
+/// exactly, beyond the `t` the BVH returned (its boxes then culled it by the
+/// true geometry, while the triangle test's rounding put it first). A box
+/// misses a hit when it rejects a real hit at `tmax` = its exact distance;
+/// rejections at the rounded `t` only are counted apart.
 pub fn check_rays(b: &Bvh, anc: &[Vec<u32>], rays: &[Ray]) -> Grazing {
+    let mut leaf_of = vec![0; b.prim.len()];
+    for (i, &p) in b.prim.iter().enumerate() {
+        leaf_of[p as usize] = i;
+    }
     rays.par_iter()
         .map(|ray| {
             let mut g = Grazing {
@@ -152,22 +162,9 @@ pub fn check_rays(b: &Bvh, anc: &[Vec<u32>], rays: &[Ray]) -> Grazing {
                 h.is_some_and(|h| !(h.t.is_finite() && h.u.is_finite() && h.v.is_finite()))
             };
             g.nan += bad(&fast) as u64 + bad(&slow) as u64;
-            if fast.map(|h| h.t) != slow.map(|h| h.t) {
-                g.disagree += 1;
-            }
-            let any = |tmax: f32| {
-                let seg = Ray::segment(ray.origin, ray.dir, tmax);
-                let mut st = TraversalStats::default();
-                b.occluded::<false>(&seg, &mut st).is_some() != b.occluded_brute(&seg).is_some()
-            };
-            g.disagree += any(1e4) as u64;
-            if let Some(h) = slow {
-                g.disagree += any(h.t * 0.5) as u64;
-                g.at_rounding += any(h.t) as u64;
-            }
             let shear = RayShear::new(ray.origin, ray.dir);
             let inv = ray.inv_dir();
-            let len = ray.dir.length();
+            let mut any_real = false;
             for (i, t) in b.tris.iter().enumerate() {
                 let Some(h) = intersect(&shear, &t[0], &t[1], &t[2], ray.tmax) else {
                     continue;
@@ -176,19 +173,41 @@ pub fn check_rays(b: &Bvh, anc: &[Vec<u32>], rays: &[Ray]) -> Grazing {
                     g.nan += 1;
                     continue;
                 }
-                let reach = t
-                    .iter()
-                    .map(|v| (Vec3::from(*v) - ray.origin).length())
-                    .fold(0.0, f32::max);
-                let slack = h.t + gamma(16) * reach / len;
+                let (exact, real) = judge(t, ray, h.t);
+                any_real |= real;
+                let slack = (exact.max(h.t as f64) * (1.0 + 1e-6)) as f32;
                 for &n in &anc[i] {
                     let bx = b.nodes[n as usize].bounds();
-                    if bx.hit(ray.origin, inv, slack).is_none() {
+                    if real && bx.hit(ray.origin, inv, slack).is_none() {
                         g.box_misses += 1;
                     } else if bx.hit(ray.origin, inv, h.t).is_none() {
                         g.at_rounding += 1;
                     }
                 }
+            }
+            let judged = |h: &crate::bvh::Hit| judge(&b.tris[leaf_of[h.prim as usize]], ray, h.t);
+            let same = match (&fast, &slow) {
+                (None, None) => true,
+                (Some(f), Some(s)) if f.t == s.t => true,
+                (Some(f), Some(s)) => {
+                    let (x, real) = judged(s);
+                    !real || x >= f.t as f64 * (1.0 - 1e-6)
+                }
+                (None, Some(s)) => !judged(s).1,
+                (Some(_), None) => false,
+            };
+            g.disagree += !same as u64;
+            let any = |tmax: f32| {
+                let seg = Ray::segment(ray.origin, ray.dir, tmax);
+                let mut st = TraversalStats::default();
+                b.occluded::<false>(&seg, &mut st).is_some() != b.occluded_brute(&seg).is_some()
+            };
+            if any_real {
+                g.disagree += any(1e4) as u64;
+            }
+            if let Some(h) = slow {
+                g.disagree += any(h.t * 0.5) as u64;
+                g.at_rounding += any(h.t) as u64;
             }
             g
         })
@@ -196,6 +215,30 @@ pub fn check_rays(b: &Bvh, anc: &[Vec<u32>], rays: &[Ray]) -> Grazing {
             a += b;
             a
         })
+}
+
+/// A hit at `t` on triangle `tri`, judged exactly: the distance at which the
+/// ray meets the triangle's plane (computed in f64 from the exact inputs;
+/// `t` itself when the ray runs in the plane), and whether that point lies in
+/// the triangle's box.
+fn judge(tri: &[[f32; 3]; 3], ray: &Ray, t: f32) -> (f64, bool) {
+    let [a, b, c] = tri.map(|v| Vec3::from(v).as_dvec3());
+    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+    let n = (b - a).cross(c - a);
+    let x = n.dot(a - o) / n.dot(d);
+    if !x.is_finite() {
+        return (t as f64, true);
+    }
+    let p = o + d * x;
+    // The f64 rounding of p: of the sum, and of x, which grows as the ray
+    // grazes the plane (1 / cos).
+    let graze = n.length() * d.length() / n.dot(d).abs();
+    let tol = (o.abs() + (d * x).abs()) * 1e-12 + d.abs() * (x.abs() * graze * 1e-14);
+    let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+    (
+        x,
+        x > 0.0 && p.cmpge(lo - tol).all() && p.cmple(hi + tol).all(),
+    )
 }
 
 /// Rays along the lattice's planes: from lattice points (on the planes) and

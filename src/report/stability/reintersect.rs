@@ -11,7 +11,7 @@ use glam::{DVec3, Vec3};
 use super::watertight::sphere;
 use super::{soup, Options, Row};
 use crate::bvh::{self, TraversalStats};
-use crate::geometry::offset::{hit_point, offset_origin};
+use crate::geometry::offset::{geometric_normal, hit_point, offset_origin};
 use crate::geometry::sampling::Rng;
 use crate::geometry::triangle::{intersect, RayShear};
 use crate::geometry::Ray;
@@ -63,7 +63,7 @@ fn spawn(
     mut hits_own: impl FnMut(&Ray) -> bool,
 ) -> Rehits {
     let (p, err) = hit_point(*tri, u, v);
-    let ng = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
+    let ng = geometric_normal(*tri);
     let mut r = Rehits::default();
     for _ in 0..SPAWNED {
         let w = unit(rng).as_vec3();
