@@ -163,6 +163,32 @@ fn aimed_rays_graze_edges_and_vertices() {
 }
 
 #[test]
+fn a_hole_in_the_teapot_is_not_taken_for_its_lid_gap() {
+    use rayterm::report::stability::watertight::through_lid_gap;
+    let mut pot = teapot(4).unwrap();
+    let inside = Vec3::new(0.013, 0.6, -0.021);
+    let mut rng = Rng::for_sample(0, 0, 6);
+    let rays = random_rays(inside, 20_000, &mut rng);
+    let elsewhere = |pot: &[[Vec3; 3]]| {
+        let b = bvh::build(&soup(pot), Builder::Sah);
+        rays.iter()
+            .filter(|r| b.intersect_brute(r).is_none() && !through_lid_gap(r))
+            .count()
+    };
+    assert_eq!(elsewhere(&pot), 0);
+    // Punch out the body triangle nearest (0, 0.5, 1), away from spout and handle.
+    let centre = |t: &[Vec3; 3]| (t[0] + t[1] + t[2]) / 3.0;
+    let i = (0..pot.len())
+        .min_by(|&a, &b| {
+            let d = |i: usize| centre(&pot[i]).distance(Vec3::new(0.0, 0.5, 1.0));
+            d(a).total_cmp(&d(b))
+        })
+        .unwrap();
+    pot.swap_remove(i);
+    assert!(elsewhere(&pot) > 0);
+}
+
+#[test]
 fn teapot_seams_are_closed_and_its_openings_are_the_datas() {
     for n in [2, 3, 8] {
         let topo = Topology::new(teapot(n).unwrap());
