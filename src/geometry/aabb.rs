@@ -72,21 +72,27 @@ impl Aabb {
     ///
     /// Returns the entry distance when the box is hit within `(0, tmax)`.
     /// `tmax` is widened by 2γ₃ as in pbrt so rays that graze a box face are
-    /// not lost to rounding. A zero direction component (infinite
-    /// reciprocal) gives two infinities of opposite sign when the origin is
-    /// inside that slab, or a NaN (`0 * inf`) when it lies on one of its
-    /// planes: either way `t0 + t1` is NaN, and the slab, closed, does not
-    /// limit the ray. So a ray lying in a face plane hits the box whatever
-    /// the sign of its zero, as the triangles on that face are hit.
+    /// not lost to rounding. As in pbrt, the near and far planes are picked
+    /// by the sign of the direction, and a NaN distance never narrows the
+    /// interval (glam's `min_element`/`max_element` do not skip NaN, hence
+    /// the explicit reductions): a zero direction component (infinite reciprocal) gives a NaN
+    /// (`0 * inf`) only when the origin lies on that slab's plane, and then
+    /// the slab, closed, does not limit the ray. So a ray lying in a face
+    /// plane hits the box whatever the sign of its zero, as it hits the
+    /// triangles on that face.
     #[inline(always)]
     pub fn hit(&self, origin: Vec3, inv_dir: Vec3, tmax: f32) -> Option<f32> {
-        let t0 = (self.min - origin) * inv_dir;
-        let t1 = (self.max - origin) * inv_dir;
-        let free = (t0 + t1).is_nan_mask();
-        let lo = Vec3::select(free, Vec3::NEG_INFINITY, t0.min(t1));
-        let hi = Vec3::select(free, Vec3::INFINITY, t0.max(t1));
-        let tnear = lo.max_element().max(0.0);
-        let tfar = hi.min_element().min(tmax) * (1.0 + 2.0 * super::gamma(3));
+        let neg = inv_dir.cmplt(Vec3::ZERO);
+        let near = Vec3::select(neg, self.max, self.min);
+        let far = Vec3::select(neg, self.min, self.max);
+        let tn = (near - origin) * inv_dir;
+        let tf = (far - origin) * inv_dir;
+        // `if a > b { a } else { b }` keeps `b` when `a` is NaN (one maxss on
+        // x86): with the running value as `b`, NaN distances are passed over.
+        let max = |a: f32, b: f32| if a > b { a } else { b };
+        let min = |a: f32, b: f32| if a < b { a } else { b };
+        let tnear = max(tn.z, max(tn.y, max(tn.x, 0.0)));
+        let tfar = min(tf.z, min(tf.y, min(tf.x, tmax))) * (1.0 + 2.0 * super::gamma(3));
         (tnear <= tfar && tnear < f32::INFINITY).then_some(tnear)
     }
 }
