@@ -217,7 +217,8 @@ pub fn image_difference(a: &[Vec3], b: &[Vec3], w: u32, h: u32) -> f64 {
 }
 
 /// Rays that must hit: from the eye at crossing vertices, crossing edges and
-/// interior points of the scene's triangles. Returns (aimed, missed).
+/// interior points of the scene's triangles, at most `rays` of each.
+/// Returns (aimed, missed).
 pub fn aimed_leaks(scene: &Scene, bvh: &Bvh, rays: u32, seed: u64) -> (u64, u64) {
     let tris = (0..scene.geometry.triangle_count())
         .map(|i| scene.geometry.triangle(i))
@@ -225,9 +226,20 @@ pub fn aimed_leaks(scene: &Scene, bvh: &Bvh, rays: u32, seed: u64) -> (u64, u64)
     let topo = Topology::new(tris);
     let eye = scene.camera.eye;
     let mut rng = Rng::for_sample(0, 1, seed);
-    let mut targets = topo.targets(eye, Crossing::Vertex, 0, 0, &mut rng);
-    targets.extend(topo.targets(eye, Crossing::Edge, 4, 0, &mut rng));
-    targets.extend(topo.targets(eye, Crossing::Surface, 0, rays, &mut rng));
+    // At most `rays` of each kind, so big meshes stay quick.
+    let mut targets = Vec::new();
+    for (kind, per_edge) in [
+        (Crossing::Vertex, 0),
+        (Crossing::Edge, 4),
+        (Crossing::Surface, 0),
+    ] {
+        let mut t = topo.targets(eye, kind, per_edge, rays, &mut rng);
+        while t.len() > rays as usize {
+            let i = rng.next_u32() as usize % t.len();
+            t.swap_remove(i);
+        }
+        targets.extend(t);
+    }
     let missed = targets
         .par_iter()
         .filter(|t| {
@@ -291,79 +303,87 @@ fn map_scene(scene: &Scene, f: impl Fn(Vec3) -> Vec3, s: f32) -> Scene {
 /// The scale and offset rows for `scene`: acne, leaks and image difference
 /// for every transform.
 pub fn scale_offset(scene: &Scene, o: &Options) -> Result<Vec<Row>> {
-    let (w, h) = (o.width, o.height);
     let base_bvh = bvh::build(&scene.geometry, Builder::Sah);
-    let reference = probe_render(scene, &base_bvh, w, h, o.seed);
+    let reference = probe_render(scene, &base_bvh, o.width, o.height, o.seed);
+    // The transforms in parallel (two cores halve a big mesh's time).
+    let per: Vec<Vec<Row>> = TRANSFORMS
+        .par_iter()
+        .map(|t| transform_rows(scene, *t, &reference, o))
+        .collect();
+    Ok(per.concat())
+}
+
+/// Acne, leaks and image difference of `scene` under `t`.
+fn transform_rows(scene: &Scene, t: Transform, reference: &Probed, o: &Options) -> Vec<Row> {
+    let (w, h) = (o.width, o.height);
     let mut rows = Vec::new();
-    for t in TRANSFORMS {
-        let off = t.offset_vec();
-        let mut moved = scene.clone();
-        moved.transform(t.scale, off);
-        let bvh = bvh::build(&moved.geometry, Builder::Sah);
-        let probed = probe_render(&moved, &bvh, w, h, o.seed);
-        let label = t.label();
-        rows.push(Row::at_most(
-            format!("{label}: acne"),
-            probed.acne as f64 / probed.lit.max(1) as f64,
-            0.0,
-            format!(
-                "{} of {} shadow rays from lit surfaces hit their own surface",
-                probed.acne, probed.lit
-            ),
-        ));
-        let (pn, pl) = pixel_leaks(&reference.primary, &probed.primary, w, h);
-        let (an, al) = aimed_leaks(&moved, &bvh, o.rays / 10, o.seed);
-        rows.push(Row::at_most(
-            format!("{label}: leaks"),
-            (pl + al) as f64 / (pn + an).max(1) as f64,
-            0.0,
-            format!(
-                "{pl} of {pn} camera rays into the scene and {al} of {an} rays aimed at \
-                 edges, vertices and faces missed"
-            ),
-        ));
-        if !t.is_identity() {
-            // As `scene::load` would hand it to the renderer: recentred
-            // when far from the origin.
-            let mut shown = moved.clone();
-            let recentred = shown.recentre().is_some();
-            let image = if recentred {
-                let b = bvh::build(&shown.geometry, Builder::Sah);
-                probe_render(&shown, &b, w, h, o.seed).image
-            } else {
-                probed.image.clone()
-            };
-            // The reference: this scene's own (rounded) geometry mapped back
-            // to unit scale in f64, so the figure measures the renderer and
-            // not the rounding of the input.
-            let (s, off64) = (t.scale as f64, off.as_dvec3());
-            let undone = map_scene(
-                &moved,
-                |p| ((p.as_dvec3() - off64) / s).as_vec3(),
-                1.0 / t.scale,
+    let off = t.offset_vec();
+    let mut moved = scene.clone();
+    moved.transform(t.scale, off);
+    let bvh = bvh::build(&moved.geometry, Builder::Sah);
+    let probed = probe_render(&moved, &bvh, w, h, o.seed);
+    let label = t.label();
+    rows.push(Row::at_most(
+        format!("{label}: acne"),
+        probed.acne as f64 / probed.lit.max(1) as f64,
+        0.0,
+        format!(
+            "{} of {} shadow rays from lit surfaces hit their own surface",
+            probed.acne, probed.lit
+        ),
+    ));
+    let (pn, pl) = pixel_leaks(&reference.primary, &probed.primary, w, h);
+    let (an, al) = aimed_leaks(&moved, &bvh, o.rays / 10, o.seed);
+    rows.push(Row::at_most(
+        format!("{label}: leaks"),
+        (pl + al) as f64 / (pn + an).max(1) as f64,
+        0.0,
+        format!(
+            "{pl} of {pn} camera rays into the scene and {al} of {an} rays aimed at \
+             edges, vertices and faces missed"
+        ),
+    ));
+    if !t.is_identity() {
+        // As `scene::load` would hand it to the renderer: recentred
+        // when far from the origin.
+        let mut shown = moved.clone();
+        let recentred = shown.recentre().is_some();
+        let image = if recentred {
+            let b = bvh::build(&shown.geometry, Builder::Sah);
+            probe_render(&shown, &b, w, h, o.seed).image
+        } else {
+            probed.image.clone()
+        };
+        // The reference: this scene's own (rounded) geometry mapped back
+        // to unit scale in f64, so the figure measures the renderer and
+        // not the rounding of the input.
+        let (s, off64) = (t.scale as f64, off.as_dvec3());
+        let undone = map_scene(
+            &moved,
+            |p| ((p.as_dvec3() - off64) / s).as_vec3(),
+            1.0 / t.scale,
+        );
+        let ubvh = bvh::build(&undone.geometry, Builder::Sah);
+        let unit = probe_render(&undone, &ubvh, w, h, o.seed);
+        let mut detail = format!(
+            "pixels off by > {PIXEL_TOLERANCE} from all 3x3 neighbours in the unit-scale \
+             render of the same geometry; {} against the original scene",
+            format_figure(image_difference(&image, &reference.image, w, h))
+        );
+        if recentred {
+            detail += &format!(
+                "; recentred at load, {} without",
+                format_figure(image_difference(&probed.image, &unit.image, w, h))
             );
-            let ubvh = bvh::build(&undone.geometry, Builder::Sah);
-            let unit = probe_render(&undone, &ubvh, w, h, o.seed);
-            let mut detail = format!(
-                "pixels off by > {PIXEL_TOLERANCE} from all 3x3 neighbours in the unit-scale \
-                 render of the same geometry; {} against the original scene",
-                format_figure(image_difference(&image, &reference.image, w, h))
-            );
-            if recentred {
-                detail += &format!(
-                    "; recentred at load, {} without",
-                    format_figure(image_difference(&probed.image, &unit.image, w, h))
-                );
-            }
-            rows.push(Row::at_most(
-                format!("{label}: image"),
-                image_difference(&image, &unit.image, w, h),
-                IMAGE_LIMIT.max(IMAGE_LIMIT_PIXELS / (w * h) as f64),
-                detail,
-            ));
         }
+        rows.push(Row::at_most(
+            format!("{label}: image"),
+            image_difference(&image, &unit.image, w, h),
+            IMAGE_LIMIT.max(IMAGE_LIMIT_PIXELS / (w * h) as f64),
+            detail,
+        ));
     }
-    Ok(rows)
+    rows
 }
 
 #[cfg(test)]

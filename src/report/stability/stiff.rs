@@ -10,7 +10,7 @@ use std::path::Path;
 use anyhow::Result;
 use glam::Vec3;
 
-use super::{Options, Row};
+use super::{format_figure, Options, Row};
 use crate::bvh::{self, TraversalStats};
 use crate::render::{pass, Features, Film, Plan, Tracer};
 use crate::scene::obj::{self, MeshData, Parts, Placement};
@@ -213,15 +213,23 @@ pub fn stiff_shading(o: &Options) -> Result<Vec<Row>> {
             format!("stiff: {name}"),
             f.bad_count + off + x,
             format!(
-                "{} of {samples} samples non-finite, {off} pixels outside [0, {b:.3e}]{what}",
-                f.bad_count
+                "{} of {samples} samples non-finite, {off} pixels outside [0, {}]{what}",
+                f.bad_count,
+                format_figure(b as f64)
             ),
         ));
         img
     };
     for ns in [0.0, 1e-6, 1e6] {
         case(
-            &format!("shininess {ns:e}"),
+            &format!(
+                "shininess {}",
+                if ns == 0.0 {
+                    "0".into()
+                } else {
+                    format!("{ns:e}")
+                }
+            ),
             &stage(ns, light, 1.0, false)?,
             None,
         );
