@@ -73,11 +73,10 @@ impl Aabb {
     /// Returns the entry distance when the box is hit within `(0, tmax)`.
     /// `tmax` is widened by 2γ₃ as in pbrt so rays that graze a box face are
     /// not lost to rounding. As in pbrt, the near and far planes are picked
-    /// by the sign of the direction, and a NaN distance never narrows the
-    /// interval (glam's `min_element`/`max_element` do not skip NaN, hence
-    /// the explicit reductions): a zero direction component (infinite reciprocal) gives a NaN
-    /// (`0 * inf`) only when the origin lies on that slab's plane, and then
-    /// the slab, closed, does not limit the ray. So a ray lying in a face
+    /// by the sign of the direction and a NaN distance never narrows the
+    /// interval. A zero direction component (infinite reciprocal) gives a
+    /// NaN (`0 * inf`) only when the origin lies on that slab's plane, and
+    /// then the slab, closed, does not limit the ray: a ray lying in a face
     /// plane hits the box whatever the sign of its zero, as it hits the
     /// triangles on that face.
     #[inline(always)]

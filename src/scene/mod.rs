@@ -208,7 +208,8 @@ impl Scene {
     /// shadows and reflections. The positions themselves were read at that
     /// spacing already; moving them is exact (the difference of two nearby
     /// floats is a float), so the image becomes the one of the scene as
-    /// stored. Axes on which the scene is not far from the origin are left alone.
+    /// stored. Axes on which the scene is not far from the origin are left
+    /// alone.
     pub fn recentre(&mut self) -> Option<Vec3> {
         let b = self.bounds();
         if b.is_empty() {

@@ -125,7 +125,6 @@ fn scene_from(parts: Parts, name: &str) -> Scene {
 /// The same triangles put straight into the geometry, degenerate ones and
 /// NaN and zero normals included, as if a loader had let them through.
 fn raw_scene(loaded: &Scene) -> Scene {
-    let mut text_parts = Parts::default();
     let mut g = Geometry::default();
     let mut positions = Vec::new();
     for line in OBJ.lines() {
@@ -159,14 +158,16 @@ fn raw_scene(loaded: &Scene) -> Scene {
         g.tri_material.push((g.indices.len() % 2) as u32);
         g.tri_mesh.push(0);
     }
-    text_parts.geometry = g;
-    text_parts.materials = loaded.materials.clone();
-    text_parts.meshes = vec![MeshInfo {
-        name: "raw".into(),
-        smooth: true,
-        textured: true,
-    }];
-    scene_from(text_parts, "degenerate (raw)")
+    Scene {
+        name: "degenerate (raw)".into(),
+        geometry: g,
+        meshes: vec![MeshInfo {
+            name: "raw".into(),
+            smooth: true,
+            textured: true,
+        }],
+        ..loaded.clone()
+    }
 }
 
 /// The degenerate-geometry rows.

@@ -15,7 +15,7 @@ use super::{format_figure, Options};
 use crate::bvh::{self, Bvh, TraversalStats};
 use crate::geometry::offset::hit_point;
 use crate::geometry::sampling::Rng;
-use crate::render::recorder::{HitInfo, LightSample, MissInfo, RayKind, Recorder};
+use crate::render::recorder::{HitInfo, LightSample, RayKind, Recorder};
 use crate::render::{Feature, Features, Plan, Tracer};
 use crate::scene::{Builder, Geometry, Light, Scene};
 
@@ -97,8 +97,6 @@ impl Recorder for Probe<'_> {
             *top = Some((info.triangle, info.barycentric.y, info.barycentric.z));
         }
     }
-
-    fn miss(&mut self, _info: MissInfo) {}
 
     fn light_sample(&mut self, s: LightSample) {
         if s.shadow_ray.is_none() {
