@@ -48,6 +48,8 @@ pub enum Command {
     Converge(ConvergeArgs),
     /// Explore a scene in the terminal (the default command).
     Tui(TuiArgs),
+    /// Run the numerical stability battery; exits non-zero when a case fails.
+    Stability(StabilityArgs),
 }
 
 /// `WxH`, e.g. `1280x720`.
@@ -244,4 +246,17 @@ pub struct TuiArgs {
     /// Colours (default: truecolor when COLORTERM says so, else 256).
     #[arg(long, value_enum)]
     pub color: Option<ColorMode>,
+}
+
+#[derive(Args, Debug)]
+pub struct StabilityArgs {
+    /// Scene for the scale and offset cases.
+    #[arg(default_value = "cornell")]
+    pub scene: String,
+    /// Image size of the rendered cases, WIDTHxHEIGHT.
+    #[arg(long, value_parser = parse_size, default_value = "96x96")]
+    pub size: (u32, u32),
+    /// Print the rows as JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
 }

@@ -6,6 +6,7 @@ mod debug;
 mod inspect;
 mod render;
 mod scenes;
+mod stability;
 
 use std::process::ExitCode;
 
@@ -39,6 +40,7 @@ pub fn main() -> ExitCode {
         Command::Inspect(a) => inspect::run(a),
         Command::Converge(a) => converge::run(a),
         Command::Tui(a) => crate::tui::run(&a.scene, a.color),
+        Command::Stability(a) => stability::run(a),
     };
     match result {
         Ok(code) => code,

@@ -67,18 +67,32 @@ impl Aabb {
         o.min.cmpge(self.min).all() && o.max.cmple(self.max).all()
     }
 
-    /// Slab test against a ray given by origin and reciprocal direction.
+    /// Slab test against a ray given by origin and reciprocal direction
+    /// ([`Ray::inv_dir`](super::Ray::inv_dir)).
     ///
     /// Returns the entry distance when the box is hit within `(0, tmax)`.
-    /// `tmax` is widened by 2γ₃ as in pbrt so rays that graze a box face are not
-    /// lost to rounding; `min`/`max` skip the NaN of `0 * inf` on a slab plane.
+    /// `tmax` is widened by 2γ₃ as in pbrt so rays that graze a box face are
+    /// not lost to rounding. As in pbrt, the near and far planes are picked
+    /// by the sign of the direction and a NaN distance never narrows the
+    /// interval. A zero direction component (infinite reciprocal) gives a
+    /// NaN (`0 * inf`) only when the origin lies on that slab's plane, and
+    /// then the slab, closed, does not limit the ray: a ray lying in a face
+    /// plane hits the box whatever the sign of its zero, as it hits the
+    /// triangles on that face.
     #[inline(always)]
     pub fn hit(&self, origin: Vec3, inv_dir: Vec3, tmax: f32) -> Option<f32> {
-        let t0 = (self.min - origin) * inv_dir;
-        let t1 = (self.max - origin) * inv_dir;
-        let tnear = t0.min(t1).max_element().max(0.0);
-        let tfar = t0.max(t1).min_element().min(tmax) * (1.0 + 2.0 * super::gamma(3));
-        (tnear <= tfar).then_some(tnear)
+        let neg = inv_dir.cmplt(Vec3::ZERO);
+        let near = Vec3::select(neg, self.max, self.min);
+        let far = Vec3::select(neg, self.min, self.max);
+        let tn = (near - origin) * inv_dir;
+        let tf = (far - origin) * inv_dir;
+        // `if a > b { a } else { b }` keeps `b` when `a` is NaN (one maxss on
+        // x86): with the running value as `b`, NaN distances are passed over.
+        let max = |a: f32, b: f32| if a > b { a } else { b };
+        let min = |a: f32, b: f32| if a < b { a } else { b };
+        let tnear = max(tn.z, max(tn.y, max(tn.x, 0.0)));
+        let tfar = min(tf.z, min(tf.y, min(tf.x, tmax))) * (1.0 + 2.0 * super::gamma(3));
+        (tnear <= tfar && tnear < f32::INFINITY).then_some(tnear)
     }
 }
 
@@ -92,31 +106,37 @@ mod tests {
             min: Vec3::ZERO,
             max: Vec3::ONE,
         };
-        // Rays lying in a face plane with a zero (or -0, or 1e-30) component:
-        // no NaN, inside the slab counts as inside. A zero component takes its
-        // sign, so on the plane itself the ray counts as entering the box when
-        // the sign points inward (as Embree's robust reciprocal does).
-        for dx in [0.0, -0.0, 1e-30, -1e-30] {
+        // Rays lying in a face plane, or inside the slab, with a zero (or
+        // -0, or negligible) x component: inside the closed slab counts as
+        // inside whatever the sign, outside misses, nothing is NaN.
+        for dx in [0.0, -0.0, 1e-31, -1e-31, 1e-40, -1e-40] {
             let inv = crate::geometry::Ray::new(Vec3::ZERO, Vec3::new(dx, 0.0, 1.0)).inv_dir();
-            assert!(inv.is_finite());
-            let face = if (1.0f32).copysign(dx) > 0.0 {
-                0.0
-            } else {
-                1.0
-            };
-            for x in [face, 0.5, 1e-7, 1.0 - 1e-7] {
-                assert!(
-                    b.hit(Vec3::new(x, 0.5, -1.0), inv, f32::INFINITY).is_some(),
+            for x in [0.0, 1.0, 0.5, 1e-7, 1.0 - 1e-7] {
+                assert_eq!(
+                    b.hit(Vec3::new(x, 0.5, -1.0), inv, f32::INFINITY),
+                    Some(1.0),
                     "x={x} dx={dx}"
                 );
             }
-            assert!(b
-                .hit(Vec3::new(1.5, 0.5, -1.0), inv, f32::INFINITY)
-                .is_none());
-            assert!(b
-                .hit(Vec3::new(-1e-6, 0.5, -1.0), inv, f32::INFINITY)
-                .is_none());
+            for x in [1.5, -1e-6, 1.0f32.next_up(), -1e-45] {
+                assert!(
+                    b.hit(Vec3::new(x, 0.5, -1.0), inv, f32::INFINITY).is_none(),
+                    "x={x} dx={dx}"
+                );
+            }
         }
+        // A flat box (all its triangles in one plane), the origin in it.
+        let flat = Aabb {
+            min: Vec3::new(0.0, 0.0, 2.0),
+            max: Vec3::new(1.0, 1.0, 2.0),
+        };
+        let inv = crate::geometry::Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.0, -0.0)).inv_dir();
+        assert_eq!(flat.hit(Vec3::new(-1.0, 0.5, 2.0), inv, 5.0), Some(1.0));
+        assert!(flat.hit(Vec3::new(-1.0, 0.5, 2.5), inv, 5.0).is_none());
+        // Every direction component zero: inside hits at 0, outside misses.
+        let inv = crate::geometry::Ray::new(Vec3::ZERO, Vec3::ZERO).inv_dir();
+        assert_eq!(b.hit(Vec3::splat(0.5), inv, f32::INFINITY), Some(0.0));
+        assert!(b.hit(Vec3::splat(2.0), inv, f32::INFINITY).is_none());
     }
 
     #[test]

@@ -17,12 +17,24 @@ pub fn hit_point(p: [Vec3; 3], u: f32, v: f32) -> (Vec3, Vec3) {
     (point, err)
 }
 
+/// Unit geometric normal of a triangle (zero when it has no area), from a
+/// cross product in f64: in f32 the cross product of a long, thin triangle
+/// can point well away from the true normal, and spawned rays are offset
+/// along it.
+pub fn geometric_normal(p: [Vec3; 3]) -> Vec3 {
+    let [a, b, c] = p.map(|v| v.as_dvec3());
+    (b - a).cross(c - a).normalize_or_zero().as_vec3()
+}
+
 /// Origin for a ray leaving `p` (error `err`) in direction `w`, on the side of
-/// the geometric normal `ng` that `w` points to.
+/// the geometric normal `ng` that `w` points to. The side is decided in f64:
+/// for a `w` nearly in the plane the f32 dot product can get its sign wrong,
+/// and the ray then starts on the far side and crosses back through the
+/// surface.
 pub fn offset_origin(p: Vec3, err: Vec3, ng: Vec3, w: Vec3) -> Vec3 {
     let d = ng.abs().dot(err);
     let mut off = d * ng;
-    if w.dot(ng) < 0.0 {
+    if w.as_dvec3().dot(ng.as_dvec3()) < 0.0 {
         off = -off;
     }
     let po = p + off;

@@ -27,14 +27,25 @@ impl Ray {
         self.origin + self.dir * t
     }
 
-    /// Reciprocal direction for slab tests. Zero components become ±1e30
-    /// rather than ±inf, so an origin lying on a slab plane gives `0 * 1e30 = 0`
-    /// (inside the slab) instead of the NaN of `0 * inf`.
+    /// Reciprocal direction for slab tests. Components below [`PARALLEL`]
+    /// count as zero (as they do for the triangle test, see [`flush`]) and
+    /// give ±inf; [`Aabb::hit`](super::Aabb::hit) reads the NaN of `0 * inf`
+    /// (an origin on a slab plane) as inside the slab.
     #[inline(always)]
     pub fn inv_dir(&self) -> Vec3 {
-        let tiny = Vec3::splat(1e-30);
-        let d = self.dir;
-        let safe = Vec3::select(d.abs().cmplt(tiny), tiny.copysign(d), d);
-        safe.recip()
+        flush(self.dir).recip()
     }
+}
+
+/// Direction components smaller than this in magnitude are treated as
+/// exactly zero by both the box and the triangle tests. A finite stand-in
+/// reciprocal (or the triangle test seeing a slope the box test does not)
+/// lets the two disagree on rays that graze a plane near the origin, and
+/// then the BVH misses hits that brute force finds.
+pub const PARALLEL: f32 = 1e-30;
+
+/// `d` with components below [`PARALLEL`] replaced by zeros of their sign.
+#[inline(always)]
+pub fn flush(d: Vec3) -> Vec3 {
+    Vec3::select(d.abs().cmplt(Vec3::splat(PARALLEL)), d * 0.0, d)
 }

@@ -22,8 +22,11 @@ pub struct RayShear {
 }
 
 impl RayShear {
+    /// Direction components below [`PARALLEL`](super::ray::PARALLEL) count
+    /// as zero, as in the box test, so the two agree on grazing rays.
     #[inline]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        let dir = super::ray::flush(dir);
         let a = dir.abs();
         let kz = if a.x > a.y {
             if a.x > a.z {
@@ -106,13 +109,16 @@ pub fn intersect(
     let bz = s.sz * b[2];
     let cz = s.sz * c[2];
     let t_scaled = u * az + v * bz + w * cz;
-    // t = t_scaled / det must lie in (0, tmax]; compare without dividing.
+    // t = t_scaled / det must lie in (0, tmax]; a first check without
+    // dividing, loose by a few roundings so it never rejects a t that the
+    // exact check below accepts (that made the closest hit depend on the
+    // order triangles are tested in).
     let (ts, d) = if det < 0.0 {
         (-t_scaled, -det)
     } else {
         (t_scaled, det)
     };
-    if ts <= 0.0 || ts > tmax * d {
+    if ts <= 0.0 || ts > tmax * d * (1.0 + 4.0 * f32::EPSILON) {
         return None;
     }
     let inv = 1.0 / det;
@@ -129,7 +135,7 @@ pub fn intersect(
     let max_e = u.abs().max(v.abs()).max(w.abs());
     let delta_t =
         3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv.abs();
-    if t <= delta_t || !t.is_finite() {
+    if t <= delta_t || !t.is_finite() || t > tmax {
         return None;
     }
     Some(TriHit {
@@ -220,6 +226,33 @@ mod tests {
             let n = fan.iter().filter(|t| hit(o, d, **t).is_some()).count();
             assert!(n >= 1, "ray through shared vertex missed all six triangles");
         }
+    }
+
+    #[test]
+    fn hits_never_lie_beyond_tmax_and_do_not_depend_on_order() {
+        // Two triangles crossing the ray one ulp of t apart (from a property
+        // test): each must be accepted exactly when its t is within tmax.
+        let o = Vec3::new(1894893.9, 1.7716894, -0.9);
+        let d = Vec3::new(-1894893.9, -2.7575336, 1.4);
+        let a = [
+            [0.0, 0.0, 873712.44],
+            [0.0, -0.16328001, 0.0],
+            [0.0, -407915.78, 0.0],
+        ];
+        let b = [
+            [947446.8, 5.173792e-7, -0.0],
+            [-0.0, -0.0, 0.0],
+            [0.0, -1.9716884, 1.0],
+        ];
+        let s = RayShear::new(o, d);
+        let ta = intersect(&s, &a[0], &a[1], &a[2], f32::INFINITY).unwrap().t;
+        let tb = intersect(&s, &b[0], &b[1], &b[2], f32::INFINITY).unwrap().t;
+        assert!(tb < ta, "{tb} {ta}");
+        assert!(intersect(&s, &a[0], &a[1], &a[2], tb).is_none());
+        assert_eq!(
+            intersect(&s, &b[0], &b[1], &b[2], ta).map(|h| h.t),
+            Some(tb)
+        );
     }
 
     #[test]

@@ -9,7 +9,7 @@ use glam::{Vec2, Vec3};
 use super::plan::Plan;
 use super::recorder::{HitInfo, LightSample, MissInfo, RayKind, Recorder};
 use crate::bvh::{Bvh, Hit};
-use crate::geometry::offset::{hit_point, offset_origin, SHADOW_EPSILON};
+use crate::geometry::offset::{geometric_normal, hit_point, offset_origin, SHADOW_EPSILON};
 use crate::geometry::sampling::{jittered, permute, phong_lobe, Rng};
 use crate::geometry::Ray;
 use crate::scene::camera::CameraFrame;
@@ -168,7 +168,7 @@ impl<'a> Tracer<'a> {
         let verts = idx.map(|i| geo.positions[i as usize]);
         let (p, err) = hit_point(verts, hit.u, hit.v);
         let b = Vec3::new(1.0 - hit.u - hit.v, hit.u, hit.v);
-        let mut ng = (verts[1] - verts[0]).cross(verts[2] - verts[0]).normalize();
+        let mut ng = geometric_normal(verts);
         if ng.dot(ray.dir) > 0.0 {
             ng = -ng;
         }

@@ -43,7 +43,7 @@ struct SceneFile {
     description: Option<String>,
     camera: Option<CameraSpec>,
     #[serde(default, rename = "mesh")]
-    meshes: Vec<MeshSpec>,
+    meshes: Vec<toml::Spanned<MeshSpec>>,
     #[serde(default, rename = "light")]
     lights: Vec<toml::Spanned<LightSpec>>,
     environment: Option<EnvSpec>,
@@ -256,7 +256,13 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
         String::from_utf8(bytes).map_err(|_| anyhow!("{}: not UTF-8 text", path.display()))?;
     let f = parse(path, &text)?;
     let mut parts = Parts::default();
-    for m in &f.meshes {
+    let at = |span: std::ops::Range<usize>| {
+        let (line, col) = line_col(&text, span.start);
+        format!("{}:{line}:{col}", path.display())
+    };
+    for spanned in &f.meshes {
+        let m = spanned.get_ref();
+        let first_vertex = parts.geometry.positions.len();
         let mesh_path = resolve(path, &m.file);
         let mut xf = Affine3A::IDENTITY;
         if let Some(s) = &m.scale {
@@ -333,6 +339,18 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
             obj::load_into(&mut parts, src, &mesh_path, &place, material.as_ref())
                 .with_context(|| format!("{}: mesh {}", path.display(), m.file))?;
         }
+        let reach = parts.geometry.positions[first_vertex..]
+            .iter()
+            .fold(0.0f32, |r, p| r.max(p.abs().max_element()));
+        if reach > obj::ABSURD {
+            parts.warnings.push(format!(
+                "{}: mesh {}: coordinates reach {reach:e} once placed; beyond {:e} shading \
+                 and shadows lose all precision",
+                at(spanned.span()),
+                m.file,
+                obj::ABSURD
+            ));
+        }
     }
     if parts.geometry.indices.is_empty() {
         bail!("{}: the scene has no triangles", path.display());
@@ -360,6 +378,13 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
                     path.display()
                 );
             }
+            if cam.eye.abs().max(cam.target.abs()).max_element() > obj::ABSURD {
+                parts.warnings.push(format!(
+                    "{}: camera beyond {:e}: its rays lose all precision",
+                    path.display(),
+                    obj::ABSURD
+                ));
+            }
             cam
         }
     };
@@ -367,10 +392,25 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
         .lights
         .iter()
         .map(|l| {
-            light_from(l.get_ref()).map_err(|e| {
-                let (line, col) = line_col(&text, l.span().start);
-                anyhow!("{}:{line}:{col}: {e}", path.display())
-            })
+            let light = light_from(l.get_ref()).map_err(|e| anyhow!("{}: {e}", at(l.span())))?;
+            let reach = match &light {
+                Light::Point { position, .. } => position.abs().max_element(),
+                Light::Segment { a, b, .. } => a.abs().max(b.abs()).max_element(),
+                Light::Parallelogram {
+                    corner,
+                    edge1,
+                    edge2,
+                    ..
+                } => (corner.abs() + edge1.abs() + edge2.abs()).max_element(),
+            };
+            if reach > obj::ABSURD {
+                parts.warnings.push(format!(
+                    "{}: light at {reach:e}: beyond {:e} shading loses all precision",
+                    at(l.span()),
+                    obj::ABSURD
+                ));
+            }
+            Ok(light)
         })
         .collect::<Result<Vec<_>>>()?;
     if lights.is_empty() {
@@ -582,6 +622,49 @@ mod tests {
         assert!(e.contains("finite"), "{e}");
         let e = err("[[light]]\ntype = \"spot\"\n");
         assert!(e.starts_with("s.toml:"), "{e}");
+    }
+
+    fn load_text(text: &str) -> Result<Scene> {
+        let src = crate::scene::source::Memory::default()
+            .with("s.toml", text)
+            .with("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+        load_with(&src, Path::new("s.toml"), Overrides::default())
+    }
+
+    #[test]
+    fn absurd_placements_warn_with_their_line() {
+        let light = "[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\ncolor = [1, 1, 1]\n";
+        let s = load_text(&format!(
+            "[[mesh]]\nfile = \"m.obj\"\nscale = 1e30\n{light}"
+        ))
+        .unwrap();
+        assert!(
+            s.warnings
+                .iter()
+                .any(|w| w.starts_with("s.toml:1:1: mesh m.obj")),
+            "{:?}",
+            s.warnings
+        );
+        let s = load_text(&format!(
+            "[[mesh]]\nfile = \"m.obj\"\n{}",
+            light.replace("[0, 2, 0]", "[0, 2e30, 0]")
+        ))
+        .unwrap();
+        assert!(
+            s.warnings
+                .iter()
+                .any(|w| w.starts_with("s.toml:3:1: light")),
+            "{:?}",
+            s.warnings
+        );
+        let s = load_text(&format!(
+            "[[mesh]]\nfile = \"m.obj\"\nscale = 1e10\n{light}"
+        ))
+        .unwrap();
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        // Beyond f32: an error at the value.
+        let e = load_text("[[mesh]]\nfile = \"m.obj\"\ntranslate = [0, 1e39, 0]\n").unwrap_err();
+        assert!(format!("{e:#}").starts_with("s.toml:3:"), "{e:#}");
     }
 
     #[test]

@@ -12,7 +12,12 @@ use super::source::{resolve, Disk, Source};
 use super::{Camera, Environment, Geometry, Light, Material, MeshInfo, Scene, Settings, Texture};
 
 /// Coordinates beyond this are legal but almost certainly a mistake.
-const ABSURD: f32 = 1e18;
+pub const ABSURD: f32 = 1e18;
+
+/// Statements holding vertex data in OBJ files.
+const OBJ_NUMBERS: &[&str] = &["v", "vn", "vt"];
+/// Statements holding numbers in MTL files (colours, exponents, opacity).
+const MTL_NUMBERS: &[&str] = &["Ka", "Kd", "Ks", "Ke", "Tf", "Ns", "Ni", "d", "Tr"];
 
 /// A `BufRead` over bytes that yields at most one line per `fill_buf`, so the
 /// number of lines handed to tobj is the line it failed on.
@@ -65,12 +70,17 @@ fn with_lines<T>(
     parse(&mut r).map_err(|e| anyhow!("{}:{}: {e}", file.display(), lines.get().max(1)))
 }
 
-/// Rejects NaN/inf in `v`, `vn`, `vt` lines (tobj accepts them) and warns on
-/// absurd magnitudes, naming the line.
-fn check_numbers(file: &Path, text: &str, warnings: &mut Vec<String>) -> Result<()> {
+/// Rejects NaN/inf in the numbers of the `statements` (tobj accepts them)
+/// and warns on absurd magnitudes, naming the line.
+fn check_numbers(
+    file: &Path,
+    text: &str,
+    statements: &[&str],
+    warnings: &mut Vec<String>,
+) -> Result<()> {
     for (i, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
-        if !matches!(words.next(), Some("v" | "vn" | "vt")) {
+        if !words.next().is_some_and(|w| statements.contains(&w)) {
             continue;
         }
         for w in words {
@@ -259,7 +269,7 @@ pub fn load_into(
         .read(path)
         .with_context(|| format!("cannot read {}", path.display()))?;
     let text = String::from_utf8_lossy(&bytes);
-    check_numbers(path, &text, &mut parts.warnings)?;
+    check_numbers(path, &text, OBJ_NUMBERS, &mut parts.warnings)?;
     let opts = tobj::LoadOptions {
         single_index: true,
         triangulate: true,
@@ -274,7 +284,14 @@ pub fn load_into(
             let mtl_path = resolve(path, &mtl.to_string_lossy());
             match src.read(&mtl_path) {
                 Ok(mb) => {
-                    let res = with_lines(&mtl_path, &mb, |r| tobj::load_mtl_buf(r));
+                    let checked = check_numbers(
+                        &mtl_path,
+                        &String::from_utf8_lossy(&mb),
+                        MTL_NUMBERS,
+                        &mut warnings.borrow_mut(),
+                    );
+                    let res = checked
+                        .and_then(|()| with_lines(&mtl_path, &mb, |r| tobj::load_mtl_buf(r)));
                     match res {
                         Ok(ok) => {
                             mtl_files.borrow_mut().push(mtl_path);
@@ -475,6 +492,28 @@ mod tests {
         assert_eq!(p.materials[0].dissolve, 0.5);
         assert!(
             p.warnings.iter().any(|w| w.contains("m/tex dir/t 1.png")),
+            "{:?}",
+            p.warnings
+        );
+    }
+
+    #[test]
+    fn non_finite_mtl_numbers_are_errors_and_absurd_ones_warn() {
+        let obj = format!("mtllib a.mtl\nusemtl x\n{QUAD}");
+        for (mtl, line) in [
+            ("newmtl x\nKd nan 0 0\n", 2),
+            ("newmtl x\nKd 1 1 1\nNs inf\n", 3),
+            ("newmtl x\n\nd -infinity\n", 3),
+            ("newmtl x\nKs 0 0 1e39\n", 2),
+        ] {
+            let e = load(vec![("m/a.obj", obj.clone()), ("m/a.mtl", mtl.into())]).unwrap_err();
+            assert!(format!("{e}").contains(&format!("m/a.mtl:{line}")), "{e}");
+        }
+        // A texture named like a number is not a number.
+        let mtl = "newmtl x\nmap_Kd nan\nKs 1e30 0 0\n";
+        let p = load(vec![("m/a.obj", obj), ("m/a.mtl", mtl.into())]).unwrap();
+        assert!(
+            p.warnings.iter().any(|w| w.contains("m/a.mtl:3: absurd")),
             "{:?}",
             p.warnings
         );

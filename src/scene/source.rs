@@ -55,3 +55,26 @@ pub fn resolve(base: &Path, written: &str) -> PathBuf {
         normalize(&base.parent().unwrap_or(Path::new("")).join(p))
     }
 }
+
+/// Files held in memory, keyed by path: scenes built or mutated in code (the
+/// stability battery, tests, fuzzing) load through the ordinary loaders.
+#[derive(Clone, Debug, Default)]
+pub struct Memory(pub Vec<(PathBuf, Vec<u8>)>);
+
+impl Memory {
+    pub fn with(mut self, path: &str, bytes: impl Into<Vec<u8>>) -> Self {
+        self.0.push((normalize(Path::new(path)), bytes.into()));
+        self
+    }
+}
+
+impl Source for Memory {
+    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
+        let key = normalize(path);
+        self.0
+            .iter()
+            .find(|(p, _)| *p == key)
+            .map(|(_, b)| b.clone())
+            .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"))
+    }
+}

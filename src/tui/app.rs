@@ -19,6 +19,7 @@ use crate::cli::{Prepared, Worst};
 use crate::inspect::{inspect_pixel, lines, PixelTree, TreeLine};
 use crate::render::plan::not_needed;
 use crate::render::{Feature, Features, Plan};
+use crate::report::stability;
 use crate::scene::{Builder, Camera, Scene};
 
 /// Camera orbit step per key press, in radians (5 degrees).
@@ -118,6 +119,8 @@ pub struct App {
     pub status: String,
     pub popup: Option<Popup>,
     export: Option<export::Job>,
+    /// The stability battery's result, while it runs.
+    stability: Option<std::sync::mpsc::Receiver<Result<Vec<stability::Row>>>>,
     /// Where PNG exports go: the directory the TUI was started in.
     pub export_dir: PathBuf,
     pub rebuilding: bool,
@@ -175,6 +178,7 @@ impl App {
             status,
             popup: None,
             export: None,
+            stability: None,
             export_dir: std::env::current_dir().unwrap_or_else(|_| PathBuf::from(".")),
             rebuilding: false,
             bytes_per_sec: 0.0,
@@ -396,13 +400,57 @@ impl App {
         }
     }
 
-    /// The `x` key. HOOK(stability): when `crate::report::stability` is
-    /// merged, run its battery on this scene in a background thread and show
-    /// the table with `self.popup = Some(Popup { title, lines, scroll: 0 })`.
+    /// The `x` key: runs the stability battery on this scene in the
+    /// background; the table opens in a popup when it is done.
     fn run_stability(&mut self) {
-        self.status =
-            "stability battery: not available yet (`rayterm stability` is not in this build)"
-                .into();
+        if self.stability.is_some() {
+            self.status = "the stability battery is already running".into();
+            return;
+        }
+        let (tx, rx) = std::sync::mpsc::channel();
+        let scene = self.scene.clone();
+        std::thread::spawn(move || {
+            let rows = stability::run_battery_on(&scene, &stability::Options::default());
+            // The receiver is gone only when the TUI has quit.
+            let _ = tx.send(rows);
+        });
+        self.stability = Some(rx);
+        self.status = "running the stability battery...".into();
+    }
+
+    /// Opens the battery's table once it has arrived; true when it did.
+    fn poll_stability(&mut self) -> bool {
+        let Some(rx) = &self.stability else {
+            return false;
+        };
+        let result = match rx.try_recv() {
+            Ok(r) => r,
+            Err(std::sync::mpsc::TryRecvError::Empty) => return false,
+            Err(std::sync::mpsc::TryRecvError::Disconnected) => {
+                Err(anyhow::anyhow!("the battery stopped unexpectedly"))
+            }
+        };
+        self.stability = None;
+        match result {
+            Ok(rows) => {
+                let failed = rows.iter().filter(|r| !r.pass).count();
+                self.status = format!(
+                    "stability battery: {} of {} cases passed",
+                    rows.len() - failed,
+                    rows.len()
+                );
+                self.popup = Some(Popup {
+                    title: format!("stability battery: {} ({failed} failed)", self.scene.name),
+                    lines: stability::format_table(&rows)
+                        .lines()
+                        .map(str::to_string)
+                        .collect(),
+                    scroll: 0,
+                });
+            }
+            Err(e) => self.status = format!("stability battery failed: {e:#}"),
+        }
+        true
     }
 
     pub fn feature_state(&self, f: Feature) -> FeatureState {
@@ -592,6 +640,7 @@ impl App {
                 }
             }
         }
+        changed |= self.poll_stability();
         if let Some(job) = &self.export {
             changed = true;
             if let Some(r) = job.poll() {

@@ -1,0 +1,407 @@
+//! Scale and offset: the scene scaled by 1e-4 .. 1e6 and moved up to 1e6
+//! from the origin, rendered through the integrator with a recorder that
+//! watches every shadow ray. Acne is a shadow ray from a surface facing the
+//! light that its own surface (its triangle, or one coplanar with it)
+//! blocks; a leak is a ray that must hit the scene and does not; the image
+//! is compared with the unit-scale render.
+
+use anyhow::Result;
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::topology::{aimed, Crossing, Topology};
+use super::Row;
+use super::{format_figure, Options};
+use crate::bvh::{self, Bvh, TraversalStats};
+use crate::geometry::offset::hit_point;
+use crate::geometry::sampling::Rng;
+use crate::render::recorder::{HitInfo, LightSample, RayKind, Recorder};
+use crate::render::{Feature, Features, Plan, Tracer};
+use crate::scene::{Builder, Geometry, Light, Scene};
+
+/// A uniform scale, then a move by `offset * (1, -0.5, 0.75)` (exact in f32
+/// for the offsets used, and off every axis).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transform {
+    pub scale: f32,
+    pub offset: f32,
+}
+
+impl Transform {
+    pub const fn new(scale: f32, offset: f32) -> Self {
+        Self { scale, offset }
+    }
+
+    pub fn offset_vec(&self) -> Vec3 {
+        Vec3::new(1.0, -0.5, 0.75) * self.offset
+    }
+
+    pub fn is_identity(&self) -> bool {
+        self.scale == 1.0 && self.offset == 0.0
+    }
+
+    pub fn label(&self) -> String {
+        let e = |x: f32| format!("{x:e}").replace("e0", "");
+        match (self.scale == 1.0, self.offset == 0.0) {
+            (_, true) => format!("scale {}", e(self.scale)),
+            (true, false) => format!("offset {}", e(self.offset)),
+            (false, false) => format!("scale {} offset {}", e(self.scale), e(self.offset)),
+        }
+    }
+}
+
+/// The transforms of the battery; the identity is the reference.
+pub const TRANSFORMS: [Transform; 10] = [
+    Transform::new(1e-4, 0.0),
+    Transform::new(1e-2, 0.0),
+    Transform::new(1.0, 0.0),
+    Transform::new(1e2, 0.0),
+    Transform::new(1e4, 0.0),
+    Transform::new(1e6, 0.0),
+    Transform::new(1.0, 1e2),
+    Transform::new(1.0, 1e4),
+    Transform::new(1.0, 1e6),
+    Transform::new(1e4, 1e6),
+];
+
+/// Largest fraction of pixels allowed to differ from the reference (see
+/// [`image_difference`]); tiny images are allowed [`IMAGE_LIMIT_PIXELS`].
+pub const IMAGE_LIMIT: f64 = 0.01;
+pub const IMAGE_LIMIT_PIXELS: f64 = 4.0;
+/// A pixel differs when a channel (clamped to [0, 1]) moves by more than this.
+pub const PIXEL_TOLERANCE: f32 = 0.02;
+
+/// Watches the integrator: the triangle hit by each open ray (with the
+/// barycentrics of the hit), whether the camera ray hit, and every shadow
+/// ray from a surface facing its light.
+struct Probe<'g> {
+    geom: &'g Geometry,
+    stack: Vec<Option<(u32, f32, f32)>>,
+    primary: bool,
+    lit: u64,
+    acne: u64,
+}
+
+impl Recorder for Probe<'_> {
+    const ACTIVE: bool = true;
+
+    fn begin_ray(&mut self, _kind: RayKind, _ray: &crate::geometry::Ray, _weight: Vec3) {
+        self.stack.push(None);
+    }
+
+    fn hit(&mut self, info: HitInfo) {
+        if self.stack.len() == 1 {
+            self.primary = true;
+        }
+        if let Some(top) = self.stack.last_mut() {
+            *top = Some((info.triangle, info.barycentric.y, info.barycentric.z));
+        }
+    }
+
+    fn light_sample(&mut self, s: LightSample) {
+        if s.shadow_ray.is_none() {
+            return;
+        }
+        self.lit += 1;
+        if let (Some((_, occ)), Some(Some((tri, u, v)))) = (s.occluder, self.stack.last()) {
+            if own_surface(self.geom, *tri, occ, *u, *v) {
+                self.acne += 1;
+            }
+        }
+    }
+
+    fn end_ray(&mut self, _color: Vec3) {
+        self.stack.pop();
+    }
+}
+
+/// Whether triangle `occ` is the surface that the hit at barycentrics
+/// `(u, v)` of triangle `hit` lies on: the same triangle, or a parallel one
+/// whose plane the hit point reaches within its rounding error bound (the
+/// bound the integrator offsets spawned rays by).
+pub fn own_surface(g: &Geometry, hit: u32, occ: u32, u: f32, v: f32) -> bool {
+    if hit == occ {
+        return true;
+    }
+    let (p, err) = hit_point(g.triangle(hit as usize), u, v);
+    let plane = |i: u32| {
+        let [a, b, c] = g.triangle(i as usize).map(|v| v.as_dvec3());
+        ((b - a).cross(c - a).normalize_or_zero(), a)
+    };
+    let (nh, _) = plane(hit);
+    let (no, a) = plane(occ);
+    nh.dot(no).abs() >= 1.0 - 1e-6 && no.dot(p.as_dvec3() - a).abs() <= no.abs().dot(err.as_dvec3())
+}
+
+/// What one render through the probe saw.
+pub struct Probed {
+    pub image: Vec<Vec3>,
+    /// Whether each pixel's camera ray hit the scene.
+    pub primary: Vec<bool>,
+    /// Shadow rays from surfaces facing their light, and those that hit their own surface.
+    pub lit: u64,
+    pub acne: u64,
+}
+
+/// Renders one sample per pixel at the pixel centres through the probe.
+pub fn probe_render(scene: &Scene, bvh: &Bvh, w: u32, h: u32, seed: u64) -> Probed {
+    let features = Features::all().without(&[Feature::Supersampling, Feature::Bloom]);
+    let plan = Plan::new(scene, features);
+    let tracer = Tracer::new(scene, bvh, &plan, w, h, seed);
+    let rows: Vec<(Vec<Vec3>, Vec<bool>, u64, u64)> = (0..h)
+        .into_par_iter()
+        .map(|y| {
+            let mut rec = Probe {
+                geom: &scene.geometry,
+                stack: Vec::new(),
+                primary: false,
+                lit: 0,
+                acne: 0,
+            };
+            let mut img = Vec::with_capacity(w as usize);
+            let mut prim = Vec::with_capacity(w as usize);
+            for x in 0..w {
+                rec.primary = false;
+                img.push(tracer.sample(x, y, 0, &mut rec));
+                prim.push(rec.primary);
+            }
+            (img, prim, rec.lit, rec.acne)
+        })
+        .collect();
+    let mut out = Probed {
+        image: Vec::with_capacity((w * h) as usize),
+        primary: Vec::with_capacity((w * h) as usize),
+        lit: 0,
+        acne: 0,
+    };
+    for (img, prim, lit, acne) in rows {
+        out.image.extend(img);
+        out.primary.extend(prim);
+        out.lit += lit;
+        out.acne += acne;
+    }
+    out
+}
+
+/// Fraction of pixels of either `w x h` image that differ by more than
+/// [`PIXEL_TOLERANCE`] from every pixel of the other's 3x3 neighbourhood: an
+/// edge or shadow boundary moved by a rounding across one pixel is not a
+/// difference, a change of shading or speckle is.
+pub fn image_difference(a: &[Vec3], b: &[Vec3], w: u32, h: u32) -> f64 {
+    let clamp = |c: Vec3| {
+        if c.is_finite() {
+            c.clamp(Vec3::ZERO, Vec3::ONE)
+        } else {
+            Vec3::NAN
+        }
+    };
+    let (w, h) = (w as i64, h as i64);
+    let unmatched = |x: &[Vec3], y: &[Vec3], i: i64| {
+        let c = clamp(x[i as usize]);
+        let (px, py) = (i % w, i / w);
+        !(-1..=1).any(|dy| {
+            (-1..=1).any(|dx| {
+                let (qx, qy) = (px + dx, py + dy);
+                (0..w).contains(&qx)
+                    && (0..h).contains(&qy)
+                    && (c - clamp(y[(qy * w + qx) as usize])).abs().max_element() <= PIXEL_TOLERANCE
+            })
+        })
+    };
+    let off = (0..w * h)
+        .filter(|&i| unmatched(a, b, i) || unmatched(b, a, i))
+        .count();
+    off as f64 / (w * h).max(1) as f64
+}
+
+/// Rays that must hit: from the eye at crossing vertices, crossing edges and
+/// interior points of the scene's triangles, at most `rays` of each.
+/// Returns (aimed, missed).
+pub fn aimed_leaks(scene: &Scene, bvh: &Bvh, rays: u32, seed: u64) -> (u64, u64) {
+    let tris = (0..scene.geometry.triangle_count())
+        .map(|i| scene.geometry.triangle(i))
+        .collect();
+    let topo = Topology::new(tris);
+    let eye = scene.camera.eye;
+    let mut rng = Rng::for_sample(0, 1, seed);
+    // At most `rays` of each kind, so big meshes stay quick.
+    let mut targets = Vec::new();
+    for (kind, per_edge) in [
+        (Crossing::Vertex, 0),
+        (Crossing::Edge, 4),
+        (Crossing::Surface, 0),
+    ] {
+        let mut t = topo.targets(eye, kind, per_edge, rays, &mut rng);
+        while t.len() > rays as usize {
+            let i = rng.next_u32() as usize % t.len();
+            t.swap_remove(i);
+        }
+        targets.extend(t);
+    }
+    let missed = targets
+        .par_iter()
+        .filter(|t| {
+            aimed(eye, **t).is_some_and(|r| {
+                bvh.intersect::<false>(&r, &mut TraversalStats::default())
+                    .is_none()
+            })
+        })
+        .count();
+    (targets.len() as u64, missed as u64)
+}
+
+/// Pixels whose camera ray hit in the reference, as did all eight
+/// neighbours' (so the pixel is not on a silhouette), but missed in `probed`.
+fn pixel_leaks(reference: &[bool], probed: &[bool], w: u32, h: u32) -> (u64, u64) {
+    let (w, h) = (w as i64, h as i64);
+    let at = |x: i64, y: i64| x >= 0 && y >= 0 && x < w && y < h && reference[(y * w + x) as usize];
+    let (mut n, mut leaks) = (0, 0);
+    for y in 0..h {
+        for x in 0..w {
+            if (-1..=1).all(|dy| (-1..=1).all(|dx| at(x + dx, y + dy))) {
+                n += 1;
+                leaks += !probed[(y * w + x) as usize] as u64;
+            }
+        }
+    }
+    (n, leaks)
+}
+
+/// The scene with every point mapped by `f` and every vector scaled by `s`
+/// (the f64 inverse of [`Scene::transform`]).
+fn map_scene(scene: &Scene, f: impl Fn(Vec3) -> Vec3, s: f32) -> Scene {
+    let mut out = scene.clone();
+    for p in &mut out.geometry.positions {
+        *p = f(*p);
+    }
+    out.camera.eye = f(out.camera.eye);
+    out.camera.target = f(out.camera.target);
+    for l in &mut out.lights {
+        match l {
+            Light::Point { position, .. } => *position = f(*position),
+            Light::Segment { a, b, .. } => {
+                *a = f(*a);
+                *b = f(*b);
+            }
+            Light::Parallelogram {
+                corner,
+                edge1,
+                edge2,
+                ..
+            } => {
+                *corner = f(*corner);
+                *edge1 *= s;
+                *edge2 *= s;
+            }
+        }
+    }
+    out
+}
+
+/// The scale and offset rows for `scene`: acne, leaks and image difference
+/// for every transform.
+pub fn scale_offset(scene: &Scene, o: &Options) -> Result<Vec<Row>> {
+    let base_bvh = bvh::build(&scene.geometry, Builder::Sah);
+    let reference = probe_render(scene, &base_bvh, o.width, o.height, o.seed);
+    // The transforms in parallel (two cores halve a big mesh's time).
+    let per: Vec<Vec<Row>> = TRANSFORMS
+        .par_iter()
+        .map(|t| transform_rows(scene, *t, &reference, o))
+        .collect();
+    Ok(per.concat())
+}
+
+/// Acne, leaks and image difference of `scene` under `t`.
+fn transform_rows(scene: &Scene, t: Transform, reference: &Probed, o: &Options) -> Vec<Row> {
+    let (w, h) = (o.width, o.height);
+    let mut rows = Vec::new();
+    let off = t.offset_vec();
+    let mut moved = scene.clone();
+    moved.transform(t.scale, off);
+    let bvh = bvh::build(&moved.geometry, Builder::Sah);
+    let probed = probe_render(&moved, &bvh, w, h, o.seed);
+    let label = t.label();
+    rows.push(Row::at_most(
+        format!("{label}: acne"),
+        probed.acne as f64 / probed.lit.max(1) as f64,
+        0.0,
+        format!(
+            "{} of {} shadow rays from lit surfaces hit their own surface",
+            probed.acne, probed.lit
+        ),
+    ));
+    let (pn, pl) = pixel_leaks(&reference.primary, &probed.primary, w, h);
+    let (an, al) = aimed_leaks(&moved, &bvh, o.rays / 10, o.seed);
+    rows.push(Row::at_most(
+        format!("{label}: leaks"),
+        (pl + al) as f64 / (pn + an).max(1) as f64,
+        0.0,
+        format!(
+            "{pl} of {pn} camera rays into the scene and {al} of {an} rays aimed at \
+             edges, vertices and faces missed"
+        ),
+    ));
+    if !t.is_identity() {
+        // As `scene::load` would hand it to the renderer: recentred
+        // when far from the origin.
+        let mut shown = moved.clone();
+        let recentred = shown.recentre().is_some();
+        let image = if recentred {
+            let b = bvh::build(&shown.geometry, Builder::Sah);
+            probe_render(&shown, &b, w, h, o.seed).image
+        } else {
+            probed.image.clone()
+        };
+        // The reference: this scene's own (rounded) geometry mapped back
+        // to unit scale in f64, so the figure measures the renderer and
+        // not the rounding of the input.
+        let (s, off64) = (t.scale as f64, off.as_dvec3());
+        let undone = map_scene(
+            &moved,
+            |p| ((p.as_dvec3() - off64) / s).as_vec3(),
+            1.0 / t.scale,
+        );
+        let ubvh = bvh::build(&undone.geometry, Builder::Sah);
+        let unit = probe_render(&undone, &ubvh, w, h, o.seed);
+        let mut detail = format!(
+            "pixels off by > {PIXEL_TOLERANCE} from all 3x3 neighbours in the unit-scale \
+             render of the same geometry; {} against the original scene",
+            format_figure(image_difference(&image, &reference.image, w, h))
+        );
+        if recentred {
+            detail += &format!(
+                "; recentred at load, {} without",
+                format_figure(image_difference(&probed.image, &unit.image, w, h))
+            );
+        }
+        rows.push(Row::at_most(
+            format!("{label}: image"),
+            image_difference(&image, &unit.image, w, h),
+            IMAGE_LIMIT.max(IMAGE_LIMIT_PIXELS / (w * h) as f64),
+            detail,
+        ));
+    }
+    rows
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    #[test]
+    fn labels_are_short() {
+        assert_eq!(Transform::new(1e-4, 0.0).label(), "scale 1e-4");
+        assert_eq!(Transform::new(1.0, 1e6).label(), "offset 1e6");
+        assert_eq!(Transform::new(1e4, 1e6).label(), "scale 1e4 offset 1e6");
+    }
+
+    #[test]
+    fn offsets_are_exact() {
+        for t in TRANSFORMS {
+            let v = t.offset_vec().as_dvec3();
+            let exact = DVec3::new(1.0, -0.5, 0.75) * t.offset as f64;
+            assert_eq!(v, exact);
+        }
+    }
+}
