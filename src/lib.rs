@@ -9,4 +9,5 @@ pub mod cli;
 pub mod geometry;
 pub mod inspect;
 pub mod render;
+pub mod report;
 pub mod scene;

@@ -20,3 +20,12 @@ pub struct Bvh {
     pub prim: Vec<u32>,
     pub stats: BuildStats,
 }
+
+impl Bvh {
+    /// Bytes held by the tree and its leaf-order triangle copies.
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of_val(&self.nodes[..])
+            + std::mem::size_of_val(&self.tris[..])
+            + std::mem::size_of_val(&self.prim[..])
+    }
+}

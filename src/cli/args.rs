@@ -22,6 +22,7 @@ impl Cli {
     pub fn threads(&self) -> Option<usize> {
         match &self.command {
             Command::Render(a) => a.threads,
+            Command::Bench(a) => a.global_threads(),
             Command::Scenes | Command::Inspect(_) => None,
         }
     }
@@ -35,6 +36,8 @@ pub enum Command {
     Scenes,
     /// Print the ray tree of one pixel: every ray the renderer traced for it.
     Inspect(InspectArgs),
+    /// Measure speed: the benchmark table, the shared ray workload, scaling.
+    Bench(super::bench::BenchArgs),
 }
 
 /// `WxH`, e.g. `1280x720`.

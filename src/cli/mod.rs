@@ -1,6 +1,7 @@
 //! Command line: argument parsing and dispatch.
 
 mod args;
+mod bench;
 mod inspect;
 mod render;
 mod scenes;
@@ -26,6 +27,7 @@ pub fn main() -> ExitCode {
         Command::Render(a) => render::run(a),
         Command::Scenes => scenes::run(),
         Command::Inspect(a) => inspect::run(a),
+        Command::Bench(a) => bench::run(a),
     };
     match result {
         Ok(code) => code,
