@@ -1,12 +1,14 @@
-//! Closest-hit and any-hit traversal, ordered near child first.
+//! Closest-hit and any-hit traversal of the 4-wide tree, nearest child first.
 //!
 //! `STATS` is a compile-time switch: with `false` the counters vanish from
 //! the generated code, so the fast path pays nothing for the inspector.
 
+use glam::Vec4;
+
+use super::wide::{leaf_packets, Node4, LEAF};
 use super::{Bvh, TraversalStats};
-use crate::geometry::triangle::{intersect, RayShear};
-use crate::geometry::Ray;
-use glam::Vec3;
+use crate::geometry::triangle::{intersect, intersect4, RayShear, RayShear4, TriHit4};
+use crate::geometry::{gamma, Ray};
 
 /// A closest hit: distance, barycentrics of vertices 1 and 2, and the
 /// triangle's index in the scene geometry.
@@ -18,180 +20,210 @@ pub struct Hit {
     pub prim: u32,
 }
 
-/// Enough for any tree the builders make (they fall back to median splits past depth 64).
-const STACK: usize = 128;
+/// Traversal stack entries on the machine stack; enough for any tree of
+/// reasonable depth (a level pushes at most three). Deeper trees, which
+/// only degenerate inputs make, get a stack on the heap.
+const STACK: usize = 64;
+
+/// Widening of the far slab distance, as in [`crate::geometry::Aabb::hit`].
+const FAR_SCALE: f32 = 1.0 + 2.0 * gamma(3);
+
+/// A ray's constants for testing the four boxes of a node at once.
+struct BoxRay {
+    o: [Vec4; 3],
+    inv: [Vec4; 3],
+    /// Index in `Node4::b` of the near plane on each axis (the far one is `^ 1`).
+    near: [usize; 3],
+}
+
+impl BoxRay {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Self {
+        let inv = ray.inv_dir();
+        let (o, near) = (ray.origin, |a: usize| 2 * a + (inv[a] < 0.0) as usize);
+        BoxRay {
+            o: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
+            inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
+            near: [near(0), near(1), near(2)],
+        }
+    }
+
+    /// Bit `i` set when child `i`'s box is hit within `(0, tmax)`, and the
+    /// entry distances; the same test as `Aabb::hit`, four boxes at once.
+    #[inline(always)]
+    fn hit(&self, n: &Node4, tmax: f32) -> (u32, Vec4) {
+        let slab = |a: usize| {
+            let near = (n.b[self.near[a]] - self.o[a]) * self.inv[a];
+            let far = (n.b[self.near[a] ^ 1] - self.o[a]) * self.inv[a];
+            (near, far)
+        };
+        let (nx, fx) = slab(0);
+        let (ny, fy) = slab(1);
+        let (nz, fz) = slab(2);
+        let tnear = nx.max(ny).max(nz.max(Vec4::ZERO));
+        let tfar = fx.min(fy).min(fz.min(Vec4::splat(tmax))) * Vec4::splat(FAR_SCALE);
+        (tnear.cmple(tfar).bitmask(), tnear)
+    }
+}
 
 impl Bvh {
     /// Nearest hit in `(0, ray.tmax]`.
     #[inline]
     pub fn intersect<const STATS: bool>(&self, ray: &Ray, st: &mut TraversalStats) -> Option<Hit> {
-        if self.nodes.is_empty() {
-            return None;
-        }
-        let shear = RayShear::new(ray.origin, ray.dir);
-        let inv = ray.inv_dir();
-        let o = ray.origin;
-        let mut tmax = ray.tmax;
         let mut best: Option<(f32, f32, f32, u32)> = None;
-        let mut stack = [0u32; STACK];
+        self.traverse::<false, STATS>(ray, st, |h, idx| {
+            let t = h.t.min_element();
+            let lane = (h.t.cmpeq(Vec4::splat(t)).bitmask() & h.mask).trailing_zeros() as usize;
+            // Arrays, not `Vec4` indexing: that is a jump table on the lane.
+            best = Some((t, h.u.to_array()[lane], h.v.to_array()[lane], idx[lane]));
+            t
+        });
+        best.map(|(t, u, v, i)| Hit {
+            t,
+            u,
+            v,
+            prim: self.prim[i as usize],
+        })
+    }
+
+    /// Whether anything lies in `(0, ray.tmax]`; stops at the first hit found
+    /// and returns that triangle.
+    #[inline]
+    pub fn occluded<const STATS: bool>(&self, ray: &Ray, st: &mut TraversalStats) -> Option<u32> {
+        let mut found = None;
+        self.traverse::<true, STATS>(ray, st, |h, idx| {
+            found = Some(self.prim[idx[h.mask.trailing_zeros() as usize] as usize]);
+            0.0
+        });
+        found
+    }
+
+    /// Walks the wide tree nearest child first. `on_hit` gets every packet
+    /// with a hit and returns the new `tmax`; with `ANY` the walk stops at
+    /// the first hit.
+    #[inline(always)]
+    fn traverse<const ANY: bool, const STATS: bool>(
+        &self,
+        ray: &Ray,
+        st: &mut TraversalStats,
+        on_hit: impl FnMut(&TriHit4, &[u32; 4]) -> f32,
+    ) {
+        if self.wide.nodes.is_empty() {
+            return;
+        }
+        if self.wide.stack <= STACK {
+            let mut stack = [(0u32, 0.0f32); STACK];
+            self.walk::<ANY, STATS>(ray, st, &mut stack, on_hit);
+        } else {
+            self.walk_deep::<ANY, STATS>(ray, st, on_hit);
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn walk_deep<const ANY: bool, const STATS: bool>(
+        &self,
+        ray: &Ray,
+        st: &mut TraversalStats,
+        on_hit: impl FnMut(&TriHit4, &[u32; 4]) -> f32,
+    ) {
+        let mut stack = vec![(0u32, 0.0f32); self.wide.stack];
+        self.walk::<ANY, STATS>(ray, st, &mut stack, on_hit);
+    }
+
+    /// The walk itself; `stack` has room for the tree's deepest path.
+    #[inline(always)]
+    fn walk<const ANY: bool, const STATS: bool>(
+        &self,
+        ray: &Ray,
+        st: &mut TraversalStats,
+        stack: &mut [(u32, f32)],
+        mut on_hit: impl FnMut(&TriHit4, &[u32; 4]) -> f32,
+    ) {
+        let w = &self.wide;
+        let shear = RayShear4::new(&RayShear::new(ray.origin, ray.dir));
+        let boxes = BoxRay::new(ray);
+        let mut tmax = ray.tmax;
         let mut sp = 0;
-        let mut node = &self.nodes[0];
-        if STATS {
-            st.nodes_visited += 1;
-        }
-        if node.bounds().hit(o, inv, tmax).is_none() {
-            if STATS {
-                st.boxes_missed += 1;
-            }
-            return None;
-        }
-        if STATS {
-            st.boxes_hit += 1;
-        }
+        let mut cur = 0u32;
         loop {
-            if node.is_leaf() {
+            if cur & LEAF == 0 {
+                let node = &w.nodes[cur as usize];
+                let (mask, tnear) = boxes.hit(node, tmax);
                 if STATS {
-                    st.leaves += 1;
-                    st.triangle_tests += node.count;
+                    let slots = 4 - node.b[0].cmpeq(Vec4::INFINITY).bitmask().count_ones();
+                    st.nodes_visited += 1;
+                    st.boxes_hit += mask.count_ones();
+                    st.boxes_missed += slots - mask.count_ones();
                 }
-                let first = node.first as usize;
-                for i in first..first + node.count as usize {
-                    let t = &self.tris[i];
-                    if let Some(h) = intersect(&shear, &t[0], &t[1], &t[2], tmax) {
-                        tmax = h.t;
-                        best = Some((h.t, h.u, h.v, i as u32));
+                if mask != 0 {
+                    if mask & (mask - 1) == 0 {
+                        cur = node.child[mask.trailing_zeros() as usize];
+                        continue;
                     }
+                    if ANY {
+                        // Any hit will do: no ordering, the first lane next.
+                        let mut m = mask & (mask - 1);
+                        while m != 0 {
+                            stack[sp] = (node.child[m.trailing_zeros() as usize], 0.0);
+                            sp += 1;
+                            m &= m - 1;
+                        }
+                        cur = node.child[mask.trailing_zeros() as usize];
+                        continue;
+                    }
+                    // Two to four hits: nearest next, the others pushed farthest first.
+                    let tnear = tnear.to_array();
+                    let mut hits = [(0u32, 0.0f32); 4];
+                    let mut n = 0;
+                    let mut m = mask;
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let mut j = n;
+                        while j > 0 && hits[j - 1].1 < tnear[i] {
+                            hits[j] = hits[j - 1];
+                            j -= 1;
+                        }
+                        hits[j] = (node.child[i], tnear[i]);
+                        n += 1;
+                    }
+                    for &h in &hits[..n - 1] {
+                        stack[sp] = h;
+                        sp += 1;
+                    }
+                    cur = hits[n - 1].0;
+                    continue;
                 }
             } else {
-                let c = node.first as usize;
-                let (a, b) = (&self.nodes[c], &self.nodes[c + 1]);
-                let ha = hit_box(a, o, inv, tmax);
-                let hb = hit_box(b, o, inv, tmax);
                 if STATS {
-                    st.nodes_visited += 2;
-                    let hits = ha.is_some() as u32 + hb.is_some() as u32;
-                    st.boxes_hit += hits;
-                    st.boxes_missed += 2 - hits;
+                    st.leaves += 1;
                 }
-                match (ha, hb) {
-                    (Some(da), Some(db)) => {
-                        let (near, far) = if da <= db { (c, c + 1) } else { (c + 1, c) };
-                        if sp < STACK {
-                            stack[sp] = far as u32;
-                            sp += 1;
+                for p in &w.packets[leaf_packets(cur)] {
+                    if STATS {
+                        st.triangle_tests += p.lanes().count_ones();
+                    }
+                    let h = intersect4(&shear, &p.p, tmax);
+                    if h.mask != 0 {
+                        tmax = on_hit(&h, &p.idx);
+                        if ANY {
+                            return;
                         }
-                        node = &self.nodes[near];
-                        continue;
                     }
-                    (Some(_), None) => {
-                        node = a;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        node = b;
-                        continue;
-                    }
-                    (None, None) => {}
                 }
             }
             // Pop, skipping nodes that now lie beyond the closest hit.
             loop {
                 if sp == 0 {
-                    return best.map(|(t, u, v, i)| Hit {
-                        t,
-                        u,
-                        v,
-                        prim: self.prim[i as usize],
-                    });
+                    return;
                 }
                 sp -= 1;
-                let n = &self.nodes[stack[sp] as usize];
-                if hit_box(n, o, inv, tmax).is_some() {
-                    node = n;
+                let (c, d) = stack[sp];
+                if ANY || d <= tmax * FAR_SCALE {
+                    cur = c;
                     break;
                 }
             }
-        }
-    }
-
-    /// Whether anything lies in `(0, ray.tmax]`; stops at the first hit found.
-    #[inline]
-    pub fn occluded<const STATS: bool>(&self, ray: &Ray, st: &mut TraversalStats) -> Option<u32> {
-        if self.nodes.is_empty() {
-            return None;
-        }
-        let shear = RayShear::new(ray.origin, ray.dir);
-        let inv = ray.inv_dir();
-        let o = ray.origin;
-        let tmax = ray.tmax;
-        let mut stack = [0u32; STACK];
-        let mut sp = 0;
-        let root = &self.nodes[0];
-        if STATS {
-            st.nodes_visited += 1;
-        }
-        if root.bounds().hit(o, inv, tmax).is_none() {
-            if STATS {
-                st.boxes_missed += 1;
-            }
-            return None;
-        }
-        if STATS {
-            st.boxes_hit += 1;
-        }
-        let mut node = root;
-        loop {
-            if node.is_leaf() {
-                if STATS {
-                    st.leaves += 1;
-                }
-                let first = node.first as usize;
-                for i in first..first + node.count as usize {
-                    if STATS {
-                        st.triangle_tests += 1;
-                    }
-                    let t = &self.tris[i];
-                    if intersect(&shear, &t[0], &t[1], &t[2], tmax).is_some() {
-                        return Some(self.prim[i]);
-                    }
-                }
-            } else {
-                let c = node.first as usize;
-                let (a, b) = (&self.nodes[c], &self.nodes[c + 1]);
-                let ha = hit_box(a, o, inv, tmax);
-                let hb = hit_box(b, o, inv, tmax);
-                if STATS {
-                    st.nodes_visited += 2;
-                    let hits = ha.is_some() as u32 + hb.is_some() as u32;
-                    st.boxes_hit += hits;
-                    st.boxes_missed += 2 - hits;
-                }
-                match (ha, hb) {
-                    (Some(da), Some(db)) => {
-                        let (near, far) = if da <= db { (c, c + 1) } else { (c + 1, c) };
-                        if sp < STACK {
-                            stack[sp] = far as u32;
-                            sp += 1;
-                        }
-                        node = &self.nodes[near];
-                        continue;
-                    }
-                    (Some(_), None) => {
-                        node = a;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        node = b;
-                        continue;
-                    }
-                    (None, None) => {}
-                }
-            }
-            if sp == 0 {
-                return None;
-            }
-            sp -= 1;
-            node = &self.nodes[stack[sp] as usize];
         }
     }
 
@@ -225,7 +257,35 @@ impl Bvh {
     }
 }
 
-#[inline(always)]
-fn hit_box(n: &super::Node, o: Vec3, inv: Vec3, tmax: f32) -> Option<f32> {
-    n.bounds().hit(o, inv, tmax)
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{self, Builder};
+
+    /// The walk with a heap stack, which trees too deep for the machine stack
+    /// take, finds the same hits as the usual one.
+    #[test]
+    fn deep_walk_agrees_with_the_usual_walk() {
+        let s = scene::load("teapot:4").unwrap();
+        let b = super::super::build(&s.geometry, Builder::Sah);
+        let frame = s.camera.frame(48, 32);
+        let mut hits = 0;
+        for y in 0..32 {
+            for x in 0..48 {
+                let ray = frame.ray(x as f64 + 0.5, y as f64 + 0.5);
+                let mut st = TraversalStats::default();
+                let want = b.intersect::<false>(&ray, &mut st).map(|h| (h.t, h.prim));
+                let mut got = None;
+                b.walk_deep::<false, false>(&ray, &mut st, |h, idx| {
+                    let t = h.t.min_element();
+                    let lane = (h.t.cmpeq(Vec4::splat(t)).bitmask() & h.mask).trailing_zeros();
+                    got = Some((t, b.prim[idx[lane as usize] as usize]));
+                    t
+                });
+                assert_eq!(got, want);
+                hits += want.is_some() as u32;
+            }
+        }
+        assert!(hits > 100);
+    }
 }

@@ -1,0 +1,160 @@
+//! The 4-wide tree that traversal walks, collapsed from the binary tree the
+//! builders make: each node holds its four children's boxes in SIMD layout
+//! (one `Vec4` per bound and axis) and leaves hold triangles in packets of
+//! four, so one instruction tests four boxes or four triangles.
+
+use glam::Vec4;
+
+use super::Node;
+
+/// Child references with this bit set are leaves:
+/// `LEAF | first_packet << PACKET_BITS | (packets - 1)`.
+pub(crate) const LEAF: u32 = 1 << 31;
+const PACKET_BITS: u32 = 3;
+
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(crate) struct Node4 {
+    /// Min x, max x, min y, max y, min z, max z of the four children; an
+    /// empty slot has min = +inf and max = -inf, which no ray hits.
+    pub b: [Vec4; 6],
+    pub child: [u32; 4],
+}
+
+/// Four triangles of a leaf.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub(crate) struct Packet {
+    /// `p[vertex][axis]`, one lane per triangle; padding lanes are NaN.
+    pub p: [[Vec4; 3]; 3],
+    /// Leaf-order index of each lane's triangle.
+    pub idx: [u32; 4],
+}
+
+impl Packet {
+    /// Lanes holding a triangle.
+    pub fn lanes(&self) -> u32 {
+        (self.p[0][0].is_nan_mask().bitmask()) ^ 0xf
+    }
+}
+
+/// Packets of a leaf reference.
+#[inline(always)]
+pub(crate) fn leaf_packets(r: u32) -> std::ops::Range<usize> {
+    let first = ((r & !LEAF) >> PACKET_BITS) as usize;
+    first..first + (r & ((1 << PACKET_BITS) - 1)) as usize + 1
+}
+
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Wide {
+    pub nodes: Vec<Node4>,
+    pub packets: Vec<Packet>,
+    /// Stack entries the deepest path can need: each node on it pushes all
+    /// but one of its children.
+    pub stack: usize,
+}
+
+impl Wide {
+    /// Collapses the binary tree `bin` (leaves over `tris` in leaf order):
+    /// each wide node takes the binary node's children and keeps opening the
+    /// largest interior one until it has four.
+    pub fn collapse(bin: &[Node], tris: &[[[f32; 3]; 3]]) -> Wide {
+        let mut w = Wide {
+            nodes: Vec::with_capacity(bin.len() / 2 + 1),
+            packets: Vec::with_capacity(tris.len() / 3 + 1),
+            stack: 0,
+        };
+        if let Some(root) = bin.first() {
+            // The root is always an interior wide node, even over one leaf.
+            w.stack = if root.is_leaf() {
+                w.node(bin, tris, &[0]).1
+            } else {
+                w.gather(bin, tris, root.first as usize).1
+            };
+        }
+        w
+    }
+
+    /// Wide node over the binary children at `c` and `c + 1`, opened up to
+    /// four; returns its index and the stack its subtree needs.
+    fn gather(&mut self, bin: &[Node], tris: &[[[f32; 3]; 3]], c: usize) -> (u32, usize) {
+        let mut kids = [c, c + 1, 0, 0];
+        let mut len = 2;
+        while len < 4 {
+            let open = (0..len)
+                .filter(|&k| !bin[kids[k]].is_leaf())
+                .max_by(|&a, &b| {
+                    let area = |k: usize| bin[kids[k]].bounds().area();
+                    area(a).total_cmp(&area(b))
+                });
+            let Some(k) = open else { break };
+            let g = bin[kids[k]].first as usize;
+            kids[k] = g;
+            kids[len] = g + 1;
+            len += 1;
+        }
+        self.node(bin, tris, &kids[..len])
+    }
+
+    fn node(&mut self, bin: &[Node], tris: &[[[f32; 3]; 3]], kids: &[usize]) -> (u32, usize) {
+        let at = self.nodes.len();
+        let mut below = 0;
+        self.nodes.push(Node4 {
+            b: [Vec4::ZERO; 6],
+            child: [0; 4],
+        });
+        let (inf, ninf) = (f32::INFINITY, f32::NEG_INFINITY);
+        let mut b = [
+            [inf, inf, inf, inf],
+            [ninf; 4],
+            [inf; 4],
+            [ninf; 4],
+            [inf; 4],
+            [ninf; 4],
+        ];
+        for (lane, &k) in kids.iter().enumerate() {
+            let n = &bin[k];
+            let r = if n.is_leaf() {
+                self.leaf(tris, n.first as usize, n.count as usize)
+            } else {
+                let (r, need) = self.gather(bin, tris, n.first as usize);
+                below = below.max(need);
+                r
+            };
+            for axis in 0..3 {
+                b[2 * axis][lane] = n.min[axis];
+                b[2 * axis + 1][lane] = n.max[axis];
+            }
+            self.nodes[at].child[lane] = r;
+        }
+        self.nodes[at].b = b.map(Vec4::from_array);
+        (at as u32, kids.len() - 1 + below)
+    }
+
+    fn leaf(&mut self, tris: &[[[f32; 3]; 3]], first: usize, count: usize) -> u32 {
+        let at = self.packets.len();
+        for start in (first..first + count).step_by(4) {
+            let mut p = [[[f32::NAN; 4]; 3]; 3];
+            let mut idx = [u32::MAX; 4];
+            for (lane, i) in (start..(start + 4).min(first + count)).enumerate() {
+                for (vertex, pv) in tris[i].iter().enumerate() {
+                    for axis in 0..3 {
+                        p[vertex][axis][lane] = pv[axis];
+                    }
+                }
+                idx[lane] = i as u32;
+            }
+            self.packets.push(Packet {
+                p: p.map(|v| v.map(Vec4::from_array)),
+                idx,
+            });
+        }
+        let n = self.packets.len() - at;
+        debug_assert!((1..=1 << PACKET_BITS).contains(&n));
+        LEAF | (at as u32) << PACKET_BITS | (n as u32 - 1)
+    }
+
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of_val(&self.nodes[..]) + std::mem::size_of_val(&self.packets[..])
+    }
+}
