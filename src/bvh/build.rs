@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use glam::{UVec3, Vec3A};
+use glam::Vec3A;
 use rayon::prelude::*;
 
 use super::{wide, BuildStats, Bvh, Node};
@@ -97,7 +97,13 @@ struct Task<'a> {
     bounds: Box3,
     cbounds: Box3,
     depth: usize,
+    /// For small nodes: `refs` indices sorted by centroid on each axis, kept
+    /// from the parent's sweep so each small subtree sorts only once.
+    sorted: Option<Orders>,
 }
+
+/// Per-axis orders of a small node's triangles.
+type Orders = [[u8; SMALL]; 3];
 
 /// How nodes are split.
 #[derive(Clone, Copy, PartialEq)]
@@ -157,6 +163,7 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
             bounds,
             cbounds,
             depth: 1,
+            sorted: None,
         };
         depth = subtree(method, task, root, rest, 1);
     }
@@ -232,6 +239,7 @@ fn halves(t: Task, m: usize) -> (Task, Task) {
             bounds: ab,
             cbounds: ac,
             depth: t.depth + 1,
+            sorted: None,
         },
         Task {
             refs: b,
@@ -239,6 +247,7 @@ fn halves(t: Task, m: usize) -> (Task, Task) {
             bounds: bb,
             cbounds: bc,
             depth: t.depth + 1,
+            sorted: None,
         },
     )
 }
@@ -265,9 +274,8 @@ impl Bins {
     }
 
     #[inline(always)]
-    fn add(&mut self, r: &PrimRef, b: UVec3) {
-        for axis in 0..3 {
-            let k = b[axis] as usize;
+    fn add(&mut self, r: &PrimRef, b: [usize; 3]) {
+        for (axis, &k) in b.iter().enumerate() {
             let slot = &mut self.bounds[axis][k];
             slot.min = slot.min.min(r.min);
             slot.max = slot.max.max(r.max);
@@ -294,11 +302,20 @@ struct Binner {
 }
 
 impl Binner {
+    /// The bin on each axis. Adding 2^23 rounds to an integer held in the
+    /// low mantissa bits: one SIMD add instead of three checked conversions.
+    /// Rounding `x - 0.5` rather than truncating `x` moves a value exactly on
+    /// a bin boundary at most one bin, the same way for binning and
+    /// partitioning, which is all the SAH needs. NaN clamps to bin 0.
     #[inline(always)]
-    fn bin(&self, c: Vec3A) -> UVec3 {
-        ((c - self.origin) * self.scale)
-            .as_uvec3()
-            .min(UVec3::splat(BINS as u32 - 1))
+    fn bin(&self, c: Vec3A) -> [usize; 3] {
+        const MAGIC: f32 = 8_388_608.0;
+        let f = ((c - self.origin) * self.scale - Vec3A::splat(0.5))
+            .max(Vec3A::ZERO)
+            .min(Vec3A::splat(BINS as f32 - 1.0))
+            + Vec3A::splat(MAGIC);
+        let lane = |x: f32| (x.to_bits() - MAGIC.to_bits()) as usize;
+        [lane(f.x), lane(f.y), lane(f.z)]
     }
 }
 
@@ -390,7 +407,7 @@ fn split_sah(t: Task) -> Result<(Task, Task), Task> {
     // ground plane from the triangles just above it; this can, and it never
     // does worse than the binned split, which is one of those tried.
     let group = |c: Vec3A| {
-        let b = binner.bin(c).to_array()[axis] as usize;
+        let b = binner.bin(c)[axis];
         (b >= bin) as usize + (b > bin + 1) as usize
     };
     let refs = &mut *t.refs;
@@ -479,6 +496,7 @@ fn split_sah(t: Task) -> Result<(Task, Task), Task> {
             bounds: lb,
             cbounds: lc,
             depth,
+            sorted: None,
         },
         Task {
             refs: b,
@@ -486,6 +504,7 @@ fn split_sah(t: Task) -> Result<(Task, Task), Task> {
             bounds: rb,
             cbounds: rc,
             depth,
+            sorted: None,
         },
     ))
 }
@@ -503,18 +522,68 @@ fn order_key(x: f32) -> u32 {
 
 /// The best SAH split of a small node by a full sweep over its triangles
 /// sorted by centroid on each axis: exact, and cheaper than binning there.
-fn split_small(t: Task) -> Result<(Task, Task), Task> {
+/// The children inherit the sorted orders.
+fn split_small(mut t: Task) -> Result<(Task, Task), Task> {
     let n = t.refs.len();
-    let mut order = [[0u64; SMALL]; 3];
-    let [a, b, c] = &mut order;
+    // One packet costs less than any split of it.
+    if n <= LEAF_BLOCK {
+        return Err(t);
+    }
+    let order = match t.sorted.take() {
+        Some(o) => o,
+        None => {
+            let mut o = [[0u8; SMALL]; 3];
+            let mut keys = [0u64; SMALL];
+            for (axis, o) in o.iter_mut().enumerate() {
+                for (k, r) in t.refs.iter().enumerate() {
+                    keys[k] = (order_key(r.c().to_array()[axis]) as u64) << 32 | k as u64;
+                }
+                keys[..n].sort_unstable();
+                for (x, key) in o.iter_mut().zip(&keys[..n]) {
+                    *x = *key as u8;
+                }
+            }
+            o
+        }
+    };
+    let mut idx = [[0usize; SMALL]; 3];
+    for (i, o) in idx.iter_mut().zip(order.iter()) {
+        for (x, &k) in i.iter_mut().zip(&o[..n]) {
+            *x = k as usize;
+        }
+    }
     let mut right = [0.0f32; SMALL];
+    let [a, b, c] = &idx;
+    let Some((axis, at)) = best_sweep(&t, [&a[..n], &b[..n], &c[..n]], &mut right[..n]) else {
+        return Err(t);
+    };
+    // Reorder along the chosen axis; the children's orders are the parent's
+    // with the triangles renumbered.
+    let mut pos = [0u8; SMALL];
     let mut tmp = [t.refs[0]; SMALL];
-    split_sweep(
-        t,
-        [&mut a[..n], &mut b[..n], &mut c[..n]],
-        &mut right[..n],
-        &mut tmp[..n],
-    )
+    for (p, &k) in order[axis][..n].iter().enumerate() {
+        pos[k as usize] = p as u8;
+        tmp[p] = t.refs[k as usize];
+    }
+    t.refs.copy_from_slice(&tmp[..n]);
+    let (mut lo, mut ro) = ([[0u8; SMALL]; 3], [[0u8; SMALL]; 3]);
+    for a in 0..3 {
+        let (mut l, mut r) = (0, 0);
+        for &k in &order[a][..n] {
+            let p = pos[k as usize];
+            if (p as usize) < at {
+                lo[a][l] = p;
+                l += 1;
+            } else {
+                ro[a][r] = p - at as u8;
+                r += 1;
+            }
+        }
+    }
+    let (mut l, mut r) = halves(t, at);
+    l.sorted = Some(lo);
+    r.sorted = Some(ro);
+    Ok((l, r))
 }
 
 /// The full sweep for any node: the reference the binned builder is
@@ -524,39 +593,36 @@ fn split_full(t: Task) -> Result<(Task, Task), Task> {
     if n <= 1 {
         return Err(t);
     }
-    let mut order = [vec![0u64; n], vec![0u64; n], vec![0u64; n]];
-    let [a, b, c] = &mut order;
-    let mut tmp = t.refs.to_vec();
-    split_sweep(t, [a, b, c], &mut vec![0.0; n], &mut tmp)
+    let order: [Vec<usize>; 3] = [0, 1, 2].map(|axis| {
+        let mut keys: Vec<u64> = t
+            .refs
+            .iter()
+            .enumerate()
+            .map(|(k, r)| (order_key(r.c().to_array()[axis]) as u64) << 32 | k as u64)
+            .collect();
+        keys.sort_unstable();
+        keys.into_iter().map(|k| k as u32 as usize).collect()
+    });
+    let [a, b, c] = &order;
+    let Some((axis, at)) = best_sweep(&t, [a, b, c], &mut vec![0.0; n]) else {
+        return Err(t);
+    };
+    let sorted: Vec<PrimRef> = order[axis].iter().map(|&k| t.refs[k]).collect();
+    t.refs.copy_from_slice(&sorted);
+    Ok(halves(t, at))
 }
 
-/// Sweeps every split position on each axis; `order`, `right` and `tmp` are
-/// scratch space for the node's triangles.
-fn split_sweep<'a>(
-    t: Task<'a>,
-    mut order: [&mut [u64]; 3],
-    right: &mut [f32],
-    tmp: &mut [PrimRef],
-) -> Result<(Task<'a>, Task<'a>), Task<'a>> {
+/// Sweeps every split position of the sorted `order` on each axis; returns
+/// the best axis and position, or `None` when a leaf is cheaper. `right` is
+/// scratch space.
+fn best_sweep(t: &Task, order: [&[usize]; 3], right: &mut [f32]) -> Option<(usize, usize)> {
     let n = t.refs.len();
-    // Sort keys: the centroid's bits in an order-preserving form above the index.
-    let refs = &*t.refs;
-    for (k, r) in refs.iter().enumerate() {
-        let c = r.c().to_array();
-        for (axis, o) in order.iter_mut().enumerate() {
-            o[k] = (order_key(c[axis]) as u64) << 32 | k as u64;
-        }
-    }
-    let bounds = |k: u64| {
-        let r = &refs[k as u32 as usize];
-        Box3 {
-            min: r.min,
-            max: r.max,
-        }
+    let bounds = |k: usize| Box3 {
+        min: t.refs[k].min,
+        max: t.refs[k].max,
     };
     let mut best: Option<(f32, usize, usize)> = None;
-    for (axis, o) in order.iter_mut().enumerate() {
-        o.sort_unstable();
+    for (axis, o) in order.iter().enumerate() {
         let mut rb = Box3::EMPTY;
         for i in (1..n).rev() {
             rb = rb.union(bounds(o[i]));
@@ -571,18 +637,12 @@ fn split_sweep<'a>(
             }
         }
     }
-    let Some((cost, axis, at)) = best else {
-        return Err(t);
-    };
+    let (cost, axis, at) = best?;
     let split_cost = TRAVERSAL_COST + cost / t.bounds.area().max(f32::MIN_POSITIVE);
     if split_cost >= blocks(n) && n <= MAX_LEAF {
-        return Err(t);
+        return None;
     }
-    for (s, &k) in tmp.iter_mut().zip(order[axis].iter()) {
-        *s = t.refs[k as u32 as usize];
-    }
-    t.refs.copy_from_slice(tmp);
-    Ok(halves(t, at))
+    Some((axis, at))
 }
 
 /// Splits at the object median of the largest centroid axis.

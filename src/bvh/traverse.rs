@@ -3,6 +3,8 @@
 //! `STATS` is a compile-time switch: with `false` the counters vanish from
 //! the generated code, so the fast path pays nothing for the inspector.
 
+use std::mem::MaybeUninit;
+
 use glam::Vec4;
 
 use super::wide::{leaf_packets, Node4, LEAF};
@@ -112,7 +114,9 @@ impl Bvh {
             return;
         }
         if self.wide.stack <= STACK {
-            let mut stack = [(0u32, 0.0f32); STACK];
+            // Left uninitialised: clearing it would cost a rays that misses
+            // as much as testing a node.
+            let mut stack = [MaybeUninit::uninit(); STACK];
             self.walk::<ANY, STATS>(ray, st, &mut stack, on_hit);
         } else {
             self.walk_deep::<ANY, STATS>(ray, st, on_hit);
@@ -127,7 +131,7 @@ impl Bvh {
         st: &mut TraversalStats,
         on_hit: impl FnMut(&TriHit4, &[u32; 4]) -> f32,
     ) {
-        let mut stack = vec![(0u32, 0.0f32); self.wide.stack];
+        let mut stack = vec![MaybeUninit::uninit(); self.wide.stack];
         self.walk::<ANY, STATS>(ray, st, &mut stack, on_hit);
     }
 
@@ -137,7 +141,7 @@ impl Bvh {
         &self,
         ray: &Ray,
         st: &mut TraversalStats,
-        stack: &mut [(u32, f32)],
+        stack: &mut [MaybeUninit<(u32, f32)>],
         mut on_hit: impl FnMut(&TriHit4, &[u32; 4]) -> f32,
     ) {
         let w = &self.wide;
@@ -165,7 +169,7 @@ impl Bvh {
                         // Any hit will do: no ordering, the first lane next.
                         let mut m = mask & (mask - 1);
                         while m != 0 {
-                            stack[sp] = (node.child[m.trailing_zeros() as usize], 0.0);
+                            stack[sp].write((node.child[m.trailing_zeros() as usize], 0.0));
                             sp += 1;
                             m &= m - 1;
                         }
@@ -189,7 +193,7 @@ impl Bvh {
                         n += 1;
                     }
                     for &h in &hits[..n - 1] {
-                        stack[sp] = h;
+                        stack[sp].write(h);
                         sp += 1;
                     }
                     cur = hits[n - 1].0;
@@ -218,7 +222,8 @@ impl Bvh {
                     return;
                 }
                 sp -= 1;
-                let (c, d) = stack[sp];
+                // SAFETY: every entry below `sp` was written by a push.
+                let (c, d) = unsafe { stack[sp].assume_init() };
                 if ANY || d <= tmax * FAR_SCALE {
                     cur = c;
                     break;
