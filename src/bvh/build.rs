@@ -189,24 +189,32 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
 
 /// Builds the subtree of `t` into `me` (its root) and `desc` (room for its
 /// descendants, which start at index `base`); returns the subtree's depth.
-fn subtree(method: Method, t: Task, me: &mut Node, desc: &mut [Node], base: usize) -> usize {
+fn subtree(method: Method, mut t: Task, me: &mut Node, desc: &mut [Node], base: usize) -> usize {
     let n = t.refs.len();
     me.min = t.bounds.min.to_array();
     me.max = t.bounds.max.to_array();
-    let split = match method {
-        Method::Binned if t.depth <= SAH_DEPTH => split_sah(t),
-        Method::Sweep if t.depth <= SAH_DEPTH => split_full(t),
-        _ => split_median(t),
+    let cut = match method {
+        Method::Binned if t.depth <= SAH_DEPTH => split_sah(&mut t),
+        Method::Sweep if t.depth <= SAH_DEPTH => split_full(&mut t),
+        _ => split_median(&mut t),
     };
-    let (left, right) = match split {
-        Ok(halves) => halves,
-        Err(t) => {
-            me.first = t.first as u32;
-            me.count = n as u32;
-            return t.depth;
-        }
+    let Some(cut) = cut else {
+        me.first = t.first as u32;
+        me.count = n as u32;
+        return t.depth;
     };
-    let m = left.refs.len();
+    let m = cut.at;
+    let (a, b) = t.refs.split_at_mut(m);
+    let side = |refs, first, s: Side| Task {
+        refs,
+        first,
+        bounds: s.bounds,
+        cbounds: s.cbounds,
+        depth: t.depth + 1,
+        sorted: s.sorted,
+    };
+    let left = side(a, t.first, cut.left);
+    let right = side(b, t.first + m, cut.right);
     me.first = base as u32;
     me.count = 0;
     let (pair, rest) = desc.split_at_mut(2);
@@ -226,30 +234,38 @@ fn subtree(method: Method, t: Task, me: &mut Node, desc: &mut [Node], base: usiz
     }
 }
 
-/// Splits at `m` when `refs` are already partitioned there, computing the
-/// halves' bounds.
-fn halves(t: Task, m: usize) -> (Task, Task) {
-    let (a, b) = t.refs.split_at_mut(m);
-    let (ab, ac) = Box3::of(a);
-    let (bb, bc) = Box3::of(b);
-    (
-        Task {
-            refs: a,
-            first: t.first,
-            bounds: ab,
-            cbounds: ac,
-            depth: t.depth + 1,
+/// A split node: the left half is `refs[..at]` (partitioned in place).
+struct Cut {
+    at: usize,
+    left: Side,
+    right: Side,
+}
+
+/// One half of a split.
+struct Side {
+    bounds: Box3,
+    cbounds: Box3,
+    sorted: Option<Orders>,
+}
+
+impl Side {
+    fn of(refs: &[PrimRef]) -> Side {
+        let (bounds, cbounds) = Box3::of(refs);
+        Side {
+            bounds,
+            cbounds,
             sorted: None,
-        },
-        Task {
-            refs: b,
-            first: t.first + m,
-            bounds: bb,
-            cbounds: bc,
-            depth: t.depth + 1,
-            sorted: None,
-        },
-    )
+        }
+    }
+}
+
+/// Splits at `m`, computing the halves' bounds.
+fn halves(refs: &[PrimRef], m: usize) -> Option<Cut> {
+    Some(Cut {
+        at: m,
+        left: Side::of(&refs[..m]),
+        right: Side::of(&refs[m..]),
+    })
 }
 
 /// Leaf cost of `n` triangles: traversal tests them in packets of four.
@@ -319,11 +335,11 @@ impl Binner {
     }
 }
 
-/// The best binned SAH split of `t`, partitioned; `Err` makes a leaf.
-fn split_sah(t: Task) -> Result<(Task, Task), Task> {
+/// The best binned SAH split of `t`, partitioned; `None` makes a leaf.
+fn split_sah(t: &mut Task) -> Option<Cut> {
     let n = t.refs.len();
     if n <= 1 {
-        return Err(t);
+        return None;
     }
     if n <= SMALL {
         return split_small(t);
@@ -392,15 +408,11 @@ fn split_sah(t: Task) -> Result<(Task, Task), Task> {
     }
     let Some((cost, axis, bin)) = best else {
         // All centroids coincide: split by index so leaves stay bounded.
-        return if n > MAX_LEAF {
-            Ok(halves(t, n / 2))
-        } else {
-            Err(t)
-        };
+        return (n > MAX_LEAF).then(|| halves(t.refs, n / 2)).flatten();
     };
     let split_cost = TRAVERSAL_COST + cost / t.bounds.area().max(f32::MIN_POSITIVE);
     if split_cost >= blocks(n) && n <= MAX_LEAF {
-        return Err(t);
+        return None;
     }
     // Refine: the triangles of the two bins beside the chosen boundary are
     // sorted and every split between them is tried. Bins cannot separate a
@@ -470,7 +482,7 @@ fn split_sah(t: Task) -> Result<(Task, Task), Task> {
         }
     }
     let Some((_, j, lb)) = best_j else {
-        return Ok(halves(t, n / 2));
+        return halves(t.refs, n / 2);
     };
     let rb = mid[j..].iter().fold(b_hi, |b, r| {
         b.union(Box3 {
@@ -486,27 +498,19 @@ fn split_sah(t: Task) -> Result<(Task, Task), Task> {
         b.grow(r.c());
         b
     });
-    let at = lo + j;
-    let depth = t.depth + 1;
-    let (a, b) = t.refs.split_at_mut(at);
-    Ok((
-        Task {
-            refs: a,
-            first: t.first,
+    Some(Cut {
+        at: lo + j,
+        left: Side {
             bounds: lb,
             cbounds: lc,
-            depth,
             sorted: None,
         },
-        Task {
-            refs: b,
-            first: t.first + at,
+        right: Side {
             bounds: rb,
             cbounds: rc,
-            depth,
             sorted: None,
         },
-    ))
+    })
 }
 
 /// A float's bits in an order that sorts like the float (total order).
@@ -523,11 +527,11 @@ fn order_key(x: f32) -> u32 {
 /// The best SAH split of a small node by a full sweep over its triangles
 /// sorted by centroid on each axis: exact, and cheaper than binning there.
 /// The children inherit the sorted orders.
-fn split_small(mut t: Task) -> Result<(Task, Task), Task> {
+fn split_small(t: &mut Task) -> Option<Cut> {
     let n = t.refs.len();
     // One packet costs less than any split of it.
     if n <= LEAF_BLOCK {
-        return Err(t);
+        return None;
     }
     let order = match t.sorted.take() {
         Some(o) => o,
@@ -554,9 +558,7 @@ fn split_small(mut t: Task) -> Result<(Task, Task), Task> {
     }
     let mut right = [0.0f32; SMALL];
     let [a, b, c] = &idx;
-    let Some((axis, at)) = best_sweep(&t, [&a[..n], &b[..n], &c[..n]], &mut right[..n]) else {
-        return Err(t);
-    };
+    let (axis, at) = best_sweep(t, [&a[..n], &b[..n], &c[..n]], &mut right[..n])?;
     // Reorder along the chosen axis; the children's orders are the parent's
     // with the triangles renumbered.
     let mut pos = [0u8; SMALL];
@@ -580,18 +582,18 @@ fn split_small(mut t: Task) -> Result<(Task, Task), Task> {
             }
         }
     }
-    let (mut l, mut r) = halves(t, at);
-    l.sorted = Some(lo);
-    r.sorted = Some(ro);
-    Ok((l, r))
+    let mut cut = halves(t.refs, at)?;
+    cut.left.sorted = Some(lo);
+    cut.right.sorted = Some(ro);
+    Some(cut)
 }
 
 /// The full sweep for any node: the reference the binned builder is
 /// measured against.
-fn split_full(t: Task) -> Result<(Task, Task), Task> {
+fn split_full(t: &mut Task) -> Option<Cut> {
     let n = t.refs.len();
     if n <= 1 {
-        return Err(t);
+        return None;
     }
     let order: [Vec<usize>; 3] = [0, 1, 2].map(|axis| {
         let mut keys: Vec<u64> = t
@@ -604,12 +606,10 @@ fn split_full(t: Task) -> Result<(Task, Task), Task> {
         keys.into_iter().map(|k| k as u32 as usize).collect()
     });
     let [a, b, c] = &order;
-    let Some((axis, at)) = best_sweep(&t, [a, b, c], &mut vec![0.0; n]) else {
-        return Err(t);
-    };
+    let (axis, at) = best_sweep(t, [a, b, c], &mut vec![0.0; n])?;
     let sorted: Vec<PrimRef> = order[axis].iter().map(|&k| t.refs[k]).collect();
     t.refs.copy_from_slice(&sorted);
-    Ok(halves(t, at))
+    halves(t.refs, at)
 }
 
 /// Sweeps every split position of the sorted `order` on each axis; returns
@@ -646,17 +646,17 @@ fn best_sweep(t: &Task, order: [&[usize]; 3], right: &mut [f32]) -> Option<(usiz
 }
 
 /// Splits at the object median of the largest centroid axis.
-fn split_median(t: Task) -> Result<(Task, Task), Task> {
+fn split_median(t: &mut Task) -> Option<Cut> {
     let n = t.refs.len();
     if n <= MEDIAN_LEAF {
-        return Err(t);
+        return None;
     }
     let axis = (t.cbounds.max - t.cbounds.min).max_position();
     let mid = n / 2;
     t.refs.select_nth_unstable_by(mid, |a, b| {
         a.c().to_array()[axis].total_cmp(&b.c().to_array()[axis])
     });
-    Ok(halves(t, mid))
+    halves(t.refs, mid)
 }
 
 /// The tree without unused slots, in depth-first order, siblings adjacent.

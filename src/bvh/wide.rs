@@ -1,7 +1,8 @@
-//! The 4-wide tree that traversal walks, collapsed from the binary tree the
-//! builders make: each node holds its four children's boxes in SIMD layout
-//! (one `Vec4` per bound and axis) and leaves hold triangles in packets of
-//! four, so one instruction tests four boxes or four triangles.
+//! The 8-wide tree that traversal walks, collapsed from the binary tree the
+//! builders make: each node holds its eight children's boxes in SIMD layout
+//! (eight lanes per bound and axis) and leaves hold triangles in packets of
+//! four, so one instruction tests eight boxes (four without AVX) or four
+//! triangles.
 
 use glam::Vec4;
 
@@ -12,13 +13,16 @@ use super::Node;
 pub(crate) const LEAF: u32 = 1 << 31;
 const PACKET_BITS: u32 = 3;
 
+/// Children per node.
+pub(crate) const WIDTH: usize = 8;
+
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(64))]
-pub(crate) struct Node4 {
-    /// Min x, max x, min y, max y, min z, max z of the four children; an
-    /// empty slot has min = +inf and max = -inf, which no ray hits.
-    pub b: [Vec4; 6],
-    pub child: [u32; 4],
+#[repr(C, align(32))]
+pub(crate) struct Node8 {
+    /// Min x, max x, min y, max y, min z, max z of the children, one lane
+    /// each; an empty slot has min = +inf and max = -inf, which no ray hits.
+    pub b: [[f32; WIDTH]; 6],
+    pub child: [u32; WIDTH],
 }
 
 /// Four triangles of a leaf.
@@ -47,22 +51,25 @@ pub(crate) fn leaf_packets(r: u32) -> std::ops::Range<usize> {
 
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Wide {
-    pub nodes: Vec<Node4>,
+    pub nodes: Vec<Node8>,
     pub packets: Vec<Packet>,
     /// Stack entries the deepest path can need: each node on it pushes all
     /// but one of its children.
     pub stack: usize,
+    /// Whether this CPU can test eight boxes at once (AVX).
+    pub avx: bool,
 }
 
 impl Wide {
     /// Collapses the binary tree `bin` (leaves over `tris` in leaf order):
     /// each wide node takes the binary node's children and keeps opening the
-    /// largest interior one until it has four.
+    /// largest interior one until it has eight.
     pub fn collapse(bin: &[Node], tris: &[[[f32; 3]; 3]]) -> Wide {
         let mut w = Wide {
             nodes: Vec::with_capacity(bin.len() / 2 + 1),
             packets: Vec::with_capacity(tris.len() / 3 + 1),
             stack: 0,
+            avx: avx_available(),
         };
         if let Some(root) = bin.first() {
             // The root is always an interior wide node, even over one leaf.
@@ -76,11 +83,12 @@ impl Wide {
     }
 
     /// Wide node over the binary children at `c` and `c + 1`, opened up to
-    /// four; returns its index and the stack its subtree needs.
+    /// eight; returns its index and the stack its subtree needs.
     fn gather(&mut self, bin: &[Node], tris: &[[[f32; 3]; 3]], c: usize) -> (u32, usize) {
-        let mut kids = [c, c + 1, 0, 0];
+        let mut kids = [0; WIDTH];
+        kids[..2].copy_from_slice(&[c, c + 1]);
         let mut len = 2;
-        while len < 4 {
+        while len < WIDTH {
             let open = (0..len)
                 .filter(|&k| !bin[kids[k]].is_leaf())
                 .max_by(|&a, &b| {
@@ -99,19 +107,18 @@ impl Wide {
     fn node(&mut self, bin: &[Node], tris: &[[[f32; 3]; 3]], kids: &[usize]) -> (u32, usize) {
         let at = self.nodes.len();
         let mut below = 0;
-        self.nodes.push(Node4 {
-            b: [Vec4::ZERO; 6],
-            child: [0; 4],
-        });
         let (inf, ninf) = (f32::INFINITY, f32::NEG_INFINITY);
-        let mut b = [
-            [inf, inf, inf, inf],
-            [ninf; 4],
-            [inf; 4],
-            [ninf; 4],
-            [inf; 4],
-            [ninf; 4],
-        ];
+        self.nodes.push(Node8 {
+            b: [
+                [inf; WIDTH],
+                [ninf; WIDTH],
+                [inf; WIDTH],
+                [ninf; WIDTH],
+                [inf; WIDTH],
+                [ninf; WIDTH],
+            ],
+            child: [0; WIDTH],
+        });
         for (lane, &k) in kids.iter().enumerate() {
             let n = &bin[k];
             let r = if n.is_leaf() {
@@ -121,13 +128,13 @@ impl Wide {
                 below = below.max(need);
                 r
             };
+            let w = &mut self.nodes[at];
             for axis in 0..3 {
-                b[2 * axis][lane] = n.min[axis];
-                b[2 * axis + 1][lane] = n.max[axis];
+                w.b[2 * axis][lane] = n.min[axis];
+                w.b[2 * axis + 1][lane] = n.max[axis];
             }
-            self.nodes[at].child[lane] = r;
+            w.child[lane] = r;
         }
-        self.nodes[at].b = b.map(Vec4::from_array);
         (at as u32, kids.len() - 1 + below)
     }
 
@@ -157,4 +164,14 @@ impl Wide {
     pub fn memory_bytes(&self) -> usize {
         std::mem::size_of_val(&self.nodes[..]) + std::mem::size_of_val(&self.packets[..])
     }
+}
+
+#[cfg(target_arch = "x86_64")]
+fn avx_available() -> bool {
+    std::is_x86_feature_detected!("avx")
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+fn avx_available() -> bool {
+    false
 }
