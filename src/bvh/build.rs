@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use glam::Vec3A;
+use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
 
 use super::{wide, BuildStats, Bvh, Node};
@@ -23,6 +23,10 @@ pub(super) const TRAVERSAL_COST: f32 = 1.0;
 /// Past this depth the SAH builder makes median splits, which bounds the
 /// depth (and so the traversal stack) at about 40 + log2(n / 4).
 const SAH_DEPTH: usize = 40;
+/// Nodes with at least this many triangles refine the binned split (large
+/// triangles such as ground planes, which binning handles badly, show up
+/// near the root; lower down refining costs more than it gains).
+const REFINE: usize = 1024;
 /// Nodes with at most this many triangles are split by a full sweep.
 const SMALL: usize = 32;
 /// Subtrees smaller than this are built on one thread.
@@ -30,18 +34,43 @@ const PARALLEL_SUBTREE: usize = 4096;
 /// Nodes with more triangles than this bin them on several threads.
 const PARALLEL_BINNING: usize = 1 << 16;
 
-/// A triangle's bounds; `c` is twice its centroid (`min + max`).
+/// A triangle's bounds in 32 bytes: the triangle's index rides in the
+/// fourth lanes, split into two halves stored as (exact, normal) floats so
+/// SIMD arithmetic on those lanes never meets a denormal or NaN.
 #[derive(Clone, Copy)]
 struct PrimRef {
-    min: Vec3A,
-    max: Vec3A,
-    index: u32,
+    lo: Vec4,
+    hi: Vec4,
 }
 
 impl PrimRef {
     #[inline(always)]
+    fn new(min: Vec3A, max: Vec3A, index: u32) -> Self {
+        PrimRef {
+            lo: min.extend((index & 0xffff) as f32),
+            hi: max.extend((index >> 16) as f32),
+        }
+    }
+
+    #[inline(always)]
+    fn min(&self) -> Vec3A {
+        Vec3A::from_vec4(self.lo)
+    }
+
+    #[inline(always)]
+    fn max(&self) -> Vec3A {
+        Vec3A::from_vec4(self.hi)
+    }
+
+    #[inline(always)]
+    fn index(&self) -> u32 {
+        (self.hi.w as u32) << 16 | self.lo.w as u32
+    }
+
+    /// Twice the centroid.
+    #[inline(always)]
     fn c(&self) -> Vec3A {
-        self.min + self.max
+        Vec3A::from_vec4(self.lo + self.hi)
     }
 }
 
@@ -81,8 +110,8 @@ impl Box3 {
     fn of(refs: &[PrimRef]) -> (Box3, Box3) {
         refs.iter()
             .fold((Box3::EMPTY, Box3::EMPTY), |(mut b, mut c), r| {
-                b.min = b.min.min(r.min);
-                b.max = b.max.max(r.max);
+                b.min = b.min.min(r.min());
+                b.max = b.max.max(r.max());
                 c.grow(r.c());
                 (b, c)
             })
@@ -143,11 +172,7 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
         .with_min_len(4096)
         .map(|i| {
             let [a, b, c] = geom.triangle(i).map(Vec3A::from);
-            PrimRef {
-                min: a.min(b).min(c),
-                max: a.max(b).max(c),
-                index: i as u32,
-            }
+            PrimRef::new(a.min(b).min(c), a.max(b).max(c), i as u32)
         })
         .collect();
     // A binary tree over n triangles has at most 2n - 1 nodes. Each subtree
@@ -169,7 +194,7 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
     }
     let nodes = compact(&scratch);
     drop(scratch);
-    let prim: Vec<u32> = refs.iter().map(|r| r.index).collect();
+    let prim: Vec<u32> = refs.iter().map(|r| r.index()).collect();
     let tris: Vec<[[f32; 3]; 3]> = prim
         .par_iter()
         .with_min_len(4096)
@@ -293,8 +318,8 @@ impl Bins {
     fn add(&mut self, r: &PrimRef, b: [usize; 3]) {
         for (axis, &k) in b.iter().enumerate() {
             let slot = &mut self.bounds[axis][k];
-            slot.min = slot.min.min(r.min);
-            slot.max = slot.max.max(r.max);
+            slot.min = slot.min.min(r.min());
+            slot.max = slot.max.max(r.max());
             self.count[axis][k] += 1;
         }
     }
@@ -414,6 +439,11 @@ fn split_sah(t: &mut Task) -> Option<Cut> {
     if split_cost >= blocks(n) && n <= MAX_LEAF {
         return None;
     }
+    if n < REFINE {
+        return Some(partition(t.refs, &bins, axis, bin, |c| {
+            binner.bin(c)[axis] <= bin
+        }));
+    }
     // Refine: the triangles of the two bins beside the chosen boundary are
     // sorted and every split between them is tried. Bins cannot separate a
     // ground plane from the triangles just above it; this can, and it never
@@ -449,7 +479,7 @@ fn split_sah(t: &mut Task) -> Option<Cut> {
     };
     let (b_lo, b_hi) = (union(0..bin), union((bin + 2).min(BINS)..BINS));
     let mid = &mut refs[lo..hi];
-    let key = |r: &PrimRef| (order_key(r.c().to_array()[axis]) as u64) << 32 | r.index as u64;
+    let key = |r: &PrimRef| (order_key(r.c().to_array()[axis]) as u64) << 32 | r.index() as u64;
     mid.sort_unstable_by_key(key);
     let m = mid.len();
     let mut right = vec![0.0f32; m + 1];
@@ -457,8 +487,8 @@ fn split_sah(t: &mut Task) -> Option<Cut> {
     for j in (0..=m).rev() {
         if j < m {
             rb = rb.union(Box3 {
-                min: mid[j].min,
-                max: mid[j].max,
+                min: mid[j].min(),
+                max: mid[j].max(),
             });
         }
         right[j] = rb.area() * blocks(n - lo - j);
@@ -468,8 +498,8 @@ fn split_sah(t: &mut Task) -> Option<Cut> {
     for j in 0..=m {
         if j > 0 {
             lb = lb.union(Box3 {
-                min: mid[j - 1].min,
-                max: mid[j - 1].max,
+                min: mid[j - 1].min(),
+                max: mid[j - 1].max(),
             });
         }
         let at = lo + j;
@@ -486,8 +516,8 @@ fn split_sah(t: &mut Task) -> Option<Cut> {
     };
     let rb = mid[j..].iter().fold(b_hi, |b, r| {
         b.union(Box3 {
-            min: r.min,
-            max: r.max,
+            min: r.min(),
+            max: r.max(),
         })
     });
     let lc = mid[..j].iter().fold(c_lo, |mut b, r| {
@@ -511,6 +541,44 @@ fn split_sah(t: &mut Task) -> Option<Cut> {
             sorted: None,
         },
     })
+}
+
+/// Partitions `refs` into those left of the boundary after `bin` and the
+/// rest, growing the halves' centroid bounds on the way.
+fn partition(
+    refs: &mut [PrimRef],
+    bins: &Bins,
+    axis: usize,
+    bin: usize,
+    left: impl Fn(Vec3A) -> bool,
+) -> Cut {
+    let union = |r: &[Box3]| r.iter().fold(Box3::EMPTY, |a, b| a.union(*b));
+    let (mut lc, mut rc) = (Box3::EMPTY, Box3::EMPTY);
+    let (mut i, mut j) = (0, refs.len());
+    while i < j {
+        let c = refs[i].c();
+        if left(c) {
+            lc.grow(c);
+            i += 1;
+        } else {
+            rc.grow(c);
+            j -= 1;
+            refs.swap(i, j);
+        }
+    }
+    Cut {
+        at: i,
+        left: Side {
+            bounds: union(&bins.bounds[axis][..=bin]),
+            cbounds: lc,
+            sorted: None,
+        },
+        right: Side {
+            bounds: union(&bins.bounds[axis][bin + 1..]),
+            cbounds: rc,
+            sorted: None,
+        },
+    }
 }
 
 /// A float's bits in an order that sorts like the float (total order).
@@ -618,8 +686,8 @@ fn split_full(t: &mut Task) -> Option<Cut> {
 fn best_sweep(t: &Task, order: [&[usize]; 3], right: &mut [f32]) -> Option<(usize, usize)> {
     let n = t.refs.len();
     let bounds = |k: usize| Box3 {
-        min: t.refs[k].min,
-        max: t.refs[k].max,
+        min: t.refs[k].min(),
+        max: t.refs[k].max(),
     };
     let mut best: Option<(f32, usize, usize)> = None;
     for (axis, o) in order.iter().enumerate() {
