@@ -344,6 +344,81 @@ mod tests {
     use super::*;
     use crate::scene::{self, Builder};
 
+    /// Both eight-box tests agree with `Aabb::hit` lane by lane, bit for bit,
+    /// grazing rays and rays starting inside a box included; empty slots
+    /// (which `Aabb::hit`, swapping the slabs, would call hit) never hit.
+    #[test]
+    fn eight_box_tests_agree_with_the_scalar_slab_test() {
+        use crate::geometry::sampling::Rng;
+        use crate::geometry::Aabb;
+        use glam::Vec3;
+        let mut r = Rng::for_sample(3, 1, 4);
+        let mut f = || {
+            (r.next_f32() * 8.0 - 4.0).round() / 2.0
+                + if r.next_u32() % 2 == 0 {
+                    0.0
+                } else {
+                    r.next_f32()
+                }
+        };
+        for k in 0..5000 {
+            let mut node = Node8 {
+                b: [[0.0; WIDTH]; 6],
+                child: [0; WIDTH],
+            };
+            let mut boxes = [Aabb::EMPTY; WIDTH];
+            for (lane, bx) in boxes.iter_mut().enumerate() {
+                if (k + lane) % 5 != 0 {
+                    let (a, b) = (Vec3::new(f(), f(), f()), Vec3::new(f(), f(), f()));
+                    *bx = Aabb {
+                        min: a.min(b),
+                        max: a.max(b),
+                    };
+                }
+                for axis in 0..3 {
+                    node.b[2 * axis][lane] = bx.min[axis];
+                    node.b[2 * axis + 1][lane] = bx.max[axis];
+                }
+            }
+            let o = Vec3::new(f(), f(), f());
+            // Rays through a box corner (where rounding decides), and zero
+            // direction components, now and then.
+            let mut d = Vec3::new(f(), f(), f());
+            if k % 3 == 0 {
+                d[k % 3] = 0.0;
+            }
+            if let Some(c) = boxes
+                .iter()
+                .filter(|b| !b.is_empty())
+                .nth(k % 4)
+                .filter(|_| k % 4 != 0)
+            {
+                d = Vec3::new(c.max.x, c.min.y, c.max.z) - o;
+            }
+            let ray = Ray::segment(o, d, if k % 2 == 0 { f32::INFINITY } else { 1.5 });
+            let br = BoxRay::new(&ray);
+            let inv = ray.inv_dir();
+            let want: u32 = (0..WIDTH)
+                .filter(|&i| !boxes[i].is_empty() && boxes[i].hit(o, inv, ray.tmax).is_some())
+                .map(|i| 1 << i)
+                .sum();
+            let (mask, tnear) = hit_boxes(&br, &node, ray.tmax);
+            assert_eq!(mask, want, "ray {ray:?}");
+            for i in (0..WIDTH).filter(|i| want & (1 << i) != 0) {
+                assert_eq!(Some(tnear[i]), boxes[i].hit(o, inv, ray.tmax));
+            }
+            #[cfg(target_arch = "x86_64")]
+            if std::is_x86_feature_detected!("avx") {
+                // SAFETY: AVX is present.
+                let (m, t) = unsafe { hit_boxes_avx(&br, &node, ray.tmax) };
+                assert_eq!(m, mask);
+                for i in (0..WIDTH).filter(|i| mask & (1 << i) != 0) {
+                    assert_eq!(t[i], tnear[i]);
+                }
+            }
+        }
+    }
+
     /// The walk with a heap stack, which trees too deep for the machine stack
     /// take, and the box test without AVX find the same hits as the usual
     /// walk.
