@@ -355,7 +355,7 @@ mod tests {
         let mut r = Rng::for_sample(3, 1, 4);
         let mut f = || {
             (r.next_f32() * 8.0 - 4.0).round() / 2.0
-                + if r.next_u32() % 2 == 0 {
+                + if r.next_u32().is_multiple_of(2) {
                     0.0
                 } else {
                     r.next_f32()
