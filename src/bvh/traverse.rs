@@ -223,7 +223,11 @@ impl Bvh {
         hit: impl Fn(&BoxRay, &Node8, f32) -> (u32, [f32; WIDTH]),
     ) {
         let w = &self.wide;
-        let shear = RayShear4::new(&RayShear::new(ray.origin, ray.dir));
+        let setup = || RayShear4::new(&RayShear::new(ray.origin, ray.dir));
+        // Closest-hit rays set up the triangle test at their first leaf:
+        // most of them (camera rays past the object) never reach one. Shadow
+        // rays nearly always do.
+        let mut shear = if ANY { Some(setup()) } else { None };
         let boxes = BoxRay::new(ray);
         let mut tmax = ray.tmax;
         let mut sp = 0;
@@ -284,7 +288,7 @@ impl Bvh {
                     if STATS {
                         st.triangle_tests += p.lanes().count_ones();
                     }
-                    let h = intersect4(&shear, &p.p, tmax);
+                    let h = intersect4(shear.get_or_insert_with(setup), &p.p, tmax);
                     if h.mask != 0 {
                         tmax = on_hit(&h, &p.idx);
                         if ANY {
