@@ -10,8 +10,9 @@ use rayon::prelude::*;
 use super::{wide, BuildStats, Bvh, Node};
 use crate::scene::{Builder, Geometry};
 
-/// Bins per axis for the SAH; 32 keeps the cost within a few percent of a full sweep.
-const BINS: usize = 32;
+/// Nodes with at least this many triangles use 32 bins per axis, smaller
+/// ones 16; the SAH cost stays within a few percent of a full sweep.
+const BIG: usize = 1024;
 /// The SAH builder splits any node with more triangles than this.
 pub(super) const MAX_LEAF: usize = 8;
 /// The median builder stops splitting at this many triangles.
@@ -301,16 +302,16 @@ fn blocks(n: usize) -> f32 {
 
 /// Per-axis bins: bounds and triangle counts.
 #[derive(Clone)]
-struct Bins {
-    bounds: [[Box3; BINS]; 3],
-    count: [[u32; BINS]; 3],
+struct Bins<const B: usize> {
+    bounds: [[Box3; B]; 3],
+    count: [[u32; B]; 3],
 }
 
-impl Bins {
+impl<const B: usize> Bins<B> {
     fn new() -> Self {
         Bins {
-            bounds: [[Box3::EMPTY; BINS]; 3],
-            count: [[0; BINS]; 3],
+            bounds: [[Box3::EMPTY; B]; 3],
+            count: [[0; B]; 3],
         }
     }
 
@@ -324,9 +325,9 @@ impl Bins {
         }
     }
 
-    fn merge(mut self, o: Bins) -> Bins {
+    fn merge(mut self, o: Self) -> Self {
         for axis in 0..3 {
-            for k in 0..BINS {
+            for k in 0..B {
                 self.bounds[axis][k] = self.bounds[axis][k].union(o.bounds[axis][k]);
                 self.count[axis][k] += o.count[axis][k];
             }
@@ -335,14 +336,14 @@ impl Bins {
     }
 }
 
-/// Maps a doubled centroid to its bin on each axis.
+/// Maps a doubled centroid to its bin (of `B`) on each axis.
 #[derive(Clone, Copy)]
-struct Binner {
+struct Binner<const B: usize> {
     origin: Vec3A,
     scale: Vec3A,
 }
 
-impl Binner {
+impl<const B: usize> Binner<B> {
     /// The bin on each axis. Adding 2^23 rounds to an integer held in the
     /// low mantissa bits: one SIMD add instead of three checked conversions.
     /// Rounding `x - 0.5` rather than truncating `x` moves a value exactly on
@@ -353,32 +354,40 @@ impl Binner {
         const MAGIC: f32 = 8_388_608.0;
         let f = ((c - self.origin) * self.scale - Vec3A::splat(0.5))
             .max(Vec3A::ZERO)
-            .min(Vec3A::splat(BINS as f32 - 1.0))
+            .min(Vec3A::splat(B as f32 - 1.0))
             + Vec3A::splat(MAGIC);
-        let lane = |x: f32| (x.to_bits() - MAGIC.to_bits()) as usize;
+        // The mask changes nothing (the value is below B, a power of two)
+        // but lets the compiler drop bounds checks on the bins.
+        let lane = |x: f32| (x.to_bits() - MAGIC.to_bits()) as usize & (B - 1);
         [lane(f.x), lane(f.y), lane(f.z)]
     }
 }
 
-/// The best binned SAH split of `t`, partitioned; `None` makes a leaf.
+/// The best SAH split of `t`, partitioned; `None` makes a leaf.
 fn split_sah(t: &mut Task) -> Option<Cut> {
+    match t.refs.len() {
+        0..=1 => None,
+        2..=SMALL => split_small(t),
+        // Fewer bins for mid-sized nodes: there evaluating the bins costs
+        // as much as filling them, and the bins are still narrow.
+        n if n < BIG => split_binned::<16>(t),
+        _ => split_binned::<32>(t),
+    }
+}
+
+/// The best split of `t` over `B` bins per axis, partitioned.
+fn split_binned<const B: usize>(t: &mut Task) -> Option<Cut> {
     let n = t.refs.len();
-    if n <= 1 {
-        return None;
-    }
-    if n <= SMALL {
-        return split_small(t);
-    }
     let ext = t.cbounds.max - t.cbounds.min;
-    let binner = Binner {
+    let binner = Binner::<B> {
         origin: t.cbounds.min,
         scale: Vec3A::select(
             ext.cmpgt(Vec3A::ZERO),
-            Vec3A::splat(BINS as f32) / ext,
+            Vec3A::splat(B as f32) / ext,
             Vec3A::ZERO,
         ),
     };
-    let mut bins = Bins::new();
+    let mut bins = Bins::<B>::new();
     if n > PARALLEL_BINNING {
         bins = t
             .refs
@@ -404,9 +413,9 @@ fn split_sah(t: &mut Task) -> Option<Cut> {
         // Right-to-left sweep stores the suffix costs, left-to-right evaluates.
         // An empty bin changes nothing, so only bins with triangles are
         // evaluated (most are empty in small nodes).
-        let mut right_cost = [0.0f32; BINS];
+        let mut right_cost = [0.0f32; B];
         let (mut rb, mut rn) = (Box3::EMPTY, 0u32);
-        for i in (1..BINS).rev() {
+        for i in (1..B).rev() {
             if bc[i] == 0 {
                 right_cost[i] = right_cost.get(i + 1).copied().unwrap_or(0.0);
                 continue;
@@ -416,7 +425,7 @@ fn split_sah(t: &mut Task) -> Option<Cut> {
             right_cost[i] = rb.area() * blocks(rn as usize);
         }
         let (mut lb, mut ln) = (Box3::EMPTY, 0u32);
-        for i in 0..BINS - 1 {
+        for i in 0..B - 1 {
             if bc[i] == 0 {
                 continue;
             }
@@ -477,10 +486,21 @@ fn split_sah(t: &mut Task) -> Option<Cut> {
             .iter()
             .fold(Box3::EMPTY, |a, b| a.union(*b))
     };
-    let (b_lo, b_hi) = (union(0..bin), union((bin + 2).min(BINS)..BINS));
+    let (b_lo, b_hi) = (union(0..bin), union((bin + 2).min(B)..B));
     let mid = &mut refs[lo..hi];
-    let key = |r: &PrimRef| (order_key(r.c().to_array()[axis]) as u64) << 32 | r.index() as u64;
-    mid.sort_unstable_by_key(key);
+    // Sort by centroid, ties by triangle index: keys computed once, with
+    // the position in the low bits to gather by.
+    let mut keys: Vec<(u64, u32)> = mid
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            let c = order_key(r.c().to_array()[axis]) as u64;
+            (c << 32 | r.index() as u64, k as u32)
+        })
+        .collect();
+    keys.sort_unstable();
+    let sorted: Vec<PrimRef> = keys.iter().map(|&(_, k)| mid[k as usize]).collect();
+    mid.copy_from_slice(&sorted);
     let m = mid.len();
     let mut right = vec![0.0f32; m + 1];
     let mut rb = b_hi;
@@ -545,9 +565,9 @@ fn split_sah(t: &mut Task) -> Option<Cut> {
 
 /// Partitions `refs` into those left of the boundary after `bin` and the
 /// rest, growing the halves' centroid bounds on the way.
-fn partition(
+fn partition<const B: usize>(
     refs: &mut [PrimRef],
-    bins: &Bins,
+    bins: &Bins<B>,
     axis: usize,
     bin: usize,
     left: impl Fn(Vec3A) -> bool,
