@@ -18,7 +18,7 @@ pub(super) const MAX_LEAF: usize = 8;
 /// The median builder stops splitting at this many triangles.
 const MEDIAN_LEAF: usize = 4;
 /// Triangles tested together (one packet), for the SAH's leaf cost.
-pub(super) const LEAF_BLOCK: usize = 4;
+pub(super) const LEAF_BLOCK: usize = 8;
 /// Cost of one node traversal relative to one triangle test, for the SAH.
 pub(super) const TRAVERSAL_COST: f32 = 1.0;
 /// Past this depth the SAH builder makes median splits, which bounds the
@@ -294,7 +294,7 @@ fn halves(refs: &[PrimRef], m: usize) -> Option<Cut> {
     })
 }
 
-/// Leaf cost of `n` triangles: traversal tests them in packets of four.
+/// Leaf cost of `n` triangles: traversal tests them in packets of eight.
 #[inline(always)]
 fn blocks(n: usize) -> f32 {
     n.div_ceil(LEAF_BLOCK) as f32
@@ -488,15 +488,11 @@ fn split_binned<const B: usize>(t: &mut Task) -> Option<Cut> {
     };
     let (b_lo, b_hi) = (union(0..bin), union((bin + 2).min(B)..B));
     let mid = &mut refs[lo..hi];
-    // Sort by centroid, ties by triangle index: keys computed once, with
-    // the position in the low bits to gather by.
+    // Sort by centroid: keys computed once, with the position to gather by.
     let mut keys: Vec<(u64, u32)> = mid
         .iter()
         .enumerate()
-        .map(|(k, r)| {
-            let c = order_key(r.c().to_array()[axis]) as u64;
-            (c << 32 | r.index() as u64, k as u32)
-        })
+        .map(|(k, r)| (sort_key(r, axis), k as u32))
         .collect();
     keys.sort_unstable();
     let sorted: Vec<PrimRef> = keys.iter().map(|&(_, k)| mid[k as usize]).collect();
@@ -601,6 +597,13 @@ fn partition<const B: usize>(
     }
 }
 
+/// Orders triangles by centroid on `axis`, ties by triangle index, so every
+/// sweep breaks ties the same way.
+#[inline(always)]
+fn sort_key(r: &PrimRef, axis: usize) -> u64 {
+    (order_key(r.c().to_array()[axis]) as u64) << 32 | r.index() as u64
+}
+
 /// A float's bits in an order that sorts like the float (total order).
 #[inline(always)]
 fn order_key(x: f32) -> u32 {
@@ -625,14 +628,14 @@ fn split_small(t: &mut Task) -> Option<Cut> {
         Some(o) => o,
         None => {
             let mut o = [[0u8; SMALL]; 3];
-            let mut keys = [0u64; SMALL];
+            let mut keys = [(0u64, 0u8); SMALL];
             for (axis, o) in o.iter_mut().enumerate() {
                 for (k, r) in t.refs.iter().enumerate() {
-                    keys[k] = (order_key(r.c().to_array()[axis]) as u64) << 32 | k as u64;
+                    keys[k] = (sort_key(r, axis), k as u8);
                 }
                 keys[..n].sort_unstable();
                 for (x, key) in o.iter_mut().zip(&keys[..n]) {
-                    *x = *key as u8;
+                    *x = key.1;
                 }
             }
             o
@@ -684,14 +687,14 @@ fn split_full(t: &mut Task) -> Option<Cut> {
         return None;
     }
     let order: [Vec<usize>; 3] = [0, 1, 2].map(|axis| {
-        let mut keys: Vec<u64> = t
+        let mut keys: Vec<(u64, usize)> = t
             .refs
             .iter()
             .enumerate()
-            .map(|(k, r)| (order_key(r.c().to_array()[axis]) as u64) << 32 | k as u64)
+            .map(|(k, r)| (sort_key(r, axis), k))
             .collect();
         keys.sort_unstable();
-        keys.into_iter().map(|k| k as u32 as usize).collect()
+        keys.into_iter().map(|k| k.1).collect()
     });
     let [a, b, c] = &order;
     let (axis, at) = best_sweep(t, [a, b, c], &mut vec![0.0; n])?;

@@ -27,7 +27,7 @@ pub struct Bvh {
 
 impl Bvh {
     /// The SAH cost the SAH builder minimises: leaves cost one per packet of
-    /// four triangles, as traversal tests them. (`stats.sah_cost` counts
+    /// eight triangles, as traversal tests them. (`stats.sah_cost` counts
     /// every triangle.)
     pub fn packet_sah_cost(&self) -> f64 {
         build::sah_cost(&self.nodes, build::LEAF_BLOCK).2

@@ -7,9 +7,9 @@ use std::mem::MaybeUninit;
 
 use glam::Vec4;
 
-use super::wide::{leaf_packets, Node8, LEAF, WIDTH};
+use super::wide::{leaf_packets, Node8, Packet, LEAF, PACKET, WIDTH};
 use super::{Bvh, TraversalStats};
-use crate::geometry::triangle::{intersect, intersect4, RayShear, RayShear4, TriHit4};
+use crate::geometry::triangle::{intersect, intersect8, RayShear, TriHit8};
 use crate::geometry::{gamma, Ray};
 
 /// A closest hit: distance, barycentrics of vertices 1 and 2, and the
@@ -29,6 +29,17 @@ const STACK: usize = 128;
 
 /// Widening of the far slab distance, as in [`crate::geometry::Aabb::hit`].
 const FAR_SCALE: f32 = 1.0 + 2.0 * gamma(3);
+
+/// The hit lane with the smallest t (the first of equals).
+#[inline(always)]
+fn nearest(h: &TriHit8) -> usize {
+    let t = h.t.iter().fold(f32::INFINITY, |a, &b| a.min(b));
+    let lanes =
+        h.t.iter()
+            .enumerate()
+            .filter(|(i, &x)| h.mask & (1 << i) != 0 && x == t);
+    lanes.map(|(i, _)| i).next().unwrap_or(0)
+}
 
 /// A ray's constants for the slab tests.
 #[derive(Clone, Copy)]
@@ -119,11 +130,9 @@ impl Bvh {
     pub fn intersect<const STATS: bool>(&self, ray: &Ray, st: &mut TraversalStats) -> Option<Hit> {
         let mut best: Option<(f32, f32, f32, u32)> = None;
         self.traverse::<false, STATS>(ray, st, |h, idx| {
-            let t = h.t.min_element();
-            let lane = (h.t.cmpeq(Vec4::splat(t)).bitmask() & h.mask).trailing_zeros() as usize;
-            // Arrays, not `Vec4` indexing: that is a jump table on the lane.
-            best = Some((t, h.u.to_array()[lane], h.v.to_array()[lane], idx[lane]));
-            t
+            let lane = nearest(h);
+            best = Some((h.t[lane], h.u[lane], h.v[lane], idx[lane]));
+            h.t[lane]
         });
         best.map(|(t, u, v, i)| Hit {
             t,
@@ -153,7 +162,7 @@ impl Bvh {
         &self,
         ray: &Ray,
         st: &mut TraversalStats,
-        on_hit: impl FnMut(&TriHit4, &[u32; 4]) -> f32,
+        on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
     ) {
         if self.wide.nodes.is_empty() {
             return;
@@ -164,7 +173,9 @@ impl Bvh {
             unsafe { self.traverse_avx::<ANY, STATS>(ray, st, on_hit) };
             return;
         }
-        self.traverse_with::<ANY, STATS>(ray, st, on_hit, hit_boxes);
+        self.traverse_with::<ANY, STATS>(ray, st, on_hit, hit_boxes, |s, p, t| {
+            intersect8(s, &p.p, t)
+        });
     }
 
     /// The traversal compiled for AVX: eight boxes per instruction, and the
@@ -176,9 +187,15 @@ impl Bvh {
         &self,
         ray: &Ray,
         st: &mut TraversalStats,
-        on_hit: impl FnMut(&TriHit4, &[u32; 4]) -> f32,
+        on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
     ) {
-        self.traverse_with::<ANY, STATS>(ray, st, on_hit, |r, n, t| hit_boxes_avx(r, n, t));
+        self.traverse_with::<ANY, STATS>(
+            ray,
+            st,
+            on_hit,
+            |r, n, t| hit_boxes_avx(r, n, t),
+            |s, p, t| crate::geometry::triangle::intersect8_avx(s, &p.p, t),
+        );
     }
 
     #[inline(always)]
@@ -186,16 +203,17 @@ impl Bvh {
         &self,
         ray: &Ray,
         st: &mut TraversalStats,
-        on_hit: impl FnMut(&TriHit4, &[u32; 4]) -> f32,
+        on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
         hit: impl Fn(&BoxRay, &Node8, f32) -> (u32, [f32; WIDTH]),
+        tri: impl Fn(&RayShear, &Packet, f32) -> TriHit8,
     ) {
         if self.wide.stack <= STACK {
             // Left uninitialised: clearing it would cost a ray that misses
             // as much as testing a node.
             let mut stack = [MaybeUninit::uninit(); STACK];
-            self.walk::<ANY, STATS>(ray, st, &mut stack, on_hit, hit);
+            self.walk::<ANY, STATS>(ray, st, &mut stack, on_hit, hit, tri);
         } else {
-            self.walk_deep::<ANY, STATS>(ray, st, on_hit, hit);
+            self.walk_deep::<ANY, STATS>(ray, st, on_hit, hit, tri);
         }
     }
 
@@ -205,11 +223,12 @@ impl Bvh {
         &self,
         ray: &Ray,
         st: &mut TraversalStats,
-        on_hit: impl FnMut(&TriHit4, &[u32; 4]) -> f32,
+        on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
         hit: impl Fn(&BoxRay, &Node8, f32) -> (u32, [f32; WIDTH]),
+        tri: impl Fn(&RayShear, &Packet, f32) -> TriHit8,
     ) {
         let mut stack = vec![MaybeUninit::uninit(); self.wide.stack];
-        self.walk::<ANY, STATS>(ray, st, &mut stack, on_hit, hit);
+        self.walk::<ANY, STATS>(ray, st, &mut stack, on_hit, hit, tri);
     }
 
     /// The walk itself; `stack` has room for the tree's deepest path.
@@ -219,11 +238,12 @@ impl Bvh {
         ray: &Ray,
         st: &mut TraversalStats,
         stack: &mut [MaybeUninit<(u32, f32)>],
-        mut on_hit: impl FnMut(&TriHit4, &[u32; 4]) -> f32,
+        mut on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
         hit: impl Fn(&BoxRay, &Node8, f32) -> (u32, [f32; WIDTH]),
+        tri: impl Fn(&RayShear, &Packet, f32) -> TriHit8,
     ) {
         let w = &self.wide;
-        let setup = || RayShear4::new(&RayShear::new(ray.origin, ray.dir));
+        let setup = || RayShear::new(ray.origin, ray.dir);
         // Closest-hit rays set up the triangle test at their first leaf:
         // most of them (camera rays past the object) never reach one. Shadow
         // rays nearly always do.
@@ -286,9 +306,9 @@ impl Bvh {
                 }
                 for p in &w.packets[leaf_packets(cur)] {
                     if STATS {
-                        st.triangle_tests += p.lanes().count_ones();
+                        st.triangle_tests += p.lanes();
                     }
-                    let h = intersect4(shear.get_or_insert_with(setup), &p.p, tmax);
+                    let h = tri(shear.get_or_insert_with(setup), p, tmax);
                     if h.mask != 0 {
                         tmax = on_hit(&h, &p.idx);
                         if ANY {
@@ -438,13 +458,14 @@ mod tests {
                 let mut st = TraversalStats::default();
                 let want = b.intersect::<false>(&ray, &mut st).map(|h| (h.t, h.prim));
                 let mut got = None;
-                let on_hit = |h: &TriHit4, idx: &[u32; 4]| {
-                    let t = h.t.min_element();
-                    let lane = (h.t.cmpeq(Vec4::splat(t)).bitmask() & h.mask).trailing_zeros();
-                    got = Some((t, b.prim[idx[lane as usize] as usize]));
-                    t
+                let on_hit = |h: &TriHit8, idx: &[u32; PACKET]| {
+                    let lane = nearest(h);
+                    got = Some((h.t[lane], b.prim[idx[lane] as usize]));
+                    h.t[lane]
                 };
-                b.walk_deep::<false, false>(&ray, &mut st, on_hit, hit_boxes);
+                b.walk_deep::<false, false>(&ray, &mut st, on_hit, hit_boxes, |s, p, t| {
+                    intersect8(s, &p.p, t)
+                });
                 assert_eq!(got, want);
                 hits += want.is_some() as u32;
             }

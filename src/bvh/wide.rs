@@ -1,10 +1,8 @@
 //! The 8-wide tree that traversal walks, collapsed from the binary tree the
 //! builders make: each node holds its eight children's boxes in SIMD layout
 //! (eight lanes per bound and axis) and leaves hold triangles in packets of
-//! four, so one instruction tests eight boxes (four without AVX) or four
-//! triangles.
-
-use glam::Vec4;
+//! eight, so one instruction tests eight boxes or eight triangles (four
+//! without AVX).
 
 use super::Node;
 
@@ -25,20 +23,23 @@ pub(crate) struct Node8 {
     pub child: [u32; WIDTH],
 }
 
-/// Four triangles of a leaf.
+/// Triangles per packet.
+pub(crate) const PACKET: usize = 8;
+
+/// Up to eight triangles of a leaf.
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(16))]
+#[repr(C, align(32))]
 pub(crate) struct Packet {
-    /// `p[vertex][axis]`, one lane per triangle; padding lanes are NaN.
-    pub p: [[Vec4; 3]; 3],
+    /// `p[vertex][axis][lane]`, one lane per triangle; padding lanes are NaN.
+    pub p: [[[f32; PACKET]; 3]; 3],
     /// Leaf-order index of each lane's triangle.
-    pub idx: [u32; 4],
+    pub idx: [u32; PACKET],
 }
 
 impl Packet {
     /// Lanes holding a triangle.
     pub fn lanes(&self) -> u32 {
-        (self.p[0][0].is_nan_mask().bitmask()) ^ 0xf
+        self.p[0][0].iter().filter(|x| !x.is_nan()).count() as u32
     }
 }
 
@@ -140,21 +141,20 @@ impl Wide {
 
     fn leaf(&mut self, tris: &[[[f32; 3]; 3]], first: usize, count: usize) -> u32 {
         let at = self.packets.len();
-        for start in (first..first + count).step_by(4) {
-            let mut p = [[[f32::NAN; 4]; 3]; 3];
-            let mut idx = [u32::MAX; 4];
-            for (lane, i) in (start..(start + 4).min(first + count)).enumerate() {
-                for (vertex, pv) in tris[i].iter().enumerate() {
-                    for axis in 0..3 {
-                        p[vertex][axis][lane] = pv[axis];
+        for start in (first..first + count).step_by(PACKET) {
+            let mut p = Packet {
+                p: [[[f32::NAN; PACKET]; 3]; 3],
+                idx: [u32::MAX; PACKET],
+            };
+            for (lane, i) in (start..(start + PACKET).min(first + count)).enumerate() {
+                for (pv, tv) in p.p.iter_mut().zip(&tris[i]) {
+                    for (pa, &x) in pv.iter_mut().zip(tv) {
+                        pa[lane] = x;
                     }
                 }
-                idx[lane] = i as u32;
+                p.idx[lane] = i as u32;
             }
-            self.packets.push(Packet {
-                p: p.map(|v| v.map(Vec4::from_array)),
-                idx,
-            });
+            self.packets.push(p);
         }
         let n = self.packets.len() - at;
         debug_assert!((1..=1 << PACKET_BITS).contains(&n));

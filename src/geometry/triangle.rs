@@ -249,6 +249,168 @@ pub fn intersect4(r: &RayShear4, p: &[[Vec4; 3]; 3], tmax: f32) -> TriHit4 {
     }
 }
 
+/// Eight results of [`intersect8`]: bit `i` of `mask` set when lane `i`
+/// hit; `t` is infinite in the other lanes.
+#[derive(Clone, Copy, Debug)]
+pub struct TriHit8 {
+    pub mask: u32,
+    pub t: [f32; 8],
+    pub u: [f32; 8],
+    pub v: [f32; 8],
+}
+
+/// [`intersect`] on eight triangles, `p[vertex][axis][lane]`, as two runs of
+/// [`intersect4`].
+#[inline(always)]
+pub fn intersect8(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f32) -> TriHit8 {
+    let s4 = RayShear4::new(s);
+    let mut h = TriHit8 {
+        mask: 0,
+        t: [f32::INFINITY; 8],
+        u: [0.0; 8],
+        v: [0.0; 8],
+    };
+    for half in 0..2 {
+        let lanes = 4 * half..4 * half + 4;
+        let q = p.map(|v| v.map(|a| Vec4::from_slice(&a[lanes.clone()])));
+        let r = intersect4(&s4, &q, tmax);
+        h.mask |= r.mask << (4 * half);
+        r.t.write_to_slice(&mut h.t[lanes.clone()]);
+        r.u.write_to_slice(&mut h.u[lanes.clone()]);
+        r.v.write_to_slice(&mut h.v[lanes]);
+    }
+    h
+}
+
+/// [`intersect8`] with AVX: all eight lanes per instruction, computing
+/// exactly what [`intersect4`] computes, operation for operation.
+///
+/// # Safety
+/// The CPU must support AVX (callers without the feature enabled must check).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+pub fn intersect8_avx(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f32) -> TriHit8 {
+    use std::arch::x86_64::*;
+    // SAFETY: each row is eight f32.
+    let ld = |v: usize, a: usize| unsafe { _mm256_loadu_ps(p[v][a].as_ptr()) };
+    let st = |x: __m256| {
+        let mut a = [0.0f32; 8];
+        // SAFETY: `a` holds eight f32.
+        unsafe { _mm256_storeu_ps(a.as_mut_ptr(), x) };
+        a
+    };
+    let set = _mm256_set1_ps;
+    let (sub, mul, add) = (_mm256_sub_ps, _mm256_mul_ps, _mm256_add_ps);
+    let (or, and) = (_mm256_or_ps, _mm256_and_ps);
+    let (kx, ky, kz) = (s.kx, s.ky, s.kz);
+    let (ox, oy, oz) = (set(s.origin[kx]), set(s.origin[ky]), set(s.origin[kz]));
+    let (sx, sy, sz) = (set(s.sx), set(s.sy), set(s.sz));
+    let (az, bz, cz) = (sub(ld(0, kz), oz), sub(ld(1, kz), oz), sub(ld(2, kz), oz));
+    let ax = sub(sub(ld(0, kx), ox), mul(sx, az));
+    let ay = sub(sub(ld(0, ky), oy), mul(sy, az));
+    let bx = sub(sub(ld(1, kx), ox), mul(sx, bz));
+    let by = sub(sub(ld(1, ky), oy), mul(sy, bz));
+    let cx = sub(sub(ld(2, kx), ox), mul(sx, cz));
+    let cy = sub(sub(ld(2, ky), oy), mul(sy, cz));
+    let mut u = sub(mul(cx, by), mul(cy, bx));
+    let mut v = sub(mul(ax, cy), mul(ay, cx));
+    let mut w = sub(mul(bx, ay), mul(by, ax));
+    let zero = _mm256_setzero_ps();
+    let eq = |a| _mm256_cmp_ps::<_CMP_EQ_OQ>(a, zero);
+    let on_edge = _mm256_movemask_ps(or(or(eq(u), eq(v)), eq(w)));
+    if on_edge != 0 {
+        let (ax, ay, bx, by, cx, cy) = (st(ax), st(ay), st(bx), st(by), st(cx), st(cy));
+        let (mut uu, mut vv, mut ww) = (st(u), st(v), st(w));
+        for i in (0..8).filter(|i| on_edge & (1 << i) != 0) {
+            let (ax, ay, bx, by, cx, cy) = (
+                ax[i] as f64,
+                ay[i] as f64,
+                bx[i] as f64,
+                by[i] as f64,
+                cx[i] as f64,
+                cy[i] as f64,
+            );
+            uu[i] = (cx * by - cy * bx) as f32;
+            vv[i] = (ax * cy - ay * cx) as f32;
+            ww[i] = (bx * ay - by * ax) as f32;
+        }
+        // SAFETY: the arrays hold eight f32.
+        unsafe {
+            u = _mm256_loadu_ps(uu.as_ptr());
+            v = _mm256_loadu_ps(vv.as_ptr());
+            w = _mm256_loadu_ps(ww.as_ptr());
+        }
+    }
+    let lt = |a| _mm256_cmp_ps::<_CMP_LT_OQ>(a, zero);
+    let gt = |a| _mm256_cmp_ps::<_CMP_GT_OQ>(a, zero);
+    let neg = or(or(lt(u), lt(v)), lt(w));
+    let pos = or(or(gt(u), gt(v)), gt(w));
+    let det = add(add(u, v), w);
+    let (az, bz, cz) = (mul(sz, az), mul(sz, bz), mul(sz, cz));
+    let t_scaled = add(add(mul(u, az), mul(v, bz)), mul(w, cz));
+    let sign = set(-0.0);
+    let flip = lt(det);
+    let ts = _mm256_blendv_ps(t_scaled, _mm256_xor_ps(t_scaled, sign), flip);
+    let d = _mm256_blendv_ps(det, _mm256_xor_ps(det, sign), flip);
+    // `!(a <= b)` and `!(a > b)` as in the scalar test, NaN included.
+    let le0 = _mm256_cmp_ps::<_CMP_LE_OQ>(ts, zero);
+    let beyond = _mm256_cmp_ps::<_CMP_GT_OQ>(ts, mul(set(tmax), d));
+    let ok = _mm256_andnot_ps(
+        or(and(neg, pos), or(le0, beyond)),
+        _mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero),
+    );
+    if _mm256_movemask_ps(ok) == 0 {
+        return TriHit8 {
+            mask: 0,
+            t: [f32::INFINITY; 8],
+            u: [0.0; 8],
+            v: [0.0; 8],
+        };
+    }
+    let inv = _mm256_div_ps(set(1.0), det);
+    let t = mul(t_scaled, inv);
+    let abs = |a| _mm256_andnot_ps(sign, a);
+    let max = _mm256_max_ps;
+    let max_zt = max(max(abs(az), abs(bz)), abs(cz));
+    let max_xt = max(max(abs(ax), abs(bx)), abs(cx));
+    let max_yt = max(max(abs(ay), abs(by)), abs(cy));
+    let g = |n| set(gamma(n));
+    let delta_z = mul(g(3), max_zt);
+    let delta_x = mul(g(5), add(max_xt, max_zt));
+    let delta_y = mul(g(5), add(max_yt, max_zt));
+    let delta_e = mul(
+        set(2.0),
+        add(
+            add(mul(mul(g(2), max_xt), max_yt), mul(delta_y, max_xt)),
+            mul(delta_x, max_yt),
+        ),
+    );
+    let max_e = max(max(abs(u), abs(v)), abs(w));
+    let delta_t = mul(
+        mul(
+            set(3.0),
+            add(
+                add(mul(mul(g(3), max_e), max_zt), mul(delta_e, max_zt)),
+                mul(delta_z, max_e),
+            ),
+        ),
+        abs(inv),
+    );
+    let finite = _mm256_cmp_ps::<_CMP_LT_OQ>(abs(t), set(f32::INFINITY));
+    let ok = and(
+        _mm256_andnot_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t, delta_t), ok),
+        finite,
+    );
+    let clamp = |a| _mm256_min_ps(_mm256_max_ps(a, zero), set(1.0));
+    TriHit8 {
+        mask: _mm256_movemask_ps(ok) as u32,
+        t: st(_mm256_blendv_ps(set(f32::INFINITY), t, ok)),
+        u: st(clamp(mul(v, inv))),
+        v: st(clamp(mul(w, inv))),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -374,10 +536,36 @@ mod tests {
             });
             assert_eq!(got, want, "lane {lane}, ray {o} {d}, triangle {t:?}");
         }
+        // Eight lanes: these four, then the same in reverse order.
+        let mut p8 = [[[f32::NAN; 8]; 3]; 3];
+        for v in 0..3 {
+            for a in 0..3 {
+                for lane in 0..4 {
+                    p8[v][a][lane] = p[v][a][lane];
+                    p8[v][a][7 - lane] = p[v][a][lane];
+                }
+            }
+        }
+        let mut results = vec![intersect8(&s, &p8, tmax)];
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx") {
+            // SAFETY: AVX is present.
+            results.push(unsafe { intersect8_avx(&s, &p8, tmax) });
+        }
+        for h8 in results {
+            for lane in 0..8 {
+                let k = if lane < 4 { lane } else { 7 - lane };
+                let want = (h.mask & (1 << k) != 0)
+                    .then(|| (h.t.to_array()[k], h.u.to_array()[k], h.v.to_array()[k]));
+                let got =
+                    (h8.mask & (1 << lane) != 0).then(|| (h8.t[lane], h8.u[lane], h8.v[lane]));
+                assert_eq!(got, want, "eight lanes: lane {lane}, ray {o} {d}");
+            }
+        }
     }
 
     #[test]
-    fn four_lane_test_agrees_bit_for_bit_with_the_scalar_test() {
+    fn four_and_eight_lane_tests_agree_bit_for_bit_with_the_scalar_test() {
         let mut r = crate::geometry::sampling::Rng::for_sample(9, 9, 9);
         let mut f = || r.next_f32() * 2.0 - 1.0;
         for k in 0..20_000 {
