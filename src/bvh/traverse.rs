@@ -174,12 +174,17 @@ impl Bvh {
             return;
         }
         self.traverse_with::<ANY, STATS>(ray, st, on_hit, hit_boxes, |s, p, t| {
-            intersect8(s, &p.p, t)
+            // Any-hit traversal needs no barycentrics.
+            if ANY {
+                intersect8::<false>(s, &p.p, t)
+            } else {
+                intersect8::<true>(s, &p.p, t)
+            }
         });
     }
 
-    /// The traversal compiled for AVX: eight boxes per instruction, and the
-    /// triangle tests in AVX encoding too.
+    /// The traversal compiled for AVX: eight boxes or eight triangles per
+    /// instruction.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
     #[inline]
@@ -189,12 +194,19 @@ impl Bvh {
         st: &mut TraversalStats,
         on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
     ) {
+        use crate::geometry::triangle::intersect8_avx;
         self.traverse_with::<ANY, STATS>(
             ray,
             st,
             on_hit,
             |r, n, t| hit_boxes_avx(r, n, t),
-            |s, p, t| crate::geometry::triangle::intersect8_avx(s, &p.p, t),
+            |s, p, t| {
+                if ANY {
+                    intersect8_avx::<false>(s, &p.p, t)
+                } else {
+                    intersect8_avx::<true>(s, &p.p, t)
+                }
+            },
         );
     }
 
@@ -464,7 +476,7 @@ mod tests {
                     h.t[lane]
                 };
                 b.walk_deep::<false, false>(&ray, &mut st, on_hit, hit_boxes, |s, p, t| {
-                    intersect8(s, &p.p, t)
+                    intersect8::<true>(s, &p.p, t)
                 });
                 assert_eq!(got, want);
                 hits += want.is_some() as u32;

@@ -250,7 +250,8 @@ pub fn intersect4(r: &RayShear4, p: &[[Vec4; 3]; 3], tmax: f32) -> TriHit4 {
 }
 
 /// Eight results of [`intersect8`]: bit `i` of `mask` set when lane `i`
-/// hit; `t` is infinite in the other lanes.
+/// hit; `t` is infinite in the other lanes; `u` and `v` are filled only
+/// when asked for (any-hit traversal needs none).
 #[derive(Clone, Copy, Debug)]
 pub struct TriHit8 {
     pub mask: u32,
@@ -260,9 +261,9 @@ pub struct TriHit8 {
 }
 
 /// [`intersect`] on eight triangles, `p[vertex][axis][lane]`, as two runs of
-/// [`intersect4`].
+/// [`intersect4`]; barycentrics only with `UV`.
 #[inline(always)]
-pub fn intersect8(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f32) -> TriHit8 {
+pub fn intersect8<const UV: bool>(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f32) -> TriHit8 {
     let s4 = RayShear4::new(s);
     let mut h = TriHit8 {
         mask: 0,
@@ -276,8 +277,10 @@ pub fn intersect8(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f32) -> TriHit8 {
         let r = intersect4(&s4, &q, tmax);
         h.mask |= r.mask << (4 * half);
         r.t.write_to_slice(&mut h.t[lanes.clone()]);
-        r.u.write_to_slice(&mut h.u[lanes.clone()]);
-        r.v.write_to_slice(&mut h.v[lanes]);
+        if UV {
+            r.u.write_to_slice(&mut h.u[lanes.clone()]);
+            r.v.write_to_slice(&mut h.v[lanes]);
+        }
     }
     h
 }
@@ -290,7 +293,7 @@ pub fn intersect8(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f32) -> TriHit8 {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
 #[inline]
-pub fn intersect8_avx(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f32) -> TriHit8 {
+pub fn intersect8_avx<const UV: bool>(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f32) -> TriHit8 {
     use std::arch::x86_64::*;
     // SAFETY: each row is eight f32.
     let ld = |v: usize, a: usize| unsafe { _mm256_loadu_ps(p[v][a].as_ptr()) };
@@ -403,11 +406,16 @@ pub fn intersect8_avx(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f32) -> TriHit
         finite,
     );
     let clamp = |a| _mm256_min_ps(_mm256_max_ps(a, zero), set(1.0));
+    let (u, v) = if UV {
+        (st(clamp(mul(v, inv))), st(clamp(mul(w, inv))))
+    } else {
+        ([0.0; 8], [0.0; 8])
+    };
     TriHit8 {
         mask: _mm256_movemask_ps(ok) as u32,
         t: st(_mm256_blendv_ps(set(f32::INFINITY), t, ok)),
-        u: st(clamp(mul(v, inv))),
-        v: st(clamp(mul(w, inv))),
+        u,
+        v,
     }
 }
 
@@ -546,11 +554,11 @@ mod tests {
                 }
             }
         }
-        let mut results = vec![intersect8(&s, &p8, tmax)];
+        let mut results = vec![intersect8::<true>(&s, &p8, tmax)];
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx") {
             // SAFETY: AVX is present.
-            results.push(unsafe { intersect8_avx(&s, &p8, tmax) });
+            results.push(unsafe { intersect8_avx::<true>(&s, &p8, tmax) });
         }
         for h8 in results {
             for lane in 0..8 {
