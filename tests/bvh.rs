@@ -74,6 +74,25 @@ fn invariants_hold_for_both_builders() {
 }
 
 #[test]
+fn binned_sah_is_within_five_percent_of_a_full_sweep() {
+    let scenes = ["cornell", "teapot:6", "mirrors"]
+        .map(|n| (n.to_string(), scene::load(n).unwrap().geometry));
+    for (name, g) in scenes
+        .into_iter()
+        .chain([("soup".to_string(), random_soup(4000, 11))])
+    {
+        let binned = bvh::build(&g, Builder::Sah);
+        let sweep = bvh::build_full_sweep(&g);
+        check_invariants(&g, &sweep);
+        let (b, s) = (binned.packet_sah_cost(), sweep.packet_sah_cost());
+        assert!(
+            b <= 1.05 * s,
+            "{name}: binned SAH cost {b} vs full sweep {s}"
+        );
+    }
+}
+
+#[test]
 fn bvh_agrees_with_brute_force() {
     let g = random_soup(3000, 7);
     let mut r = Rng::for_sample(1, 2, 3);

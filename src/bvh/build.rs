@@ -1,207 +1,800 @@
-//! BVH builders: binned SAH (Wald 2007) and object median on the largest axis.
+//! BVH builders: binned SAH (Wald 2007) and object median on the largest
+//! axis. Both build a binary tree, in parallel on the rayon pool; the 4-wide
+//! tree that traversal uses is collapsed from it (`wide.rs`).
 
 use std::time::Instant;
 
-use glam::Vec3;
+use glam::{Vec3A, Vec4};
+use rayon::prelude::*;
 
-use super::{BuildStats, Bvh, Node};
-use crate::geometry::Aabb;
+use super::{wide, BuildStats, Bvh, Node};
 use crate::scene::{Builder, Geometry};
 
-/// Bins per axis for the SAH; 32 keeps the cost within a few percent of a full sweep.
-const BINS: usize = 32;
+/// Nodes with at least this many triangles use 32 bins per axis, smaller
+/// ones 16; the SAH cost stays within a few percent of a full sweep.
+const BIG: usize = 1024;
 /// The SAH builder splits any node with more triangles than this.
-const MAX_LEAF: usize = 8;
+pub(super) const MAX_LEAF: usize = 8;
 /// The median builder stops splitting at this many triangles.
 const MEDIAN_LEAF: usize = 4;
+/// Triangles tested together (one packet), for the SAH's leaf cost.
+pub(super) const LEAF_BLOCK: usize = 8;
 /// Cost of one node traversal relative to one triangle test, for the SAH.
-const TRAVERSAL_COST: f32 = 1.0;
+pub(super) const TRAVERSAL_COST: f32 = 1.0;
+/// Past this depth the SAH builder makes median splits, which bounds the
+/// depth (and so the traversal stack) at about 40 + log2(n / 4).
+const SAH_DEPTH: usize = 40;
+/// Nodes with at least this many triangles refine the binned split (large
+/// triangles such as ground planes, which binning handles badly, show up
+/// near the root; lower down refining costs more than it gains).
+const REFINE: usize = 1024;
+/// Nodes with at most this many triangles are split by a full sweep.
+const SMALL: usize = 32;
+/// Subtrees smaller than this are built on one thread.
+const PARALLEL_SUBTREE: usize = 4096;
+/// Nodes with more triangles than this bin them on several threads.
+const PARALLEL_BINNING: usize = 1 << 16;
 
+/// A triangle's bounds in 32 bytes: the triangle's index rides in the
+/// fourth lanes, split into two halves stored as (exact, normal) floats so
+/// SIMD arithmetic on those lanes never meets a denormal or NaN.
 #[derive(Clone, Copy)]
 struct PrimRef {
-    bounds: Aabb,
-    centroid: Vec3,
-    index: u32,
+    lo: Vec4,
+    hi: Vec4,
 }
 
-struct Task {
-    node: usize,
-    start: usize,
-    end: usize,
+impl PrimRef {
+    #[inline(always)]
+    fn new(min: Vec3A, max: Vec3A, index: u32) -> Self {
+        PrimRef {
+            lo: min.extend((index & 0xffff) as f32),
+            hi: max.extend((index >> 16) as f32),
+        }
+    }
+
+    #[inline(always)]
+    fn min(&self) -> Vec3A {
+        Vec3A::from_vec4(self.lo)
+    }
+
+    #[inline(always)]
+    fn max(&self) -> Vec3A {
+        Vec3A::from_vec4(self.hi)
+    }
+
+    #[inline(always)]
+    fn index(&self) -> u32 {
+        (self.hi.w as u32) << 16 | self.lo.w as u32
+    }
+
+    /// Twice the centroid.
+    #[inline(always)]
+    fn c(&self) -> Vec3A {
+        Vec3A::from_vec4(self.lo + self.hi)
+    }
+}
+
+/// Bounds as SIMD vectors, for the builder's inner loops.
+#[derive(Clone, Copy)]
+struct Box3 {
+    min: Vec3A,
+    max: Vec3A,
+}
+
+impl Box3 {
+    const EMPTY: Box3 = Box3 {
+        min: Vec3A::splat(f32::INFINITY),
+        max: Vec3A::splat(f32::NEG_INFINITY),
+    };
+
+    #[inline(always)]
+    fn grow(&mut self, p: Vec3A) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    #[inline(always)]
+    fn union(self, o: Box3) -> Box3 {
+        Box3 {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+
+    #[inline(always)]
+    fn area(&self) -> f32 {
+        let e = (self.max - self.min).max(Vec3A::ZERO);
+        2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+    }
+
+    fn of(refs: &[PrimRef]) -> (Box3, Box3) {
+        refs.iter()
+            .fold((Box3::EMPTY, Box3::EMPTY), |(mut b, mut c), r| {
+                b.min = b.min.min(r.min());
+                b.max = b.max.max(r.max());
+                c.grow(r.c());
+                (b, c)
+            })
+    }
+}
+
+/// One subtree to build: its triangles, their bounds and centroid bounds.
+struct Task<'a> {
+    refs: &'a mut [PrimRef],
+    /// Index of `refs[0]` in the leaf order.
+    first: usize,
+    bounds: Box3,
+    cbounds: Box3,
     depth: usize,
+    /// For small nodes: `refs` indices sorted by centroid on each axis, kept
+    /// from the parent's sweep so each small subtree sorts only once.
+    sorted: Option<Orders>,
+}
+
+/// Per-axis orders of a small node's triangles.
+type Orders = [[u8; SMALL]; 3];
+
+/// How nodes are split.
+#[derive(Clone, Copy, PartialEq)]
+enum Method {
+    /// Binned SAH (exact sweep for small nodes).
+    Binned,
+    /// SAH with a full sweep at every node: slow, the quality reference.
+    Sweep,
+    Median,
 }
 
 /// Builds a BVH over every triangle of `geom`.
 pub fn build(geom: &Geometry, builder: Builder) -> Bvh {
+    let method = match builder {
+        Builder::Sah => Method::Binned,
+        Builder::Median => Method::Median,
+    };
+    let mut bvh = build_with(geom, method);
+    bvh.stats.builder = builder.to_string();
+    bvh
+}
+
+/// The SAH tree with every split chosen by a full sweep over the sorted
+/// centroids (no binning): the reference for the binned builder's quality.
+/// O(n log² n); meant for tests and benchmarks.
+pub fn build_full_sweep(geom: &Geometry) -> Bvh {
+    let mut bvh = build_with(geom, Method::Sweep);
+    bvh.stats.builder = "sah-full-sweep".to_string();
+    bvh
+}
+
+fn build_with(geom: &Geometry, method: Method) -> Bvh {
     let start_time = Instant::now();
     let n = geom.indices.len();
     let mut refs: Vec<PrimRef> = (0..n)
+        .into_par_iter()
+        .with_min_len(4096)
         .map(|i| {
-            let b = Aabb::from_points(&geom.triangle(i));
-            PrimRef {
-                bounds: b,
-                centroid: b.center(),
-                index: i as u32,
-            }
+            let [a, b, c] = geom.triangle(i).map(Vec3A::from);
+            PrimRef::new(a.min(b).min(c), a.max(b).max(c), i as u32)
         })
         .collect();
-    let mut nodes = Vec::with_capacity(2 * n);
-    let mut stack = Vec::new();
-    if n > 0 {
-        nodes.push(Node::default());
-        stack.push(Task {
-            node: 0,
-            start: 0,
-            end: n,
+    // A binary tree over n triangles has at most 2n - 1 nodes. Each subtree
+    // gets its own part of this array, so subtrees build in parallel without
+    // locks; `compact` then removes the unused slots.
+    let mut scratch = vec![Node::default(); (2 * n).saturating_sub(1)];
+    let mut depth = 0;
+    if let Some((root, rest)) = scratch.split_first_mut() {
+        let (bounds, cbounds) = Box3::of(&refs);
+        let task = Task {
+            refs: &mut refs,
+            first: 0,
+            bounds,
+            cbounds,
             depth: 1,
-        });
-    }
-    let mut depth = n.min(1);
-    while let Some(t) = stack.pop() {
-        depth = depth.max(t.depth);
-        let slice = &mut refs[t.start..t.end];
-        let (bounds, cbounds) = slice.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), r| {
-            (b.union(r.bounds), c.grow(r.centroid))
-        });
-        nodes[t.node].set_bounds(&bounds);
-        // Past depth 64 only balanced splits, so traversal stacks stay bounded.
-        let mid = match builder {
-            Builder::Sah if t.depth <= 64 => split_sah(slice, &bounds, &cbounds),
-            _ => split_median(slice, &cbounds),
+            sorted: None,
         };
-        match mid {
-            Some(m) => {
-                let left = nodes.len();
-                nodes.push(Node::default());
-                nodes.push(Node::default());
-                nodes[t.node].first = left as u32;
-                nodes[t.node].count = 0;
-                stack.push(Task {
-                    node: left + 1,
-                    start: t.start + m,
-                    end: t.end,
-                    depth: t.depth + 1,
-                });
-                stack.push(Task {
-                    node: left,
-                    start: t.start,
-                    end: t.start + m,
-                    depth: t.depth + 1,
-                });
-            }
-            None => {
-                nodes[t.node].first = t.start as u32;
-                nodes[t.node].count = (t.end - t.start) as u32;
-            }
-        }
+        depth = subtree(method, task, root, rest, 1);
     }
-    let tris = refs
-        .iter()
-        .map(|r| geom.triangle(r.index as usize).map(|v| v.to_array()))
+    let nodes = compact(&scratch);
+    drop(scratch);
+    let prim: Vec<u32> = refs.iter().map(|r| r.index()).collect();
+    let tris: Vec<[[f32; 3]; 3]> = prim
+        .par_iter()
+        .with_min_len(4096)
+        .map(|&i| geom.triangle(i as usize).map(|v| v.to_array()))
         .collect();
-    let prim = refs.iter().map(|r| r.index).collect();
+    let wide = wide::Wide::collapse(&nodes, &tris);
     let build_ms = start_time.elapsed().as_secs_f64() * 1e3;
-    let stats = stats(&nodes, n, depth, builder, build_ms);
+    let stats = stats(&nodes, n, depth, build_ms);
     Bvh {
         nodes,
         tris,
         prim,
         stats,
+        wide,
     }
 }
 
-/// Partitions `refs` by the best binned SAH split; `None` makes a leaf.
-fn split_sah(refs: &mut [PrimRef], bounds: &Aabb, cbounds: &Aabb) -> Option<usize> {
-    let n = refs.len();
-    if n <= 1 {
-        return None;
-    }
-    let ext = cbounds.extent();
-    let scale = Vec3::splat(BINS as f32) / ext.max(Vec3::splat(f32::MIN_POSITIVE));
-    let bin_of = |c: Vec3, axis: usize| -> usize {
-        (((c[axis] - cbounds.min[axis]) * scale[axis]) as usize).min(BINS - 1)
+/// Builds the subtree of `t` into `me` (its root) and `desc` (room for its
+/// descendants, which start at index `base`); returns the subtree's depth.
+fn subtree(method: Method, mut t: Task, me: &mut Node, desc: &mut [Node], base: usize) -> usize {
+    let n = t.refs.len();
+    me.min = t.bounds.min.to_array();
+    me.max = t.bounds.max.to_array();
+    let cut = match method {
+        Method::Binned if t.depth <= SAH_DEPTH => split_sah(&mut t),
+        Method::Sweep if t.depth <= SAH_DEPTH => split_full(&mut t),
+        _ => split_median(&mut t),
     };
-    let mut bins = [[(Aabb::EMPTY, 0u32); BINS]; 3];
-    for r in refs.iter() {
-        for (axis, axis_bins) in bins.iter_mut().enumerate() {
-            let b = &mut axis_bins[bin_of(r.centroid, axis)];
-            b.0 = b.0.union(r.bounds);
-            b.1 += 1;
+    let Some(cut) = cut else {
+        me.first = t.first as u32;
+        me.count = n as u32;
+        return t.depth;
+    };
+    let m = cut.at;
+    let (a, b) = t.refs.split_at_mut(m);
+    let side = |refs, first, s: Side| Task {
+        refs,
+        first,
+        bounds: s.bounds,
+        cbounds: s.cbounds,
+        depth: t.depth + 1,
+        sorted: s.sorted,
+    };
+    let left = side(a, t.first, cut.left);
+    let right = side(b, t.first + m, cut.right);
+    me.first = base as u32;
+    me.count = 0;
+    let (pair, rest) = desc.split_at_mut(2);
+    let (l, r) = pair.split_at_mut(1);
+    let (ldesc, rdesc) = rest.split_at_mut(2 * m - 2);
+    let (lbase, rbase) = (base + 2, base + 2 + 2 * m - 2);
+    if n > PARALLEL_SUBTREE {
+        let (a, b) = rayon::join(
+            || subtree(method, left, &mut l[0], ldesc, lbase),
+            || subtree(method, right, &mut r[0], rdesc, rbase),
+        );
+        a.max(b)
+    } else {
+        let a = subtree(method, left, &mut l[0], ldesc, lbase);
+        let b = subtree(method, right, &mut r[0], rdesc, rbase);
+        a.max(b)
+    }
+}
+
+/// A split node: the left half is `refs[..at]` (partitioned in place).
+struct Cut {
+    at: usize,
+    left: Side,
+    right: Side,
+}
+
+/// One half of a split.
+struct Side {
+    bounds: Box3,
+    cbounds: Box3,
+    sorted: Option<Orders>,
+}
+
+impl Side {
+    fn of(refs: &[PrimRef]) -> Side {
+        let (bounds, cbounds) = Box3::of(refs);
+        Side {
+            bounds,
+            cbounds,
+            sorted: None,
+        }
+    }
+}
+
+/// Splits at `m`, computing the halves' bounds.
+fn halves(refs: &[PrimRef], m: usize) -> Option<Cut> {
+    Some(Cut {
+        at: m,
+        left: Side::of(&refs[..m]),
+        right: Side::of(&refs[m..]),
+    })
+}
+
+/// Leaf cost of `n` triangles: traversal tests them in packets of eight.
+#[inline(always)]
+fn blocks(n: usize) -> f32 {
+    n.div_ceil(LEAF_BLOCK) as f32
+}
+
+/// Per-axis bins: bounds and triangle counts.
+#[derive(Clone)]
+struct Bins<const B: usize> {
+    bounds: [[Box3; B]; 3],
+    count: [[u32; B]; 3],
+}
+
+impl<const B: usize> Bins<B> {
+    fn new() -> Self {
+        Bins {
+            bounds: [[Box3::EMPTY; B]; 3],
+            count: [[0; B]; 3],
+        }
+    }
+
+    #[inline(always)]
+    fn add(&mut self, r: &PrimRef, b: [usize; 3]) {
+        for (axis, &k) in b.iter().enumerate() {
+            let slot = &mut self.bounds[axis][k];
+            slot.min = slot.min.min(r.min());
+            slot.max = slot.max.max(r.max());
+            self.count[axis][k] += 1;
+        }
+    }
+
+    fn merge(mut self, o: Self) -> Self {
+        for axis in 0..3 {
+            for k in 0..B {
+                self.bounds[axis][k] = self.bounds[axis][k].union(o.bounds[axis][k]);
+                self.count[axis][k] += o.count[axis][k];
+            }
+        }
+        self
+    }
+}
+
+/// Maps a doubled centroid to its bin (of `B`) on each axis.
+#[derive(Clone, Copy)]
+struct Binner<const B: usize> {
+    origin: Vec3A,
+    scale: Vec3A,
+}
+
+impl<const B: usize> Binner<B> {
+    /// The bin on each axis. Adding 2^23 rounds to an integer held in the
+    /// low mantissa bits: one SIMD add instead of three checked conversions.
+    /// Rounding `x - 0.5` rather than truncating `x` moves a value exactly on
+    /// a bin boundary at most one bin, the same way for binning and
+    /// partitioning, which is all the SAH needs. NaN clamps to bin 0.
+    #[inline(always)]
+    fn bin(&self, c: Vec3A) -> [usize; 3] {
+        const MAGIC: f32 = 8_388_608.0;
+        let f = ((c - self.origin) * self.scale - Vec3A::splat(0.5))
+            .max(Vec3A::ZERO)
+            .min(Vec3A::splat(B as f32 - 1.0))
+            + Vec3A::splat(MAGIC);
+        // The mask changes nothing (the value is below B, a power of two)
+        // but lets the compiler drop bounds checks on the bins.
+        let lane = |x: f32| (x.to_bits() - MAGIC.to_bits()) as usize & (B - 1);
+        [lane(f.x), lane(f.y), lane(f.z)]
+    }
+}
+
+/// The best SAH split of `t`, partitioned; `None` makes a leaf.
+fn split_sah(t: &mut Task) -> Option<Cut> {
+    match t.refs.len() {
+        0..=1 => None,
+        2..=SMALL => split_small(t),
+        // Fewer bins for mid-sized nodes: there evaluating the bins costs
+        // as much as filling them, and the bins are still narrow.
+        n if n < BIG => split_binned::<16>(t),
+        _ => split_binned::<32>(t),
+    }
+}
+
+/// The best split of `t` over `B` bins per axis, partitioned.
+fn split_binned<const B: usize>(t: &mut Task) -> Option<Cut> {
+    let n = t.refs.len();
+    let ext = t.cbounds.max - t.cbounds.min;
+    let binner = Binner::<B> {
+        origin: t.cbounds.min,
+        scale: Vec3A::select(
+            ext.cmpgt(Vec3A::ZERO),
+            Vec3A::splat(B as f32) / ext,
+            Vec3A::ZERO,
+        ),
+    };
+    let mut bins = Bins::<B>::new();
+    if n > PARALLEL_BINNING {
+        bins = t
+            .refs
+            .par_chunks(PARALLEL_BINNING / 4)
+            .fold(Bins::new, |mut b, chunk| {
+                for r in chunk {
+                    b.add(r, binner.bin(r.c()));
+                }
+                b
+            })
+            .reduce(Bins::new, Bins::merge);
+    } else {
+        for r in t.refs.iter() {
+            bins.add(r, binner.bin(r.c()));
         }
     }
     let mut best: Option<(f32, usize, usize)> = None;
-    for (axis, axis_bins) in bins.iter().enumerate() {
+    for axis in 0..3 {
         if ext[axis] <= 0.0 {
             continue;
         }
-        // Right-to-left sweep stores the suffix areas, left-to-right evaluates.
-        let mut right_cost = [0.0f32; BINS];
-        let (mut rb, mut rn) = (Aabb::EMPTY, 0u32);
-        for i in (1..BINS).rev() {
-            rb = rb.union(axis_bins[i].0);
-            rn += axis_bins[i].1;
-            right_cost[i] = rb.area() * rn as f32;
-        }
-        let (mut lb, mut ln) = (Aabb::EMPTY, 0u32);
-        for i in 0..BINS - 1 {
-            lb = lb.union(axis_bins[i].0);
-            ln += axis_bins[i].1;
-            if ln == 0 || ln as usize == n {
+        let (bb, bc) = (&bins.bounds[axis], &bins.count[axis]);
+        // Right-to-left sweep stores the suffix costs, left-to-right evaluates.
+        // An empty bin changes nothing, so only bins with triangles are
+        // evaluated (most are empty in small nodes).
+        let mut right_cost = [0.0f32; B];
+        let (mut rb, mut rn) = (Box3::EMPTY, 0u32);
+        for i in (1..B).rev() {
+            if bc[i] == 0 {
+                right_cost[i] = right_cost.get(i + 1).copied().unwrap_or(0.0);
                 continue;
             }
-            let cost = lb.area() * ln as f32 + right_cost[i + 1];
+            rb = rb.union(bb[i]);
+            rn += bc[i];
+            right_cost[i] = rb.area() * blocks(rn as usize);
+        }
+        let (mut lb, mut ln) = (Box3::EMPTY, 0u32);
+        for i in 0..B - 1 {
+            if bc[i] == 0 {
+                continue;
+            }
+            lb = lb.union(bb[i]);
+            ln += bc[i];
+            if ln as usize == n {
+                break;
+            }
+            let cost = lb.area() * blocks(ln as usize) + right_cost[i + 1];
             if best.is_none_or(|b| cost < b.0) {
                 best = Some((cost, axis, i));
             }
         }
     }
-    let leaf_cost = n as f32;
     let Some((cost, axis, bin)) = best else {
         // All centroids coincide: split by index so leaves stay bounded.
-        return (n > MAX_LEAF).then_some(n / 2);
+        return (n > MAX_LEAF).then(|| halves(t.refs, n / 2)).flatten();
     };
-    let split_cost = TRAVERSAL_COST + cost / bounds.area().max(f32::MIN_POSITIVE);
-    if split_cost >= leaf_cost && n <= MAX_LEAF {
+    let split_cost = TRAVERSAL_COST + cost / t.bounds.area().max(f32::MIN_POSITIVE);
+    if split_cost >= blocks(n) && n <= MAX_LEAF {
         return None;
     }
-    let mid = partition(refs, |r| bin_of(r.centroid, axis) <= bin);
-    (mid > 0 && mid < n).then_some(mid).or(Some(n / 2))
+    if n < REFINE {
+        return Some(partition(t.refs, &bins, axis, bin, |c| {
+            binner.bin(c)[axis] <= bin
+        }));
+    }
+    // Refine: the triangles of the two bins beside the chosen boundary are
+    // sorted and every split between them is tried. Bins cannot separate a
+    // ground plane from the triangles just above it; this can, and it never
+    // does worse than the binned split, which is one of those tried.
+    let group = |c: Vec3A| {
+        let b = binner.bin(c)[axis];
+        (b >= bin) as usize + (b > bin + 1) as usize
+    };
+    let refs = &mut *t.refs;
+    let (mut lo, mut i, mut hi) = (0, 0, n);
+    let (mut c_lo, mut c_hi) = (Box3::EMPTY, Box3::EMPTY);
+    while i < hi {
+        let c = refs[i].c();
+        match group(c) {
+            0 => {
+                c_lo.grow(c);
+                refs.swap(lo, i);
+                lo += 1;
+                i += 1;
+            }
+            2 => {
+                c_hi.grow(c);
+                hi -= 1;
+                refs.swap(i, hi);
+            }
+            _ => i += 1,
+        }
+    }
+    let union = |r: std::ops::Range<usize>| {
+        bins.bounds[axis][r]
+            .iter()
+            .fold(Box3::EMPTY, |a, b| a.union(*b))
+    };
+    let (b_lo, b_hi) = (union(0..bin), union((bin + 2).min(B)..B));
+    let mid = &mut refs[lo..hi];
+    // Sort by centroid: keys computed once, with the position to gather by.
+    let mut keys: Vec<(u64, u32)> = mid
+        .iter()
+        .enumerate()
+        .map(|(k, r)| (sort_key(r, axis), k as u32))
+        .collect();
+    keys.sort_unstable();
+    let sorted: Vec<PrimRef> = keys.iter().map(|&(_, k)| mid[k as usize]).collect();
+    mid.copy_from_slice(&sorted);
+    let m = mid.len();
+    let mut right = vec![0.0f32; m + 1];
+    let mut rb = b_hi;
+    for j in (0..=m).rev() {
+        if j < m {
+            rb = rb.union(Box3 {
+                min: mid[j].min(),
+                max: mid[j].max(),
+            });
+        }
+        right[j] = rb.area() * blocks(n - lo - j);
+    }
+    let mut best_j = None;
+    let mut lb = b_lo;
+    for j in 0..=m {
+        if j > 0 {
+            lb = lb.union(Box3 {
+                min: mid[j - 1].min(),
+                max: mid[j - 1].max(),
+            });
+        }
+        let at = lo + j;
+        if at == 0 || at == n {
+            continue;
+        }
+        let cost = lb.area() * blocks(at) + right[j];
+        if best_j.is_none_or(|(c, _, _)| cost < c) {
+            best_j = Some((cost, j, lb));
+        }
+    }
+    let Some((_, j, lb)) = best_j else {
+        return halves(t.refs, n / 2);
+    };
+    let rb = mid[j..].iter().fold(b_hi, |b, r| {
+        b.union(Box3 {
+            min: r.min(),
+            max: r.max(),
+        })
+    });
+    let lc = mid[..j].iter().fold(c_lo, |mut b, r| {
+        b.grow(r.c());
+        b
+    });
+    let rc = mid[j..].iter().fold(c_hi, |mut b, r| {
+        b.grow(r.c());
+        b
+    });
+    Some(Cut {
+        at: lo + j,
+        left: Side {
+            bounds: lb,
+            cbounds: lc,
+            sorted: None,
+        },
+        right: Side {
+            bounds: rb,
+            cbounds: rc,
+            sorted: None,
+        },
+    })
+}
+
+/// Partitions `refs` into those left of the boundary after `bin` and the
+/// rest, growing the halves' centroid bounds on the way.
+fn partition<const B: usize>(
+    refs: &mut [PrimRef],
+    bins: &Bins<B>,
+    axis: usize,
+    bin: usize,
+    left: impl Fn(Vec3A) -> bool,
+) -> Cut {
+    let union = |r: &[Box3]| r.iter().fold(Box3::EMPTY, |a, b| a.union(*b));
+    let (mut lc, mut rc) = (Box3::EMPTY, Box3::EMPTY);
+    let (mut i, mut j) = (0, refs.len());
+    while i < j {
+        let c = refs[i].c();
+        if left(c) {
+            lc.grow(c);
+            i += 1;
+        } else {
+            rc.grow(c);
+            j -= 1;
+            refs.swap(i, j);
+        }
+    }
+    Cut {
+        at: i,
+        left: Side {
+            bounds: union(&bins.bounds[axis][..=bin]),
+            cbounds: lc,
+            sorted: None,
+        },
+        right: Side {
+            bounds: union(&bins.bounds[axis][bin + 1..]),
+            cbounds: rc,
+            sorted: None,
+        },
+    }
+}
+
+/// Orders triangles by centroid on `axis`, ties by triangle index, so every
+/// sweep breaks ties the same way.
+#[inline(always)]
+fn sort_key(r: &PrimRef, axis: usize) -> u64 {
+    (order_key(r.c().to_array()[axis]) as u64) << 32 | r.index() as u64
+}
+
+/// A float's bits in an order that sorts like the float (total order).
+#[inline(always)]
+fn order_key(x: f32) -> u32 {
+    let b = x.to_bits();
+    if b >> 31 == 1 {
+        !b
+    } else {
+        b | 1 << 31
+    }
+}
+
+/// The best SAH split of a small node by a full sweep over its triangles
+/// sorted by centroid on each axis: exact, and cheaper than binning there.
+/// The children inherit the sorted orders.
+fn split_small(t: &mut Task) -> Option<Cut> {
+    let n = t.refs.len();
+    // One packet costs less than any split of it.
+    if n <= LEAF_BLOCK {
+        return None;
+    }
+    let order = match t.sorted.take() {
+        Some(o) => o,
+        None => {
+            let mut o = [[0u8; SMALL]; 3];
+            let mut keys = [(0u64, 0u8); SMALL];
+            for (axis, o) in o.iter_mut().enumerate() {
+                for (k, r) in t.refs.iter().enumerate() {
+                    keys[k] = (sort_key(r, axis), k as u8);
+                }
+                keys[..n].sort_unstable();
+                for (x, key) in o.iter_mut().zip(&keys[..n]) {
+                    *x = key.1;
+                }
+            }
+            o
+        }
+    };
+    let mut idx = [[0usize; SMALL]; 3];
+    for (i, o) in idx.iter_mut().zip(order.iter()) {
+        for (x, &k) in i.iter_mut().zip(&o[..n]) {
+            *x = k as usize;
+        }
+    }
+    let mut right = [0.0f32; SMALL];
+    let [a, b, c] = &idx;
+    let (axis, at) = best_sweep(t, [&a[..n], &b[..n], &c[..n]], &mut right[..n])?;
+    // Reorder along the chosen axis; the children's orders are the parent's
+    // with the triangles renumbered.
+    let mut pos = [0u8; SMALL];
+    let mut tmp = [t.refs[0]; SMALL];
+    for (p, &k) in order[axis][..n].iter().enumerate() {
+        pos[k as usize] = p as u8;
+        tmp[p] = t.refs[k as usize];
+    }
+    t.refs.copy_from_slice(&tmp[..n]);
+    let (mut lo, mut ro) = ([[0u8; SMALL]; 3], [[0u8; SMALL]; 3]);
+    for a in 0..3 {
+        let (mut l, mut r) = (0, 0);
+        for &k in &order[a][..n] {
+            let p = pos[k as usize];
+            if (p as usize) < at {
+                lo[a][l] = p;
+                l += 1;
+            } else {
+                ro[a][r] = p - at as u8;
+                r += 1;
+            }
+        }
+    }
+    let mut cut = halves(t.refs, at)?;
+    cut.left.sorted = Some(lo);
+    cut.right.sorted = Some(ro);
+    Some(cut)
+}
+
+/// The full sweep for any node: the reference the binned builder is
+/// measured against.
+fn split_full(t: &mut Task) -> Option<Cut> {
+    let n = t.refs.len();
+    if n <= 1 {
+        return None;
+    }
+    let order: [Vec<usize>; 3] = [0, 1, 2].map(|axis| {
+        let mut keys: Vec<(u64, usize)> = t
+            .refs
+            .iter()
+            .enumerate()
+            .map(|(k, r)| (sort_key(r, axis), k))
+            .collect();
+        keys.sort_unstable();
+        keys.into_iter().map(|k| k.1).collect()
+    });
+    let [a, b, c] = &order;
+    let (axis, at) = best_sweep(t, [a, b, c], &mut vec![0.0; n])?;
+    let sorted: Vec<PrimRef> = order[axis].iter().map(|&k| t.refs[k]).collect();
+    t.refs.copy_from_slice(&sorted);
+    halves(t.refs, at)
+}
+
+/// Sweeps every split position of the sorted `order` on each axis; returns
+/// the best axis and position, or `None` when a leaf is cheaper. `right` is
+/// scratch space.
+fn best_sweep(t: &Task, order: [&[usize]; 3], right: &mut [f32]) -> Option<(usize, usize)> {
+    let n = t.refs.len();
+    let bounds = |k: usize| Box3 {
+        min: t.refs[k].min(),
+        max: t.refs[k].max(),
+    };
+    let mut best: Option<(f32, usize, usize)> = None;
+    for (axis, o) in order.iter().enumerate() {
+        let mut rb = Box3::EMPTY;
+        for i in (1..n).rev() {
+            rb = rb.union(bounds(o[i]));
+            right[i] = rb.area() * blocks(n - i);
+        }
+        let mut lb = Box3::EMPTY;
+        for i in 1..n {
+            lb = lb.union(bounds(o[i - 1]));
+            let cost = lb.area() * blocks(i) + right[i];
+            if best.is_none_or(|b| cost < b.0) {
+                best = Some((cost, axis, i));
+            }
+        }
+    }
+    let (cost, axis, at) = best?;
+    let split_cost = TRAVERSAL_COST + cost / t.bounds.area().max(f32::MIN_POSITIVE);
+    if split_cost >= blocks(n) && n <= MAX_LEAF {
+        return None;
+    }
+    Some((axis, at))
 }
 
 /// Splits at the object median of the largest centroid axis.
-fn split_median(refs: &mut [PrimRef], cbounds: &Aabb) -> Option<usize> {
-    let n = refs.len();
+fn split_median(t: &mut Task) -> Option<Cut> {
+    let n = t.refs.len();
     if n <= MEDIAN_LEAF {
         return None;
     }
-    let axis = cbounds.extent().max_position();
+    let axis = (t.cbounds.max - t.cbounds.min).max_position();
     let mid = n / 2;
-    refs.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-    Some(mid)
+    t.refs.select_nth_unstable_by(mid, |a, b| {
+        a.c().to_array()[axis].total_cmp(&b.c().to_array()[axis])
+    });
+    halves(t.refs, mid)
 }
 
-/// In-place partition; returns the number of elements for which `pred` holds.
-fn partition<T>(v: &mut [T], pred: impl Fn(&T) -> bool) -> usize {
-    let mut i = 0;
-    let mut j = v.len();
-    while i < j {
-        if pred(&v[i]) {
-            i += 1;
-        } else {
-            j -= 1;
-            v.swap(i, j);
-        }
+/// The tree without unused slots, in depth-first order, siblings adjacent.
+fn compact(scratch: &[Node]) -> Vec<Node> {
+    let mut out = Vec::with_capacity(scratch.len());
+    if scratch.is_empty() {
+        return out;
     }
-    i
+    out.push(scratch[0]);
+    // (index in `out`, index in `scratch`) of interior nodes whose children
+    // are still to be copied.
+    let mut stack = vec![(0usize, 0usize)];
+    while let Some((o, s)) = stack.pop() {
+        let n = scratch[s];
+        if n.is_leaf() {
+            continue;
+        }
+        let c = n.first as usize;
+        let at = out.len();
+        out[o].first = at as u32;
+        out.push(scratch[c]);
+        out.push(scratch[c + 1]);
+        stack.push((at + 1, c + 1));
+        stack.push((at, c));
+    }
+    out
 }
 
-fn stats(
-    nodes: &[Node],
-    triangles: usize,
-    depth: usize,
-    builder: Builder,
-    build_ms: f64,
-) -> BuildStats {
+fn stats(nodes: &[Node], triangles: usize, depth: usize, build_ms: f64) -> BuildStats {
+    let (leaves, max_leaf, sah) = sah_cost(nodes, 1);
+    BuildStats {
+        builder: String::new(),
+        triangles,
+        nodes: nodes.len(),
+        leaves,
+        depth,
+        max_leaf,
+        mean_leaf: triangles as f64 / leaves.max(1) as f64,
+        sah_cost: sah,
+        build_ms,
+    }
+}
+
+/// Leaves, largest leaf and SAH cost of a binary tree, with a node
+/// traversal costing `TRAVERSAL_COST` and a leaf 1 per `block` triangles
+/// (rounded up).
+pub(super) fn sah_cost(nodes: &[Node], block: usize) -> (usize, usize, f64) {
     let root_area = nodes
         .first()
         .map_or(1.0, |r| r.bounds().area().max(f32::MIN_POSITIVE) as f64);
@@ -213,20 +806,10 @@ fn stats(
         if node.is_leaf() {
             leaves += 1;
             max_leaf = max_leaf.max(node.count as usize);
-            sah += a * node.count as f64;
+            sah += a * (node.count as usize).div_ceil(block) as f64;
         } else {
             sah += a * TRAVERSAL_COST as f64;
         }
     }
-    BuildStats {
-        builder: builder.to_string(),
-        triangles,
-        nodes: nodes.len(),
-        leaves,
-        depth,
-        max_leaf,
-        mean_leaf: triangles as f64 / leaves.max(1) as f64,
-        sah_cost: sah,
-        build_ms,
-    }
+    (leaves, max_leaf, sah)
 }

@@ -5,19 +5,46 @@ pub mod debug;
 pub mod node;
 pub mod stats;
 pub mod traverse;
+mod wide;
 
-pub use build::build;
+pub use build::{build, build_full_sweep};
 pub use node::Node;
 pub use stats::{BuildStats, TraversalStats};
 pub use traverse::Hit;
 
-/// A binary BVH over the triangles of a scene.
+/// A BVH over the triangles of a scene.
 ///
-/// Triangles are copied in leaf order (`tris`) so a leaf reads contiguous
-/// memory; `prim` maps each back to its index in the scene's geometry.
+/// The builders make the binary tree `nodes` (what the statistics and debug
+/// views describe), with triangles copied in leaf order (`tris`); `prim`
+/// maps each back to its index in the scene's geometry. Traversal walks a
+/// wide tree collapsed from it, with the same boxes and leaves.
 pub struct Bvh {
     pub nodes: Vec<Node>,
     pub tris: Vec<[[f32; 3]; 3]>,
     pub prim: Vec<u32>,
     pub stats: BuildStats,
+    wide: wide::Wide,
+}
+
+impl Bvh {
+    /// The SAH cost the SAH builder minimises: leaves cost one per packet of
+    /// eight triangles, as traversal tests them. (`stats.sah_cost` counts
+    /// every triangle.)
+    pub fn packet_sah_cost(&self) -> f64 {
+        build::sah_cost(&self.nodes, build::LEAF_BLOCK).2
+    }
+
+    /// Collapses the traversal tree again from `nodes`, after they were
+    /// edited (the stability tests break a box on purpose).
+    pub fn recollapse(&mut self) {
+        self.wide = wide::Wide::collapse(&self.nodes, &self.tris);
+    }
+
+    /// Bytes held by the tree and its leaf-order triangle copies.
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of_val(&self.nodes[..])
+            + std::mem::size_of_val(&self.tris[..])
+            + std::mem::size_of_val(&self.prim[..])
+            + self.wide.memory_bytes()
+    }
 }

@@ -1,12 +1,16 @@
-//! Closest-hit and any-hit traversal, ordered near child first.
+//! Closest-hit and any-hit traversal of the 8-wide tree, nearest child first.
 //!
 //! `STATS` is a compile-time switch: with `false` the counters vanish from
 //! the generated code, so the fast path pays nothing for the inspector.
 
+use std::mem::MaybeUninit;
+
+use glam::Vec4;
+
+use super::wide::{leaf_packets, Node8, Packet, LEAF, PACKET, WIDTH};
 use super::{Bvh, TraversalStats};
-use crate::geometry::triangle::{intersect, RayShear};
-use crate::geometry::Ray;
-use glam::Vec3;
+use crate::geometry::triangle::{intersect, intersect8, RayShear, TriHit8};
+use crate::geometry::{gamma, Ray};
 
 /// A closest hit: distance, barycentrics of vertices 1 and 2, and the
 /// triangle's index in the scene geometry.
@@ -18,180 +22,345 @@ pub struct Hit {
     pub prim: u32,
 }
 
-/// Enough for any tree the builders make (they fall back to median splits past depth 64).
+/// Traversal stack entries on the machine stack; enough for any tree of
+/// reasonable depth (a level pushes at most seven). Deeper trees, which
+/// only degenerate inputs make, get a stack on the heap.
 const STACK: usize = 128;
+
+/// Widening of the far slab distance, as in [`crate::geometry::Aabb::hit`].
+const FAR_SCALE: f32 = 1.0 + 2.0 * gamma(3);
+/// Exit distances are capped below infinity so that an entry distance of
+/// infinity (a ray with no direction at all) never counts as a hit, as in
+/// `Aabb::hit`.
+const MAX_TFAR: f32 = f32::MAX / 2.0;
+
+/// Whether `hit` replaces `best`: nearer, or as near and of a lower scene
+/// triangle index. A ray through a shared edge or vertex then picks the
+/// same triangle whatever the tree or the order of the tests.
+#[inline(always)]
+fn closer(hit: &Hit, best: Option<&Hit>) -> bool {
+    best.is_none_or(|b| hit.t < b.t || (hit.t == b.t && hit.prim < b.prim))
+}
+
+/// A ray's constants for the slab tests.
+#[derive(Clone, Copy)]
+struct BoxRay {
+    o: [f32; 3],
+    inv: [f32; 3],
+    /// Index in `Node8::b` of the near plane on each axis (the far one is `^ 1`).
+    near: [usize; 3],
+}
+
+impl BoxRay {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Self {
+        let inv = ray.inv_dir();
+        let near = |a: usize| 2 * a + (inv[a] < 0.0) as usize;
+        BoxRay {
+            o: ray.origin.to_array(),
+            inv: inv.to_array(),
+            near: [near(0), near(1), near(2)],
+        }
+    }
+}
+
+/// Bit `i` set when child `i`'s box is hit within `(0, tmax)`, and the entry
+/// distances: the test of `Aabb::hit`, four boxes at a time.
+#[inline(always)]
+fn hit_boxes(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+    let mut mask = 0;
+    let mut tnear = [0.0; WIDTH];
+    for half in 0..WIDTH / 4 {
+        let lanes = half * 4..half * 4 + 4;
+        let slab = |a: usize| {
+            let (o, inv) = (Vec4::splat(r.o[a]), Vec4::splat(r.inv[a]));
+            let near = (Vec4::from_slice(&n.b[r.near[a]][lanes.clone()]) - o) * inv;
+            let far = (Vec4::from_slice(&n.b[r.near[a] ^ 1][lanes.clone()]) - o) * inv;
+            (near, far)
+        };
+        let (nx, fx) = slab(0);
+        let (ny, fy) = slab(1);
+        let (nz, fz) = slab(2);
+        // maxps/minps return the second operand when either is NaN: with the
+        // running value second, the NaN of `0 * inf` (an origin on a slab
+        // plane of a parallel ray) is passed over, as in `Aabb::hit`.
+        let tn = nz.max(ny.max(nx.max(Vec4::ZERO)));
+        let tf = fz.min(fy.min(fx.min(Vec4::splat(tmax.min(MAX_TFAR))))) * Vec4::splat(FAR_SCALE);
+        mask |= tn.cmple(tf).bitmask() << (4 * half);
+        tn.write_to_slice(&mut tnear[lanes]);
+    }
+    (mask, tnear)
+}
+
+/// The same test on all eight boxes at once with AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+fn hit_boxes_avx(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+    use std::arch::x86_64::*;
+    // SAFETY: `Node8` is 32-byte aligned and each plane is eight f32 at the
+    // start of a 32-byte row.
+    let load = |k: usize| unsafe { _mm256_load_ps(n.b[k].as_ptr()) };
+    let slab = |a: usize| {
+        let (o, inv) = (_mm256_set1_ps(r.o[a]), _mm256_set1_ps(r.inv[a]));
+        let near = _mm256_mul_ps(_mm256_sub_ps(load(r.near[a]), o), inv);
+        let far = _mm256_mul_ps(_mm256_sub_ps(load(r.near[a] ^ 1), o), inv);
+        (near, far)
+    };
+    let (nx, fx) = slab(0);
+    let (ny, fy) = slab(1);
+    let (nz, fz) = slab(2);
+    // Running value second, so NaN lanes are passed over (see `hit_boxes`).
+    let tn = _mm256_max_ps(
+        nz,
+        _mm256_max_ps(ny, _mm256_max_ps(nx, _mm256_setzero_ps())),
+    );
+    let tf = _mm256_mul_ps(
+        _mm256_min_ps(
+            fz,
+            _mm256_min_ps(fy, _mm256_min_ps(fx, _mm256_set1_ps(tmax.min(MAX_TFAR)))),
+        ),
+        _mm256_set1_ps(FAR_SCALE),
+    );
+    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
+    let mut tnear = [0.0; WIDTH];
+    // SAFETY: `tnear` holds eight f32.
+    unsafe { _mm256_storeu_ps(tnear.as_mut_ptr(), tn) };
+    (mask, tnear)
+}
 
 impl Bvh {
     /// Nearest hit in `(0, ray.tmax]`.
     #[inline]
     pub fn intersect<const STATS: bool>(&self, ray: &Ray, st: &mut TraversalStats) -> Option<Hit> {
-        if self.nodes.is_empty() {
-            return None;
-        }
-        let shear = RayShear::new(ray.origin, ray.dir);
-        let inv = ray.inv_dir();
-        let o = ray.origin;
-        let mut tmax = ray.tmax;
-        let mut best: Option<(f32, f32, f32, u32)> = None;
-        let mut stack = [0u32; STACK];
-        let mut sp = 0;
-        let mut node = &self.nodes[0];
-        if STATS {
-            st.nodes_visited += 1;
-        }
-        if node.bounds().hit(o, inv, tmax).is_none() {
-            if STATS {
-                st.boxes_missed += 1;
-            }
-            return None;
-        }
-        if STATS {
-            st.boxes_hit += 1;
-        }
-        loop {
-            if node.is_leaf() {
-                if STATS {
-                    st.leaves += 1;
-                    st.triangle_tests += node.count;
+        let mut best: Option<Hit> = None;
+        self.traverse::<false, STATS>(ray, st, self.keep_closest(&mut best));
+        best
+    }
+
+    /// The closest-hit `on_hit`: keeps the closest of a packet's hits in
+    /// `best` and returns its `t` as the new `tmax`.
+    #[inline(always)]
+    fn keep_closest<'b>(
+        &'b self,
+        best: &'b mut Option<Hit>,
+    ) -> impl FnMut(&TriHit8, &[u32; PACKET]) -> f32 + 'b {
+        move |h, idx| {
+            for lane in (0..PACKET).filter(|l| h.mask & (1 << l) != 0) {
+                let hit = Hit {
+                    t: h.t[lane],
+                    u: h.u[lane],
+                    v: h.v[lane],
+                    prim: self.prim[idx[lane] as usize],
+                };
+                if closer(&hit, best.as_ref()) {
+                    *best = Some(hit);
                 }
-                let first = node.first as usize;
-                for i in first..first + node.count as usize {
-                    let t = &self.tris[i];
-                    if let Some(h) = intersect(&shear, &t[0], &t[1], &t[2], tmax) {
-                        tmax = h.t;
-                        best = Some((h.t, h.u, h.v, i as u32));
+            }
+            best.map_or(f32::INFINITY, |b| b.t)
+        }
+    }
+
+    /// Whether anything lies in `(0, ray.tmax]`; stops at the first hit found
+    /// and returns that triangle.
+    #[inline]
+    pub fn occluded<const STATS: bool>(&self, ray: &Ray, st: &mut TraversalStats) -> Option<u32> {
+        let mut found = None;
+        self.traverse::<true, STATS>(ray, st, |h, idx| {
+            found = Some(self.prim[idx[h.mask.trailing_zeros() as usize] as usize]);
+            0.0
+        });
+        found
+    }
+
+    /// Walks the wide tree nearest child first. `on_hit` gets every packet
+    /// with a hit and returns the new `tmax`; with `ANY` the walk stops at
+    /// the first hit.
+    #[inline(always)]
+    fn traverse<const ANY: bool, const STATS: bool>(
+        &self,
+        ray: &Ray,
+        st: &mut TraversalStats,
+        on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
+    ) {
+        if self.wide.nodes.is_empty() {
+            return;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if self.wide.avx {
+            // SAFETY: `wide.avx` says this CPU has AVX.
+            unsafe { self.traverse_avx::<ANY, STATS>(ray, st, on_hit) };
+            return;
+        }
+        self.traverse_with::<ANY, STATS>(ray, st, on_hit, hit_boxes, |s, p, t| {
+            // Any-hit traversal needs no barycentrics.
+            if ANY {
+                intersect8::<false>(s, &p.p, t)
+            } else {
+                intersect8::<true>(s, &p.p, t)
+            }
+        });
+    }
+
+    /// The traversal compiled for AVX: eight boxes or eight triangles per
+    /// instruction.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    #[inline]
+    fn traverse_avx<const ANY: bool, const STATS: bool>(
+        &self,
+        ray: &Ray,
+        st: &mut TraversalStats,
+        on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
+    ) {
+        use crate::geometry::triangle::intersect8_avx;
+        self.traverse_with::<ANY, STATS>(
+            ray,
+            st,
+            on_hit,
+            |r, n, t| hit_boxes_avx(r, n, t),
+            |s, p, t| {
+                if ANY {
+                    intersect8_avx::<false>(s, &p.p, t)
+                } else {
+                    intersect8_avx::<true>(s, &p.p, t)
+                }
+            },
+        );
+    }
+
+    #[inline(always)]
+    fn traverse_with<const ANY: bool, const STATS: bool>(
+        &self,
+        ray: &Ray,
+        st: &mut TraversalStats,
+        on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
+        hit: impl Fn(&BoxRay, &Node8, f32) -> (u32, [f32; WIDTH]),
+        tri: impl Fn(&RayShear, &Packet, f32) -> TriHit8,
+    ) {
+        if self.wide.stack <= STACK {
+            // Left uninitialised: clearing it would cost a ray that misses
+            // as much as testing a node.
+            let mut stack = [MaybeUninit::uninit(); STACK];
+            self.walk::<ANY, STATS>(ray, st, &mut stack, on_hit, hit, tri);
+        } else {
+            self.walk_deep::<ANY, STATS>(ray, st, on_hit, hit, tri);
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn walk_deep<const ANY: bool, const STATS: bool>(
+        &self,
+        ray: &Ray,
+        st: &mut TraversalStats,
+        on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
+        hit: impl Fn(&BoxRay, &Node8, f32) -> (u32, [f32; WIDTH]),
+        tri: impl Fn(&RayShear, &Packet, f32) -> TriHit8,
+    ) {
+        let mut stack = vec![MaybeUninit::uninit(); self.wide.stack];
+        self.walk::<ANY, STATS>(ray, st, &mut stack, on_hit, hit, tri);
+    }
+
+    /// The walk itself; `stack` has room for the tree's deepest path.
+    #[inline(always)]
+    fn walk<const ANY: bool, const STATS: bool>(
+        &self,
+        ray: &Ray,
+        st: &mut TraversalStats,
+        stack: &mut [MaybeUninit<(u32, f32)>],
+        mut on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
+        hit: impl Fn(&BoxRay, &Node8, f32) -> (u32, [f32; WIDTH]),
+        tri: impl Fn(&RayShear, &Packet, f32) -> TriHit8,
+    ) {
+        let w = &self.wide;
+        let setup = || RayShear::new(ray.origin, ray.dir);
+        // Closest-hit rays set up the triangle test at their first leaf:
+        // most of them (camera rays past the object) never reach one. Shadow
+        // rays nearly always do.
+        let mut shear = if ANY { Some(setup()) } else { None };
+        let boxes = BoxRay::new(ray);
+        let mut tmax = ray.tmax;
+        let mut sp = 0;
+        let mut cur = 0u32;
+        loop {
+            if cur & LEAF == 0 {
+                let node = &w.nodes[cur as usize];
+                let (mask, tnear) = hit(&boxes, node, tmax);
+                if STATS {
+                    let slots = node.b[0].iter().filter(|x| x.is_finite()).count() as u32;
+                    st.nodes_visited += 1;
+                    st.boxes_hit += mask.count_ones();
+                    st.boxes_missed += slots - mask.count_ones();
+                }
+                if mask != 0 {
+                    if mask & (mask - 1) == 0 {
+                        cur = node.child[mask.trailing_zeros() as usize];
+                        continue;
                     }
+                    if ANY {
+                        // Any hit will do: no ordering, the first lane next.
+                        let mut m = mask & (mask - 1);
+                        while m != 0 {
+                            stack[sp].write((node.child[m.trailing_zeros() as usize], 0.0));
+                            sp += 1;
+                            m &= m - 1;
+                        }
+                        cur = node.child[mask.trailing_zeros() as usize];
+                        continue;
+                    }
+                    // Two or more hits: nearest next, the others pushed farthest first.
+                    let mut hits = [(0u32, 0.0f32); WIDTH];
+                    let mut n = 0;
+                    let mut m = mask;
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let mut j = n;
+                        while j > 0 && hits[j - 1].1 < tnear[i] {
+                            hits[j] = hits[j - 1];
+                            j -= 1;
+                        }
+                        hits[j] = (node.child[i], tnear[i]);
+                        n += 1;
+                    }
+                    for &h in &hits[..n - 1] {
+                        stack[sp].write(h);
+                        sp += 1;
+                    }
+                    cur = hits[n - 1].0;
+                    continue;
                 }
             } else {
-                let c = node.first as usize;
-                let (a, b) = (&self.nodes[c], &self.nodes[c + 1]);
-                let ha = hit_box(a, o, inv, tmax);
-                let hb = hit_box(b, o, inv, tmax);
                 if STATS {
-                    st.nodes_visited += 2;
-                    let hits = ha.is_some() as u32 + hb.is_some() as u32;
-                    st.boxes_hit += hits;
-                    st.boxes_missed += 2 - hits;
+                    st.leaves += 1;
                 }
-                match (ha, hb) {
-                    (Some(da), Some(db)) => {
-                        let (near, far) = if da <= db { (c, c + 1) } else { (c + 1, c) };
-                        if sp < STACK {
-                            stack[sp] = far as u32;
-                            sp += 1;
+                for p in &w.packets[leaf_packets(cur)] {
+                    if STATS {
+                        st.triangle_tests += p.lanes();
+                    }
+                    let h = tri(shear.get_or_insert_with(setup), p, tmax);
+                    if h.mask != 0 {
+                        tmax = on_hit(&h, &p.idx);
+                        if ANY {
+                            return;
                         }
-                        node = &self.nodes[near];
-                        continue;
                     }
-                    (Some(_), None) => {
-                        node = a;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        node = b;
-                        continue;
-                    }
-                    (None, None) => {}
                 }
             }
             // Pop, skipping nodes that now lie beyond the closest hit.
             loop {
                 if sp == 0 {
-                    return best.map(|(t, u, v, i)| Hit {
-                        t,
-                        u,
-                        v,
-                        prim: self.prim[i as usize],
-                    });
+                    return;
                 }
                 sp -= 1;
-                let n = &self.nodes[stack[sp] as usize];
-                if hit_box(n, o, inv, tmax).is_some() {
-                    node = n;
+                // SAFETY: every entry below `sp` was written by a push.
+                let (c, d) = unsafe { stack[sp].assume_init() };
+                if ANY || d <= tmax * FAR_SCALE {
+                    cur = c;
                     break;
                 }
             }
-        }
-    }
-
-    /// Whether anything lies in `(0, ray.tmax]`; stops at the first hit found.
-    #[inline]
-    pub fn occluded<const STATS: bool>(&self, ray: &Ray, st: &mut TraversalStats) -> Option<u32> {
-        if self.nodes.is_empty() {
-            return None;
-        }
-        let shear = RayShear::new(ray.origin, ray.dir);
-        let inv = ray.inv_dir();
-        let o = ray.origin;
-        let tmax = ray.tmax;
-        let mut stack = [0u32; STACK];
-        let mut sp = 0;
-        let root = &self.nodes[0];
-        if STATS {
-            st.nodes_visited += 1;
-        }
-        if root.bounds().hit(o, inv, tmax).is_none() {
-            if STATS {
-                st.boxes_missed += 1;
-            }
-            return None;
-        }
-        if STATS {
-            st.boxes_hit += 1;
-        }
-        let mut node = root;
-        loop {
-            if node.is_leaf() {
-                if STATS {
-                    st.leaves += 1;
-                }
-                let first = node.first as usize;
-                for i in first..first + node.count as usize {
-                    if STATS {
-                        st.triangle_tests += 1;
-                    }
-                    let t = &self.tris[i];
-                    if intersect(&shear, &t[0], &t[1], &t[2], tmax).is_some() {
-                        return Some(self.prim[i]);
-                    }
-                }
-            } else {
-                let c = node.first as usize;
-                let (a, b) = (&self.nodes[c], &self.nodes[c + 1]);
-                let ha = hit_box(a, o, inv, tmax);
-                let hb = hit_box(b, o, inv, tmax);
-                if STATS {
-                    st.nodes_visited += 2;
-                    let hits = ha.is_some() as u32 + hb.is_some() as u32;
-                    st.boxes_hit += hits;
-                    st.boxes_missed += 2 - hits;
-                }
-                match (ha, hb) {
-                    (Some(da), Some(db)) => {
-                        let (near, far) = if da <= db { (c, c + 1) } else { (c + 1, c) };
-                        if sp < STACK {
-                            stack[sp] = far as u32;
-                            sp += 1;
-                        }
-                        node = &self.nodes[near];
-                        continue;
-                    }
-                    (Some(_), None) => {
-                        node = a;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        node = b;
-                        continue;
-                    }
-                    (None, None) => {}
-                }
-            }
-            if sp == 0 {
-                return None;
-            }
-            sp -= 1;
-            node = &self.nodes[stack[sp] as usize];
         }
     }
 
@@ -203,13 +372,16 @@ impl Bvh {
         let mut best = None;
         for (i, t) in self.tris.iter().enumerate() {
             if let Some(h) = intersect(&shear, &t[0], &t[1], &t[2], tmax) {
-                tmax = h.t;
-                best = Some(Hit {
+                let hit = Hit {
                     t: h.t,
                     u: h.u,
                     v: h.v,
                     prim: self.prim[i],
-                });
+                };
+                if closer(&hit, best.as_ref()) {
+                    tmax = h.t;
+                    best = Some(hit);
+                }
             }
         }
         best
@@ -225,7 +397,112 @@ impl Bvh {
     }
 }
 
-#[inline(always)]
-fn hit_box(n: &super::Node, o: Vec3, inv: Vec3, tmax: f32) -> Option<f32> {
-    n.bounds().hit(o, inv, tmax)
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{self, Builder};
+
+    /// Both eight-box tests agree with `Aabb::hit` lane by lane, bit for bit,
+    /// grazing rays and rays starting inside a box included; empty slots
+    /// (which `Aabb::hit`, swapping the slabs, would call hit) never hit.
+    #[test]
+    fn eight_box_tests_agree_with_the_scalar_slab_test() {
+        use crate::geometry::sampling::Rng;
+        use crate::geometry::Aabb;
+        use glam::Vec3;
+        let mut r = Rng::for_sample(3, 1, 4);
+        let mut f = || {
+            (r.next_f32() * 8.0 - 4.0).round() / 2.0
+                + if r.next_u32().is_multiple_of(2) {
+                    0.0
+                } else {
+                    r.next_f32()
+                }
+        };
+        for k in 0..5000 {
+            let mut node = Node8 {
+                b: [[0.0; WIDTH]; 6],
+                child: [0; WIDTH],
+            };
+            let mut boxes = [Aabb::EMPTY; WIDTH];
+            for (lane, bx) in boxes.iter_mut().enumerate() {
+                if (k + lane) % 5 != 0 {
+                    let (a, b) = (Vec3::new(f(), f(), f()), Vec3::new(f(), f(), f()));
+                    *bx = Aabb {
+                        min: a.min(b),
+                        max: a.max(b),
+                    };
+                }
+                for axis in 0..3 {
+                    node.b[2 * axis][lane] = bx.min[axis];
+                    node.b[2 * axis + 1][lane] = bx.max[axis];
+                }
+            }
+            let o = Vec3::new(f(), f(), f());
+            // Rays through a box corner (where rounding decides), and zero
+            // direction components, now and then.
+            let mut d = Vec3::new(f(), f(), f());
+            if k % 3 == 0 {
+                d[k % 3] = 0.0;
+            }
+            if let Some(c) = boxes
+                .iter()
+                .filter(|b| !b.is_empty())
+                .nth(k % 4)
+                .filter(|_| k % 4 != 0)
+            {
+                d = Vec3::new(c.max.x, c.min.y, c.max.z) - o;
+            }
+            let ray = Ray::segment(o, d, if k % 2 == 0 { f32::INFINITY } else { 1.5 });
+            let br = BoxRay::new(&ray);
+            let inv = ray.inv_dir();
+            let want: u32 = (0..WIDTH)
+                .filter(|&i| !boxes[i].is_empty() && boxes[i].hit(o, inv, ray.tmax).is_some())
+                .map(|i| 1 << i)
+                .sum();
+            let (mask, tnear) = hit_boxes(&br, &node, ray.tmax);
+            assert_eq!(mask, want, "ray {ray:?}");
+            for i in (0..WIDTH).filter(|i| want & (1 << i) != 0) {
+                assert_eq!(Some(tnear[i]), boxes[i].hit(o, inv, ray.tmax));
+            }
+            #[cfg(target_arch = "x86_64")]
+            if std::is_x86_feature_detected!("avx") {
+                // SAFETY: AVX is present.
+                let (m, t) = unsafe { hit_boxes_avx(&br, &node, ray.tmax) };
+                assert_eq!(m, mask);
+                for i in (0..WIDTH).filter(|i| mask & (1 << i) != 0) {
+                    assert_eq!(t[i], tnear[i]);
+                }
+            }
+        }
+    }
+
+    /// The walk with a heap stack, which trees too deep for the machine stack
+    /// take, and the box test without AVX find the same hits as the usual
+    /// walk.
+    #[test]
+    fn deep_walk_agrees_with_the_usual_walk() {
+        let s = scene::load("teapot:4").unwrap();
+        let b = super::super::build(&s.geometry, Builder::Sah);
+        let frame = s.camera.frame(48, 32);
+        let mut hits = 0;
+        for y in 0..32 {
+            for x in 0..48 {
+                let ray = frame.ray(x as f64 + 0.5, y as f64 + 0.5);
+                let mut st = TraversalStats::default();
+                let want = b.intersect::<false>(&ray, &mut st);
+                let mut got = None;
+                b.walk_deep::<false, false>(
+                    &ray,
+                    &mut st,
+                    b.keep_closest(&mut got),
+                    hit_boxes,
+                    |s, p, t| intersect8::<true>(s, &p.p, t),
+                );
+                assert_eq!(got, want);
+                hits += want.is_some() as u32;
+            }
+        }
+        assert!(hits > 100);
+    }
 }

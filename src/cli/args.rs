@@ -26,6 +26,7 @@ impl Cli {
         match &self.command {
             Some(Command::Render(a)) => a.threads,
             Some(Command::Converge(a)) => a.threads,
+            Some(Command::Bench(a)) => a.global_threads(),
             _ => None,
         }
     }
@@ -50,6 +51,8 @@ pub enum Command {
     Tui(TuiArgs),
     /// Run the numerical stability battery; exits non-zero when a case fails.
     Stability(StabilityArgs),
+    /// Measure speed: the benchmark table, the shared ray workload, scaling.
+    Bench(super::bench::BenchArgs),
 }
 
 /// `WxH`, e.g. `1280x720`.

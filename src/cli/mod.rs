@@ -1,6 +1,7 @@
 //! Command line: argument parsing and dispatch.
 
 mod args;
+mod bench;
 mod converge;
 mod debug;
 mod inspect;
@@ -41,6 +42,7 @@ pub fn main() -> ExitCode {
         Command::Converge(a) => converge::run(a),
         Command::Tui(a) => crate::tui::run(&a.scene, a.color),
         Command::Stability(a) => stability::run(a),
+        Command::Bench(a) => bench::run(a),
     };
     match result {
         Ok(code) => code,

@@ -5,7 +5,7 @@
 //! side for both neighbours: no cracks, no double misses. When an edge
 //! function is exactly zero the test is redone in f64, as the paper requires.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use super::gamma;
 
@@ -66,6 +66,10 @@ pub struct TriHit {
     pub v: f32,
 }
 
+/// Slack of the undivided `t <= tmax` pre-check, a few roundings wide, so it
+/// never rejects a `t` the exact check after the division accepts.
+const LOOSE: f32 = 1.0 + 4.0 * f32::EPSILON;
+
 /// Intersects the ray with triangle `(p0, p1, p2)` for `t` in `(0, tmax]`.
 /// Both faces are hit.
 #[inline(always)]
@@ -118,7 +122,7 @@ pub fn intersect(
     } else {
         (t_scaled, det)
     };
-    if ts <= 0.0 || ts > tmax * d * (1.0 + 4.0 * f32::EPSILON) {
+    if ts <= 0.0 || ts > tmax * LOOSE * d {
         return None;
     }
     let inv = 1.0 / det;
@@ -143,6 +147,289 @@ pub fn intersect(
         u: (v * inv).clamp(0.0, 1.0),
         v: (w * inv).clamp(0.0, 1.0),
     })
+}
+
+/// [`RayShear`] with every constant splatted across four lanes, for
+/// [`intersect4`].
+#[derive(Clone, Copy, Debug)]
+pub struct RayShear4 {
+    pub k: [usize; 3],
+    pub o: [Vec4; 3],
+    pub s: [Vec4; 3],
+}
+
+impl RayShear4 {
+    #[inline(always)]
+    pub fn new(s: &RayShear) -> Self {
+        let k = [s.kx, s.ky, s.kz];
+        RayShear4 {
+            k,
+            o: [
+                Vec4::splat(s.origin[k[0]]),
+                Vec4::splat(s.origin[k[1]]),
+                Vec4::splat(s.origin[k[2]]),
+            ],
+            s: [Vec4::splat(s.sx), Vec4::splat(s.sy), Vec4::splat(s.sz)],
+        }
+    }
+}
+
+/// Four results of [`intersect4`]: `mask` has bit `i` set when lane `i` hit.
+#[derive(Clone, Copy, Debug)]
+pub struct TriHit4 {
+    pub mask: u32,
+    pub t: Vec4,
+    pub u: Vec4,
+    pub v: Vec4,
+}
+
+/// [`intersect`] on four triangles at once: `p[vertex][axis]` holds one
+/// triangle per lane. Every lane computes exactly what the scalar test
+/// computes, operation for operation (no fused multiply-adds), so results
+/// agree bit for bit, watertightness and the conservative t bound included.
+/// Lanes with NaN coordinates (padding) never hit.
+#[inline(always)]
+pub fn intersect4(r: &RayShear4, p: &[[Vec4; 3]; 3], tmax: f32) -> TriHit4 {
+    let [kx, ky, kz] = r.k;
+    let [ox, oy, oz] = r.o;
+    let [sx, sy, sz] = r.s;
+    let (az, bz, cz) = (p[0][kz] - oz, p[1][kz] - oz, p[2][kz] - oz);
+    let ax = (p[0][kx] - ox) - sx * az;
+    let ay = (p[0][ky] - oy) - sy * az;
+    let bx = (p[1][kx] - ox) - sx * bz;
+    let by = (p[1][ky] - oy) - sy * bz;
+    let cx = (p[2][kx] - ox) - sx * cz;
+    let cy = (p[2][ky] - oy) - sy * cz;
+    let mut u = cx * by - cy * bx;
+    let mut v = ax * cy - ay * cx;
+    let mut w = bx * ay - by * ax;
+    let zero = Vec4::ZERO;
+    let on_edge = (u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero)).bitmask();
+    if on_edge != 0 {
+        for i in (0..4).filter(|i| on_edge & (1 << i) != 0) {
+            let (ax, ay, bx, by, cx, cy) = (
+                ax[i] as f64,
+                ay[i] as f64,
+                bx[i] as f64,
+                by[i] as f64,
+                cx[i] as f64,
+                cy[i] as f64,
+            );
+            u[i] = (cx * by - cy * bx) as f32;
+            v[i] = (ax * cy - ay * cx) as f32;
+            w[i] = (bx * ay - by * ax) as f32;
+        }
+    }
+    let neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
+    let pos = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
+    let det = u + v + w;
+    let (az, bz, cz) = (sz * az, sz * bz, sz * cz);
+    let t_scaled = u * az + v * bz + w * cz;
+    let flip = det.cmplt(zero);
+    let ts = Vec4::select(flip, -t_scaled, t_scaled);
+    let d = Vec4::select(flip, -det, det);
+    let mut ok =
+        !(neg & pos) & det.cmpne(zero) & !ts.cmple(zero) & !ts.cmpgt(Vec4::splat(tmax * LOOSE) * d);
+    if ok.bitmask() == 0 {
+        return TriHit4 {
+            mask: 0,
+            t: Vec4::INFINITY,
+            u: zero,
+            v: zero,
+        };
+    }
+    let inv = Vec4::ONE / det;
+    let t = t_scaled * inv;
+    let max_zt = az.abs().max(bz.abs()).max(cz.abs());
+    let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
+    let max_yt = ay.abs().max(by.abs()).max(cy.abs());
+    let g = |n| Vec4::splat(gamma(n));
+    let delta_z = g(3) * max_zt;
+    let delta_x = g(5) * (max_xt + max_zt);
+    let delta_y = g(5) * (max_yt + max_zt);
+    let delta_e = 2.0 * (g(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    let max_e = u.abs().max(v.abs()).max(w.abs());
+    let delta_t = 3.0 * (g(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv.abs();
+    ok &= !t.cmple(delta_t) & t.abs().cmplt(Vec4::INFINITY) & !t.cmpgt(Vec4::splat(tmax));
+    TriHit4 {
+        mask: ok.bitmask(),
+        t: Vec4::select(ok, t, Vec4::INFINITY),
+        u: (v * inv).clamp(zero, Vec4::ONE),
+        v: (w * inv).clamp(zero, Vec4::ONE),
+    }
+}
+
+/// Eight results of [`intersect8`]: bit `i` of `mask` set when lane `i`
+/// hit; `t` is infinite in the other lanes; `u` and `v` are filled only
+/// when asked for (any-hit traversal needs none).
+#[derive(Clone, Copy, Debug)]
+pub struct TriHit8 {
+    pub mask: u32,
+    pub t: [f32; 8],
+    pub u: [f32; 8],
+    pub v: [f32; 8],
+}
+
+/// [`intersect`] on eight triangles, `p[vertex][axis][lane]`, as two runs of
+/// [`intersect4`]; barycentrics only with `UV`.
+#[inline(always)]
+pub fn intersect8<const UV: bool>(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f32) -> TriHit8 {
+    let s4 = RayShear4::new(s);
+    let mut h = TriHit8 {
+        mask: 0,
+        t: [f32::INFINITY; 8],
+        u: [0.0; 8],
+        v: [0.0; 8],
+    };
+    for half in 0..2 {
+        let lanes = 4 * half..4 * half + 4;
+        let q = p.map(|v| v.map(|a| Vec4::from_slice(&a[lanes.clone()])));
+        let r = intersect4(&s4, &q, tmax);
+        h.mask |= r.mask << (4 * half);
+        r.t.write_to_slice(&mut h.t[lanes.clone()]);
+        if UV {
+            r.u.write_to_slice(&mut h.u[lanes.clone()]);
+            r.v.write_to_slice(&mut h.v[lanes]);
+        }
+    }
+    h
+}
+
+/// [`intersect8`] with AVX: all eight lanes per instruction, computing
+/// exactly what [`intersect4`] computes, operation for operation.
+///
+/// # Safety
+/// The CPU must support AVX (callers without the feature enabled must check).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+pub fn intersect8_avx<const UV: bool>(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f32) -> TriHit8 {
+    use std::arch::x86_64::*;
+    // SAFETY: each row is eight f32.
+    let ld = |v: usize, a: usize| unsafe { _mm256_loadu_ps(p[v][a].as_ptr()) };
+    let st = |x: __m256| {
+        let mut a = [0.0f32; 8];
+        // SAFETY: `a` holds eight f32.
+        unsafe { _mm256_storeu_ps(a.as_mut_ptr(), x) };
+        a
+    };
+    let set = _mm256_set1_ps;
+    let (sub, mul, add) = (_mm256_sub_ps, _mm256_mul_ps, _mm256_add_ps);
+    let (or, and) = (_mm256_or_ps, _mm256_and_ps);
+    let (kx, ky, kz) = (s.kx, s.ky, s.kz);
+    let (ox, oy, oz) = (set(s.origin[kx]), set(s.origin[ky]), set(s.origin[kz]));
+    let (sx, sy, sz) = (set(s.sx), set(s.sy), set(s.sz));
+    let (az, bz, cz) = (sub(ld(0, kz), oz), sub(ld(1, kz), oz), sub(ld(2, kz), oz));
+    let ax = sub(sub(ld(0, kx), ox), mul(sx, az));
+    let ay = sub(sub(ld(0, ky), oy), mul(sy, az));
+    let bx = sub(sub(ld(1, kx), ox), mul(sx, bz));
+    let by = sub(sub(ld(1, ky), oy), mul(sy, bz));
+    let cx = sub(sub(ld(2, kx), ox), mul(sx, cz));
+    let cy = sub(sub(ld(2, ky), oy), mul(sy, cz));
+    let mut u = sub(mul(cx, by), mul(cy, bx));
+    let mut v = sub(mul(ax, cy), mul(ay, cx));
+    let mut w = sub(mul(bx, ay), mul(by, ax));
+    let zero = _mm256_setzero_ps();
+    let eq = |a| _mm256_cmp_ps::<_CMP_EQ_OQ>(a, zero);
+    let on_edge = _mm256_movemask_ps(or(or(eq(u), eq(v)), eq(w)));
+    if on_edge != 0 {
+        let (ax, ay, bx, by, cx, cy) = (st(ax), st(ay), st(bx), st(by), st(cx), st(cy));
+        let (mut uu, mut vv, mut ww) = (st(u), st(v), st(w));
+        for i in (0..8).filter(|i| on_edge & (1 << i) != 0) {
+            let (ax, ay, bx, by, cx, cy) = (
+                ax[i] as f64,
+                ay[i] as f64,
+                bx[i] as f64,
+                by[i] as f64,
+                cx[i] as f64,
+                cy[i] as f64,
+            );
+            uu[i] = (cx * by - cy * bx) as f32;
+            vv[i] = (ax * cy - ay * cx) as f32;
+            ww[i] = (bx * ay - by * ax) as f32;
+        }
+        // SAFETY: the arrays hold eight f32.
+        unsafe {
+            u = _mm256_loadu_ps(uu.as_ptr());
+            v = _mm256_loadu_ps(vv.as_ptr());
+            w = _mm256_loadu_ps(ww.as_ptr());
+        }
+    }
+    let lt = |a| _mm256_cmp_ps::<_CMP_LT_OQ>(a, zero);
+    let gt = |a| _mm256_cmp_ps::<_CMP_GT_OQ>(a, zero);
+    let neg = or(or(lt(u), lt(v)), lt(w));
+    let pos = or(or(gt(u), gt(v)), gt(w));
+    let det = add(add(u, v), w);
+    let (az, bz, cz) = (mul(sz, az), mul(sz, bz), mul(sz, cz));
+    let t_scaled = add(add(mul(u, az), mul(v, bz)), mul(w, cz));
+    let sign = set(-0.0);
+    let flip = lt(det);
+    let ts = _mm256_blendv_ps(t_scaled, _mm256_xor_ps(t_scaled, sign), flip);
+    let d = _mm256_blendv_ps(det, _mm256_xor_ps(det, sign), flip);
+    // `!(a <= b)` and `!(a > b)` as in the scalar test, NaN included.
+    let le0 = _mm256_cmp_ps::<_CMP_LE_OQ>(ts, zero);
+    let beyond = _mm256_cmp_ps::<_CMP_GT_OQ>(ts, mul(set(tmax * LOOSE), d));
+    let ok = _mm256_andnot_ps(
+        or(and(neg, pos), or(le0, beyond)),
+        _mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero),
+    );
+    if _mm256_movemask_ps(ok) == 0 {
+        return TriHit8 {
+            mask: 0,
+            t: [f32::INFINITY; 8],
+            u: [0.0; 8],
+            v: [0.0; 8],
+        };
+    }
+    let inv = _mm256_div_ps(set(1.0), det);
+    let t = mul(t_scaled, inv);
+    let abs = |a| _mm256_andnot_ps(sign, a);
+    let max = _mm256_max_ps;
+    let max_zt = max(max(abs(az), abs(bz)), abs(cz));
+    let max_xt = max(max(abs(ax), abs(bx)), abs(cx));
+    let max_yt = max(max(abs(ay), abs(by)), abs(cy));
+    let g = |n| set(gamma(n));
+    let delta_z = mul(g(3), max_zt);
+    let delta_x = mul(g(5), add(max_xt, max_zt));
+    let delta_y = mul(g(5), add(max_yt, max_zt));
+    let delta_e = mul(
+        set(2.0),
+        add(
+            add(mul(mul(g(2), max_xt), max_yt), mul(delta_y, max_xt)),
+            mul(delta_x, max_yt),
+        ),
+    );
+    let max_e = max(max(abs(u), abs(v)), abs(w));
+    let delta_t = mul(
+        mul(
+            set(3.0),
+            add(
+                add(mul(mul(g(3), max_e), max_zt), mul(delta_e, max_zt)),
+                mul(delta_z, max_e),
+            ),
+        ),
+        abs(inv),
+    );
+    let finite = and(
+        _mm256_cmp_ps::<_CMP_LT_OQ>(abs(t), set(f32::INFINITY)),
+        _mm256_cmp_ps::<_CMP_LE_OQ>(t, set(tmax)),
+    );
+    let ok = and(
+        _mm256_andnot_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t, delta_t), ok),
+        finite,
+    );
+    let clamp = |a| _mm256_min_ps(_mm256_max_ps(a, zero), set(1.0));
+    let (u, v) = if UV {
+        (st(clamp(mul(v, inv))), st(clamp(mul(w, inv))))
+    } else {
+        ([0.0; 8], [0.0; 8])
+    };
+    TriHit8 {
+        mask: _mm256_movemask_ps(ok) as u32,
+        t: st(_mm256_blendv_ps(set(f32::INFINITY), t, ok)),
+        u,
+        v,
+    }
 }
 
 #[cfg(test)]
@@ -267,6 +554,109 @@ mod tests {
             let o = Vec3::new(0.5, 0.5, 1.0);
             assert!(hit(o, d, line).is_none());
             assert!(hit(o, d, point).is_none());
+        }
+    }
+
+    /// Lane `i` of `intersect4` against the scalar test on the same triangle.
+    fn check_lanes(o: Vec3, d: Vec3, tris: &[[[f32; 3]; 3]; 4], pad: usize, tmax: f32) {
+        let s = RayShear::new(o, d);
+        let mut p = [[[f32::NAN; 4]; 3]; 3];
+        for (lane, t) in tris.iter().enumerate().take(4 - pad) {
+            for v in 0..3 {
+                for a in 0..3 {
+                    p[v][a][lane] = t[v][a];
+                }
+            }
+        }
+        let h = intersect4(
+            &RayShear4::new(&s),
+            &p.map(|v| v.map(Vec4::from_array)),
+            tmax,
+        );
+        for (lane, t) in tris.iter().enumerate() {
+            let want = (lane < 4 - pad)
+                .then(|| intersect(&s, &t[0], &t[1], &t[2], tmax))
+                .flatten();
+            let got = (h.mask & (1 << lane) != 0).then(|| TriHit {
+                t: h.t.to_array()[lane],
+                u: h.u.to_array()[lane],
+                v: h.v.to_array()[lane],
+            });
+            assert_eq!(got, want, "lane {lane}, ray {o} {d}, triangle {t:?}");
+        }
+        // Eight lanes: these four, then the same in reverse order.
+        let mut p8 = [[[f32::NAN; 8]; 3]; 3];
+        for v in 0..3 {
+            for a in 0..3 {
+                for lane in 0..4 {
+                    p8[v][a][lane] = p[v][a][lane];
+                    p8[v][a][7 - lane] = p[v][a][lane];
+                }
+            }
+        }
+        let mut results = vec![intersect8::<true>(&s, &p8, tmax)];
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx") {
+            // SAFETY: AVX is present.
+            results.push(unsafe { intersect8_avx::<true>(&s, &p8, tmax) });
+        }
+        for h8 in results {
+            for lane in 0..8 {
+                let k = if lane < 4 { lane } else { 7 - lane };
+                let want = (h.mask & (1 << k) != 0)
+                    .then(|| (h.t.to_array()[k], h.u.to_array()[k], h.v.to_array()[k]));
+                let got =
+                    (h8.mask & (1 << lane) != 0).then(|| (h8.t[lane], h8.u[lane], h8.v[lane]));
+                assert_eq!(got, want, "eight lanes: lane {lane}, ray {o} {d}");
+            }
+        }
+    }
+
+    #[test]
+    fn four_and_eight_lane_tests_agree_bit_for_bit_with_the_scalar_test() {
+        let mut r = crate::geometry::sampling::Rng::for_sample(9, 9, 9);
+        let mut f = || r.next_f32() * 2.0 - 1.0;
+        for k in 0..20_000 {
+            let o = Vec3::new(f(), f(), f()) * 3.0;
+            let d = Vec3::new(f(), f(), f());
+            let mut tris = [[[0.0f32; 3]; 3]; 4];
+            for t in &mut tris {
+                *t = [[f(), f(), f()], [f(), f(), f()], [f(), f(), f()]];
+            }
+            // Shared edges and vertices, a ray through a vertex, snapped
+            // coordinates (exact zeros in the edge functions), degenerate
+            // triangles and padding lanes.
+            tris[1][0] = tris[0][1];
+            tris[1][1] = tris[0][0];
+            if k % 3 == 0 {
+                let v = Vec3::from(tris[2][0]);
+                let o2 = v - d * 2.0;
+                check_lanes(o2, d, &tris, 0, f32::INFINITY);
+            }
+            if k % 5 == 0 {
+                for t in &mut tris {
+                    for v in t.iter_mut() {
+                        *v = v.map(|x| (x * 4.0).round() / 4.0);
+                    }
+                }
+                tris[3] = [[0.5, 0.5, 0.5]; 3];
+            }
+            check_lanes(
+                o,
+                d,
+                &tris,
+                k % 4,
+                if k % 2 == 0 { 2.0 } else { f32::INFINITY },
+            );
+            // From a point on triangle 0 (its own surface, up to rounding):
+            // hits there are decided by the conservative t bound.
+            let [a, b, c] = tris[0].map(Vec3::from);
+            let (u, v) = (f().abs() * 0.5, f().abs() * 0.5);
+            let on = a + u * (b - a) + v * (c - a);
+            check_lanes(on, d, &tris, 0, f32::INFINITY);
+            check_lanes(on + d * 1e-6 * f(), -d, &tris, 0, f32::INFINITY);
+            let axis = Vec3::new((f() * 4.0).round() / 4.0, (f() * 4.0).round() / 4.0, 2.0);
+            check_lanes(axis, Vec3::NEG_Z, &tris, 0, f32::INFINITY);
         }
     }
 }

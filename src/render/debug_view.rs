@@ -207,11 +207,11 @@ mod tests {
         let tests = heat(&t, HeatMeasure::TriangleTests);
         assert_eq!(nodes.len(), 24 * 24);
         let (max, mean) = heat_summary(&nodes);
-        // The box fills the (square) view, so every ray enters the root and tests its
-        // two children; no ray visits more than every node.
+        // The box fills the (square) view, so every ray enters the root; no
+        // ray visits more than every node.
         assert!(max >= 1 && (max as usize) <= bvh.nodes.len(), "{max}");
-        assert!(nodes.iter().all(|&n| n >= 3), "a ray skipped the root");
-        assert!(mean >= 3.0 && mean <= max as f64, "{mean}");
+        assert!(nodes.iter().all(|&n| n >= 1), "a ray skipped the root");
+        assert!(mean >= 1.0 && mean <= max as f64, "{mean}");
         assert!(heat_summary(&tests).0 >= 1);
         // The same count the traversal reports for that ray.
         let mut st = crate::bvh::TraversalStats::default();

@@ -35,21 +35,14 @@ impl Camera {
     }
 
     pub fn frame(&self, width: u32, height: u32) -> CameraFrame {
-        let eye = self.eye.as_dvec3();
-        let fwd = (self.target.as_dvec3() - eye).normalize();
-        let right = fwd.cross(self.up.as_dvec3()).normalize();
-        let upv = right.cross(fwd);
-        let h = (self.vfov as f64 * 0.5).to_radians().tan();
-        CameraFrame {
-            eye,
-            fwd,
-            right,
-            upv,
-            h,
-            aspect: width as f64 / height as f64,
-            width: width as f64,
-            height: height as f64,
-        }
+        CameraFrame::new(
+            self.eye.as_dvec3(),
+            self.target.as_dvec3(),
+            self.up.as_dvec3(),
+            self.vfov as f64,
+            width,
+            height,
+        )
     }
 
     /// Rotates the eye about the target (yaw about `up`, pitch about the right axis).
@@ -94,6 +87,26 @@ pub struct CameraFrame {
 }
 
 impl CameraFrame {
+    /// The basis from an f64 eye, target and up: the ray workload derives
+    /// them in f64 from the mesh bounds, and rounding them to f32 first
+    /// would change the rays.
+    pub fn new(eye: DVec3, target: DVec3, up: DVec3, vfov: f64, width: u32, height: u32) -> Self {
+        let fwd = (target - eye).normalize();
+        let right = fwd.cross(up).normalize();
+        let upv = right.cross(fwd);
+        let h = (vfov * 0.5).to_radians().tan();
+        CameraFrame {
+            eye,
+            fwd,
+            right,
+            upv,
+            h,
+            aspect: width as f64 / height as f64,
+            width: width as f64,
+            height: height as f64,
+        }
+    }
+
     /// Ray through image position `(x, y)` in pixels, `y = 0` the top row;
     /// the pixel centre of `(i, j)` is `(i + 0.5, j + 0.5)`.
     #[inline]

@@ -1,0 +1,177 @@
+//! The 8-wide tree that traversal walks, collapsed from the binary tree the
+//! builders make: each node holds its eight children's boxes in SIMD layout
+//! (eight lanes per bound and axis) and leaves hold triangles in packets of
+//! eight, so one instruction tests eight boxes or eight triangles (four
+//! without AVX).
+
+use super::Node;
+
+/// Child references with this bit set are leaves:
+/// `LEAF | first_packet << PACKET_BITS | (packets - 1)`.
+pub(crate) const LEAF: u32 = 1 << 31;
+const PACKET_BITS: u32 = 3;
+
+/// Children per node.
+pub(crate) const WIDTH: usize = 8;
+
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+pub(crate) struct Node8 {
+    /// Min x, max x, min y, max y, min z, max z of the children, one lane
+    /// each; an empty slot has min = +inf and max = -inf, which no ray hits.
+    pub b: [[f32; WIDTH]; 6],
+    pub child: [u32; WIDTH],
+}
+
+/// Triangles per packet.
+pub(crate) const PACKET: usize = 8;
+
+/// Up to eight triangles of a leaf.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+pub(crate) struct Packet {
+    /// `p[vertex][axis][lane]`, one lane per triangle; padding lanes are NaN.
+    pub p: [[[f32; PACKET]; 3]; 3],
+    /// Leaf-order index of each lane's triangle.
+    pub idx: [u32; PACKET],
+}
+
+impl Packet {
+    /// Lanes holding a triangle.
+    pub fn lanes(&self) -> u32 {
+        self.p[0][0].iter().filter(|x| !x.is_nan()).count() as u32
+    }
+}
+
+/// Packets of a leaf reference.
+#[inline(always)]
+pub(crate) fn leaf_packets(r: u32) -> std::ops::Range<usize> {
+    let first = ((r & !LEAF) >> PACKET_BITS) as usize;
+    first..first + (r & ((1 << PACKET_BITS) - 1)) as usize + 1
+}
+
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Wide {
+    pub nodes: Vec<Node8>,
+    pub packets: Vec<Packet>,
+    /// Stack entries the deepest path can need: each node on it pushes all
+    /// but one of its children.
+    pub stack: usize,
+    /// Whether this CPU can test eight boxes at once (AVX).
+    pub avx: bool,
+}
+
+impl Wide {
+    /// Collapses the binary tree `bin` (leaves over `tris` in leaf order):
+    /// each wide node takes the binary node's children and keeps opening the
+    /// largest interior one until it has eight.
+    pub fn collapse(bin: &[Node], tris: &[[[f32; 3]; 3]]) -> Wide {
+        let mut w = Wide {
+            nodes: Vec::with_capacity(bin.len() / 2 + 1),
+            packets: Vec::with_capacity(tris.len() / 3 + 1),
+            stack: 0,
+            avx: avx_available(),
+        };
+        if let Some(root) = bin.first() {
+            // The root is always an interior wide node, even over one leaf.
+            w.stack = if root.is_leaf() {
+                w.node(bin, tris, &[0]).1
+            } else {
+                w.gather(bin, tris, root.first as usize).1
+            };
+        }
+        w
+    }
+
+    /// Wide node over the binary children at `c` and `c + 1`, opened up to
+    /// eight; returns its index and the stack its subtree needs.
+    fn gather(&mut self, bin: &[Node], tris: &[[[f32; 3]; 3]], c: usize) -> (u32, usize) {
+        let mut kids = [0; WIDTH];
+        kids[..2].copy_from_slice(&[c, c + 1]);
+        let mut len = 2;
+        while len < WIDTH {
+            let open = (0..len)
+                .filter(|&k| !bin[kids[k]].is_leaf())
+                .max_by(|&a, &b| {
+                    let area = |k: usize| bin[kids[k]].bounds().area();
+                    area(a).total_cmp(&area(b))
+                });
+            let Some(k) = open else { break };
+            let g = bin[kids[k]].first as usize;
+            kids[k] = g;
+            kids[len] = g + 1;
+            len += 1;
+        }
+        self.node(bin, tris, &kids[..len])
+    }
+
+    fn node(&mut self, bin: &[Node], tris: &[[[f32; 3]; 3]], kids: &[usize]) -> (u32, usize) {
+        let at = self.nodes.len();
+        let mut below = 0;
+        let (inf, ninf) = (f32::INFINITY, f32::NEG_INFINITY);
+        self.nodes.push(Node8 {
+            b: [
+                [inf; WIDTH],
+                [ninf; WIDTH],
+                [inf; WIDTH],
+                [ninf; WIDTH],
+                [inf; WIDTH],
+                [ninf; WIDTH],
+            ],
+            child: [0; WIDTH],
+        });
+        for (lane, &k) in kids.iter().enumerate() {
+            let n = &bin[k];
+            let r = if n.is_leaf() {
+                self.leaf(tris, n.first as usize, n.count as usize)
+            } else {
+                let (r, need) = self.gather(bin, tris, n.first as usize);
+                below = below.max(need);
+                r
+            };
+            let w = &mut self.nodes[at];
+            for axis in 0..3 {
+                w.b[2 * axis][lane] = n.min[axis];
+                w.b[2 * axis + 1][lane] = n.max[axis];
+            }
+            w.child[lane] = r;
+        }
+        (at as u32, kids.len() - 1 + below)
+    }
+
+    fn leaf(&mut self, tris: &[[[f32; 3]; 3]], first: usize, count: usize) -> u32 {
+        let at = self.packets.len();
+        for start in (first..first + count).step_by(PACKET) {
+            let mut p = Packet {
+                p: [[[f32::NAN; PACKET]; 3]; 3],
+                idx: [u32::MAX; PACKET],
+            };
+            for (lane, i) in (start..(start + PACKET).min(first + count)).enumerate() {
+                for (pv, tv) in p.p.iter_mut().zip(&tris[i]) {
+                    for (pa, &x) in pv.iter_mut().zip(tv) {
+                        pa[lane] = x;
+                    }
+                }
+                p.idx[lane] = i as u32;
+            }
+            self.packets.push(p);
+        }
+        let n = self.packets.len() - at;
+        debug_assert!((1..=1 << PACKET_BITS).contains(&n));
+        LEAF | (at as u32) << PACKET_BITS | (n as u32 - 1)
+    }
+
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of_val(&self.nodes[..]) + std::mem::size_of_val(&self.packets[..])
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+fn avx_available() -> bool {
+    std::is_x86_feature_detected!("avx")
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+fn avx_available() -> bool {
+    false
+}

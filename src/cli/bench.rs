@@ -1,0 +1,141 @@
+//! `rayterm bench`: the benchmark table, `bench rays` (the shared ray
+//! workload, one JSON line) and `bench scaling`.
+
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use clap::{Args, Subcommand};
+
+use super::args::parse_size;
+use crate::report::{bench, scaling, workload};
+use crate::scene::{self, Builder};
+
+#[derive(Args, Debug)]
+#[command(args_conflicts_with_subcommands = true)]
+pub struct BenchArgs {
+    #[command(subcommand)]
+    pub command: Option<BenchCommand>,
+    /// Print JSON instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Repetitions of every build and frame; medians are reported.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    pub reps: u32,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub threads: Option<u32>,
+    /// Frame size, WIDTHxHEIGHT.
+    #[arg(long, value_parser = parse_size, default_value = "800x800")]
+    pub size: (u32, u32),
+    /// Measure these scenes instead of the built-ins and the shared meshes (repeatable).
+    #[arg(long = "scene", value_name = "SCENE")]
+    pub scenes: Vec<String>,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum BenchCommand {
+    /// The shared ray workload primary+shadow (../shared/bench/WORKLOAD.md)
+    /// on one mesh: prints its JSON line, comparable with the Embree harness.
+    Rays(RaysArgs),
+    /// Build and trace teapot:N from ~1k to ~4M triangles; fit the growth.
+    Scaling(ScalingArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct RaysArgs {
+    /// A .obj mesh (or any scene: its triangles, with the workload's auto camera).
+    pub mesh: String,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, value_parser = parse_size, default_value = "1024x768")]
+    pub size: (u32, u32),
+    /// Threads for the build and the tracing.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    pub threads: u32,
+    #[arg(long, value_enum, default_value_t = Builder::Sah)]
+    pub builder: Builder,
+    /// Fresh builds and traces; medians are reported.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    pub reps: u32,
+}
+
+#[derive(Args, Debug)]
+pub struct ScalingArgs {
+    /// Largest N of teapot:N (4.2M triangles at 256).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(4..=1024))]
+    pub max_n: u32,
+    #[arg(long, value_enum, default_value_t = Builder::Sah)]
+    pub builder: Builder,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub threads: Option<u32>,
+    /// Print JSON instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl BenchArgs {
+    /// Threads for the global pool; `bench rays` makes its own.
+    pub fn global_threads(&self) -> Option<usize> {
+        match &self.command {
+            None => self.threads.map(|n| n as usize),
+            Some(BenchCommand::Scaling(a)) => a.threads.map(|n| n as usize),
+            Some(BenchCommand::Rays(_)) => None,
+        }
+    }
+}
+
+pub fn run(a: BenchArgs) -> Result<ExitCode> {
+    match a.command {
+        None => {
+            let o = bench::BenchOptions {
+                width: a.size.0,
+                height: a.size.1,
+                reps: a.reps as usize,
+                scenes: a.scenes,
+                ..Default::default()
+            };
+            let r = bench::run(&o, rayon::current_num_threads())?;
+            if a.json {
+                println!("{}", serde_json::to_string_pretty(&r)?);
+            } else {
+                print!("{}", bench::to_text(&r));
+            }
+        }
+        Some(BenchCommand::Rays(r)) => rays(r)?,
+        Some(BenchCommand::Scaling(s)) => {
+            let o = scaling::ScalingOptions {
+                max_n: s.max_n,
+                builder: s.builder,
+                ..Default::default()
+            };
+            let r = scaling::run(&o, rayon::current_num_threads())?;
+            if s.json {
+                println!("{}", serde_json::to_string_pretty(&r)?);
+            } else {
+                print!("{}", scaling::to_text(&r));
+            }
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn rays(a: RaysArgs) -> Result<()> {
+    let s = scene::load(&a.mesh)?;
+    for w in &s.warnings {
+        eprintln!("warning: {w}");
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads as usize)
+        .build()
+        .with_context(|| format!("cannot set up {} threads", a.threads))?;
+    let o = workload::RaysOptions {
+        width: a.size.0,
+        height: a.size.1,
+        threads: a.threads as usize,
+        builder: a.builder,
+        reps: a.reps as usize,
+    };
+    let r = pool.install(|| workload::run(&a.mesh, &s.geometry, &o));
+    println!("{}", serde_json::to_string(&r)?);
+    Ok(())
+}
