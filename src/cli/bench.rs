@@ -39,6 +39,22 @@ pub enum BenchCommand {
     Rays(RaysArgs),
     /// Build and trace teapot:N from ~1k to ~4M triangles; fit the growth.
     Scaling(ScalingArgs),
+    /// Progressive passes of the TUI at a terminal's size, through its render
+    /// worker: pass time and bytes written to the terminal per frame.
+    Tui(TuiBenchArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct TuiBenchArgs {
+    /// Built-in name, .toml scene file or .obj mesh.
+    #[arg(default_value = "cornell")]
+    pub scene: String,
+    /// Terminal size, COLUMNSxROWS (two pixels per cell vertically).
+    #[arg(long, value_parser = parse_size, default_value = "160x48")]
+    pub terminal: (u32, u32),
+    /// Passes to measure.
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
+    pub passes: u32,
 }
 
 #[derive(Args, Debug)]
@@ -79,7 +95,7 @@ impl BenchArgs {
         match &self.command {
             None => self.threads.map(|n| n as usize),
             Some(BenchCommand::Scaling(a)) => a.threads.map(|n| n as usize),
-            Some(BenchCommand::Rays(_)) => None,
+            Some(BenchCommand::Rays(_)) | Some(BenchCommand::Tui(_)) => None,
         }
     }
 }
@@ -102,6 +118,13 @@ pub fn run(a: BenchArgs) -> Result<ExitCode> {
             }
         }
         Some(BenchCommand::Rays(r)) => rays(r)?,
+        Some(BenchCommand::Tui(t)) => {
+            let (cols, rows) = t.terminal;
+            let cols = u16::try_from(cols).context("--terminal: too many columns")?;
+            let rows = u16::try_from(rows).context("--terminal: too many rows")?;
+            let stats = crate::tui::bench::measure_pass(&t.scene, cols, rows, t.passes)?;
+            println!("{}", serde_json::to_string_pretty(&stats)?);
+        }
         Some(BenchCommand::Scaling(s)) => {
             let o = scaling::ScalingOptions {
                 max_n: s.max_n,
