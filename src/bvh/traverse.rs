@@ -290,26 +290,22 @@ impl Bvh {
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
-                    // Two or more hits: nearest next, the others pushed farthest first.
-                    let mut hits = [(0u32, 0.0f32); WIDTH];
-                    let mut n = 0;
-                    let mut m = mask;
+                    // Two or more hits: the nearest next, the others pushed
+                    // (unsorted: sorting mispredicts more than it saves).
+                    let mut near = mask.trailing_zeros() as usize;
+                    let mut m = mask & (mask - 1);
                     while m != 0 {
                         let i = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        let mut j = n;
-                        while j > 0 && hits[j - 1].1 < tnear[i] {
-                            hits[j] = hits[j - 1];
-                            j -= 1;
-                        }
-                        hits[j] = (node.child[i], tnear[i]);
-                        n += 1;
-                    }
-                    for &h in &hits[..n - 1] {
-                        stack[sp].write(h);
+                        let far = if tnear[i] < tnear[near] {
+                            std::mem::replace(&mut near, i)
+                        } else {
+                            i
+                        };
+                        stack[sp].write((node.child[far], tnear[far]));
                         sp += 1;
                     }
-                    cur = hits[n - 1].0;
+                    cur = node.child[near];
                     continue;
                 }
             } else {
