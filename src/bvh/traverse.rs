@@ -5,7 +5,7 @@
 
 use std::mem::MaybeUninit;
 
-use glam::Vec4;
+use glam::{Vec3A, Vec4};
 
 use super::wide::{leaf_packets, Node8, Packet, LEAF, PACKET, WIDTH};
 use super::{Bvh, TraversalStats};
@@ -44,8 +44,10 @@ fn nearest(h: &TriHit8) -> usize {
 /// A ray's constants for the slab tests.
 #[derive(Clone, Copy)]
 struct BoxRay {
-    o: [f32; 3],
-    inv: [f32; 3],
+    /// Kept in registers: built as arrays, they cost a store-forwarding
+    /// stall on every ray when the splats read them back.
+    o: Vec3A,
+    inv: Vec3A,
     /// Index in `Node8::b` of the near plane on each axis (the far one is `^ 1`).
     near: [usize; 3],
 }
@@ -56,10 +58,20 @@ impl BoxRay {
         let inv = ray.inv_dir();
         let near = |a: usize| 2 * a + (inv[a] < 0.0) as usize;
         BoxRay {
-            o: ray.origin.to_array(),
-            inv: inv.to_array(),
+            o: ray.origin.into(),
+            inv: inv.into(),
             near: [near(0), near(1), near(2)],
         }
+    }
+}
+
+/// Component `a` of `v`; a constant `a` folds to a register lane.
+#[inline(always)]
+fn lane(v: Vec3A, a: usize) -> f32 {
+    match a {
+        0 => v.x,
+        1 => v.y,
+        _ => v.z,
     }
 }
 
@@ -72,7 +84,7 @@ fn hit_boxes(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
     for half in 0..WIDTH / 4 {
         let lanes = half * 4..half * 4 + 4;
         let slab = |a: usize| {
-            let (o, inv) = (Vec4::splat(r.o[a]), Vec4::splat(r.inv[a]));
+            let (o, inv) = (Vec4::splat(lane(r.o, a)), Vec4::splat(lane(r.inv, a)));
             let near = (Vec4::from_slice(&n.b[r.near[a]][lanes.clone()]) - o) * inv;
             let far = (Vec4::from_slice(&n.b[r.near[a] ^ 1][lanes.clone()]) - o) * inv;
             (near, far)
@@ -98,7 +110,7 @@ fn hit_boxes_avx(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
     // start of a 32-byte row.
     let load = |k: usize| unsafe { _mm256_load_ps(n.b[k].as_ptr()) };
     let slab = |a: usize| {
-        let (o, inv) = (_mm256_set1_ps(r.o[a]), _mm256_set1_ps(r.inv[a]));
+        let (o, inv) = (_mm256_set1_ps(lane(r.o, a)), _mm256_set1_ps(lane(r.inv, a)));
         let near = _mm256_mul_ps(_mm256_sub_ps(load(r.near[a]), o), inv);
         let far = _mm256_mul_ps(_mm256_sub_ps(load(r.near[a] ^ 1), o), inv);
         (near, far)
