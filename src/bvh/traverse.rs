@@ -100,24 +100,36 @@ fn hit_boxes(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
     (mask, tnear)
 }
 
-/// The same test on all eight boxes at once with AVX.
+/// The same test on all eight boxes at once with AVX (not a
+/// `#[target_feature]` function so that it can be forced inline).
+///
+/// # Safety
+/// The CPU must support AVX.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-#[inline]
-fn hit_boxes_avx(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+#[inline(always)]
+unsafe fn hit_boxes_avx(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
     use std::arch::x86_64::*;
-    // SAFETY: `Node8` is 32-byte aligned and each plane is eight f32 at the
-    // start of a 32-byte row.
-    let load = |k: usize| unsafe { _mm256_load_ps(n.b[k].as_ptr()) };
-    let slab = |a: usize| {
-        let (o, inv) = (_mm256_set1_ps(lane(r.o, a)), _mm256_set1_ps(lane(r.inv, a)));
-        let near = _mm256_mul_ps(_mm256_sub_ps(load(r.near[a]), o), inv);
-        let far = _mm256_mul_ps(_mm256_sub_ps(load(r.near[a] ^ 1), o), inv);
-        (near, far)
-    };
-    let (nx, fx) = slab(0);
-    let (ny, fy) = slab(1);
-    let (nz, fz) = slab(2);
+    // Macros, not closures: a closure here would be compiled on its own,
+    // without AVX, and called.
+    // `Node8` is 32-byte aligned and each plane is eight f32 at the start of
+    // a 32-byte row.
+    macro_rules! slab {
+        ($a:expr) => {{
+            let (o, inv) = (
+                _mm256_set1_ps(lane(r.o, $a)),
+                _mm256_set1_ps(lane(r.inv, $a)),
+            );
+            let near = _mm256_load_ps(n.b[r.near[$a]].as_ptr());
+            let far = _mm256_load_ps(n.b[r.near[$a] ^ 1].as_ptr());
+            (
+                _mm256_mul_ps(_mm256_sub_ps(near, o), inv),
+                _mm256_mul_ps(_mm256_sub_ps(far, o), inv),
+            )
+        }};
+    }
+    let (nx, fx) = slab!(0);
+    let (ny, fy) = slab!(1);
+    let (nz, fz) = slab!(2);
     let tn = _mm256_max_ps(
         _mm256_max_ps(nx, ny),
         _mm256_max_ps(nz, _mm256_setzero_ps()),
@@ -131,9 +143,50 @@ fn hit_boxes_avx(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
     );
     let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
     let mut tnear = [0.0; WIDTH];
-    // SAFETY: `tnear` holds eight f32.
-    unsafe { _mm256_storeu_ps(tnear.as_mut_ptr(), tn) };
+    _mm256_storeu_ps(tnear.as_mut_ptr(), tn);
     (mask, tnear)
+}
+
+/// The SIMD kernels of the walk: the eight-box test and the eight-triangle
+/// test. Static dispatch with forced inlining, so the walk compiled for AVX
+/// holds the AVX kernels inline.
+trait Kernels {
+    fn boxes(&self, r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]);
+    fn triangles<const UV: bool>(&self, s: &RayShear, p: &Packet, tmax: f32) -> TriHit8;
+}
+
+/// Four lanes at a time, on any CPU.
+struct Portable;
+
+impl Kernels for Portable {
+    #[inline(always)]
+    fn boxes(&self, r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+        hit_boxes(r, n, tmax)
+    }
+
+    #[inline(always)]
+    fn triangles<const UV: bool>(&self, s: &RayShear, p: &Packet, tmax: f32) -> TriHit8 {
+        intersect8::<UV>(s, &p.p, tmax)
+    }
+}
+
+/// Eight lanes at a time; made only where the CPU has AVX.
+#[cfg(target_arch = "x86_64")]
+struct Avx(());
+
+#[cfg(target_arch = "x86_64")]
+impl Kernels for Avx {
+    #[inline(always)]
+    fn boxes(&self, r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+        // SAFETY: an `Avx` exists only where the CPU has AVX.
+        unsafe { hit_boxes_avx(r, n, tmax) }
+    }
+
+    #[inline(always)]
+    fn triangles<const UV: bool>(&self, s: &RayShear, p: &Packet, tmax: f32) -> TriHit8 {
+        // SAFETY: as above.
+        unsafe { crate::geometry::triangle::intersect8_avx::<UV>(s, &p.p, tmax) }
+    }
 }
 
 impl Bvh {
@@ -185,14 +238,7 @@ impl Bvh {
             unsafe { self.traverse_avx::<ANY, STATS>(ray, st, on_hit) };
             return;
         }
-        self.traverse_with::<ANY, STATS>(ray, st, on_hit, hit_boxes, |s, p, t| {
-            // Any-hit traversal needs no barycentrics.
-            if ANY {
-                intersect8::<false>(s, &p.p, t)
-            } else {
-                intersect8::<true>(s, &p.p, t)
-            }
-        });
+        self.traverse_with::<ANY, STATS, _>(ray, st, on_hit, &Portable);
     }
 
     /// The traversal compiled for AVX: eight boxes or eight triangles per
@@ -206,65 +252,49 @@ impl Bvh {
         st: &mut TraversalStats,
         on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
     ) {
-        use crate::geometry::triangle::intersect8_avx;
-        self.traverse_with::<ANY, STATS>(
-            ray,
-            st,
-            on_hit,
-            |r, n, t| hit_boxes_avx(r, n, t),
-            |s, p, t| {
-                if ANY {
-                    intersect8_avx::<false>(s, &p.p, t)
-                } else {
-                    intersect8_avx::<true>(s, &p.p, t)
-                }
-            },
-        );
+        self.traverse_with::<ANY, STATS, _>(ray, st, on_hit, &Avx(()));
     }
 
     #[inline(always)]
-    fn traverse_with<const ANY: bool, const STATS: bool>(
+    fn traverse_with<const ANY: bool, const STATS: bool, K: Kernels>(
         &self,
         ray: &Ray,
         st: &mut TraversalStats,
         on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
-        hit: impl Fn(&BoxRay, &Node8, f32) -> (u32, [f32; WIDTH]),
-        tri: impl Fn(&RayShear, &Packet, f32) -> TriHit8,
+        k: &K,
     ) {
         if self.wide.stack <= STACK {
             // Left uninitialised: clearing it would cost a ray that misses
             // as much as testing a node.
             let mut stack = [MaybeUninit::uninit(); STACK];
-            self.walk::<ANY, STATS>(ray, st, &mut stack, on_hit, hit, tri);
+            self.walk::<ANY, STATS, K>(ray, st, &mut stack, on_hit, k);
         } else {
-            self.walk_deep::<ANY, STATS>(ray, st, on_hit, hit, tri);
+            self.walk_deep::<ANY, STATS, K>(ray, st, on_hit, k);
         }
     }
 
     #[cold]
     #[inline(never)]
-    fn walk_deep<const ANY: bool, const STATS: bool>(
+    fn walk_deep<const ANY: bool, const STATS: bool, K: Kernels>(
         &self,
         ray: &Ray,
         st: &mut TraversalStats,
         on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
-        hit: impl Fn(&BoxRay, &Node8, f32) -> (u32, [f32; WIDTH]),
-        tri: impl Fn(&RayShear, &Packet, f32) -> TriHit8,
+        k: &K,
     ) {
         let mut stack = vec![MaybeUninit::uninit(); self.wide.stack];
-        self.walk::<ANY, STATS>(ray, st, &mut stack, on_hit, hit, tri);
+        self.walk::<ANY, STATS, K>(ray, st, &mut stack, on_hit, k);
     }
 
     /// The walk itself; `stack` has room for the tree's deepest path.
     #[inline(always)]
-    fn walk<const ANY: bool, const STATS: bool>(
+    fn walk<const ANY: bool, const STATS: bool, K: Kernels>(
         &self,
         ray: &Ray,
         st: &mut TraversalStats,
         stack: &mut [MaybeUninit<(u32, f32)>],
         mut on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
-        hit: impl Fn(&BoxRay, &Node8, f32) -> (u32, [f32; WIDTH]),
-        tri: impl Fn(&RayShear, &Packet, f32) -> TriHit8,
+        k: &K,
     ) {
         let w = &self.wide;
         let setup = || RayShear::new(ray.origin, ray.dir);
@@ -279,7 +309,7 @@ impl Bvh {
         loop {
             if cur & LEAF == 0 {
                 let node = &w.nodes[cur as usize];
-                let (mask, tnear) = hit(&boxes, node, tmax);
+                let (mask, tnear) = k.boxes(&boxes, node, tmax);
                 if STATS {
                     let slots = node.b[0].iter().filter(|x| x.is_finite()).count() as u32;
                     st.nodes_visited += 1;
@@ -328,7 +358,13 @@ impl Bvh {
                     if STATS {
                         st.triangle_tests += p.lanes();
                     }
-                    let h = tri(shear.get_or_insert_with(setup), p, tmax);
+                    let shear = shear.get_or_insert_with(setup);
+                    // Any-hit traversal needs no barycentrics.
+                    let h = if ANY {
+                        k.triangles::<false>(shear, p, tmax)
+                    } else {
+                        k.triangles::<true>(shear, p, tmax)
+                    };
                     if h.mask != 0 {
                         tmax = on_hit(&h, &p.idx);
                         if ANY {
@@ -483,9 +519,7 @@ mod tests {
                     got = Some((h.t[lane], b.prim[idx[lane] as usize]));
                     h.t[lane]
                 };
-                b.walk_deep::<false, false>(&ray, &mut st, on_hit, hit_boxes, |s, p, t| {
-                    intersect8::<true>(s, &p.p, t)
-                });
+                b.walk_deep::<false, false, _>(&ray, &mut st, on_hit, &Portable);
                 assert_eq!(got, want);
                 hits += want.is_some() as u32;
             }
