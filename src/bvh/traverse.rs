@@ -48,21 +48,30 @@ struct BoxRay {
     /// stall on every ray when the splats read them back.
     o: Vec3A,
     inv: Vec3A,
-    /// Index in `Node8::b` of the near plane on each axis (the far one is `^ 1`).
-    near: [usize; 3],
+    /// Whether the ray runs toward -axis: the near plane of axis `a` is then
+    /// `Node8::b[2a + 1]` (max), else `b[2a]` (min). Kept as a bool so the
+    /// index is provably in bounds.
+    neg: [bool; 3],
 }
 
 impl BoxRay {
     #[inline(always)]
     fn new(ray: &Ray) -> Self {
         let inv = ray.inv_dir();
-        let near = |a: usize| 2 * a + (inv[a] < 0.0) as usize;
+
         BoxRay {
             o: ray.origin.into(),
             inv: inv.into(),
-            near: [near(0), near(1), near(2)],
+            neg: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
         }
     }
+}
+
+/// Indices in `Node8::b` of the near and far planes of axis `a`.
+#[inline(always)]
+fn planes(r: &BoxRay, a: usize) -> (usize, usize) {
+    let n = r.neg[a] as usize;
+    (2 * a + n, 2 * a + 1 - n)
 }
 
 /// Component `a` of `v`; a constant `a` folds to a register lane.
@@ -85,8 +94,9 @@ fn hit_boxes(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
         let lanes = half * 4..half * 4 + 4;
         let slab = |a: usize| {
             let (o, inv) = (Vec4::splat(lane(r.o, a)), Vec4::splat(lane(r.inv, a)));
-            let near = (Vec4::from_slice(&n.b[r.near[a]][lanes.clone()]) - o) * inv;
-            let far = (Vec4::from_slice(&n.b[r.near[a] ^ 1][lanes.clone()]) - o) * inv;
+            let (i, j) = planes(r, a);
+            let near = (Vec4::from_slice(&n.b[i][lanes.clone()]) - o) * inv;
+            let far = (Vec4::from_slice(&n.b[j][lanes.clone()]) - o) * inv;
             (near, far)
         };
         let (nx, fx) = slab(0);
@@ -119,8 +129,9 @@ unsafe fn hit_boxes_avx(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH])
                 _mm256_set1_ps(lane(r.o, $a)),
                 _mm256_set1_ps(lane(r.inv, $a)),
             );
-            let near = _mm256_load_ps(n.b[r.near[$a]].as_ptr());
-            let far = _mm256_load_ps(n.b[r.near[$a] ^ 1].as_ptr());
+            let (i, j) = planes(r, $a);
+            let near = _mm256_load_ps(n.b[i].as_ptr());
+            let far = _mm256_load_ps(n.b[j].as_ptr());
             (
                 _mm256_mul_ps(_mm256_sub_ps(near, o), inv),
                 _mm256_mul_ps(_mm256_sub_ps(far, o), inv),
