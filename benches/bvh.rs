@@ -9,7 +9,7 @@ use std::time::Duration;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::Vec3;
 use rayterm::bvh::{self, TraversalStats};
-use rayterm::geometry::triangle::{intersect, RayShear};
+use rayterm::geometry::triangle::{intersect, intersect8, RayShear};
 use rayterm::geometry::{Aabb, Ray};
 use rayterm::report::workload::Workload;
 use rayterm::scene::{self, Builder, Geometry};
@@ -37,6 +37,15 @@ fn primitives(c: &mut Criterion) {
     c.bench_function("triangle/miss", |b| {
         b.iter(|| intersect(black_box(&miss), &tri[0], &tri[1], &tri[2], f32::INFINITY))
     });
+    // Eight triangles at once, as the leaves hold them (the portable two
+    // four-lane runs; traversal uses AVX where the CPU has it).
+    let p8: [[[f32; 8]; 3]; 3] =
+        tri.map(|v| v.map(|x| std::array::from_fn(|lane| x + lane as f32 * 0.01)));
+    let ray = RayShear::new(Vec3::new(0.25, 0.25, 1.0), Vec3::new(0.01, 0.02, -1.0));
+    c.bench_function("triangle/packet8", |b| {
+        b.iter(|| intersect8::<true>(black_box(&ray), &p8, f32::INFINITY))
+    });
+    // The scalar slab test that the eight-box test in traversal reproduces.
     let bx = Aabb {
         min: Vec3::ZERO,
         max: Vec3::ONE,

@@ -1,6 +1,13 @@
-//! BVH builders: binned SAH (Wald 2007) and object median on the largest
-//! axis. Both build a binary tree, in parallel on the rayon pool; the 4-wide
-//! tree that traversal uses is collapsed from it (`wide.rs`).
+//! BVH builders: SAH and object median on the largest axis. Both build a
+//! binary tree, in parallel on the rayon pool; the 8-wide tree that
+//! traversal uses is collapsed from it (`wide.rs`).
+//!
+//! The SAH builder bins centroids (Wald 2007; 32 bins near the root, 16
+//! lower down), refines the chosen split near the root by sweeping the
+//! triangles of the two bins beside it, and splits nodes of up to 32
+//! triangles by a full sweep over presorted centroids. Leaves cost one per
+//! packet of eight triangles, as traversal tests them. `build_full_sweep`
+//! sweeps every node: the reference its cost is measured against.
 
 use std::time::Instant;
 

@@ -23,7 +23,10 @@ impl BuildStats {
     }
 }
 
-/// Work done by one traversal (or summed over many).
+/// Work done by one traversal (or summed over many). Traversal walks the
+/// 8-wide tree: `nodes_visited` counts its nodes, `boxes_hit`/`boxes_missed`
+/// their child boxes, and `triangle_tests` the triangles in the leaf packets
+/// tested (padding lanes not counted).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
 pub struct TraversalStats {
     pub nodes_visited: u32,

@@ -5,7 +5,7 @@
 
 use std::mem::MaybeUninit;
 
-use glam::Vec4;
+use glam::{Vec3A, Vec4};
 
 use super::wide::{leaf_packets, Node8, Packet, LEAF, PACKET, WIDTH};
 use super::{Bvh, TraversalStats};
@@ -45,22 +45,43 @@ fn closer(hit: &Hit, best: Option<&Hit>) -> bool {
 /// A ray's constants for the slab tests.
 #[derive(Clone, Copy)]
 struct BoxRay {
-    o: [f32; 3],
-    inv: [f32; 3],
-    /// Index in `Node8::b` of the near plane on each axis (the far one is `^ 1`).
-    near: [usize; 3],
+    /// Kept in registers: built as arrays, they cost a store-forwarding
+    /// stall on every ray when the splats read them back.
+    o: Vec3A,
+    inv: Vec3A,
+    /// Whether the ray runs toward -axis: the near plane of axis `a` is then
+    /// `Node8::b[2a + 1]` (max), else `b[2a]` (min). Kept as a bool so the
+    /// index is provably in bounds.
+    neg: [bool; 3],
 }
 
 impl BoxRay {
     #[inline(always)]
     fn new(ray: &Ray) -> Self {
         let inv = ray.inv_dir();
-        let near = |a: usize| 2 * a + (inv[a] < 0.0) as usize;
+
         BoxRay {
-            o: ray.origin.to_array(),
-            inv: inv.to_array(),
-            near: [near(0), near(1), near(2)],
+            o: ray.origin.into(),
+            inv: inv.into(),
+            neg: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
         }
+    }
+}
+
+/// Indices in `Node8::b` of the near and far planes of axis `a`.
+#[inline(always)]
+fn planes(r: &BoxRay, a: usize) -> (usize, usize) {
+    let n = r.neg[a] as usize;
+    (2 * a + n, 2 * a + 1 - n)
+}
+
+/// Component `a` of `v`; a constant `a` folds to a register lane.
+#[inline(always)]
+fn lane(v: Vec3A, a: usize) -> f32 {
+    match a {
+        0 => v.x,
+        1 => v.y,
+        _ => v.z,
     }
 }
 
@@ -73,9 +94,10 @@ fn hit_boxes(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
     for half in 0..WIDTH / 4 {
         let lanes = half * 4..half * 4 + 4;
         let slab = |a: usize| {
-            let (o, inv) = (Vec4::splat(r.o[a]), Vec4::splat(r.inv[a]));
-            let near = (Vec4::from_slice(&n.b[r.near[a]][lanes.clone()]) - o) * inv;
-            let far = (Vec4::from_slice(&n.b[r.near[a] ^ 1][lanes.clone()]) - o) * inv;
+            let (o, inv) = (Vec4::splat(lane(r.o, a)), Vec4::splat(lane(r.inv, a)));
+            let (i, j) = planes(r, a);
+            let near = (Vec4::from_slice(&n.b[i][lanes.clone()]) - o) * inv;
+            let far = (Vec4::from_slice(&n.b[j][lanes.clone()]) - o) * inv;
             (near, far)
         };
         let (nx, fx) = slab(0);
@@ -92,25 +114,37 @@ fn hit_boxes(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
     (mask, tnear)
 }
 
-/// The same test on all eight boxes at once with AVX.
+/// The same test on all eight boxes at once with AVX (not a
+/// `#[target_feature]` function so that it can be forced inline).
+///
+/// # Safety
+/// The CPU must support AVX.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-#[inline]
-fn hit_boxes_avx(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+#[inline(always)]
+unsafe fn hit_boxes_avx(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
     use std::arch::x86_64::*;
-    // SAFETY: `Node8` is 32-byte aligned and each plane is eight f32 at the
-    // start of a 32-byte row.
-    let load = |k: usize| unsafe { _mm256_load_ps(n.b[k].as_ptr()) };
-    let slab = |a: usize| {
-        let (o, inv) = (_mm256_set1_ps(r.o[a]), _mm256_set1_ps(r.inv[a]));
-        let near = _mm256_mul_ps(_mm256_sub_ps(load(r.near[a]), o), inv);
-        let far = _mm256_mul_ps(_mm256_sub_ps(load(r.near[a] ^ 1), o), inv);
-        (near, far)
-    };
-    let (nx, fx) = slab(0);
-    let (ny, fy) = slab(1);
-    let (nz, fz) = slab(2);
-    // Running value second, so NaN lanes are passed over (see `hit_boxes`).
+    // Macros, not closures: a closure here would be compiled on its own,
+    // without AVX, and called.
+    // `Node8` is 32-byte aligned and each plane is eight f32 at the start of
+    // a 32-byte row.
+    macro_rules! slab {
+        ($a:expr) => {{
+            let (o, inv) = (
+                _mm256_set1_ps(lane(r.o, $a)),
+                _mm256_set1_ps(lane(r.inv, $a)),
+            );
+            let (i, j) = planes(r, $a);
+            let near = _mm256_load_ps(n.b[i].as_ptr());
+            let far = _mm256_load_ps(n.b[j].as_ptr());
+            (
+                _mm256_mul_ps(_mm256_sub_ps(near, o), inv),
+                _mm256_mul_ps(_mm256_sub_ps(far, o), inv),
+            )
+        }};
+    }
+    let (nx, fx) = slab!(0);
+    let (ny, fy) = slab!(1);
+    let (nz, fz) = slab!(2);
     let tn = _mm256_max_ps(
         nz,
         _mm256_max_ps(ny, _mm256_max_ps(nx, _mm256_setzero_ps())),
@@ -124,9 +158,50 @@ fn hit_boxes_avx(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
     );
     let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
     let mut tnear = [0.0; WIDTH];
-    // SAFETY: `tnear` holds eight f32.
-    unsafe { _mm256_storeu_ps(tnear.as_mut_ptr(), tn) };
+    _mm256_storeu_ps(tnear.as_mut_ptr(), tn);
     (mask, tnear)
+}
+
+/// The SIMD kernels of the walk: the eight-box test and the eight-triangle
+/// test. Static dispatch with forced inlining, so the walk compiled for AVX
+/// holds the AVX kernels inline.
+trait Kernels {
+    fn boxes(&self, r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]);
+    fn triangles<const UV: bool>(&self, s: &RayShear, p: &Packet, tmax: f32) -> TriHit8;
+}
+
+/// Four lanes at a time, on any CPU.
+struct Portable;
+
+impl Kernels for Portable {
+    #[inline(always)]
+    fn boxes(&self, r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+        hit_boxes(r, n, tmax)
+    }
+
+    #[inline(always)]
+    fn triangles<const UV: bool>(&self, s: &RayShear, p: &Packet, tmax: f32) -> TriHit8 {
+        intersect8::<UV>(s, &p.p, tmax)
+    }
+}
+
+/// Eight lanes at a time; made only where the CPU has AVX.
+#[cfg(target_arch = "x86_64")]
+struct Avx(());
+
+#[cfg(target_arch = "x86_64")]
+impl Kernels for Avx {
+    #[inline(always)]
+    fn boxes(&self, r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+        // SAFETY: an `Avx` exists only where the CPU has AVX.
+        unsafe { hit_boxes_avx(r, n, tmax) }
+    }
+
+    #[inline(always)]
+    fn triangles<const UV: bool>(&self, s: &RayShear, p: &Packet, tmax: f32) -> TriHit8 {
+        // SAFETY: as above.
+        unsafe { crate::geometry::triangle::intersect8_avx::<UV>(s, &p.p, tmax) }
+    }
 }
 
 impl Bvh {
@@ -192,14 +267,7 @@ impl Bvh {
             unsafe { self.traverse_avx::<ANY, STATS>(ray, st, on_hit) };
             return;
         }
-        self.traverse_with::<ANY, STATS>(ray, st, on_hit, hit_boxes, |s, p, t| {
-            // Any-hit traversal needs no barycentrics.
-            if ANY {
-                intersect8::<false>(s, &p.p, t)
-            } else {
-                intersect8::<true>(s, &p.p, t)
-            }
-        });
+        self.traverse_with::<ANY, STATS, _>(ray, st, on_hit, &Portable);
     }
 
     /// The traversal compiled for AVX: eight boxes or eight triangles per
@@ -213,65 +281,49 @@ impl Bvh {
         st: &mut TraversalStats,
         on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
     ) {
-        use crate::geometry::triangle::intersect8_avx;
-        self.traverse_with::<ANY, STATS>(
-            ray,
-            st,
-            on_hit,
-            |r, n, t| hit_boxes_avx(r, n, t),
-            |s, p, t| {
-                if ANY {
-                    intersect8_avx::<false>(s, &p.p, t)
-                } else {
-                    intersect8_avx::<true>(s, &p.p, t)
-                }
-            },
-        );
+        self.traverse_with::<ANY, STATS, _>(ray, st, on_hit, &Avx(()));
     }
 
     #[inline(always)]
-    fn traverse_with<const ANY: bool, const STATS: bool>(
+    fn traverse_with<const ANY: bool, const STATS: bool, K: Kernels>(
         &self,
         ray: &Ray,
         st: &mut TraversalStats,
         on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
-        hit: impl Fn(&BoxRay, &Node8, f32) -> (u32, [f32; WIDTH]),
-        tri: impl Fn(&RayShear, &Packet, f32) -> TriHit8,
+        k: &K,
     ) {
         if self.wide.stack <= STACK {
             // Left uninitialised: clearing it would cost a ray that misses
             // as much as testing a node.
             let mut stack = [MaybeUninit::uninit(); STACK];
-            self.walk::<ANY, STATS>(ray, st, &mut stack, on_hit, hit, tri);
+            self.walk::<ANY, STATS, K>(ray, st, &mut stack, on_hit, k);
         } else {
-            self.walk_deep::<ANY, STATS>(ray, st, on_hit, hit, tri);
+            self.walk_deep::<ANY, STATS, K>(ray, st, on_hit, k);
         }
     }
 
     #[cold]
     #[inline(never)]
-    fn walk_deep<const ANY: bool, const STATS: bool>(
+    fn walk_deep<const ANY: bool, const STATS: bool, K: Kernels>(
         &self,
         ray: &Ray,
         st: &mut TraversalStats,
         on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
-        hit: impl Fn(&BoxRay, &Node8, f32) -> (u32, [f32; WIDTH]),
-        tri: impl Fn(&RayShear, &Packet, f32) -> TriHit8,
+        k: &K,
     ) {
         let mut stack = vec![MaybeUninit::uninit(); self.wide.stack];
-        self.walk::<ANY, STATS>(ray, st, &mut stack, on_hit, hit, tri);
+        self.walk::<ANY, STATS, K>(ray, st, &mut stack, on_hit, k);
     }
 
     /// The walk itself; `stack` has room for the tree's deepest path.
     #[inline(always)]
-    fn walk<const ANY: bool, const STATS: bool>(
+    fn walk<const ANY: bool, const STATS: bool, K: Kernels>(
         &self,
         ray: &Ray,
         st: &mut TraversalStats,
         stack: &mut [MaybeUninit<(u32, f32)>],
         mut on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
-        hit: impl Fn(&BoxRay, &Node8, f32) -> (u32, [f32; WIDTH]),
-        tri: impl Fn(&RayShear, &Packet, f32) -> TriHit8,
+        k: &K,
     ) {
         let w = &self.wide;
         let setup = || RayShear::new(ray.origin, ray.dir);
@@ -286,7 +338,7 @@ impl Bvh {
         loop {
             if cur & LEAF == 0 {
                 let node = &w.nodes[cur as usize];
-                let (mask, tnear) = hit(&boxes, node, tmax);
+                let (mask, tnear) = k.boxes(&boxes, node, tmax);
                 if STATS {
                     let slots = node.b[0].iter().filter(|x| x.is_finite()).count() as u32;
                     st.nodes_visited += 1;
@@ -309,26 +361,22 @@ impl Bvh {
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
-                    // Two or more hits: nearest next, the others pushed farthest first.
-                    let mut hits = [(0u32, 0.0f32); WIDTH];
-                    let mut n = 0;
-                    let mut m = mask;
+                    // Two or more hits: the nearest next, the others pushed
+                    // (unsorted: sorting mispredicts more than it saves).
+                    let mut near = mask.trailing_zeros() as usize;
+                    let mut m = mask & (mask - 1);
                     while m != 0 {
                         let i = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        let mut j = n;
-                        while j > 0 && hits[j - 1].1 < tnear[i] {
-                            hits[j] = hits[j - 1];
-                            j -= 1;
-                        }
-                        hits[j] = (node.child[i], tnear[i]);
-                        n += 1;
-                    }
-                    for &h in &hits[..n - 1] {
-                        stack[sp].write(h);
+                        let far = if tnear[i] < tnear[near] {
+                            std::mem::replace(&mut near, i)
+                        } else {
+                            i
+                        };
+                        stack[sp].write((node.child[far], tnear[far]));
                         sp += 1;
                     }
-                    cur = hits[n - 1].0;
+                    cur = node.child[near];
                     continue;
                 }
             } else {
@@ -339,7 +387,13 @@ impl Bvh {
                     if STATS {
                         st.triangle_tests += p.lanes();
                     }
-                    let h = tri(shear.get_or_insert_with(setup), p, tmax);
+                    let shear = shear.get_or_insert_with(setup);
+                    // Any-hit traversal needs no barycentrics.
+                    let h = if ANY {
+                        k.triangles::<false>(shear, p, tmax)
+                    } else {
+                        k.triangles::<true>(shear, p, tmax)
+                    };
                     if h.mask != 0 {
                         tmax = on_hit(&h, &p.idx);
                         if ANY {
@@ -492,13 +546,7 @@ mod tests {
                 let mut st = TraversalStats::default();
                 let want = b.intersect::<false>(&ray, &mut st);
                 let mut got = None;
-                b.walk_deep::<false, false>(
-                    &ray,
-                    &mut st,
-                    b.keep_closest(&mut got),
-                    hit_boxes,
-                    |s, p, t| intersect8::<true>(s, &p.p, t),
-                );
+                b.walk_deep::<false, false, _>(&ray, &mut st, b.keep_closest(&mut got), &Portable);
                 assert_eq!(got, want);
                 hits += want.is_some() as u32;
             }

@@ -295,83 +295,113 @@ pub fn intersect8<const UV: bool>(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f3
     h
 }
 
+/// The edge functions of the lanes in `lanes` redone in f64 from the sheared
+/// vertices `[ax, ay, bx, by, cx, cy]`; the others kept. Rare, so kept out
+/// of line where it does not stop the packet test from being inlined.
+#[cold]
+#[inline(never)]
+fn edges_f64(lanes: i32, p: [[f32; 8]; 6], mut e: [[f32; 8]; 3]) -> [[f32; 8]; 3] {
+    for i in (0..8).filter(|i| lanes & (1 << i) != 0) {
+        let [ax, ay, bx, by, cx, cy] = p.map(|c| c[i] as f64);
+        e[0][i] = (cx * by - cy * bx) as f32;
+        e[1][i] = (ax * cy - ay * cx) as f32;
+        e[2][i] = (bx * ay - by * ax) as f32;
+    }
+    e
+}
+
 /// [`intersect8`] with AVX: all eight lanes per instruction, computing
 /// exactly what [`intersect4`] computes, operation for operation.
 ///
+/// Not a `#[target_feature]` function, which could not be forced inline:
+/// traversal calls it from its AVX build, where it is inlined and every
+/// intrinsic compiles to one instruction.
+///
 /// # Safety
-/// The CPU must support AVX (callers without the feature enabled must check).
+/// The CPU must support AVX.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-#[inline]
-pub fn intersect8_avx<const UV: bool>(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f32) -> TriHit8 {
+#[inline(always)]
+pub(crate) unsafe fn intersect8_avx<const UV: bool>(
+    s: &RayShear,
+    p: &[[[f32; 8]; 3]; 3],
+    tmax: f32,
+) -> TriHit8 {
     use std::arch::x86_64::*;
-    // SAFETY: each row is eight f32.
-    let ld = |v: usize, a: usize| unsafe { _mm256_loadu_ps(p[v][a].as_ptr()) };
-    let st = |x: __m256| {
-        let mut a = [0.0f32; 8];
-        // SAFETY: `a` holds eight f32.
-        unsafe { _mm256_storeu_ps(a.as_mut_ptr(), x) };
-        a
-    };
+    // Macros, not closures: a closure here would be compiled on its own,
+    // without AVX, and called.
+    macro_rules! ld {
+        ($v:expr, $a:expr) => {
+            _mm256_loadu_ps(p[$v][$a].as_ptr())
+        };
+    }
+    macro_rules! st {
+        ($x:expr) => {{
+            let mut a = [0.0f32; 8];
+            _mm256_storeu_ps(a.as_mut_ptr(), $x);
+            a
+        }};
+    }
+    macro_rules! cmp {
+        ($op:ident, $a:expr, $b:expr) => {
+            _mm256_cmp_ps::<$op>($a, $b)
+        };
+    }
     let set = _mm256_set1_ps;
     let (sub, mul, add) = (_mm256_sub_ps, _mm256_mul_ps, _mm256_add_ps);
-    let (or, and) = (_mm256_or_ps, _mm256_and_ps);
+    let (or, and, max) = (_mm256_or_ps, _mm256_and_ps, _mm256_max_ps);
     let (kx, ky, kz) = (s.kx, s.ky, s.kz);
     let (ox, oy, oz) = (set(s.origin[kx]), set(s.origin[ky]), set(s.origin[kz]));
     let (sx, sy, sz) = (set(s.sx), set(s.sy), set(s.sz));
-    let (az, bz, cz) = (sub(ld(0, kz), oz), sub(ld(1, kz), oz), sub(ld(2, kz), oz));
-    let ax = sub(sub(ld(0, kx), ox), mul(sx, az));
-    let ay = sub(sub(ld(0, ky), oy), mul(sy, az));
-    let bx = sub(sub(ld(1, kx), ox), mul(sx, bz));
-    let by = sub(sub(ld(1, ky), oy), mul(sy, bz));
-    let cx = sub(sub(ld(2, kx), ox), mul(sx, cz));
-    let cy = sub(sub(ld(2, ky), oy), mul(sy, cz));
+    let (az, bz, cz) = (
+        sub(ld!(0, kz), oz),
+        sub(ld!(1, kz), oz),
+        sub(ld!(2, kz), oz),
+    );
+    let ax = sub(sub(ld!(0, kx), ox), mul(sx, az));
+    let ay = sub(sub(ld!(0, ky), oy), mul(sy, az));
+    let bx = sub(sub(ld!(1, kx), ox), mul(sx, bz));
+    let by = sub(sub(ld!(1, ky), oy), mul(sy, bz));
+    let cx = sub(sub(ld!(2, kx), ox), mul(sx, cz));
+    let cy = sub(sub(ld!(2, ky), oy), mul(sy, cz));
     let mut u = sub(mul(cx, by), mul(cy, bx));
     let mut v = sub(mul(ax, cy), mul(ay, cx));
     let mut w = sub(mul(bx, ay), mul(by, ax));
     let zero = _mm256_setzero_ps();
-    let eq = |a| _mm256_cmp_ps::<_CMP_EQ_OQ>(a, zero);
-    let on_edge = _mm256_movemask_ps(or(or(eq(u), eq(v)), eq(w)));
+    let on_edge = _mm256_movemask_ps(or(
+        or(cmp!(_CMP_EQ_OQ, u, zero), cmp!(_CMP_EQ_OQ, v, zero)),
+        cmp!(_CMP_EQ_OQ, w, zero),
+    ));
     if on_edge != 0 {
-        let (ax, ay, bx, by, cx, cy) = (st(ax), st(ay), st(bx), st(by), st(cx), st(cy));
-        let (mut uu, mut vv, mut ww) = (st(u), st(v), st(w));
-        for i in (0..8).filter(|i| on_edge & (1 << i) != 0) {
-            let (ax, ay, bx, by, cx, cy) = (
-                ax[i] as f64,
-                ay[i] as f64,
-                bx[i] as f64,
-                by[i] as f64,
-                cx[i] as f64,
-                cy[i] as f64,
-            );
-            uu[i] = (cx * by - cy * bx) as f32;
-            vv[i] = (ax * cy - ay * cx) as f32;
-            ww[i] = (bx * ay - by * ax) as f32;
-        }
-        // SAFETY: the arrays hold eight f32.
-        unsafe {
-            u = _mm256_loadu_ps(uu.as_ptr());
-            v = _mm256_loadu_ps(vv.as_ptr());
-            w = _mm256_loadu_ps(ww.as_ptr());
-        }
+        let e = edges_f64(
+            on_edge,
+            [st!(ax), st!(ay), st!(bx), st!(by), st!(cx), st!(cy)],
+            [st!(u), st!(v), st!(w)],
+        );
+        u = _mm256_loadu_ps(e[0].as_ptr());
+        v = _mm256_loadu_ps(e[1].as_ptr());
+        w = _mm256_loadu_ps(e[2].as_ptr());
     }
-    let lt = |a| _mm256_cmp_ps::<_CMP_LT_OQ>(a, zero);
-    let gt = |a| _mm256_cmp_ps::<_CMP_GT_OQ>(a, zero);
-    let neg = or(or(lt(u), lt(v)), lt(w));
-    let pos = or(or(gt(u), gt(v)), gt(w));
+    let neg = or(
+        or(cmp!(_CMP_LT_OQ, u, zero), cmp!(_CMP_LT_OQ, v, zero)),
+        cmp!(_CMP_LT_OQ, w, zero),
+    );
+    let pos = or(
+        or(cmp!(_CMP_GT_OQ, u, zero), cmp!(_CMP_GT_OQ, v, zero)),
+        cmp!(_CMP_GT_OQ, w, zero),
+    );
     let det = add(add(u, v), w);
     let (az, bz, cz) = (mul(sz, az), mul(sz, bz), mul(sz, cz));
     let t_scaled = add(add(mul(u, az), mul(v, bz)), mul(w, cz));
     let sign = set(-0.0);
-    let flip = lt(det);
+    let flip = cmp!(_CMP_LT_OQ, det, zero);
     let ts = _mm256_blendv_ps(t_scaled, _mm256_xor_ps(t_scaled, sign), flip);
     let d = _mm256_blendv_ps(det, _mm256_xor_ps(det, sign), flip);
     // `!(a <= b)` and `!(a > b)` as in the scalar test, NaN included.
-    let le0 = _mm256_cmp_ps::<_CMP_LE_OQ>(ts, zero);
-    let beyond = _mm256_cmp_ps::<_CMP_GT_OQ>(ts, mul(set(tmax * LOOSE), d));
+    let le0 = cmp!(_CMP_LE_OQ, ts, zero);
+    let beyond = cmp!(_CMP_GT_OQ, ts, mul(set(tmax * LOOSE), d));
     let ok = _mm256_andnot_ps(
         or(and(neg, pos), or(le0, beyond)),
-        _mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero),
+        cmp!(_CMP_NEQ_UQ, det, zero),
     );
     if _mm256_movemask_ps(ok) == 0 {
         return TriHit8 {
@@ -383,50 +413,68 @@ pub fn intersect8_avx<const UV: bool>(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax
     }
     let inv = _mm256_div_ps(set(1.0), det);
     let t = mul(t_scaled, inv);
-    let abs = |a| _mm256_andnot_ps(sign, a);
-    let max = _mm256_max_ps;
-    let max_zt = max(max(abs(az), abs(bz)), abs(cz));
-    let max_xt = max(max(abs(ax), abs(bx)), abs(cx));
-    let max_yt = max(max(abs(ay), abs(by)), abs(cy));
-    let g = |n| set(gamma(n));
-    let delta_z = mul(g(3), max_zt);
-    let delta_x = mul(g(5), add(max_xt, max_zt));
-    let delta_y = mul(g(5), add(max_yt, max_zt));
+    let (au, av, aw) = (
+        _mm256_andnot_ps(sign, u),
+        _mm256_andnot_ps(sign, v),
+        _mm256_andnot_ps(sign, w),
+    );
+    let (aaz, abz, acz) = (
+        _mm256_andnot_ps(sign, az),
+        _mm256_andnot_ps(sign, bz),
+        _mm256_andnot_ps(sign, cz),
+    );
+    let (aax, abx, acx) = (
+        _mm256_andnot_ps(sign, ax),
+        _mm256_andnot_ps(sign, bx),
+        _mm256_andnot_ps(sign, cx),
+    );
+    let (aay, aby, acy) = (
+        _mm256_andnot_ps(sign, ay),
+        _mm256_andnot_ps(sign, by),
+        _mm256_andnot_ps(sign, cy),
+    );
+    let max_zt = max(max(aaz, abz), acz);
+    let max_xt = max(max(aax, abx), acx);
+    let max_yt = max(max(aay, aby), acy);
+    let (g2, g3, g5) = (set(gamma(2)), set(gamma(3)), set(gamma(5)));
+    let delta_z = mul(g3, max_zt);
+    let delta_x = mul(g5, add(max_xt, max_zt));
+    let delta_y = mul(g5, add(max_yt, max_zt));
     let delta_e = mul(
         set(2.0),
         add(
-            add(mul(mul(g(2), max_xt), max_yt), mul(delta_y, max_xt)),
+            add(mul(mul(g2, max_xt), max_yt), mul(delta_y, max_xt)),
             mul(delta_x, max_yt),
         ),
     );
-    let max_e = max(max(abs(u), abs(v)), abs(w));
+    let max_e = max(max(au, av), aw);
     let delta_t = mul(
         mul(
             set(3.0),
             add(
-                add(mul(mul(g(3), max_e), max_zt), mul(delta_e, max_zt)),
+                add(mul(mul(g3, max_e), max_zt), mul(delta_e, max_zt)),
                 mul(delta_z, max_e),
             ),
         ),
-        abs(inv),
+        _mm256_andnot_ps(sign, inv),
     );
     let finite = and(
-        _mm256_cmp_ps::<_CMP_LT_OQ>(abs(t), set(f32::INFINITY)),
-        _mm256_cmp_ps::<_CMP_LE_OQ>(t, set(tmax)),
+        cmp!(_CMP_LT_OQ, _mm256_andnot_ps(sign, t), set(f32::INFINITY)),
+        cmp!(_CMP_LE_OQ, t, set(tmax)),
     );
-    let ok = and(
-        _mm256_andnot_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t, delta_t), ok),
-        finite,
-    );
-    let clamp = |a| _mm256_min_ps(_mm256_max_ps(a, zero), set(1.0));
+    let ok = and(_mm256_andnot_ps(cmp!(_CMP_LE_OQ, t, delta_t), ok), finite);
     let (u, v) = if UV {
-        (st(clamp(mul(v, inv))), st(clamp(mul(w, inv))))
+        let one = set(1.0);
+        (
+            st!(_mm256_min_ps(_mm256_max_ps(mul(v, inv), zero), one)),
+            st!(_mm256_min_ps(_mm256_max_ps(mul(w, inv), zero), one)),
+        )
     } else {
         ([0.0; 8], [0.0; 8])
     };
     TriHit8 {
         mask: _mm256_movemask_ps(ok) as u32,
-        t: st(_mm256_blendv_ps(set(f32::INFINITY), t, ok)),
+        t: st!(_mm256_blendv_ps(set(f32::INFINITY), t, ok)),
         u,
         v,
     }

@@ -115,11 +115,16 @@ pub fn trace_primary(
         .zip(frame.rows.par_chunks_mut(ROW_CHUNK))
         .enumerate()
         .for_each(|(chunk, (ts, rows))| {
+            // As the harness does: a row's rays first, then the row traced,
+            // so the camera math does not sit in front of every ray.
+            let mut rays = Vec::with_capacity(width);
             for (r, (trow, sums)) in ts.chunks_mut(width).zip(rows).enumerate() {
                 let y = (chunk * ROW_CHUNK + r) as u32;
+                rays.clear();
+                rays.extend((0..w.width).map(|x| w.primary(x, y)));
                 let (mut hits, mut sum_t) = (0, 0.0);
-                for (x, t) in trow.iter_mut().enumerate() {
-                    *t = match closest(&w.primary(x as u32, y)) {
+                for (t, ray) in trow.iter_mut().zip(&rays) {
+                    *t = match closest(ray) {
                         Some(d) => {
                             hits += 1;
                             sum_t += d as f64;
@@ -150,16 +155,17 @@ pub fn trace_shadow(
         .zip(frame.rows.par_chunks_mut(ROW_CHUNK))
         .enumerate()
         .for_each(|(chunk, (ts, rows))| {
+            let mut rays = Vec::with_capacity(width);
             for (r, (trow, sums)) in ts.chunks(width).zip(rows).enumerate() {
                 let y = (chunk * ROW_CHUNK + r) as u32;
-                let mut occ = 0;
-                for (x, &t) in trow.iter().enumerate() {
-                    if t >= 0.0 {
-                        let ray = w.shadow(&w.primary(x as u32, y), t);
-                        occ += occluded(&ray) as u64;
-                    }
-                }
-                sums.occluded = occ;
+                rays.clear();
+                rays.extend(
+                    trow.iter()
+                        .enumerate()
+                        .filter(|(_, t)| **t >= 0.0)
+                        .map(|(x, &t)| w.shadow(&w.primary(x as u32, y), t)),
+                );
+                sums.occluded = rays.iter().filter(|ray| occluded(ray)).count() as u64;
             }
         });
     start.elapsed().as_secs_f64()
