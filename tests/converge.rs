@@ -298,3 +298,52 @@ fn command_writes_table_csv_and_plot() {
     assert!(String::from_utf8_lossy(&exact.stdout).contains("one pass is exact"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_rendered_hdr_is_a_reference_for_converge() {
+    let dir = std::env::temp_dir().join(format!("rayterm-converge-hdr-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let hdr = dir.join("ref.hdr");
+    let rayterm = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_rayterm"))
+            .args(args)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(
+            o.status.success(),
+            "{stdout}\n{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        stdout
+    };
+    let h = hdr.to_str().unwrap();
+    rayterm(&[
+        "render",
+        "cornell-area",
+        "--size",
+        "12x10",
+        "--spp",
+        "64",
+        "-o",
+        h,
+    ]);
+    let (w, hh, img) = load_reference(&hdr).unwrap();
+    assert_eq!((w, hh), (12, 10));
+    assert!(img.iter().all(|c| c.is_finite()));
+    let out = rayterm(&[
+        "converge",
+        "cornell-area",
+        "--size",
+        "12x10",
+        "--spp",
+        "1,4",
+        "--seeds",
+        "1",
+        "--no-compare",
+        "--reference",
+        h,
+    ]);
+    assert!(out.contains("ref.hdr"), "{out}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -127,7 +127,8 @@ impl SceneOpts {
 pub struct RenderArgs {
     #[command(flatten)]
     pub scene: SceneOpts,
-    /// Output PNG.
+    /// Output PNG; a name ending in .hdr gets the linear image before bloom
+    /// as Radiance HDR instead (a reference for `converge` and `tui`).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Samples per pixel (default: the scene's).
@@ -136,7 +137,7 @@ pub struct RenderArgs {
     /// Keep adding passes until this many seconds have passed.
     #[arg(long, conflicts_with = "target_error")]
     pub time: Option<f64>,
-    /// Keep adding passes until the mean relative standard error is below this.
+    /// Keep adding passes until the estimated relative error is below this.
     #[arg(long)]
     pub target_error: Option<f64>,
     /// Worker threads (default: all cores).
@@ -249,6 +250,11 @@ pub struct TuiArgs {
     /// Colours (default: truecolor when COLORTERM says so, else 256).
     #[arg(long, value_enum)]
     pub color: Option<ColorMode>,
+    /// A converged image of the scene (Radiance .hdr, e.g. from `rayterm
+    /// render --spp 1024 -o ref.hdr`): the true error is shown beside the
+    /// estimate while the camera and features are the starting ones.
+    #[arg(long, value_name = "FILE.hdr")]
+    pub reference: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]

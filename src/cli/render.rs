@@ -12,6 +12,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use super::args::{RenderArgs, SceneOpts};
 use crate::bvh::{self, Bvh};
 use crate::render::{output, pass, post, Features, Film, Plan, Tracer};
+use crate::report::converge::save_reference;
 use crate::scene::{self, Scene};
 
 /// A scene loaded and ready to render with the options given.
@@ -82,6 +83,9 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         eprintln!("plan for {}:\n{}", p.scene.name, p.plan.explain());
     }
     if let Some(view) = a.debug {
+        if is_hdr(&a.output) {
+            bail!("--debug views are PNG images; name the output .png");
+        }
         return super::debug::run(&p, view, &a.output);
     }
     let mut stop = match (a.spp, a.time, a.target_error) {
@@ -143,15 +147,21 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     let render_ms = start.elapsed().as_secs_f64() * 1e3;
     bar.finish_and_clear();
     let mut img = film.image();
-    if p.plan.bloom {
-        post::bloom(
-            &mut img,
-            p.width as usize,
-            p.height as usize,
-            &p.scene.settings.bloom,
-        );
+    if is_hdr(&a.output) {
+        // The film's mean as it is: what `converge` and the TUI's
+        // `--reference` compare against.
+        save_reference(&a.output, p.width, p.height, &img)?;
+    } else {
+        if p.plan.bloom {
+            post::bloom(
+                &mut img,
+                p.width as usize,
+                p.height as usize,
+                &p.scene.settings.bloom,
+            );
+        }
+        output::save_png_atomic(&post::to_rgb8(&img, p.width, p.height), &a.output)?;
     }
-    output::save_png_atomic(&post::to_rgb8(&img, p.width, p.height), &a.output)?;
     let err = if p.plan.deterministic {
         "exact".to_string()
     } else {
@@ -175,4 +185,10 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         a.output.display()
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// A `.hdr` output gets the linear film instead of a PNG.
+fn is_hdr(path: &std::path::Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("hdr"))
 }

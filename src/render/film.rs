@@ -68,8 +68,9 @@ pub struct Film {
     pub bad: Vec<BadSample>,
 }
 
-/// Offset in relative error so black pixels do not dominate it.
-const REL_EPS: f64 = 0.01;
+/// Offset in relative errors (`x^2 + REL_EPS` below the squared error) so
+/// black pixels do not dominate them.
+pub const REL_EPS: f64 = 0.01;
 
 impl Film {
     pub fn new(width: u32, height: u32) -> Self {
@@ -108,18 +109,29 @@ impl Film {
         self.pixels.iter().map(|p| p.mean.as_vec3()).collect()
     }
 
-    /// Mean over pixels of the standard error relative to the luminance
-    /// (`se / (lum + 0.01)`); 0 for a deterministic image after one pass.
-    pub fn relative_error(&self) -> f64 {
+    /// The film's estimate of its relMSE: the mean over pixels of the squared
+    /// standard error of the mean luminance over `lum^2 + REL_EPS`. Pixels
+    /// with fewer than two samples count as exact.
+    pub fn estimated_rel_mse(&self) -> f64 {
         if self.pixels.is_empty() {
             return 0.0;
         }
         let sum: f64 = self
             .pixels
             .iter()
-            .map(|p| p.std_error() / (p.mean.dot(LUMA.as_dvec3()).abs() + REL_EPS))
+            .map(|p| {
+                let lum = p.mean.dot(LUMA.as_dvec3());
+                p.std_error().powi(2) / (lum * lum + REL_EPS)
+            })
             .sum();
         sum / self.pixels.len() as f64
+    }
+
+    /// The relative error shown everywhere (TUI, `--target-error`,
+    /// `converge`): the square root of [`Film::estimated_rel_mse`]; 0 for a
+    /// deterministic image after one pass.
+    pub fn relative_error(&self) -> f64 {
+        self.estimated_rel_mse().sqrt()
     }
 }
 

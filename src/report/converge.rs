@@ -12,6 +12,7 @@ mod metrics;
 mod plot;
 mod reference;
 mod report;
+mod resample;
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -20,9 +21,10 @@ use anyhow::{bail, Result};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
-pub use metrics::{estimated_rel_mse, fit_log_log, luminance, rel_mse, rmse};
+pub use metrics::{estimated_rel_mse, fit_log_log, luminance, rel_mse, rel_mse_on, rmse};
 pub use plot::draw as plot;
 pub use reference::{default_cache_dir, load_reference, save_reference};
+pub use resample::{resample, Resampled};
 
 use crate::bvh::Bvh;
 use crate::render::{pass, Film, Plan, Tracer};

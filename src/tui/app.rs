@@ -2,7 +2,7 @@
 //! state (see `widgets`); rendering happens in the worker.
 
 use std::collections::HashSet;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -13,12 +13,13 @@ use ratatui::layout::Rect;
 use super::color::ColorMode;
 use super::export;
 use super::keys::{self, Action, Key, Mode};
-use super::worker::{self, Cmd, Msg, Snapshot, View, Worker};
+use super::worker::{self, Cmd, Msg, Reference, Snapshot, View, Worker};
 use crate::bvh::Bvh;
 use crate::cli::{Prepared, Worst};
 use crate::inspect::{inspect_pixel, lines, PixelTree, TreeLine};
 use crate::render::plan::not_needed;
 use crate::render::{Feature, Features, Plan};
+use crate::report::converge::load_reference;
 use crate::report::stability;
 use crate::scene::{Builder, Camera, Scene};
 
@@ -132,22 +133,53 @@ pub struct App {
     pub viewport: Rect,
     pub debug_area: Rect,
     pub quit: bool,
+    /// The `--reference` image, if any.
+    pub reference: Option<Arc<Reference>>,
 }
 
 impl App {
-    pub fn new(p: Prepared, color: ColorMode) -> Result<App> {
+    /// `reference` is a linear .hdr image of the scene from its own camera
+    /// with the features the TUI starts with; the true error is measured
+    /// against it while the view is that one.
+    pub fn new(p: Prepared, color: ColorMode, reference: Option<&Path>) -> Result<App> {
         let scene = Arc::new(p.scene);
         let bvh = Arc::new(p.bvh);
-        let worker = worker::spawn(Worker::new(scene.clone(), bvh.clone(), p.seed))?;
         let home = scene.camera;
+        let reference = match reference {
+            Some(path) => {
+                let (width, height, image) = load_reference(path)?;
+                Some(Arc::new(Reference {
+                    name: path.display().to_string(),
+                    width,
+                    height,
+                    image,
+                    camera: home,
+                    features: p.plan.features,
+                }))
+            }
+            None => None,
+        };
+        let worker = worker::spawn(Worker::new(
+            scene.clone(),
+            bvh.clone(),
+            p.seed,
+            reference.clone(),
+        ))?;
         let status = format!(
-            "{}: {} triangles, {} lights. Press ? for help.{}",
+            "{}: {} triangles, {} lights. Press ? for help.{}{}",
             scene.name,
             scene.geometry.triangle_count(),
             scene.lights.len(),
             match scene.warnings.len() {
                 0 => String::new(),
                 n => format!(" {n} load warnings (printed above the TUI)."),
+            },
+            match &reference {
+                Some(r) => format!(
+                    " Reference {} ({}x{}): true error shown at the start view (r returns).",
+                    r.name, r.width, r.height
+                ),
+                None => String::new(),
             }
         );
         Ok(App {
@@ -189,6 +221,7 @@ impl App {
             quit: false,
             scene,
             bvh,
+            reference,
         })
     }
 

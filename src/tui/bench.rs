@@ -75,7 +75,7 @@ pub fn measure_pass(scene_spec: &str, cols: u16, rows: u16, passes: u32) -> Resu
     let p = prepare(&SceneOpts::new(scene_spec))?;
     let (width, height) = (cols as u32, rows as u32 * 2);
     let scene = Arc::new(p.scene);
-    let mut worker = Worker::new(scene.clone(), Arc::new(p.bvh), p.seed);
+    let mut worker = Worker::new(scene.clone(), Arc::new(p.bvh), p.seed, None);
     worker.apply(Cmd::View(
         1,
         View {

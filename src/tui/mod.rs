@@ -15,6 +15,7 @@ pub mod widgets;
 pub mod worker;
 
 use std::io::{self, BufWriter, IsTerminal, Stdout, Write};
+use std::path::Path;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Once};
@@ -40,14 +41,18 @@ const POLL_BUSY: Duration = Duration::from_millis(8);
 const POLL_IDLE: Duration = Duration::from_millis(250);
 
 /// Opens the TUI on the scene; returns when the user quits.
-pub fn run(opts: &SceneOpts, color: Option<ColorMode>) -> Result<ExitCode> {
+pub fn run(
+    opts: &SceneOpts,
+    color: Option<ColorMode>,
+    reference: Option<&Path>,
+) -> Result<ExitCode> {
     if !io::stdout().is_terminal() {
         bail!("the TUI needs an interactive terminal; `rayterm render` writes images without one");
     }
     let p = prepare(opts)?;
     let color =
         color.unwrap_or_else(|| ColorMode::detect(std::env::var("COLORTERM").ok().as_deref()));
-    let mut app = App::new(p, color)?;
+    let mut app = App::new(p, color, reference)?;
     let bytes = Arc::new(AtomicU64::new(0));
     let guard = TerminalGuard::enter()?;
     let writer = CountingWriter {

@@ -23,7 +23,7 @@ fn app(spec: &str, off: &[Feature]) -> App {
         ..SceneOpts::new(spec)
     })
     .unwrap();
-    App::new(p, ColorMode::Truecolor).unwrap()
+    App::new(p, ColorMode::Truecolor, None).unwrap()
 }
 
 fn terminal(w: u16, h: u16) -> Terminal<TestBackend> {

@@ -18,6 +18,7 @@ use crate::bvh::{self, Bvh};
 use crate::cli::{find_worst, Worst};
 use crate::render::recorder::WorkCounter;
 use crate::render::{pass, post, Features, Film, Plan, Tracer};
+use crate::report::converge::{rel_mse_on, resample};
 use crate::scene::{Builder, Camera, Scene};
 
 /// A full pass slower than this is preceded by a quarter-resolution pass
@@ -52,6 +53,36 @@ pub enum Msg {
     Bvh(Arc<Bvh>),
 }
 
+/// A reference image (`--reference`) and the view it shows.
+pub struct Reference {
+    /// The file's name, for the panel.
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    /// Linear colours, row-major from the top.
+    pub image: Vec<Vec3>,
+    /// The camera and features it was rendered with; other views are not
+    /// compared.
+    pub camera: Camera,
+    pub features: Features,
+}
+
+/// Whether the true error against the reference is measured, and if not why.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Truth {
+    /// No reference was given.
+    NoReference,
+    /// Measured over `coverage` of the view's pixels; `exact` when each is
+    /// a whole block of reference pixels (otherwise resampling adds error).
+    Compared { coverage: f64, exact: bool },
+    /// The camera is not the one the reference shows.
+    CameraMoved,
+    /// Features that change the image differ from the reference's.
+    FeaturesChanged,
+    /// The view and the reference share no pixel.
+    NoOverlap,
+}
+
 /// Mean BVH work per ray (camera and shadow rays) of a full pass.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PerRay {
@@ -74,7 +105,7 @@ pub struct Snapshot {
     pub spp: u32,
     pub pass_ms: f64,
     pub mrays: f64,
-    /// Mean relative standard error of the film.
+    /// The film's estimated relative error ([`Film::relative_error`]).
     pub error: f64,
     /// Nothing is sampled and one pass is done: the image is exact.
     pub exact: bool,
@@ -84,6 +115,11 @@ pub struct Snapshot {
     pub elapsed: f64,
     /// (seconds, error) after each pass with an error estimate.
     pub history: Vec<(f64, f64)>,
+    /// The true error (root relMSE against the reference) when measured.
+    pub true_error: Option<f64>,
+    pub truth: Truth,
+    /// (seconds, true error) after each pass.
+    pub true_history: Vec<(f64, f64)>,
     pub per_ray: Option<PerRay>,
     /// Worst pixels by [`Worst::Nan`], [`Worst::Variance`], [`Worst::Brightest`].
     pub worst: [Option<(u32, u32, u32)>; 3],
@@ -120,10 +156,20 @@ pub struct Worker {
     per_ray: Option<PerRay>,
     /// Time of the last full pass, to decide whether coarse passes pay off.
     last_full_ms: Option<f64>,
+    reference: Option<Arc<Reference>>,
+    truth: Truth,
+    /// The reference on the view's pixels while `truth` is `Compared`.
+    reference_pixels: Vec<(u32, Vec3)>,
+    true_history: Vec<(f64, f64)>,
 }
 
 impl Worker {
-    pub fn new(scene: Arc<Scene>, bvh: Arc<Bvh>, seed: u64) -> Self {
+    pub fn new(
+        scene: Arc<Scene>,
+        bvh: Arc<Bvh>,
+        seed: u64,
+        reference: Option<Arc<Reference>>,
+    ) -> Self {
         let plan = Plan::new(&scene, Features::all());
         Self {
             scene,
@@ -138,6 +184,10 @@ impl Worker {
             history: Vec::new(),
             per_ray: None,
             last_full_ms: None,
+            reference,
+            truth: Truth::NoReference,
+            reference_pixels: Vec::new(),
+            true_history: Vec::new(),
         }
     }
 
@@ -172,6 +222,33 @@ impl Worker {
         self.started = Instant::now();
         self.history.clear();
         self.per_ray = None;
+        self.true_history.clear();
+        self.compare_with_reference();
+    }
+
+    /// Decides whether the view can be compared with the reference, and
+    /// takes the reference onto the view's pixels when it can.
+    fn compare_with_reference(&mut self) {
+        self.reference_pixels.clear();
+        self.truth = match (&self.reference, self.view) {
+            (None, _) | (_, None) => Truth::NoReference,
+            (Some(r), Some(v)) if v.camera != r.camera => Truth::CameraMoved,
+            (Some(r), Some(v)) if v.features.shaping_film() != r.features.shaping_film() => {
+                Truth::FeaturesChanged
+            }
+            (Some(r), Some(v)) => {
+                let m = resample(r.width, r.height, &r.image, v.width, v.height);
+                if m.pixels.is_empty() {
+                    Truth::NoOverlap
+                } else {
+                    self.reference_pixels = m.pixels;
+                    Truth::Compared {
+                        coverage: m.coverage,
+                        exact: m.exact,
+                    }
+                }
+            }
+        };
     }
 
     /// Whether more passes would change the image.
@@ -225,6 +302,11 @@ impl Worker {
             self.history.push((elapsed, error));
         }
         let mean = self.film.image();
+        let true_error = matches!(self.truth, Truth::Compared { .. })
+            .then(|| rel_mse_on(&mean, &self.reference_pixels).sqrt());
+        if let Some(e) = true_error {
+            self.true_history.push((elapsed, e));
+        }
         let (image, pre_bloom) = self.bloomed(mean, view.width, view.height);
         let worst =
             [Worst::Nan, Worst::Variance, Worst::Brightest].map(|w| find_worst(&self.film, w));
@@ -243,6 +325,9 @@ impl Worker {
             done: self.idle(),
             elapsed,
             history: self.history.clone(),
+            true_error,
+            truth: self.truth,
+            true_history: self.true_history.clone(),
             per_ray: self.per_ray,
             worst,
             bad_samples: self.film.bad_count,
@@ -300,6 +385,9 @@ impl Worker {
             done: false,
             elapsed: self.started.elapsed().as_secs_f64(),
             history: Vec::new(),
+            true_error: None,
+            truth: self.truth,
+            true_history: Vec::new(),
             per_ray: None,
             worst: [None; 3],
             bad_samples: 0,
@@ -402,7 +490,7 @@ mod tests {
     fn worker(features: Features) -> Worker {
         let scene = Arc::new(crate::scene::load("cornell").unwrap());
         let bvh = Arc::new(bvh::build(&scene.geometry, Builder::Sah));
-        let mut w = Worker::new(scene.clone(), bvh, 1);
+        let mut w = Worker::new(scene.clone(), bvh, 1, None);
         w.apply(Cmd::View(
             1,
             View {
@@ -429,6 +517,81 @@ mod tests {
             assert_eq!((s.spp, s.generation), (spp, 1));
         }
         assert!(w.step(&|| false).unwrap().per_ray.is_some());
+    }
+
+    #[test]
+    fn the_true_error_is_measured_only_for_the_references_view() {
+        let scene = Arc::new(crate::scene::load("cornell-area").unwrap());
+        let bvh = Arc::new(bvh::build(&scene.geometry, Builder::Sah));
+        let features = Features::all();
+        // The reference: twice the view's size, many samples.
+        let plan = Plan::new(&scene, features);
+        let t = Tracer::new(&scene, &bvh, &plan, 32, 24, 99);
+        let mut film = Film::new(32, 24);
+        pass::render_pass(&t, &mut film, 256, &|| false);
+        let reference = Arc::new(Reference {
+            name: "ref.hdr".into(),
+            width: 32,
+            height: 24,
+            image: film.image(),
+            camera: scene.camera,
+            features,
+        });
+        let mut w = Worker::new(scene.clone(), bvh, 1, Some(reference));
+        let view = View {
+            camera: scene.camera,
+            features,
+            width: 16,
+            height: 12,
+        };
+        w.apply(Cmd::View(1, view));
+        let mut frames = Vec::new();
+        while frames.len() < 17 {
+            let s = w.step(&|| false).unwrap();
+            if !s.coarse {
+                frames.push(s);
+            }
+        }
+        let (first, last) = (&frames[0], &frames[16]);
+        assert_eq!(
+            last.truth,
+            Truth::Compared {
+                coverage: 1.0,
+                exact: true
+            }
+        );
+        let (e1, e17) = (first.true_error.unwrap(), last.true_error.unwrap());
+        assert!(
+            e17 < 0.5 * e1,
+            "true error {e1} after 1 spp, {e17} after 17"
+        );
+        assert!(
+            (0.5..2.0).contains(&(last.error / e17)),
+            "estimate {} against true {e17}",
+            last.error
+        );
+        assert_eq!(last.true_history.len(), 17);
+        // Bloom does not change the film; shadows and the camera do.
+        let mut bloomless = view;
+        bloomless.features.set(Feature::Bloom, false);
+        let mut shadowless = view;
+        shadowless.features.set(Feature::Shadows, false);
+        let mut moved = view;
+        moved.camera.orbit(0.1, 0.0);
+        for (v, truth) in [
+            (bloomless, None),
+            (shadowless, Some(Truth::FeaturesChanged)),
+            (moved, Some(Truth::CameraMoved)),
+        ] {
+            w.apply(Cmd::View(2, v));
+            let s = std::iter::from_fn(|| w.step(&|| false))
+                .find(|s| !s.coarse)
+                .unwrap();
+            match truth {
+                None => assert!(s.true_error.is_some()),
+                Some(t) => assert_eq!((s.truth, s.true_error), (t, None)),
+            }
+        }
     }
 
     #[test]

@@ -2,11 +2,8 @@
 
 use glam::Vec3;
 
-use crate::render::film::LUMA;
+use crate::render::film::{LUMA, REL_EPS};
 use crate::render::Film;
-
-/// Offset in relMSE so black pixels do not dominate it.
-const REL_EPS: f64 = 0.01;
 
 /// Luminance of a linear colour.
 #[inline]
@@ -42,22 +39,30 @@ pub fn rel_mse(img: &[Vec3], reference: &[Vec3]) -> f64 {
     mean_over(img, reference, |x, r| (x - r) * (x - r) / (r * r + REL_EPS))
 }
 
-/// The film's own estimate of its relMSE: the squared standard error of each
-/// pixel's mean over its squared luminance. `None` before every pixel has
-/// two samples, when there is no variance to go on.
+/// [`rel_mse`] over some pixels only: `(index into img, reference value)`
+/// pairs, as [`super::Resampled`] gives them; 0 when there are none.
+pub fn rel_mse_on(img: &[Vec3], pairs: &[(u32, Vec3)]) -> f64 {
+    if pairs.is_empty() {
+        return 0.0;
+    }
+    let sum: f64 = pairs
+        .iter()
+        .map(|&(i, r)| {
+            let (x, r) = (luminance(img[i as usize]), luminance(r));
+            (x - r) * (x - r) / (r * r + REL_EPS)
+        })
+        .sum();
+    sum / pairs.len() as f64
+}
+
+/// The film's own estimate of its relMSE ([`Film::estimated_rel_mse`]);
+/// `None` before every pixel has two samples, when there is no variance to
+/// go on.
 pub fn estimated_rel_mse(film: &Film) -> Option<f64> {
     if film.pixels.is_empty() || film.pixels.iter().any(|p| p.n < 2) {
         return None;
     }
-    let sum: f64 = film
-        .pixels
-        .iter()
-        .map(|p| {
-            let lum = p.mean.dot(LUMA.as_dvec3());
-            p.variance() / p.n as f64 / (lum * lum + REL_EPS)
-        })
-        .sum();
-    Some(sum / film.pixels.len() as f64)
+    Some(film.estimated_rel_mse())
 }
 
 /// Least-squares slope and intercept of `ln y` against `ln x` over the

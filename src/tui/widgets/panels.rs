@@ -11,6 +11,7 @@ use ratatui::Frame;
 use crate::render::Feature;
 use crate::tui::app::{App, FeatureState};
 use crate::tui::keys::{self, Action};
+use crate::tui::worker::{Snapshot, Truth};
 
 fn panel(title: String) -> Block<'static> {
     Block::new()
@@ -150,8 +151,11 @@ pub fn render(f: &mut Frame, area: Rect, app: &App) {
                 Line::from(format!("{} spp{done} · {:.1} ms/pass", s.spp, s.pass_ms)),
                 Line::from(format!("{:.1} Mrays/s · {:.1} s", s.mrays, s.elapsed)),
                 Line::from(error),
-                Line::from(bytes),
             ];
+            if app.reference.is_some() {
+                v.push(truth_line(s));
+            }
+            v.push(Line::from(bytes));
             if s.bad_samples > 0 {
                 v.push(Line::styled(
                     format!("{} NaN/Inf samples (n finds one)", s.bad_samples),
@@ -165,9 +169,42 @@ pub fn render(f: &mut Frame, area: Rect, app: &App) {
         Layout::vertical([Constraint::Length(text.len() as u16), Constraint::Min(0)]).areas(inner);
     f.render_widget(Paragraph::new(text), text_area);
     if chart_area.height >= 6 {
-        if let Some(s) = app.current_frame().filter(|s| s.history.len() >= 2) {
-            error_chart(f, chart_area, &s.history);
+        if let Some(s) = app
+            .current_frame()
+            .filter(|s| s.history.len() >= 2 || s.true_history.len() >= 2)
+        {
+            error_chart(f, chart_area, &s.history, &s.true_history);
         }
+    }
+}
+
+/// The true error against the `--reference` image, or why there is none.
+fn truth_line(s: &Snapshot) -> Line<'static> {
+    let na = |why: &str| Line::styled(format!("true: {why}"), Style::new().fg(Color::DarkGray));
+    match (s.truth, s.true_error) {
+        (Truth::Compared { coverage, exact }, Some(e)) => {
+            let mut how = Vec::new();
+            if !exact {
+                how.push("resampled".to_string());
+            }
+            if coverage < 1.0 {
+                how.push(format!("{:.0}% of view", coverage * 100.0));
+            }
+            let how = if how.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", how.join(", "))
+            };
+            Line::styled(
+                format!("error {:.2}% (true){how}", e * 100.0),
+                Style::new().fg(Color::Yellow),
+            )
+        }
+        (Truth::Compared { .. }, None) => na("after the first pass"),
+        (Truth::CameraMoved, _) => na("camera moved (r resets)"),
+        (Truth::FeaturesChanged, _) => na("features differ from the reference's"),
+        (Truth::NoOverlap, _) => na("reference outside the view"),
+        (Truth::NoReference, _) => na("no reference"),
     }
 }
 
@@ -191,44 +228,64 @@ fn decade_label(e: f64, unit: &str) -> String {
     }
 }
 
-/// Estimated error (%) against elapsed seconds, both on log axes.
-fn error_chart(f: &mut Frame, area: Rect, history: &[(f64, f64)]) {
-    let data: Vec<(f64, f64)> = history
-        .iter()
-        .filter(|(t, e)| *t > 0.0 && *e > 0.0)
-        .map(|(t, e)| (t.log10(), (e * 100.0).log10()))
-        .collect();
-    let (Some(x0), Some(x1)) = (data.first().map(|p| p.0), data.last().map(|p| p.0)) else {
-        return;
+/// Error (%) against elapsed seconds, both on log axes: the estimate, and
+/// the true error when a reference is loaded.
+fn error_chart(f: &mut Frame, area: Rect, estimate: &[(f64, f64)], truth: &[(f64, f64)]) {
+    let log = |h: &[(f64, f64)]| -> Vec<(f64, f64)> {
+        h.iter()
+            .filter(|(t, e)| *t > 0.0 && *e > 0.0)
+            .map(|(t, e)| (t.log10(), (e * 100.0).log10()))
+            .collect()
     };
-    let (y0, y1) = data
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-            (a.min(p.1), b.max(p.1))
-        });
+    let (est, tru) = (log(estimate), log(truth));
+    let all = || est.iter().chain(&tru);
+    let bounds = |k: fn(&(f64, f64)) -> f64| {
+        all().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(k(p)), b.max(k(p)))
+        })
+    };
+    let ((x0, x1), (y0, y1)) = (bounds(|p| p.0), bounds(|p| p.1));
+    if !(x0.is_finite() && y0.is_finite()) {
+        return;
+    }
     let (xb, yb) = (decades(x0, x1), decades(y0, y1));
     let labels = |b: [f64; 2], unit: &str| -> Vec<String> {
         (b[0] as i32..=b[1] as i32)
             .map(|e| decade_label(e as f64, unit))
             .collect()
     };
-    let chart = Chart::new(vec![Dataset::default()
-        .marker(Marker::Braille)
-        .graph_type(GraphType::Line)
-        .style(Style::new().fg(Color::Cyan))
-        .data(&data)])
-    .x_axis(
-        Axis::default()
-            .title("time")
-            .bounds(xb)
-            .labels(labels(xb, "s")),
-    )
-    .y_axis(
-        Axis::default()
-            .title("error")
-            .bounds(yb)
-            .labels(labels(yb, "%")),
-    );
+    // A legend only when there are two lines to tell apart.
+    let named = !tru.is_empty();
+    let line = |name: &'static str, color: Color, data| {
+        let d = Dataset::default()
+            .marker(Marker::Braille)
+            .graph_type(GraphType::Line)
+            .style(Style::new().fg(color))
+            .data(data);
+        if named {
+            d.name(name)
+        } else {
+            d
+        }
+    };
+    let mut sets = vec![line("estimate", Color::Cyan, &est)];
+    if named {
+        sets.push(line("true", Color::Yellow, &tru));
+    }
+    let chart = Chart::new(sets)
+        .hidden_legend_constraints((Constraint::Ratio(1, 2), Constraint::Ratio(1, 2)))
+        .x_axis(
+            Axis::default()
+                .title("time")
+                .bounds(xb)
+                .labels(labels(xb, "s")),
+        )
+        .y_axis(
+            Axis::default()
+                .title("error")
+                .bounds(yb)
+                .labels(labels(yb, "%")),
+        );
     f.render_widget(chart, area);
 }
 
