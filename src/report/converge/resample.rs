@@ -118,9 +118,12 @@ mod tests {
 
     #[test]
     fn a_fractional_size_weights_by_area() {
-        // Three reference columns onto two view columns: 1.5 each.
-        let img = vec![Vec3::ONE, Vec3::splat(2.0), Vec3::splat(4.0)];
-        let r = resample(3, 1, &img, 2, 1);
+        // Three reference columns onto two view columns: 1.5 each (rows
+        // alike, so only the columns' weights show).
+        let row = [Vec3::ONE, Vec3::splat(2.0), Vec3::splat(4.0)];
+        let img: Vec<Vec3> = (0..3).flat_map(|_| row).collect();
+        let r = resample(3, 3, &img, 2, 2);
+        assert_eq!(r.coverage, 1.0);
         assert!(!r.exact);
         assert!((r.pixels[0].1.x - (1.0 + 0.5 * 2.0) / 1.5).abs() < 1e-6);
         assert!((r.pixels[1].1.x - (0.5 * 2.0 + 4.0) / 1.5).abs() < 1e-6);
