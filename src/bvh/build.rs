@@ -2,12 +2,12 @@
 //! binary tree, in parallel on the rayon pool; the 8-wide tree that
 //! traversal uses is collapsed from it (`wide.rs`).
 //!
-//! The SAH builder bins centroids (Wald 2007; 32 bins near the root, 16
-//! lower down), refines the chosen split near the root by sweeping the
-//! triangles of the two bins beside it, and splits nodes of up to 32
-//! triangles by a full sweep over presorted centroids. Leaves cost one per
-//! packet of eight triangles, as traversal tests them. `build_full_sweep`
-//! sweeps every node: the reference its cost is measured against.
+//! The SAH builder bins centroids at every node (Wald 2007; 32 bins near
+//! the root, 16 lower down) and refines the chosen split near the root by
+//! sweeping the triangles of the two bins beside it. Leaves cost one per
+//! packet of eight triangles, as traversal tests them, so nodes of up to
+//! eight triangles are leaves. `build_full_sweep` sweeps every node: the
+//! reference its cost is measured against.
 
 use std::time::Instant;
 
@@ -35,8 +35,6 @@ const SAH_DEPTH: usize = 40;
 /// triangles such as ground planes, which binning handles badly, show up
 /// near the root; lower down refining costs more than it gains).
 const REFINE: usize = 1024;
-/// Nodes with at most this many triangles are split by a full sweep.
-const SMALL: usize = 32;
 /// Subtrees smaller than this are built on one thread.
 const PARALLEL_SUBTREE: usize = 4096;
 /// Nodes with more triangles than this bin them on several threads.
@@ -134,18 +132,12 @@ struct Task<'a> {
     bounds: Box3,
     cbounds: Box3,
     depth: usize,
-    /// For small nodes: `refs` indices sorted by centroid on each axis, kept
-    /// from the parent's sweep so each small subtree sorts only once.
-    sorted: Option<Orders>,
 }
-
-/// Per-axis orders of a small node's triangles.
-type Orders = [[u8; SMALL]; 3];
 
 /// How nodes are split.
 #[derive(Clone, Copy, PartialEq)]
 enum Method {
-    /// Binned SAH (exact sweep for small nodes).
+    /// Binned SAH.
     Binned,
     /// SAH with a full sweep at every node: slow, the quality reference.
     Sweep,
@@ -175,11 +167,20 @@ pub fn build_full_sweep(geom: &Geometry) -> Bvh {
 fn build_with(geom: &Geometry, method: Method) -> Bvh {
     let start_time = Instant::now();
     let n = geom.indices.len();
-    let mut refs: Vec<PrimRef> = (0..n)
-        .into_par_iter()
+    // Vertices fetched once through the index buffer, in scene order; the
+    // leaves' copy is gathered from here.
+    let scene_tris: Vec<[[f32; 3]; 3]> = geom
+        .indices
+        .par_iter()
         .with_min_len(4096)
-        .map(|i| {
-            let [a, b, c] = geom.triangle(i).map(Vec3A::from);
+        .map(|ix| ix.map(|v| geom.positions[v as usize].to_array()))
+        .collect();
+    let mut refs: Vec<PrimRef> = scene_tris
+        .par_iter()
+        .enumerate()
+        .with_min_len(4096)
+        .map(|(i, t)| {
+            let [a, b, c] = t.map(Vec3A::from_array);
             PrimRef::new(a.min(b).min(c), a.max(b).max(c), i as u32)
         })
         .collect();
@@ -196,9 +197,8 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
             bounds,
             cbounds,
             depth: 1,
-            sorted: None,
         };
-        depth = subtree(method, task, root, rest, 1);
+        depth = subtree(method, task, root, rest, 1, &mut Box::new(Bins::new()));
     }
     let nodes = compact(&scratch);
     drop(scratch);
@@ -206,8 +206,9 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
     let tris: Vec<[[f32; 3]; 3]> = prim
         .par_iter()
         .with_min_len(4096)
-        .map(|&i| geom.triangle(i as usize).map(|v| v.to_array()))
+        .map(|&i| scene_tris[i as usize])
         .collect();
+    drop(scene_tris);
     let wide = wide::Wide::collapse(&nodes, &tris);
     let build_ms = start_time.elapsed().as_secs_f64() * 1e3;
     let stats = stats(&nodes, n, depth, build_ms);
@@ -222,12 +223,20 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
 
 /// Builds the subtree of `t` into `me` (its root) and `desc` (room for its
 /// descendants, which start at index `base`); returns the subtree's depth.
-fn subtree(method: Method, mut t: Task, me: &mut Node, desc: &mut [Node], base: usize) -> usize {
+/// `bins` is scratch space for the binned SAH.
+fn subtree(
+    method: Method,
+    mut t: Task,
+    me: &mut Node,
+    desc: &mut [Node],
+    base: usize,
+    bins: &mut Bins,
+) -> usize {
     let n = t.refs.len();
     me.min = t.bounds.min.to_array();
     me.max = t.bounds.max.to_array();
     let cut = match method {
-        Method::Binned if t.depth <= SAH_DEPTH => split_sah(&mut t),
+        Method::Binned if t.depth <= SAH_DEPTH => split_sah(&mut t, bins),
         Method::Sweep if t.depth <= SAH_DEPTH => split_full(&mut t),
         _ => split_median(&mut t),
     };
@@ -244,7 +253,6 @@ fn subtree(method: Method, mut t: Task, me: &mut Node, desc: &mut [Node], base: 
         bounds: s.bounds,
         cbounds: s.cbounds,
         depth: t.depth + 1,
-        sorted: s.sorted,
     };
     let left = side(a, t.first, cut.left);
     let right = side(b, t.first + m, cut.right);
@@ -255,14 +263,15 @@ fn subtree(method: Method, mut t: Task, me: &mut Node, desc: &mut [Node], base: 
     let (ldesc, rdesc) = rest.split_at_mut(2 * m - 2);
     let (lbase, rbase) = (base + 2, base + 2 + 2 * m - 2);
     if n > PARALLEL_SUBTREE {
+        let mut other = Box::new(Bins::new());
         let (a, b) = rayon::join(
-            || subtree(method, left, &mut l[0], ldesc, lbase),
-            || subtree(method, right, &mut r[0], rdesc, rbase),
+            || subtree(method, left, &mut l[0], ldesc, lbase, bins),
+            || subtree(method, right, &mut r[0], rdesc, rbase, &mut other),
         );
         a.max(b)
     } else {
-        let a = subtree(method, left, &mut l[0], ldesc, lbase);
-        let b = subtree(method, right, &mut r[0], rdesc, rbase);
+        let a = subtree(method, left, &mut l[0], ldesc, lbase, bins);
+        let b = subtree(method, right, &mut r[0], rdesc, rbase, bins);
         a.max(b)
     }
 }
@@ -278,17 +287,12 @@ struct Cut {
 struct Side {
     bounds: Box3,
     cbounds: Box3,
-    sorted: Option<Orders>,
 }
 
 impl Side {
     fn of(refs: &[PrimRef]) -> Side {
         let (bounds, cbounds) = Box3::of(refs);
-        Side {
-            bounds,
-            cbounds,
-            sorted: None,
-        }
+        Side { bounds, cbounds }
     }
 }
 
@@ -307,18 +311,32 @@ fn blocks(n: usize) -> f32 {
     n.div_ceil(LEAF_BLOCK) as f32
 }
 
-/// Per-axis bins: bounds and triangle counts.
+/// Most bins per axis.
+const MAX_BINS: usize = 32;
+
+/// Per-axis bins: bounds and triangle counts. One set serves a whole
+/// subtree, cleared per node: building a fresh one per node cost more than
+/// filling it.
 #[derive(Clone)]
-struct Bins<const B: usize> {
-    bounds: [[Box3; B]; 3],
-    count: [[u32; B]; 3],
+struct Bins {
+    bounds: [[Box3; MAX_BINS]; 3],
+    count: [[u32; MAX_BINS]; 3],
 }
 
-impl<const B: usize> Bins<B> {
+impl Bins {
     fn new() -> Self {
         Bins {
-            bounds: [[Box3::EMPTY; B]; 3],
-            count: [[0; B]; 3],
+            bounds: [[Box3::EMPTY; MAX_BINS]; 3],
+            count: [[0; MAX_BINS]; 3],
+        }
+    }
+
+    /// Empties the first `b` bins of each axis.
+    #[inline(always)]
+    fn clear(&mut self, b: usize) {
+        for axis in 0..3 {
+            self.bounds[axis][..b].fill(Box3::EMPTY);
+            self.count[axis][..b].fill(0);
         }
     }
 
@@ -334,7 +352,7 @@ impl<const B: usize> Bins<B> {
 
     fn merge(mut self, o: Self) -> Self {
         for axis in 0..3 {
-            for k in 0..B {
+            for k in 0..MAX_BINS {
                 self.bounds[axis][k] = self.bounds[axis][k].union(o.bounds[axis][k]);
                 self.count[axis][k] += o.count[axis][k];
             }
@@ -368,22 +386,28 @@ impl<const B: usize> Binner<B> {
         let lane = |x: f32| (x.to_bits() - MAGIC.to_bits()) as usize & (B - 1);
         [lane(f.x), lane(f.y), lane(f.z)]
     }
+
+    /// The bin on one axis, the same as `bin(c)[axis]`.
+    #[inline(always)]
+    fn bin_on<const AXIS: usize>(&self, c: Vec3A) -> usize {
+        self.bin(c)[AXIS]
+    }
 }
 
 /// The best SAH split of `t`, partitioned; `None` makes a leaf.
-fn split_sah(t: &mut Task) -> Option<Cut> {
+fn split_sah(t: &mut Task, bins: &mut Bins) -> Option<Cut> {
     match t.refs.len() {
-        0..=1 => None,
-        2..=SMALL => split_small(t),
+        // One packet costs less than any split of it.
+        0..=LEAF_BLOCK => None,
         // Fewer bins for mid-sized nodes: there evaluating the bins costs
         // as much as filling them, and the bins are still narrow.
-        n if n < BIG => split_binned::<16>(t),
-        _ => split_binned::<32>(t),
+        n if n < BIG => split_binned::<16>(t, bins),
+        _ => split_binned::<MAX_BINS>(t, bins),
     }
 }
 
 /// The best split of `t` over `B` bins per axis, partitioned.
-fn split_binned<const B: usize>(t: &mut Task) -> Option<Cut> {
+fn split_binned<const B: usize>(t: &mut Task, bins: &mut Bins) -> Option<Cut> {
     let n = t.refs.len();
     let ext = t.cbounds.max - t.cbounds.min;
     let binner = Binner::<B> {
@@ -394,9 +418,8 @@ fn split_binned<const B: usize>(t: &mut Task) -> Option<Cut> {
             Vec3A::ZERO,
         ),
     };
-    let mut bins = Bins::<B>::new();
     if n > PARALLEL_BINNING {
-        bins = t
+        *bins = t
             .refs
             .par_chunks(PARALLEL_BINNING / 4)
             .fold(Bins::new, |mut b, chunk| {
@@ -407,46 +430,44 @@ fn split_binned<const B: usize>(t: &mut Task) -> Option<Cut> {
             })
             .reduce(Bins::new, Bins::merge);
     } else {
+        bins.clear(B);
         for r in t.refs.iter() {
             bins.add(r, binner.bin(r.c()));
         }
     }
-    let mut best: Option<(f32, usize, usize)> = None;
+    // Best (cost, axis, last bin of the left side). Empty bins are swept
+    // like the others (a branch on them mispredicts more than it saves);
+    // the strict comparison keeps the first of equal splits.
+    let mut best = (f32::INFINITY, 0, 0);
     for axis in 0..3 {
         if ext[axis] <= 0.0 {
             continue;
         }
         let (bb, bc) = (&bins.bounds[axis], &bins.count[axis]);
         // Right-to-left sweep stores the suffix costs, left-to-right evaluates.
-        // An empty bin changes nothing, so only bins with triangles are
-        // evaluated (most are empty in small nodes).
         let mut right_cost = [0.0f32; B];
         let (mut rb, mut rn) = (Box3::EMPTY, 0u32);
         for i in (1..B).rev() {
-            if bc[i] == 0 {
-                right_cost[i] = right_cost.get(i + 1).copied().unwrap_or(0.0);
-                continue;
-            }
             rb = rb.union(bb[i]);
             rn += bc[i];
             right_cost[i] = rb.area() * blocks(rn as usize);
         }
         let (mut lb, mut ln) = (Box3::EMPTY, 0u32);
         for i in 0..B - 1 {
-            if bc[i] == 0 {
-                continue;
-            }
             lb = lb.union(bb[i]);
             ln += bc[i];
-            if ln as usize == n {
-                break;
-            }
             let cost = lb.area() * blocks(ln as usize) + right_cost[i + 1];
-            if best.is_none_or(|b| cost < b.0) {
-                best = Some((cost, axis, i));
+            let cost = if ln > 0 && (ln as usize) < n {
+                cost
+            } else {
+                f32::INFINITY
+            };
+            if cost < best.0 {
+                best = (cost, axis, i);
             }
         }
     }
+    let best = (best.0 < f32::INFINITY).then_some(best);
     let Some((cost, axis, bin)) = best else {
         // All centroids coincide: split by index so leaves stay bounded.
         return (n > MAX_LEAF).then(|| halves(t.refs, n / 2)).flatten();
@@ -456,38 +477,35 @@ fn split_binned<const B: usize>(t: &mut Task) -> Option<Cut> {
         return None;
     }
     if n < REFINE {
-        return Some(partition(t.refs, &bins, axis, bin, |c| {
-            binner.bin(c)[axis] <= bin
-        }));
+        let (at, lc, rc) = match axis {
+            0 => partition_by(t.refs, |c| binner.bin_on::<0>(c) <= bin),
+            1 => partition_by(t.refs, |c| binner.bin_on::<1>(c) <= bin),
+            _ => partition_by(t.refs, |c| binner.bin_on::<2>(c) <= bin),
+        };
+        let union = |r: &[Box3]| r.iter().fold(Box3::EMPTY, |a, b| a.union(*b));
+        return Some(Cut {
+            at,
+            left: Side {
+                bounds: union(&bins.bounds[axis][..=bin]),
+                cbounds: lc,
+            },
+            right: Side {
+                bounds: union(&bins.bounds[axis][bin + 1..B]),
+                cbounds: rc,
+            },
+        });
     }
     // Refine: the triangles of the two bins beside the chosen boundary are
     // sorted and every split between them is tried. Bins cannot separate a
     // ground plane from the triangles just above it; this can, and it never
     // does worse than the binned split, which is one of those tried.
-    let group = |c: Vec3A| {
-        let b = binner.bin(c)[axis];
-        (b >= bin) as usize + (b > bin + 1) as usize
-    };
+    // Three groups: left of the two bins, in them, right of them.
     let refs = &mut *t.refs;
-    let (mut lo, mut i, mut hi) = (0, 0, n);
-    let (mut c_lo, mut c_hi) = (Box3::EMPTY, Box3::EMPTY);
-    while i < hi {
-        let c = refs[i].c();
-        match group(c) {
-            0 => {
-                c_lo.grow(c);
-                refs.swap(lo, i);
-                lo += 1;
-                i += 1;
-            }
-            2 => {
-                c_hi.grow(c);
-                hi -= 1;
-                refs.swap(i, hi);
-            }
-            _ => i += 1,
-        }
-    }
+    let below = |c: Vec3A| binner.bin(c)[axis] < bin;
+    let (lo, c_lo, _) = partition_by(refs, below);
+    let inside = |c: Vec3A| binner.bin(c)[axis] <= bin + 1;
+    let (m, _, c_hi) = partition_by(&mut refs[lo..], inside);
+    let hi = lo + m;
     let union = |r: std::ops::Range<usize>| {
         bins.bounds[axis][r]
             .iter()
@@ -556,52 +574,35 @@ fn split_binned<const B: usize>(t: &mut Task) -> Option<Cut> {
         left: Side {
             bounds: lb,
             cbounds: lc,
-            sorted: None,
         },
         right: Side {
             bounds: rb,
             cbounds: rc,
-            sorted: None,
         },
     })
 }
 
-/// Partitions `refs` into those left of the boundary after `bin` and the
-/// rest, growing the halves' centroid bounds on the way.
-fn partition<const B: usize>(
-    refs: &mut [PrimRef],
-    bins: &Bins<B>,
-    axis: usize,
-    bin: usize,
-    left: impl Fn(Vec3A) -> bool,
-) -> Cut {
-    let union = |r: &[Box3]| r.iter().fold(Box3::EMPTY, |a, b| a.union(*b));
+/// Moves the triangles whose centroid satisfies `left` to the front;
+/// returns how many there are and the centroid bounds of both sides.
+/// Without branches: which side a triangle goes to is a coin toss to the
+/// branch predictor.
+#[inline(always)]
+fn partition_by(refs: &mut [PrimRef], left: impl Fn(Vec3A) -> bool) -> (usize, Box3, Box3) {
     let (mut lc, mut rc) = (Box3::EMPTY, Box3::EMPTY);
-    let (mut i, mut j) = (0, refs.len());
-    while i < j {
-        let c = refs[i].c();
-        if left(c) {
-            lc.grow(c);
-            i += 1;
-        } else {
-            rc.grow(c);
-            j -= 1;
-            refs.swap(i, j);
-        }
+    // `refs[..i]` are left, `refs[i..j]` right.
+    let mut i = 0;
+    for j in 0..refs.len() {
+        let c = refs[j].c();
+        let go = left(c);
+        let m = glam::BVec3A::splat(go);
+        lc.min = lc.min.min(Vec3A::select(m, c, lc.min));
+        lc.max = lc.max.max(Vec3A::select(m, c, lc.max));
+        rc.min = rc.min.min(Vec3A::select(m, rc.min, c));
+        rc.max = rc.max.max(Vec3A::select(m, rc.max, c));
+        refs.swap(i, j);
+        i += go as usize;
     }
-    Cut {
-        at: i,
-        left: Side {
-            bounds: union(&bins.bounds[axis][..=bin]),
-            cbounds: lc,
-            sorted: None,
-        },
-        right: Side {
-            bounds: union(&bins.bounds[axis][bin + 1..]),
-            cbounds: rc,
-            sorted: None,
-        },
-    }
+    (i, lc, rc)
 }
 
 /// Orders triangles by centroid on `axis`, ties by triangle index, so every
@@ -620,70 +621,6 @@ fn order_key(x: f32) -> u32 {
     } else {
         b | 1 << 31
     }
-}
-
-/// The best SAH split of a small node by a full sweep over its triangles
-/// sorted by centroid on each axis: exact, and cheaper than binning there.
-/// The children inherit the sorted orders.
-fn split_small(t: &mut Task) -> Option<Cut> {
-    let n = t.refs.len();
-    // One packet costs less than any split of it.
-    if n <= LEAF_BLOCK {
-        return None;
-    }
-    let order = match t.sorted.take() {
-        Some(o) => o,
-        None => {
-            let mut o = [[0u8; SMALL]; 3];
-            let mut keys = [(0u64, 0u8); SMALL];
-            for (axis, o) in o.iter_mut().enumerate() {
-                for (k, r) in t.refs.iter().enumerate() {
-                    keys[k] = (sort_key(r, axis), k as u8);
-                }
-                keys[..n].sort_unstable();
-                for (x, key) in o.iter_mut().zip(&keys[..n]) {
-                    *x = key.1;
-                }
-            }
-            o
-        }
-    };
-    let mut idx = [[0usize; SMALL]; 3];
-    for (i, o) in idx.iter_mut().zip(order.iter()) {
-        for (x, &k) in i.iter_mut().zip(&o[..n]) {
-            *x = k as usize;
-        }
-    }
-    let mut right = [0.0f32; SMALL];
-    let [a, b, c] = &idx;
-    let (axis, at) = best_sweep(t, [&a[..n], &b[..n], &c[..n]], &mut right[..n])?;
-    // Reorder along the chosen axis; the children's orders are the parent's
-    // with the triangles renumbered.
-    let mut pos = [0u8; SMALL];
-    let mut tmp = [t.refs[0]; SMALL];
-    for (p, &k) in order[axis][..n].iter().enumerate() {
-        pos[k as usize] = p as u8;
-        tmp[p] = t.refs[k as usize];
-    }
-    t.refs.copy_from_slice(&tmp[..n]);
-    let (mut lo, mut ro) = ([[0u8; SMALL]; 3], [[0u8; SMALL]; 3]);
-    for a in 0..3 {
-        let (mut l, mut r) = (0, 0);
-        for &k in &order[a][..n] {
-            let p = pos[k as usize];
-            if (p as usize) < at {
-                lo[a][l] = p;
-                l += 1;
-            } else {
-                ro[a][r] = p - at as u8;
-                r += 1;
-            }
-        }
-    }
-    let mut cut = halves(t.refs, at)?;
-    cut.left.sorted = Some(lo);
-    cut.right.sorted = Some(ro);
-    Some(cut)
 }
 
 /// The full sweep for any node: the reference the binned builder is
