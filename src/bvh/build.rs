@@ -2,12 +2,13 @@
 //! binary tree, in parallel on the rayon pool; the 8-wide tree that
 //! traversal uses is collapsed from it (`wide.rs`).
 //!
-//! The SAH builder bins centroids at every node (Wald 2007; 32 bins near
-//! the root, 16 lower down) and refines the chosen split near the root by
-//! sweeping the triangles of the two bins beside it. Leaves cost one per
-//! packet of eight triangles, as traversal tests them, so nodes of up to
-//! eight triangles are leaves. `build_full_sweep` sweeps every node: the
-//! reference its cost is measured against.
+//! The SAH builder bins centroids (Wald 2007; 32 bins near the root, 16
+//! lower down), refines the chosen split near the root by sweeping the
+//! triangles of the two bins beside it, and sweeps nodes of up to twelve
+//! triangles exactly. Leaves cost one per packet of eight triangles, as
+//! traversal tests them, so nodes of up to eight triangles are leaves.
+//! `build_full_sweep` sweeps every node: the reference its cost is
+//! measured against.
 
 use std::time::Instant;
 
@@ -35,6 +36,10 @@ const SAH_DEPTH: usize = 40;
 /// triangles such as ground planes, which binning handles badly, show up
 /// near the root; lower down refining costs more than it gains).
 const REFINE: usize = 1024;
+/// Nodes of up to this many triangles are split by an exact sweep: bins
+/// cannot separate triangles whose centroids coincide on an axis (a cube's
+/// faces), a sweep can, and for so few it costs little more.
+const SWEEP: usize = 12;
 /// Subtrees smaller than this are built on one thread.
 const PARALLEL_SUBTREE: usize = 4096;
 /// Nodes with more triangles than this bin them on several threads.
@@ -399,6 +404,7 @@ fn split_sah(t: &mut Task, bins: &mut Bins) -> Option<Cut> {
     match t.refs.len() {
         // One packet costs less than any split of it.
         0..=LEAF_BLOCK => None,
+        n if n <= SWEEP => split_sweep(t),
         // Fewer bins for mid-sized nodes: there evaluating the bins costs
         // as much as filling them, and the bins are still narrow.
         n if n < BIG => split_binned::<16>(t, bins),
@@ -621,6 +627,33 @@ fn order_key(x: f32) -> u32 {
     } else {
         b | 1 << 31
     }
+}
+
+/// The exact sweep for a node of at most `SWEEP` triangles, without
+/// allocating.
+fn split_sweep(t: &mut Task) -> Option<Cut> {
+    let n = t.refs.len();
+    let mut order = [[0usize; SWEEP]; 3];
+    for (axis, o) in order.iter_mut().enumerate() {
+        // Centroid above, position below: one integer sort, ties by position.
+        let mut keys = [0u64; SWEEP];
+        for (key, (k, r)) in keys.iter_mut().zip(t.refs.iter().enumerate()) {
+            *key = (order_key(r.c().to_array()[axis]) as u64) << 32 | k as u64;
+        }
+        keys[..n].sort_unstable();
+        for (x, key) in o.iter_mut().zip(&keys[..n]) {
+            *x = *key as u32 as usize;
+        }
+    }
+    let mut right = [0.0f32; SWEEP];
+    let [a, b, c] = &order;
+    let (axis, at) = best_sweep(t, [&a[..n], &b[..n], &c[..n]], &mut right[..n])?;
+    let mut sorted = [t.refs[0]; SWEEP];
+    for (s, &k) in sorted.iter_mut().zip(&order[axis][..n]) {
+        *s = t.refs[k];
+    }
+    t.refs.copy_from_slice(&sorted[..n]);
+    halves(t.refs, at)
 }
 
 /// The full sweep for any node: the reference the binned builder is
