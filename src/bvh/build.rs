@@ -483,7 +483,7 @@ fn split_binned<const B: usize>(t: &mut Task, bins: &mut Bins) -> Option<Cut> {
         return None;
     }
     if n < REFINE {
-        let (at, lc, rc) = match axis {
+        let at = match axis {
             0 => partition_by(t.refs, |c| binner.bin_on::<0>(c) <= bin),
             1 => partition_by(t.refs, |c| binner.bin_on::<1>(c) <= bin),
             _ => partition_by(t.refs, |c| binner.bin_on::<2>(c) <= bin),
@@ -493,11 +493,11 @@ fn split_binned<const B: usize>(t: &mut Task, bins: &mut Bins) -> Option<Cut> {
             at,
             left: Side {
                 bounds: union(&bins.bounds[axis][..=bin]),
-                cbounds: lc,
+                cbounds: centroids(&t.refs[..at]),
             },
             right: Side {
                 bounds: union(&bins.bounds[axis][bin + 1..B]),
-                cbounds: rc,
+                cbounds: centroids(&t.refs[at..]),
             },
         });
     }
@@ -507,11 +507,9 @@ fn split_binned<const B: usize>(t: &mut Task, bins: &mut Bins) -> Option<Cut> {
     // does worse than the binned split, which is one of those tried.
     // Three groups: left of the two bins, in them, right of them.
     let refs = &mut *t.refs;
-    let below = |c: Vec3A| binner.bin(c)[axis] < bin;
-    let (lo, c_lo, _) = partition_by(refs, below);
-    let inside = |c: Vec3A| binner.bin(c)[axis] <= bin + 1;
-    let (m, _, c_hi) = partition_by(&mut refs[lo..], inside);
-    let hi = lo + m;
+    let lo = partition_by(refs, |c| binner.bin(c)[axis] < bin);
+    let hi = lo + partition_by(&mut refs[lo..], |c| binner.bin(c)[axis] <= bin + 1);
+    let (c_lo, c_hi) = (centroids(&refs[..lo]), centroids(&refs[hi..]));
     let union = |r: std::ops::Range<usize>| {
         bins.bounds[axis][r]
             .iter()
@@ -588,13 +586,13 @@ fn split_binned<const B: usize>(t: &mut Task, bins: &mut Bins) -> Option<Cut> {
     })
 }
 
-/// Moves the triangles whose centroid satisfies `left` to the front;
-/// returns how many there are and the centroid bounds of both sides.
-/// Without branches: which side a triangle goes to is a coin toss to the
-/// branch predictor. The bounds take a second pass over the halves, which
-/// are in cache by then: cheaper than growing both sides under a mask.
+/// Moves the triangles whose centroid satisfies `left` to the front and
+/// returns how many there are. Without branches: which side a triangle
+/// goes to is a coin toss to the branch predictor. (Centroid bounds are
+/// taken afterwards, by [`centroids`] over the halves while they are in
+/// cache: cheaper than growing both sides under a mask here.)
 #[inline(always)]
-fn partition_by(refs: &mut [PrimRef], left: impl Fn(Vec3A) -> bool) -> (usize, Box3, Box3) {
+fn partition_by(refs: &mut [PrimRef], left: impl Fn(Vec3A) -> bool) -> usize {
     // `refs[..i]` are left, `refs[i..j]` right.
     let mut i = 0;
     for j in 0..refs.len() {
@@ -602,13 +600,15 @@ fn partition_by(refs: &mut [PrimRef], left: impl Fn(Vec3A) -> bool) -> (usize, B
         refs.swap(i, j);
         i += go as usize;
     }
-    let centroids = |r: &[PrimRef]| {
-        r.iter().fold(Box3::EMPTY, |mut b, p| {
-            b.grow(p.c());
-            b
-        })
-    };
-    (i, centroids(&refs[..i]), centroids(&refs[i..]))
+    i
+}
+
+/// Bounds of the (doubled) centroids.
+fn centroids(refs: &[PrimRef]) -> Box3 {
+    refs.iter().fold(Box3::EMPTY, |mut b, p| {
+        b.grow(p.c());
+        b
+    })
 }
 
 /// Orders triangles by centroid on `axis`, ties by triangle index, so every
