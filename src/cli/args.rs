@@ -197,6 +197,7 @@ pub struct InspectArgs {
 }
 
 #[derive(Args, Debug)]
+#[command(mut_arg("size", |a| a.help("Image size, WIDTHxHEIGHT [default: 64x64]")))]
 pub struct ConvergeArgs {
     #[command(flatten)]
     pub scene: SceneOpts,
@@ -243,16 +244,19 @@ pub struct ConvergeArgs {
 }
 
 #[derive(Args, Debug)]
+#[command(mut_arg("size", |a| {
+    a.help("Size of PNG exports (p), WIDTHxHEIGHT (default: the scene's); the view fills the terminal")
+}))]
 pub struct TuiArgs {
-    /// The scene; `--size` is the size of PNG exports (`p`).
     #[command(flatten)]
     pub scene: SceneOpts,
     /// Colours (default: truecolor when COLORTERM says so, else 256).
     #[arg(long, value_enum)]
     pub color: Option<ColorMode>,
     /// A converged image of the scene (Radiance .hdr, e.g. from `rayterm
-    /// render --spp 1024 -o ref.hdr`): the true error is shown beside the
-    /// estimate while the camera and features are the starting ones.
+    /// render --spp 1024 -o ref.hdr`, best at a whole multiple of the view's
+    /// size): the true error is shown beside the estimate while the camera
+    /// and features are the starting ones.
     #[arg(long, value_name = "FILE.hdr")]
     pub reference: Option<PathBuf>,
 }

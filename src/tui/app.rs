@@ -13,7 +13,7 @@ use ratatui::layout::Rect;
 use super::color::ColorMode;
 use super::export;
 use super::keys::{self, Action, Key, Mode};
-use super::worker::{self, Cmd, Msg, Reference, Snapshot, View, Worker};
+use super::worker::{self, Cmd, Msg, Reference, Snapshot, Truth, View, Worker};
 use crate::bvh::Bvh;
 use crate::cli::{Prepared, Worst};
 use crate::inspect::{inspect_pixel, lines, PixelTree, TreeLine};
@@ -135,6 +135,9 @@ pub struct App {
     pub quit: bool,
     /// The `--reference` image, if any.
     pub reference: Option<Arc<Reference>>,
+    /// The view size for which the status line last said how to make the
+    /// reference exact.
+    resample_noted: Option<(u32, u32)>,
 }
 
 impl App {
@@ -222,6 +225,7 @@ impl App {
             scene,
             bvh,
             reference,
+            resample_noted: None,
         })
     }
 
@@ -708,6 +712,7 @@ impl App {
                 if due {
                     self.shown = (f.generation, Instant::now());
                 }
+                self.note_resampling(&f);
                 self.frame = Some(f);
                 due
             }
@@ -723,6 +728,29 @@ impl App {
                 true
             }
         }
+    }
+
+    /// Says once per view size how to render a reference that compares
+    /// exactly: resampling it adds error wherever an edge falls inside a
+    /// reference pixel.
+    fn note_resampling(&mut self, f: &Snapshot) {
+        let (Truth::Compared { exact: false, .. }, Some(r)) = (f.truth, &self.reference) else {
+            return;
+        };
+        if self.resample_noted == Some((f.width, f.height)) {
+            return;
+        }
+        self.resample_noted = Some((f.width, f.height));
+        let k = ((r.width as f64 / f.width as f64).round() as u32).max(1);
+        self.status = format!(
+            "For an exact true error render the reference at {}x{} ({k}x the {}x{} view): this {}x{} one is resampled, which adds error at edges.",
+            k * f.width,
+            k * f.height,
+            f.width,
+            f.height,
+            r.width,
+            r.height,
+        );
     }
 
     /// Waits until a full pass of the current view has arrived; false on timeout.

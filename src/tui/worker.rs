@@ -161,6 +161,10 @@ pub struct Worker {
     /// The reference on the view's pixels while `truth` is `Compared`.
     reference_pixels: Vec<(u32, Vec3)>,
     true_history: Vec<(f64, f64)>,
+    /// Mrays/s of the last full pass.
+    last_mrays: f64,
+    /// The film is unchanged but the view's generation is new: show it again.
+    resend: bool,
 }
 
 impl Worker {
@@ -188,6 +192,8 @@ impl Worker {
             truth: Truth::NoReference,
             reference_pixels: Vec::new(),
             true_history: Vec::new(),
+            last_mrays: 0.0,
+            resend: false,
         }
     }
 
@@ -197,11 +203,26 @@ impl Worker {
         match cmd {
             Cmd::View(generation, view) => {
                 self.generation = generation;
+                // Bloom and the BVH toggle leave the film as it is: keep its
+                // samples and only show it again.
+                // A pass cancelled halfway leaves some rows a sample short;
+                // each pixel's mean and error stay its own, so the film is
+                // still sound.
+                let same_film = self.film.spp > 0
+                    && self.view.is_some_and(|old| {
+                        (old.camera, old.width, old.height)
+                            == (view.camera, view.width, view.height)
+                            && old.features.shaping_film() == view.features.shaping_film()
+                    });
                 if self.view != Some(view) {
                     self.plan = Plan::new(&self.scene, view.features);
                     self.view = Some(view);
                 }
-                self.restart();
+                if same_film {
+                    self.resend = true;
+                } else {
+                    self.restart();
+                }
                 None
             }
             Cmd::Builder(generation, builder) => {
@@ -253,6 +274,9 @@ impl Worker {
 
     /// Whether more passes would change the image.
     pub fn idle(&self) -> bool {
+        if self.resend {
+            return false;
+        }
         match self.view {
             None => true,
             Some(v) if v.width == 0 || v.height == 0 => true,
@@ -266,6 +290,9 @@ impl Worker {
             return None;
         }
         let view = self.view?;
+        if std::mem::take(&mut self.resend) {
+            return Some(self.snapshot(&view, self.film.image()));
+        }
         if std::mem::take(&mut self.coarse_pending) {
             return self.coarse(&view, cancel);
         }
@@ -296,21 +323,32 @@ impl Worker {
             return None;
         }
         self.last_full_ms = Some(ms);
+        self.last_mrays = rays as f64 / (ms.max(1e-6) * 1e3);
         let elapsed = self.started.elapsed().as_secs_f64();
         let error = self.film.relative_error();
         if self.film.spp >= 2 && error > 0.0 {
             self.history.push((elapsed, error));
         }
         let mean = self.film.image();
-        let true_error = matches!(self.truth, Truth::Compared { .. })
-            .then(|| rel_mse_on(&mean, &self.reference_pixels).sqrt());
-        if let Some(e) = true_error {
+        if let Some(e) = self.true_error(&mean) {
             self.true_history.push((elapsed, e));
         }
+        Some(self.snapshot(&view, mean))
+    }
+
+    /// Root relMSE of `mean` against the reference, where it is compared.
+    fn true_error(&self, mean: &[Vec3]) -> Option<f64> {
+        matches!(self.truth, Truth::Compared { .. })
+            .then(|| rel_mse_on(mean, &self.reference_pixels).sqrt())
+    }
+
+    /// The film as it stands, for the app.
+    fn snapshot(&self, view: &View, mean: Vec<Vec3>) -> Snapshot {
+        let true_error = self.true_error(&mean);
         let (image, pre_bloom) = self.bloomed(mean, view.width, view.height);
         let worst =
             [Worst::Nan, Worst::Variance, Worst::Brightest].map(|w| find_worst(&self.film, w));
-        Some(Snapshot {
+        Snapshot {
             generation: self.generation,
             width: view.width,
             height: view.height,
@@ -318,12 +356,12 @@ impl Worker {
             pre_bloom,
             coarse: false,
             spp: self.film.spp,
-            pass_ms: ms,
-            mrays: rays as f64 / (ms.max(1e-6) * 1e3),
-            error,
+            pass_ms: self.last_full_ms.unwrap_or(0.0),
+            mrays: self.last_mrays,
+            error: self.film.relative_error(),
             exact: self.plan.deterministic,
             done: self.idle(),
-            elapsed,
+            elapsed: self.started.elapsed().as_secs_f64(),
             history: self.history.clone(),
             true_error,
             truth: self.truth,
@@ -331,7 +369,7 @@ impl Worker {
             per_ray: self.per_ray,
             worst,
             bad_samples: self.film.bad_count,
-        })
+        }
     }
 
     /// Bloom applied when the plan has it: (displayed, mean before bloom).
@@ -592,6 +630,31 @@ mod tests {
                 Some(t) => assert_eq!((s.truth, s.true_error), (t, None)),
             }
         }
+    }
+
+    #[test]
+    fn bloom_and_bvh_toggles_keep_the_samples() {
+        let mut w = worker(Features::all());
+        let view = w.view.unwrap();
+        let full = |w: &mut Worker| {
+            std::iter::from_fn(|| w.step(&|| false))
+                .find(|s| !s.coarse)
+                .unwrap()
+        };
+        for _ in 0..4 {
+            full(&mut w);
+        }
+        let mut plain = view;
+        plain.features.set(Feature::Bloom, false);
+        plain.features.set(Feature::Bvh, false);
+        w.apply(Cmd::View(2, plain));
+        let s = w.step(&|| false).unwrap();
+        assert_eq!((s.generation, s.spp, s.pre_bloom.is_none()), (2, 4, true));
+        assert_eq!(full(&mut w).spp, 5);
+        let mut shadowless = plain;
+        shadowless.features.set(Feature::Shadows, false);
+        w.apply(Cmd::View(3, shadowless));
+        assert_eq!(full(&mut w).spp, 1);
     }
 
     #[test]

@@ -35,7 +35,11 @@ fn encode_hdr(width: u32, height: u32, img: &[Vec3]) -> Result<Vec<u8>> {
 }
 
 fn decode_hdr(bytes: &[u8]) -> Result<(u32, u32, Vec<Vec3>)> {
-    let img = image::DynamicImage::from_decoder(HdrDecoder::new(Cursor::new(bytes))?)?;
+    // The image crate's errors repeat their source in their message; one
+    // line without the chain reads better.
+    let flat = |e: image::ImageError| anyhow::anyhow!("{e}");
+    let img = image::DynamicImage::from_decoder(HdrDecoder::new(Cursor::new(bytes)).map_err(flat)?)
+        .map_err(flat)?;
     let rgb = match img {
         image::DynamicImage::ImageRgb32F(i) => i,
         other => other.to_rgb32f(),

@@ -33,8 +33,9 @@ pub fn draw(f: &mut Frame, app: &mut App) {
     ])
     .areas(area);
     let side = (area.width * 2 / 7).clamp(32, 46);
-    let [left, right] =
-        Layout::horizontal([Constraint::Min(0), Constraint::Length(side)]).areas(main);
+    let [left, right] = Layout::horizontal([Constraint::Min(0), Constraint::Length(side)])
+        .spacing(1)
+        .areas(main);
     let [view, debug] = Layout::vertical([
         Constraint::Min(0),
         Constraint::Length((left.height * 3 / 10).max(6)),

@@ -153,7 +153,7 @@ pub fn render(f: &mut Frame, area: Rect, app: &App) {
                 Line::from(error),
             ];
             if app.reference.is_some() {
-                v.push(truth_line(s));
+                v.extend(truth_lines(s));
             }
             v.push(Line::from(bytes));
             if s.bad_samples > 0 {
@@ -178,11 +178,17 @@ pub fn render(f: &mut Frame, area: Rect, app: &App) {
     }
 }
 
-/// The true error against the `--reference` image, or why there is none.
-fn truth_line(s: &Snapshot) -> Line<'static> {
-    let na = |why: &str| Line::styled(format!("true: {why}"), Style::new().fg(Color::DarkGray));
+/// The true error against the `--reference` image and how it was taken,
+/// or why there is none.
+fn truth_lines(s: &Snapshot) -> Vec<Line<'static>> {
+    let dim = Style::new().fg(Color::DarkGray);
+    let na = |why: &str| vec![Line::styled(format!("true: {why}"), dim)];
     match (s.truth, s.true_error) {
         (Truth::Compared { coverage, exact }, Some(e)) => {
+            let mut lines = vec![Line::styled(
+                format!("error {:.2}% (true)", e * 100.0),
+                Style::new().fg(Color::Yellow),
+            )];
             let mut how = Vec::new();
             if !exact {
                 how.push("resampled".to_string());
@@ -190,15 +196,10 @@ fn truth_line(s: &Snapshot) -> Line<'static> {
             if coverage < 1.0 {
                 how.push(format!("{:.0}% of view", coverage * 100.0));
             }
-            let how = if how.is_empty() {
-                String::new()
-            } else {
-                format!(" ({})", how.join(", "))
-            };
-            Line::styled(
-                format!("error {:.2}% (true){how}", e * 100.0),
-                Style::new().fg(Color::Yellow),
-            )
+            if !how.is_empty() {
+                lines.push(Line::styled(format!("  {}", how.join(", ")), dim));
+            }
+            lines
         }
         (Truth::Compared { .. }, None) => na("after the first pass"),
         (Truth::CameraMoved, _) => na("camera moved (r resets)"),
