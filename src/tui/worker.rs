@@ -204,10 +204,9 @@ impl Worker {
             Cmd::View(generation, view) => {
                 self.generation = generation;
                 // Bloom and the BVH toggle leave the film as it is: keep its
-                // samples and only show it again.
-                // A pass cancelled halfway leaves some rows a sample short;
-                // each pixel's mean and error stay its own, so the film is
-                // still sound.
+                // samples and only show it again. (A pass cancelled halfway
+                // leaves some rows a sample short; each pixel's mean and
+                // error are its own, so the film is still sound.)
                 let same_film = self.film.spp > 0
                     && self.view.is_some_and(|old| {
                         (old.camera, old.width, old.height)
@@ -291,7 +290,9 @@ impl Worker {
         }
         let view = self.view?;
         if std::mem::take(&mut self.resend) {
-            return Some(self.snapshot(&view, self.film.image()));
+            let mean = self.film.image();
+            let truth = self.true_error(&mean);
+            return Some(self.snapshot(&view, mean, truth));
         }
         if std::mem::take(&mut self.coarse_pending) {
             return self.coarse(&view, cancel);
@@ -330,10 +331,11 @@ impl Worker {
             self.history.push((elapsed, error));
         }
         let mean = self.film.image();
-        if let Some(e) = self.true_error(&mean) {
+        let truth = self.true_error(&mean);
+        if let Some(e) = truth {
             self.true_history.push((elapsed, e));
         }
-        Some(self.snapshot(&view, mean))
+        Some(self.snapshot(&view, mean, truth))
     }
 
     /// Root relMSE of `mean` against the reference, where it is compared.
@@ -342,9 +344,9 @@ impl Worker {
             .then(|| rel_mse_on(mean, &self.reference_pixels).sqrt())
     }
 
-    /// The film as it stands, for the app.
-    fn snapshot(&self, view: &View, mean: Vec<Vec3>) -> Snapshot {
-        let true_error = self.true_error(&mean);
+    /// The film as it stands, for the app; `mean` is its image and
+    /// `true_error` that image's error against the reference.
+    fn snapshot(&self, view: &View, mean: Vec<Vec3>, true_error: Option<f64>) -> Snapshot {
         let (image, pre_bloom) = self.bloomed(mean, view.width, view.height);
         let worst =
             [Worst::Nan, Worst::Variance, Worst::Brightest].map(|w| find_worst(&self.film, w));
