@@ -168,12 +168,12 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         format!("{:.3}%", film.relative_error() * 100.0)
     };
     println!(
-        "{}: {} triangles, build {:.1} ms ({}), render {:.1} ms, {} spp, {:.2} Mrays/s, error {}{} -> {}",
+        "{}: {} triangles, build {:.1} ms ({}), render {}, {} spp, {:.2} Mrays/s, error {}{} -> {}",
         p.scene.name,
         p.scene.geometry.triangle_count(),
         p.bvh.stats.build_ms,
         p.bvh.stats.builder,
-        render_ms,
+        duration(render_ms),
         film.spp,
         rays as f64 / render_ms / 1e3,
         err,
@@ -187,8 +187,29 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// `812.3 ms` below ten seconds, `24.9 s` from there.
+fn duration(ms: f64) -> String {
+    if ms < 1e4 {
+        format!("{ms:.1} ms")
+    } else {
+        format!("{:.1} s", ms / 1e3)
+    }
+}
+
 /// A `.hdr` output gets the linear film instead of a PNG.
 fn is_hdr(path: &std::path::Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("hdr"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn durations_read_in_the_unit_that_fits() {
+        assert_eq!(duration(812.34), "812.3 ms");
+        assert_eq!(duration(24_927.9), "24.9 s");
+        assert!(is_hdr(std::path::Path::new("ref.HDR")) && !is_hdr(std::path::Path::new("a.png")));
+    }
 }
