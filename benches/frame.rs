@@ -3,24 +3,20 @@
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use rayterm::bvh;
-use rayterm::render::{pass, Film, Plan, Tracer};
+use rayterm::render::{Progressive, SceneRequest, Session};
 use rayterm::report::bench::frame_features;
-use rayterm::scene;
 
 fn frame(c: &mut Criterion) {
     let mut g = c.benchmark_group("frame");
     for name in ["cornell", "teapot", "mirrors"] {
-        let s = scene::load(name).unwrap();
-        let b = bvh::build(&s.geometry, s.settings.builder);
-        let plan = Plan::new(&s, frame_features());
-        let tracer = Tracer::new(&s, &b, &plan, 400, 400, 1);
-        g.bench_function(name, |bn| {
-            bn.iter(|| {
-                let mut film = Film::new(400, 400);
-                pass::render_pass(&tracer, &mut film, 1, &|| false)
-            })
-        });
+        let req = SceneRequest {
+            size: Some((400, 400)),
+            features: frame_features(),
+            ..SceneRequest::new(name)
+        };
+        let (s, _) = Session::open(&req).unwrap();
+        let tracer = s.tracer();
+        g.bench_function(name, |bn| bn.iter(|| Progressive::render(&tracer, 1)));
     }
     g.finish();
 }

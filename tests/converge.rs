@@ -8,7 +8,7 @@ mod exact;
 use common::*;
 use exact::*;
 use rayterm::bvh::{self, Bvh};
-use rayterm::render::{Feature, Features, Plan};
+use rayterm::render::{Feature, Features, Plan, PlanPolicy};
 use rayterm::report::converge::{
     fit_log_log, load_reference, rmse, Budget, Config, ReferenceSource, Study, Subject,
 };
@@ -30,7 +30,7 @@ fn config(w: u32, h: u32, budgets: &[u32], reference: ReferenceSource) -> Config
 
 fn study(s: &Scene, features: Features, cfg: &Config) -> Study {
     let bvh: Bvh = bvh::build(&s.geometry, Builder::Sah);
-    let plan = Plan::new(s, features);
+    let plan = Plan::new(s, features, PlanPolicy::Prune);
     Subject {
         scene: s,
         bvh: &bvh,

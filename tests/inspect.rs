@@ -5,31 +5,27 @@
 use std::path::Path;
 use std::process::Command;
 
-use rayterm::bvh::{self, Bvh};
 use rayterm::inspect::{inspect_pixel, PixelTree, RayNode};
 use rayterm::render::recorder::RayKind;
-use rayterm::render::{pass, Features, Film, Plan, Tracer};
-use rayterm::scene::{self, builtin::SCENES, Scene};
+use rayterm::render::{Progressive, SceneRequest, Session, Tracer};
+use rayterm::scene::builtin::SCENES;
 use serde_json::Value;
 
 const SEED: u64 = 7;
 
-struct Setup {
-    scene: Scene,
-    bvh: Bvh,
-    plan: Plan,
-}
+struct Setup(Session);
 
 fn setup(spec: &str) -> Setup {
-    let scene = scene::load(spec).unwrap();
-    let bvh = bvh::build(&scene.geometry, scene.settings.builder);
-    let plan = Plan::new(&scene, Features::all());
-    Setup { scene, bvh, plan }
+    let req = SceneRequest {
+        seed: SEED,
+        ..SceneRequest::new(spec)
+    };
+    Setup(Session::open(&req).unwrap().0)
 }
 
 impl Setup {
     fn tracer(&self, w: u32, h: u32) -> Tracer<'_> {
-        Tracer::new(&self.scene, &self.bvh, &self.plan, w, h, SEED)
+        self.0.tracer_for(&self.0.plan, &self.0.camera, (w, h))
     }
 }
 
@@ -39,8 +35,7 @@ fn tree_colour_is_the_rendered_sample_to_the_bit() {
     for (name, _) in SCENES {
         let s = setup(name);
         let t = s.tracer(w, h);
-        let mut film = Film::new(w, h);
-        pass::render_pass(&t, &mut film, 1, &|| false);
+        let film = Progressive::render(&t, 1);
         assert_eq!(film.bad_count, 0, "{name}: NaN/Inf samples");
         for y in 0..h {
             for x in 0..w {

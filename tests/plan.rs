@@ -4,7 +4,7 @@
 mod common;
 
 use common::*;
-use rayterm::render::{Feature, Features, Plan};
+use rayterm::render::{Feature, Features, Plan, PlanPolicy};
 use rayterm::scene::{self, Builder};
 
 /// (scene, textures, smooth normals, reflections, glossy, area sampling, environment)
@@ -21,7 +21,7 @@ const TABLE: &[(&str, bool, bool, bool, bool, bool, bool)] = &[
 fn plan_of_each_builtin_follows_the_rules() {
     for &(name, tex, smooth, refl, glossy, area, env) in TABLE {
         let s = scene::load(name).unwrap();
-        let p = Plan::new(&s, Features::all());
+        let p = Plan::new(&s, Features::all(), PlanPolicy::Prune);
         assert_eq!(p.textures, tex, "{name} textures");
         assert_eq!(p.smooth_normals, smooth, "{name} smooth normals");
         assert_eq!(p.reflections, refl, "{name} reflections");
@@ -31,14 +31,18 @@ fn plan_of_each_builtin_follows_the_rules() {
         assert_eq!(p.environment, env, "{name} environment");
         assert!(p.shadows && p.bvh && p.supersampling);
         // Every stage that is off because of the scene says why.
-        for st in &p.stages {
+        for (stage, on, reason) in p.rows() {
             assert!(
-                st.on || st.reason.starts_with("not needed: ") || st.reason.starts_with("off"),
-                "{st:?}"
+                on || reason.starts_with("not needed: ") || reason.starts_with("off"),
+                "{stage}: {reason}"
             );
         }
         // Without supersampling, only area lights and glossy materials sample.
-        let q = Plan::new(&s, Features::all().without(&[Feature::Supersampling]));
+        let q = Plan::new(
+            &s,
+            Features::all().without(&[Feature::Supersampling]),
+            PlanPolicy::Prune,
+        );
         assert_eq!(q.deterministic, !(area || glossy), "{name} deterministic");
     }
 }
@@ -46,14 +50,18 @@ fn plan_of_each_builtin_follows_the_rules() {
 #[test]
 fn toggled_off_features_are_off_whatever_the_scene() {
     let s = scene::load("cube-textured").unwrap();
-    let p = Plan::new(&s, Features::all().without(&[Feature::Textures]));
+    let p = Plan::new(
+        &s,
+        Features::all().without(&[Feature::Textures]),
+        PlanPolicy::Prune,
+    );
     assert!(!p.textures && !p.bilinear);
-    let st = p
-        .stages
-        .iter()
-        .find(|s| s.stage.starts_with("bilinear"))
+    let (_, on, reason) = p
+        .rows()
+        .into_iter()
+        .find(|r| r.0.starts_with("bilinear"))
         .unwrap();
-    assert_eq!(st.reason, "off: needs textures");
+    assert_eq!((on, reason.as_str()), (false, "off: needs textures"));
 }
 
 #[test]
@@ -62,8 +70,16 @@ fn plan_on_and_off_give_identical_deterministic_images() {
     for name in ["cornell", "teapot", "cube-textured", "env"] {
         let s = scene::load(name).unwrap();
         let bvh = rayterm::bvh::build(&s.geometry, Builder::Sah);
-        let with = render_with(&s, &bvh, &Plan::new(&s, f), 48, 36, 1, 1);
-        let without = render_with(&s, &bvh, &Plan::everything(&s, f), 48, 36, 1, 1);
+        let with = render_with(&s, &bvh, &Plan::new(&s, f, PlanPolicy::Prune), 48, 36, 1, 1);
+        let without = render_with(
+            &s,
+            &bvh,
+            &Plan::new(&s, f, PlanPolicy::Everything),
+            48,
+            36,
+            1,
+            1,
+        );
         for (a, b) in with.image.iter().zip(&without.image) {
             assert_eq!(
                 a.to_array().map(f32::to_bits),
@@ -79,8 +95,16 @@ fn plan_on_and_off_agree_on_sampled_scenes() {
     let s = scene::load("cornell-area").unwrap();
     let bvh = rayterm::bvh::build(&s.geometry, Builder::Sah);
     let f = Features::all().without(&[Feature::Bloom]);
-    let a = render_with(&s, &bvh, &Plan::new(&s, f), 24, 24, 8, 1);
-    let b = render_with(&s, &bvh, &Plan::everything(&s, f), 24, 24, 8, 2);
+    let a = render_with(&s, &bvh, &Plan::new(&s, f, PlanPolicy::Prune), 24, 24, 8, 1);
+    let b = render_with(
+        &s,
+        &bvh,
+        &Plan::new(&s, f, PlanPolicy::Everything),
+        24,
+        24,
+        8,
+        2,
+    );
     let mean =
         |r: &Rendered| r.image.iter().map(|c| c.x as f64).sum::<f64>() / r.image.len() as f64;
     let se = |r: &Rendered| {

@@ -9,7 +9,7 @@ use common::*;
 use exact::*;
 use glam::Vec3;
 use rayterm::bvh;
-use rayterm::render::{Feature, Features, Plan};
+use rayterm::render::{Feature, Features, Plan, PlanPolicy};
 use rayterm::scene::{self, Builder, Camera, Light, Scene};
 
 /// Renders `s` with `light_samples` per hit, jittered or independent.
@@ -108,7 +108,7 @@ fn jittered_light_samples_beat_independent_ones_at_equal_count() {
 fn film_with_threads(spec: &str, threads: usize) -> anyhow::Result<Vec<(u64, u64, u32)>> {
     let s = scene::load(spec)?;
     let bvh = bvh::build(&s.geometry, s.settings.builder);
-    let plan = Plan::new(&s, Features::all());
+    let plan = Plan::new(&s, Features::all(), PlanPolicy::Prune);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()?;

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 
 use crate::render::debug_view::DebugView;
-use crate::render::Feature;
+use crate::render::{Feature, Features, PlanPolicy, SceneRequest, Worst};
 use crate::scene::Builder;
 use crate::tui::color::ColorMode;
 
@@ -107,18 +107,22 @@ pub struct SceneOpts {
 }
 
 impl SceneOpts {
-    /// Options as the command line would give them with only `scene` set.
-    pub fn new(scene: &str) -> Self {
-        Self {
-            scene: scene.to_string(),
-            size: None,
-            builder: None,
-            off: Vec::new(),
-            seed: 1,
-            no_plan: false,
-            light_samples: None,
-            glossy_samples: None,
-            independent: false,
+    /// What these options ask the session for.
+    pub fn request(&self) -> SceneRequest {
+        SceneRequest {
+            spec: self.scene.clone(),
+            size: self.size,
+            builder: self.builder,
+            features: Features::all().without(&self.off),
+            policy: if self.no_plan {
+                PlanPolicy::Everything
+            } else {
+                PlanPolicy::Prune
+            },
+            seed: self.seed,
+            light_samples: self.light_samples,
+            glossy_samples: self.glossy_samples,
+            independent: self.independent,
         }
     }
 }
@@ -162,16 +166,6 @@ pub fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
     Ok((x, y))
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Worst {
-    /// The first pixel with a NaN or infinite sample.
-    Nan,
-    /// The pixel whose samples vary most.
-    Variance,
-    /// The brightest pixel.
-    Brightest,
-}
-
 #[derive(Args, Debug)]
 pub struct InspectArgs {
     #[command(flatten)]
@@ -185,10 +179,12 @@ pub struct InspectArgs {
     /// Sample index to replay.
     #[arg(long, default_value_t = 0)]
     pub sample: u32,
-    /// Samples per pixel rendered to find the worst pixel.
-    #[arg(long, default_value_t = 16)]
-    pub spp: u32,
-    /// Print JSON (schema in the README) instead of text.
+    /// Samples per pixel of the image rendered to find the worst pixel
+    /// (default 16) and, when bloom runs, for the pixel's value before and
+    /// after bloom (default 1).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: Option<u32>,
+    /// Print JSON (schema in docs/inspect-json.md) instead of text.
     #[arg(long)]
     pub json: bool,
     /// Show every light sample instead of folding long lists.
@@ -272,4 +268,40 @@ pub struct StabilityArgs {
     /// Print the rows as JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::PlanPolicy;
+
+    #[test]
+    fn no_command_means_the_tui() {
+        assert!(Cli::try_parse_from(["rayterm"]).unwrap().command.is_none());
+        let cli =
+            Cli::try_parse_from(["rayterm", "tui", "teapot", "--color", "16", "--no", "bloom"]);
+        match cli.unwrap().command {
+            Some(Command::Tui(a)) => {
+                assert_eq!(a.scene.scene, "teapot");
+                assert_eq!(a.color, Some(crate::tui::color::ColorMode::Ansi16));
+                assert_eq!(a.scene.off, vec![Feature::Bloom]);
+            }
+            other => panic!("{other:?}"),
+        }
+        let Some(Command::Tui(a)) = Cli::try_parse_from(["rayterm", "tui"]).unwrap().command else {
+            panic!("tui parses");
+        };
+        assert_eq!((a.scene.scene.as_str(), a.scene.seed), ("cornell", 1));
+    }
+
+    #[test]
+    fn no_plan_reaches_the_request() {
+        let Some(Command::Tui(a)) = Cli::try_parse_from(["rayterm", "tui", "cornell", "--no-plan"])
+            .unwrap()
+            .command
+        else {
+            panic!("tui parses");
+        };
+        assert_eq!(a.scene.request().policy, PlanPolicy::Everything);
+    }
 }

@@ -7,8 +7,9 @@ use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
 use super::args::parse_size;
+use crate::render::SceneRequest;
 use crate::report::{bench, scaling, workload};
-use crate::scene::{self, Builder};
+use crate::scene::Builder;
 
 #[derive(Args, Debug)]
 #[command(args_conflicts_with_subcommands = true)]
@@ -122,7 +123,8 @@ pub fn run(a: BenchArgs) -> Result<ExitCode> {
             let (cols, rows) = t.terminal;
             let cols = u16::try_from(cols).context("--terminal: too many columns")?;
             let rows = u16::try_from(rows).context("--terminal: too many rows")?;
-            let stats = crate::tui::bench::measure_pass(&t.scene, cols, rows, t.passes)?;
+            let req = SceneRequest::new(&t.scene);
+            let stats = crate::tui::bench::measure_pass(&req, cols, rows, t.passes)?;
             println!("{}", serde_json::to_string_pretty(&stats)?);
         }
         Some(BenchCommand::Scaling(s)) => {
@@ -143,10 +145,7 @@ pub fn run(a: BenchArgs) -> Result<ExitCode> {
 }
 
 fn rays(a: RaysArgs) -> Result<()> {
-    let s = scene::load(&a.mesh)?;
-    for w in &s.warnings {
-        eprintln!("warning: {w}");
-    }
+    let s = super::load_scene(&a.mesh)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.threads as usize)
         .build()

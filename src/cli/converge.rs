@@ -5,7 +5,7 @@ use std::process::ExitCode;
 use anyhow::{bail, Context, Result};
 
 use super::args::ConvergeArgs;
-use super::render::prepare;
+use super::open_scene;
 use crate::render::output::save_png_atomic;
 use crate::report::converge::{self, Budget, Config, ReferenceSource, Subject};
 
@@ -15,7 +15,7 @@ const DEFAULT_SIZE: (u32, u32) = (64, 64);
 pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
     let mut opts = a.scene.clone();
     opts.size = opts.size.or(Some(DEFAULT_SIZE));
-    let p = prepare(&opts)?;
+    let p = open_scene(&opts)?;
     let mut budgets = if a.times.is_empty() {
         if a.spp.contains(&0) {
             bail!("--spp budgets must be at least 1");

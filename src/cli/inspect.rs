@@ -1,62 +1,60 @@
 //! `rayterm inspect`: the ray tree of one pixel, as text or JSON.
 
-use std::process::ExitCode;
-
 use std::io::Write;
+use std::process::ExitCode;
 
 use anyhow::{bail, Result};
 
-use super::args::{InspectArgs, Worst};
-use super::render::prepare;
+use super::args::InspectArgs;
+use super::open_scene;
 use crate::inspect::{inspect_pixel, to_text};
-use crate::render::{film::LUMA, pass, post, Film};
+use crate::render::{post, Progressive};
 
 pub fn run(a: InspectArgs) -> Result<ExitCode> {
-    let p = prepare(&a.scene)?;
-    let tracer = p.tracer();
-    let (x, y, k) = match (a.pixel, a.worst) {
-        (Some((x, y)), _) => {
-            if x >= p.width || y >= p.height {
-                bail!(
-                    "pixel ({x}, {y}) is outside the {}x{} image",
-                    p.width,
-                    p.height
+    let s = open_scene(&a.scene)?;
+    let tracer = s.tracer();
+    if let Some((x, y)) = a.pixel {
+        if x >= s.width || y >= s.height {
+            bail!(
+                "pixel ({x}, {y}) is outside the {}x{} image",
+                s.width,
+                s.height
+            );
+        }
+    }
+    // The image the pixel belongs to: rendered to pick the worst pixel, and
+    // for the pixel's value before and after bloom.
+    let spp = a.spp.unwrap_or(if a.worst.is_some() { 16 } else { 1 });
+    let film = (a.worst.is_some() || s.plan.bloom).then(|| Progressive::render(&tracer, spp));
+    let (x, y, k) = match (a.pixel, a.worst, &film) {
+        (Some((x, y)), _, _) => (x, y, a.sample),
+        (None, Some(w), Some(film)) => match film.worst(w) {
+            Some(found) => found,
+            None => {
+                println!(
+                    "no pixel {} in {} samples per pixel",
+                    match w {
+                        crate::render::Worst::Nan => "had a NaN or infinite sample",
+                        crate::render::Worst::Variance => "varies between samples",
+                        crate::render::Worst::Brightest => "exists",
+                    },
+                    film.spp
                 );
+                return Ok(ExitCode::SUCCESS);
             }
-            (x, y, a.sample)
-        }
-        (None, Some(w)) => {
-            let mut film = Film::new(p.width, p.height);
-            let spp = if p.plan.deterministic {
-                1
-            } else {
-                a.spp.max(2)
-            };
-            pass::render_pass(&tracer, &mut film, spp, &|| false);
-            match find_worst(&film, w) {
-                Some(found) => found,
-                None => {
-                    println!("no pixel had a NaN or infinite sample in {spp} samples per pixel");
-                    return Ok(ExitCode::SUCCESS);
-                }
-            }
-        }
-        (None, None) => bail!("give --pixel X,Y or --worst nan|variance|brightest"),
+        },
+        _ => bail!("give --pixel X,Y or --worst nan|variance|brightest"),
     };
     let mut tree = inspect_pixel(&tracer, x, y, k);
-    if p.plan.bloom {
-        let mut film = Film::new(p.width, p.height);
-        pass::render_pass(&tracer, &mut film, 1, &|| false);
-        let mut img = film.image();
-        let before = img[(y * p.width + x) as usize];
-        post::bloom(
-            &mut img,
-            p.width as usize,
-            p.height as usize,
-            &p.scene.settings.bloom,
+    if let Some(film) = &film {
+        let shown = post::display(
+            film.image(),
+            s.width,
+            s.height,
+            &s.plan,
+            &s.scene.settings.bloom,
         );
-        tree.pixel_before_bloom = Some(before);
-        tree.pixel_after_bloom = Some(img[(y * p.width + x) as usize]);
+        tree.set_pixel(&shown, film.spp);
     }
     let text = if a.json {
         serde_json::to_string_pretty(&tree)? + "\n"
@@ -66,34 +64,4 @@ pub fn run(a: InspectArgs) -> Result<ExitCode> {
     // A closed pipe (`| head`) is an error to return, not a panic.
     std::io::stdout().lock().write_all(text.as_bytes())?;
     Ok(ExitCode::SUCCESS)
-}
-
-/// Pixel and sample index of the worst pixel by the given measure.
-pub fn find_worst(film: &Film, w: Worst) -> Option<(u32, u32, u32)> {
-    let at = |i: usize| (i as u32 % film.width, i as u32 / film.width);
-    match w {
-        Worst::Nan => film.bad.first().map(|b| (b.x, b.y, b.sample)),
-        Worst::Variance => film
-            .pixels
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.variance().total_cmp(&b.1.variance()))
-            .map(|(i, _)| {
-                let (x, y) = at(i);
-                (x, y, 0)
-            }),
-        Worst::Brightest => film
-            .pixels
-            .iter()
-            .enumerate()
-            .max_by(|a, b| {
-                a.1.mean
-                    .dot(LUMA.as_dvec3())
-                    .total_cmp(&b.1.mean.dot(LUMA.as_dvec3()))
-            })
-            .map(|(i, _)| {
-                let (x, y) = at(i);
-                (x, y, 0)
-            }),
-    }
 }

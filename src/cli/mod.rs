@@ -13,10 +13,12 @@ use std::process::ExitCode;
 
 use clap::Parser;
 
-pub use args::{parse_size, Cli, Command};
-pub(crate) use args::{SceneOpts, Worst};
-pub(crate) use inspect::find_worst;
-pub(crate) use render::{prepare, Prepared};
+use anyhow::Result;
+
+pub use args::{parse_size, Cli, Command, SceneOpts};
+
+use crate::render::Session;
+use crate::scene::Scene;
 
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
@@ -40,7 +42,7 @@ pub fn main() -> ExitCode {
         Command::Scenes => scenes::run(),
         Command::Inspect(a) => inspect::run(a),
         Command::Converge(a) => converge::run(a),
-        Command::Tui(a) => crate::tui::run(&a.scene, a.color, a.reference.as_deref()),
+        Command::Tui(a) => crate::tui::run(&a.scene.request(), a.color, a.reference.as_deref()),
         Command::Stability(a) => stability::run(a),
         Command::Bench(a) => bench::run(a),
     };
@@ -52,6 +54,25 @@ pub fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// Opens the scene the options name, with its load warnings on stderr.
+fn open_scene(opts: &SceneOpts) -> Result<Session> {
+    let (session, warnings) = Session::open(&opts.request())?;
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(session)
+}
+
+/// Loads a scene for its geometry alone (no BVH, no plan), with its load
+/// warnings on stderr.
+fn load_scene(spec: &str) -> Result<Scene> {
+    let mut scene = crate::scene::load(spec)?;
+    for w in std::mem::take(&mut scene.warnings) {
+        eprintln!("warning: {w}");
+    }
+    Ok(scene)
 }
 
 /// The reader of our output went away (`rayterm inspect ... | head`): not a failure.

@@ -4,106 +4,43 @@
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::time::Instant;
 
 use anyhow::{bail, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use super::args::{RenderArgs, SceneOpts};
-use crate::bvh::{self, Bvh};
-use crate::render::{output, pass, post, Features, Film, Plan, Tracer};
+use super::args::RenderArgs;
+use super::open_scene;
+use crate::render::{output, post, Ended, Progressive, Stop};
 use crate::report::converge::save_reference;
-use crate::scene::{self, Scene};
-
-/// A scene loaded and ready to render with the options given.
-pub struct Prepared {
-    pub scene: Scene,
-    pub bvh: Bvh,
-    pub plan: Plan,
-    pub width: u32,
-    pub height: u32,
-    pub seed: u64,
-}
-
-impl Prepared {
-    pub fn tracer(&self) -> Tracer<'_> {
-        Tracer::new(
-            &self.scene,
-            &self.bvh,
-            &self.plan,
-            self.width,
-            self.height,
-            self.seed,
-        )
-    }
-}
-
-pub fn prepare(o: &SceneOpts) -> Result<Prepared> {
-    let mut scene = scene::load(&o.scene)?;
-    for w in &scene.warnings {
-        eprintln!("warning: {w}");
-    }
-    if let Some(b) = o.builder {
-        scene.settings.builder = b;
-    }
-    let st = &mut scene.settings;
-    st.light_samples = o.light_samples.unwrap_or(st.light_samples);
-    st.glossy_samples = o.glossy_samples.unwrap_or(st.glossy_samples);
-    st.stratify &= !o.independent;
-    let (width, height) = o
-        .size
-        .unwrap_or((scene.settings.width, scene.settings.height));
-    let features = Features::all().without(&o.off);
-    let plan = if o.no_plan {
-        Plan::everything(&scene, features)
-    } else {
-        Plan::new(&scene, features)
-    };
-    let bvh = bvh::build(&scene.geometry, scene.settings.builder);
-    Ok(Prepared {
-        scene,
-        bvh,
-        plan,
-        width,
-        height,
-        seed: o.seed,
-    })
-}
-
-/// When to stop adding passes.
-enum Stop {
-    Spp(u32),
-    Time(f64),
-    Error(f64),
-}
 
 pub fn run(a: RenderArgs) -> Result<ExitCode> {
-    let p = prepare(&a.scene)?;
+    let s = open_scene(&a.scene)?;
     if a.explain {
-        eprintln!("plan for {}:\n{}", p.scene.name, p.plan.explain());
+        eprintln!("plan for {}:\n{}", s.scene.name, s.plan.explain());
     }
     if let Some(view) = a.debug {
         if is_hdr(&a.output) {
             bail!("--debug views are PNG images; name the output .png");
         }
-        return super::debug::run(&p, view, &a.output);
+        return super::debug::run(&s, view, &a.output);
     }
-    let mut stop = match (a.spp, a.time, a.target_error) {
+    let stop = match (a.spp, a.time, a.target_error) {
         (_, Some(t), _) if !(t > 0.0 && t.is_finite()) => {
             bail!("--time must be a positive number of seconds")
         }
         (_, _, Some(e)) if !(e > 0.0 && e.is_finite()) => bail!("--target-error must be positive"),
-        (_, Some(t), _) => Stop::Time(t),
-        (_, _, Some(e)) => Stop::Error(e),
         (Some(0), _, _) => bail!("--spp must be at least 1"),
-        (Some(n), _, _) => Stop::Spp(n),
-        (None, None, None) => Stop::Spp(p.scene.settings.spp),
+        (spp, None, None) => Stop::spp(spp.unwrap_or(s.scene.settings.spp)),
+        (_, seconds, error) => Stop {
+            spp: None,
+            seconds,
+            error,
+        },
     };
-    if p.plan.deterministic {
-        if !matches!(stop, Stop::Spp(1)) {
-            eprintln!("note: nothing in this scene is sampled, so one pass is exact; extra passes skipped");
-        }
-        stop = Stop::Spp(1);
+    if s.plan.deterministic && stop != Stop::spp(1) {
+        eprintln!(
+            "note: nothing in this scene is sampled, so one pass is exact; extra passes skipped"
+        );
     }
     let interrupted = Arc::new(AtomicBool::new(false));
     {
@@ -111,10 +48,9 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         // Failing to install the handler only loses the clean Ctrl-C message.
         let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
     }
-    let tracer = p.tracer();
-    let mut film = Film::new(p.width, p.height);
-    let bar = match stop {
-        Stop::Spp(n) => ProgressBar::new(n as u64).with_style(
+    let tracer = s.tracer();
+    let bar = match stop.spp {
+        Some(n) if !s.plan.deterministic => ProgressBar::new(n as u64).with_style(
             ProgressStyle::with_template("{bar:40} {pos}/{len} spp  {elapsed} (eta {eta})")
                 .unwrap(),
         ),
@@ -122,60 +58,48 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
             ProgressStyle::with_template("{spinner} {pos} spp  {elapsed}  {msg}").unwrap(),
         ),
     };
-    let start = Instant::now();
-    let mut rays = 0u64;
+    let mut p = Progressive::new(s.width, s.height);
     let cancel = || interrupted.load(Ordering::Relaxed);
-    loop {
-        rays += pass::render_pass(&tracer, &mut film, 1, &cancel);
-        if cancel() {
-            bar.abandon();
-            eprintln!("interrupted: nothing written");
-            return Ok(ExitCode::from(130));
-        }
-        bar.inc(1);
-        let err = film.relative_error();
-        bar.set_message(format!("error {:.3}%", err * 100.0));
-        let done = match stop {
-            Stop::Spp(n) => film.spp >= n,
-            Stop::Time(t) => start.elapsed().as_secs_f64() >= t,
-            Stop::Error(e) => film.spp >= 2 && err < e,
-        };
-        if done {
-            break;
-        }
+    let outcome = p.run(&tracer, &stop, &cancel, |film, _| {
+        bar.set_position(film.spp as u64);
+        bar.set_message(format!("error {:.3}%", film.relative_error() * 100.0));
+    });
+    if outcome.ended == Ended::Cancelled {
+        bar.abandon();
+        eprintln!("interrupted: nothing written");
+        return Ok(ExitCode::from(130));
     }
-    let render_ms = start.elapsed().as_secs_f64() * 1e3;
     bar.finish_and_clear();
-    let mut img = film.image();
+    let film = &p.film;
     if is_hdr(&a.output) {
         // The film's mean as it is: what `converge` and the TUI's
         // `--reference` compare against.
-        save_reference(&a.output, p.width, p.height, &img)?;
+        save_reference(&a.output, s.width, s.height, &film.image())?;
     } else {
-        if p.plan.bloom {
-            post::bloom(
-                &mut img,
-                p.width as usize,
-                p.height as usize,
-                &p.scene.settings.bloom,
-            );
-        }
-        output::save_png_atomic(&post::to_rgb8(&img, p.width, p.height), &a.output)?;
+        let shown = post::display(
+            film.image(),
+            s.width,
+            s.height,
+            &s.plan,
+            &s.scene.settings.bloom,
+        );
+        output::save_png_atomic(&post::to_rgb8(&shown.image, s.width, s.height), &a.output)?;
     }
-    let err = if p.plan.deterministic {
+    let err = if s.plan.deterministic {
         "exact".to_string()
     } else {
         format!("{:.3}%", film.relative_error() * 100.0)
     };
+    let render_ms = outcome.seconds * 1e3;
     println!(
         "{}: {} triangles, build {:.1} ms ({}), render {}, {} spp, {:.2} Mrays/s, error {}{} -> {}",
-        p.scene.name,
-        p.scene.geometry.triangle_count(),
-        p.bvh.stats.build_ms,
-        p.bvh.stats.builder,
+        s.scene.name,
+        s.scene.geometry.triangle_count(),
+        s.bvh.stats.build_ms,
+        s.bvh.stats.builder,
         duration(render_ms),
         film.spp,
-        rays as f64 / render_ms / 1e3,
+        outcome.rays as f64 / render_ms.max(1e-9) / 1e3,
         err,
         if film.bad_count > 0 {
             format!(", {} NaN/Inf samples dropped", film.bad_count)

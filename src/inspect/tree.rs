@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::bvh::{Bvh, Hit, TraversalStats};
 use crate::geometry::Ray;
+use crate::render::post::Displayed;
 use crate::render::recorder::{HitInfo, LightSample, MissInfo, RayKind, Recorder};
 use crate::render::Tracer;
 
@@ -51,9 +52,11 @@ pub struct PixelTree {
     pub seed: u64,
     /// The sample's value: exactly what the renderer adds to the film.
     pub color: Vec3,
-    /// Pixel colour of the whole image before and after bloom, when known.
+    /// When bloom runs: the pixel's value in the image it belongs to,
+    /// rendered at `pixel_spp` samples per pixel, before and after bloom.
     pub pixel_before_bloom: Option<Vec3>,
     pub pixel_after_bloom: Option<Vec3>,
+    pub pixel_spp: Option<u32>,
     pub root: RayNode,
 }
 
@@ -178,6 +181,24 @@ pub fn inspect_pixel(tracer: &Tracer, x: u32, y: u32, k: u32) -> PixelTree {
         color,
         pixel_before_bloom: None,
         pixel_after_bloom: None,
+        pixel_spp: None,
         root,
+    }
+}
+
+impl PixelTree {
+    /// Takes the pixel's values before and after bloom from the image it
+    /// belongs to (`shown`, made from a film of `spp` samples per pixel);
+    /// nothing when bloom did not run.
+    pub fn set_pixel(&mut self, shown: &Displayed, spp: u32) {
+        let i = (self.y * self.width + self.x) as usize;
+        if let (Some(before), Some(after)) = (
+            shown.before_bloom.as_ref().and_then(|b| b.get(i)),
+            shown.image.get(i),
+        ) {
+            self.pixel_before_bloom = Some(*before);
+            self.pixel_after_bloom = Some(*after);
+            self.pixel_spp = Some(spp);
+        }
     }
 }

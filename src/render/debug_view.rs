@@ -8,9 +8,11 @@ use std::str::FromStr;
 use anyhow::{bail, Result};
 use glam::Vec3;
 
-use super::{overlay, pass, post, Film, Tracer};
+use super::overlay::{self, Layer};
+use super::{post, Progressive, Tracer};
 use crate::bvh::debug::HeatMeasure;
 use crate::bvh::debug::{boxes_at_level, heat_color, heat_map, heat_summary, leaf_boxes};
+use crate::raster::canvas::Canvas;
 
 /// Per pixel (row-major), the traversal work of the camera ray through the
 /// pixel centre: what the heat map shows.
@@ -90,24 +92,25 @@ pub const BOX_COLORS: [Vec3; 6] = [
     Vec3::new(0.45, 0.3, 1.0),
 ];
 
-/// Draws `view`: boxes over one shaded sample per pixel (with bloom where
-/// the plan has it), or the heat map with a legend.
-pub fn draw(tracer: &Tracer, view: DebugView) -> Result<DebugImage> {
+/// `view` as a layer over the tracer's image (box outlines, or the heat map
+/// with its legend covering everything), and what it shows in words.
+pub fn layer(tracer: &Tracer, view: DebugView) -> Result<(Layer, String)> {
     let (w, h) = (tracer.width, tracer.height);
     let bvh = tracer.bvh;
+    let mut layer = Canvas::new(w, h, None);
     let (boxes, summary) = match view {
         DebugView::Heat(measure) => {
             let values = heat(tracer, measure);
             let (max, mean) = heat_summary(&values);
-            let mut image: Vec<Vec3> = values.iter().map(|&v| heat_color(v, max)).collect();
-            overlay::legend(&mut image, w, h, max);
-            return Ok(DebugImage {
-                image,
-                summary: format!(
-                    "{} per camera ray: max {max}, mean {mean:.2} per pixel",
-                    measure.label()
-                ),
-            });
+            for (px, &v) in layer.pixels.iter_mut().zip(&values) {
+                *px = Some(heat_color(v, max));
+            }
+            overlay::legend(&mut layer, max);
+            let summary = format!(
+                "{} per camera ray: max {max}, mean {mean:.2} per pixel",
+                measure.label()
+            );
+            return Ok((layer, summary));
         }
         DebugView::Level(k) => {
             let depth = bvh.stats.depth;
@@ -141,35 +144,39 @@ pub fn draw(tracer: &Tracer, view: DebugView) -> Result<DebugImage> {
             (b, summary)
         }
     };
-    let mut film = Film::new(w, h);
-    pass::render_pass(tracer, &mut film, 1, &|| false);
-    let mut image = film.image();
-    if tracer.plan.bloom {
-        post::bloom(
-            &mut image,
-            w as usize,
-            h as usize,
-            &tracer.scene.settings.bloom,
-        );
-    }
     for (i, b) in boxes.iter().enumerate() {
-        overlay::draw_box(
-            &mut image,
-            w,
-            h,
-            &tracer.frame,
-            b,
-            BOX_COLORS[i % BOX_COLORS.len()],
-        );
+        let c = BOX_COLORS[i % BOX_COLORS.len()];
+        overlay::draw_box(&mut layer, &tracer.frame, b, Some(c));
     }
+    Ok((layer, summary))
+}
+
+/// Draws `view` over one shaded sample per pixel (with bloom where the plan
+/// has it).
+pub fn draw(tracer: &Tracer, view: DebugView) -> Result<DebugImage> {
+    let (layer, summary) = layer(tracer, view)?;
+    if let Some(image) = layer.pixels.iter().copied().collect::<Option<Vec<Vec3>>>() {
+        // The heat map covers every pixel: nothing to render under it.
+        return Ok(DebugImage { image, summary });
+    }
+    let film = Progressive::render(tracer, 1);
+    let settings = &tracer.scene.settings.bloom;
+    let (w, h) = (tracer.width, tracer.height);
+    let mut image = post::display(film.image(), w, h, tracer.plan, settings).image;
+    layer.over(&mut image);
     Ok(DebugImage { image, summary })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::{Features, Plan};
-    use crate::scene;
+    use crate::render::{SceneRequest, Session};
+
+    fn session(w: u32, h: u32) -> Session {
+        let mut req = SceneRequest::new("cornell");
+        req.size = Some((w, h));
+        Session::open(&req).unwrap().0
+    }
 
     #[test]
     fn parses_every_view_and_rejects_bad_ones() {
@@ -199,10 +206,8 @@ mod tests {
 
     #[test]
     fn heat_counts_the_work_of_each_camera_ray() {
-        let s = scene::load("cornell").unwrap();
-        let bvh = crate::bvh::build(&s.geometry, s.settings.builder);
-        let plan = Plan::new(&s, Features::all());
-        let t = Tracer::new(&s, &bvh, &plan, 24, 24, 1);
+        let s = session(24, 24);
+        let (t, bvh) = (s.tracer(), &s.bvh);
         let nodes = heat(&t, HeatMeasure::NodesVisited);
         let tests = heat(&t, HeatMeasure::TriangleTests);
         assert_eq!(nodes.len(), 24 * 24);
@@ -222,10 +227,8 @@ mod tests {
 
     #[test]
     fn level_past_the_deepest_is_an_error() {
-        let s = scene::load("cornell").unwrap();
-        let bvh = crate::bvh::build(&s.geometry, s.settings.builder);
-        let plan = Plan::new(&s, Features::all());
-        let t = Tracer::new(&s, &bvh, &plan, 16, 16, 1);
+        let s = session(16, 16);
+        let (t, bvh) = (s.tracer(), &s.bvh);
         let e = draw(&t, DebugView::Level(bvh.stats.depth))
             .err()
             .unwrap()

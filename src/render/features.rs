@@ -107,10 +107,4 @@ impl Features {
     pub fn toggle(&mut self, f: Feature) {
         self.0 ^= f.bit();
     }
-
-    /// Only the features that change the film's mean: bloom is applied
-    /// after it, and brute force finds the same hits as the BVH.
-    pub fn shaping_film(self) -> Self {
-        self.without(&[Feature::Bloom, Feature::Bvh])
-    }
 }

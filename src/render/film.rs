@@ -135,6 +135,71 @@ impl Film {
     }
 }
 
+/// What makes a pixel the worst of a film.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Worst {
+    /// The first pixel with a NaN or infinite sample.
+    Nan,
+    /// The pixel whose samples vary most.
+    Variance,
+    /// The brightest pixel.
+    Brightest,
+}
+
+/// A pixel and the sample of it worth replaying.
+pub type PixelSample = (u32, u32, u32);
+
+/// The worst pixel of a film by each measure.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct WorstPixels {
+    pub nan: Option<PixelSample>,
+    pub variance: Option<PixelSample>,
+    pub brightest: Option<PixelSample>,
+}
+
+impl WorstPixels {
+    pub fn get(&self, w: Worst) -> Option<PixelSample> {
+        match w {
+            Worst::Nan => self.nan,
+            Worst::Variance => self.variance,
+            Worst::Brightest => self.brightest,
+        }
+    }
+}
+
+impl Film {
+    /// The worst pixel by `w`, with the sample to replay: the first NaN/Inf
+    /// sample; the pixel of highest variance (none while no pixel varies);
+    /// the brightest pixel (none on an empty film).
+    pub fn worst(&self, w: Worst) -> Option<PixelSample> {
+        let at = |i: usize| (i as u32 % self.width, i as u32 / self.width, 0);
+        let lum = |p: &PixelStats| p.mean.dot(LUMA.as_dvec3());
+        let top = |key: &dyn Fn(&PixelStats) -> f64| {
+            self.pixels
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (i, key(p)))
+                .filter(|(_, v)| v.is_finite())
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+        };
+        match w {
+            Worst::Nan => self.bad.first().map(|b| (b.x, b.y, b.sample)),
+            Worst::Variance => top(&PixelStats::variance)
+                .filter(|(_, v)| *v > 0.0)
+                .map(|(i, _)| at(i)),
+            Worst::Brightest => top(&lum).map(|(i, _)| at(i)),
+        }
+    }
+
+    pub fn worst_pixels(&self) -> WorstPixels {
+        WorstPixels {
+            nan: self.worst(Worst::Nan),
+            variance: self.worst(Worst::Variance),
+            brightest: self.worst(Worst::Brightest),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -151,6 +216,25 @@ mod tests {
         assert!((p.mean.x - m).abs() < 1e-12);
         // Luminance of a grey is the grey (weights sum to 1 up to f32 rounding).
         assert!((p.variance() - v).abs() < 1e-6, "{} vs {v}", p.variance());
+    }
+
+    #[test]
+    fn worst_pixels_by_each_measure() {
+        let mut f = Film::new(3, 1);
+        assert_eq!(f.worst(Worst::Variance), None);
+        f.add(0, 0, 0, Vec3::ONE);
+        f.add(1, 0, 0, Vec3::splat(0.2));
+        f.add(1, 0, 1, Vec3::splat(0.4));
+        f.add(2, 0, 0, Vec3::splat(0.5));
+        f.add(2, 0, 1, Vec3::NAN);
+        assert_eq!(
+            f.worst_pixels(),
+            WorstPixels {
+                nan: Some((2, 0, 1)),
+                variance: Some((1, 0, 0)),
+                brightest: Some((0, 0, 0)),
+            }
+        );
     }
 
     #[test]

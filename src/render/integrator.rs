@@ -49,19 +49,20 @@ struct Surface<'m> {
 }
 
 impl<'a> Tracer<'a> {
+    /// Samples of the image `frame` was made for (its camera and size).
     pub fn new(
         scene: &'a Scene,
         bvh: &'a Bvh,
         plan: &'a Plan,
-        width: u32,
-        height: u32,
+        frame: CameraFrame,
         seed: u64,
     ) -> Self {
+        let (width, height) = frame.size();
         Self {
             scene,
             bvh,
             plan,
-            frame: scene.camera.frame(width, height),
+            frame,
             width,
             height,
             seed,

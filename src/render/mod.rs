@@ -1,5 +1,6 @@
-//! Rendering: the plan of what runs, the one shading code path (generic over
-//! a [`Recorder`]), the progressive film, passes and post-processing.
+//! Rendering: the session a scene is opened into, the plan of what runs,
+//! the one shading code path (generic over a [`Recorder`]), the film, the
+//! one progressive loop and the one post-processing step.
 
 pub mod debug_view;
 pub mod features;
@@ -7,13 +8,16 @@ pub mod film;
 pub mod integrator;
 pub mod output;
 pub mod overlay;
-pub mod pass;
 pub mod plan;
 pub mod post;
+pub mod progressive;
 pub mod recorder;
+pub mod session;
 
 pub use features::{Feature, Features};
-pub use film::Film;
+pub use film::{Film, Worst, WorstPixels};
 pub use integrator::Tracer;
-pub use plan::Plan;
+pub use plan::{Decision, Plan, PlanPolicy};
+pub use progressive::{Ended, Outcome, PassStats, Progressive, Stop};
 pub use recorder::{RayCounter, Recorder};
+pub use session::{SceneRequest, Session};

@@ -1,47 +1,49 @@
-//! The scene plan: from the scene and the feature toggles, which stages run
-//! and why. Stages a scene cannot use are left out of the hot loop.
+//! The scene plan: from the scene, the feature toggles and the policy, a
+//! decision for every stage and the reason for it. Computed once per
+//! (scene, features) by [`Plan::new`]; `--explain`, the TUI's Features panel,
+//! the worker, exports and the inspector all read the same plan.
 
 use serde::Serialize;
 
 use super::{Feature, Features};
 use crate::scene::{Environment, Scene};
 
-/// One line of `--explain`: a stage, whether it runs, and why.
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct Stage {
-    pub stage: &'static str,
-    pub on: bool,
-    pub reason: String,
+/// Whether stages the scene cannot use are left out (`--no-plan` runs them).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PlanPolicy {
+    /// Leave out what cannot change the image.
+    #[default]
+    Prune,
+    /// Run every enabled stage, for measuring what the plan saves.
+    Everything,
 }
 
-#[derive(Clone, Debug, Serialize)]
-pub struct Plan {
-    pub features: Features,
-    pub shadows: bool,
-    pub reflections: bool,
-    pub specular: bool,
-    pub glossy: bool,
-    pub textures: bool,
-    pub bilinear: bool,
-    pub smooth_normals: bool,
-    pub area_sampling: bool,
-    pub supersampling: bool,
-    pub environment: bool,
-    pub bloom: bool,
-    pub bvh: bool,
-    /// Nothing is sampled: one pass gives the exact image.
-    pub deterministic: bool,
-    pub stages: Vec<Stage>,
+/// What the plan decided for one feature's stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Decision {
+    On,
+    /// Switched off by the user.
+    Off,
+    /// Enabled, but the scene has nothing it could change.
+    NotNeeded(&'static str),
+    /// Enabled, but the feature it refines is not running.
+    Needs(Feature),
 }
 
-impl serde::Serialize for Features {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.collect_seq(
-            Feature::ALL
-                .iter()
-                .filter(|f| self.on(**f))
-                .map(|f| f.name()),
-        )
+impl Decision {
+    pub fn runs(self) -> bool {
+        self == Decision::On
+    }
+
+    /// `on`, `off`, `not needed: ...`, `off: needs ...`.
+    pub fn reason(self) -> String {
+        match self {
+            Decision::On => "on".into(),
+            Decision::Off => "off".into(),
+            Decision::NotNeeded(why) => format!("not needed: {why}"),
+            Decision::Needs(f) => format!("off: needs {}", f.name()),
+        }
     }
 }
 
@@ -68,115 +70,261 @@ pub fn not_needed(scene: &Scene, f: Feature) -> Option<&'static str> {
     }
 }
 
+/// The stage each feature controls, as `--explain` names it.
+fn stage_name(f: Feature) -> &'static str {
+    match f {
+        Feature::Shadows => "shadow rays",
+        Feature::Reflections => "reflection rays",
+        Feature::Glossy => "glossy sampling",
+        Feature::Textures => "UV interpolation and texture lookups",
+        Feature::Bilinear => "bilinear filtering",
+        Feature::SmoothNormals => "normal interpolation",
+        Feature::SoftShadows => "area light sampling",
+        Feature::Supersampling => "jittered supersampling",
+        Feature::Environment => "environment lookups",
+        Feature::Bloom => "bloom",
+        Feature::Bvh => "BVH traversal",
+    }
+}
+
+/// Stages in the order `--explain` lists them; a refinement comes after the
+/// feature it needs.
+const ORDER: [Feature; 11] = [
+    Feature::Shadows,
+    Feature::Reflections,
+    Feature::Glossy,
+    Feature::Textures,
+    Feature::Bilinear,
+    Feature::SmoothNormals,
+    Feature::SoftShadows,
+    Feature::Supersampling,
+    Feature::Environment,
+    Feature::Bloom,
+    Feature::Bvh,
+];
+
+/// The feature a refinement needs to be running.
+fn refines(f: Feature) -> Option<Feature> {
+    match f {
+        Feature::Glossy => Some(Feature::Reflections),
+        Feature::Bilinear => Some(Feature::Textures),
+        _ => None,
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    pub features: Features,
+    pub policy: PlanPolicy,
+    decisions: [Decision; Feature::ALL.len()],
+    // What the hot loop reads: one flag per stage, copied from `decisions`.
+    pub shadows: bool,
+    pub reflections: bool,
+    /// The specular term of the lights (some material has `ks > 0`).
+    pub specular: bool,
+    pub glossy: bool,
+    pub textures: bool,
+    pub bilinear: bool,
+    pub smooth_normals: bool,
+    pub area_sampling: bool,
+    pub supersampling: bool,
+    pub environment: bool,
+    pub bloom: bool,
+    pub bvh: bool,
+    /// Nothing is sampled: one pass gives the exact image.
+    pub deterministic: bool,
+}
+
 impl Plan {
     /// The plan for `scene` with `features` enabled.
-    pub fn new(scene: &Scene, features: Features) -> Self {
-        Self::make(scene, features, true)
-    }
-
-    /// Every enabled stage runs whether the scene needs it or not (`--no-plan`),
-    /// for measuring what the plan saves.
-    pub fn everything(scene: &Scene, features: Features) -> Self {
-        Self::make(scene, features, false)
-    }
-
-    fn make(scene: &Scene, features: Features, prune: bool) -> Self {
-        let mut stages = Vec::new();
-        let mut stage = |name: &'static str, f: Feature, extra: Option<&'static str>| -> bool {
-            let (on, reason) = if !features.on(f) {
-                (false, "off".to_string())
-            } else if let Some(why) = extra {
-                (false, format!("off: needs {why}"))
+    pub fn new(scene: &Scene, features: Features, policy: PlanPolicy) -> Self {
+        let prune = policy == PlanPolicy::Prune;
+        let mut decisions = [Decision::Off; Feature::ALL.len()];
+        for f in ORDER {
+            decisions[f as usize] = if !features.on(f) {
+                Decision::Off
+            } else if let Some(g) = refines(f).filter(|g| !decisions[*g as usize].runs()) {
+                Decision::Needs(g)
             } else if let Some(why) = not_needed(scene, f).filter(|_| prune) {
-                (false, format!("not needed: {why}"))
+                Decision::NotNeeded(why)
             } else {
-                (true, "on".to_string())
+                Decision::On
             };
-            stages.push(Stage {
-                stage: name,
-                on,
-                reason,
-            });
-            on
-        };
-        let shadows = stage("shadow rays", Feature::Shadows, None);
-        let reflections = stage("reflection rays", Feature::Reflections, None);
-        let glossy = stage(
-            "glossy sampling",
-            Feature::Glossy,
-            (!reflections).then_some("reflections"),
-        );
-        let textures = stage(
-            "UV interpolation and texture lookups",
-            Feature::Textures,
-            None,
-        );
-        let bilinear = stage(
-            "bilinear filtering",
-            Feature::Bilinear,
-            (!textures).then_some("textures"),
-        );
-        let smooth_normals = stage("normal interpolation", Feature::SmoothNormals, None);
-        let area_sampling = stage("area light sampling", Feature::SoftShadows, None);
-        let supersampling = stage("jittered supersampling", Feature::Supersampling, None);
-        let environment = stage("environment lookups", Feature::Environment, None);
-        let bloom = stage("bloom", Feature::Bloom, None);
-        let bvh = stage("BVH traversal", Feature::Bvh, None);
-        let any_ks = scene.materials.iter().any(|m| m.reflective());
-        let specular = !prune || any_ks;
-        stages.push(Stage {
-            stage: "specular term",
-            on: specular,
-            reason: if specular {
-                "on"
-            } else {
-                "not needed: no material with ks > 0"
-            }
-            .into(),
-        });
+        }
+        let on = |f: Feature| decisions[f as usize].runs();
         let any_area = scene.lights.iter().any(|l| l.is_area());
-        let deterministic = !(supersampling || glossy || (area_sampling && any_area));
-        stages.push(Stage {
-            stage: "progressive passes",
-            on: !deterministic,
-            reason: if deterministic {
+        let deterministic = !(on(Feature::Supersampling)
+            || on(Feature::Glossy)
+            || (on(Feature::SoftShadows) && any_area));
+        Plan {
+            features,
+            policy,
+            decisions,
+            shadows: on(Feature::Shadows),
+            reflections: on(Feature::Reflections),
+            specular: !prune || scene.materials.iter().any(|m| m.reflective()),
+            glossy: on(Feature::Glossy),
+            textures: on(Feature::Textures),
+            bilinear: on(Feature::Bilinear),
+            smooth_normals: on(Feature::SmoothNormals),
+            area_sampling: on(Feature::SoftShadows),
+            supersampling: on(Feature::Supersampling),
+            environment: on(Feature::Environment),
+            bloom: on(Feature::Bloom),
+            bvh: on(Feature::Bvh),
+            deterministic,
+        }
+    }
+
+    /// The decision for `f`'s stage.
+    pub fn decision(&self, f: Feature) -> Decision {
+        self.decisions[f as usize]
+    }
+
+    /// Whether each stage runs, the specular term and the progressive
+    /// passes included: what the image depends on.
+    fn runs(&self) -> [bool; Feature::ALL.len() + 2] {
+        let mut r = [false; Feature::ALL.len() + 2];
+        for f in Feature::ALL {
+            r[f as usize] = self.decision(f).runs();
+        }
+        r[Feature::ALL.len()] = self.specular;
+        r[Feature::ALL.len() + 1] = self.deterministic;
+        r
+    }
+
+    /// Whether the same stages run under both plans (features that are not
+    /// needed may differ).
+    pub fn same_stages(&self, other: &Plan) -> bool {
+        self.runs() == other.runs()
+    }
+
+    /// Whether a film rendered under `other` holds the same samples as one
+    /// rendered under this plan: bloom is applied after the film and brute
+    /// force finds the same hits as the BVH, so only they may differ.
+    pub fn same_film(&self, other: &Plan) -> bool {
+        let shaping = |p: &Plan| {
+            let mut r = p.runs();
+            r[Feature::Bloom as usize] = false;
+            r[Feature::Bvh as usize] = false;
+            r
+        };
+        shaping(self) == shaping(other)
+    }
+
+    /// Every row of `--explain`: the stage, whether it runs, and why.
+    pub fn rows(&self) -> Vec<(&'static str, bool, String)> {
+        let mut rows: Vec<(&'static str, bool, String)> = ORDER
+            .iter()
+            .map(|&f| {
+                let d = self.decision(f);
+                (stage_name(f), d.runs(), d.reason())
+            })
+            .collect();
+        rows.push((
+            "specular term",
+            self.specular,
+            if self.specular {
+                "on".into()
+            } else {
+                "not needed: no material with ks > 0".into()
+            },
+        ));
+        rows.push((
+            "progressive passes",
+            !self.deterministic,
+            if self.deterministic {
                 "not needed: nothing is sampled, one pass is exact".into()
             } else {
                 "on".into()
             },
-        });
-        Plan {
-            features,
-            shadows,
-            reflections,
-            specular,
-            glossy,
-            textures,
-            bilinear,
-            smooth_normals,
-            area_sampling,
-            supersampling,
-            environment,
-            bloom,
-            bvh,
-            deterministic,
-            stages,
-        }
+        ));
+        rows
     }
 
     /// The plan as a table for `--explain`.
     pub fn explain(&self) -> String {
-        let w = self.stages.iter().map(|s| s.stage.len()).max().unwrap_or(0);
-        self.stages
-            .iter()
-            .map(|s| {
-                format!(
-                    "  {:w$}  {:3}  {}\n",
-                    s.stage,
-                    if s.on { "on" } else { "off" },
-                    s.reason
-                )
-            })
-            .collect()
+        let rows = self.rows();
+        let w = rows.iter().map(|r| r.0.len()).max().unwrap_or(0);
+        let mut s = format!("  {:w$}  {:3}  {}\n", "stage", "run", "why");
+        for (stage, on, reason) in rows {
+            s += &format!(
+                "  {stage:w$}  {:3}  {reason}\n",
+                if on { "on" } else { "off" }
+            );
+        }
+        s
+    }
+}
+
+impl serde::Serialize for Features {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(
+            Feature::ALL
+                .iter()
+                .filter(|f| self.on(**f))
+                .map(|f| f.name()),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene;
+
+    #[test]
+    fn refinements_need_what_they_refine() {
+        let s = scene::load("cube-textured").unwrap();
+        let p = Plan::new(
+            &s,
+            Features::all().without(&[Feature::Textures]),
+            PlanPolicy::Prune,
+        );
+        assert_eq!(
+            p.decision(Feature::Bilinear),
+            Decision::Needs(Feature::Textures)
+        );
+        assert!(!p.bilinear && !p.textures);
+        assert_eq!(p.decision(Feature::Textures), Decision::Off);
+    }
+
+    #[test]
+    fn everything_runs_what_pruning_leaves_out() {
+        let s = scene::load("cornell").unwrap();
+        let pruned = Plan::new(&s, Features::all(), PlanPolicy::Prune);
+        let all = Plan::new(&s, Features::all(), PlanPolicy::Everything);
+        assert_eq!(
+            pruned.decision(Feature::Textures),
+            Decision::NotNeeded("no textures in scene")
+        );
+        assert!(all.textures && all.glossy && all.environment && all.specular);
+        assert!(!pruned.same_film(&all));
+    }
+
+    #[test]
+    fn bloom_and_bvh_keep_the_film() {
+        let s = scene::load("cornell").unwrap();
+        let p = Plan::new(&s, Features::all(), PlanPolicy::Prune);
+        let q = Plan::new(
+            &s,
+            Features::all().without(&[Feature::Bloom, Feature::Bvh]),
+            PlanPolicy::Prune,
+        );
+        let r = Plan::new(
+            &s,
+            Features::all().without(&[Feature::Shadows]),
+            PlanPolicy::Prune,
+        );
+        assert!(p.same_film(&q) && !p.same_film(&r));
+    }
+
+    #[test]
+    fn explain_has_a_header_and_a_row_per_stage() {
+        let s = scene::load("cornell").unwrap();
+        let text = Plan::new(&s, Features::all(), PlanPolicy::Prune).explain();
+        let lines: Vec<&str> = text.lines().collect();
+        assert!(lines[0].contains("stage") && lines[0].contains("why"));
+        assert_eq!(lines.len(), 1 + 13);
     }
 }

@@ -1,9 +1,43 @@
-//! Post-processing of the linear mean image: bloom and tone mapping.
+//! Post-processing of the linear mean image: bloom and tone mapping. Every
+//! image shown or saved goes through [`display`].
 
 use glam::Vec3;
 
 use super::film::LUMA;
+use super::Plan;
 use crate::scene::BloomSettings;
+
+/// A film's mean as it is shown: after bloom when the plan runs it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Displayed {
+    /// Linear colours after post-processing, row-major.
+    pub image: Vec<Vec3>,
+    /// The mean before bloom, when bloom ran.
+    pub before_bloom: Option<Vec<Vec3>>,
+}
+
+/// The one post-processing step from a film's mean image to what is shown
+/// (the TUI), saved (PNG) or inspected.
+pub fn display(
+    mean: Vec<Vec3>,
+    width: u32,
+    height: u32,
+    plan: &Plan,
+    s: &BloomSettings,
+) -> Displayed {
+    if !plan.bloom {
+        return Displayed {
+            image: mean,
+            before_bloom: None,
+        };
+    }
+    let mut image = mean.clone();
+    bloom(&mut image, width as usize, height as usize, s);
+    Displayed {
+        image,
+        before_bloom: Some(mean),
+    }
+}
 
 /// Adds a glow around pixels brighter than the threshold: the bright part is
 /// blurred with a separable Gaussian and added back with `strength`.

@@ -13,7 +13,7 @@ use serde::Serialize;
 use super::workload::median;
 use super::Machine;
 use crate::bvh::{self, Bvh};
-use crate::render::{pass, Feature, Features, Film, Plan, RayCounter, Tracer};
+use crate::render::{Feature, Features, Plan, PlanPolicy, Progressive, RayCounter, Stop, Tracer};
 use crate::scene::{self, Builder, Scene};
 
 /// Meshes up to this size get the full-sweep SAH reference (it is O(n log² n)).
@@ -176,7 +176,7 @@ fn shared_objs(dir: &Path) -> Vec<String> {
 }
 
 fn scene_row(spec: &str, scene: &Scene, o: &BenchOptions, bar: &ProgressBar) -> SceneRow {
-    let plan = Plan::new(scene, frame_features());
+    let plan = Plan::new(scene, frame_features(), PlanPolicy::Prune);
     let reps = o.reps.max(1);
     let mut builds = Vec::new();
     let mut last = None;
@@ -232,14 +232,15 @@ fn scene_row(spec: &str, scene: &Scene, o: &BenchOptions, bar: &ProgressBar) -> 
 
 /// Median time of `reps` frames and the rays of one.
 fn frame_ms(scene: &Scene, bvh: &Bvh, plan: &Plan, o: &BenchOptions, reps: usize) -> (f64, u64) {
-    let tracer = Tracer::new(scene, bvh, plan, o.width, o.height, 1);
+    let tracer = Tracer::new(scene, bvh, plan, scene.camera.frame(o.width, o.height), 1);
     let mut ms = Vec::new();
     let mut rays = 0;
     for _ in 0..reps {
-        let mut film = Film::new(o.width, o.height);
-        let start = Instant::now();
-        rays = pass::render_pass(&tracer, &mut film, 1, &|| false);
-        ms.push(start.elapsed().as_secs_f64() * 1e3);
+        let mut p = Progressive::new(o.width, o.height);
+        if let Some(pass) = p.pass(&tracer, &Stop::spp(1), &|| false) {
+            ms.push(pass.ms);
+            rays = pass.rays;
+        }
     }
     (median(&mut ms), rays)
 }
@@ -247,8 +248,12 @@ fn frame_ms(scene: &Scene, bvh: &Bvh, plan: &Plan, o: &BenchOptions, reps: usize
 /// The frame without the BVH, when an estimate from a sample of pixels says
 /// it finishes within the limit.
 fn brute(scene: &Scene, bvh: &Bvh, o: &BenchOptions) -> Brute {
-    let plan = Plan::new(scene, frame_features().without(&[Feature::Bvh]));
-    let tracer = Tracer::new(scene, bvh, &plan, o.width, o.height, 1);
+    let plan = Plan::new(
+        scene,
+        frame_features().without(&[Feature::Bvh]),
+        PlanPolicy::Prune,
+    );
+    let tracer = Tracer::new(scene, bvh, &plan, scene.camera.frame(o.width, o.height), 1);
     let total = o.width as usize * o.height as usize;
     // About 4e7 triangle tests per primary ray sample: a fraction of a second.
     let n =
@@ -276,8 +281,8 @@ fn brute(scene: &Scene, bvh: &Bvh, o: &BenchOptions) -> Brute {
 fn plan_row(scene: &Scene, o: &BenchOptions) -> PlanRow {
     let bvh = bvh::build(&scene.geometry, Builder::Sah);
     let reps = o.reps.max(1);
-    let with = Plan::new(scene, frame_features());
-    let without = Plan::everything(scene, frame_features());
+    let with = Plan::new(scene, frame_features(), PlanPolicy::Prune);
+    let without = Plan::new(scene, frame_features(), PlanPolicy::Everything);
     // Interleave the two so drift in machine load hits both alike.
     let (mut a, mut b) = (Vec::new(), Vec::new());
     for _ in 0..reps {

@@ -15,7 +15,6 @@ mod report;
 mod resample;
 
 use std::path::PathBuf;
-use std::time::Instant;
 
 use anyhow::{bail, Result};
 use glam::Vec3;
@@ -27,7 +26,7 @@ pub use reference::{default_cache_dir, load_reference, save_reference};
 pub use resample::{resample, Resampled};
 
 use crate::bvh::Bvh;
-use crate::render::{pass, Film, Plan, Tracer};
+use crate::render::{Film, Plan, Progressive, Stop, Tracer};
 use crate::scene::{Scene, Settings};
 use metrics::log_lerp;
 use reference::{quantised, reference_key};
@@ -395,24 +394,17 @@ struct Run {
 
 /// Renders one independent run: passes of one sample until the budget is met.
 fn run_once(tracer: &Tracer, budget: Budget, passes: &mut u64) -> Run {
-    let mut film = Film::new(tracer.width, tracer.height);
-    let start = Instant::now();
-    let mut rays = 0;
-    loop {
-        rays += pass::render_pass(tracer, &mut film, 1, &|| false);
-        *passes += 1;
-        let done = match budget {
-            Budget::Spp(n) => film.spp >= n,
-            Budget::Seconds(t) => start.elapsed().as_secs_f64() >= t,
-        };
-        if done {
-            break;
-        }
-    }
+    let stop = match budget {
+        Budget::Spp(n) => Stop::spp(n),
+        Budget::Seconds(t) => Stop::seconds(t),
+    };
+    let mut p = Progressive::new(tracer.width, tracer.height);
+    let o = p.run(tracer, &stop, &|| false, |_, _| {});
+    *passes += o.passes as u64;
     Run {
-        film,
-        seconds: start.elapsed().as_secs_f64(),
-        rays,
+        film: p.film,
+        seconds: o.seconds,
+        rays: o.rays,
     }
 }
 
@@ -445,7 +437,8 @@ impl Subject<'_> {
         let mut est = Some(0.0);
         for i in 0..cfg.seeds {
             let seed = cfg.seed.wrapping_add(i as u64);
-            let tracer = Tracer::new(&scene, self.bvh, self.plan, cfg.width, cfg.height, seed);
+            let frame = scene.camera.frame(cfg.width, cfg.height);
+            let tracer = Tracer::new(&scene, self.bvh, self.plan, frame, seed);
             let r = run_once(&tracer, budget, passes);
             let img = r.film.image();
             spp += r.film.spp as f64 / n;
@@ -545,17 +538,16 @@ impl Subject<'_> {
                         )),
                     }
                 }
-                let tracer = Tracer::new(self.scene, self.bvh, self.plan, w, h, seed);
-                let mut film = Film::new(w, h);
-                let start = Instant::now();
+                let frame = self.scene.camera.frame(w, h);
+                let tracer = Tracer::new(self.scene, self.bvh, self.plan, frame, seed);
+                let mut p = Progressive::new(w, h);
                 // Several samples per pass keep the pass overhead small.
-                while film.spp < spp {
-                    bar.set_message(format!("reference: {}/{spp} spp", film.spp));
-                    let n = (spp - film.spp).min(8);
-                    pass::render_pass(&tracer, &mut film, n, &|| false);
-                }
-                let seconds = start.elapsed().as_secs_f64();
-                let img = quantised(w, h, &film.image())?;
+                p.samples_per_pass = 8;
+                let o = p.run(&tracer, &Stop::spp(spp), &|| false, |film, _| {
+                    bar.set_message(format!("reference: {}/{spp} spp", film.spp))
+                });
+                let seconds = o.seconds;
+                let img = quantised(w, h, &p.film.image())?;
                 let source = match &file {
                     Some(f) => match save_reference(f, w, h, &img) {
                         Ok(()) => format!("rendered, cached as {}", f.display()),
@@ -618,9 +610,8 @@ impl Subject<'_> {
         };
         if self.plan.deterministic {
             // One pass is the answer: it is its own reference unless one is given.
-            let tracer = Tracer::new(
-                self.scene, self.bvh, self.plan, cfg.width, cfg.height, cfg.seed,
-            );
+            let frame = self.scene.camera.frame(cfg.width, cfg.height);
+            let tracer = Tracer::new(self.scene, self.bvh, self.plan, frame, cfg.seed);
             let r = run_once(&tracer, Budget::Spp(1), &mut passes);
             let img = r.film.image();
             let (reference, info) = match cfg.reference {

@@ -84,6 +84,7 @@ pub struct CameraFrame {
     aspect: f64,
     width: f64,
     height: f64,
+    size: (u32, u32),
 }
 
 impl CameraFrame {
@@ -104,7 +105,13 @@ impl CameraFrame {
             aspect: width as f64 / height as f64,
             width: width as f64,
             height: height as f64,
+            size: (width, height),
         }
+    }
+
+    /// The image size in pixels this frame was made for.
+    pub fn size(&self) -> (u32, u32) {
+        self.size
     }
 
     /// Ray through image position `(x, y)` in pixels, `y = 0` the top row;

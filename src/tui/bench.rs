@@ -14,9 +14,9 @@ use serde::Serialize;
 
 use super::color::ColorMode;
 use super::widgets::paint_view;
-use super::worker::{Cmd, View, Worker};
+use super::worker::{Cmd, Msg, View, Worker};
 use super::CountingWriter;
-use crate::cli::{prepare, SceneOpts};
+use crate::render::{SceneRequest, Session};
 
 /// What [`measure_pass`] measured.
 #[derive(Clone, Debug, Serialize)]
@@ -64,26 +64,26 @@ fn counting_terminal(cols: u16, rows: u16) -> Result<(Counting, Arc<AtomicU64>)>
     Ok((t, count))
 }
 
-/// Renders `passes` progressive passes of `scene_spec` at the size of a
-/// `cols x rows` terminal (two pixels per cell), with every feature the
-/// scene uses (shadows included), and draws each into a counting terminal
-/// filled by the viewport.
-pub fn measure_pass(scene_spec: &str, cols: u16, rows: u16, passes: u32) -> Result<TuiPassStats> {
+/// Renders `passes` progressive passes of the scene `req` asks for at the
+/// size of a `cols x rows` terminal (two pixels per cell), with the
+/// request's plan, and draws each into a counting terminal filled by the
+/// viewport.
+pub fn measure_pass(req: &SceneRequest, cols: u16, rows: u16, passes: u32) -> Result<TuiPassStats> {
     if cols == 0 || rows == 0 || passes == 0 {
         bail!("measure_pass needs a non-empty terminal and at least one pass");
     }
-    let p = prepare(&SceneOpts::new(scene_spec))?;
+    let (s, _) = Session::open(req)?;
     let (width, height) = (cols as u32, rows as u32 * 2);
-    let scene = Arc::new(p.scene);
-    let mut worker = Worker::new(scene.clone(), Arc::new(p.bvh), p.seed, None);
+    let scene = s.scene.clone();
+    let mut worker = Worker::new(scene.clone(), s.bvh.clone(), s.seed, None);
     worker.apply(Cmd::View(
         1,
-        View {
-            camera: scene.camera,
-            features: p.plan.features,
+        Box::new(View {
+            camera: s.camera,
+            plan: s.plan.clone(),
             width,
             height,
-        },
+        }),
     ));
     let (mut term, bytes) = counting_terminal(cols, rows)?;
     let (mut term256, bytes256) = counting_terminal(cols, rows)?;
@@ -92,8 +92,10 @@ pub fn measure_pass(scene_spec: &str, cols: u16, rows: u16, passes: u32) -> Resu
     let mut rays = Vec::new();
     while (pass_ms.len() as u32) < passes {
         let start = Instant::now();
-        let Some(s) = worker.step(&|| false) else {
-            break;
+        let s = match worker.step(&|| false) {
+            Some(Msg::Frame(s)) => s,
+            Some(_) => continue,
+            None => break,
         };
         let step = start.elapsed().as_secs_f64() * 1e3;
         if s.coarse {
@@ -162,7 +164,7 @@ mod tests {
 
     #[test]
     fn measures_passes_and_bytes() {
-        let s = measure_pass("cornell", 40, 12, 3).unwrap();
+        let s = measure_pass(&SceneRequest::new("cornell"), 40, 12, 3).unwrap();
         assert_eq!((s.width, s.height, s.passes), (40, 24, 3));
         assert!(s.pass_ms_mean > 0.0 && s.mrays_per_s > 0.0);
         // The first frame paints every cell: at least the half block per cell.

@@ -7,23 +7,18 @@ use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::sync::Arc;
 use std::thread::JoinHandle;
-use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 
-use super::worker::tracer;
-use crate::bvh::Bvh;
-use crate::render::{output, pass, post, Features, Film, Plan};
-use crate::scene::{Camera, Scene};
+use crate::render::{output, post, Ended, Plan, Progressive, Session, Stop};
+use crate::scene::Camera;
 
-/// What to export.
+/// What to export: the session's scene at its size (the export size) and
+/// seed, seen from `camera` with `plan`.
 pub struct Request {
-    pub scene: Arc<Scene>,
-    pub bvh: Arc<Bvh>,
+    pub session: Session,
     pub camera: Camera,
-    pub features: Features,
-    pub size: (u32, u32),
-    pub seed: u64,
+    pub plan: Plan,
     /// Where the file goes.
     pub dir: PathBuf,
 }
@@ -72,21 +67,20 @@ impl Job {
     /// Starts rendering `r` to `rayterm-<scene>-NNN.png` at the scene's spp
     /// (one pass when nothing is sampled).
     pub fn start(r: Request) -> Result<Job> {
-        let plan = Plan::new(&r.scene, r.features);
-        let target_spp = if plan.deterministic {
+        let target_spp = if r.plan.deterministic {
             1
         } else {
-            r.scene.settings.spp.max(1)
+            r.session.scene.settings.spp.max(1)
         };
         let done_spp = Arc::new(AtomicU32::new(0));
         let cancel = Arc::new(AtomicBool::new(false));
         let (tx, result) = mpsc::channel();
         let (done, stop) = (done_spp.clone(), cancel.clone());
-        let size = r.size;
+        let size = (r.session.width, r.session.height);
         let thread = std::thread::Builder::new()
             .name("rayterm-export".into())
             .spawn(move || {
-                let _ = tx.send(render(&r, &plan, target_spp, &done, &stop));
+                let _ = tx.send(render(&r, target_spp, &done, &stop));
             })
             .context("cannot start the export thread")?;
         Ok(Job {
@@ -125,35 +119,25 @@ impl Drop for Job {
     }
 }
 
-fn render(
-    r: &Request,
-    plan: &Plan,
-    spp: u32,
-    done: &AtomicU32,
-    stop: &AtomicBool,
-) -> Result<Saved> {
-    let start = Instant::now();
-    let (w, h) = r.size;
-    let t = tracer(&r.scene, &r.bvh, plan, &r.camera, r.size, r.seed);
-    let mut film = Film::new(w, h);
+fn render(r: &Request, spp: u32, done: &AtomicU32, stop: &AtomicBool) -> Result<Saved> {
+    let s = &r.session;
+    let (w, h) = (s.width, s.height);
+    let tracer = s.tracer_for(&r.plan, &r.camera, (w, h));
     let cancel = || stop.load(Ordering::Relaxed);
-    for k in 0..spp {
-        pass::render_pass(&t, &mut film, 1, &cancel);
-        if cancel() {
-            bail!("export cancelled");
-        }
-        done.store(k + 1, Ordering::Relaxed);
+    let mut p = Progressive::new(w, h);
+    let o = p.run(&tracer, &Stop::spp(spp), &cancel, |film, _| {
+        done.store(film.spp, Ordering::Relaxed)
+    });
+    if o.ended == Ended::Cancelled {
+        bail!("export cancelled");
     }
-    let mut img = film.image();
-    if plan.bloom {
-        post::bloom(&mut img, w as usize, h as usize, &r.scene.settings.bloom);
-    }
-    let path = output::fresh_name(&r.dir, &format!("rayterm-{}", stem(&r.scene.name)));
-    output::save_png_atomic(&post::to_rgb8(&img, w, h), &path)?;
+    let shown = post::display(p.film.image(), w, h, &r.plan, &s.scene.settings.bloom);
+    let path = output::fresh_name(&r.dir, &format!("rayterm-{}", stem(&s.scene.name)));
+    output::save_png_atomic(&post::to_rgb8(&shown.image, w, h), &path)?;
     Ok(Saved {
         path,
-        spp,
-        seconds: start.elapsed().as_secs_f64(),
+        spp: p.film.spp,
+        seconds: o.seconds,
     })
 }
 

@@ -4,8 +4,7 @@
 
 use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
 
-use crate::cli::Worst;
-use crate::render::Feature;
+use crate::render::{Feature, Worst};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Key {
@@ -66,17 +65,21 @@ impl Key {
 }
 
 /// Where a binding applies: arrows orbit the camera in view mode and move
-/// the pixel cursor in select mode.
+/// the pixel cursor in select mode; while a popup is open only its own keys
+/// work.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {
+    /// View and select mode.
     Any,
     View,
     Select,
+    Popup,
 }
 
 impl Mode {
     fn overlaps(self, o: Mode) -> bool {
-        self == o || self == Mode::Any || o == Mode::Any
+        let any = |m: Mode| m == Mode::Any && o != Mode::Popup && self != Mode::Popup;
+        self == o || any(self) || any(o)
     }
 }
 
@@ -92,7 +95,7 @@ pub enum Action {
     Toggle(Feature),
     SwitchBuilder,
     SelectMode,
-    /// Leave select mode or close the help.
+    /// Leave select mode.
     Back,
     /// Pixel cursor steps right and down.
     Cursor(i8, i8),
@@ -110,6 +113,10 @@ pub enum Action {
     SavePng,
     Stability,
     Help,
+    /// Scroll the popup by lines, or by pages.
+    ScrollPopup(i8),
+    PagePopup(i8),
+    ClosePopup,
     Quit,
 }
 
@@ -244,7 +251,7 @@ pub const ROWS: &[Row] = &[
     Row {
         mode: Mode::Any,
         keys: &[(K::Esc, A::Back)],
-        help: "leave select mode, close the help",
+        help: "leave select mode",
         hint: None,
     },
     Row {
@@ -304,6 +311,42 @@ pub const ROWS: &[Row] = &[
         keys: &[(K::Char('x'), A::Stability)],
         help: "run the numerical stability battery on this scene",
         hint: Some("stability"),
+    },
+    Row {
+        mode: Mode::Popup,
+        keys: &[
+            (K::Up, A::ScrollPopup(-1)),
+            (K::Down, A::ScrollPopup(1)),
+            (K::Char('k'), A::ScrollPopup(-1)),
+            (K::Char('j'), A::ScrollPopup(1)),
+        ],
+        help: "scroll a popup (help, stability table) up, down",
+        hint: Some("scroll"),
+    },
+    Row {
+        mode: Mode::Popup,
+        keys: &[
+            (K::PageUp, A::PagePopup(-1)),
+            (K::PageDown, A::PagePopup(1)),
+        ],
+        help: "scroll a popup a page up, down",
+        hint: None,
+    },
+    Row {
+        mode: Mode::Popup,
+        keys: &[
+            (K::Esc, A::ClosePopup),
+            (K::Char('q'), A::ClosePopup),
+            (K::Char('?'), A::ClosePopup),
+        ],
+        help: "close the popup",
+        hint: Some("close"),
+    },
+    Row {
+        mode: Mode::Popup,
+        keys: &[(K::Ctrl('c'), A::Quit)],
+        help: "quit",
+        hint: None,
     },
 ];
 
@@ -368,6 +411,7 @@ pub fn markdown_table() -> String {
             Mode::Any => "any",
             Mode::View => "view",
             Mode::Select => "select",
+            Mode::Popup => "popup",
         };
         s += &format!("| {keys} | {mode} | {} |\n", r.help);
     }
@@ -386,6 +430,7 @@ mod tests {
                     Mode::Any => &[Mode::View, Mode::Select],
                     Mode::View => &[Mode::View],
                     Mode::Select => &[Mode::Select],
+                    Mode::Popup => &[Mode::Popup],
                 };
                 for &m in modes {
                     assert_eq!(action(k, m), Some(a), "{k:?} in {m:?}");
@@ -415,6 +460,17 @@ mod tests {
         for f in Feature::ALL {
             assert!(key_for(Action::Toggle(f)).is_some(), "{}", f.name());
         }
+    }
+
+    #[test]
+    fn popups_take_their_own_keys() {
+        assert_eq!(
+            action(Key::Char('q'), Mode::Popup),
+            Some(Action::ClosePopup)
+        );
+        assert_eq!(action(Key::Ctrl('c'), Mode::Popup), Some(Action::Quit));
+        assert_eq!(action(Key::Char('w'), Mode::Popup), None);
+        assert_eq!(action(Key::Char('q'), Mode::View), Some(Action::Quit));
     }
 
     #[test]

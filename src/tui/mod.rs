@@ -1,16 +1,24 @@
 //! The terminal UI: explore a scene with a progressively rendered viewport,
 //! BVH, feature and render panels, and the selected pixel's ray tree.
 //!
-//! `app` holds the state and actions, `keys` the one key table, `worker`
-//! renders on its own thread, `widgets` draw, `color` turns pixels into
-//! half-block cells, `export` writes PNGs in the background and `bench`
-//! measures the pass time and terminal bandwidth.
+//! `app` holds the state and actions, split into `camera`, `link` (to the
+//! render `worker` on its own thread), `inspector` (the ray-tree pane),
+//! `jobs` (PNG `export`, the stability battery) and `popup`; `keys` is the
+//! one key table, `layout` places everything before each draw, `widgets`
+//! draw (and only draw), `color` turns pixels into half-block cells and
+//! `bench` measures the pass time and terminal bandwidth.
 
 pub mod app;
 pub mod bench;
+pub mod camera;
 pub mod color;
 pub mod export;
+pub mod inspector;
+pub mod jobs;
 pub mod keys;
+pub mod layout;
+pub mod link;
+pub mod popup;
 pub mod widgets;
 pub mod worker;
 
@@ -28,9 +36,10 @@ use ratatui::crossterm::terminal::{
     disable_raw_mode, enable_raw_mode, EnterAlternateScreen, LeaveAlternateScreen,
 };
 use ratatui::crossterm::{cursor, execute};
+use ratatui::layout::Rect;
 use ratatui::Terminal;
 
-use crate::cli::{prepare, SceneOpts};
+use crate::render::{SceneRequest, Session};
 use app::App;
 use color::ColorMode;
 
@@ -42,17 +51,20 @@ const POLL_IDLE: Duration = Duration::from_millis(250);
 
 /// Opens the TUI on the scene; returns when the user quits.
 pub fn run(
-    opts: &SceneOpts,
+    req: &SceneRequest,
     color: Option<ColorMode>,
     reference: Option<&Path>,
 ) -> Result<ExitCode> {
     if !io::stdout().is_terminal() {
         bail!("the TUI needs an interactive terminal; `rayterm render` writes images without one");
     }
-    let p = prepare(opts)?;
+    let (session, warnings) = Session::open(req)?;
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
     let color =
         color.unwrap_or_else(|| ColorMode::detect(std::env::var("COLORTERM").ok().as_deref()));
-    let mut app = App::new(p, color, reference)?;
+    let mut app = App::new(session, warnings, color, reference)?;
     let bytes = Arc::new(AtomicU64::new(0));
     let guard = TerminalGuard::enter()?;
     let writer = CountingWriter {
@@ -63,7 +75,7 @@ pub fn run(
         .context("cannot set up the terminal")
         .and_then(|mut t| event_loop(&mut t, &mut app, &bytes));
     drop(guard);
-    if app.cancel_export() {
+    if app.jobs.cancel_export() {
         eprintln!("rayterm: an unfinished PNG export was cancelled");
     }
     result.map(|()| ExitCode::SUCCESS)
@@ -80,11 +92,11 @@ fn event_loop<W: Write>(
         dirty |= app.poll()?;
         dirty |= app.note_bytes(bytes.load(Ordering::Relaxed));
         if dirty && last_draw.elapsed() >= FRAME {
-            terminal.draw(|f| widgets::draw(f, app))?;
+            draw(terminal, app)?;
             last_draw = Instant::now();
             dirty = false;
         }
-        let idle = app.current_frame().is_some_and(|f| f.done) && app.export_progress().is_none();
+        let idle = app.idle();
         let wait = if dirty {
             FRAME.saturating_sub(last_draw.elapsed())
         } else if idle {
@@ -106,6 +118,18 @@ fn event_loop<W: Write>(
             return Ok(());
         }
     }
+}
+
+/// Lays out the screen for the terminal's size, brings the app in line
+/// with it, then draws (drawing only reads the app).
+pub fn draw<B: ratatui::backend::Backend>(terminal: &mut Terminal<B>, app: &mut App) -> Result<()>
+where
+    B::Error: Send + Sync + 'static,
+{
+    let size = terminal.size()?;
+    app.update(Rect::new(0, 0, size.width, size.height));
+    terminal.draw(|f| widgets::draw(f, app))?;
+    Ok(())
 }
 
 /// Counts the bytes written to the terminal, for the bandwidth readout.

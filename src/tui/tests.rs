@@ -10,32 +10,31 @@ use ratatui::Terminal;
 use super::app::App;
 use super::color::ColorMode;
 use super::keys::Key;
-use super::widgets;
-use crate::cli::{prepare, SceneOpts};
-use crate::render::Feature;
+use crate::render::{post, Feature, Features, PlanPolicy, Progressive, SceneRequest, Session};
 
 const WAIT: Duration = Duration::from_secs(30);
 
 fn app(spec: &str, off: &[Feature]) -> App {
-    let p = prepare(&SceneOpts {
+    let req = SceneRequest {
         size: Some((24, 16)),
-        off: off.to_vec(),
-        ..SceneOpts::new(spec)
-    })
-    .unwrap();
-    App::new(p, ColorMode::Truecolor, None).unwrap()
+        features: Features::all().without(off),
+        ..SceneRequest::new(spec)
+    };
+    let (session, warnings) = Session::open(&req).unwrap();
+    App::new(session, warnings, ColorMode::Truecolor, None).unwrap()
 }
 
 fn terminal(w: u16, h: u16) -> Terminal<TestBackend> {
     Terminal::new(TestBackend::new(w, h)).unwrap()
 }
 
-/// Draws, waits for a full pass of the view that drawing asked for, and
-/// draws again.
+/// Lays the app out for the terminal, waits for a full pass of that view,
+/// and draws.
 fn settle(t: &mut Terminal<TestBackend>, app: &mut App) -> String {
-    t.draw(|f| widgets::draw(f, app)).unwrap();
+    let size = t.size().unwrap();
+    app.update(ratatui::layout::Rect::new(0, 0, size.width, size.height));
     assert!(app.wait_frame(WAIT).unwrap(), "no pass within {WAIT:?}");
-    t.draw(|f| widgets::draw(f, app)).unwrap();
+    super::draw(t, app).unwrap();
     text(t)
 }
 
@@ -76,7 +75,7 @@ fn a_frame_shows_every_panel() {
     assert!(s.contains("per ray:"), "{s}");
     // The viewport is half blocks with two colours each.
     let b = t.backend().buffer();
-    let v = app.viewport;
+    let v = app.layout.image;
     let cell = &b[(v.x + v.width / 2, v.y + v.height / 2)];
     assert_eq!(cell.symbol(), "▀");
     assert!(matches!(cell.fg, Color::Rgb(..)) && matches!(cell.bg, Color::Rgb(..)));
@@ -147,16 +146,16 @@ fn folds_open_and_close() {
     settle(&mut t, &mut app);
     let (w, h) = app.view_size;
     app.select(w / 2, h * 7 / 8, 0);
-    let lines = app.debug_lines();
+    let lines = app.inspector.lines().to_vec();
     let folded = lines.len();
     assert!(lines.iter().any(|l| l.text.starts_with("[+] 16 samples")));
     // Enter opens the first fold below the cursor and scrolls to it.
     app.handle_key(Key::Enter);
     let s = settle(&mut t, &mut app);
     assert!(s.contains("[-] 16 samples"), "{s}");
-    assert_eq!(app.debug_lines().len(), folded + 16);
+    assert_eq!(app.inspector.lines().len(), folded + 16);
     app.handle_key(Key::Char(' '));
-    assert_eq!(app.debug_lines().len(), folded);
+    assert_eq!(app.inspector.lines().len(), folded);
 }
 
 #[test]
@@ -167,7 +166,7 @@ fn rays_are_drawn_into_the_view() {
     let (w, h) = app.view_size;
     // A pixel whose shadow ray was traced (lit by the light or blocked).
     let has_shadow_ray = |app: &mut App| {
-        let tree = app.tree().unwrap();
+        let tree = app.inspector.tree().unwrap();
         tree.root
             .lights
             .iter()
@@ -198,7 +197,7 @@ fn rays_are_drawn_into_the_view() {
 fn a_small_terminal_shows_a_message() {
     let mut app = app("cornell", &[]);
     let mut t = terminal(60, 20);
-    t.draw(|f| widgets::draw(f, &mut app)).unwrap();
+    super::draw(&mut t, &mut app).unwrap();
     assert!(
         text(&t).contains("terminal too small (need 80x24"),
         "{}",
@@ -215,17 +214,17 @@ fn help_lists_every_binding() {
     let mut t = terminal(140, 60);
     settle(&mut t, &mut app);
     app.handle_key(Key::Char('?'));
-    t.draw(|f| widgets::draw(f, &mut app)).unwrap();
+    super::draw(&mut t, &mut app).unwrap();
     let s = text(&t);
     for r in super::keys::ROWS {
         assert!(s.contains(r.help), "{:?} missing from the help", r.help);
     }
-    // Keys go to the popup while it is open.
+    // Keys go to the popup while it is open; q closes it, not the app.
     let g = app.generation();
     app.handle_key(Key::Char('w'));
     assert_eq!(app.generation(), g);
-    app.handle_key(Key::Esc);
-    assert!(app.popup.is_none());
+    app.handle_key(Key::Char('q'));
+    assert!(app.popup.is_none() && !app.quit);
 }
 
 #[test]
@@ -258,7 +257,7 @@ fn worst_pixel_keys_select_a_pixel() {
     let mut t = terminal(100, 30);
     settle(&mut t, &mut app);
     app.handle_key(Key::Char('B'));
-    assert!(app.selected.is_some(), "{}", app.status);
+    assert!(app.inspector.selected.is_some(), "{}", app.status);
     app.handle_key(Key::Char('n'));
     assert!(app.status.contains("no pixel had a NaN"), "{}", app.status);
 }
@@ -273,7 +272,7 @@ fn export_writes_a_png_in_the_background() {
     settle(&mut t, &mut app);
     app.handle_key(Key::Char('p'));
     let end = std::time::Instant::now() + WAIT;
-    while app.export_progress().is_some() && std::time::Instant::now() < end {
+    while app.jobs.export_progress().is_some() && std::time::Instant::now() < end {
         std::thread::sleep(Duration::from_millis(10));
         app.poll().unwrap();
     }
@@ -291,7 +290,7 @@ fn a_click_selects_the_pixel_under_it() {
     let mut app = app("cornell", &[]);
     let mut t = terminal(100, 30);
     settle(&mut t, &mut app);
-    let v = app.viewport;
+    let v = app.layout.image;
     let click = |column, row| {
         Event::Mouse(MouseEvent {
             kind: MouseEventKind::Down(MouseButton::Left),
@@ -301,29 +300,79 @@ fn a_click_selects_the_pixel_under_it() {
         })
     };
     app.handle_event(&click(v.x + 5, v.y + 3));
-    let s = app.selected.unwrap();
+    let s = app.inspector.selected.unwrap();
     assert_eq!((s.x, s.y), (5, 6), "cell row 3 holds pixel rows 6 and 7");
     // Clicks outside the viewport select nothing new.
     app.handle_event(&click(v.x + v.width + 2, v.y));
-    assert_eq!(app.selected.map(|s| (s.x, s.y)), Some((5, 6)));
+    assert_eq!(app.inspector.selected.map(|s| (s.x, s.y)), Some((5, 6)));
 }
 
 #[test]
-fn no_command_means_the_tui() {
-    use crate::cli::{Cli, Command};
-    use clap::Parser;
-    assert!(Cli::try_parse_from(["rayterm"]).unwrap().command.is_none());
-    let cli = Cli::try_parse_from(["rayterm", "tui", "teapot", "--color", "16", "--no", "bloom"]);
-    match cli.unwrap().command {
-        Some(Command::Tui(a)) => {
-            assert_eq!(a.scene.scene, "teapot");
-            assert_eq!(a.color, Some(ColorMode::Ansi16));
-            assert_eq!(a.scene.off, vec![Feature::Bloom]);
-        }
-        other => panic!("{other:?}"),
-    }
-    let Some(Command::Tui(a)) = Cli::try_parse_from(["rayterm", "tui"]).unwrap().command else {
-        panic!("tui parses");
+fn no_plan_runs_every_enabled_stage_in_the_view_and_its_export() {
+    let req = SceneRequest {
+        size: Some((24, 16)),
+        policy: PlanPolicy::Everything,
+        ..SceneRequest::new("cornell")
     };
-    assert_eq!((a.scene.scene.as_str(), a.scene.seed), ("cornell", 1));
+    let (session, warnings) = Session::open(&req).unwrap();
+    let mut app = App::new(session, warnings, ColorMode::Truecolor, None).unwrap();
+    let mut t = terminal(100, 30);
+    let s = settle(&mut t, &mut app);
+    // Cornell has no textures, glossy materials or environment map, yet
+    // with --no-plan their stages run, and the panel says so.
+    assert!(app.plan.textures && app.plan.glossy && app.plan.environment);
+    assert!(line_with(&s, "textures").contains("textures       on"), "{s}");
+    app.handle_key(Key::Char('1'));
+    assert!(app.plan.textures && !app.plan.shadows, "toggles keep the policy");
+    let dir = std::env::temp_dir().join(format!("rayterm-tui-noplan-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    app.export_dir = dir.clone();
+    app.handle_key(Key::Char('p'));
+    let end = std::time::Instant::now() + WAIT;
+    while app.jobs.export_progress().is_some() && std::time::Instant::now() < end {
+        std::thread::sleep(Duration::from_millis(10));
+        app.poll().unwrap();
+    }
+    assert!(app.status.starts_with("saved "), "{}", app.status);
+    // The export rendered the view's plan: every stage but the shadows.
+    let req = SceneRequest {
+        features: Features::all().without(&[Feature::Shadows]),
+        ..req
+    };
+    let (s, _) = Session::open(&req).unwrap();
+    let film = Progressive::render(&s.tracer(), s.scene.settings.spp);
+    let shown = post::display(film.image(), 24, 16, &s.plan, &s.scene.settings.bloom);
+    let want = post::to_rgb8(&shown.image, 24, 16);
+    let got = image::open(dir.join("rayterm-cornell-001.png"))
+        .unwrap()
+        .to_rgb8();
+    assert_eq!(got, want);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_pixel_before_and_after_bloom_is_the_films_as_inspect_gives_it() {
+    let mut app = app("cornell-area", &[]);
+    let mut t = terminal(100, 30);
+    settle(&mut t, &mut app);
+    let (w, h) = app.view_size;
+    app.select(w / 2, h / 3, 0);
+    let tree = app.inspector.tree().unwrap().clone();
+    let spp = tree.pixel_spp.expect("bloom runs, so the pixel's values are known");
+    // What `rayterm inspect --size WxH --spp N` computes: the image at N
+    // spp, before and after bloom.
+    let req = SceneRequest {
+        size: Some((w, h)),
+        ..SceneRequest::new("cornell-area")
+    };
+    let (s, _) = Session::open(&req).unwrap();
+    let film = Progressive::render(&s.tracer(), spp);
+    let shown = post::display(film.image(), w, h, &s.plan, &s.scene.settings.bloom);
+    let mut want = crate::inspect::inspect_pixel(&s.tracer(), w / 2, h / 3, 0);
+    want.set_pixel(&shown, spp);
+    assert_eq!(
+        (tree.pixel_before_bloom, tree.pixel_after_bloom),
+        (want.pixel_before_bloom, want.pixel_after_bloom)
+    );
+    assert_eq!(tree.color, want.color);
 }

@@ -3,7 +3,8 @@
 //! pass (when full passes are slow) so something appears at once, then every
 //! full-resolution pass adds one sample per pixel and sends a snapshot. A
 //! newer view cancels the pass in flight between rows, so camera motion never
-//! waits for a pass.
+//! waits for a pass. BVH overlays are computed here too, once per view, so
+//! drawing never traverses the BVH.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
@@ -15,9 +16,10 @@ use anyhow::{Context, Result};
 use glam::Vec3;
 
 use crate::bvh::{self, Bvh};
-use crate::cli::{find_worst, Worst};
+use crate::render::debug_view::{self, DebugView};
+use crate::render::overlay::Layer;
 use crate::render::recorder::WorkCounter;
-use crate::render::{pass, post, Features, Film, Plan, Tracer};
+use crate::render::{post, Plan, Progressive, Stop, Tracer, WorstPixels};
 use crate::report::converge::{rel_mse_on, resample};
 use crate::scene::{Builder, Camera, Scene};
 
@@ -29,21 +31,29 @@ const COARSE: u32 = 4;
 /// Accumulation stops here; the image no longer visibly changes.
 pub const MAX_SPP: u32 = 1024;
 
-/// What to render.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// What to render: a camera, the plan of what runs, and the size.
+#[derive(Clone, Debug, PartialEq)]
 pub struct View {
     pub camera: Camera,
-    pub features: Features,
+    pub plan: Plan,
     pub width: u32,
     pub height: u32,
 }
 
+impl View {
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+}
+
 pub enum Cmd {
     /// Render this view; `u64` is its generation.
-    View(u64, View),
+    View(u64, Box<View>),
     /// Rebuild the BVH with this builder, then render the current view as
     /// generation `u64`.
     Builder(u64, Builder),
+    /// Keep this BVH view drawn over every view (none: no overlay).
+    Overlay(Option<DebugView>),
     Quit,
 }
 
@@ -51,6 +61,15 @@ pub enum Msg {
     Frame(Box<Snapshot>),
     /// The BVH was rebuilt.
     Bvh(Arc<Bvh>),
+    Overlay(Box<OverlayFrame>),
+}
+
+/// A BVH view drawn for one view of the scene.
+pub struct OverlayFrame {
+    pub generation: u64,
+    pub view: DebugView,
+    /// The layer, or why it cannot be drawn.
+    pub layer: Result<(Layer, String), String>,
 }
 
 /// A reference image (`--reference`) and the view it shows.
@@ -61,10 +80,10 @@ pub struct Reference {
     pub height: u32,
     /// Linear colours, row-major from the top.
     pub image: Vec<Vec3>,
-    /// The camera and features it was rendered with; other views are not
+    /// The camera and plan it was rendered with; other views are not
     /// compared.
     pub camera: Camera,
-    pub features: Features,
+    pub plan: Plan,
 }
 
 /// Whether the true error against the reference is measured, and if not why.
@@ -105,7 +124,7 @@ pub struct Snapshot {
     pub spp: u32,
     pub pass_ms: f64,
     pub mrays: f64,
-    /// The film's estimated relative error ([`Film::relative_error`]).
+    /// The film's estimated relative error.
     pub error: f64,
     /// Nothing is sampled and one pass is done: the image is exact.
     pub exact: bool,
@@ -121,23 +140,8 @@ pub struct Snapshot {
     /// (seconds, true error) after each pass.
     pub true_history: Vec<(f64, f64)>,
     pub per_ray: Option<PerRay>,
-    /// Worst pixels by [`Worst::Nan`], [`Worst::Variance`], [`Worst::Brightest`].
-    pub worst: [Option<(u32, u32, u32)>; 3],
+    pub worst: WorstPixels,
     pub bad_samples: u64,
-}
-
-/// A tracer for `camera` instead of the scene's own.
-pub fn tracer<'a>(
-    scene: &'a Scene,
-    bvh: &'a Bvh,
-    plan: &'a Plan,
-    camera: &Camera,
-    (width, height): (u32, u32),
-    seed: u64,
-) -> Tracer<'a> {
-    let mut t = Tracer::new(scene, bvh, plan, width, height, seed);
-    t.frame = camera.frame(width, height);
-    t
 }
 
 /// The worker's state; [`Worker::step`] runs one pass. The thread in
@@ -148,8 +152,7 @@ pub struct Worker {
     seed: u64,
     generation: u64,
     view: Option<View>,
-    plan: Plan,
-    film: Film,
+    film: Progressive,
     coarse_pending: bool,
     started: Instant,
     history: Vec<(f64, f64)>,
@@ -165,6 +168,9 @@ pub struct Worker {
     last_mrays: f64,
     /// The film is unchanged but the view's generation is new: show it again.
     resend: bool,
+    /// The BVH view to draw, and the generation it was last drawn for.
+    overlay: Option<DebugView>,
+    overlay_drawn: Option<(u64, DebugView)>,
 }
 
 impl Worker {
@@ -174,15 +180,13 @@ impl Worker {
         seed: u64,
         reference: Option<Arc<Reference>>,
     ) -> Self {
-        let plan = Plan::new(&scene, Features::all());
         Self {
             scene,
             bvh,
             seed,
             generation: 0,
             view: None,
-            plan,
-            film: Film::new(0, 0),
+            film: Progressive::new(0, 0),
             coarse_pending: false,
             started: Instant::now(),
             history: Vec::new(),
@@ -194,6 +198,8 @@ impl Worker {
             true_history: Vec::new(),
             last_mrays: 0.0,
             resend: false,
+            overlay: None,
+            overlay_drawn: None,
         }
     }
 
@@ -202,21 +208,18 @@ impl Worker {
     pub fn apply(&mut self, cmd: Cmd) -> Option<Msg> {
         match cmd {
             Cmd::View(generation, view) => {
+                let view = *view;
                 self.generation = generation;
-                // Bloom and the BVH toggle leave the film as it is: keep its
-                // samples and only show it again. (A pass cancelled halfway
-                // leaves some rows a sample short; each pixel's mean and
-                // error are its own, so the film is still sound.)
-                let same_film = self.film.spp > 0
-                    && self.view.is_some_and(|old| {
-                        (old.camera, old.width, old.height)
-                            == (view.camera, view.width, view.height)
-                            && old.features.shaping_film() == view.features.shaping_film()
+                // A plan that keeps the film (bloom, the BVH toggle) keeps its
+                // samples: the film is only shown again. (A pass cancelled
+                // halfway leaves some rows a sample short; each pixel's mean
+                // and error are its own, so the film is still sound.)
+                let same_film = self.film.film.spp > 0
+                    && self.view.as_ref().is_some_and(|old| {
+                        (old.camera, old.size()) == (view.camera, view.size())
+                            && old.plan.same_film(&view.plan)
                     });
-                if self.view != Some(view) {
-                    self.plan = Plan::new(&self.scene, view.features);
-                    self.view = Some(view);
-                }
+                self.view = Some(view);
                 if same_film {
                     self.resend = true;
                 } else {
@@ -231,13 +234,18 @@ impl Worker {
                 self.restart();
                 Some(Msg::Bvh(self.bvh.clone()))
             }
+            Cmd::Overlay(o) => {
+                self.overlay = o;
+                self.overlay_drawn = None;
+                None
+            }
             Cmd::Quit => None,
         }
     }
 
     fn restart(&mut self) {
-        let (w, h) = self.view.map_or((0, 0), |v| (v.width, v.height));
-        self.film = Film::new(w, h);
+        let (w, h) = self.view.as_ref().map_or((0, 0), View::size);
+        self.film = Progressive::new(w, h);
         self.coarse_pending = self.last_full_ms.is_none_or(|ms| ms > COARSE_ABOVE_MS);
         self.started = Instant::now();
         self.history.clear();
@@ -250,12 +258,10 @@ impl Worker {
     /// takes the reference onto the view's pixels when it can.
     fn compare_with_reference(&mut self) {
         self.reference_pixels.clear();
-        self.truth = match (&self.reference, self.view) {
+        self.truth = match (&self.reference, &self.view) {
             (None, _) | (_, None) => Truth::NoReference,
             (Some(r), Some(v)) if v.camera != r.camera => Truth::CameraMoved,
-            (Some(r), Some(v)) if v.features.shaping_film() != r.features.shaping_film() => {
-                Truth::FeaturesChanged
-            }
+            (Some(r), Some(v)) if !v.plan.same_film(&r.plan) => Truth::FeaturesChanged,
             (Some(r), Some(v)) => {
                 let m = resample(r.width, r.height, &r.image, v.width, v.height);
                 if m.pixels.is_empty() {
@@ -271,71 +277,105 @@ impl Worker {
         };
     }
 
-    /// Whether more passes would change the image.
+    fn stop() -> Stop {
+        Stop::spp(MAX_SPP)
+    }
+
+    /// Whether the overlay asked for is not yet drawn for this view.
+    fn overlay_due(&self) -> Option<DebugView> {
+        let o = self.overlay?;
+        (self.overlay_drawn != Some((self.generation, o))).then_some(o)
+    }
+
+    /// Whether more work would change what is shown.
     pub fn idle(&self) -> bool {
-        if self.resend {
+        if self.resend || self.overlay_due().is_some() && self.view.is_some() {
             return false;
         }
-        match self.view {
+        match &self.view {
             None => true,
             Some(v) if v.width == 0 || v.height == 0 => true,
-            Some(_) => self.film.spp >= MAX_SPP || (self.plan.deterministic && self.film.spp >= 1),
+            Some(v) => self.film.finished(&v.plan, &Self::stop(), 0.0).is_some(),
         }
     }
 
-    /// Runs the next pass; `None` when idle or cancelled.
-    pub fn step(&mut self, cancel: &(dyn Fn() -> bool + Sync)) -> Option<Snapshot> {
+    /// A tracer for the current view.
+    fn tracer<'a>(&'a self, view: &'a View, (w, h): (u32, u32)) -> Tracer<'a> {
+        Tracer::new(
+            &self.scene,
+            &self.bvh,
+            &view.plan,
+            view.camera.frame(w, h),
+            self.seed,
+        )
+    }
+
+    /// Does the next piece of work: shows a kept film again, draws the
+    /// overlay, or runs a pass; `None` when idle or cancelled.
+    pub fn step(&mut self, cancel: &(dyn Fn() -> bool + Sync)) -> Option<Msg> {
         if self.idle() {
             return None;
         }
-        let view = self.view?;
+        let view = self.view.clone()?;
         if std::mem::take(&mut self.resend) {
-            let mean = self.film.image();
+            let mean = self.film.film.image();
             let truth = self.true_error(&mean);
-            return Some(self.snapshot(&view, mean, truth));
+            return Some(Msg::Frame(Box::new(self.snapshot(&view, mean, truth))));
         }
         if std::mem::take(&mut self.coarse_pending) {
-            return self.coarse(&view, cancel);
+            return self.coarse(&view, cancel).map(|s| Msg::Frame(Box::new(s)));
         }
-        let t = tracer(
+        if let Some(o) = self.overlay_due() {
+            self.overlay_drawn = Some((self.generation, o));
+            let layer = debug_view::layer(&self.tracer(&view, view.size()), o)
+                .map_err(|e| format!("{e:#}"));
+            return Some(Msg::Overlay(Box::new(OverlayFrame {
+                generation: self.generation,
+                view: o,
+                layer,
+            })));
+        }
+        self.full_pass(&view, cancel)
+            .map(|s| Msg::Frame(Box::new(s)))
+    }
+
+    /// One sample more for every pixel of the view.
+    fn full_pass(&mut self, view: &View, cancel: &(dyn Fn() -> bool + Sync)) -> Option<Snapshot> {
+        let t = Tracer::new(
             &self.scene,
             &self.bvh,
-            &self.plan,
-            &view.camera,
-            (view.width, view.height),
+            &view.plan,
+            view.camera.frame(view.width, view.height),
             self.seed,
         );
-        let start = Instant::now();
         // The first pass of a view counts BVH work for the panel; later ones
         // take the fast path.
-        let rays = if self.film.spp == 0 && self.plan.bvh {
-            let (rays, work) = pass::render_pass_with::<WorkCounter>(&t, &mut self.film, 1, cancel);
-            let n = rays.max(1) as f64;
+        let pass = if self.film.film.spp == 0 && view.plan.bvh {
+            let (pass, work) = self
+                .film
+                .pass_with::<WorkCounter>(&t, &Self::stop(), cancel)?;
+            let n = pass.rays.max(1) as f64;
             self.per_ray = Some(PerRay {
                 nodes: work.work.nodes_visited as f64 / n,
                 triangle_tests: work.work.triangle_tests as f64 / n,
             });
-            rays
+            pass
         } else {
-            pass::render_pass(&t, &mut self.film, 1, cancel)
+            self.film.pass(&t, &Self::stop(), cancel)?
         };
-        let ms = start.elapsed().as_secs_f64() * 1e3;
-        if cancel() {
-            return None;
-        }
-        self.last_full_ms = Some(ms);
-        self.last_mrays = rays as f64 / (ms.max(1e-6) * 1e3);
+        self.last_full_ms = Some(pass.ms);
+        self.last_mrays = pass.mrays_per_s();
         let elapsed = self.started.elapsed().as_secs_f64();
-        let error = self.film.relative_error();
-        if self.film.spp >= 2 && error > 0.0 {
+        let error = self.film.film.relative_error();
+        if self.film.film.spp >= 2 && error > 0.0 {
             self.history.push((elapsed, error));
         }
-        let mean = self.film.image();
+        let mean = self.film.film.image();
         let truth = self.true_error(&mean);
         if let Some(e) = truth {
             self.true_history.push((elapsed, e));
         }
-        Some(self.snapshot(&view, mean, truth))
+        Some(self.snapshot(view, mean, truth))
     }
 
     /// Root relMSE of `mean` against the reference, where it is compared.
@@ -347,21 +387,26 @@ impl Worker {
     /// The film as it stands, for the app; `mean` is its image and
     /// `true_error` that image's error against the reference.
     fn snapshot(&self, view: &View, mean: Vec<Vec3>, true_error: Option<f64>) -> Snapshot {
-        let (image, pre_bloom) = self.bloomed(mean, view.width, view.height);
-        let worst =
-            [Worst::Nan, Worst::Variance, Worst::Brightest].map(|w| find_worst(&self.film, w));
+        let film = &self.film.film;
+        let shown = post::display(
+            mean,
+            view.width,
+            view.height,
+            &view.plan,
+            &self.scene.settings.bloom,
+        );
         Snapshot {
             generation: self.generation,
             width: view.width,
             height: view.height,
-            image,
-            pre_bloom,
+            image: shown.image,
+            pre_bloom: shown.before_bloom,
             coarse: false,
-            spp: self.film.spp,
+            spp: film.spp,
             pass_ms: self.last_full_ms.unwrap_or(0.0),
             mrays: self.last_mrays,
-            error: self.film.relative_error(),
-            exact: self.plan.deterministic,
+            error: film.relative_error(),
+            exact: view.plan.deterministic,
             done: self.idle(),
             elapsed: self.started.elapsed().as_secs_f64(),
             history: self.history.clone(),
@@ -369,57 +414,41 @@ impl Worker {
             truth: self.truth,
             true_history: self.true_history.clone(),
             per_ray: self.per_ray,
-            worst,
-            bad_samples: self.film.bad_count,
+            worst: film.worst_pixels(),
+            bad_samples: film.bad_count,
         }
-    }
-
-    /// Bloom applied when the plan has it: (displayed, mean before bloom).
-    fn bloomed(&self, mut img: Vec<Vec3>, w: u32, h: u32) -> (Vec<Vec3>, Option<Vec<Vec3>>) {
-        if !self.plan.bloom {
-            return (img, None);
-        }
-        let before = img.clone();
-        post::bloom(&mut img, w as usize, h as usize, &self.scene.settings.bloom);
-        (img, Some(before))
     }
 
     /// One sample of every `COARSE`-th pixel, upscaled to the view.
     fn coarse(&self, view: &View, cancel: &(dyn Fn() -> bool + Sync)) -> Option<Snapshot> {
         let (cw, ch) = (view.width.div_ceil(COARSE), view.height.div_ceil(COARSE));
-        let t = tracer(
-            &self.scene,
-            &self.bvh,
-            &self.plan,
-            &view.camera,
-            (cw, ch),
-            self.seed,
-        );
-        let mut film = Film::new(cw, ch);
-        let start = Instant::now();
-        let rays = pass::render_pass(&t, &mut film, 1, cancel);
-        let ms = start.elapsed().as_secs_f64() * 1e3;
-        if cancel() {
-            return None;
-        }
-        let small = film.image();
+        let t = self.tracer(view, (cw, ch));
+        let mut small = Progressive::new(cw, ch);
+        let pass = small.pass(&t, &Stop::spp(1), cancel)?;
+        let small = small.film.image();
         let mut image = Vec::with_capacity((view.width * view.height) as usize);
         for y in 0..view.height {
             for x in 0..view.width {
                 image.push(small[((y / COARSE) * cw + x / COARSE) as usize]);
             }
         }
-        let (image, pre_bloom) = self.bloomed(image, view.width, view.height);
+        let shown = post::display(
+            image,
+            view.width,
+            view.height,
+            &view.plan,
+            &self.scene.settings.bloom,
+        );
         Some(Snapshot {
             generation: self.generation,
             width: view.width,
             height: view.height,
-            image,
-            pre_bloom,
+            image: shown.image,
+            pre_bloom: shown.before_bloom,
             coarse: true,
             spp: 0,
-            pass_ms: ms,
-            mrays: rays as f64 / (ms.max(1e-6) * 1e3),
+            pass_ms: pass.ms,
+            mrays: pass.mrays_per_s(),
             error: 0.0,
             exact: false,
             done: false,
@@ -429,7 +458,7 @@ impl Worker {
             truth: self.truth,
             true_history: Vec::new(),
             per_ray: None,
-            worst: [None; 3],
+            worst: WorstPixels::default(),
             bad_samples: 0,
         })
     }
@@ -514,8 +543,8 @@ fn run(mut w: Worker, rx: Receiver<Cmd>, tx: Sender<Msg>, latest: Arc<AtomicU64>
         }
         let generation = w.generation;
         let cancel = || latest.load(Ordering::Relaxed) != generation;
-        if let Some(s) = w.step(&cancel) {
-            if tx.send(Msg::Frame(Box::new(s))).is_err() {
+        if let Some(m) = w.step(&cancel) {
+            if tx.send(m).is_err() {
                 return;
             }
         }
@@ -525,73 +554,80 @@ fn run(mut w: Worker, rx: Receiver<Cmd>, tx: Sender<Msg>, latest: Arc<AtomicU64>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::Feature;
+    use crate::render::{Feature, Features, Progressive, SceneRequest, Session};
+
+    fn session(spec: &str) -> Session {
+        Session::open(&SceneRequest::new(spec)).unwrap().0
+    }
+
+    fn view(s: &Session, features: Features) -> View {
+        View {
+            camera: s.camera,
+            plan: s.plan_for(features),
+            width: 16,
+            height: 12,
+        }
+    }
 
     fn worker(features: Features) -> Worker {
-        let scene = Arc::new(crate::scene::load("cornell").unwrap());
-        let bvh = Arc::new(bvh::build(&scene.geometry, Builder::Sah));
-        let mut w = Worker::new(scene.clone(), bvh, 1, None);
-        w.apply(Cmd::View(
-            1,
-            View {
-                camera: scene.camera,
-                features,
-                width: 16,
-                height: 12,
-            },
-        ));
+        let s = session("cornell");
+        let mut w = Worker::new(s.scene.clone(), s.bvh.clone(), 1, None);
+        w.apply(Cmd::View(1, Box::new(view(&s, features))));
         w
+    }
+
+    /// The next frame the worker sends; `None` once it is idle.
+    fn next_frame(w: &mut Worker) -> Option<Box<Snapshot>> {
+        loop {
+            match w.step(&|| false)? {
+                Msg::Frame(s) => return Some(s),
+                _ => continue,
+            }
+        }
+    }
+
+    /// The next full (not coarse) frame.
+    fn full(w: &mut Worker) -> Box<Snapshot> {
+        std::iter::from_fn(|| next_frame(w))
+            .find(|s| !s.coarse)
+            .expect("a full pass")
     }
 
     #[test]
     fn a_coarse_preview_comes_first_then_one_sample_per_pass() {
         let mut w = worker(Features::all());
-        let s = w.step(&|| false).unwrap();
+        let s = next_frame(&mut w).unwrap();
         assert!(s.coarse && s.spp == 0);
         assert_eq!(s.image.len(), 16 * 12);
         // Each 4x4 block of the preview is one coarse pixel.
         assert_eq!(s.image[0], s.image[3 * 16 + 3]);
         for spp in 1..=3 {
-            let s = w.step(&|| false).unwrap();
+            let s = next_frame(&mut w).unwrap();
             assert!(!s.coarse);
             assert_eq!((s.spp, s.generation), (spp, 1));
         }
-        assert!(w.step(&|| false).unwrap().per_ray.is_some());
+        assert!(next_frame(&mut w).unwrap().per_ray.is_some());
     }
 
     #[test]
     fn the_true_error_is_measured_only_for_the_references_view() {
-        let scene = Arc::new(crate::scene::load("cornell-area").unwrap());
-        let bvh = Arc::new(bvh::build(&scene.geometry, Builder::Sah));
+        let s = session("cornell-area");
         let features = Features::all();
         // The reference: twice the view's size, many samples.
-        let plan = Plan::new(&scene, features);
-        let t = Tracer::new(&scene, &bvh, &plan, 32, 24, 99);
-        let mut film = Film::new(32, 24);
-        pass::render_pass(&t, &mut film, 256, &|| false);
+        let t = s.tracer_for(&s.plan, &s.camera, (32, 24));
+        let film = Progressive::render(&t, 256);
         let reference = Arc::new(Reference {
-            name: "ref.hdr".into(),
+            name: "ref.exr".into(),
             width: 32,
             height: 24,
             image: film.image(),
-            camera: scene.camera,
-            features,
+            camera: s.camera,
+            plan: s.plan.clone(),
         });
-        let mut w = Worker::new(scene.clone(), bvh, 1, Some(reference));
-        let view = View {
-            camera: scene.camera,
-            features,
-            width: 16,
-            height: 12,
-        };
-        w.apply(Cmd::View(1, view));
-        let mut frames = Vec::new();
-        while frames.len() < 17 {
-            let s = w.step(&|| false).unwrap();
-            if !s.coarse {
-                frames.push(s);
-            }
-        }
+        let mut w = Worker::new(s.scene.clone(), s.bvh.clone(), 1, Some(reference));
+        let v = view(&s, features);
+        w.apply(Cmd::View(1, Box::new(v.clone())));
+        let frames: Vec<Box<Snapshot>> = (0..17).map(|_| full(&mut w)).collect();
         let (first, last) = (&frames[0], &frames[16]);
         assert_eq!(
             last.truth,
@@ -612,21 +648,19 @@ mod tests {
         );
         assert_eq!(last.true_history.len(), 17);
         // Bloom does not change the film; shadows and the camera do.
-        let mut bloomless = view;
-        bloomless.features.set(Feature::Bloom, false);
-        let mut shadowless = view;
-        shadowless.features.set(Feature::Shadows, false);
-        let mut moved = view;
+        let with = |off: Feature| View {
+            plan: s.plan_for(features.without(&[off])),
+            ..v.clone()
+        };
+        let mut moved = v.clone();
         moved.camera.orbit(0.1, 0.0);
         for (v, truth) in [
-            (bloomless, None),
-            (shadowless, Some(Truth::FeaturesChanged)),
+            (with(Feature::Bloom), None),
+            (with(Feature::Shadows), Some(Truth::FeaturesChanged)),
             (moved, Some(Truth::CameraMoved)),
         ] {
-            w.apply(Cmd::View(2, v));
-            let s = std::iter::from_fn(|| w.step(&|| false))
-                .find(|s| !s.coarse)
-                .unwrap();
+            w.apply(Cmd::View(2, Box::new(v)));
+            let s = full(&mut w);
             match truth {
                 None => assert!(s.true_error.is_some()),
                 Some(t) => assert_eq!((s.truth, s.true_error), (t, None)),
@@ -636,27 +670,42 @@ mod tests {
 
     #[test]
     fn bloom_and_bvh_toggles_keep_the_samples() {
+        let s = session("cornell");
         let mut w = worker(Features::all());
-        let view = w.view.unwrap();
-        let full = |w: &mut Worker| {
-            std::iter::from_fn(|| w.step(&|| false))
-                .find(|s| !s.coarse)
-                .unwrap()
-        };
         for _ in 0..4 {
             full(&mut w);
         }
-        let mut plain = view;
-        plain.features.set(Feature::Bloom, false);
-        plain.features.set(Feature::Bvh, false);
-        w.apply(Cmd::View(2, plain));
-        let s = w.step(&|| false).unwrap();
-        assert_eq!((s.generation, s.spp, s.pre_bloom.is_none()), (2, 4, true));
+        let plain = view(&s, Features::all().without(&[Feature::Bloom, Feature::Bvh]));
+        w.apply(Cmd::View(2, Box::new(plain.clone())));
+        let f = next_frame(&mut w).unwrap();
+        assert_eq!((f.generation, f.spp, f.pre_bloom.is_none()), (2, 4, true));
         assert_eq!(full(&mut w).spp, 5);
-        let mut shadowless = plain;
-        shadowless.features.set(Feature::Shadows, false);
-        w.apply(Cmd::View(3, shadowless));
+        let shadowless = View {
+            plan: s.plan_for(Features::all().without(&[
+                Feature::Bloom,
+                Feature::Bvh,
+                Feature::Shadows,
+            ])),
+            ..plain
+        };
+        w.apply(Cmd::View(3, Box::new(shadowless)));
         assert_eq!(full(&mut w).spp, 1);
+    }
+
+    #[test]
+    fn overlays_are_drawn_once_per_view() {
+        let mut w = worker(Features::all());
+        w.apply(Cmd::Overlay(Some(DebugView::Leaves)));
+        let mut overlays = 0;
+        for _ in 0..6 {
+            if let Some(Msg::Overlay(o)) = w.step(&|| false) {
+                let (layer, summary) = o.layer.unwrap();
+                assert_eq!((o.generation, layer.width, layer.height), (1, 16, 12));
+                assert!(!layer.is_blank() && summary.contains("leaf boxes"));
+                overlays += 1;
+            }
+        }
+        assert_eq!(overlays, 1);
     }
 
     #[test]
@@ -669,7 +718,7 @@ mod tests {
     fn deterministic_views_stop_after_one_pass() {
         let mut w = worker(Features::all().without(&[Feature::Supersampling]));
         let mut last = None;
-        while let Some(s) = w.step(&|| false) {
+        while let Some(s) = next_frame(&mut w) {
             last = Some(s);
         }
         let s = last.unwrap();

@@ -2,8 +2,8 @@
 #![allow(dead_code)]
 
 use glam::{Vec2, Vec3};
-use rayterm::bvh::{self, Bvh};
-use rayterm::render::{pass, Features, Film, Plan, Tracer};
+use rayterm::bvh::Bvh;
+use rayterm::render::{Features, Film, Plan, Progressive, SceneRequest, Session, Tracer};
 use rayterm::scene::obj::{MeshData, Parts, Placement};
 use rayterm::scene::{Builder, Camera, Environment, Light, Material, Scene, Settings};
 
@@ -90,8 +90,17 @@ pub fn render(
     builder: Builder,
     seed: u64,
 ) -> Rendered {
-    let bvh = bvh::build(&scene.geometry, builder);
-    render_with(scene, &bvh, &Plan::new(scene, features), w, h, spp, seed)
+    let req = SceneRequest {
+        size: Some((w, h)),
+        builder: Some(builder),
+        features,
+        seed,
+        ..SceneRequest::new(&scene.name)
+    };
+    let (s, _) = Session::with_scene(scene.clone(), &req);
+    let film = Progressive::render(&s.tracer(), spp);
+    let image = film.image();
+    Rendered { film, image }
 }
 
 pub fn render_with(
@@ -103,11 +112,8 @@ pub fn render_with(
     spp: u32,
     seed: u64,
 ) -> Rendered {
-    let tracer = Tracer::new(scene, bvh, plan, w, h, seed);
-    let mut film = Film::new(w, h);
-    for _ in 0..spp {
-        pass::render_pass(&tracer, &mut film, 1, &|| false);
-    }
+    let tracer = Tracer::new(scene, bvh, plan, scene.camera.frame(w, h), seed);
+    let film = Progressive::render(&tracer, spp);
     let image = film.image();
     Rendered { film, image }
 }

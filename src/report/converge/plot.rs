@@ -1,8 +1,10 @@
-//! The log-log plot of relative error against time, drawn with the image
-//! crate and an 8x8 bitmap font (a plotting crate would need a font stack):
-//! one line per strategy, the slope -0.5 reference dashed, the target dotted.
+//! The log-log plot of relative error against time, drawn on the project's
+//! canvas (a plotting crate would need a font stack): one line per
+//! strategy, the slope -0.5 reference dashed, the target dotted.
 
 use image::{Rgb, RgbImage};
+
+use crate::raster::canvas::{text_width, Canvas, Dash};
 
 use super::Study;
 
@@ -29,70 +31,8 @@ const PALETTE: [Rgb<u8>; 8] = [
     Rgb([23, 190, 207]),
 ];
 
-/// On and off lengths of a dash pattern, in pixels along the line.
-type Dash = Option<(u32, u32)>;
 const DASHED: Dash = Some((10, 6));
 const DOTTED: Dash = Some((2, 4));
-
-struct Canvas {
-    img: RgbImage,
-    /// Pixels outside this box are not drawn (x0, y0, x1, y1).
-    clip: (i32, i32, i32, i32),
-}
-
-impl Canvas {
-    fn put(&mut self, x: i32, y: i32, c: Rgb<u8>) {
-        let (x0, y0, x1, y1) = self.clip;
-        if (x0..=x1).contains(&x) && (y0..=y1).contains(&y) {
-            self.img.put_pixel(x as u32, y as u32, c);
-        }
-    }
-
-    fn rect(&mut self, x0: i32, y0: i32, x1: i32, y1: i32, c: Rgb<u8>) {
-        for y in y0..=y1 {
-            for x in x0..=x1 {
-                self.put(x, y, c);
-            }
-        }
-    }
-
-    /// A line `width` pixels thick, stepping along its major axis.
-    fn line(&mut self, a: (f64, f64), b: (f64, f64), c: Rgb<u8>, width: i32, dash: Dash) {
-        let steps = (b.0 - a.0).abs().max((b.1 - a.1).abs()).ceil().max(1.0) as u32;
-        for i in 0..=steps {
-            if let Some((on, off)) = dash {
-                if i % (on + off) >= on {
-                    continue;
-                }
-            }
-            let t = i as f64 / steps as f64;
-            let x = (a.0 + (b.0 - a.0) * t).round() as i32;
-            let y = (a.1 + (b.1 - a.1) * t).round() as i32;
-            let lo = -(width - 1) / 2;
-            self.rect(x + lo, y + lo, x + lo + width - 1, y + lo + width - 1, c);
-        }
-    }
-
-    /// Text with its top-left corner at `(x, y)`, each font pixel `scale` wide.
-    fn text(&mut self, x: i32, y: i32, s: &str, c: Rgb<u8>, scale: i32) {
-        for (i, ch) in s.chars().enumerate() {
-            let glyph = font8x8::legacy::BASIC_LEGACY[(ch as usize).min(127)];
-            let gx = x + i as i32 * 8 * scale;
-            for (row, bits) in glyph.iter().enumerate() {
-                for col in 0..8 {
-                    if bits >> col & 1 == 1 {
-                        let (px, py) = (gx + col * scale, y + row as i32 * scale);
-                        self.rect(px, py, px + scale - 1, py + scale - 1, c);
-                    }
-                }
-            }
-        }
-    }
-}
-
-fn text_width(s: &str, scale: i32) -> i32 {
-    s.chars().count() as i32 * 8 * scale
-}
 
 /// A logarithmic axis from `lo` to `hi` (data units) onto pixels `p0..p1`.
 struct Axis {
@@ -149,10 +89,7 @@ impl Axis {
 
 /// Draws the study's error-against-time plot.
 pub fn draw(study: &Study) -> RgbImage {
-    let mut c = Canvas {
-        img: RgbImage::from_pixel(WIDTH, HEIGHT, WHITE),
-        clip: (0, 0, WIDTH as i32 - 1, HEIGHT as i32 - 1),
-    };
+    let mut c = Canvas::new(WIDTH, HEIGHT, WHITE);
     let points = || study.series.iter().flat_map(|s| s.points.iter());
     let x = Axis::fit(points().map(|p| p.seconds), LEFT, RIGHT);
     let target = 100.0 * study.target;
@@ -247,10 +184,10 @@ pub fn draw(study: &Study) -> RgbImage {
         }
     }
 
-    c.clip = (0, 0, WIDTH as i32 - 1, HEIGHT as i32 - 1);
+    c.unclip();
     let lx = RIGHT + 20;
     let mut ly = TOP + 4;
-    let mut entry = |c: &mut Canvas, label: &str, col: Rgb<u8>, width: i32, dash: Dash| {
+    let mut entry = |c: &mut Canvas<Rgb<u8>>, label: &str, col: Rgb<u8>, width: i32, dash: Dash| {
         let yy = ly as f64 + 4.0;
         c.line((lx as f64, yy), (lx as f64 + 30.0, yy), col, width, dash);
         c.text(lx + 40, ly, label, BLACK, 1);
@@ -274,5 +211,5 @@ pub fn draw(study: &Study) -> RgbImage {
         1,
         DOTTED,
     );
-    c.img
+    RgbImage::from_fn(WIDTH, HEIGHT, |x, y| c.get(x, y).unwrap_or(WHITE))
 }

@@ -16,7 +16,7 @@ use crate::bvh::{self, Bvh, TraversalStats};
 use crate::geometry::offset::hit_point;
 use crate::geometry::sampling::Rng;
 use crate::render::recorder::{HitInfo, LightSample, RayKind, Recorder};
-use crate::render::{Feature, Features, Plan, Tracer};
+use crate::render::{Feature, Features, Plan, PlanPolicy, Tracer};
 use crate::scene::{Builder, Geometry, Light, Scene};
 
 /// A uniform scale, then a move by `offset * (1, -0.5, 0.75)` (exact in f32
@@ -146,8 +146,8 @@ pub struct Probed {
 /// Renders one sample per pixel at the pixel centres through the probe.
 pub fn probe_render(scene: &Scene, bvh: &Bvh, w: u32, h: u32, seed: u64) -> Probed {
     let features = Features::all().without(&[Feature::Supersampling, Feature::Bloom]);
-    let plan = Plan::new(scene, features);
-    let tracer = Tracer::new(scene, bvh, &plan, w, h, seed);
+    let plan = Plan::new(scene, features, PlanPolicy::Prune);
+    let tracer = Tracer::new(scene, bvh, &plan, scene.camera.frame(w, h), seed);
     let rows: Vec<(Vec<Vec3>, Vec<bool>, u64, u64)> = (0..h)
         .into_par_iter()
         .map(|y| {

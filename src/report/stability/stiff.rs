@@ -12,21 +12,22 @@ use glam::Vec3;
 
 use super::{format_figure, Options, Row};
 use crate::bvh::{self, TraversalStats};
-use crate::render::{pass, Features, Film, Plan, Tracer};
+use crate::render::{Features, Film, Progressive, SceneRequest, Session};
 use crate::scene::obj::{self, MeshData, Parts, Placement};
 use crate::scene::{builtin, Builder, Camera, Environment, Light, Material, Scene, Settings};
 use glam::Affine3A;
 
 /// Renders `spp` passes with every feature (or `features`) on.
 pub fn render(scene: &Scene, w: u32, h: u32, spp: u32, features: Option<Features>) -> Film {
-    let b = bvh::build(&scene.geometry, Builder::Sah);
-    let plan = Plan::new(scene, features.unwrap_or_else(Features::all));
-    let tracer = Tracer::new(scene, &b, &plan, w, h, 7);
-    let mut film = Film::new(w, h);
-    for _ in 0..spp {
-        pass::render_pass(&tracer, &mut film, 1, &|| false);
-    }
-    film
+    let req = SceneRequest {
+        size: Some((w, h)),
+        builder: Some(Builder::Sah),
+        features: features.unwrap_or_else(Features::all),
+        seed: 7,
+        ..SceneRequest::new(&scene.name)
+    };
+    let (s, _) = Session::with_scene(scene.clone(), &req);
+    Progressive::render(&s.tracer(), spp)
 }
 
 const AMBIENT: f32 = 0.05;

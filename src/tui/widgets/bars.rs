@@ -6,12 +6,13 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Clear, Paragraph, Wrap};
 use ratatui::Frame;
 
-use super::MIN_SIZE;
-use crate::tui::app::{App, Popup};
+use crate::tui::app::App;
 use crate::tui::keys;
+use crate::tui::layout::MIN_SIZE;
+use crate::tui::popup::Popup;
 
 pub fn status(f: &mut Frame, area: Rect, app: &App) {
-    let text = match app.export_progress() {
+    let text = match app.jobs.export_progress() {
         Some(p) => format!("{p} · {}", app.status),
         None => app.status.clone(),
     };
@@ -30,25 +31,7 @@ pub fn hints(f: &mut Frame, area: Rect, app: &App) {
     f.render_widget(Paragraph::new(Line::from(spans)), area);
 }
 
-pub fn popup(f: &mut Frame, area: Rect, p: &mut Popup) {
-    let width = p
-        .lines
-        .iter()
-        .map(|l| l.chars().count())
-        .max()
-        .unwrap_or(0)
-        .max(p.title.chars().count()) as u16
-        + 4;
-    let w = width.min(area.width.saturating_sub(2));
-    let h = (p.lines.len() as u16 + 2).min(area.height.saturating_sub(2));
-    let r = Rect::new(
-        area.x + (area.width - w) / 2,
-        area.y + (area.height - h) / 2,
-        w,
-        h,
-    );
-    let visible = h.saturating_sub(2) as usize;
-    p.scroll = p.scroll.min(p.lines.len().saturating_sub(visible));
+pub fn popup(f: &mut Frame, r: Rect, p: &Popup) {
     let text: Vec<Line> = p
         .lines
         .iter()

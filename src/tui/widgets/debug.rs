@@ -23,16 +23,16 @@ fn style(k: LineKind) -> Style {
     }
 }
 
-pub fn draw(f: &mut Frame, area: Rect, app: &mut App) {
-    app.debug_area = area;
-    let lines = app.debug_lines();
-    let title = match app.selected {
+pub fn draw(f: &mut Frame, area: Rect, app: &App) {
+    let ins = &app.inspector;
+    let lines = ins.lines();
+    let title = match ins.selected {
         Some(s) => format!(
             " Ray tree: pixel ({}, {}) sample {} · line {}/{} ",
             s.x,
             s.y,
             s.sample,
-            (app.debug_cursor + 1).min(lines.len()),
+            (ins.cursor + 1).min(lines.len()),
             lines.len()
         ),
         None => " Ray tree ".into(),
@@ -43,8 +43,6 @@ pub fn draw(f: &mut Frame, area: Rect, app: &mut App) {
         .title_style(Style::new().add_modifier(Modifier::BOLD));
     let inner = block.inner(area);
     f.render_widget(block, area);
-    let height = inner.height.max(1) as usize;
-    app.debug_height = height;
     if lines.is_empty() {
         f.render_widget(
             Paragraph::new("select a pixel (v, then hjkl or arrows; or click it) to see its rays")
@@ -53,20 +51,14 @@ pub fn draw(f: &mut Frame, area: Rect, app: &mut App) {
         );
         return;
     }
-    app.debug_cursor = app.debug_cursor.min(lines.len() - 1);
-    if app.debug_cursor < app.debug_top {
-        app.debug_top = app.debug_cursor;
-    } else if app.debug_cursor >= app.debug_top + height {
-        app.debug_top = app.debug_cursor + 1 - height;
-    }
     let text: Vec<Line> = lines
         .iter()
         .enumerate()
-        .skip(app.debug_top)
-        .take(height)
+        .skip(ins.top)
+        .take(inner.height as usize)
         .map(|(i, l)| {
             let mut s = style(l.kind);
-            if i == app.debug_cursor {
+            if i == ins.cursor {
                 s = s.add_modifier(Modifier::REVERSED);
             }
             Line::styled(format!("{}{}", "  ".repeat(l.depth), l.text), s)

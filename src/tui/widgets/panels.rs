@@ -8,8 +8,8 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::{Axis, Block, Borders, Chart, Dataset, GraphType, Paragraph};
 use ratatui::Frame;
 
-use crate::render::Feature;
-use crate::tui::app::{App, FeatureState};
+use crate::render::{Decision, Feature};
+use crate::tui::app::App;
 use crate::tui::keys::{self, Action};
 use crate::tui::worker::{Snapshot, Truth};
 
@@ -36,8 +36,8 @@ pub fn si(x: f64) -> String {
 }
 
 pub fn bvh(f: &mut Frame, area: Rect, app: &App) {
-    let s = &app.bvh.stats;
-    let title = if app.rebuilding {
+    let s = &app.session.bvh.stats;
+    let title = if app.link.rebuilding {
         format!(" BVH: rebuilding with {}... ", app.builder)
     } else {
         format!(" BVH: {}, {} triangles ", s.builder, s.triangles)
@@ -81,14 +81,14 @@ pub fn feature_lines(app: &App, width: u16, wrap: bool) -> Vec<Line<'static>> {
         let key = keys::key_for(Action::Toggle(feat)).map_or(" ".into(), |k| k.label());
         // The state, and for features not needed the reason.
         let (state, why, style) = match app.feature_state(feat) {
-            FeatureState::On => ("on".to_string(), "", Style::new().fg(Color::Green)),
-            FeatureState::Off => ("off".to_string(), "", Style::new().fg(Color::DarkGray)),
-            FeatureState::NotNeeded(why) => (
+            Decision::On => ("on".to_string(), "", Style::new().fg(Color::Green)),
+            Decision::Off => ("off".to_string(), "", Style::new().fg(Color::DarkGray)),
+            Decision::NotNeeded(why) => (
                 "not needed:".to_string(),
                 why,
                 Style::new().fg(Color::Yellow),
             ),
-            FeatureState::Needs(g) => (
+            Decision::Needs(g) => (
                 format!("off: needs {}", g.name()),
                 "",
                 Style::new().fg(Color::Yellow),

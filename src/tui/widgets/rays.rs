@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use crate::inspect::{PixelTree, RayNode};
-use crate::render::overlay;
+use crate::render::overlay::{self, Layer};
 use crate::render::recorder::RayKind;
 use crate::scene::camera::CameraFrame;
 
@@ -21,8 +21,8 @@ fn kind_color(k: RayKind) -> Vec3 {
 }
 
 /// Draws every ray of `tree`; rays that miss are drawn `reach` long.
-pub fn draw(img: &mut [Vec3], w: u32, h: u32, frame: &CameraFrame, tree: &PixelTree, reach: f32) {
-    let mut seg = |a: Vec3, b: Vec3, c: Vec3| overlay::draw_segment(img, w, h, frame, a, b, c);
+pub fn draw(layer: &mut Layer, frame: &CameraFrame, tree: &PixelTree, reach: f32) {
+    let mut seg = |a: Vec3, b: Vec3, c: Vec3| overlay::draw_segment(layer, frame, a, b, Some(c));
     let mut stack: Vec<&RayNode> = vec![&tree.root];
     while let Some(n) = stack.pop() {
         let end = n

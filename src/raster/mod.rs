@@ -1,0 +1,3 @@
+//! Images as data: drawing onto them.
+
+pub mod canvas;

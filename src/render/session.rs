@@ -1,0 +1,127 @@
+//! The one way a scene is opened for rendering: a [`SceneRequest`] (what the
+//! user asked for, free of any command-line parser) becomes a [`Session`]
+//! (the scene, its BVH, the plan, the camera and the image size). The CLI,
+//! the TUI, the reports, the benchmarks and the tests all open scenes here.
+
+use std::sync::Arc;
+
+use anyhow::Result;
+
+use super::plan::{Plan, PlanPolicy};
+use super::{Features, Tracer};
+use crate::bvh::{self, Bvh};
+use crate::scene::{self, Builder, Camera, Scene};
+
+/// What to open and how to render it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneRequest {
+    /// A built-in name, a `.toml` scene file or a mesh file.
+    pub spec: String,
+    /// Image size (default: the scene's).
+    pub size: Option<(u32, u32)>,
+    /// BVH builder (default: the scene's).
+    pub builder: Option<Builder>,
+    pub features: Features,
+    pub policy: PlanPolicy,
+    pub seed: u64,
+    /// Samples per area light per shading point (default: the scene's).
+    pub light_samples: Option<u32>,
+    /// Glossy directions per glossy hit (default: the scene's).
+    pub glossy_samples: Option<u32>,
+    /// Independent instead of jittered sub-pixel and light samples.
+    pub independent: bool,
+}
+
+impl SceneRequest {
+    /// Everything at its default: every feature, the plan, seed 1.
+    pub fn new(spec: &str) -> Self {
+        Self {
+            spec: spec.to_string(),
+            size: None,
+            builder: None,
+            features: Features::all(),
+            policy: PlanPolicy::Prune,
+            seed: 1,
+            light_samples: None,
+            glossy_samples: None,
+            independent: false,
+        }
+    }
+}
+
+/// A scene ready to render: shared, so the TUI's worker, exports and
+/// background jobs hold the same scene and BVH.
+#[derive(Clone)]
+pub struct Session {
+    pub scene: Arc<Scene>,
+    pub bvh: Arc<Bvh>,
+    pub plan: Plan,
+    /// The scene's camera (the TUI moves its own copy).
+    pub camera: Camera,
+    pub width: u32,
+    pub height: u32,
+    pub seed: u64,
+}
+
+impl Session {
+    /// Loads the scene `req` names and prepares it; the load warnings are
+    /// returned for the caller to show.
+    pub fn open(req: &SceneRequest) -> Result<(Session, Vec<String>)> {
+        Ok(Self::with_scene(scene::load(&req.spec)?, req))
+    }
+
+    /// Prepares a scene already in memory (built in code, or loaded another
+    /// way) with the request's settings; `req.spec` is not read.
+    pub fn with_scene(mut scene: Scene, req: &SceneRequest) -> (Session, Vec<String>) {
+        let warnings = std::mem::take(&mut scene.warnings);
+        let st = &mut scene.settings;
+        st.builder = req.builder.unwrap_or(st.builder);
+        st.light_samples = req.light_samples.unwrap_or(st.light_samples);
+        st.glossy_samples = req.glossy_samples.unwrap_or(st.glossy_samples);
+        st.stratify &= !req.independent;
+        let (width, height) = req.size.unwrap_or((st.width, st.height));
+        let plan = Plan::new(&scene, req.features, req.policy);
+        let bvh = bvh::build(&scene.geometry, scene.settings.builder);
+        let session = Session {
+            camera: scene.camera,
+            scene: Arc::new(scene),
+            bvh: Arc::new(bvh),
+            plan,
+            width,
+            height,
+            seed: req.seed,
+        };
+        (session, warnings)
+    }
+
+    /// The plan for other features, under this session's policy.
+    pub fn plan_for(&self, features: Features) -> Plan {
+        Plan::new(&self.scene, features, self.plan.policy)
+    }
+
+    /// A tracer for the session's camera, size and plan.
+    pub fn tracer(&self) -> Tracer<'_> {
+        self.tracer_for(&self.plan, &self.camera, (self.width, self.height))
+    }
+
+    /// A tracer for another view of the same scene.
+    pub fn tracer_for<'a>(
+        &'a self,
+        plan: &'a Plan,
+        camera: &Camera,
+        (width, height): (u32, u32),
+    ) -> Tracer<'a> {
+        Tracer::new(
+            &self.scene,
+            &self.bvh,
+            plan,
+            camera.frame(width, height),
+            self.seed,
+        )
+    }
+
+    /// The BVH rebuilt with another builder.
+    pub fn rebuild(&mut self, builder: Builder) {
+        self.bvh = Arc::new(bvh::build(&self.scene.geometry, builder));
+    }
+}

@@ -1,0 +1,139 @@
+//! Work the TUI runs in the background besides rendering: PNG exports and
+//! the stability battery. Each reports back through [`Jobs::poll`].
+
+use std::sync::mpsc::{self, Receiver, TryRecvError};
+use std::sync::Arc;
+
+use anyhow::Result;
+
+use super::export;
+use super::popup::Popup;
+use crate::report::stability;
+use crate::scene::Scene;
+
+#[derive(Default)]
+pub struct Jobs {
+    export: Option<export::Job>,
+    /// The stability battery's result, while it runs.
+    stability: Option<Receiver<Result<Vec<stability::Row>>>>,
+}
+
+/// What finished jobs have to say.
+pub struct Finished {
+    pub status: Option<String>,
+    pub popup: Option<Popup>,
+}
+
+impl Jobs {
+    /// Starts an export unless one is running; the status line's text.
+    pub fn export(&mut self, r: export::Request) -> String {
+        if self.export.is_some() {
+            return "an export is already running".into();
+        }
+        match export::Job::start(r) {
+            Ok(job) => {
+                let s = format!(
+                    "exporting {}x{} PNG at {} spp...",
+                    job.size.0, job.size.1, job.target_spp
+                );
+                self.export = Some(job);
+                s
+            }
+            Err(e) => format!("cannot export: {e:#}"),
+        }
+    }
+
+    /// Export progress for the status line.
+    pub fn export_progress(&self) -> Option<String> {
+        self.export.as_ref().map(|j| {
+            format!(
+                "exporting {}x{} PNG: {}/{} spp",
+                j.size.0,
+                j.size.1,
+                j.done_spp(),
+                j.target_spp
+            )
+        })
+    }
+
+    /// Stops an export in progress; says so when there was one.
+    pub fn cancel_export(&mut self) -> bool {
+        self.export.take().is_some()
+    }
+
+    /// Runs the stability battery on `scene` in the background; the status
+    /// line's text.
+    pub fn stability(&mut self, scene: Arc<Scene>) -> String {
+        if self.stability.is_some() {
+            return "the stability battery is already running".into();
+        }
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            let rows = stability::run_battery_on(&scene, &stability::Options::default());
+            // The receiver is gone only when the TUI has quit.
+            let _ = tx.send(rows);
+        });
+        self.stability = Some(rx);
+        "running the stability battery...".into()
+    }
+
+    pub fn busy(&self) -> bool {
+        self.export.is_some() || self.stability.is_some()
+    }
+
+    /// Collects what has finished; `None` when nothing has.
+    pub fn poll(&mut self, scene_name: &str) -> Option<Finished> {
+        if let Some(job) = &self.export {
+            if let Some(r) = job.poll() {
+                let status = match r {
+                    Ok(s) => format!(
+                        "saved {} ({}x{}, {} spp, {:.1} s)",
+                        s.path.display(),
+                        job.size.0,
+                        job.size.1,
+                        s.spp,
+                        s.seconds
+                    ),
+                    Err(e) => format!("export failed: {e:#}"),
+                };
+                self.export = None;
+                return Some(Finished {
+                    status: Some(status),
+                    popup: None,
+                });
+            }
+        }
+        let rx = self.stability.as_ref()?;
+        let result = match rx.try_recv() {
+            Ok(r) => r,
+            Err(TryRecvError::Empty) => return None,
+            Err(TryRecvError::Disconnected) => {
+                Err(anyhow::anyhow!("the battery stopped unexpectedly"))
+            }
+        };
+        self.stability = None;
+        Some(match result {
+            Ok(rows) => {
+                let failed = rows.iter().filter(|r| !r.pass).count();
+                Finished {
+                    status: Some(format!(
+                        "stability battery: {} of {} cases passed",
+                        rows.len() - failed,
+                        rows.len()
+                    )),
+                    popup: Some(Popup::new(
+                        format!("stability battery: {scene_name} ({failed} failed)"),
+                        stability::format_table(&rows)
+                            .lines()
+                            .map(str::to_string)
+                            .collect(),
+                    )),
+                }
+            }
+            Err(e) => Finished {
+                status: Some(format!("stability battery failed: {e:#}")),
+                popup: None,
+            },
+        })
+    }
+}

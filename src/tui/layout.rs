@@ -1,0 +1,124 @@
+//! Where everything goes on screen, computed in the event loop before each
+//! draw: the view size the worker renders, the debug pane's height and the
+//! popup's rows follow from it, so drawing only reads.
+
+use ratatui::layout::{Constraint, Layout as Split, Rect};
+use ratatui::widgets::{Block, Borders};
+
+use super::app::App;
+use super::popup::Popup;
+use super::widgets::panels;
+
+/// Below this the layout cannot show every panel.
+pub const MIN_SIZE: (u16, u16) = (80, 24);
+/// Height of a render panel with a readable chart.
+const RENDER_WITH_CHART: u16 = 16;
+/// Height of the BVH panel.
+const BVH_PANEL: u16 = 5;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Layout {
+    pub area: Rect,
+    /// The terminal is smaller than [`MIN_SIZE`]: only a message is shown.
+    pub too_small: bool,
+    /// Everything above the status line (popups centre on it).
+    pub main: Rect,
+    /// The viewport panel and, inside its title line, the image.
+    pub view: Rect,
+    pub image: Rect,
+    /// The debug pane and its text.
+    pub debug: Rect,
+    pub debug_text: Rect,
+    pub bvh: Rect,
+    pub features: Rect,
+    /// Whether feature reasons get lines of their own.
+    pub wrap_features: bool,
+    pub render: Rect,
+    pub status: Rect,
+    pub hints: Rect,
+}
+
+impl Layout {
+    pub fn compute(area: Rect, app: &App) -> Layout {
+        let mut l = Layout {
+            area,
+            ..Layout::default()
+        };
+        if area.width < MIN_SIZE.0 || area.height < MIN_SIZE.1 {
+            l.too_small = true;
+            return l;
+        }
+        [l.main, l.status, l.hints] = Split::vertical([
+            Constraint::Min(0),
+            Constraint::Length(1),
+            Constraint::Length(1),
+        ])
+        .areas(area);
+        let side = (area.width * 2 / 7).clamp(32, 46);
+        let [left, right] = Split::horizontal([Constraint::Min(0), Constraint::Length(side)])
+            .spacing(1)
+            .areas(l.main);
+        [l.view, l.debug] = Split::vertical([
+            Constraint::Min(0),
+            Constraint::Length((left.height * 3 / 10).max(6)),
+        ])
+        .areas(left);
+        let titled = Block::new().borders(Borders::TOP);
+        l.image = titled.inner(l.view);
+        l.debug_text = titled.inner(l.debug);
+        // Reasons get lines of their own when that leaves the render panel
+        // room for its chart.
+        l.wrap_features = true;
+        let mut n = panels::feature_lines(app, right.width, true).len() as u16;
+        if BVH_PANEL + 1 + n + RENDER_WITH_CHART > right.height {
+            l.wrap_features = false;
+            n = panels::feature_lines(app, right.width, false).len() as u16;
+        }
+        [l.bvh, l.features, l.render] = Split::vertical([
+            Constraint::Length(BVH_PANEL),
+            Constraint::Length(1 + n),
+            Constraint::Min(0),
+        ])
+        .areas(right);
+        l
+    }
+
+    /// The view's size in pixels: two per cell vertically.
+    pub fn view_size(&self) -> (u32, u32) {
+        (self.image.width as u32, self.image.height as u32 * 2)
+    }
+
+    /// The pixel under a terminal cell, when it lies in the image.
+    pub fn pixel_at(&self, column: u16, row: u16) -> Option<(u32, u32)> {
+        let r = self.image;
+        let inside = column >= r.x && column < r.x + r.width && row >= r.y && row < r.y + r.height;
+        inside.then(|| ((column - r.x) as u32, (row - r.y) as u32 * 2))
+    }
+
+    /// Whether a terminal cell lies in the debug pane.
+    pub fn in_debug(&self, column: u16, row: u16) -> bool {
+        let r = self.debug;
+        column >= r.x && column < r.x + r.width && row >= r.y && row < r.y + r.height
+    }
+
+    /// Where `p` is drawn: centred on the main area, as large as its text.
+    pub fn popup(&self, p: &Popup) -> Rect {
+        let area = self.main;
+        let width = p
+            .lines
+            .iter()
+            .map(|l| l.chars().count())
+            .max()
+            .unwrap_or(0)
+            .max(p.title.chars().count()) as u16
+            + 4;
+        let w = width.min(area.width.saturating_sub(2));
+        let h = (p.lines.len() as u16 + 2).min(area.height.saturating_sub(2));
+        Rect::new(
+            area.x + (area.width - w) / 2,
+            area.y + (area.height - h) / 2,
+            w,
+            h,
+        )
+    }
+}

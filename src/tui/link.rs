@@ -1,0 +1,124 @@
+//! The app's link to the render worker: the generation of the newest
+//! request, the newest pass and BVH overlay it sent back, and when a pass is
+//! worth redrawing for.
+
+use std::sync::mpsc::{RecvTimeoutError, TryRecvError};
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Result};
+
+use super::worker::{self, Cmd, Msg, OverlayFrame, Snapshot, View};
+use crate::render::debug_view::DebugView;
+use crate::scene::Builder;
+
+pub struct RenderLink {
+    worker: worker::Handle,
+    /// Bumped on every change that restarts rendering.
+    generation: u64,
+    /// The newest pass.
+    pub frame: Option<Box<Snapshot>>,
+    /// The newest BVH overlay.
+    pub overlay: Option<Box<OverlayFrame>>,
+    /// Generation and time of the last pass that asked for a redraw.
+    shown: (u64, Instant),
+    /// A BVH rebuild is under way.
+    pub rebuilding: bool,
+}
+
+impl RenderLink {
+    pub fn new(worker: worker::Handle) -> Self {
+        Self {
+            worker,
+            generation: 0,
+            frame: None,
+            overlay: None,
+            shown: (0, Instant::now()),
+            rebuilding: false,
+        }
+    }
+
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// Renders `view` from now on, cancelling the pass in flight.
+    pub fn send_view(&mut self, view: View) {
+        self.generation += 1;
+        self.worker.send(Cmd::View(self.generation, Box::new(view)));
+    }
+
+    /// Rebuilds the BVH, then renders the current view again.
+    pub fn rebuild(&mut self, builder: Builder) {
+        self.generation += 1;
+        self.rebuilding = true;
+        self.worker.send(Cmd::Builder(self.generation, builder));
+    }
+
+    /// Keeps `view` drawn over every view (none: no overlay).
+    pub fn set_overlay(&mut self, view: Option<DebugView>) {
+        self.overlay = None;
+        self.worker.send(Cmd::Overlay(view));
+    }
+
+    /// The newest pass when it shows the current view.
+    pub fn current_frame(&self) -> Option<&Snapshot> {
+        self.frame
+            .as_deref()
+            .filter(|f| f.generation == self.generation)
+    }
+
+    /// The newest full (not coarse) pass of the current view.
+    pub fn full_frame(&self) -> Option<&Snapshot> {
+        self.current_frame().filter(|f| !f.coarse)
+    }
+
+    /// The overlay when it was drawn for the current view.
+    pub fn current_overlay(&self) -> Option<&OverlayFrame> {
+        self.overlay
+            .as_deref()
+            .filter(|o| o.generation == self.generation)
+    }
+
+    /// The next message from the worker, if one is waiting. Fails when the
+    /// worker has stopped.
+    pub fn try_recv(&self) -> Result<Option<Msg>> {
+        match self.worker.rx.try_recv() {
+            Ok(m) => Ok(Some(m)),
+            Err(TryRecvError::Empty) => Ok(None),
+            Err(TryRecvError::Disconnected) => bail!("the render worker stopped unexpectedly"),
+        }
+    }
+
+    /// Waits up to `timeout` for the next message.
+    pub fn recv_timeout(&self, timeout: Duration) -> Result<Option<Msg>> {
+        match self.worker.rx.recv_timeout(timeout) {
+            Ok(m) => Ok(Some(m)),
+            Err(RecvTimeoutError::Timeout) => Ok(None),
+            Err(RecvTimeoutError::Disconnected) => {
+                bail!("the render worker stopped unexpectedly")
+            }
+        }
+    }
+
+    /// Keeps a pass; true when it is worth redrawing for. Late passes change
+    /// the image less and less, so they are shown less often, which saves
+    /// terminal bandwidth.
+    pub fn keep_frame(&mut self, f: Box<Snapshot>) -> bool {
+        let due = f.coarse
+            || f.done
+            || f.generation != self.shown.0
+            || self.shown.1.elapsed() >= refresh_interval(f.spp);
+        if due {
+            self.shown = (f.generation, Instant::now());
+        }
+        self.frame = Some(f);
+        due
+    }
+}
+
+/// How often a pass at `spp` samples per pixel is worth showing: every
+/// frame up to 32 spp, then less often as each pass changes less, up to
+/// twice a second.
+fn refresh_interval(spp: u32) -> Duration {
+    Duration::from_millis((33 * spp as u64 / 32).min(500))
+}
