@@ -10,8 +10,9 @@ use exact::*;
 use rayterm::bvh::{self, Bvh};
 use rayterm::render::{Feature, Features, Plan, PlanPolicy};
 use rayterm::report::converge::{
-    fit_log_log, load_reference, rmse, Budget, Config, ReferenceSource, Study, Subject,
+    load_reference, rmse, Budget, Config, ReferenceSource, Study, Subject,
 };
+use rayterm::report::stats::fit_log_log;
 use rayterm::scene::{self, Builder, Scene};
 
 fn config(w: u32, h: u32, budgets: &[u32], reference: ReferenceSource) -> Config {

@@ -10,7 +10,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::workload::median;
+use super::stats::median;
 use super::Machine;
 use crate::bvh::{self, Bvh};
 use crate::render::{Feature, Features, Plan, PlanPolicy, Progressive, RayCounter, Stop, Tracer};

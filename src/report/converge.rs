@@ -20,13 +20,14 @@ use anyhow::{bail, Result};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
-pub use metrics::{estimated_rel_mse, fit_log_log, luminance, rel_mse, rel_mse_on, rmse};
+pub use metrics::{estimated_rel_mse, luminance, rel_mse, rel_mse_on, rmse};
 pub use plot::draw as plot;
 pub use reference::{default_cache_dir, load_reference, save_reference};
 pub use resample::{resample, Resampled};
 
 use crate::bvh::Bvh;
 use crate::render::{Film, Plan, Progressive, Stop, Tracer};
+use crate::report::stats::{fit_log_log, median};
 use crate::scene::{Scene, Settings};
 use metrics::log_lerp;
 use reference::{quantised, reference_key};
@@ -448,11 +449,10 @@ impl Subject<'_> {
             rel += rel_mse(&img, reference) / n;
             est = est.zip(estimated_rel_mse(&r.film)).map(|(a, b)| a + b / n);
         }
-        times.sort_by(f64::total_cmp);
         Point {
             budget,
             spp,
-            seconds: times[times.len() / 2],
+            seconds: median(&mut times),
             rays,
             rmse: mse.sqrt(),
             rel_mse: rel,

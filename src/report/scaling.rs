@@ -7,8 +7,9 @@ use anyhow::Result;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
-use super::workload::{self, median, Frame, Workload};
-use super::{fit_line, Machine};
+use super::stats::{fit_line, median};
+use super::workload::{self, Frame, Workload};
+use super::Machine;
 use crate::bvh::{self, TraversalStats};
 use crate::scene::{self, Builder, Geometry};
 

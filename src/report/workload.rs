@@ -9,6 +9,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::stats::median;
 use crate::bvh::{self, Bvh, TraversalStats};
 use crate::geometry::{Aabb, Ray};
 use crate::scene::camera::CameraFrame;
@@ -267,18 +268,4 @@ fn closest_t(bvh: &Bvh, r: &Ray) -> Option<f32> {
 fn occluded(bvh: &Bvh, r: &Ray) -> bool {
     bvh.occluded::<false>(r, &mut TraversalStats::default())
         .is_some()
-}
-
-/// Median of `v` (the mean of the middle two for an even count); 0 when empty.
-pub fn median(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
 }

@@ -17,6 +17,7 @@ use super::widgets::paint_view;
 use super::worker::{Cmd, Msg, View, Worker};
 use super::CountingWriter;
 use crate::render::{SceneRequest, Session};
+use crate::report::stats::median;
 
 /// What [`measure_pass`] measured.
 #[derive(Clone, Debug, Serialize)]
@@ -148,7 +149,7 @@ pub fn measure_pass(req: &SceneRequest, cols: u16, rows: u16, passes: u32) -> Re
         passes: pass_ms.len() as u32,
         first_pass_ms: pass_ms[0],
         pass_ms_mean: pass_mean,
-        pass_ms_median: sorted[sorted.len() / 2],
+        pass_ms_median: median(&mut sorted.clone()),
         pass_ms_min: sorted[0],
         step_ms_mean: mean(&later(&step_ms)),
         mrays_per_s: later(&rays).iter().sum::<f64>() / (later(&pass_ms).iter().sum::<f64>() * 1e3),

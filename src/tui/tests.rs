@@ -321,9 +321,15 @@ fn no_plan_runs_every_enabled_stage_in_the_view_and_its_export() {
     // Cornell has no textures, glossy materials or environment map, yet
     // with --no-plan their stages run, and the panel says so.
     assert!(app.plan.textures && app.plan.glossy && app.plan.environment);
-    assert!(line_with(&s, "textures").contains("textures       on"), "{s}");
+    assert!(
+        line_with(&s, "textures").contains("textures       on"),
+        "{s}"
+    );
     app.handle_key(Key::Char('1'));
-    assert!(app.plan.textures && !app.plan.shadows, "toggles keep the policy");
+    assert!(
+        app.plan.textures && !app.plan.shadows,
+        "toggles keep the policy"
+    );
     let dir = std::env::temp_dir().join(format!("rayterm-tui-noplan-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     app.export_dir = dir.clone();
@@ -358,7 +364,9 @@ fn the_pixel_before_and_after_bloom_is_the_films_as_inspect_gives_it() {
     let (w, h) = app.view_size;
     app.select(w / 2, h / 3, 0);
     let tree = app.inspector.tree().unwrap().clone();
-    let spp = tree.pixel_spp.expect("bloom runs, so the pixel's values are known");
+    let spp = tree
+        .pixel_spp
+        .expect("bloom runs, so the pixel's values are known");
     // What `rayterm inspect --size WxH --spp N` computes: the image at N
     // spp, before and after bloom.
     let req = SceneRequest {

@@ -65,26 +65,6 @@ pub fn estimated_rel_mse(film: &Film) -> Option<f64> {
     Some(film.estimated_rel_mse())
 }
 
-/// Least-squares slope and intercept of `ln y` against `ln x` over the
-/// positive pairs; `None` with fewer than two distinct `x`.
-pub fn fit_log_log(xy: &[(f64, f64)]) -> Option<(f64, f64)> {
-    let pts: Vec<(f64, f64)> = xy
-        .iter()
-        .filter(|(x, y)| *x > 0.0 && *y > 0.0)
-        .map(|(x, y)| (x.ln(), y.ln()))
-        .collect();
-    let n = pts.len() as f64;
-    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
-    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    if pts.len() < 2 || sxx < 1e-12 {
-        return None;
-    }
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let slope = sxy / sxx;
-    Some((slope, my - slope * mx))
-}
-
 /// `y` at `x` on the straight line through two points in log-log space.
 pub(super) fn log_lerp(x: f64, (x0, y0): (f64, f64), (x1, y1): (f64, f64)) -> f64 {
     if (x1 / x0).ln().abs() < 1e-12 {
@@ -97,17 +77,6 @@ pub(super) fn log_lerp(x: f64, (x0, y0): (f64, f64), (x1, y1): (f64, f64)) -> f6
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn log_log_fit_recovers_a_power_law() {
-        let pts: Vec<(f64, f64)> = [1.0, 2.0, 4.0, 8.0, 16.0]
-            .iter()
-            .map(|&x| (x, 3.0 * f64::powf(x, -0.5)))
-            .collect();
-        let (s, c) = fit_log_log(&pts).unwrap();
-        assert!((s + 0.5).abs() < 1e-12 && (c - 3f64.ln()).abs() < 1e-12);
-        assert_eq!(fit_log_log(&pts[..1]), None);
-    }
 
     #[test]
     fn metrics_on_luminance() {
