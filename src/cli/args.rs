@@ -24,8 +24,8 @@ pub struct Cli {
 impl Cli {
     pub fn threads(&self) -> Option<usize> {
         match &self.command {
-            Some(Command::Render(a)) => a.threads,
-            Some(Command::Converge(a)) => a.threads,
+            Some(Command::Render(a)) => a.threads.map(|n| n as usize),
+            Some(Command::Converge(a)) => a.threads.map(|n| n as usize),
             Some(Command::Bench(a)) => a.global_threads(),
             _ => None,
         }
@@ -72,6 +72,26 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
         return Err(format!("size '{s}' must be between 1x1 and 16384x16384"));
     }
     Ok((w, h))
+}
+
+/// The most samples per pixel any render takes.
+pub const MAX_SPP: u32 = 1 << 20;
+
+/// A thread count from 1 to four times the machine's cores: more only
+/// slows the machine down.
+pub fn parse_threads(s: &str) -> Result<u32, String> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let max = 4 * cores;
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a whole number of threads"))?;
+    if n == 0 || n > max {
+        return Err(format!(
+            "{n} threads: use 1 to {max} (four times this machine's {cores} cores)"
+        ));
+    }
+    Ok(n as u32)
 }
 
 /// Options shared by every command that renders a scene.
@@ -131,22 +151,29 @@ impl SceneOpts {
 pub struct RenderArgs {
     #[command(flatten)]
     pub scene: SceneOpts,
-    /// Output PNG; a name ending in .hdr gets the linear image before bloom
-    /// as Radiance HDR instead (a reference for `converge` and `tui`).
+    /// Output image: .png (after bloom), or .hdr for the linear film before
+    /// bloom (a reference for `converge` and `tui`). Checked before rendering.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Samples per pixel (default: the scene's).
-    #[arg(long, conflicts_with_all = ["time", "target_error"])]
+    #[arg(long, conflicts_with_all = ["time", "target_error"],
+          value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub spp: Option<u32>,
-    /// Keep adding passes until this many seconds have passed.
-    #[arg(long, conflicts_with = "target_error")]
+    /// Add passes until this many seconds have passed (may be combined with
+    /// --target-error: whichever comes first).
+    #[arg(long)]
     pub time: Option<f64>,
-    /// Keep adding passes until the estimated relative error is below this.
+    /// Add passes until the estimated relative error is below this (0.01
+    /// for 1 %).
     #[arg(long)]
     pub target_error: Option<f64>,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    pub threads: Option<usize>,
+    /// The most samples per pixel --time and --target-error may add.
+    #[arg(long, default_value_t = 4096,
+          value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
+    pub max_spp: u32,
+    /// Worker threads (default: all cores; at most 4x the cores).
+    #[arg(long, value_parser = parse_threads)]
+    pub threads: Option<u32>,
     /// Print the scene plan (stage, on/off, reason) before rendering.
     #[arg(long)]
     pub explain: bool,
@@ -234,9 +261,9 @@ pub struct ConvergeArgs {
     /// else ~/.cache/rayterm].
     #[arg(long)]
     pub cache_dir: Option<PathBuf>,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    pub threads: Option<usize>,
+    /// Worker threads (default: all cores; at most 4x the cores).
+    #[arg(long, value_parser = parse_threads)]
+    pub threads: Option<u32>,
 }
 
 #[derive(Args, Debug)]

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
-use super::args::parse_size;
+use super::args::{parse_size, parse_threads};
 use crate::render::SceneRequest;
 use crate::report::{bench, scaling, workload};
 use crate::scene::Builder;
@@ -22,8 +22,8 @@ pub struct BenchArgs {
     /// Repetitions of every build and frame; medians are reported.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
     pub reps: u32,
-    /// Worker threads (default: all cores).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Worker threads (default: all cores; at most 4x the cores).
+    #[arg(long, value_parser = parse_threads)]
     pub threads: Option<u32>,
     /// Frame size, WIDTHxHEIGHT.
     #[arg(long, value_parser = parse_size, default_value = "800x800")]
@@ -65,8 +65,8 @@ pub struct RaysArgs {
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, value_parser = parse_size, default_value = "1024x768")]
     pub size: (u32, u32),
-    /// Threads for the build and the tracing.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Threads for the build and the tracing (at most 4x the cores).
+    #[arg(long, default_value_t = 1, value_parser = parse_threads)]
     pub threads: u32,
     #[arg(long, value_enum, default_value_t = Builder::Sah)]
     pub builder: Builder,
@@ -82,8 +82,8 @@ pub struct ScalingArgs {
     pub max_n: u32,
     #[arg(long, value_enum, default_value_t = Builder::Sah)]
     pub builder: Builder,
-    /// Worker threads (default: all cores).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Worker threads (default: all cores; at most 4x the cores).
+    #[arg(long, value_parser = parse_threads)]
     pub threads: Option<u32>,
     /// Print JSON instead of the table.
     #[arg(long)]

@@ -1,19 +1,19 @@
 //! `rayterm render --debug VIEW`: a BVH debug view written as a PNG.
 
-use std::path::Path;
 use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Result;
 
+use super::output::{png, Output};
 use crate::render::debug_view::{self, DebugView};
-use crate::render::{output, post, Session};
+use crate::render::{post, Session};
 
-pub fn run(s: &Session, view: DebugView, out: &Path) -> Result<ExitCode> {
+pub fn run(s: &Session, view: DebugView, out: &Output) -> Result<ExitCode> {
     let start = Instant::now();
     let d = debug_view::draw(&s.tracer(), view)?;
     let ms = start.elapsed().as_secs_f64() * 1e3;
-    output::save_png_atomic(&post::to_rgb8(&d.image, s.width, s.height), out)?;
+    out.write(&png(&post::to_rgb8(&d.image, s.width, s.height))?)?;
     let st = &s.bvh.stats;
     println!(
         "{} {view} at {}x{}: {} triangles, {} BVH nodes, depth {} ({}); {} ({ms:.1} ms) -> {}",
@@ -25,7 +25,7 @@ pub fn run(s: &Session, view: DebugView, out: &Path) -> Result<ExitCode> {
         st.depth,
         st.builder,
         d.summary,
-        out.display()
+        out.path.display()
     );
     Ok(ExitCode::SUCCESS)
 }

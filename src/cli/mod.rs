@@ -5,6 +5,7 @@ mod bench;
 mod converge;
 mod debug;
 mod inspect;
+mod output;
 mod render;
 mod scenes;
 mod stability;
@@ -21,6 +22,7 @@ use crate::render::Session;
 use crate::scene::Scene;
 
 pub fn main() -> ExitCode {
+    crate::interrupt::default_sigpipe();
     let cli = Cli::parse();
     if let Some(n) = cli.threads() {
         if let Err(e) = rayon::ThreadPoolBuilder::new()

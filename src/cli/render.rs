@@ -1,98 +1,97 @@
-//! `rayterm render`: progressive passes to a PNG, with a progress bar,
-//! Ctrl-C handling and an atomic write.
+//! `rayterm render`: progressive passes to an image file, with a progress
+//! bar and an estimate of the time left, stopped cleanly by Ctrl-C, SIGTERM
+//! or SIGHUP. The output is checked before anything renders.
 
+use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::time::Instant;
 
 use anyhow::{bail, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::args::RenderArgs;
 use super::open_scene;
-use crate::render::{output, post, Ended, Progressive, Stop};
-use crate::report::converge::save_reference;
+use super::output::{Format, Output};
+use crate::interrupt;
+use crate::render::{post, Ended, Film, Progressive, Stop};
+use crate::report::converge::encode_hdr;
 
 pub fn run(a: RenderArgs) -> Result<ExitCode> {
+    let stop = stop(&a)?;
+    // Inputs are the scene file, if the scene is one.
+    let inputs: Vec<PathBuf> = std::path::Path::new(&a.scene.scene)
+        .is_file()
+        .then(|| PathBuf::from(&a.scene.scene))
+        .into_iter()
+        .collect();
+    let out = Output::check(&a.output, &inputs)?;
+    if a.debug.is_some() && out.format != Format::Png {
+        bail!("--debug views are PNG images; name the output .png");
+    }
     let s = open_scene(&a.scene)?;
     if a.explain {
         eprintln!("plan for {}:\n{}", s.scene.name, s.plan.explain());
     }
     if let Some(view) = a.debug {
-        if is_hdr(&a.output) {
-            bail!("--debug views are PNG images; name the output .png");
-        }
-        return super::debug::run(&s, view, &a.output);
+        return super::debug::run(&s, view, &out);
     }
-    let stop = match (a.spp, a.time, a.target_error) {
-        (_, Some(t), _) if !(t > 0.0 && t.is_finite()) => {
-            bail!("--time must be a positive number of seconds")
-        }
-        (_, _, Some(e)) if !(e > 0.0 && e.is_finite()) => bail!("--target-error must be positive"),
-        (Some(0), _, _) => bail!("--spp must be at least 1"),
-        (spp, None, None) => Stop::spp(spp.unwrap_or(s.scene.settings.spp)),
-        (_, seconds, error) => Stop {
-            spp: None,
-            seconds,
-            error,
-        },
-    };
+    let stop = stop.unwrap_or(Stop::spp(s.scene.settings.spp));
     if s.plan.deterministic && stop != Stop::spp(1) {
         eprintln!(
             "note: nothing in this scene is sampled, so one pass is exact; extra passes skipped"
         );
     }
-    let interrupted = Arc::new(AtomicBool::new(false));
-    {
-        let flag = interrupted.clone();
-        // Failing to install the handler only loses the clean Ctrl-C message.
-        let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
-    }
+    let interrupted = interrupt::flag();
     let tracer = s.tracer();
-    let bar = match stop.spp {
-        Some(n) if !s.plan.deterministic => ProgressBar::new(n as u64).with_style(
-            ProgressStyle::with_template("{bar:40} {pos}/{len} spp  {elapsed} (eta {eta})")
-                .unwrap(),
-        ),
-        _ => ProgressBar::new_spinner().with_style(
-            ProgressStyle::with_template("{spinner} {pos} spp  {elapsed}  {msg}").unwrap(),
-        ),
-    };
+    let bar = progress_bar(&stop, s.plan.deterministic);
     let mut p = Progressive::new(s.width, s.height);
-    let cancel = || interrupted.load(Ordering::Relaxed);
+    let start = Instant::now();
+    let cancel = || interrupted.load(std::sync::atomic::Ordering::Relaxed);
     let outcome = p.run(&tracer, &stop, &cancel, |film, _| {
         bar.set_position(film.spp as u64);
-        bar.set_message(format!("error {:.3}%", film.relative_error() * 100.0));
+        if stop.spp.is_none() || stop.error.is_some() {
+            bar.set_message(progress(film, &stop, start.elapsed().as_secs_f64()));
+        }
     });
     if outcome.ended == Ended::Cancelled {
         bar.abandon();
         eprintln!("interrupted: nothing written");
-        return Ok(ExitCode::from(130));
+        return Ok(ExitCode::from(interrupt::exit_code()));
     }
     bar.finish_and_clear();
     let film = &p.film;
-    if is_hdr(&a.output) {
+    let bytes = match out.format {
         // The film's mean as it is: what `converge` and the TUI's
         // `--reference` compare against.
-        save_reference(&a.output, s.width, s.height, &film.image())?;
-    } else {
-        let shown = post::display(
-            film.image(),
-            s.width,
-            s.height,
-            &s.plan,
-            &s.scene.settings.bloom,
-        );
-        output::save_png_atomic(&post::to_rgb8(&shown.image, s.width, s.height), &a.output)?;
-    }
+        Format::Hdr => encode_hdr(s.width, s.height, &film.image())?,
+        Format::Png => {
+            let shown = post::display(
+                film.image(),
+                s.width,
+                s.height,
+                &s.plan,
+                &s.scene.settings.bloom,
+            );
+            super::output::png(&post::to_rgb8(&shown.image, s.width, s.height))?
+        }
+    };
+    out.write(&bytes)?;
     let err = if s.plan.deterministic {
         "exact".to_string()
     } else {
         format!("{:.3}%", film.relative_error() * 100.0)
     };
     let render_ms = outcome.seconds * 1e3;
+    let capped = match (outcome.ended, stop.error) {
+        (Ended::Spp, Some(e)) if stop.spp.is_some() => format!(
+            " (stopped at the --max-spp cap of {} before reaching {}%)",
+            film.spp,
+            e * 100.0
+        ),
+        _ => String::new(),
+    };
     println!(
-        "{}: {} triangles, build {:.1} ms ({}), render {}, {} spp, {:.2} Mrays/s, error {}{} -> {}",
+        "{}: {} triangles, build {:.1} ms ({}), render {}, {} spp, {:.2} Mrays/s, error {}{}{} -> {}",
         s.scene.name,
         s.scene.geometry.triangle_count(),
         s.bvh.stats.build_ms,
@@ -101,6 +100,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         film.spp,
         outcome.rays as f64 / render_ms.max(1e-9) / 1e3,
         err,
+        capped,
         if film.bad_count > 0 {
             format!(", {} NaN/Inf samples dropped", film.bad_count)
         } else {
@@ -109,6 +109,71 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         a.output.display()
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// The stop the options ask for; `None` means the scene's spp.
+fn stop(a: &RenderArgs) -> Result<Option<Stop>> {
+    if let Some(t) = a.time {
+        if !(t > 0.0 && t.is_finite()) {
+            bail!("--time must be a positive number of seconds");
+        }
+    }
+    if let Some(e) = a.target_error {
+        if !(e > 0.0 && e.is_finite()) {
+            bail!("--target-error must be a positive fraction (0.01 for 1 %)");
+        }
+    }
+    Ok(match (a.spp, a.time, a.target_error) {
+        (Some(n), _, _) => Some(Stop::spp(n)),
+        (None, None, None) => None,
+        (None, seconds, error) => Some(Stop {
+            spp: Some(a.max_spp),
+            seconds,
+            error,
+        }),
+    })
+}
+
+fn progress_bar(stop: &Stop, exact: bool) -> ProgressBar {
+    match stop.spp {
+        Some(n) if !exact && stop.seconds.is_none() && stop.error.is_none() => {
+            ProgressBar::new(n as u64).with_style(
+                ProgressStyle::with_template("{bar:40} {pos}/{len} spp  {elapsed} (eta {eta})")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            )
+        }
+        _ => ProgressBar::new_spinner().with_style(
+            ProgressStyle::with_template("{spinner} {pos} spp  {elapsed}  {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+        ),
+    }
+}
+
+/// The error and the time left for a render that stops on time or error:
+/// the error of a sampled image falls as 1/sqrt(spp), which says how many
+/// samples the target needs.
+fn progress(film: &Film, stop: &Stop, elapsed: f64) -> String {
+    let per_spp = elapsed / film.spp.max(1) as f64;
+    let cap = stop.spp.unwrap_or(u32::MAX) as f64;
+    let mut left = stop
+        .seconds
+        .map_or(f64::INFINITY, |t| (t - elapsed).max(0.0));
+    let err = film.relative_error();
+    let mut text = if film.spp >= 2 {
+        format!("error {:.3}%", err * 100.0)
+    } else {
+        "error unknown until 2 spp".to_string()
+    };
+    if let Some(target) = stop.error.filter(|_| film.spp >= 2 && err > 0.0) {
+        let need = (film.spp as f64 * (err / target).powi(2)).min(cap);
+        left = left.min((need - film.spp as f64).max(0.0) * per_spp);
+        text += &format!(" (target {}%, about {need:.0} spp)", target * 100.0);
+    }
+    left = left.min((cap - film.spp as f64).max(0.0) * per_spp);
+    if left.is_finite() {
+        text += &format!(", eta {}", duration(left * 1e3));
+    }
+    text
 }
 
 /// `812.3 ms` below ten seconds, `24.9 s` from there.
@@ -120,12 +185,6 @@ fn duration(ms: f64) -> String {
     }
 }
 
-/// A `.hdr` output gets the linear film instead of a PNG.
-fn is_hdr(path: &std::path::Path) -> bool {
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("hdr"))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -134,6 +193,35 @@ mod tests {
     fn durations_read_in_the_unit_that_fits() {
         assert_eq!(duration(812.34), "812.3 ms");
         assert_eq!(duration(24_927.9), "24.9 s");
-        assert!(is_hdr(std::path::Path::new("ref.HDR")) && !is_hdr(std::path::Path::new("a.png")));
+    }
+
+    #[test]
+    fn progress_estimates_the_time_to_the_target() {
+        let mut f = Film::new(1, 1);
+        for k in 0..4 {
+            f.add(
+                0,
+                0,
+                k,
+                glam::Vec3::splat(if k % 2 == 0 { 0.4 } else { 0.6 }),
+            );
+        }
+        f.spp = 4;
+        let stop = Stop {
+            spp: Some(4096),
+            seconds: None,
+            error: Some(f.relative_error() / 2.0),
+        };
+        // Half the error needs four times the samples: 12 more, at 0.25 s each.
+        let text = progress(&f, &stop, 1.0);
+        assert!(
+            text.contains("about 16 spp") && text.ends_with("eta 3000.0 ms"),
+            "{text}"
+        );
+        let timed = Stop {
+            seconds: Some(5.0),
+            ..Stop::default()
+        };
+        assert!(progress(&f, &timed, 1.0).ends_with("eta 4000.0 ms"));
     }
 }

@@ -22,7 +22,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 pub use metrics::{estimated_rel_mse, luminance, rel_mse, rel_mse_on, rmse};
 pub use plot::draw as plot;
-pub use reference::{default_cache_dir, load_reference, save_reference};
+pub use reference::{default_cache_dir, encode_hdr, load_reference, save_reference};
 pub use resample::{resample, Resampled};
 
 use crate::bvh::Bvh;

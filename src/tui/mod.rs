@@ -65,6 +65,9 @@ pub fn run(
     let color =
         color.unwrap_or_else(|| ColorMode::detect(std::env::var("COLORTERM").ok().as_deref()));
     let mut app = App::new(session, warnings, color, reference)?;
+    // SIGTERM, SIGHUP and an outside SIGINT quit like `q`: the loop sees the
+    // flag and the guard below restores the terminal.
+    crate::interrupt::flag();
     let bytes = Arc::new(AtomicU64::new(0));
     let guard = TerminalGuard::enter()?;
     let writer = CountingWriter {
@@ -78,7 +81,12 @@ pub fn run(
     if app.jobs.cancel_export() {
         eprintln!("rayterm: an unfinished PNG export was cancelled");
     }
-    result.map(|()| ExitCode::SUCCESS)
+    result?;
+    Ok(if crate::interrupt::requested() {
+        ExitCode::from(crate::interrupt::exit_code())
+    } else {
+        ExitCode::SUCCESS
+    })
 }
 
 fn event_loop<W: Write>(
@@ -114,7 +122,7 @@ fn event_loop<W: Write>(
             }
             dirty = true;
         }
-        if app.quit {
+        if app.quit || crate::interrupt::requested() {
             return Ok(());
         }
     }

@@ -25,7 +25,7 @@ fn round_for_rgbe(c: Vec3) -> Rgb<f32> {
     Rgb([r(c.x), r(c.y), r(c.z)])
 }
 
-fn encode_hdr(width: u32, height: u32, img: &[Vec3]) -> Result<Vec<u8>> {
+pub fn encode_hdr(width: u32, height: u32, img: &[Vec3]) -> Result<Vec<u8>> {
     let px: Vec<Rgb<f32>> = img.iter().map(|&c| round_for_rgbe(c)).collect();
     let mut bytes = Vec::new();
     HdrEncoder::new(&mut bytes)

@@ -1,0 +1,282 @@
+//! Where an image goes, checked before any rendering: a format rayterm
+//! writes, a directory that exists and takes files, never a directory or
+//! one of the inputs. Regular files are replaced atomically; a character
+//! device or a FIFO with a reader (`/dev/null`, `/dev/stdout`) is written in
+//! place; anything else is refused, so no device is ever replaced.
+
+use std::fs::{self, OpenOptions};
+use std::io::Write;
+use std::os::unix::fs::{FileTypeExt, MetadataExt, OpenOptionsExt};
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Result};
+
+/// The image formats `rayterm render -o` writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// 8-bit sRGB after bloom.
+    Png,
+    /// The linear film before bloom, 8-bit mantissas.
+    Hdr,
+}
+
+impl Format {
+    const NAMES: &'static str = ".png (the image), .hdr (the linear film)";
+
+    fn of(path: &Path) -> Option<Format> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "png" => Some(Format::Png),
+            "hdr" => Some(Format::Hdr),
+            _ => None,
+        }
+    }
+}
+
+#[derive(Debug)]
+pub struct Output {
+    pub path: PathBuf,
+    pub format: Format,
+    /// A device or FIFO is opened when checked and kept open: a FIFO's
+    /// reader would see the end of its input if it were closed.
+    device: Option<fs::File>,
+}
+
+impl Output {
+    /// Checks `path` as the output of a render whose inputs are `inputs`.
+    pub fn check(path: &Path, inputs: &[PathBuf]) -> Result<Output> {
+        let shown = path.display();
+        let mut device = None;
+        match fs::metadata(path) {
+            Ok(m) => {
+                let t = m.file_type();
+                for input in inputs {
+                    if let Ok(i) = fs::metadata(input) {
+                        if (i.dev(), i.ino()) == (m.dev(), m.ino()) {
+                            bail!(
+                                "{shown} is an input of this render ({}); choose another output",
+                                input.display()
+                            );
+                        }
+                    }
+                }
+                if t.is_dir() {
+                    bail!("{shown} is a directory; name a file inside it");
+                } else if t.is_file() {
+                    // Replaced atomically, as a new file is written.
+                } else if t.is_char_device() || t.is_fifo() {
+                    // Opening without blocking fails on a FIFO nobody
+                    // reads, where writing would wait forever.
+                    let f = OpenOptions::new()
+                        .write(true)
+                        .custom_flags(libc::O_NONBLOCK)
+                        .open(path)
+                        .map_err(|e| match t.is_fifo() {
+                            true => anyhow::anyhow!("{shown} is a FIFO that no process is reading"),
+                            false => anyhow::anyhow!("cannot open {shown}: {}", reason(&e)),
+                        })?;
+                    blocking(&f);
+                    device = Some(f);
+                } else {
+                    bail!("{shown} is not a regular file (a block device or socket); refusing to write to it");
+                }
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => bail!("{shown}: {}", reason(&e)),
+        }
+        // A device or pipe gets a PNG unless its name says otherwise.
+        let format = match (Format::of(path), device.is_some()) {
+            (Some(f), _) => f,
+            (None, true) => Format::Png,
+            (None, false) => bail!(
+                "{shown}: unknown image format; rayterm writes {}",
+                Format::NAMES
+            ),
+        };
+        if device.is_none() {
+            check_directory(path)?;
+        }
+        Ok(Output {
+            path: path.to_path_buf(),
+            format,
+            device,
+        })
+    }
+}
+
+impl Output {
+    /// Writes `bytes`: atomically through a temporary file beside a regular
+    /// target (removed on any failure), or in place into a device or FIFO.
+    pub fn write(&self, bytes: &[u8]) -> Result<()> {
+        let path = &self.path;
+        if let Some(mut f) = self.device.as_ref() {
+            return f
+                .write_all(bytes)
+                .and_then(|()| f.flush())
+                .map_err(|e| anyhow::anyhow!("cannot write {}: {}", path.display(), reason(&e)));
+        }
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let name = path
+            .file_name()
+            .map_or("image".into(), |n| n.to_string_lossy());
+        let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+        let written = (|| -> std::io::Result<()> {
+            let mut f = OpenOptions::new().write(true).create_new(true).open(&tmp)?;
+            f.write_all(bytes)?;
+            f.sync_all()?;
+            fs::rename(&tmp, path)
+        })();
+        written.map_err(|e| {
+            let _ = fs::remove_file(&tmp);
+            anyhow::anyhow!("cannot write {}: {}", path.display(), reason(&e))
+        })
+    }
+}
+
+/// Clears `O_NONBLOCK` again, so writes wait for a slow reader.
+fn blocking(f: &fs::File) {
+    use std::os::fd::AsRawFd;
+    let fd = f.as_raw_fd();
+    // SAFETY: fcntl on a descriptor this file owns; only the flag changes.
+    unsafe {
+        let flags = libc::fcntl(fd, libc::F_GETFL);
+        if flags >= 0 {
+            libc::fcntl(fd, libc::F_SETFL, flags & !libc::O_NONBLOCK);
+        }
+    }
+}
+
+/// The directory `path` goes in exists and takes new files: probed with a
+/// file created and removed at once, which also catches read-only file
+/// systems (root bypasses permission bits, not those).
+fn check_directory(path: &Path) -> Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    match fs::metadata(dir) {
+        Ok(m) if m.is_dir() => {}
+        Ok(_) => bail!("{}: {} is not a directory", path.display(), dir.display()),
+        Err(_) => bail!(
+            "{}: directory {} does not exist",
+            path.display(),
+            dir.display()
+        ),
+    }
+    let probe = dir.join(format!(".rayterm-probe-{}", std::process::id()));
+    match OpenOptions::new().write(true).create_new(true).open(&probe) {
+        Ok(_) => {
+            let _ = fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => bail!(
+            "{}: cannot create files in {}: {}",
+            path.display(),
+            dir.display(),
+            reason(&e)
+        ),
+    }
+}
+
+/// `img` encoded as PNG.
+pub fn png(img: &image::RgbImage) -> Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    img.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )?;
+    Ok(bytes)
+}
+
+/// An I/O error in words, without the OS error number.
+pub fn reason(e: &std::io::Error) -> String {
+    let s = e.to_string();
+    match s.find(" (os error") {
+        Some(i) => s[..i].to_lowercase(),
+        None => s,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("rayterm-out-{name}-{}", std::process::id()));
+        fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn formats_by_extension() {
+        let d = dir("fmt");
+        assert_eq!(
+            Output::check(&d.join("a.PNG"), &[]).unwrap().format,
+            Format::Png
+        );
+        assert_eq!(
+            Output::check(&d.join("a.hdr"), &[]).unwrap().format,
+            Format::Hdr
+        );
+        for bad in ["a.jpg", "noext", "a.png.tmp"] {
+            let e = Output::check(&d.join(bad), &[]).unwrap_err().to_string();
+            assert!(
+                e.contains("unknown image format") && e.contains(".png"),
+                "{e}"
+            );
+        }
+        fs::remove_dir_all(d).unwrap();
+    }
+
+    #[test]
+    fn directories_inputs_and_missing_folders_are_refused() {
+        let d = dir("dirs");
+        let e = Output::check(&d, &[]).unwrap_err().to_string();
+        assert!(e.contains("is a directory"), "{e}");
+        let sub = d.join("x.png");
+        fs::create_dir(&sub).unwrap();
+        let e = Output::check(&sub, &[]).unwrap_err().to_string();
+        assert!(e.contains("is a directory"), "{e}");
+        let e = Output::check(&d.join("nope/x.png"), &[])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("does not exist"), "{e}");
+        let scene = d.join("scene.png");
+        fs::write(&scene, b"input").unwrap();
+        let e = Output::check(&scene, std::slice::from_ref(&scene))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("is an input"), "{e}");
+        fs::remove_dir_all(d).unwrap();
+    }
+
+    #[test]
+    fn devices_are_written_in_place() {
+        let null = Output::check(Path::new("/dev/null"), &[]).unwrap();
+        assert_eq!((null.device.is_some(), null.format), (true, Format::Png));
+        let d = dir("dev");
+        let link = d.join("null.hdr");
+        std::os::unix::fs::symlink("/dev/null", &link).unwrap();
+        let out = Output::check(&link, &[]).unwrap();
+        assert_eq!((out.device.is_some(), out.format), (true, Format::Hdr));
+        fs::remove_dir_all(d).unwrap();
+    }
+
+    #[test]
+    fn a_fifo_without_a_reader_is_refused() {
+        let d = dir("fifo");
+        let fifo = d.join("f.png");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if !made.is_ok_and(|s| s.success()) {
+            eprintln!("skipping: mkfifo is not available");
+            return;
+        }
+        let e = Output::check(&fifo, &[]).unwrap_err().to_string();
+        assert!(e.contains("FIFO that no process is reading"), "{e}");
+        assert!(fs::metadata(&fifo).unwrap().file_type().is_fifo());
+        fs::remove_dir_all(d).unwrap();
+    }
+}

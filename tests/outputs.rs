@@ -1,0 +1,219 @@
+//! `rayterm render -o`: bad outputs are refused before anything renders,
+//! devices and FIFOs are never replaced, and no temporary file is left
+//! behind by a failure or a signal.
+
+use std::fs;
+use std::os::unix::fs::FileTypeExt;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn rayterm(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rayterm"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("rayterm-outputs-{name}-{}", std::process::id()));
+    let _ = fs::remove_dir_all(&d);
+    fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The files in `d`, hidden ones included.
+fn files(d: &Path) -> Vec<String> {
+    let mut v: Vec<String> = fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+fn fails_with(args: &[&str], needle: &str) {
+    let out = rayterm(args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{args:?} succeeded");
+    assert!(err.contains(needle), "{args:?}: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(out.stdout.is_empty(), "{args:?} rendered: {:?}", out.stdout);
+}
+
+#[test]
+fn bad_outputs_are_refused_with_the_reason() {
+    let d = dir("bad");
+    let p = |n: &str| d.join(n).display().to_string();
+    fails_with(
+        &["render", "cornell", "-o", &p("nope/x.png")],
+        "does not exist",
+    );
+    fails_with(
+        &["render", "cornell", "-o", &p("x.jpg")],
+        "unknown image format",
+    );
+    fails_with(
+        &["render", "cornell", "-o", &p("noext")],
+        "unknown image format",
+    );
+    fs::create_dir(d.join("sub.png")).unwrap();
+    fails_with(
+        &["render", "cornell", "-o", &p("sub.png")],
+        "is a directory",
+    );
+    // The scene file itself as the output.
+    let scene = d.join("plane.obj");
+    fs::write(&scene, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let hdr = d.join("plane.hdr");
+    fs::copy(&scene, &hdr).unwrap();
+    let _ = fs::remove_file(&scene);
+    std::os::unix::fs::symlink(&hdr, &scene).unwrap();
+    fails_with(
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            hdr.to_str().unwrap(),
+        ],
+        "is an input",
+    );
+    assert_eq!(
+        fs::read_to_string(&hdr).unwrap(),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+    );
+    assert_eq!(files(&d), ["plane.hdr", "plane.obj", "sub.png"]);
+    fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
+fn devices_and_fifos_are_written_in_place_never_replaced() {
+    let d = dir("dev");
+    let null = d.join("null.png");
+    std::os::unix::fs::symlink("/dev/null", &null).unwrap();
+    let out = rayterm(&[
+        "render",
+        "cornell",
+        "--size",
+        "8x8",
+        "-o",
+        null.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(fs::metadata("/dev/null")
+        .unwrap()
+        .file_type()
+        .is_char_device());
+    // /dev/full takes nothing: an error naming it, and still a device.
+    let out = rayterm(&["render", "cornell", "--size", "8x8", "-o", "/dev/full"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("/dev/full"), "{err}");
+    assert!(err.contains("no space left on device"), "{err}");
+    assert!(fs::metadata("/dev/full")
+        .unwrap()
+        .file_type()
+        .is_char_device());
+    let fifo = d.join("f.png");
+    if Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .is_ok_and(|s| s.success())
+    {
+        fails_with(
+            &["render", "cornell", "-o", fifo.to_str().unwrap()],
+            "FIFO that no process is reading",
+        );
+        // With a reader, the PNG goes through the FIFO.
+        let reader = Command::new("cat")
+            .arg(&fifo)
+            .stdout(Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(200));
+        let out = rayterm(&[
+            "render",
+            "cornell",
+            "--size",
+            "8x8",
+            "-o",
+            fifo.to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let got = reader.wait_with_output().unwrap().stdout;
+        assert_eq!(&got[..8], b"\x89PNG\r\n\x1a\n");
+        assert!(fs::metadata(&fifo).unwrap().file_type().is_fifo());
+    } else {
+        eprintln!("skipping the FIFO cases: mkfifo is not available");
+    }
+    assert_eq!(files(&d), ["f.png", "null.png"]);
+    fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
+fn a_signal_during_a_render_writes_nothing() {
+    let d = dir("signal");
+    let out = d.join("x.png");
+    for signal in [libc::SIGTERM, libc::SIGHUP, libc::SIGINT] {
+        let child = Command::new(env!("CARGO_BIN_EXE_rayterm"))
+            .args(["render", "cornell-area", "--spp", "100000", "-o"])
+            .arg(&out)
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(1500));
+        // SAFETY: signalling the child we started.
+        assert_eq!(unsafe { libc::kill(child.id() as i32, signal) }, 0);
+        let start = Instant::now();
+        let res = child.wait_with_output().unwrap();
+        assert!(start.elapsed() < Duration::from_secs(10));
+        let err = String::from_utf8_lossy(&res.stderr);
+        assert_eq!(res.status.code(), Some(128 + signal), "{err}");
+        assert!(err.contains("interrupted: nothing written"), "{err}");
+        assert!(files(&d).is_empty(), "{:?}", files(&d));
+    }
+    fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
+fn a_full_disk_leaves_no_temporary_file() {
+    let d = dir("full");
+    let mounted = Command::new("mount")
+        .args(["-t", "tmpfs", "-o", "size=16k", "tmpfs"])
+        .arg(&d)
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !mounted {
+        eprintln!("skipping: cannot mount a small tmpfs here (needs root)");
+        fs::remove_dir_all(d).unwrap();
+        return;
+    }
+    for name in ["x.png", "x.hdr"] {
+        let out = d.join(name);
+        let res = rayterm(&[
+            "render",
+            "cornell",
+            "--size",
+            "200x200",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&res.stderr);
+        assert!(!res.status.success(), "{name} fit in 16 kB?");
+        assert!(
+            err.contains(name) && err.contains("no space left on device"),
+            "{err}"
+        );
+        assert!(files(&d).is_empty(), "{:?}", files(&d));
+    }
+    let _ = Command::new("umount").arg(&d).status();
+    fs::remove_dir_all(d).unwrap();
+}

@@ -1,0 +1,115 @@
+//! The TUI in a real pseudo-terminal, ended by a signal: the terminal must
+//! come back exactly as `q` leaves it (alternate screen left, cursor shown,
+//! mouse capture off, canonical mode on), and the exit status says which
+//! signal it was.
+
+use std::fs::File;
+use std::io::Read;
+use std::os::fd::{FromRawFd, OwnedFd};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// A pty pair of `cols` x `rows`: (master, slave).
+fn pty(cols: u16, rows: u16) -> (OwnedFd, OwnedFd) {
+    let (mut master, mut slave) = (0, 0);
+    let size = libc::winsize {
+        ws_row: rows,
+        ws_col: cols,
+        ws_xpixel: 0,
+        ws_ypixel: 0,
+    };
+    // SAFETY: openpty writes two descriptors it opened; the null pointers
+    // ask for no name and default terminal settings.
+    let r = unsafe {
+        libc::openpty(
+            &mut master,
+            &mut slave,
+            std::ptr::null_mut(),
+            std::ptr::null(),
+            &size,
+        )
+    };
+    assert_eq!(r, 0, "openpty failed");
+    // SAFETY: both descriptors are fresh and owned here alone.
+    unsafe { (OwnedFd::from_raw_fd(master), OwnedFd::from_raw_fd(slave)) }
+}
+
+fn canonical(fd: &OwnedFd) -> bool {
+    use std::os::fd::AsRawFd;
+    // SAFETY: tcgetattr fills the zeroed struct for a valid terminal fd.
+    let mut t: libc::termios = unsafe { std::mem::zeroed() };
+    assert_eq!(unsafe { libc::tcgetattr(fd.as_raw_fd(), &mut t) }, 0);
+    t.c_lflag & libc::ICANON != 0
+}
+
+fn ended_by(signal: i32) {
+    let (master, slave) = pty(100, 30);
+    assert!(canonical(&slave));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rayterm"))
+        .args(["tui", "cornell"])
+        .env("TERM", "xterm-256color")
+        .stdin(Stdio::from(slave.try_clone().unwrap()))
+        .stdout(Stdio::from(slave.try_clone().unwrap()))
+        .stderr(Stdio::from(slave.try_clone().unwrap()))
+        .spawn()
+        .unwrap();
+    // Everything the TUI writes, read as it comes so it never blocks.
+    let mut reader = File::from(master);
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut buf = [0u8; 1 << 16];
+        while let Ok(n) = reader.read(&mut buf) {
+            if n == 0 || tx.send(buf[..n].to_vec()).is_err() {
+                break;
+            }
+        }
+    });
+    let mut out = Vec::new();
+    let collect = |until: Instant, out: &mut Vec<u8>| {
+        while let Ok(b) = rx.recv_timeout(until.saturating_duration_since(Instant::now())) {
+            out.extend(b);
+        }
+    };
+    // Wait until it has entered the alternate screen and drawn a frame.
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while !out.windows(8).any(|w| w == b"\x1b[?1049h") && Instant::now() < deadline {
+        collect(Instant::now() + Duration::from_millis(100), &mut out);
+    }
+    assert!(!canonical(&slave), "the TUI did not enter raw mode");
+    std::thread::sleep(Duration::from_millis(500));
+    // SAFETY: sending a signal to the child we started.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, signal) }, 0);
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the TUI did not quit on signal {signal}"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    collect(Instant::now() + Duration::from_millis(300), &mut out);
+    let tail = &out[out.len().saturating_sub(400)..];
+    let has = |seq: &[u8]| tail.windows(seq.len()).any(|w| w == seq);
+    assert!(has(b"\x1b[?1049l"), "alternate screen not left: {tail:?}");
+    assert!(has(b"\x1b[?25h"), "cursor not shown again: {tail:?}");
+    assert!(has(b"\x1b[?1000l"), "mouse capture not disabled: {tail:?}");
+    assert!(canonical(&slave), "the terminal was left in raw mode");
+    assert_eq!(status.code(), Some(128 + signal), "{status:?}");
+}
+
+#[test]
+fn sigterm_restores_the_terminal() {
+    ended_by(libc::SIGTERM);
+}
+
+#[test]
+fn sighup_restores_the_terminal() {
+    ended_by(libc::SIGHUP);
+}
+
+#[test]
+fn sigint_from_outside_restores_the_terminal() {
+    ended_by(libc::SIGINT);
+}
