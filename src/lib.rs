@@ -14,3 +14,4 @@ pub mod render;
 pub mod report;
 pub mod scene;
 pub mod tui;
+pub mod words;

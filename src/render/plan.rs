@@ -19,6 +19,45 @@ pub enum PlanPolicy {
     Everything,
 }
 
+/// Why a scene cannot use a feature.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reason {
+    NoLights,
+    NoReflective,
+    NoGlossy,
+    NoTextures,
+    NoVertexNormals,
+    PointLightsOnly,
+    NoEnvironment,
+}
+
+impl Reason {
+    pub fn long(self) -> &'static str {
+        match self {
+            Reason::NoLights => "no lights in scene",
+            Reason::NoReflective => "no material with ks > 0",
+            Reason::NoGlossy => "no glossy material (ks > 0 and Ns < 1000)",
+            Reason::NoTextures => "no textures in scene",
+            Reason::NoVertexNormals => "no vertex normals in scene",
+            Reason::PointLightsOnly => "point lights only",
+            Reason::NoEnvironment => "no environment map in scene",
+        }
+    }
+
+    /// At most 13 characters, for narrow panels.
+    pub fn short(self) -> &'static str {
+        match self {
+            Reason::NoLights => "no lights",
+            Reason::NoReflective => "no ks > 0",
+            Reason::NoGlossy => "no glossy",
+            Reason::NoTextures => "no textures",
+            Reason::NoVertexNormals => "no normals",
+            Reason::PointLightsOnly => "point lights",
+            Reason::NoEnvironment => "no env. map",
+        }
+    }
+}
+
 /// What the plan decided for one feature's stage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Decision {
@@ -26,7 +65,7 @@ pub enum Decision {
     /// Switched off by the user.
     Off,
     /// Enabled, but the scene has nothing it could change.
-    NotNeeded(&'static str),
+    NotNeeded(Reason),
     /// Enabled, but the feature it refines is not running.
     Needs(Feature),
 }
@@ -41,7 +80,7 @@ impl Decision {
         match self {
             Decision::On => "on".into(),
             Decision::Off => "off".into(),
-            Decision::NotNeeded(why) => format!("not needed: {why}"),
+            Decision::NotNeeded(why) => format!("not needed: {}", why.long()),
             Decision::Needs(f) => format!("off: needs {}", f.name()),
         }
     }
@@ -49,22 +88,18 @@ impl Decision {
 
 /// What the scene needs of one feature: `None` when it can use it, or the
 /// reason it cannot.
-pub fn not_needed(scene: &Scene, f: Feature) -> Option<&'static str> {
+pub fn not_needed(scene: &Scene, f: Feature) -> Option<Reason> {
     let any_reflective = scene.materials.iter().any(|m| m.reflective());
     let any_area = scene.lights.iter().any(|l| l.is_area());
     match f {
-        Feature::Shadows if scene.lights.is_empty() => Some("no lights in scene"),
-        Feature::Reflections if !any_reflective => Some("no material with ks > 0"),
-        Feature::Glossy if !scene.materials.iter().any(|m| m.glossy()) => {
-            Some("no glossy material (ks > 0 and Ns < 1000)")
-        }
-        Feature::Textures | Feature::Bilinear if !scene.has_textures() => {
-            Some("no textures in scene")
-        }
-        Feature::SmoothNormals if !scene.has_vertex_normals() => Some("no vertex normals in scene"),
-        Feature::SoftShadows if !any_area => Some("point lights only"),
+        Feature::Shadows if scene.lights.is_empty() => Some(Reason::NoLights),
+        Feature::Reflections if !any_reflective => Some(Reason::NoReflective),
+        Feature::Glossy if !scene.materials.iter().any(|m| m.glossy()) => Some(Reason::NoGlossy),
+        Feature::Textures | Feature::Bilinear if !scene.has_textures() => Some(Reason::NoTextures),
+        Feature::SmoothNormals if !scene.has_vertex_normals() => Some(Reason::NoVertexNormals),
+        Feature::SoftShadows if !any_area => Some(Reason::PointLightsOnly),
         Feature::Environment if !matches!(scene.environment, Environment::CubeMap(_)) => {
-            Some("no environment map in scene")
+            Some(Reason::NoEnvironment)
         }
         _ => None,
     }
@@ -296,7 +331,7 @@ mod tests {
         let all = Plan::new(&s, Features::all(), PlanPolicy::Everything);
         assert_eq!(
             pruned.decision(Feature::Textures),
-            Decision::NotNeeded("no textures in scene")
+            Decision::NotNeeded(Reason::NoTextures)
         );
         assert!(all.textures && all.glossy && all.environment && all.specular);
         assert!(!pruned.same_film(&all));

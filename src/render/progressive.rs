@@ -6,6 +6,8 @@
 //! Results depend only on (pixel, sample index, seed), never on threads:
 //! rows run in parallel, and a pass gives every pixel the same sample indices.
 
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
@@ -90,6 +92,8 @@ pub struct Progressive {
     /// Samples per pixel a pass adds (fewer when the stop leaves fewer);
     /// more than one keeps the per-pass overhead small on tiny images.
     pub samples_per_pass: u32,
+    /// Counts the rows each pass finishes, for a progress readout.
+    pub rows_done: Option<Arc<AtomicU32>>,
 }
 
 impl Progressive {
@@ -104,6 +108,7 @@ impl Progressive {
             rays: 0,
             seconds: 0.0,
             samples_per_pass: 1,
+            rows_done: None,
         }
     }
 
@@ -132,7 +137,11 @@ impl Progressive {
             .map_or(u32::MAX, |n| n.saturating_sub(self.film.spp));
         let samples = self.samples_per_pass.clamp(1, left.max(1));
         let start = Instant::now();
-        let rec: R = sample_rows(tracer, &mut self.film, samples, cancel);
+        if let Some(r) = &self.rows_done {
+            r.store(0, Ordering::Relaxed);
+        }
+        let rows = self.rows_done.as_deref();
+        let rec: R = sample_rows(tracer, &mut self.film, samples, cancel, rows);
         let ms = start.elapsed().as_secs_f64() * 1e3;
         let rays = rec.rays();
         self.rays += rays;
@@ -210,12 +219,13 @@ impl Progressive {
 }
 
 /// Adds `samples` samples to every pixel of `film`, rows in parallel;
-/// `cancel` is polled between rows.
+/// `cancel` is polled between rows and `rows_done` counts finished rows.
 fn sample_rows<R: Recorder + Default + Send + Merge>(
     tracer: &Tracer,
     film: &mut Film,
     samples: u32,
     cancel: &(dyn Fn() -> bool + Sync),
+    rows_done: Option<&AtomicU32>,
 ) -> R {
     let w = film.width as usize;
     let first = film.spp;
@@ -242,6 +252,9 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                         });
                     }
                 }
+            }
+            if let Some(r) = rows_done {
+                r.fetch_add(1, Ordering::Relaxed);
             }
             (rec, bad)
         })

@@ -26,6 +26,14 @@ use crate::render::debug_view::DebugView;
 use crate::render::{Decision, Feature, Features, Plan, Session, Worst};
 use crate::report::converge::load_reference;
 use crate::scene::Builder;
+use crate::words;
+
+/// How long a status message stays before the status line shows the
+/// state again.
+const MESSAGE_LIFE: Duration = Duration::from_secs(8);
+
+/// How often the progress of a slow pass is redrawn.
+const PROGRESS_EVERY: Duration = Duration::from_millis(250);
 
 /// BVH visualisation over the viewport.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -101,16 +109,24 @@ pub struct App {
     /// Draw the selected pixel's rays into the view.
     pub show_rays: bool,
     pub overlay: BvhOverlay,
+    /// The newest message for the status line, and when it was said; it
+    /// gives way to the state line after [`MESSAGE_LIFE`].
     pub status: String,
+    status_at: Instant,
     pub popup: Option<Popup>,
     pub jobs: Jobs,
     /// Where PNG exports go: the directory the TUI was started in.
     pub export_dir: PathBuf,
+    /// The export size `--size` asked for; otherwise exports take the
+    /// view's shape at the scene's size.
+    pub export_size: Option<(u32, u32)>,
     /// Terminal bytes per second, and the (time, total) it was last taken at.
     pub bytes_per_sec: f64,
     bytes_mark: (Instant, u64),
     /// The layout of the last update.
     pub layout: Layout,
+    /// When a slow pass's progress was last shown.
+    progress_shown: Instant,
     pub quit: bool,
     /// The `--reference` image, if any.
     pub reference: Option<Arc<Reference>>,
@@ -156,23 +172,13 @@ impl App {
             session.seed,
             reference.clone(),
         ))?;
-        let status = format!(
-            "{}: {} triangles, {} lights. Press ? for help.{}{}",
-            scene.name,
-            scene.geometry.triangle_count(),
-            scene.lights.len(),
-            match warnings.len() {
-                0 => String::new(),
-                n => format!(" {n} load warnings (printed above the TUI)."),
-            },
-            match &reference {
-                Some(r) => format!(
-                    " Reference {} ({}x{}): true error shown at the start view (r returns).",
-                    r.name, r.width, r.height
-                ),
-                None => String::new(),
-            }
-        );
+        let status = match &reference {
+            Some(r) => format!(
+                "Reference {} ({}x{}): the true error is shown at the start view (r returns to it).",
+                r.name, r.width, r.height
+            ),
+            None => String::new(),
+        };
         Ok(App {
             reach: 2.0 * scene.bounds().extent().length(),
             builder: scene.settings.builder,
@@ -189,12 +195,15 @@ impl App {
                 level: 0,
             },
             status,
+            status_at: Instant::now(),
             popup: None,
             jobs: Jobs::default(),
             export_dir: std::env::current_dir().unwrap_or_else(|_| PathBuf::from(".")),
+            export_size: None,
             bytes_per_sec: 0.0,
             bytes_mark: (Instant::now(), 0),
             layout: Layout::default(),
+            progress_shown: Instant::now(),
             quit: false,
             reference,
             resample_noted: None,
@@ -211,6 +220,42 @@ impl App {
         } else {
             Mode::View
         }
+    }
+
+    /// Puts `text` on the status line for a while.
+    pub fn say(&mut self, text: impl Into<String>) {
+        self.status = text.into();
+        self.status_at = Instant::now();
+    }
+
+    /// What the status line shows: the newest message while it lasts, else
+    /// the state (scene, mode, warnings).
+    pub fn status_line(&self) -> String {
+        if !self.status.is_empty() && self.status_at.elapsed() < MESSAGE_LIFE {
+            return self.status.clone();
+        }
+        let scene = &self.session.scene;
+        let mut parts = vec![format!(
+            "{}: {}, {}",
+            scene.name,
+            words::count(
+                scene.geometry.triangle_count() as u64,
+                "triangle",
+                "triangles"
+            ),
+            words::count(scene.lights.len() as u64, "light", "lights")
+        )];
+        if self.inspector.select_mode {
+            parts.push("select mode (v or Esc leaves)".into());
+        }
+        if !self.warnings.is_empty() {
+            parts.push(format!(
+                "{} (W lists them)",
+                words::count(self.warnings.len() as u64, "load warning", "load warnings")
+            ));
+        }
+        parts.push("? help".into());
+        parts.join(" · ")
     }
 
     pub fn generation(&self) -> u64 {
@@ -235,6 +280,8 @@ impl App {
         }
         self.refresh_inspector();
         if let Some(p) = &mut self.popup {
+            let width = l.main.width.saturating_sub(6);
+            p.set_width(width as usize);
             let rows = l.popup(p).height.saturating_sub(2);
             p.set_visible(rows as usize);
         }
@@ -319,20 +366,22 @@ impl App {
         match a {
             Action::Orbit(yaw, pitch) => {
                 self.camera.orbit(yaw, pitch);
+                self.status.clear();
                 self.send_view();
             }
             Action::Move(r, u, f) => {
                 self.camera.pan(r, u, f);
+                self.status.clear();
                 self.send_view();
             }
             Action::Fov(d) => {
                 let fov = self.camera.zoom(d);
-                self.status = format!("field of view {fov:.0}°");
+                self.say(format!("field of view {fov:.0}°"));
                 self.send_view();
             }
             Action::ResetView => {
                 self.camera.reset();
-                self.status = "view reset".into();
+                self.say("view reset");
                 self.send_view();
             }
             Action::Toggle(f) => self.toggle(f),
@@ -342,7 +391,10 @@ impl App {
                     Builder::Median => Builder::Sah,
                 };
                 self.link.rebuild(self.builder);
-                self.status = format!("rebuilding the BVH with the {} builder...", self.builder);
+                self.say(format!(
+                    "rebuilding the BVH with the {} builder...",
+                    self.builder
+                ));
             }
             Action::SelectMode => {
                 let s = &mut self.inspector;
@@ -351,13 +403,16 @@ impl App {
                     let (w, h) = self.view_size;
                     self.select(w / 2, h / 2, 0);
                 }
-                self.status = if self.inspector.select_mode {
-                    "select mode: hjkl or arrows move the cursor, v or Esc leaves".into()
+                self.say(if self.inspector.select_mode {
+                    "select mode: hjkl or arrows move the cursor, v or Esc leaves"
                 } else {
-                    "view mode".into()
-                };
+                    "view mode"
+                });
             }
-            Action::Back => self.inspector.select_mode = false,
+            Action::Back => {
+                self.inspector.select_mode = false;
+                self.status.clear();
+            }
             Action::Cursor(dx, dy) => {
                 let (w, h) = self.view_size;
                 let (x, y) = self
@@ -371,7 +426,7 @@ impl App {
             Action::Fold => {
                 self.refresh_inspector();
                 if !self.inspector.fold() {
-                    self.status = "nothing to fold below the debug cursor".into();
+                    self.say("nothing to fold below the debug cursor");
                 }
             }
             Action::Line(n) => {
@@ -386,14 +441,13 @@ impl App {
             Action::Worst(w) => self.jump_to_worst(w),
             Action::Rays => {
                 self.show_rays = !self.show_rays;
-                self.status = match (self.show_rays, self.inspector.selected) {
-                    (false, _) => "rays off".into(),
+                self.say(match (self.show_rays, self.inspector.selected) {
+                    (false, _) => "rays off",
                     (true, Some(_)) => {
                         "rays of the selected pixel: shadow rays red when occluded, white when clear"
-                            .into()
                     }
-                    (true, None) => "rays on: select a pixel (v, or click) to see its rays".into(),
-                };
+                    (true, None) => "rays on: select a pixel (v, or click) to see its rays",
+                });
             }
             Action::Overlay => {
                 self.overlay.mode = self.overlay.mode.next();
@@ -407,9 +461,24 @@ impl App {
             }
             Action::SavePng => self.save_png(),
             Action::Stability => {
-                self.status = self.jobs.stability(self.session.scene.clone());
+                let said = self.jobs.stability(self.session.scene.clone());
+                self.say(said);
             }
             Action::Help => self.popup = Some(popup::help()),
+            Action::Warnings => {
+                self.popup = Some(Popup::new(
+                    format!(
+                        "{} loading {}",
+                        words::count(self.warnings.len() as u64, "warning", "warnings"),
+                        self.session.scene.name
+                    ),
+                    if self.warnings.is_empty() {
+                        vec!["the scene loaded without warnings".into()]
+                    } else {
+                        self.warnings.clone()
+                    },
+                ))
+            }
             Action::ScrollPopup(n) => {
                 if let Some(p) = &mut self.popup {
                     p.scroll_by(n as i64);
@@ -428,7 +497,7 @@ impl App {
 
     fn overlay_changed(&mut self) {
         self.link.set_overlay(self.overlay.view());
-        self.status = format!("BVH overlay: {}", self.overlay.name());
+        self.say(format!("BVH overlay: {}", self.overlay.name()));
     }
 
     /// The decision the Features panel shows for `f`.
@@ -441,14 +510,17 @@ impl App {
         let plan = self.session.plan_for(self.features);
         let same = plan.same_stages(&self.plan);
         let state = if self.features.on(f) { "on" } else { "off" };
-        self.status = match crate::render::plan::not_needed(&self.session.scene, f) {
-            Some(why) if plan.policy == crate::render::PlanPolicy::Prune => format!(
-                "{} {state}: not needed: {why}, so the image does not change",
-                f.name()
-            ),
-            _ if same => format!("{} {state}: no change to the image", f.name()),
-            _ => format!("{} {state}", f.name()),
-        };
+        self.say(
+            match crate::render::plan::not_needed(&self.session.scene, f) {
+                Some(why) if plan.policy == crate::render::PlanPolicy::Prune => format!(
+                    "{} {state}: not needed: {}, so the image does not change",
+                    f.name(),
+                    why.long()
+                ),
+                _ if same => format!("{} {state}: no change to the image", f.name()),
+                _ => format!("{} {state}", f.name()),
+            },
+        );
         self.plan = plan;
         if !same {
             self.send_view();
@@ -462,7 +534,7 @@ impl App {
 
     fn jump_to_worst(&mut self, w: Worst) {
         let Some(f) = self.link.full_frame() else {
-            self.status = "no pass has finished for this view yet".into();
+            self.say("no pass has finished for this view yet");
             return;
         };
         let (found, spp) = (f.worst.get(w), f.spp);
@@ -474,24 +546,30 @@ impl App {
         match found {
             Some((x, y, k)) => {
                 self.select(x, y, k);
-                self.status = format!("worst pixel ({what}): ({x}, {y}), sample {k}");
+                self.say(format!("worst pixel ({what}): ({x}, {y}), sample {k}"));
             }
             None if w == Worst::Nan => {
-                self.status = format!("no pixel had a NaN or infinite sample in {spp} spp");
+                self.say(format!(
+                    "no pixel had a NaN or infinite sample in {spp} spp"
+                ));
             }
             None => {
-                self.status = format!("no pixel varies between samples in {spp} spp");
+                self.say(format!("no pixel varies between samples in {spp} spp"));
             }
         }
     }
 
     fn save_png(&mut self) {
-        self.status = self.jobs.export(export::Request {
+        let scene_size = (self.session.width, self.session.height);
+        let size = export::size_for(self.view_size, self.export_size, scene_size);
+        let said = self.jobs.export(export::Request {
             session: self.session.clone(),
             camera: self.camera.camera,
             plan: self.plan.clone(),
+            size,
             dir: self.export_dir.clone(),
         });
+        self.say(said);
     }
 
     /// Takes what the worker and the jobs have sent; true when the screen
@@ -503,7 +581,7 @@ impl App {
         }
         if let Some(done) = self.jobs.poll(&self.session.scene.name) {
             if let Some(s) = done.status {
-                self.status = s;
+                self.say(s);
             }
             if let Some(p) = done.popup {
                 self.popup = Some(p);
@@ -511,6 +589,16 @@ impl App {
             changed = true;
         }
         changed |= self.jobs.busy();
+        // A slow pass shows its progress a few times a second.
+        if self.link.slow_pass().is_some() && self.progress_shown.elapsed() >= PROGRESS_EVERY {
+            self.progress_shown = Instant::now();
+            changed = true;
+        }
+        // A message that has just run its time gives way to the state.
+        if !self.status.is_empty() && self.status_at.elapsed() >= MESSAGE_LIFE {
+            self.status.clear();
+            changed = true;
+        }
         Ok(changed)
     }
 
@@ -523,10 +611,11 @@ impl App {
                 self.link.keep_frame(f)
             }
             Msg::Bvh(b) => {
-                self.status = format!(
-                    "BVH rebuilt with the {} builder in {:.1} ms",
-                    b.stats.builder, b.stats.build_ms
-                );
+                self.say(format!(
+                    "BVH rebuilt with the {} builder in {}",
+                    b.stats.builder,
+                    words::ms(b.stats.build_ms)
+                ));
                 self.session.bvh = b;
                 self.link.rebuilding = false;
                 let depth = self.session.bvh.stats.depth;
@@ -535,7 +624,7 @@ impl App {
             }
             Msg::Overlay(o) => {
                 if let Err(e) = &o.layer {
-                    self.status = format!("BVH overlay: {e}");
+                    self.say(format!("BVH overlay: {e}"));
                 }
                 self.link.overlay = Some(o);
                 true
@@ -555,7 +644,7 @@ impl App {
         }
         self.resample_noted = Some((f.width, f.height));
         let k = ((r.width as f64 / f.width as f64).round() as u32).max(1);
-        self.status = format!(
+        self.say(format!(
             "For an exact true error render the reference at {}x{} ({k}x the {}x{} view): this {}x{} one is resampled, which adds error at edges.",
             k * f.width,
             k * f.height,
@@ -563,7 +652,7 @@ impl App {
             f.height,
             r.width,
             r.height,
-        );
+        ));
     }
 
     /// Waits until a full pass of the current view has arrived; false on timeout.

@@ -13,12 +13,13 @@ use anyhow::{bail, Context, Result};
 use crate::render::{output, post, Ended, Plan, Progressive, Session, Stop};
 use crate::scene::Camera;
 
-/// What to export: the session's scene at its size (the export size) and
-/// seed, seen from `camera` with `plan`.
+/// What to export: the session's scene with its seed, seen from `camera`
+/// with `plan`, at `size`.
 pub struct Request {
     pub session: Session,
     pub camera: Camera,
     pub plan: Plan,
+    pub size: (u32, u32),
     /// Where the file goes.
     pub dir: PathBuf,
 }
@@ -76,7 +77,7 @@ impl Job {
         let cancel = Arc::new(AtomicBool::new(false));
         let (tx, result) = mpsc::channel();
         let (done, stop) = (done_spp.clone(), cancel.clone());
-        let size = (r.session.width, r.session.height);
+        let size = r.size;
         let thread = std::thread::Builder::new()
             .name("rayterm-export".into())
             .spawn(move || {
@@ -121,8 +122,8 @@ impl Drop for Job {
 
 fn render(r: &Request, spp: u32, done: &AtomicU32, stop: &AtomicBool) -> Result<Saved> {
     let s = &r.session;
-    let (w, h) = (s.width, s.height);
-    let tracer = s.tracer_for(&r.plan, &r.camera, (w, h));
+    let (w, h) = r.size;
+    let tracer = s.tracer_for(&r.plan, &r.camera, r.size);
     let cancel = || stop.load(Ordering::Relaxed);
     let mut p = Progressive::new(w, h);
     let o = p.run(&tracer, &Stop::spp(spp), &cancel, |film, _| {
@@ -141,9 +142,36 @@ fn render(r: &Request, spp: u32, done: &AtomicU32, stop: &AtomicBool) -> Result<
     })
 }
 
+/// The export size for a view of `view` pixels: `asked` (`--size`) when
+/// given, else the view's shape with the long side of `scene` (the scene's
+/// size), so the picture shows what the view shows.
+pub fn size_for(view: (u32, u32), asked: Option<(u32, u32)>, scene: (u32, u32)) -> (u32, u32) {
+    if let Some(s) = asked {
+        return s;
+    }
+    let (vw, vh) = (view.0.max(1) as f64, view.1.max(1) as f64);
+    let long = scene.0.max(scene.1) as f64;
+    let (w, h) = if vw >= vh {
+        (long, long * vh / vw)
+    } else {
+        (long * vw / vh, long)
+    };
+    ((w.round() as u32).max(1), (h.round() as u32).max(1))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn exports_keep_the_views_shape() {
+        assert_eq!(size_for((114, 64), None, (800, 800)), (800, 449));
+        assert_eq!(size_for((64, 114), None, (1280, 720)), (719, 1280));
+        assert_eq!(
+            size_for((114, 64), Some((300, 200)), (800, 800)),
+            (300, 200)
+        );
+    }
 
     #[test]
     fn stems_are_safe_file_names() {

@@ -33,7 +33,7 @@ impl Jobs {
         match export::Job::start(r) {
             Ok(job) => {
                 let s = format!(
-                    "exporting {}x{} PNG at {} spp...",
+                    "exporting this view as a {}x{} PNG at {} spp...",
                     job.size.0, job.size.1, job.target_spp
                 );
                 self.export = Some(job);
@@ -121,13 +121,16 @@ impl Jobs {
                         rows.len() - failed,
                         rows.len()
                     )),
-                    popup: Some(Popup::new(
-                        format!("stability battery: {scene_name} ({failed} failed)"),
-                        stability::format_table(&rows)
-                            .lines()
-                            .map(str::to_string)
-                            .collect(),
-                    )),
+                    popup: Some(
+                        Popup::new(
+                            format!("stability battery: {scene_name} ({failed} failed)"),
+                            stability::format_table(&rows)
+                                .lines()
+                                .map(str::to_string)
+                                .collect(),
+                        )
+                        .with_header(1),
+                    ),
                 }
             }
             Err(e) => Finished {

@@ -113,6 +113,8 @@ pub enum Action {
     SavePng,
     Stability,
     Help,
+    /// List what loading the scene warned about.
+    Warnings,
     /// Scroll the popup by lines, or by pages.
     ScrollPopup(i8),
     PagePopup(i8),
@@ -305,6 +307,12 @@ pub const ROWS: &[Row] = &[
         keys: &[(K::Char('p'), A::SavePng)],
         help: "save a PNG of this view (rendered in the background)",
         hint: Some("png"),
+    },
+    Row {
+        mode: Mode::Any,
+        keys: &[(K::Char('W'), A::Warnings)],
+        help: "list the scene's load warnings",
+        hint: None,
     },
     Row {
         mode: Mode::Any,

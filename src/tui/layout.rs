@@ -13,6 +13,8 @@ use super::widgets::panels;
 pub const MIN_SIZE: (u16, u16) = (80, 24);
 /// Height of a render panel with a readable chart.
 const RENDER_WITH_CHART: u16 = 16;
+/// The keys every popup takes, on its bottom edge.
+pub const POPUP_HINT: &str = " ↑↓ PgUp PgDn scroll · Esc q close ";
 /// Height of the BVH panel.
 const BVH_PANEL: u16 = 5;
 
@@ -105,15 +107,18 @@ impl Layout {
     pub fn popup(&self, p: &Popup) -> Rect {
         let area = self.main;
         let width = p
-            .lines
+            .header
             .iter()
+            .chain(&p.lines)
             .map(|l| l.chars().count())
             .max()
             .unwrap_or(0)
-            .max(p.title.chars().count()) as u16
+            .max(p.title.chars().count())
+            .max(POPUP_HINT.chars().count()) as u16
             + 4;
         let w = width.min(area.width.saturating_sub(2));
-        let h = (p.lines.len() as u16 + 2).min(area.height.saturating_sub(2));
+        let rows = (p.header.len() + p.lines.len()) as u16;
+        let h = (rows + 2).min(area.height.saturating_sub(2));
         Rect::new(
             area.x + (area.width - w) / 2,
             area.y + (area.height - h) / 2,

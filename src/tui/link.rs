@@ -79,6 +79,13 @@ impl RenderLink {
             .filter(|o| o.generation == self.generation)
     }
 
+    /// (rows done, rows, seconds) of a pass of the current view that has
+    /// run longer than [`SLOW_PASS`].
+    pub fn slow_pass(&self) -> Option<(u32, u32, f64)> {
+        let (generation, done, rows, secs) = self.worker.progress.current()?;
+        (generation == self.generation && secs >= SLOW_PASS).then_some((done, rows, secs))
+    }
+
     /// The next message from the worker, if one is waiting. Fails when the
     /// worker has stopped.
     pub fn try_recv(&self) -> Result<Option<Msg>> {
@@ -115,6 +122,9 @@ impl RenderLink {
         due
     }
 }
+
+/// A pass running longer than this gets a progress readout.
+pub const SLOW_PASS: f64 = 0.5;
 
 /// How often a pass at `spp` samples per pixel is worth showing: every
 /// frame up to 32 spp, then less often as each pass changes less, up to

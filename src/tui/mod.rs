@@ -58,6 +58,10 @@ pub fn run(
     if !io::stdout().is_terminal() {
         bail!("the TUI needs an interactive terminal; `rayterm render` writes images without one");
     }
+    if io::stderr().is_terminal() {
+        // Large scenes take seconds to load; say so before the screen changes.
+        eprintln!("rayterm: loading {}...", req.spec);
+    }
     let (session, warnings) = Session::open(req)?;
     for w in &warnings {
         eprintln!("warning: {w}");
@@ -65,6 +69,7 @@ pub fn run(
     let color =
         color.unwrap_or_else(|| ColorMode::detect(std::env::var("COLORTERM").ok().as_deref()));
     let mut app = App::new(session, warnings, color, reference)?;
+    app.export_size = req.size;
     // SIGTERM, SIGHUP and an outside SIGINT quit like `q`: the loop sees the
     // flag and the guard below restores the terminal.
     crate::interrupt::flag();

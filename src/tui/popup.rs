@@ -4,7 +4,14 @@ use super::keys;
 
 pub struct Popup {
     pub title: String,
+    /// Lines that stay at the top while the rest scrolls (a table's header).
+    pub header: Vec<String>,
+    /// The text as given, and as shown (wrapped to the popup's width when
+    /// `wrap_indent` is set; tables are cut instead, to keep their columns).
+    text: Vec<String>,
     pub lines: Vec<String>,
+    /// Continuation lines start this far in.
+    pub wrap_indent: Option<usize>,
     /// First line shown.
     pub scroll: usize,
     /// Lines that fit, set from the layout.
@@ -15,7 +22,10 @@ impl Popup {
     pub fn new(title: String, lines: Vec<String>) -> Self {
         Self {
             title,
+            header: Vec::new(),
+            text: lines.clone(),
             lines,
+            wrap_indent: None,
             scroll: 0,
             visible: 1,
         }
@@ -27,8 +37,30 @@ impl Popup {
         self.clamp();
     }
 
-    pub fn set_visible(&mut self, visible: usize) {
-        self.visible = visible.max(1);
+    /// Sets the rows inside the frame; the header takes its share.
+    pub fn set_visible(&mut self, rows: usize) {
+        self.visible = rows.saturating_sub(self.header.len()).max(1);
+        self.clamp();
+    }
+
+    /// The first `n` lines become a header that does not scroll.
+    pub fn with_header(mut self, n: usize) -> Self {
+        let n = n.min(self.text.len());
+        self.header = self.text.drain(..n).collect();
+        self.lines = self.text.clone();
+        self
+    }
+
+    /// Wraps the text to `width` columns when it wraps at all.
+    pub fn set_width(&mut self, width: usize) {
+        let Some(indent) = self.wrap_indent else {
+            return;
+        };
+        self.lines = self
+            .text
+            .iter()
+            .flat_map(|l| wrap(l, width.max(indent + 8), indent))
+            .collect();
         self.clamp();
     }
 
@@ -37,6 +69,26 @@ impl Popup {
             .scroll
             .min(self.lines.len().saturating_sub(self.visible));
     }
+}
+
+/// `line` broken at spaces into lines of at most `width` characters, the
+/// continuations indented by `indent`.
+fn wrap(line: &str, width: usize, indent: usize) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    // Splitting at single spaces keeps runs of spaces (the key column).
+    for (i, word) in line.split(' ').enumerate() {
+        let sep = if i == 0 { "" } else { " " };
+        let len = cur.chars().count();
+        if !word.is_empty() && len > indent && len + 1 + word.chars().count() > width {
+            out.push(std::mem::replace(&mut cur, " ".repeat(indent)));
+        } else {
+            cur.push_str(sep);
+        }
+        cur.push_str(word);
+    }
+    out.push(cur);
+    out
 }
 
 /// The help, generated from the key table.
@@ -52,5 +104,27 @@ pub fn help() -> Popup {
         .collect();
     lines.push(String::new());
     lines.push("mouse: click a pixel to inspect it; the wheel scrolls the debug pane".into());
-    Popup::new("keys (↑↓ scroll, Esc closes)".into(), lines)
+    let mut p = Popup::new("keys".into(), lines);
+    p.wrap_indent = Some(w + 2);
+    p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn long_lines_wrap_under_their_text() {
+        let lines = wrap("q Ctrl-C  quit the application now please", 22, 10);
+        assert_eq!(
+            lines,
+            [
+                "q Ctrl-C  quit the",
+                "          application",
+                "          now please"
+            ]
+        );
+        assert!(lines.iter().all(|l| l.chars().count() <= 22));
+        assert_eq!(wrap("short", 20, 4), ["short"]);
+    }
 }

@@ -21,7 +21,9 @@ fn app(spec: &str, off: &[Feature]) -> App {
         ..SceneRequest::new(spec)
     };
     let (session, warnings) = Session::open(&req).unwrap();
-    App::new(session, warnings, ColorMode::Truecolor, None).unwrap()
+    let mut app = App::new(session, warnings, ColorMode::Truecolor, None).unwrap();
+    app.export_size = req.size;
+    app
 }
 
 fn terminal(w: u16, h: u16) -> Terminal<TestBackend> {
@@ -72,7 +74,7 @@ fn a_frame_shows_every_panel() {
         assert!(s.contains(title), "{title:?} missing in\n{s}");
     }
     assert!(s.contains("spp") && s.contains("Mrays/s"), "{s}");
-    assert!(s.contains("per ray:"), "{s}");
+    assert!(s.contains("wide nodes"), "{s}");
     // The viewport is half blocks with two colours each.
     let b = t.backend().buffer();
     let v = app.layout.image;
@@ -100,7 +102,7 @@ fn toggling_a_feature_changes_the_features_panel() {
         "{s}"
     );
     // Cornell has no textures: the panel says so, and toggling says so.
-    assert!(line_with(&s, "textures").contains("not needed"), "{s}");
+    assert!(line_with(&s, "4 textures").contains("no textures"), "{s}");
     let before = app.generation();
     app.handle_key(Key::Char('4'));
     assert_eq!(
@@ -316,6 +318,7 @@ fn no_plan_runs_every_enabled_stage_in_the_view_and_its_export() {
     };
     let (session, warnings) = Session::open(&req).unwrap();
     let mut app = App::new(session, warnings, ColorMode::Truecolor, None).unwrap();
+    app.export_size = req.size;
     let mut t = terminal(100, 30);
     let s = settle(&mut t, &mut app);
     // Cornell has no textures, glossy materials or environment map, yet

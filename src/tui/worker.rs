@@ -6,9 +6,9 @@
 //! waits for a pass. BVH overlays are computed here too, once per view, so
 //! drawing never traverses the BVH.
 
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::Instant;
 
@@ -102,6 +102,45 @@ pub enum Truth {
     NoOverlap,
 }
 
+/// The pass in flight, for a progress readout while a pass is slow.
+#[derive(Debug, Default)]
+pub struct PassProgress {
+    pub generation: AtomicU64,
+    /// Rows finished and rows in all.
+    pub rows_done: Arc<AtomicU32>,
+    pub rows: AtomicU32,
+    /// When the pass began; `None` between passes.
+    pub started: Mutex<Option<Instant>>,
+}
+
+impl PassProgress {
+    /// (generation, rows done, rows, seconds running) of the pass in flight.
+    pub fn current(&self) -> Option<(u64, u32, u32, f64)> {
+        let started = (*self.started.lock().ok()?)?;
+        Some((
+            self.generation.load(Ordering::Relaxed),
+            self.rows_done.load(Ordering::Relaxed),
+            self.rows.load(Ordering::Relaxed),
+            started.elapsed().as_secs_f64(),
+        ))
+    }
+
+    fn begin(&self, generation: u64, rows: u32) {
+        self.generation.store(generation, Ordering::Relaxed);
+        self.rows_done.store(0, Ordering::Relaxed);
+        self.rows.store(rows, Ordering::Relaxed);
+        if let Ok(mut s) = self.started.lock() {
+            *s = Some(Instant::now());
+        }
+    }
+
+    fn end(&self) {
+        if let Ok(mut s) = self.started.lock() {
+            *s = None;
+        }
+    }
+}
+
 /// Mean BVH work per ray (camera and shadow rays) of a full pass.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PerRay {
@@ -157,8 +196,11 @@ pub struct Worker {
     started: Instant,
     history: Vec<(f64, f64)>,
     per_ray: Option<PerRay>,
-    /// Time of the last full pass, to decide whether coarse passes pay off.
-    last_full_ms: Option<f64>,
+    /// Time of the last full pass and whether it used the BVH, to decide
+    /// whether coarse passes pay off.
+    last_full_ms: Option<(f64, bool)>,
+    /// The pass in flight, shared with the app.
+    pub progress: Arc<PassProgress>,
     reference: Option<Arc<Reference>>,
     truth: Truth,
     /// The reference on the view's pixels while `truth` is `Compared`.
@@ -192,6 +234,7 @@ impl Worker {
             history: Vec::new(),
             per_ray: None,
             last_full_ms: None,
+            progress: Arc::default(),
             reference,
             truth: Truth::NoReference,
             reference_pixels: Vec::new(),
@@ -246,7 +289,13 @@ impl Worker {
     fn restart(&mut self) {
         let (w, h) = self.view.as_ref().map_or((0, 0), View::size);
         self.film = Progressive::new(w, h);
-        self.coarse_pending = self.last_full_ms.is_none_or(|ms| ms > COARSE_ABOVE_MS);
+        self.film.rows_done = Some(self.progress.rows_done.clone());
+        // A pass is slow when the last one was, or when it is the first
+        // without the BVH (brute force is orders of magnitude slower).
+        let bvh = self.view.as_ref().is_some_and(|v| v.plan.bvh);
+        self.coarse_pending = self
+            .last_full_ms
+            .is_none_or(|(ms, with_bvh)| ms > COARSE_ABOVE_MS || with_bvh != bvh);
         self.started = Instant::now();
         self.history.clear();
         self.per_ray = None;
@@ -361,9 +410,11 @@ impl Worker {
             });
             pass
         } else {
-            self.film.pass(&t, &Self::stop(), cancel)?
+            let pass = self.film.pass(&t, &Self::stop(), cancel);
+            self.progress.end();
+            pass?
         };
-        self.last_full_ms = Some(pass.ms);
+        self.last_full_ms = Some((pass.ms, view.plan.bvh));
         self.last_mrays = pass.mrays_per_s();
         let elapsed = self.started.elapsed().as_secs_f64();
         let error = self.film.film.relative_error();
@@ -403,7 +454,7 @@ impl Worker {
             pre_bloom: shown.before_bloom,
             coarse: false,
             spp: film.spp,
-            pass_ms: self.last_full_ms.unwrap_or(0.0),
+            pass_ms: self.last_full_ms.map_or(0.0, |l| l.0),
             mrays: self.last_mrays,
             error: film.relative_error(),
             exact: view.plan.deterministic,
@@ -424,7 +475,11 @@ impl Worker {
         let (cw, ch) = (view.width.div_ceil(COARSE), view.height.div_ceil(COARSE));
         let t = self.tracer(view, (cw, ch));
         let mut small = Progressive::new(cw, ch);
-        let pass = small.pass(&t, &Stop::spp(1), cancel)?;
+        small.rows_done = Some(self.progress.rows_done.clone());
+        self.progress.begin(self.generation, ch);
+        let pass = small.pass(&t, &Stop::spp(1), cancel);
+        self.progress.end();
+        let pass = pass?;
         let small = small.film.image();
         let mut image = Vec::with_capacity((view.width * view.height) as usize);
         for y in 0..view.height {
@@ -468,6 +523,7 @@ impl Worker {
 pub struct Handle {
     tx: Sender<Cmd>,
     pub rx: Receiver<Msg>,
+    pub progress: Arc<PassProgress>,
     /// Generation of the newest command; passes of older ones stop.
     latest: Arc<AtomicU64>,
     thread: Option<JoinHandle<()>>,
@@ -479,6 +535,7 @@ pub fn spawn(worker: Worker) -> Result<Handle> {
     let (msg_tx, rx) = mpsc::channel();
     let latest = Arc::new(AtomicU64::new(0));
     let seen = latest.clone();
+    let progress = worker.progress.clone();
     let thread = std::thread::Builder::new()
         .name("rayterm-render".into())
         .spawn(move || run(worker, cmd_rx, msg_tx, seen))
@@ -486,6 +543,7 @@ pub fn spawn(worker: Worker) -> Result<Handle> {
     Ok(Handle {
         tx,
         rx,
+        progress,
         latest,
         thread: Some(thread),
     })

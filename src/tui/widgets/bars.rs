@@ -8,13 +8,13 @@ use ratatui::Frame;
 
 use crate::tui::app::App;
 use crate::tui::keys;
-use crate::tui::layout::MIN_SIZE;
+use crate::tui::layout::{MIN_SIZE, POPUP_HINT};
 use crate::tui::popup::Popup;
 
 pub fn status(f: &mut Frame, area: Rect, app: &App) {
     let text = match app.jobs.export_progress() {
-        Some(p) => format!("{p} · {}", app.status),
-        None => app.status.clone(),
+        Some(p) => format!("{p} · {}", app.status_line()),
+        None => app.status_line(),
     };
     f.render_widget(
         Paragraph::new(text).style(Style::new().bg(Color::DarkGray).fg(Color::White)),
@@ -22,28 +22,56 @@ pub fn status(f: &mut Frame, area: Rect, app: &App) {
     );
 }
 
+/// As many whole hints as fit, in the key table's order (help and quit
+/// first); `?` lists the rest.
 pub fn hints(f: &mut Frame, area: Rect, app: &App) {
     let key = Style::new().fg(Color::Black).bg(Color::Gray);
-    let spans: Vec<Span> = keys::hints(app.mode())
-        .into_iter()
-        .flat_map(|(k, h)| [Span::styled(k, key), Span::raw(format!(" {h} "))])
-        .collect();
+    let mut left = area.width as usize;
+    let mut spans = Vec::new();
+    for (k, h) in keys::hints(app.mode()) {
+        let text = format!(" {h} ");
+        let need = k.chars().count() + text.chars().count();
+        if need > left {
+            break;
+        }
+        left -= need;
+        spans.push(Span::styled(k, key));
+        spans.push(Span::raw(text));
+    }
     f.render_widget(Paragraph::new(Line::from(spans)), area);
 }
 
 pub fn popup(f: &mut Frame, r: Rect, p: &Popup) {
+    let bold = Style::new().add_modifier(Modifier::BOLD);
     let text: Vec<Line> = p
-        .lines
+        .header
         .iter()
-        .skip(p.scroll)
-        .map(|l| Line::from(l.as_str()))
+        .map(|l| Line::styled(l.as_str(), bold))
+        .chain(
+            p.lines
+                .iter()
+                .skip(p.scroll)
+                .map(|l| Line::from(l.as_str())),
+        )
         .collect();
+    let shown = if p.lines.len() > p.visible {
+        format!(
+            " lines {}-{} of {} ",
+            p.scroll + 1,
+            (p.scroll + p.visible).min(p.lines.len()),
+            p.lines.len()
+        )
+    } else {
+        String::new()
+    };
     f.render_widget(Clear, r);
     f.render_widget(
         Paragraph::new(text).block(
             Block::bordered()
                 .title(format!(" {} ", p.title))
-                .title_style(Style::new().add_modifier(Modifier::BOLD)),
+                .title_style(bold)
+                .title_bottom(Line::from(POPUP_HINT).right_aligned())
+                .title_bottom(Line::from(shown).left_aligned()),
         ),
         r,
     );

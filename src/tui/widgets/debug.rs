@@ -46,7 +46,8 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App) {
     if lines.is_empty() {
         f.render_widget(
             Paragraph::new("select a pixel (v, then hjkl or arrows; or click it) to see its rays")
-                .style(Style::new().fg(Color::DarkGray)),
+                .style(Style::new().fg(Color::DarkGray))
+                .wrap(ratatui::widgets::Wrap { trim: true }),
             inner,
         );
         return;

@@ -8,31 +8,18 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::{Axis, Block, Borders, Chart, Dataset, GraphType, Paragraph};
 use ratatui::Frame;
 
+use crate::render::plan::not_needed;
 use crate::render::{Decision, Feature};
 use crate::tui::app::App;
 use crate::tui::keys::{self, Action};
 use crate::tui::worker::{Snapshot, Truth};
+use crate::words::{self, si};
 
 fn panel(title: String) -> Block<'static> {
     Block::new()
         .borders(Borders::TOP)
         .title(title)
         .title_style(Style::new().add_modifier(Modifier::BOLD))
-}
-
-/// `1234567` as `1.23M`.
-pub fn si(x: f64) -> String {
-    let (v, unit) = match x.abs() {
-        a if a >= 1e9 => (x / 1e9, "G"),
-        a if a >= 1e6 => (x / 1e6, "M"),
-        a if a >= 1e3 => (x / 1e3, "k"),
-        _ => (x, ""),
-    };
-    if unit.is_empty() {
-        format!("{v:.0}")
-    } else {
-        format!("{v:.2}{unit}")
-    }
 }
 
 pub fn bvh(f: &mut Frame, area: Rect, app: &App) {
@@ -42,17 +29,28 @@ pub fn bvh(f: &mut Frame, area: Rect, app: &App) {
     } else {
         format!(" BVH: {}, {} triangles ", s.builder, s.triangles)
     };
+    let room = area.width as usize;
     let per_ray = match app.current_frame().and_then(|f| f.per_ray) {
-        Some(p) if app.plan.bvh => format!(
-            "per ray: {:.1} nodes, {:.1} tests",
-            p.nodes, p.triangle_tests
-        ),
+        Some(p) if app.plan.bvh => {
+            let long = format!(
+                "per ray: {:.1} wide nodes, {:.1} triangle tests",
+                p.nodes, p.triangle_tests
+            );
+            if long.chars().count() <= room {
+                long
+            } else {
+                format!(
+                    "ray: {:.1} wide nodes {:.1} tests",
+                    p.nodes, p.triangle_tests
+                )
+            }
+        }
         _ if !app.plan.bvh => "per ray: BVH off (brute force)".into(),
         _ => "per ray: measuring...".into(),
     };
     let text = vec![
         Line::from(format!(
-            "nodes {} leaves {} depth {}",
+            "binary: {} nodes {} leaves depth {}",
             s.nodes, s.leaves, s.depth
         )),
         Line::from(format!(
@@ -60,12 +58,8 @@ pub fn bvh(f: &mut Frame, area: Rect, app: &App) {
             s.max_leaf, s.mean_leaf, s.sah_cost
         )),
         Line::from(format!(
-            "build {} ms, {} tris/s",
-            if s.build_ms < 10.0 {
-                format!("{:.2}", s.build_ms)
-            } else {
-                format!("{:.0}", s.build_ms)
-            },
+            "build {}, {} tris/s",
+            words::ms(s.build_ms),
             si(s.triangles_per_second())
         )),
         Line::from(per_ray),
@@ -74,48 +68,55 @@ pub fn bvh(f: &mut Frame, area: Rect, app: &App) {
 }
 
 /// The features panel's lines for a panel `width` wide. With `wrap`, a
-/// reason too long for the line goes on its own indented line.
+/// reason too long for the line goes on its own indented line; without,
+/// reasons too long take their short form.
 pub fn feature_lines(app: &App, width: u16, wrap: bool) -> Vec<Line<'static>> {
     let mut lines = Vec::new();
+    let dim = Style::new().fg(Color::DarkGray);
+    let yellow = Style::new().fg(Color::Yellow);
     for feat in Feature::ALL {
         let key = keys::key_for(Action::Toggle(feat)).map_or(" ".into(), |k| k.label());
-        // The state, and for features not needed the reason.
+        // The state, and why it is not running: a feature switched off the
+        // scene would not need anyway keeps its reason.
+        let scene_reason = not_needed(&app.session.scene, feat);
         let (state, why, style) = match app.feature_state(feat) {
-            Decision::On => ("on".to_string(), "", Style::new().fg(Color::Green)),
-            Decision::Off => ("off".to_string(), "", Style::new().fg(Color::DarkGray)),
-            Decision::NotNeeded(why) => (
-                "not needed:".to_string(),
-                why,
-                Style::new().fg(Color::Yellow),
-            ),
-            Decision::Needs(g) => (
-                format!("off: needs {}", g.name()),
-                "",
-                Style::new().fg(Color::Yellow),
-            ),
+            Decision::On => ("on".to_string(), None, Style::new().fg(Color::Green)),
+            Decision::Off => ("off".to_string(), scene_reason, dim),
+            Decision::NotNeeded(why) => ("not needed:".to_string(), Some(why), yellow),
+            Decision::Needs(g) => (format!("off: needs {}", g.name()), None, yellow),
         };
         let name = format!(" {:<14} ", feat.name());
         let head = Span::styled(key, Style::new().add_modifier(Modifier::BOLD));
-        let full = if why.is_empty() {
-            state.clone()
-        } else {
-            format!("{state} {why}")
+        let room = (width as usize).saturating_sub(1 + name.len());
+        let with = |reason: &str| match why {
+            Some(_) if state == "off" => format!("off ({reason})"),
+            Some(_) => format!("{state} {reason}"),
+            None => state.clone(),
         };
-        let fits = 1 + name.len() + full.chars().count() <= width as usize;
-        if wrap && !fits {
+        let full = with(why.map_or("", |w| w.long()));
+        let line = if full.chars().count() <= room {
+            full
+        } else if let (true, Some(w)) = (wrap, why) {
             lines.push(Line::from(vec![
-                head,
-                Span::raw(name),
-                Span::styled(state, style),
+                head.clone(),
+                Span::raw(name.clone()),
+                Span::styled(state.clone(), style),
             ]));
-            lines.push(Line::from(Span::styled(format!("  {why}"), style)));
+            lines.push(Line::from(Span::styled(format!("  {}", w.long()), style)));
+            continue;
         } else {
-            lines.push(Line::from(vec![
-                head,
-                Span::raw(name),
-                Span::styled(full, style),
-            ]));
-        }
+            // Narrow: the short reason, which says as much in fewer words.
+            let short = why.map_or(state.clone(), |w| match state.as_str() {
+                "off" => format!("off ({})", w.short()),
+                _ => w.short().to_string(),
+            });
+            short.chars().take(room).collect()
+        };
+        lines.push(Line::from(vec![
+            head,
+            Span::raw(name),
+            Span::styled(line, style),
+        ]));
     }
     lines
 }
@@ -132,10 +133,10 @@ pub fn render(f: &mut Frame, area: Rect, app: &App) {
     let inner = block.inner(area);
     f.render_widget(block, area);
     let bytes = format!("terminal {}B/s", si(app.bytes_per_sec));
-    let text = match app.current_frame() {
+    let mut text = match app.current_frame() {
         None => vec![Line::from("starting..."), Line::from(bytes)],
         Some(s) if s.coarse => vec![
-            Line::from(format!("coarse preview in {:.1} ms", s.pass_ms)),
+            Line::from(format!("coarse preview in {}", words::ms(s.pass_ms))),
             Line::from(bytes),
         ],
         Some(s) => {
@@ -148,8 +149,16 @@ pub fn render(f: &mut Frame, area: Rect, app: &App) {
             };
             let done = if s.done && !s.exact { " (done)" } else { "" };
             let mut v = vec![
-                Line::from(format!("{} spp{done} · {:.1} ms/pass", s.spp, s.pass_ms)),
-                Line::from(format!("{:.1} Mrays/s · {:.1} s", s.mrays, s.elapsed)),
+                Line::from(format!(
+                    "{} spp{done} · {}/pass",
+                    s.spp,
+                    words::ms(s.pass_ms)
+                )),
+                Line::from(format!(
+                    "{} · {:.1} s",
+                    words::rays_per_s(s.mrays * 1e6),
+                    s.elapsed
+                )),
                 Line::from(error),
             ];
             if app.reference.is_some() {
@@ -165,6 +174,18 @@ pub fn render(f: &mut Frame, area: Rect, app: &App) {
             v
         }
     };
+    if let Some((done, rows, secs)) = app.link.slow_pass() {
+        text.insert(
+            0,
+            Line::styled(
+                format!(
+                    "pass: {}% of rows ({done}/{rows}) · {secs:.1} s",
+                    done as u64 * 100 / rows.max(1) as u64
+                ),
+                Style::new().fg(Color::Yellow),
+            ),
+        );
+    }
     let [text_area, chart_area] =
         Layout::vertical([Constraint::Length(text.len() as u16), Constraint::Min(0)]).areas(inner);
     f.render_widget(Paragraph::new(text), text_area);
@@ -301,11 +322,5 @@ mod tests {
         assert_eq!(decade_label(1.0, "%"), "10%");
         assert_eq!(decades(-0.5, 0.3), [-1.0, 1.0]);
         assert_eq!(decades(2.0, 2.0), [2.0, 3.0]);
-    }
-
-    #[test]
-    fn si_prefixes() {
-        assert_eq!(si(950.0), "950");
-        assert_eq!(si(1_234_567.0), "1.23M");
     }
 }

@@ -1,0 +1,85 @@
+//! Numbers in words as the UI and the reports print them.
+
+/// `1 light`, `3 lights`; `plural` is the word for any count but one.
+pub fn count(n: impl Into<u64>, one: &str, plural: &str) -> String {
+    let n = n.into();
+    format!("{n} {}", if n == 1 { one } else { plural })
+}
+
+/// `n` with an SI prefix and three significant digits: `950`, `1.23k`,
+/// `45.6M`.
+pub fn si(x: f64) -> String {
+    let (v, unit) = match x.abs() {
+        a if a >= 1e9 => (x / 1e9, "G"),
+        a if a >= 1e6 => (x / 1e6, "M"),
+        a if a >= 1e3 => (x / 1e3, "k"),
+        _ => (x, ""),
+    };
+    match v.abs() {
+        _ if unit.is_empty() => format!("{v:.0}"),
+        a if a >= 100.0 => format!("{v:.0}{unit}"),
+        a if a >= 10.0 => format!("{v:.1}{unit}"),
+        _ => format!("{v:.2}{unit}"),
+    }
+}
+
+/// A rate of rays: `12.3 Mrays/s`, `456 krays/s`, `87 rays/s`.
+pub fn rays_per_s(rays_per_s: f64) -> String {
+    format!("{}rays/s", spaced(si(rays_per_s)))
+}
+
+/// Milliseconds to three significant digits: `0.05 ms`, `12.3 ms`, `1.23 s`.
+pub fn ms(ms: f64) -> String {
+    match ms {
+        m if m >= 1e3 => format!("{} s", significant(m / 1e3)),
+        m => format!("{} ms", significant(m)),
+    }
+}
+
+/// Three significant digits, without an exponent for ordinary values.
+pub fn significant(x: f64) -> String {
+    match x.abs() {
+        a if a >= 100.0 || a == 0.0 => format!("{x:.0}"),
+        a if a >= 10.0 => format!("{x:.1}"),
+        a if a >= 1.0 => format!("{x:.2}"),
+        a if a >= 0.001 => format!("{x:.*}", (2 - a.log10().floor() as i32) as usize),
+        _ => format!("{x:.2e}"),
+    }
+}
+
+/// `1.23k` as `1.23 k`, `950` as `950 `: a unit can follow directly.
+fn spaced(s: String) -> String {
+    match s.chars().last() {
+        Some(c) if c.is_ascii_alphabetic() => {
+            let (num, unit) = s.split_at(s.len() - 1);
+            format!("{num} {unit}")
+        }
+        _ => s + " ",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_agree_with_their_nouns() {
+        assert_eq!(count(1u32, "light", "lights"), "1 light");
+        assert_eq!(count(0u32, "light", "lights"), "0 lights");
+        assert_eq!(count(12u64, "box", "boxes"), "12 boxes");
+    }
+
+    #[test]
+    fn rates_and_times_keep_three_digits() {
+        assert_eq!(si(950.0), "950");
+        assert_eq!(si(1_234_567.0), "1.23M");
+        assert_eq!(rays_per_s(45_600.0), "45.6 krays/s");
+        assert_eq!(rays_per_s(12_345_678.0), "12.3 Mrays/s");
+        assert_eq!(rays_per_s(87.0), "87 rays/s");
+        assert_eq!(ms(0.0512), "0.0512 ms");
+        assert_eq!(ms(12.34), "12.3 ms");
+        assert_eq!(ms(1234.0), "1.23 s");
+        assert_eq!(significant(0.0), "0");
+        assert_eq!(significant(3.0e-6), "3.00e-6");
+    }
+}
