@@ -73,7 +73,7 @@ fn a_frame_shows_every_panel() {
     ] {
         assert!(s.contains(title), "{title:?} missing in\n{s}");
     }
-    assert!(s.contains("spp") && s.contains("Mrays/s"), "{s}");
+    assert!(s.contains("spp") && s.contains("rays/s"), "{s}");
     assert!(s.contains("wide nodes"), "{s}");
     // The viewport is half blocks with two colours each.
     let b = t.backend().buffer();
