@@ -4,6 +4,20 @@
 //! evaluated in 2D, which makes a point on a shared edge land on exactly one
 //! side for both neighbours: no cracks, no double misses. When an edge
 //! function is exactly zero the test is redone in f64, as the paper requires.
+//!
+//! A hit is kept only when its `t` exceeds a conservative bound on the
+//! rounding error of `t` (pbrt-v4's `IntersectTriangle`), derived term by
+//! term in the sheared space of this ray, where `x` and `y` are lengths and
+//! the scaled `z` (divided by the direction's largest component) is in units
+//! of `t`. A sheared `x = (p.x - o.x) - s_x (p.z - o.z)` is three roundings
+//! from exact: its error is at most `γ₂ |p.x - o.x| + γ₃ |s_x z|`, with `z`
+//! the translated, unscaled coordinate, and so at most `γ₃ (|x_t| + 2 |s_x
+//! z|)` (`γ₅` covers taking the bound from the rounded values). Edge functions (`x y` products, length²) then carry `δe`, the
+//! scaled `z` `δz = γ₃ |z_t|`, and `t = Σ e z_t / Σ e` the sum of both.
+//! Every term is thus a length, a length² or a `t`, at any scale and for any
+//! length of the direction (shadow rays are not normalised): adding the
+//! scaled `z` to the lengths instead would make the bound depend on the
+//! scene's size and reject true hits in tiny scenes.
 
 use glam::{Vec3, Vec4};
 
@@ -127,14 +141,16 @@ pub fn intersect(
     }
     let inv = 1.0 / det;
     let t = t_scaled * inv;
-    // pbrt-v4's conservative bound on the rounding error of t: a hit closer
-    // than it may be the ray's own surface, seen through rounding.
+    // The conservative bound on the rounding error of t (see the module
+    // comment): a hit closer than it may be the ray's own surface, seen
+    // through rounding.
+    let max_z = a[2].abs().max(b[2].abs()).max(c[2].abs());
     let max_zt = az.abs().max(bz.abs()).max(cz.abs());
     let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
     let max_yt = ay.abs().max(by.abs()).max(cy.abs());
     let delta_z = gamma(3) * max_zt;
-    let delta_x = gamma(5) * (max_xt + max_zt);
-    let delta_y = gamma(5) * (max_yt + max_zt);
+    let delta_x = gamma(5) * (max_xt + 2.0 * (s.sx.abs() * max_z));
+    let delta_y = gamma(5) * (max_yt + 2.0 * (s.sy.abs() * max_z));
     let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
     let max_e = u.abs().max(v.abs()).max(w.abs());
     let delta_t =
@@ -223,6 +239,7 @@ pub fn intersect4(r: &RayShear4, p: &[[Vec4; 3]; 3], tmax: f32) -> TriHit4 {
     let neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
     let pos = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
     let det = u + v + w;
+    let max_z = az.abs().max(bz.abs()).max(cz.abs());
     let (az, bz, cz) = (sz * az, sz * bz, sz * cz);
     let t_scaled = u * az + v * bz + w * cz;
     let flip = det.cmplt(zero);
@@ -245,8 +262,8 @@ pub fn intersect4(r: &RayShear4, p: &[[Vec4; 3]; 3], tmax: f32) -> TriHit4 {
     let max_yt = ay.abs().max(by.abs()).max(cy.abs());
     let g = |n| Vec4::splat(gamma(n));
     let delta_z = g(3) * max_zt;
-    let delta_x = g(5) * (max_xt + max_zt);
-    let delta_y = g(5) * (max_yt + max_zt);
+    let delta_x = g(5) * (max_xt + 2.0 * (sx.abs() * max_z));
+    let delta_y = g(5) * (max_yt + 2.0 * (sy.abs() * max_z));
     let delta_e = 2.0 * (g(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
     let max_e = u.abs().max(v.abs()).max(w.abs());
     let delta_t = 3.0 * (g(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv.abs();
@@ -367,6 +384,7 @@ pub(crate) unsafe fn intersect8_avx<const UV: bool>(
     let mut v = sub(mul(ax, cy), mul(ay, cx));
     let mut w = sub(mul(bx, ay), mul(by, ax));
     let zero = _mm256_setzero_ps();
+    let sign = set(-0.0);
     let on_edge = _mm256_movemask_ps(or(
         or(cmp!(_CMP_EQ_OQ, u, zero), cmp!(_CMP_EQ_OQ, v, zero)),
         cmp!(_CMP_EQ_OQ, w, zero),
@@ -390,9 +408,12 @@ pub(crate) unsafe fn intersect8_avx<const UV: bool>(
         cmp!(_CMP_GT_OQ, w, zero),
     );
     let det = add(add(u, v), w);
+    let max_z = max(
+        max(_mm256_andnot_ps(sign, az), _mm256_andnot_ps(sign, bz)),
+        _mm256_andnot_ps(sign, cz),
+    );
     let (az, bz, cz) = (mul(sz, az), mul(sz, bz), mul(sz, cz));
     let t_scaled = add(add(mul(u, az), mul(v, bz)), mul(w, cz));
-    let sign = set(-0.0);
     let flip = cmp!(_CMP_LT_OQ, det, zero);
     let ts = _mm256_blendv_ps(t_scaled, _mm256_xor_ps(t_scaled, sign), flip);
     let d = _mm256_blendv_ps(det, _mm256_xor_ps(det, sign), flip);
@@ -438,8 +459,11 @@ pub(crate) unsafe fn intersect8_avx<const UV: bool>(
     let max_yt = max(max(aay, aby), acy);
     let (g2, g3, g5) = (set(gamma(2)), set(gamma(3)), set(gamma(5)));
     let delta_z = mul(g3, max_zt);
-    let delta_x = mul(g5, add(max_xt, max_zt));
-    let delta_y = mul(g5, add(max_yt, max_zt));
+    let two = set(2.0);
+    let shear_x = mul(two, mul(_mm256_andnot_ps(sign, sx), max_z));
+    let shear_y = mul(two, mul(_mm256_andnot_ps(sign, sy), max_z));
+    let delta_x = mul(g5, add(max_xt, shear_x));
+    let delta_y = mul(g5, add(max_yt, shear_y));
     let delta_e = mul(
         set(2.0),
         add(
