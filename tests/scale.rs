@@ -8,7 +8,7 @@ mod common;
 use common::*;
 use glam::Vec3;
 use rayterm::bvh;
-use rayterm::report::stability::scale::{interior_lost, probe_render, Probed};
+use rayterm::report::stability::scale::{image_difference, interior_lost, probe_render, Probed};
 use rayterm::scene::{Camera, Light, Scene};
 
 /// A box standing on a plane, lit by a point light from the side: a shadow
@@ -136,5 +136,58 @@ fn the_monkey_keeps_its_shadows_at_1e_minus_5() -> anyhow::Result<()> {
             shadowed(&unit)
         );
     }
+    Ok(())
+}
+
+#[test]
+fn huge_scenes_render_like_unit_ones_or_are_refused() {
+    let (w, h) = (48, 48);
+    let unit = probe(&box_on_plane(), w, h);
+    assert!(unit.primary.iter().any(|&p| p));
+    // 1e13 used to render black: t's numerator (length² · t) overflowed f32.
+    for scale in [1e12, 1e13, 1e15, 1e17] {
+        let mut s = box_on_plane();
+        s.transform(scale, Vec3::ZERO);
+        rayterm::report::stability::check_reach(&s).expect("within reach");
+        let p = probe(&s, w, h);
+        let diff = image_difference(&p.image, &unit.image, w, h);
+        assert!(diff < 0.01, "scale {scale:e}: {diff} of the pixels differ");
+        assert_eq!(p.shadowed, unit.shadowed, "scale {scale:e}");
+    }
+    for scale in [1e19, 1e25, 1e30, f32::MAX] {
+        let mut s = box_on_plane();
+        s.transform(scale, Vec3::ZERO);
+        let e = rayterm::report::stability::check_reach(&s).unwrap_err();
+        assert!(
+            e.to_string().contains("renders coordinates up to 1e18"),
+            "{e}"
+        );
+    }
+}
+
+#[test]
+fn a_huge_obj_renders_like_a_small_one() -> anyhow::Result<()> {
+    let dir = std::env::temp_dir().join(format!("rayterm-scale-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let load = |size: &str| {
+        let path = dir.join(format!("t{size}.obj"));
+        std::fs::write(
+            &path,
+            format!("v 0 0 0\nv {size} 0 0\nv 0 {size} 0\nf 1 2 3\n"),
+        )?;
+        rayterm::scene::load(&path.to_string_lossy())
+    };
+    let (w, h) = (32, 32);
+    let small = probe(&load("1")?, w, h);
+    assert!(small.primary.iter().filter(|&&p| p).count() > 100);
+    for size in ["1e12", "1e13", "1e16"] {
+        let big = probe(&load(size)?, w, h);
+        assert_eq!(big.primary, small.primary, "{size}");
+        assert!(
+            image_difference(&big.image, &small.image, w, h) < 0.01,
+            "{size}"
+        );
+    }
+    std::fs::remove_dir_all(&dir)?;
     Ok(())
 }

@@ -40,6 +40,7 @@ impl Prepared {
 
 pub fn prepare(o: &SceneOpts) -> Result<Prepared> {
     let mut scene = scene::load(&o.scene)?;
+    crate::report::stability::check_reach(&scene)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }

@@ -25,7 +25,7 @@ pub use degenerate::degenerate;
 pub use grazing::grazing;
 pub use hygiene::hygiene;
 pub use reintersect::reintersection;
-pub use scale::{scale_offset, Transform, TRANSFORMS};
+pub use scale::{check_reach, scale_offset, Transform, TRANSFORMS};
 pub use stiff::stiff_shading;
 pub use topology::{Crossing, Topology};
 pub use watertight::{escapes, watertight, Escapes};
@@ -103,6 +103,7 @@ pub fn run_battery_on(scene: &crate::scene::Scene, o: &Options) -> Result<Vec<Ro
     if o.width < 16 || o.height < 16 {
         bail!("the stability battery needs images of at least 16x16");
     }
+    check_reach(scene)?;
     let mut rows = scale_offset(scene, o).context("scale and offset cases")?;
     rows.extend(watertight(o).context("watertightness cases")?);
     rows.extend(grazing(o).context("grazing cases")?);

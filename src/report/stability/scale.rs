@@ -5,8 +5,8 @@
 //! blocks; a leak is a ray that must hit the scene and does not; the image
 //! is compared with the unit-scale render.
 
-use anyhow::Result;
-use glam::Vec3;
+use anyhow::{bail, Result};
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::topology::{aimed, Crossing, Topology};
@@ -15,6 +15,7 @@ use super::{format_figure, Options};
 use crate::bvh::{self, Bvh, TraversalStats};
 use crate::geometry::offset::hit_point;
 use crate::geometry::sampling::Rng;
+use crate::geometry::MAX_COORDINATE;
 use crate::render::recorder::{HitInfo, LightSample, RayKind, Recorder};
 use crate::render::{Feature, Features, Plan, Tracer};
 use crate::scene::{Builder, Geometry, Light, Scene};
@@ -306,6 +307,46 @@ fn map_scene(scene: &Scene, f: impl Fn(Vec3) -> Vec3, s: f32) -> Scene {
         }
     }
     out
+}
+
+/// An error naming what lies too far when a point of `scene` (a vertex,
+/// the camera, a light) is beyond [`MAX_COORDINATE`] or not finite: f32
+/// shading cannot render it, and would show a black image instead.
+pub fn check_reach(scene: &Scene) -> Result<()> {
+    let c = &scene.camera;
+    let mut far: Vec<(String, f32)> = [("the camera", c.eye), ("the camera's target", c.target)]
+        .into_iter()
+        .map(|(what, p)| (what.to_string(), p.abs().max_element()))
+        .collect();
+    let b = scene.bounds();
+    if !b.is_empty() {
+        far.push((
+            "the geometry".into(),
+            b.min.abs().max(b.max.abs()).max_element(),
+        ));
+    }
+    for (i, l) in scene.lights.iter().enumerate() {
+        for s in [Vec2::ZERO, Vec2::X, Vec2::Y, Vec2::ONE] {
+            far.push((
+                format!("light {}", i + 1),
+                l.point_at(s).0.abs().max_element(),
+            ));
+        }
+    }
+    let beyond = |m: f32| m.partial_cmp(&MAX_COORDINATE).is_none_or(|o| o.is_gt());
+    let Some((what, m)) = far.iter().find(|(_, m)| beyond(*m)) else {
+        return Ok(());
+    };
+    let place = if m.is_finite() {
+        format!("lies {m:e} from the origin")
+    } else {
+        "is beyond f32's range".into()
+    };
+    bail!(
+        "{what} {place}: rayterm shades in f32, where the squared lengths of such \
+         distances overflow; it renders coordinates up to {MAX_COORDINATE:e} (scale the \
+         scene down)"
+    )
 }
 
 /// The scale and offset rows for `scene`: acne, leaks and image difference
