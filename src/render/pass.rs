@@ -44,7 +44,7 @@ pub fn render_pass_with<R: Recorder + Default + Send + Merge>(
                 for k in first..first + samples {
                     let c: Vec3 = tracer.sample(x as u32, y as u32, k, &mut rec);
                     if c.is_finite() {
-                        px.add(c);
+                        px.add(k, c, tracer.stratum(x as u32, y as u32, k));
                     } else {
                         bad.push(BadSample {
                             x: x as u32,

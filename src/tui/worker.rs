@@ -105,8 +105,9 @@ pub struct Snapshot {
     pub spp: u32,
     pub pass_ms: f64,
     pub mrays: f64,
-    /// The film's estimated relative error ([`Film::relative_error`]).
-    pub error: f64,
+    /// The film's estimated relative error ([`Film::relative_error`]),
+    /// unknown below two samples.
+    pub error: Option<f64>,
     /// Nothing is sampled and one pass is done: the image is exact.
     pub exact: bool,
     /// No more passes will come for this view.
@@ -326,8 +327,7 @@ impl Worker {
         self.last_full_ms = Some(ms);
         self.last_mrays = rays as f64 / (ms.max(1e-6) * 1e3);
         let elapsed = self.started.elapsed().as_secs_f64();
-        let error = self.film.relative_error();
-        if self.film.spp >= 2 && error > 0.0 {
+        if let Some(error) = self.film.relative_error().filter(|&e| e > 0.0) {
             self.history.push((elapsed, error));
         }
         let mean = self.film.image();
@@ -420,7 +420,7 @@ impl Worker {
             spp: 0,
             pass_ms: ms,
             mrays: rays as f64 / (ms.max(1e-6) * 1e3),
-            error: 0.0,
+            error: None,
             exact: false,
             done: false,
             elapsed: self.started.elapsed().as_secs_f64(),
@@ -605,10 +605,10 @@ mod tests {
             e17 < 0.5 * e1,
             "true error {e1} after 1 spp, {e17} after 17"
         );
+        let est = last.error.expect("an estimate at 17 spp");
         assert!(
-            (0.5..2.0).contains(&(last.error / e17)),
-            "estimate {} against true {e17}",
-            last.error
+            (0.5..2.0).contains(&(est / e17)),
+            "estimate {est} against true {e17}"
         );
         assert_eq!(last.true_history.len(), 17);
         // Bloom does not change the film; shadows and the camera do.
