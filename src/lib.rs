@@ -8,6 +8,7 @@ pub mod bvh;
 pub mod cli;
 pub mod geometry;
 pub mod inspect;
+pub mod raster;
 pub mod render;
 pub mod report;
 pub mod scene;

@@ -84,7 +84,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         eprintln!("plan for {}:\n{}", p.scene.name, p.plan.explain());
     }
     if let Some(view) = a.debug {
-        if is_hdr(&a.output) {
+        if is_linear(&a.output) {
             bail!("--debug views are PNG images; name the output .png");
         }
         return super::debug::run(&p, view, &a.output);
@@ -135,11 +135,11 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         }
         bar.inc(1);
         let err = film.relative_error();
-        bar.set_message(format!("error {:.3}%", err * 100.0));
+        bar.set_message(error_text(err));
         let done = match stop {
             Stop::Spp(n) => film.spp >= n,
             Stop::Time(t) => start.elapsed().as_secs_f64() >= t,
-            Stop::Error(e) => film.spp >= 2 && err < e,
+            Stop::Error(e) => film.error_is_meaningful() && err.is_some_and(|err| err < e),
         };
         if done {
             break;
@@ -148,7 +148,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     let render_ms = start.elapsed().as_secs_f64() * 1e3;
     bar.finish_and_clear();
     let mut img = film.image();
-    if is_hdr(&a.output) {
+    if is_linear(&a.output) {
         // The film's mean as it is: what `converge` and the TUI's
         // `--reference` compare against.
         save_reference(&a.output, p.width, p.height, &img)?;
@@ -164,12 +164,12 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         output::save_png_atomic(&post::to_rgb8(&img, p.width, p.height), &a.output)?;
     }
     let err = if p.plan.deterministic {
-        "exact".to_string()
+        "error exact".to_string()
     } else {
-        format!("{:.3}%", film.relative_error() * 100.0)
+        error_text(film.relative_error())
     };
     println!(
-        "{}: {} triangles, build {:.1} ms ({}), render {}, {} spp, {:.2} Mrays/s, error {}{} -> {}",
+        "{}: {} triangles, build {:.1} ms ({}), render {}, {} spp, {:.2} Mrays/s, {}{} -> {}",
         p.scene.name,
         p.scene.geometry.triangle_count(),
         p.bvh.stats.build_ms,
@@ -188,6 +188,14 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// The estimated error, or that it is unknown until two samples.
+fn error_text(err: Option<f64>) -> String {
+    match err {
+        Some(e) => format!("error {:.3}%", e * 100.0),
+        None => "error unknown until 2 spp".into(),
+    }
+}
+
 /// `812.3 ms` below ten seconds, `24.9 s` from there.
 fn duration(ms: f64) -> String {
     if ms < 1e4 {
@@ -197,10 +205,9 @@ fn duration(ms: f64) -> String {
     }
 }
 
-/// A `.hdr` output gets the linear film instead of a PNG.
-fn is_hdr(path: &std::path::Path) -> bool {
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("hdr"))
+/// A `.exr` or `.hdr` output gets the linear film instead of a PNG.
+fn is_linear(path: &std::path::Path) -> bool {
+    crate::raster::Linear::of(path).is_some()
 }
 
 #[cfg(test)]
@@ -211,6 +218,9 @@ mod tests {
     fn durations_read_in_the_unit_that_fits() {
         assert_eq!(duration(812.34), "812.3 ms");
         assert_eq!(duration(24_927.9), "24.9 s");
-        assert!(is_hdr(std::path::Path::new("ref.HDR")) && !is_hdr(std::path::Path::new("a.png")));
+        assert!(
+            is_linear(std::path::Path::new("ref.HDR")) && !is_linear(std::path::Path::new("a.png"))
+        );
+        assert!(is_linear(std::path::Path::new("ref.exr")));
     }
 }
