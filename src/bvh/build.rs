@@ -186,7 +186,15 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
         .with_min_len(4096)
         .map(|(i, t)| {
             let [a, b, c] = t.map(Vec3A::from_array);
-            PrimRef::new(a.min(b).min(c), a.max(b).max(c), i as u32)
+            if a.is_finite() && b.is_finite() && c.is_finite() {
+                PrimRef::new(a.min(b).min(c), a.max(b).max(c), i as u32)
+            } else {
+                // Never hit (its edge functions or t are not finite). Its
+                // box is a point at the origin: NaN in a bound would be
+                // dropped or kept by min and max depending on the order,
+                // and could cut the boxes of its neighbours short.
+                PrimRef::new(Vec3A::ZERO, Vec3A::ZERO, i as u32)
+            }
         })
         .collect();
     // A binary tree over n triangles has at most 2n - 1 nodes. Each subtree
@@ -217,12 +225,19 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
     let wide = wide::Wide::collapse(&nodes, &tris);
     let build_ms = start_time.elapsed().as_secs_f64() * 1e3;
     let stats = stats(&nodes, n, depth, build_ms);
+    let reach = nodes.first().map_or(0.0, |r| {
+        r.min
+            .iter()
+            .chain(&r.max)
+            .fold(0.0, |m: f32, x| m.max(x.abs()))
+    });
     Bvh {
         nodes,
         tris,
         prim,
         stats,
         wide,
+        reach,
     }
 }
 

@@ -24,6 +24,9 @@ pub struct Bvh {
     pub prim: Vec<u32>,
     pub stats: BuildStats,
     wide: wide::Wide,
+    /// The largest coordinate magnitude of any triangle: rays test in f64
+    /// beyond [`F32_REACH`](crate::geometry::triangle::F32_REACH).
+    reach: f32,
 }
 
 impl Bvh {

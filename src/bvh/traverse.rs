@@ -22,10 +22,14 @@ pub struct Hit {
     pub prim: u32,
 }
 
-/// Traversal stack entries on the machine stack; enough for any tree of
-/// reasonable depth (a level pushes at most seven). Deeper trees, which
-/// only degenerate inputs make, get a stack on the heap.
-const STACK: usize = 128;
+/// Traversal stack entries on the machine stack (2 kB, left uninitialised):
+/// enough for trees 36 wide levels deep (a level pushes at most seven).
+/// The builders' trees are at most about 40 + log2(n) binary levels deep,
+/// fewer wide ones; deeper trees get a stack on the heap. Either way the
+/// stack holds [`Wide::stack`](super::wide::Wide) entries, the most any
+/// ray can push, whatever its coordinates: empty slots lead to an empty
+/// leaf, so the walk only goes down the tree.
+const STACK: usize = 256;
 
 /// Widening of the far slab distance, as in [`crate::geometry::Aabb::hit`].
 const FAR_SCALE: f32 = 1.0 + 2.0 * gamma(3);
@@ -326,7 +330,7 @@ impl Bvh {
         k: &K,
     ) {
         let w = &self.wide;
-        let setup = || RayShear::new(ray.origin, ray.dir);
+        let setup = || RayShear::within(ray.origin, ray.dir, self.reach);
         // Closest-hit rays set up the triangle test at their first leaf:
         // most of them (camera rays past the object) never reach one. Shadow
         // rays nearly always do.
@@ -421,7 +425,7 @@ impl Bvh {
     /// Closest hit by testing every triangle: the reference the BVH is checked
     /// against, and the "no BVH" column of the benchmark.
     pub fn intersect_brute(&self, ray: &Ray) -> Option<Hit> {
-        let shear = RayShear::new(ray.origin, ray.dir);
+        let shear = RayShear::within(ray.origin, ray.dir, self.reach);
         let mut tmax = ray.tmax;
         let mut best = None;
         for (i, t) in self.tris.iter().enumerate() {
@@ -443,7 +447,7 @@ impl Bvh {
 
     /// Any hit by testing every triangle.
     pub fn occluded_brute(&self, ray: &Ray) -> Option<u32> {
-        let shear = RayShear::new(ray.origin, ray.dir);
+        let shear = RayShear::within(ray.origin, ray.dir, self.reach);
         self.tris
             .iter()
             .position(|t| intersect(&shear, &t[0], &t[1], &t[2], ray.tmax).is_some())
@@ -529,6 +533,78 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Traversal is memory-safe whatever the floats: huge, infinite and NaN
+    /// coordinates in the tree, NaN, infinite and zero rays. The stack
+    /// cannot overflow (the 1e20 triangle once pushed past 128 entries:
+    /// empty slots led back to the root), and where the answer is defined
+    /// the BVH agrees with brute force.
+    #[test]
+    fn any_float_in_the_tree_or_the_ray_is_walked_safely() {
+        use crate::report::stability::soup;
+        use glam::Vec3;
+        let (inf, nan) = (f32::INFINITY, f32::NAN);
+        let mut tris = vec![
+            [
+                Vec3::ZERO,
+                Vec3::new(1e20, 0.0, 0.0),
+                Vec3::new(0.0, 1e20, 0.0),
+            ],
+            [
+                Vec3::ZERO,
+                Vec3::new(3e38, 0.0, 0.0),
+                Vec3::new(0.0, 3e38, 1.0),
+            ],
+            [
+                Vec3::ZERO,
+                Vec3::new(inf, 0.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+            ],
+            [Vec3::splat(-inf), Vec3::splat(inf), Vec3::ONE],
+            [Vec3::new(nan, 0.0, 0.0), Vec3::ONE, Vec3::Y],
+            [Vec3::splat(nan); 3],
+        ];
+        // Enough ordinary triangles for several levels of the tree.
+        for i in 0..300 {
+            let p = Vec3::new((i % 17) as f32, (i / 17) as f32, (i % 5) as f32);
+            tris.push([p, p + Vec3::X, p + Vec3::Y]);
+        }
+        let origins = [
+            Vec3::new(0.3, 0.2, 5.0),
+            Vec3::ZERO,
+            Vec3::splat(1e20),
+            Vec3::splat(-3e38),
+            Vec3::new(inf, 0.0, 0.0),
+            Vec3::splat(nan),
+        ];
+        let dirs = [
+            Vec3::new(0.01, 0.02, -1.0),
+            Vec3::ZERO,
+            Vec3::splat(inf),
+            Vec3::new(nan, 1.0, 0.0),
+            Vec3::new(-1.0, 1e-38, 0.0),
+        ];
+        let mut hits = 0;
+        for builder in [Builder::Sah, Builder::Median] {
+            let b = super::super::build(&soup(&tris), builder);
+            let mut st = TraversalStats::default();
+            for o in origins {
+                for d in dirs {
+                    for tmax in [f32::INFINITY, 1.0, nan] {
+                        let ray = Ray::segment(o, d, tmax);
+                        let hit = b.intersect::<true>(&ray, &mut st);
+                        let any = b.occluded::<true>(&ray, &mut st);
+                        if o.is_finite() && d.is_finite() && !tmax.is_nan() {
+                            assert_eq!(hit, b.intersect_brute(&ray), "{ray:?}");
+                            assert_eq!(any.is_some(), hit.is_some(), "{ray:?}");
+                            hits += hit.is_some() as u32;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(hits >= 4, "{hits} hits");
     }
 
     /// The walk with a heap stack, which trees too deep for the machine stack

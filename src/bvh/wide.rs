@@ -18,10 +18,17 @@ pub(crate) const WIDTH: usize = 8;
 #[repr(C, align(32))]
 pub(crate) struct Node8 {
     /// Min x, max x, min y, max y, min z, max z of the children, one lane
-    /// each; an empty slot has min = +inf and max = -inf, which no ray hits.
+    /// each; an empty slot has min = +inf and max = -inf, which no finite
+    /// ray hits.
     pub b: [[f32; WIDTH]; 6],
+    /// An empty slot's child is [`EMPTY_LEAF`]: should a ray with NaN or
+    /// infinite coordinates "hit" it, it finds nothing there, and no slot
+    /// ever leads back up the tree.
     pub child: [u32; WIDTH],
 }
+
+/// The leaf of empty slots: packet 0, which holds no triangle.
+pub(crate) const EMPTY_LEAF: u32 = LEAF;
 
 /// Triangles per packet.
 pub(crate) const PACKET: usize = 8;
@@ -54,8 +61,8 @@ pub(crate) fn leaf_packets(r: u32) -> std::ops::Range<usize> {
 pub(crate) struct Wide {
     pub nodes: Vec<Node8>,
     pub packets: Vec<Packet>,
-    /// Stack entries the deepest path can need: each node on it pushes all
-    /// but one of its children.
+    /// Stack entries the deepest path can need, whatever the box tests
+    /// answer: each node on it pushes at most all but one of its slots.
     pub stack: usize,
     /// Whether this CPU can test eight boxes at once (AVX).
     pub avx: bool,
@@ -68,23 +75,28 @@ impl Wide {
     pub fn collapse(bin: &[Node], tris: &[[[f32; 3]; 3]]) -> Wide {
         let mut w = Wide {
             nodes: Vec::with_capacity(bin.len() / 2 + 1),
-            packets: Vec::with_capacity(tris.len() / 3 + 1),
+            packets: Vec::with_capacity(tris.len() / 3 + 2),
             stack: 0,
             avx: avx_available(),
         };
+        w.packets.push(Packet {
+            p: [[[f32::NAN; PACKET]; 3]; 3],
+            idx: [u32::MAX; PACKET],
+        });
         if let Some(root) = bin.first() {
             // The root is always an interior wide node, even over one leaf.
-            w.stack = if root.is_leaf() {
+            let depth = if root.is_leaf() {
                 w.node(bin, tris, &[0]).1
             } else {
                 w.gather(bin, tris, root.first as usize).1
             };
+            w.stack = depth * (WIDTH - 1);
         }
         w
     }
 
     /// Wide node over the binary children at `c` and `c + 1`, opened up to
-    /// eight; returns its index and the stack its subtree needs.
+    /// eight; returns its index and the depth of its subtree in wide nodes.
     fn gather(&mut self, bin: &[Node], tris: &[[[f32; 3]; 3]], c: usize) -> (u32, usize) {
         let mut kids = [0; WIDTH];
         kids[..2].copy_from_slice(&[c, c + 1]);
@@ -118,7 +130,7 @@ impl Wide {
                 [inf; WIDTH],
                 [ninf; WIDTH],
             ],
-            child: [0; WIDTH],
+            child: [EMPTY_LEAF; WIDTH],
         });
         for (lane, &k) in kids.iter().enumerate() {
             let n = &bin[k];
@@ -136,7 +148,7 @@ impl Wide {
             }
             w.child[lane] = r;
         }
-        (at as u32, kids.len() - 1 + below)
+        (at as u32, 1 + below)
     }
 
     fn leaf(&mut self, tris: &[[[f32; 3]; 3]], first: usize, count: usize) -> u32 {

@@ -2,17 +2,29 @@
 
 use std::process::ExitCode;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 
 use super::args::ConvergeArgs;
 use super::open_scene;
-use crate::render::output::save_png_atomic;
+use crate::raster::{png, Format, Output};
 use crate::report::converge::{self, Budget, Config, ReferenceSource, Subject};
 
 /// Small enough that a whole study takes seconds; `--size` changes it.
 const DEFAULT_SIZE: (u32, u32) = (64, 64);
 
 pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
+    // Outputs are checked before the study runs, which can take minutes.
+    let inputs: Vec<std::path::PathBuf> = a.reference.iter().cloned().collect();
+    let csv = a
+        .csv
+        .as_ref()
+        .map(|p| Output::check(p, &inputs, &[Format::Csv]))
+        .transpose()?;
+    let plot = a
+        .plot
+        .as_ref()
+        .map(|p| Output::check(p, &inputs, &[Format::Png]))
+        .transpose()?;
     let mut opts = a.scene.clone();
     opts.size = opts.size.or(Some(DEFAULT_SIZE));
     let p = open_scene(&opts)?;
@@ -61,14 +73,13 @@ pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
     };
     let study = subject.study(&cfg)?;
     print!("{}", study.text());
-    if let Some(path) = &a.csv {
-        std::fs::write(path, study.csv())
-            .with_context(|| format!("cannot write {}", path.display()))?;
-        eprintln!("wrote {}", path.display());
+    if let Some(out) = csv {
+        out.write(study.csv().as_bytes())?;
+        eprintln!("wrote {}", out.path.display());
     }
-    if let Some(path) = &a.plot {
-        save_png_atomic(&converge::plot(&study), path)?;
-        eprintln!("wrote {}", path.display());
+    if let Some(out) = plot {
+        out.write(&png::encode(&converge::plot(&study))?)?;
+        eprintln!("wrote {}", out.path.display());
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -5,7 +5,6 @@ mod bench;
 mod converge;
 mod debug;
 mod inspect;
-mod output;
 mod render;
 mod scenes;
 mod stability;

@@ -11,10 +11,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use super::args::RenderArgs;
 use super::open_scene;
-use super::output::{Format, Output};
 use crate::interrupt;
+use crate::raster::{png, Format, Output};
 use crate::render::{post, Ended, Film, Progressive, Stop};
-use crate::report::converge::encode_hdr;
 
 pub fn run(a: RenderArgs) -> Result<ExitCode> {
     let stop = stop(&a)?;
@@ -24,7 +23,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         .then(|| PathBuf::from(&a.scene.scene))
         .into_iter()
         .collect();
-    let out = Output::check(&a.output, &inputs)?;
+    let out = Output::check(&a.output, &inputs, Format::RENDERS)?;
     if a.debug.is_some() && out.format != Format::Png {
         bail!("--debug views are PNG images; name the output .png");
     }
@@ -63,7 +62,9 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     let bytes = match out.format {
         // The film's mean as it is: what `converge` and the TUI's
         // `--reference` compare against.
-        Format::Hdr => encode_hdr(s.width, s.height, &film.image())?,
+        Format::Hdr | Format::Exr | Format::Csv => {
+            out.format.encode_linear(s.width, s.height, &film.image())?
+        }
         Format::Png => {
             let shown = post::display(
                 film.image(),
@@ -72,14 +73,14 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
                 &s.plan,
                 &s.scene.settings.bloom,
             );
-            super::output::png(&post::to_rgb8(&shown.image, s.width, s.height))?
+            png::encode(&post::to_rgb8(&shown.image, s.width, s.height))?
         }
     };
     out.write(&bytes)?;
     let err = if s.plan.deterministic {
-        "exact".to_string()
+        "error exact".to_string()
     } else {
-        format!("{:.3}%", film.relative_error() * 100.0)
+        error_text(film)
     };
     let render_ms = outcome.seconds * 1e3;
     let capped = match (outcome.ended, stop.error) {
@@ -91,7 +92,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         _ => String::new(),
     };
     println!(
-        "{}: {} triangles, build {:.1} ms ({}), render {}, {} spp, {:.2} Mrays/s, error {}{}{} -> {}",
+        "{}: {} triangles, build {:.1} ms ({}), render {}, {} spp, {:.2} Mrays/s, {}{}{} -> {}",
         s.scene.name,
         s.scene.geometry.triangle_count(),
         s.bvh.stats.build_ms,
@@ -149,6 +150,14 @@ fn progress_bar(stop: &Stop, exact: bool) -> ProgressBar {
     }
 }
 
+/// The estimated error, or that it is not known yet.
+fn error_text(film: &Film) -> String {
+    match film.relative_error() {
+        Some(e) => format!("error {:.3}%", e * 100.0),
+        None => "error unknown until 2 spp".into(),
+    }
+}
+
 /// The error and the time left for a render that stops on time or error:
 /// the error of a sampled image falls as 1/sqrt(spp), which says how many
 /// samples the target needs.
@@ -158,13 +167,9 @@ fn progress(film: &Film, stop: &Stop, elapsed: f64) -> String {
     let mut left = stop
         .seconds
         .map_or(f64::INFINITY, |t| (t - elapsed).max(0.0));
-    let err = film.relative_error();
-    let mut text = if film.spp >= 2 {
-        format!("error {:.3}%", err * 100.0)
-    } else {
-        "error unknown until 2 spp".to_string()
-    };
-    if let Some(target) = stop.error.filter(|_| film.spp >= 2 && err > 0.0) {
+    let mut text = error_text(film);
+    let err = film.relative_error().filter(|&e| e > 0.0);
+    if let (Some(target), Some(err)) = (stop.error, err) {
         let need = (film.spp as f64 * (err / target).powi(2)).min(cap);
         left = left.min((need - film.spp as f64).max(0.0) * per_spp);
         text += &format!(" (target {}%, about {need:.0} spp)", target * 100.0);
@@ -199,18 +204,14 @@ mod tests {
     fn progress_estimates_the_time_to_the_target() {
         let mut f = Film::new(1, 1);
         for k in 0..4 {
-            f.add(
-                0,
-                0,
-                k,
-                glam::Vec3::splat(if k % 2 == 0 { 0.4 } else { 0.6 }),
-            );
+            let c = glam::Vec3::splat(if k % 2 == 0 { 0.4 } else { 0.6 });
+            f.add(0, 0, k, None, c);
         }
         f.spp = 4;
         let stop = Stop {
             spp: Some(4096),
             seconds: None,
-            error: Some(f.relative_error() / 2.0),
+            error: Some(f.relative_error().unwrap() / 2.0),
         };
         // Half the error needs four times the samples: 12 more, at 0.25 s each.
         let text = progress(&f, &stop, 1.0);

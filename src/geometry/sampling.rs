@@ -59,6 +59,21 @@ impl Rng {
     }
 }
 
+/// Sub-pixel strata per side when pixel samples are jittered.
+pub const PIXEL_GRID: u32 = 4;
+/// Strata per pixel: each run of this many consecutive samples of a pixel
+/// (a block) visits every stratum once.
+pub const PIXEL_STRATA: u32 = PIXEL_GRID * PIXEL_GRID;
+
+/// The stratum (`i + PIXEL_GRID * j`) of sample `k` of `pixel`: each block
+/// of [`PIXEL_STRATA`] samples visits the strata once, in a random order per
+/// pixel and block, so any prefix is spread over the pixel. The integrator
+/// places samples by it and the film's error estimate reads it.
+pub fn pixel_stratum(pixel: u64, k: u32, seed: u64) -> u32 {
+    let block = Rng::for_sample(pixel, (k / PIXEL_STRATA) as u64, seed ^ 0x5bd1_e995).next_u32();
+    permute(k % PIXEL_STRATA, PIXEL_STRATA, block)
+}
+
 /// Stratum `k` of an `n x n` grid, jittered with `r`, in [0, 1)^2.
 #[inline]
 pub fn jittered(k: u32, n: u32, r: Vec2) -> Vec2 {

@@ -4,10 +4,39 @@
 //! evaluated in 2D, which makes a point on a shared edge land on exactly one
 //! side for both neighbours: no cracks, no double misses. When an edge
 //! function is exactly zero the test is redone in f64, as the paper requires.
+//!
+//! A hit is kept only when its `t` exceeds a conservative bound on the
+//! rounding error of `t` (pbrt-v4's `IntersectTriangle`), derived term by
+//! term in the sheared space of this ray, where `x` and `y` are lengths and
+//! the scaled `z` (divided by the direction's largest component) is in units
+//! of `t`. A sheared `x = (p.x - o.x) - s_x (p.z - o.z)` is three roundings
+//! from exact: its error is at most `γ₂ |p.x - o.x| + γ₃ |s_x z|`, with `z`
+//! the translated, unscaled coordinate, and so at most `γ₃ (|x_t| + 2 |s_x
+//! z|)` (`γ₅` covers taking the bound from the rounded values). Edge functions (`x y` products, length²) then carry `δe`, the
+//! scaled `z` `δz = γ₃ |z_t|`, and `t = Σ e z_t / Σ e` the sum of both.
+//! Every term is thus a length, a length² or a `t`, at any scale and for any
+//! length of the direction (shadow rays are not normalised): adding the
+//! scaled `z` to the lengths instead would make the bound depend on the
+//! scene's size and reject true hits in tiny scenes.
+//!
+//! The f32 test forms products of three coordinates (`t_scaled`, length² ·
+//! t): beyond [`F32_REACH`] from the ray's origin they can overflow, and a
+//! scene some 1e13 across went black. Rays that can meet such coordinates
+//! run the whole test in f64 instead ([`RayShear::wide`]), every triangle
+//! alike, so neighbours still agree on their shared edges.
 
 use glam::{Vec3, Vec4};
 
 use super::gamma;
+
+/// While the ray's origin and the triangles' coordinates stay within this
+/// magnitude, every product of the f32 test is finite: translated
+/// coordinates are below 2^40, sheared ones below 2^41, edge functions
+/// (length²) below 2^83 and `t_scaled` (length² · t) below 2^128 for
+/// directions at least 1/4 long (camera and reflection rays are unit
+/// vectors) and for triangles within a shadow ray's segment (others lie
+/// beyond its end and are rejected whatever their `t`).
+pub const F32_REACH: f32 = (1u64 << 39) as f32;
 
 /// Per-ray constants of the shear transform, computed once per ray.
 #[derive(Clone, Copy, Debug)]
@@ -19,13 +48,25 @@ pub struct RayShear {
     pub sx: f32,
     pub sy: f32,
     pub sz: f32,
+    /// The ray may meet coordinates beyond [`F32_REACH`] of its origin:
+    /// every test of it runs in f64.
+    pub wide: bool,
 }
 
 impl RayShear {
-    /// Direction components below [`PARALLEL`](super::ray::PARALLEL) count
-    /// as zero, as in the box test, so the two agree on grazing rays.
+    /// For triangles whose coordinates are at most as large as the origin's
+    /// (see [`RayShear::within`]).
     #[inline]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Self::within(origin, dir, 0.0)
+    }
+
+    /// For triangles whose coordinates are at most `reach` in magnitude
+    /// (a BVH's bounds). Direction components below
+    /// [`PARALLEL`](super::ray::PARALLEL) count as zero, as in the box
+    /// test, so the two agree on grazing rays.
+    #[inline]
+    pub fn within(origin: Vec3, dir: Vec3, reach: f32) -> Self {
         let dir = super::ray::flush(dir);
         let a = dir.abs();
         let kz = if a.x > a.y {
@@ -53,6 +94,10 @@ impl RayShear {
             sx: d[kx] / d[kz],
             sy: d[ky] / d[kz],
             sz: 1.0 / d[kz],
+            // NaN (a broken origin or bound) takes the f64 path too.
+            wide: (origin.abs().max_element() + reach)
+                .partial_cmp(&F32_REACH)
+                .is_none_or(|o| o.is_gt()),
         }
     }
 }
@@ -80,6 +125,9 @@ pub fn intersect(
     p2: &[f32; 3],
     tmax: f32,
 ) -> Option<TriHit> {
+    if s.wide {
+        return intersect_wide(s, [p0, p1, p2], tmax);
+    }
     let (kx, ky, kz) = (s.kx, s.ky, s.kz);
     let o = &s.origin;
     let a = [p0[kx] - o[kx], p0[ky] - o[ky], p0[kz] - o[kz]];
@@ -127,14 +175,16 @@ pub fn intersect(
     }
     let inv = 1.0 / det;
     let t = t_scaled * inv;
-    // pbrt-v4's conservative bound on the rounding error of t: a hit closer
-    // than it may be the ray's own surface, seen through rounding.
+    // The conservative bound on the rounding error of t (see the module
+    // comment): a hit closer than it may be the ray's own surface, seen
+    // through rounding.
+    let max_z = a[2].abs().max(b[2].abs()).max(c[2].abs());
     let max_zt = az.abs().max(bz.abs()).max(cz.abs());
     let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
     let max_yt = ay.abs().max(by.abs()).max(cy.abs());
     let delta_z = gamma(3) * max_zt;
-    let delta_x = gamma(5) * (max_xt + max_zt);
-    let delta_y = gamma(5) * (max_yt + max_zt);
+    let delta_x = gamma(5) * (max_xt + 2.0 * (s.sx.abs() * max_z));
+    let delta_y = gamma(5) * (max_yt + 2.0 * (s.sy.abs() * max_z));
     let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
     let max_e = u.abs().max(v.abs()).max(w.abs());
     let delta_t =
@@ -149,6 +199,82 @@ pub fn intersect(
     })
 }
 
+/// pbrt's γₙ for f64 arithmetic.
+const fn gamma64(n: i32) -> f64 {
+    let nu = n as f64 * f64::EPSILON * 0.5;
+    nu / (1.0 - nu)
+}
+
+/// [`intersect`] in f64, for rays that may meet coordinates beyond
+/// [`F32_REACH`]: the same steps and the same conservative bound on `t`,
+/// with f64's rounding (and one more rounding for the translation, which
+/// f64 need not hold exactly). Out of line: such scenes are rare, and the
+/// packet tests call it lane by lane.
+#[cold]
+#[inline(never)]
+pub fn intersect_wide(s: &RayShear, p: [&[f32; 3]; 3], tmax: f32) -> Option<TriHit> {
+    let (kx, ky, kz) = (s.kx, s.ky, s.kz);
+    let o = s.origin.map(f64::from);
+    let [a, b, c] = p.map(|p| {
+        [
+            p[kx] as f64 - o[kx],
+            p[ky] as f64 - o[ky],
+            p[kz] as f64 - o[kz],
+        ]
+    });
+    let (sx, sy, sz) = (s.sx as f64, s.sy as f64, s.sz as f64);
+    let (ax, ay) = (a[0] - sx * a[2], a[1] - sy * a[2]);
+    let (bx, by) = (b[0] - sx * b[2], b[1] - sy * b[2]);
+    let (cx, cy) = (c[0] - sx * c[2], c[1] - sy * c[2]);
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let (az, bz, cz) = (sz * a[2], sz * b[2], sz * c[2]);
+    let t = (u * az + v * bz + w * cz) / det;
+    let max_z = a[2].abs().max(b[2].abs()).max(c[2].abs());
+    let max_zt = az.abs().max(bz.abs()).max(cz.abs());
+    let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
+    let max_yt = ay.abs().max(by.abs()).max(cy.abs());
+    let delta_z = gamma64(4) * max_zt;
+    let delta_x = gamma64(6) * (max_xt + 2.0 * (sx.abs() * max_z));
+    let delta_y = gamma64(6) * (max_yt + 2.0 * (sy.abs() * max_z));
+    let delta_e = 2.0 * (gamma64(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    let max_e = u.abs().max(v.abs()).max(w.abs());
+    let delta_t =
+        3.0 * (gamma64(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / det.abs();
+    // `t <= tmax` in f64 keeps `t as f32 <= tmax`: rounding is monotone.
+    if !(t > delta_t && t <= tmax as f64) {
+        return None;
+    }
+    let t32 = t as f32;
+    (t32 > 0.0 && t32.is_finite()).then(|| TriHit {
+        t: t32,
+        u: ((v / det) as f32).clamp(0.0, 1.0),
+        v: ((w / det) as f32).clamp(0.0, 1.0),
+    })
+}
+
+/// [`intersect_wide`] on the lanes of a packet `p[vertex][axis][lane]`.
+#[cold]
+#[inline(never)]
+fn wide_lanes<const N: usize>(
+    s: &RayShear,
+    p: &[[[f32; N]; 3]; 3],
+    tmax: f32,
+) -> [Option<TriHit>; N] {
+    std::array::from_fn(|lane| {
+        let v = p.map(|v| v.map(|a| a[lane]));
+        intersect_wide(s, [&v[0], &v[1], &v[2]], tmax)
+    })
+}
+
 /// [`RayShear`] with every constant splatted across four lanes, for
 /// [`intersect4`].
 #[derive(Clone, Copy, Debug)]
@@ -156,6 +282,8 @@ pub struct RayShear4 {
     pub k: [usize; 3],
     pub o: [Vec4; 3],
     pub s: [Vec4; 3],
+    /// The ray itself, for [`RayShear::wide`] rays.
+    pub ray: RayShear,
 }
 
 impl RayShear4 {
@@ -163,6 +291,7 @@ impl RayShear4 {
     pub fn new(s: &RayShear) -> Self {
         let k = [s.kx, s.ky, s.kz];
         RayShear4 {
+            ray: *s,
             k,
             o: [
                 Vec4::splat(s.origin[k[0]]),
@@ -190,6 +319,18 @@ pub struct TriHit4 {
 /// Lanes with NaN coordinates (padding) never hit.
 #[inline(always)]
 pub fn intersect4(r: &RayShear4, p: &[[Vec4; 3]; 3], tmax: f32) -> TriHit4 {
+    if r.ray.wide {
+        let h = wide_lanes(&r.ray, &p.map(|v| v.map(|a| a.to_array())), tmax);
+        let get = |f: fn(&TriHit) -> f32, none: f32| {
+            Vec4::from_array(h.map(|x| x.as_ref().map_or(none, f)))
+        };
+        return TriHit4 {
+            mask: (0..4).filter(|&i| h[i].is_some()).map(|i| 1 << i).sum(),
+            t: get(|x| x.t, f32::INFINITY),
+            u: get(|x| x.u, 0.0),
+            v: get(|x| x.v, 0.0),
+        };
+    }
     let [kx, ky, kz] = r.k;
     let [ox, oy, oz] = r.o;
     let [sx, sy, sz] = r.s;
@@ -223,6 +364,7 @@ pub fn intersect4(r: &RayShear4, p: &[[Vec4; 3]; 3], tmax: f32) -> TriHit4 {
     let neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
     let pos = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
     let det = u + v + w;
+    let (az0, bz0, cz0) = (az, bz, cz);
     let (az, bz, cz) = (sz * az, sz * bz, sz * cz);
     let t_scaled = u * az + v * bz + w * cz;
     let flip = det.cmplt(zero);
@@ -243,10 +385,11 @@ pub fn intersect4(r: &RayShear4, p: &[[Vec4; 3]; 3], tmax: f32) -> TriHit4 {
     let max_zt = az.abs().max(bz.abs()).max(cz.abs());
     let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
     let max_yt = ay.abs().max(by.abs()).max(cy.abs());
+    let max_z = az0.abs().max(bz0.abs()).max(cz0.abs());
     let g = |n| Vec4::splat(gamma(n));
     let delta_z = g(3) * max_zt;
-    let delta_x = g(5) * (max_xt + max_zt);
-    let delta_y = g(5) * (max_yt + max_zt);
+    let delta_x = g(5) * (max_xt + 2.0 * (sx.abs() * max_z));
+    let delta_y = g(5) * (max_yt + 2.0 * (sy.abs() * max_z));
     let delta_e = 2.0 * (g(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
     let max_e = u.abs().max(v.abs()).max(w.abs());
     let delta_t = 3.0 * (g(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv.abs();
@@ -327,6 +470,26 @@ pub(crate) unsafe fn intersect8_avx<const UV: bool>(
     tmax: f32,
 ) -> TriHit8 {
     use std::arch::x86_64::*;
+    if s.wide {
+        let h = wide_lanes(s, p, tmax);
+        let mut out = TriHit8 {
+            mask: 0,
+            t: [f32::INFINITY; 8],
+            u: [0.0; 8],
+            v: [0.0; 8],
+        };
+        for (lane, hit) in h.iter().enumerate() {
+            if let Some(hit) = hit {
+                out.mask |= 1 << lane;
+                out.t[lane] = hit.t;
+                if UV {
+                    out.u[lane] = hit.u;
+                    out.v[lane] = hit.v;
+                }
+            }
+        }
+        return out;
+    }
     // Macros, not closures: a closure here would be compiled on its own,
     // without AVX, and called.
     macro_rules! ld {
@@ -367,6 +530,7 @@ pub(crate) unsafe fn intersect8_avx<const UV: bool>(
     let mut v = sub(mul(ax, cy), mul(ay, cx));
     let mut w = sub(mul(bx, ay), mul(by, ax));
     let zero = _mm256_setzero_ps();
+    let sign = set(-0.0);
     let on_edge = _mm256_movemask_ps(or(
         or(cmp!(_CMP_EQ_OQ, u, zero), cmp!(_CMP_EQ_OQ, v, zero)),
         cmp!(_CMP_EQ_OQ, w, zero),
@@ -390,9 +554,9 @@ pub(crate) unsafe fn intersect8_avx<const UV: bool>(
         cmp!(_CMP_GT_OQ, w, zero),
     );
     let det = add(add(u, v), w);
+    let (az0, bz0, cz0) = (az, bz, cz);
     let (az, bz, cz) = (mul(sz, az), mul(sz, bz), mul(sz, cz));
     let t_scaled = add(add(mul(u, az), mul(v, bz)), mul(w, cz));
-    let sign = set(-0.0);
     let flip = cmp!(_CMP_LT_OQ, det, zero);
     let ts = _mm256_blendv_ps(t_scaled, _mm256_xor_ps(t_scaled, sign), flip);
     let d = _mm256_blendv_ps(det, _mm256_xor_ps(det, sign), flip);
@@ -438,8 +602,15 @@ pub(crate) unsafe fn intersect8_avx<const UV: bool>(
     let max_yt = max(max(aay, aby), acy);
     let (g2, g3, g5) = (set(gamma(2)), set(gamma(3)), set(gamma(5)));
     let delta_z = mul(g3, max_zt);
-    let delta_x = mul(g5, add(max_xt, max_zt));
-    let delta_y = mul(g5, add(max_yt, max_zt));
+    let max_z = max(
+        max(_mm256_andnot_ps(sign, az0), _mm256_andnot_ps(sign, bz0)),
+        _mm256_andnot_ps(sign, cz0),
+    );
+    let two = set(2.0);
+    let shear_x = mul(two, mul(_mm256_andnot_ps(sign, sx), max_z));
+    let shear_y = mul(two, mul(_mm256_andnot_ps(sign, sy), max_z));
+    let delta_x = mul(g5, add(max_xt, shear_x));
+    let delta_y = mul(g5, add(max_yt, shear_y));
     let delta_e = mul(
         set(2.0),
         add(
@@ -607,7 +778,19 @@ mod tests {
 
     /// Lane `i` of `intersect4` against the scalar test on the same triangle.
     fn check_lanes(o: Vec3, d: Vec3, tris: &[[[f32; 3]; 3]; 4], pad: usize, tmax: f32) {
-        let s = RayShear::new(o, d);
+        check_lanes_with(RayShear::new(o, d), o, d, tris, pad, tmax);
+        // The same in f64, as for rays that may meet huge coordinates.
+        check_lanes_with(RayShear::within(o, d, f32::MAX), o, d, tris, pad, tmax);
+    }
+
+    fn check_lanes_with(
+        s: RayShear,
+        o: Vec3,
+        d: Vec3,
+        tris: &[[[f32; 3]; 3]; 4],
+        pad: usize,
+        tmax: f32,
+    ) {
         let mut p = [[[f32::NAN; 4]; 3]; 3];
         for (lane, t) in tris.iter().enumerate().take(4 - pad) {
             for v in 0..3 {
@@ -658,6 +841,43 @@ mod tests {
                 assert_eq!(got, want, "eight lanes: lane {lane}, ray {o} {d}");
             }
         }
+    }
+
+    /// The f64 test finds the f32 test's hits, at the same `t` up to
+    /// rounding, and its misses, on triangles the ray does not graze.
+    #[test]
+    fn the_f64_test_agrees_with_the_f32_test() {
+        let mut r = crate::geometry::sampling::Rng::for_sample(5, 7, 9);
+        let mut f = || r.next_f32() * 2.0 - 1.0;
+        let mut hits = 0;
+        for _ in 0..100_000 {
+            let o = Vec3::new(f(), f(), f()) * 3.0;
+            let d = Vec3::new(f(), f(), f());
+            let t = [[f(), f(), f()], [f(), f(), f()], [f(), f(), f()]];
+            let narrow = intersect(&RayShear::new(o, d), &t[0], &t[1], &t[2], f32::INFINITY);
+            let wide = intersect(
+                &RayShear::within(o, d, f32::MAX),
+                &t[0],
+                &t[1],
+                &t[2],
+                f32::INFINITY,
+            );
+            let near_edge = narrow
+                .or(wide)
+                .is_some_and(|h| h.u.min(h.v).min(1.0 - h.u - h.v) < 1e-4 || h.t < 1e-4);
+            if near_edge {
+                continue;
+            }
+            match (narrow, wide) {
+                (Some(a), Some(b)) => {
+                    hits += 1;
+                    assert!((a.t - b.t).abs() <= 1e-5 * a.t, "{a:?} {b:?}");
+                }
+                (None, None) => {}
+                (a, b) => panic!("f32 {a:?}, f64 {b:?}, ray {o} {d}, triangle {t:?}"),
+            }
+        }
+        assert!(hits > 250, "{hits} hits");
     }
 
     #[test]

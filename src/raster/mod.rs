@@ -1,3 +1,147 @@
-//! Images as data: drawing onto them.
+//! Images as data: drawing onto them ([`canvas`]), and image files, the
+//! one place rayterm reads and writes them: PNG for
+//! pictures, OpenEXR (32-bit float) and Radiance `.hdr` (8-bit mantissas)
+//! for linear images such as references. Every write goes through
+//! [`Output`] (regular files replaced atomically, devices written in place),
+//! and every read checks the size an image declares before decoding it.
 
 pub mod canvas;
+pub mod hdr;
+pub mod openexr;
+pub mod output;
+pub mod png;
+
+use std::path::Path;
+
+use anyhow::{bail, Result};
+use glam::Vec3;
+
+pub use output::{Format, Output};
+
+/// The most memory a decoded image may take (1 GiB): a header declaring more
+/// is refused before anything is allocated.
+pub const MAX_DECODED_BYTES: u64 = 1 << 30;
+
+/// Refuses a `width x height` image of `bytes_per_pixel` decoded bytes per
+/// pixel beyond [`MAX_DECODED_BYTES`], naming `path` and the memory needed.
+pub fn check_size(path: &Path, width: u32, height: u32, bytes_per_pixel: u64) -> Result<()> {
+    let need = width as u64 * height as u64 * bytes_per_pixel;
+    if need > MAX_DECODED_BYTES {
+        bail!(
+            "{}: a {width}x{height} image would need {} to decode; rayterm reads images up \
+             to {}",
+            path.display(),
+            bytes(need),
+            bytes(MAX_DECODED_BYTES)
+        );
+    }
+    Ok(())
+}
+
+/// Opens `path` for reading, refusing anything but a regular file (a FIFO
+/// would hang, a device would read forever).
+fn open(path: &Path) -> Result<std::fs::File> {
+    let m = std::fs::metadata(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    if !m.is_file() {
+        bail!("{}: not a regular file", path.display());
+    }
+    std::fs::File::open(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+}
+
+/// A byte count in binary units.
+fn bytes(n: u64) -> String {
+    let units = ["bytes", "KiB", "MiB", "GiB", "TiB"];
+    let mut v = n as f64;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < units.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{n} bytes")
+    } else {
+        format!("{v:.1} {}", units[u])
+    }
+}
+
+/// Formats for linear (unclamped, untoned) images.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Linear {
+    /// OpenEXR, 32-bit float RGB: exact.
+    Exr,
+    /// Radiance RGBE: 8-bit mantissas sharing an exponent, rounded to
+    /// nearest (see [`hdr`]).
+    Hdr,
+}
+
+impl Linear {
+    /// The format an output or input path names by its extension.
+    pub fn of(path: &Path) -> Option<Linear> {
+        let ext = path.extension()?.to_str()?;
+        if ext.eq_ignore_ascii_case("exr") {
+            Some(Linear::Exr)
+        } else if ext.eq_ignore_ascii_case("hdr") {
+            Some(Linear::Hdr)
+        } else {
+            None
+        }
+    }
+}
+
+/// A linear image, row-major from the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<Vec3>,
+    pub format: Linear,
+}
+
+/// Reads a linear image, in the format its extension names.
+pub fn read_linear(path: &Path) -> Result<Image> {
+    let format = Linear::of(path).ok_or_else(|| {
+        anyhow::anyhow!(
+            "{}: a linear image must be OpenEXR (.exr) or Radiance HDR (.hdr)",
+            path.display()
+        )
+    })?;
+    let (width, height, pixels) = match format {
+        Linear::Exr => openexr::read(path)?,
+        Linear::Hdr => hdr::read(path)?,
+    };
+    Ok(Image {
+        width,
+        height,
+        pixels,
+        format,
+    })
+}
+
+/// Writes a linear image, in the format its extension names.
+pub fn write_linear(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<()> {
+    let out = Output::check(path, &[], &[Format::Exr, Format::Hdr])?;
+    out.write(&out.format.encode_linear(width, height, pixels)?)
+}
+
+/// Writes a picture as PNG.
+pub fn write_png(path: &Path, img: &image::RgbImage) -> Result<()> {
+    Output::check(path, &[], &[Format::Png])?.write(&png::encode(img)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_read_in_binary_units() {
+        assert_eq!(bytes(512), "512 bytes");
+        assert_eq!(bytes(120_000_000_000), "111.8 GiB");
+        let e = check_size(Path::new("big.hdr"), 100_000, 100_000, 12).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "big.hdr: a 100000x100000 image would need 111.8 GiB to decode; rayterm reads \
+             images up to 1.0 GiB"
+        );
+        assert!(check_size(Path::new("ok.hdr"), 4096, 4096, 12).is_ok());
+    }
+}

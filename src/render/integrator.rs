@@ -10,15 +10,12 @@ use super::plan::Plan;
 use super::recorder::{HitInfo, LightSample, MissInfo, RayKind, Recorder};
 use crate::bvh::{Bvh, Hit};
 use crate::geometry::offset::{geometric_normal, hit_point, offset_origin, SHADOW_EPSILON};
-use crate::geometry::sampling::{jittered, permute, phong_lobe, Rng};
+use crate::geometry::sampling::{jittered, phong_lobe, pixel_stratum, Rng, PIXEL_GRID};
 use crate::geometry::Ray;
 use crate::scene::camera::CameraFrame;
 use crate::scene::texture::{cube_face_uv, FACE_NAMES};
 use crate::scene::{Environment, Light, Material, Scene};
 
-/// Sub-pixel strata per side: consecutive runs of `JITTER_GRID²` samples of
-/// a pixel cover every stratum once.
-const JITTER_GRID: u32 = 4;
 /// Tries to draw a glossy direction above the surface before using the mirror direction.
 const GLOSSY_TRIES: u32 = 8;
 
@@ -70,19 +67,22 @@ impl<'a> Tracer<'a> {
         }
     }
 
+    /// The sub-pixel stratum of sample `k` of pixel `(x, y)` when pixel
+    /// samples are jittered ([`pixel_stratum`]), else `None`.
+    pub fn stratum(&self, x: u32, y: u32, k: u32) -> Option<u32> {
+        let pixel = y as u64 * self.width as u64 + x as u64;
+        (self.plan.supersampling && self.scene.settings.stratify)
+            .then(|| pixel_stratum(pixel, k, self.seed))
+    }
+
     /// Sample `k` of pixel `(x, y)`: the same value whoever asks, in any order.
     pub fn sample<R: Recorder>(&self, x: u32, y: u32, k: u32, rec: &mut R) -> Vec3 {
         let pixel = y as u64 * self.width as u64 + x as u64;
         let mut rng = Rng::for_sample(pixel, k as u64, self.seed);
-        let off = if self.plan.supersampling && !self.scene.settings.stratify {
-            rng.next_vec2()
+        let off = if let Some(stratum) = self.stratum(x, y, k) {
+            jittered(stratum, PIXEL_GRID, rng.next_vec2())
         } else if self.plan.supersampling {
-            // Each run of 16 samples visits the 16 strata once, in a random
-            // order per pixel and run, so any prefix is spread over the pixel.
-            let n = JITTER_GRID * JITTER_GRID;
-            let run = Rng::for_sample(pixel, (k / n) as u64, self.seed ^ 0x5bd1_e995).next_u32();
-            let stratum = permute(k % n, n, run);
-            jittered(stratum, JITTER_GRID, rng.next_vec2())
+            rng.next_vec2()
         } else {
             Vec2::splat(0.5)
         };

@@ -6,7 +6,6 @@ pub mod debug_view;
 pub mod features;
 pub mod film;
 pub mod integrator;
-pub mod output;
 pub mod overlay;
 pub mod plan;
 pub mod post;

@@ -164,7 +164,7 @@ impl Progressive {
         }
         if stop
             .error
-            .is_some_and(|e| f.spp >= 2 && f.relative_error() < e)
+            .is_some_and(|e| f.error_is_meaningful() && f.relative_error().is_some_and(|r| r < e))
         {
             return Some(Ended::Error);
         }
@@ -229,7 +229,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
 ) -> R {
     let w = film.width as usize;
     let first = film.spp;
-    let results: Vec<(R, Vec<BadSample>)> = film
+    let results: Vec<(R, Vec<BadSample>, bool)> = film
         .pixels
         .par_chunks_mut(w.max(1))
         .enumerate()
@@ -237,13 +237,13 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             let mut rec = R::default();
             let mut bad = Vec::new();
             if cancel() {
-                return (rec, bad);
+                return (rec, bad, false);
             }
             for (x, px) in row.iter_mut().enumerate() {
                 for k in first..first + samples {
                     let c: Vec3 = tracer.sample(x as u32, y as u32, k, &mut rec);
                     if c.is_finite() {
-                        px.add(c);
+                        px.add(k, c, tracer.stratum(x as u32, y as u32, k));
                     } else {
                         bad.push(BadSample {
                             x: x as u32,
@@ -256,12 +256,15 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             if let Some(r) = rows_done {
                 r.fetch_add(1, Ordering::Relaxed);
             }
-            (rec, bad)
+            (rec, bad, true)
         })
         .collect();
-    film.spp += samples;
+    // A pass cut between rows leaves `spp` at what every pixel has.
+    if results.iter().all(|r| r.2) {
+        film.spp += samples;
+    }
     let mut total = R::default();
-    for (rec, bad) in results {
+    for (rec, bad, _) in results {
         total.merge(&rec);
         for b in bad {
             film.record_bad(b);

@@ -67,7 +67,9 @@ impl Session {
     /// Loads the scene `req` names and prepares it; the load warnings are
     /// returned for the caller to show.
     pub fn open(req: &SceneRequest) -> Result<(Session, Vec<String>)> {
-        Ok(Self::with_scene(scene::load(&req.spec)?, req))
+        let scene = scene::load(&req.spec)?;
+        scene::check_reach(&scene)?;
+        Ok(Self::with_scene(scene, req))
     }
 
     /// Prepares a scene already in memory (built in code, or loaded another

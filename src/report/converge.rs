@@ -16,13 +16,13 @@ mod resample;
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
-pub use metrics::{estimated_rel_mse, luminance, rel_mse, rel_mse_on, rmse};
+pub use metrics::{luminance, rel_mse, rel_mse_on, rmse};
 pub use plot::draw as plot;
-pub use reference::{default_cache_dir, encode_hdr, load_reference, save_reference};
+pub use reference::{default_cache_dir, format_floor, load_reference, save_reference};
 pub use resample::{resample, Resampled};
 
 use crate::bvh::Bvh;
@@ -30,7 +30,7 @@ use crate::render::{Film, Plan, Progressive, Stop, Tracer};
 use crate::report::stats::{fit_log_log, median};
 use crate::scene::{Scene, Settings};
 use metrics::log_lerp;
-use reference::{quantised, reference_key};
+use reference::reference_key;
 
 /// A rendered reference has this many times the samples of the largest budget...
 const REFERENCE_FACTOR: u32 = 64;
@@ -329,7 +329,7 @@ impl Series {
 /// Where the reference comes from.
 #[derive(Clone, Debug)]
 pub enum ReferenceSource {
-    /// A linear .hdr image of the study's size.
+    /// A linear image (.exr or .hdr) of the study's size.
     File(PathBuf),
     /// An image known some other way (computed exactly, say).
     Image(Vec<Vec3>),
@@ -447,7 +447,7 @@ impl Subject<'_> {
             rays += r.rays as f64 / n;
             mse += rmse(&img, reference).powi(2) / n;
             rel += rel_mse(&img, reference) / n;
-            est = est.zip(estimated_rel_mse(&r.film)).map(|(a, b)| a + b / n);
+            est = est.zip(r.film.estimated_rel_mse()).map(|(a, b)| a + b / n);
         }
         Point {
             budget,
@@ -480,12 +480,24 @@ impl Subject<'_> {
                 Ok((img.clone(), info))
             }
             ReferenceSource::File(path) => {
-                let (rw, rh, img) = load_reference(path)?;
+                let loaded = crate::raster::read_linear(path)
+                    .with_context(|| format!("cannot load the reference {}", path.display()))?;
+                let (rw, rh, img) = (loaded.width, loaded.height, loaded.pixels);
                 if (rw, rh) != (w, h) {
                     bail!(
                         "reference {} is {rw}x{rh} but the study renders {w}x{h}: pass --size {rw}x{rh}",
                         path.display()
                     );
+                }
+                let floor = format_floor(loaded.format, &img);
+                if floor > 0.0 {
+                    notes.push(format!(
+                        "the reference {} is Radiance .hdr (8-bit mantissas): its rounding alone \
+                         is a relative error of {:.3} %, so errors below about that cannot be \
+                         measured against it (an .exr reference stores f32 exactly)",
+                        path.display(),
+                        100.0 * floor
+                    ));
                 }
                 let info = ReferenceInfo {
                     source: path.display().to_string(),
@@ -521,7 +533,7 @@ impl Subject<'_> {
                     .collect();
                 let file = cache
                     .as_ref()
-                    .map(|d| d.join(format!("{slug}-{w}x{h}-{spp}spp-{key:016x}.hdr")));
+                    .map(|d| d.join(format!("{slug}-{w}x{h}-{spp}spp-{key:016x}.exr")));
                 if let Some(f) = file.as_ref().filter(|f| f.exists()) {
                     match load_reference(f) {
                         Ok((rw, rh, img)) if (rw, rh) == (w, h) => {
@@ -547,9 +559,16 @@ impl Subject<'_> {
                     bar.set_message(format!("reference: {}/{spp} spp", film.spp))
                 });
                 let seconds = o.seconds;
-                let img = quantised(w, h, &p.film.image())?;
+                let img = p.film.image();
+                let cached = |f: &std::path::Path| -> Result<()> {
+                    if let Some(dir) = f.parent() {
+                        std::fs::create_dir_all(dir)
+                            .with_context(|| format!("cannot create {}", dir.display()))?;
+                    }
+                    save_reference(f, w, h, &img)
+                };
                 let source = match &file {
-                    Some(f) => match save_reference(f, w, h, &img) {
+                    Some(f) => match cached(f) {
                         Ok(()) => format!("rendered, cached as {}", f.display()),
                         Err(e) => {
                             notes.push(format!("reference not cached: {e:#}"));

@@ -103,6 +103,7 @@ pub fn run_battery_on(scene: &crate::scene::Scene, o: &Options) -> Result<Vec<Ro
     if o.width < 16 || o.height < 16 {
         bail!("the stability battery needs images of at least 16x16");
     }
+    crate::scene::check_reach(scene)?;
     let mut rows = scale_offset(scene, o).context("scale and offset cases")?;
     rows.extend(watertight(o).context("watertightness cases")?);
     rows.extend(grazing(o).context("grazing cases")?);

@@ -8,6 +8,7 @@ pub mod file;
 pub mod light;
 pub mod material;
 pub mod obj;
+mod reach;
 pub mod source;
 pub mod texture;
 
@@ -19,6 +20,7 @@ use glam::{Vec2, Vec3};
 pub use camera::Camera;
 pub use light::Light;
 pub use material::Material;
+pub use reach::check_reach;
 pub use texture::{CubeMap, Texture};
 
 use crate::geometry::Aabb;

@@ -10,7 +10,8 @@ use std::thread::JoinHandle;
 
 use anyhow::{bail, Context, Result};
 
-use crate::render::{output, post, Ended, Plan, Progressive, Session, Stop};
+use crate::raster::output;
+use crate::render::{post, Ended, Plan, Progressive, Session, Stop};
 use crate::scene::Camera;
 
 /// What to export: the session's scene with its seed, seen from `camera`
@@ -134,7 +135,7 @@ fn render(r: &Request, spp: u32, done: &AtomicU32, stop: &AtomicBool) -> Result<
     }
     let shown = post::display(p.film.image(), w, h, &r.plan, &s.scene.settings.bloom);
     let path = output::fresh_name(&r.dir, &format!("rayterm-{}", stem(&s.scene.name)));
-    output::save_png_atomic(&post::to_rgb8(&shown.image, w, h), &path)?;
+    crate::raster::write_png(&path, &post::to_rgb8(&shown.image, w, h))?;
     Ok(Saved {
         path,
         spp: p.film.spp,

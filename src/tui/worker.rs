@@ -163,8 +163,9 @@ pub struct Snapshot {
     pub spp: u32,
     pub pass_ms: f64,
     pub mrays: f64,
-    /// The film's estimated relative error.
-    pub error: f64,
+    /// The film's estimated relative error ([`Film::relative_error`]),
+    /// unknown below two samples.
+    pub error: Option<f64>,
     /// Nothing is sampled and one pass is done: the image is exact.
     pub exact: bool,
     /// No more passes will come for this view.
@@ -417,8 +418,7 @@ impl Worker {
         self.last_full_ms = Some((pass.ms, view.plan.bvh));
         self.last_mrays = pass.mrays_per_s();
         let elapsed = self.started.elapsed().as_secs_f64();
-        let error = self.film.film.relative_error();
-        if self.film.film.spp >= 2 && error > 0.0 {
+        if let Some(error) = self.film.film.relative_error().filter(|&e| e > 0.0) {
             self.history.push((elapsed, error));
         }
         let mean = self.film.film.image();
@@ -504,7 +504,7 @@ impl Worker {
             spp: 0,
             pass_ms: pass.ms,
             mrays: pass.mrays_per_s(),
-            error: 0.0,
+            error: None,
             exact: false,
             done: false,
             elapsed: self.started.elapsed().as_secs_f64(),
@@ -699,10 +699,10 @@ mod tests {
             e17 < 0.5 * e1,
             "true error {e1} after 1 spp, {e17} after 17"
         );
+        let est = last.error.expect("an estimate at 17 spp");
         assert!(
-            (0.5..2.0).contains(&(last.error / e17)),
-            "estimate {} against true {e17}",
-            last.error
+            (0.5..2.0).contains(&(est / e17)),
+            "estimate {est} against true {e17}"
         );
         assert_eq!(last.true_history.len(), 17);
         // Bloom does not change the film; shadows and the camera do.

@@ -3,7 +3,6 @@
 use glam::Vec3;
 
 use crate::render::film::{LUMA, REL_EPS};
-use crate::render::Film;
 
 /// Luminance of a linear colour.
 #[inline]
@@ -53,16 +52,6 @@ pub fn rel_mse_on(img: &[Vec3], pairs: &[(u32, Vec3)]) -> f64 {
         })
         .sum();
     sum / pairs.len() as f64
-}
-
-/// The film's own estimate of its relMSE ([`Film::estimated_rel_mse`]);
-/// `None` before every pixel has two samples, when there is no variance to
-/// go on.
-pub fn estimated_rel_mse(film: &Film) -> Option<f64> {
-    if film.pixels.is_empty() || film.pixels.iter().any(|p| p.n < 2) {
-        return None;
-    }
-    Some(film.estimated_rel_mse())
 }
 
 /// `y` at `x` on the straight line through two points in log-log space.

@@ -72,12 +72,14 @@ pub const IMAGE_LIMIT_PIXELS: f64 = 4.0;
 pub const PIXEL_TOLERANCE: f32 = 0.02;
 
 /// Watches the integrator: the triangle hit by each open ray (with the
-/// barycentrics of the hit), whether the camera ray hit, and every shadow
-/// ray from a surface facing its light.
+/// barycentrics of the hit), whether the camera ray hit, whether a shadow
+/// ray from its hit was blocked, and every shadow ray from a surface facing
+/// its light.
 struct Probe<'g> {
     geom: &'g Geometry,
     stack: Vec<Option<(u32, f32, f32)>>,
     primary: bool,
+    shadowed: bool,
     lit: u64,
     acne: u64,
 }
@@ -103,6 +105,9 @@ impl Recorder for Probe<'_> {
             return;
         }
         self.lit += 1;
+        if self.stack.len() == 1 && s.occluder.is_some() {
+            self.shadowed = true;
+        }
         if let (Some((_, occ)), Some(Some((tri, u, v)))) = (s.occluder, self.stack.last()) {
             if own_surface(self.geom, *tri, occ, *u, *v) {
                 self.acne += 1;
@@ -134,10 +139,13 @@ pub fn own_surface(g: &Geometry, hit: u32, occ: u32, u: f32, v: f32) -> bool {
 }
 
 /// What one render through the probe saw.
+#[derive(Default)]
 pub struct Probed {
     pub image: Vec<Vec3>,
     /// Whether each pixel's camera ray hit the scene.
     pub primary: Vec<bool>,
+    /// Whether a shadow ray from each pixel's camera hit was blocked.
+    pub shadowed: Vec<bool>,
     /// Shadow rays from surfaces facing their light, and those that hit their own surface.
     pub lit: u64,
     pub acne: u64,
@@ -148,37 +156,37 @@ pub fn probe_render(scene: &Scene, bvh: &Bvh, w: u32, h: u32, seed: u64) -> Prob
     let features = Features::all().without(&[Feature::Supersampling, Feature::Bloom]);
     let plan = Plan::new(scene, features, PlanPolicy::Prune);
     let tracer = Tracer::new(scene, bvh, &plan, scene.camera.frame(w, h), seed);
-    let rows: Vec<(Vec<Vec3>, Vec<bool>, u64, u64)> = (0..h)
+    let rows: Vec<Probed> = (0..h)
         .into_par_iter()
         .map(|y| {
             let mut rec = Probe {
                 geom: &scene.geometry,
                 stack: Vec::new(),
                 primary: false,
+                shadowed: false,
                 lit: 0,
                 acne: 0,
             };
-            let mut img = Vec::with_capacity(w as usize);
-            let mut prim = Vec::with_capacity(w as usize);
+            let mut row = Probed::default();
             for x in 0..w {
                 rec.primary = false;
-                img.push(tracer.sample(x, y, 0, &mut rec));
-                prim.push(rec.primary);
+                rec.shadowed = false;
+                row.image.push(tracer.sample(x, y, 0, &mut rec));
+                row.primary.push(rec.primary);
+                row.shadowed.push(rec.shadowed);
             }
-            (img, prim, rec.lit, rec.acne)
+            row.lit = rec.lit;
+            row.acne = rec.acne;
+            row
         })
         .collect();
-    let mut out = Probed {
-        image: Vec::with_capacity((w * h) as usize),
-        primary: Vec::with_capacity((w * h) as usize),
-        lit: 0,
-        acne: 0,
-    };
-    for (img, prim, lit, acne) in rows {
-        out.image.extend(img);
-        out.primary.extend(prim);
-        out.lit += lit;
-        out.acne += acne;
+    let mut out = Probed::default();
+    for row in rows {
+        out.image.extend(row.image);
+        out.primary.extend(row.primary);
+        out.shadowed.extend(row.shadowed);
+        out.lit += row.lit;
+        out.acne += row.acne;
     }
     out
 }
@@ -250,9 +258,11 @@ pub fn aimed_leaks(scene: &Scene, bvh: &Bvh, rays: u32, seed: u64) -> (u64, u64)
     (targets.len() as u64, missed as u64)
 }
 
-/// Pixels whose camera ray hit in the reference, as did all eight
-/// neighbours' (so the pixel is not on a silhouette), but missed in `probed`.
-fn pixel_leaks(reference: &[bool], probed: &[bool], w: u32, h: u32) -> (u64, u64) {
+/// Pixels set in `reference` whose eight neighbours are set too (so the
+/// pixel is not on a silhouette or a shadow's edge), and how many of them
+/// are not set in `probed`: camera rays that hit and then leaked, or shadows
+/// that vanished.
+pub fn interior_lost(reference: &[bool], probed: &[bool], w: u32, h: u32) -> (u64, u64) {
     let (w, h) = (w as i64, h as i64);
     let at = |x: i64, y: i64| x >= 0 && y >= 0 && x < w && y < h && reference[(y * w + x) as usize];
     let (mut n, mut leaks) = (0, 0);
@@ -330,7 +340,7 @@ fn transform_rows(scene: &Scene, t: Transform, reference: &Probed, o: &Options) 
             probed.acne, probed.lit
         ),
     ));
-    let (pn, pl) = pixel_leaks(&reference.primary, &probed.primary, w, h);
+    let (pn, pl) = interior_lost(&reference.primary, &probed.primary, w, h);
     let (an, al) = aimed_leaks(&moved, &bvh, o.rays / 10, o.seed);
     rows.push(Row::at_most(
         format!("{label}: leaks"),

@@ -140,12 +140,10 @@ pub fn render(f: &mut Frame, area: Rect, app: &App) {
             Line::from(bytes),
         ],
         Some(s) => {
-            let error = if s.exact {
-                "error: exact (nothing sampled)".to_string()
-            } else if s.spp < 2 {
-                "error: needs 2 spp".to_string()
-            } else {
-                format!("error {:.2}% (estimated)", s.error * 100.0)
+            let error = match s.error {
+                _ if s.exact => "error: exact (nothing sampled)".to_string(),
+                None => "error: unknown until 2 spp".to_string(),
+                Some(e) => format!("error {:.2}% (estimated)", e * 100.0),
             };
             let done = if s.done && !s.exact { " (done)" } else { "" };
             let mut v = vec![

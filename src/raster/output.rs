@@ -10,6 +10,7 @@ use std::os::unix::fs::{FileTypeExt, MetadataExt, OpenOptionsExt};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
+use glam::Vec3;
 
 /// The image formats `rayterm render -o` writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -18,17 +19,42 @@ pub enum Format {
     Png,
     /// The linear film before bloom, 8-bit mantissas.
     Hdr,
+    /// The linear film before bloom, 32-bit float: exact.
+    Exr,
+    /// A table of numbers.
+    Csv,
 }
 
 impl Format {
-    const NAMES: &'static str = ".png (the image), .hdr (the linear film)";
+    /// What a render writes.
+    pub const RENDERS: &'static [Format] = &[Format::Png, Format::Exr, Format::Hdr];
+
+    fn describe(self) -> &'static str {
+        match self {
+            Format::Png => ".png (the picture)",
+            Format::Hdr => ".hdr (the linear film, 8-bit mantissas)",
+            Format::Exr => ".exr (the linear film, 32-bit float)",
+            Format::Csv => ".csv (the table)",
+        }
+    }
 
     fn of(path: &Path) -> Option<Format> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         match ext.as_str() {
             "png" => Some(Format::Png),
             "hdr" => Some(Format::Hdr),
+            "exr" => Some(Format::Exr),
+            "csv" => Some(Format::Csv),
             _ => None,
+        }
+    }
+
+    /// A linear image encoded in this format; PNG is not linear.
+    pub fn encode_linear(self, width: u32, height: u32, img: &[Vec3]) -> Result<Vec<u8>> {
+        match self {
+            Format::Hdr => super::hdr::encode(width, height, img),
+            Format::Exr => super::openexr::encode(width, height, img),
+            Format::Png | Format::Csv => bail!("{} is not a linear image format", self.describe()),
         }
     }
 }
@@ -43,8 +69,10 @@ pub struct Output {
 }
 
 impl Output {
-    /// Checks `path` as the output of a render whose inputs are `inputs`.
-    pub fn check(path: &Path, inputs: &[PathBuf]) -> Result<Output> {
+    /// Checks `path` as an output in one of the `accepted` formats (by its
+    /// extension; a device or FIFO without one gets the first) of a command
+    /// whose inputs are `inputs`.
+    pub fn check(path: &Path, inputs: &[PathBuf], accepted: &[Format]) -> Result<Output> {
         let shown = path.display();
         let mut device = None;
         match fs::metadata(path) {
@@ -86,11 +114,15 @@ impl Output {
         }
         // A device or pipe gets a PNG unless its name says otherwise.
         let format = match (Format::of(path), device.is_some()) {
-            (Some(f), _) => f,
-            (None, true) => Format::Png,
-            (None, false) => bail!(
-                "{shown}: unknown image format; rayterm writes {}",
-                Format::NAMES
+            (Some(f), _) if accepted.contains(&f) => f,
+            (None, true) => accepted[0],
+            _ => bail!(
+                "{shown}: unknown format; this writes {}",
+                accepted
+                    .iter()
+                    .map(|f| f.describe())
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ),
         };
         if device.is_none() {
@@ -181,14 +213,12 @@ fn check_directory(path: &Path) -> Result<()> {
     }
 }
 
-/// `img` encoded as PNG.
-pub fn png(img: &image::RgbImage) -> Result<Vec<u8>> {
-    let mut bytes = Vec::new();
-    img.write_to(
-        &mut std::io::Cursor::new(&mut bytes),
-        image::ImageFormat::Png,
-    )?;
-    Ok(bytes)
+/// `stem-NNN.png` for the first number not taken yet, in `dir`.
+pub fn fresh_name(dir: &Path, stem: &str) -> PathBuf {
+    (1..)
+        .map(|n| dir.join(format!("{stem}-{n:03}.png")))
+        .find(|p| !p.exists())
+        .expect("an unused file name exists")
 }
 
 /// An I/O error in words, without the OS error number.
@@ -214,17 +244,23 @@ mod tests {
     fn formats_by_extension() {
         let d = dir("fmt");
         assert_eq!(
-            Output::check(&d.join("a.PNG"), &[]).unwrap().format,
+            Output::check(&d.join("a.PNG"), &[], Format::RENDERS)
+                .unwrap()
+                .format,
             Format::Png
         );
         assert_eq!(
-            Output::check(&d.join("a.hdr"), &[]).unwrap().format,
+            Output::check(&d.join("a.hdr"), &[], Format::RENDERS)
+                .unwrap()
+                .format,
             Format::Hdr
         );
         for bad in ["a.jpg", "noext", "a.png.tmp"] {
-            let e = Output::check(&d.join(bad), &[]).unwrap_err().to_string();
+            let e = Output::check(&d.join(bad), &[], Format::RENDERS)
+                .unwrap_err()
+                .to_string();
             assert!(
-                e.contains("unknown image format") && e.contains(".png"),
+                e.contains("unknown format") && e.contains(".png") && e.contains(".exr"),
                 "{e}"
             );
         }
@@ -234,19 +270,23 @@ mod tests {
     #[test]
     fn directories_inputs_and_missing_folders_are_refused() {
         let d = dir("dirs");
-        let e = Output::check(&d, &[]).unwrap_err().to_string();
+        let e = Output::check(&d, &[], Format::RENDERS)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("is a directory"), "{e}");
         let sub = d.join("x.png");
         fs::create_dir(&sub).unwrap();
-        let e = Output::check(&sub, &[]).unwrap_err().to_string();
+        let e = Output::check(&sub, &[], Format::RENDERS)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("is a directory"), "{e}");
-        let e = Output::check(&d.join("nope/x.png"), &[])
+        let e = Output::check(&d.join("nope/x.png"), &[], Format::RENDERS)
             .unwrap_err()
             .to_string();
         assert!(e.contains("does not exist"), "{e}");
         let scene = d.join("scene.png");
         fs::write(&scene, b"input").unwrap();
-        let e = Output::check(&scene, std::slice::from_ref(&scene))
+        let e = Output::check(&scene, std::slice::from_ref(&scene), Format::RENDERS)
             .unwrap_err()
             .to_string();
         assert!(e.contains("is an input"), "{e}");
@@ -255,12 +295,12 @@ mod tests {
 
     #[test]
     fn devices_are_written_in_place() {
-        let null = Output::check(Path::new("/dev/null"), &[]).unwrap();
+        let null = Output::check(Path::new("/dev/null"), &[], Format::RENDERS).unwrap();
         assert_eq!((null.device.is_some(), null.format), (true, Format::Png));
         let d = dir("dev");
         let link = d.join("null.hdr");
         std::os::unix::fs::symlink("/dev/null", &link).unwrap();
-        let out = Output::check(&link, &[]).unwrap();
+        let out = Output::check(&link, &[], Format::RENDERS).unwrap();
         assert_eq!((out.device.is_some(), out.format), (true, Format::Hdr));
         fs::remove_dir_all(d).unwrap();
     }
@@ -274,7 +314,9 @@ mod tests {
             eprintln!("skipping: mkfifo is not available");
             return;
         }
-        let e = Output::check(&fifo, &[]).unwrap_err().to_string();
+        let e = Output::check(&fifo, &[], Format::RENDERS)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("FIFO that no process is reading"), "{e}");
         assert!(fs::metadata(&fifo).unwrap().file_type().is_fifo());
         fs::remove_dir_all(d).unwrap();

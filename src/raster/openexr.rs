@@ -1,0 +1,100 @@
+//! OpenEXR with 32-bit float RGB channels: every f32 stored exactly, so a
+//! reference carries no error of its own format (through the `exr` crate,
+//! which can also write the custom channels and header attributes partial
+//! films will need).
+
+use std::io::{BufReader, Seek};
+use std::path::Path;
+
+use anyhow::{bail, Result};
+use exr::prelude::{ReadChannels, ReadLayers, SpecificChannels, WritableImage};
+use glam::Vec3;
+
+/// `img` encoded as OpenEXR, f32 R, G and B, losslessly compressed.
+pub fn encode(width: u32, height: u32, img: &[Vec3]) -> Result<Vec<u8>> {
+    if img.len() != width as usize * height as usize {
+        bail!("{} pixels for a {width}x{height} image", img.len());
+    }
+    let w = width as usize;
+    let channels = SpecificChannels::rgb(|exr::math::Vec2(x, y): exr::math::Vec2<usize>| {
+        let c = img[y * w + x];
+        (c.x, c.y, c.z)
+    });
+    let image = exr::image::Image::from_channels((w, height as usize), channels);
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok(bytes.into_inner())
+}
+
+/// Reads the R, G and B channels of an OpenEXR image's first layer as f32,
+/// refusing sizes beyond [`super::MAX_DECODED_BYTES`] before decoding.
+pub fn read(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
+    let err = |e: exr::error::Error| anyhow::anyhow!("{}: {e}", path.display());
+    let mut file = BufReader::new(super::open(path)?);
+    let meta = exr::meta::MetaData::read_from_buffered(&mut file, false).map_err(err)?;
+    for h in meta.headers.iter() {
+        let (w, hh) = (h.layer_size.0, h.layer_size.1);
+        let clamp = |v: usize| v.min(u32::MAX as usize) as u32;
+        // The decoder's samples of every channel and the Vec3 copy.
+        let per_pixel = 12 + 4 * h.channels.list.len() as u64;
+        super::check_size(path, clamp(w), clamp(hh), per_pixel)?;
+    }
+    file.rewind()?;
+    let image = exr::image::read::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgb_channels(
+            |size, _| (size.0, vec![Vec3::ZERO; size.0 * size.1]),
+            |(w, px): &mut (usize, Vec<Vec3>), pos, (r, g, b): (f32, f32, f32)| {
+                px[pos.1 * *w + pos.0] = Vec3::new(r, g, b);
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(file)
+        .map_err(err)?;
+    let size = image.layer_data.size;
+    let (_, pixels) = image.layer_data.channel_data.pixels;
+    Ok((size.0 as u32, size.1 as u32, pixels))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_round_trip_is_bit_exact_for_finite_f32() {
+        let mut r = crate::geometry::sampling::Rng::for_sample(4, 5, 6);
+        let (w, h) = (37, 23);
+        let mut img: Vec<Vec3> = (0..w * h)
+            .map(|_| {
+                let mut f = || {
+                    f32::from_bits(r.next_u32() & 0x7f7f_ffff)
+                        * if r.next_u32().is_multiple_of(2) {
+                            1.0
+                        } else {
+                            -1.0
+                        }
+                };
+                Vec3::new(f(), f(), f())
+            })
+            .collect();
+        img[0] = Vec3::new(0.0, -0.0, f32::MAX);
+        img[1] = Vec3::new(f32::MIN_POSITIVE, 1e-45, 0.30370);
+        assert!(img.iter().all(|c| c.is_finite()));
+        let dir = std::env::temp_dir().join(format!("rayterm-exr-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("r.exr");
+        crate::raster::write_linear(&p, w, h, &img).unwrap();
+        let (rw, rh, back) = read(&p).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!((rw, rh), (w, h));
+        for (a, b) in img.iter().zip(&back) {
+            let bits = |v: &Vec3| v.to_array().map(f32::to_bits);
+            assert_eq!(bits(a), bits(b));
+        }
+    }
+}
