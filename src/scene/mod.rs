@@ -7,6 +7,7 @@ pub mod camera;
 pub mod file;
 pub mod light;
 pub mod material;
+pub mod memory;
 pub mod obj;
 pub mod source;
 pub mod texture;
