@@ -9,7 +9,10 @@ pub mod frame;
 pub mod light;
 pub mod material;
 pub mod memory;
+pub mod mtl;
+pub mod numbers;
 pub mod obj;
+pub mod parts;
 pub mod source;
 pub mod texture;
 
@@ -228,14 +231,9 @@ impl Scene {
 }
 
 /// Loads `spec`: a built-in name (`cornell`, `teapot:32`, ...), a `.toml` scene
-/// file or a bare `.obj`; far-away scenes are recentred ([`Scene::recentre`]).
+/// file or a bare `.obj`; far-away and huge scenes are moved and scaled in
+/// f64 as they load ([`frame::Frame`]).
 pub fn load(spec: &str) -> Result<Scene> {
-    let mut scene = load_unmoved(spec)?;
-    scene.recentre();
-    Ok(scene)
-}
-
-fn load_unmoved(spec: &str) -> Result<Scene> {
     if let Some(scene) = builtin::load(spec)? {
         return Ok(scene);
     }
