@@ -489,9 +489,10 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
             .fold(0.0f64, |r, p| r.max(p.abs().max_element()));
         if reach > ABSURD {
             parts.warnings.push(format!(
-                "{here}: mesh {}: coordinates reach {reach:e} once placed; beyond {ABSURD:e} \
+                "{here}: mesh {}: coordinates reach {} once placed; beyond {ABSURD:e} \
                  they are almost certainly a mistake",
                 m.file,
+                numbers::show(reach),
             ));
         }
     }

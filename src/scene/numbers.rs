@@ -36,7 +36,7 @@ pub fn parse(word: &str) -> Result<f64, String> {
 pub fn show(x: f64) -> String {
     let plain = x == 0.0 || (1e-4..1e15).contains(&x.abs());
     let f = x as f32;
-    if f.is_finite() {
+    if x == 0.0 || (f32::MIN_POSITIVE as f64..=f32::MAX as f64).contains(&x.abs()) {
         // The shortest form that reads back as the same f32.
         return if plain {
             format!("{f}")
@@ -124,6 +124,7 @@ mod tests {
         assert_eq!(show(1e-45), "1e-45");
         assert_eq!(show(1.0 / 1e-45), "1e45");
         assert_eq!(show(0.1 + 0.2), "0.3");
+        assert_eq!(show(1e-300), "1e-300");
         assert_eq!(show3(glam::DVec3::new(1.0, 0.0, 2e20)), "(1, 0, 2e20)");
     }
 

@@ -152,7 +152,9 @@ impl Parts {
         for tri in indices {
             let t = tri.map(|i| i + base);
             let [a, b, c] = t.map(|i| g.positions[i as usize]);
-            if (b - a).cross(c - a).length_squared() == 0.0 {
+            // Exactly zero: a squared length would also drop slivers whose
+            // cross product underflows when squared.
+            if (b - a).cross(c - a) == Vec3::ZERO {
                 degenerate += 1;
                 continue;
             }
