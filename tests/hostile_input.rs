@@ -487,9 +487,33 @@ fn w_components_and_huge_exponents_are_checked_after_every_step() {
     let s = d.write("big.toml", scene_with("tri.obj", "scale = 3e38"));
     let s = warned(
         &s,
-        &["big.toml: the scene is 3.000e38 across", "scaled by 2^-127"],
+        &["big.toml: the scene is 3e38 across", "scaled by 2^-127"],
     );
     assert!(s.geometry.positions.iter().all(|p| p.is_finite()));
+    let s = d.write("tiny.toml", scene_with("tri.obj", "scale = 1e-30"));
+    let s = warned(
+        &s,
+        &["tiny.toml: the scene is 1e-30 across", "scaled by 2^100"],
+    );
+    assert_eq!(
+        s.geometry.triangle_count(),
+        1,
+        "a tiny triangle is no degenerate one"
+    );
+    // At 1e30 even f64 cannot tell the vertices of a unit triangle apart:
+    // the error says why the scene came out empty.
+    let s = d.write(
+        "far30.toml",
+        scene_with("tri.obj", "translate = [1e30, 1e30, 1e30]"),
+    );
+    refused(
+        &s,
+        &[
+            "far30.toml: the scene has no triangles (",
+            "coordinates reach 1e30",
+            "skipped 1 degenerate",
+        ],
+    );
     // Huge exponents in MTL and patch files.
     d.write("m.mtl", "newmtl a\nNs 1e99999\n");
     refused(&d.write("with.obj", WITH_MTL), &["m.mtl:2: '1e99999'"]);

@@ -38,7 +38,7 @@ impl TryFrom<f64> for Num {
     type Error = String;
     fn try_from(x: f64) -> Result<Self, String> {
         match numbers::unusable(x) {
-            Some(why) => Err(format!("{x} {why}")),
+            Some(why) => Err(format!("{} {why}", numbers::show(x))),
             None => Ok(Num(x)),
         }
     }
@@ -507,7 +507,11 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
         parts.add_placed(m, &frame);
     }
     if parts.geometry.indices.is_empty() {
-        bail!("{}: the scene has no triangles", path.display());
+        bail!(
+            "{}: the scene has no triangles{}",
+            path.display(),
+            parts.why_empty()
+        );
     }
     let bounds = parts.geometry.bounds();
     let camera = match &f.camera {

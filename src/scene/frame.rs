@@ -4,11 +4,13 @@
 //! only then are positions rounded to the f32 the renderer stores. Before
 //! rounding, a scene far from the origin for its size is moved next to it
 //! (f32 positions out there are coarse: 1/16 apart at 1e6, 2 apart at 1e7),
-//! and a scene too large for f32 arithmetic is scaled down by a power of
-//! two. Both are exact or nearly so in f64, so the f32 scene keeps the
+//! and a scene too large or too small for f32 arithmetic is scaled by a
+//! power of two. Both are exact or nearly so in f64, so the f32 scene keeps the
 //! precision its file had; each says so in a warning.
 
 use glam::{DVec3, Vec3};
+
+use super::numbers::{show, show3};
 
 /// A scene whose centre is farther from the origin than this many times its
 /// size is moved next to the origin.
@@ -19,12 +21,16 @@ pub const FAR: f64 = 1024.0;
 /// 7e12 that product overflows f32.
 pub const HUGE: f64 = (1u64 << 40) as f64;
 
+/// A scene smaller than this across (2^-40, about 9.1e-13) is scaled up:
+/// products of three coordinates would fall below the smallest normal f32.
+pub const TINY: f64 = 1.0 / HUGE;
+
 /// The map from file coordinates to render coordinates:
 /// `(p - shift) * scale`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
     pub shift: DVec3,
-    /// A power of two, at most 1.
+    /// A power of two.
     pub scale: f64,
 }
 
@@ -58,10 +64,12 @@ pub fn far_warning(shift: DVec3, min: DVec3, max: DVec3) -> String {
     let far = c.abs().max_element() as f32;
     let spacing = far.next_up() - far;
     format!(
-        "the scene lies around ({}, {}, {}), far from the origin for its size {}: \
-         f32 positions there are {spacing} apart; moved next to the origin for rendering \
+        "the scene lies around {}, far from the origin for its size {}: \
+         f32 positions there are {} apart; moved next to the origin for rendering \
          (coordinates shown are relative to that point)",
-        shift.x, shift.y, shift.z, size as f32
+        show3(shift),
+        show(size),
+        show(spacing as f64)
     )
 }
 
@@ -85,14 +93,20 @@ impl Frame {
             warnings.push(far_warning(shift, min, max));
         }
         let size = (max - min).max_element();
-        if size > HUGE {
-            // Down to between 1 and 2 across: exact, a power of two.
+        if size > HUGE || (size > 0.0 && size < TINY) {
+            // To between 1 and 2 across: exact, a power of two.
             let k = size.log2().floor() as i32;
             frame.scale = 2f64.powi(-k);
+            let why = if size > HUGE {
+                format!("beyond {HUGE:.1e} the triangle test's f32 arithmetic overflows")
+            } else {
+                format!("below {TINY:.1e} the triangle test's f32 arithmetic underflows")
+            };
             warnings.push(format!(
-                "the scene is {size:.3e} across: beyond {HUGE:.1e} the triangle test's \
-                 f32 arithmetic overflows; scaled by 2^-{k} for rendering (coordinates \
-                 shown are scaled alike)"
+                "the scene is {} across: {why}; scaled by 2^{} for rendering \
+                 (coordinates shown are scaled alike)",
+                show(size),
+                -k
             ));
         }
         (frame, warnings)
@@ -133,6 +147,11 @@ mod tests {
         assert!((f.vector(DVec3::splat(2e20)).x as f64) < 2.0);
         assert!(w[0].contains("scaled by 2^-67"), "{w:?}");
         let (f, _) = Frame::fit(DVec3::ZERO, DVec3::splat(1e12));
+        assert_eq!(f.scale, 1.0);
+        let (f, w) = Frame::fit(DVec3::ZERO, DVec3::splat(1e-30));
+        assert_eq!(f.scale, 2f64.powi(100));
+        assert!(w[0].contains("underflows; scaled by 2^100"), "{w:?}");
+        let (f, _) = Frame::fit(DVec3::ZERO, DVec3::splat(1e-6));
         assert_eq!(f.scale, 1.0);
     }
 

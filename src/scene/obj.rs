@@ -608,7 +608,7 @@ pub fn load_bare_from(src: &dyn Source, path: &Path) -> Result<Scene> {
         parts.add_placed(m, &frame);
     }
     if parts.geometry.indices.is_empty() {
-        bail!("{}: no triangles", path.display());
+        bail!("{}: no triangles{}", path.display(), parts.why_empty());
     }
     let b = parts.geometry.bounds();
     let name = path.display().to_string();

@@ -152,9 +152,10 @@ impl Parts {
         for tri in indices {
             let t = tri.map(|i| i + base);
             let [a, b, c] = t.map(|i| g.positions[i as usize]);
-            // Exactly zero: a squared length would also drop slivers whose
-            // cross product underflows when squared.
-            if (b - a).cross(c - a) == Vec3::ZERO {
+            // Exactly zero, in f64: in f32 the products (let alone a
+            // squared length) underflow for slivers and tiny triangles.
+            let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
+            if (b - a).cross(c - a) == DVec3::ZERO {
                 degenerate += 1;
                 continue;
             }
@@ -173,6 +174,14 @@ impl Parts {
             smooth,
             textured,
         });
+    }
+
+    /// The warnings, as the reason a scene came out without triangles.
+    pub fn why_empty(&self) -> String {
+        match self.warnings.is_empty() {
+            true => String::new(),
+            false => format!(" ({})", self.warnings.join("; ")),
+        }
     }
 
     pub fn add_material(&mut self, m: Material) -> u32 {
