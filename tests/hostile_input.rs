@@ -351,7 +351,7 @@ fn invalid_utf8_names_the_file_and_line() {
     // A NUL byte is valid UTF-8 but no number.
     refused(
         &d.write("nul.obj", "v 0 0 0\nv 1\u{0} 0 0\n"),
-        &["nul.obj:2: '1\u{0}' is not a number"],
+        &["nul.obj:2: '1\u{fffd}' is not a number"],
     );
 }
 
@@ -843,4 +843,47 @@ fn the_binary_says_what_is_wrong_and_never_hangs() {
         scene_with("tri.obj", &FACES.replace("F", "zero.hdr")),
     );
     fails(&["env0.toml"], &["zero.hdr: the image has no pixels (0x0)"]);
+}
+
+#[test]
+fn control_characters_and_empty_names_are_handled() {
+    let d = Dir::new("hostile-names");
+    d.write("tri.obj", TRI);
+    // Escape sequences in names and statements never reach a terminal.
+    let obj = d.write(
+        "esc.obj",
+        "o \u{1b}]0;title\u{7}\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nfoo\u{1b}[2J 1\n",
+    );
+    let s = warned(&obj, &["foo\u{fffd}[2J (line 6)"]);
+    assert_eq!(s.meshes[0].name, "\u{fffd}]0;title\u{fffd}");
+    let s = d.write(
+        "esc.toml",
+        "name = \"\\u001b[2J\"\ndescription = \"a\\u009bb\"\n[[mesh]]\nfile = \"tri.obj\"\n\
+         material = { name = \"m\\u0007\" }\n[[light]]\ntype = \"point\"\nposition = [0, 1, 1]\n\
+         color = [1, 1, 1]\n",
+    );
+    let s = clean(&s);
+    let text = format!("{}{}{}", s.name, s.description, s.materials[0].name);
+    assert!(!text.chars().any(char::is_control), "{text:?}");
+    // Empty file names.
+    let s = d.write("nomesh.toml", scene_with("", ""));
+    refused(&s, &["nomesh.toml:1:1: mesh: the file name is empty"]);
+    let s = d.write(
+        "notex.toml",
+        scene_with("tri.obj", "material = { texture = \" \" }"),
+    );
+    warned(
+        &s,
+        &["notex.toml: material texture: the file name is empty"],
+    );
+    let s = d.write(
+        "noface.toml",
+        scene_with("tri.obj", &FACES.replace("F", "")),
+    );
+    refused(&s, &["environment face posx: the file name is empty"]);
+    d.write("m.mtl", "newmtl a\nmap_Kd   \n");
+    refused(
+        &d.write("with.obj", WITH_MTL),
+        &["m.mtl:2: map_Kd needs a file name"],
+    );
 }

@@ -21,7 +21,7 @@ use super::frame::Frame;
 use super::numbers::{self, ABSURD};
 use super::obj::{self, Parts, Placed};
 use super::parts::bounds;
-use super::source::{resolve, Disk, Kind, Source};
+use super::source::{printable, resolve, Disk, Kind, Source};
 use super::texture::FACE_NAMES;
 use super::{
     bezier, memory, BloomSettings, Builder, Camera, CubeMap, Environment, Light, Material, Scene,
@@ -441,16 +441,54 @@ fn patches(
     })
 }
 
+/// Every string of the file with control characters replaced (TOML
+/// escapes can hold them), so no name or path echoed to a terminal can
+/// carry an escape sequence.
+fn sanitize(f: &mut SceneFile) {
+    let clean = |s: &mut String| *s = printable(s);
+    f.name.iter_mut().for_each(clean);
+    f.description.iter_mut().for_each(clean);
+    for m in &mut f.meshes {
+        let m = m.get_mut();
+        clean(&mut m.file);
+        if let Some(mat) = &mut m.material {
+            mat.name.iter_mut().for_each(clean);
+            mat.texture.iter_mut().for_each(clean);
+        }
+    }
+    if let Some(faces) = f.environment.as_mut().and_then(|e| e.faces.as_mut()) {
+        for s in [
+            &mut faces.posx,
+            &mut faces.negx,
+            &mut faces.posy,
+            &mut faces.negy,
+            &mut faces.posz,
+            &mut faces.negz,
+        ] {
+            clean(s);
+        }
+    }
+}
+
+/// A file name written in the scene: an error naming `what` when empty.
+fn named<'a>(written: &'a str, what: &str) -> Result<&'a str> {
+    if written.trim().is_empty() {
+        bail!("{what}: the file name is empty");
+    }
+    Ok(written)
+}
+
 pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> {
     let text = src.read_text(path, Kind::Scene)?;
-    let f = parse(path, &text)?;
+    let mut f = parse(path, &text)?;
+    sanitize(&mut f);
     let loc = Locator { path, text: &text };
     let mut parts = Parts::default();
     let mut placed: Vec<Placed> = Vec::new();
     for spanned in &f.meshes {
         let m = spanned.get_ref();
         let here = loc.at(spanned.span());
-        let mesh_path = resolve(path, &m.file);
+        let mesh_path = resolve(path, named(&m.file, &format!("{here}: mesh"))?);
         let xf = placement(m, &loc)?;
         let material = m
             .material
@@ -622,10 +660,17 @@ fn material_from(parts: &mut Parts, src: &dyn Source, loc: &Locator, m: &Materia
         }
         x.clamp(0.0, 1.0)
     });
-    let texture = m
-        .texture
-        .as_ref()
-        .and_then(|t| parts.texture(src, &resolve(loc.path, t), &loc.path.display().to_string()));
+    let from = loc.path.display().to_string();
+    let texture = match m.texture.as_deref() {
+        Some(t) if t.trim().is_empty() => {
+            parts.warnings.push(format!(
+                "{from}: material texture: the file name is empty; using the material colour"
+            ));
+            None
+        }
+        Some(t) => parts.texture(src, &resolve(loc.path, t), &from),
+        None => None,
+    };
     Material {
         name: m.name.clone().unwrap_or_else(|| "inline".into()),
         kd,
@@ -728,7 +773,8 @@ pub fn sky() -> Result<CubeMap> {
 fn load_cube(src: &dyn Source, base: &Path, name: impl Fn(&str) -> String) -> Result<CubeMap> {
     let mut faces = Vec::with_capacity(6);
     for face in FACE_NAMES {
-        let p = resolve(base, &name(face));
+        let written = name(face);
+        let p = resolve(base, named(&written, &format!("environment face {face}"))?);
         let bytes = src
             .read(&p, Kind::Image)
             .with_context(|| format!("environment face {face}"))?;

@@ -217,9 +217,24 @@ fn read_limited(path: &Path, limit: u64) -> Result<Vec<u8>, Cause> {
     Ok(bytes)
 }
 
+/// A control character other than tab and newline: never shown as is (an
+/// escape sequence in a name would reach the terminal).
+fn unprintable(c: char) -> bool {
+    c.is_control() && c != '\n' && c != '\t'
+}
+
+/// `s` with control characters (tab and newline too) replaced by U+FFFD,
+/// for strings decoded from escapes in scene files (names, paths).
+pub fn printable(s: &str) -> String {
+    s.chars()
+        .map(|c| if c.is_control() { '\u{fffd}' } else { c })
+        .collect()
+}
+
 /// The text of a file: a UTF-8 byte-order mark removed, CRLF and lone CR
-/// line endings turned into LF (so files from any system read alike), and
-/// invalid UTF-8 reported with its line.
+/// line endings turned into LF (so files from any system read alike),
+/// other control characters than tab turned into U+FFFD (names and
+/// messages echo the file), and invalid UTF-8 reported with its line.
 pub fn text(path: &Path, bytes: Vec<u8>) -> Result<String> {
     let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
     let s = std::str::from_utf8(body).map_err(|e| {
@@ -237,11 +252,18 @@ pub fn text(path: &Path, bytes: Vec<u8>) -> Result<String> {
             body[e.valid_up_to()]
         )
     })?;
-    Ok(if s.contains('\r') {
+    let mut s = if s.contains('\r') {
         s.replace("\r\n", "\n").replace('\r', "\n")
     } else {
         s.to_string()
-    })
+    };
+    if s.contains(unprintable) {
+        s = s
+            .chars()
+            .map(|c| if unprintable(c) { '\u{fffd}' } else { c })
+            .collect();
+    }
+    Ok(s)
 }
 
 pub trait Source: Sync {
@@ -383,6 +405,14 @@ mod tests {
         assert_eq!(
             text(p, b"\xEF\xBB\xBFv 1\r\nv 2\rv 3\n".to_vec()).unwrap(),
             "v 1\nv 2\nv 3\n"
+        );
+        assert_eq!(
+            text(p, b"o \x1b[2J\tx\x00\n".to_vec()).unwrap(),
+            "o \u{fffd}[2J\tx\u{fffd}\n"
+        );
+        assert_eq!(
+            printable("a\u{1b}]0;x\u{7}\nb"),
+            "a\u{fffd}]0;x\u{fffd}\u{fffd}b"
         );
         let e = text(p, b"ok\nok\nbad \xff here\n".to_vec()).unwrap_err();
         assert_eq!(
