@@ -310,11 +310,6 @@ pub fn load_path(path: &Path) -> Result<Scene> {
 /// Largest segment count accepted for Bézier meshes.
 const MAX_SEGMENTS: u32 = bezier::MAX_SEGMENTS;
 
-/// Peak memory per triangle of a loaded, built and rendered scene: 187
-/// bytes measured (`/usr/bin/time rayterm render teapot:256`: tessellation,
-/// scene arrays, BVH build), rounded up.
-pub const BYTES_PER_TRIANGLE: u64 = 200;
-
 /// Positions in a scene file, for messages: `file:line:col`.
 struct Locator<'a> {
     path: &'a Path,
@@ -407,7 +402,7 @@ fn patches(
     if vertices > u32::MAX as u64 {
         bail!("{what} is more than 32-bit indices address ({vertices} vertices); lower segments");
     }
-    memory::check(&what, triangles * BYTES_PER_TRIANGLE, None)
+    memory::check(&what, triangles * memory::BYTES_PER_TRIANGLE, None)
         .map_err(|e| anyhow!("{e}; lower segments"))?;
     let pm = bezier::tessellate(&patches, segments);
     let nxf = xf.matrix3.inverse().transpose();

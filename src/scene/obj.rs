@@ -17,6 +17,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use glam::{DAffine3, DVec3, Vec2, Vec3};
 
 use super::frame::Frame;
+use super::memory;
 use super::mtl::{self, MtlMaterial};
 use super::numbers::{self, show, show3, Absurd};
 use super::source::{resolve, Disk, Kind, ReadError, Source};
@@ -120,6 +121,17 @@ fn logical_lines(text: &str) -> impl Iterator<Item = (usize, String)> + '_ {
 impl ObjFile {
     /// Parses OBJ text; non-fatal findings are appended to `warnings`.
     pub fn parse(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<ObjFile> {
+        Self::parse_within(path, text, warnings, memory::available())
+    }
+
+    /// [`ObjFile::parse`], refusing a mesh whose triangles would need more
+    /// than `available` bytes ([`memory::BYTES_PER_TRIANGLE`] each).
+    fn parse_within(
+        path: &Path,
+        text: &str,
+        warnings: &mut Vec<String>,
+        available: u64,
+    ) -> Result<ObjFile> {
         let mut f = ObjFile {
             path: path.to_path_buf(),
             positions: Vec::new(),
@@ -137,6 +149,9 @@ impl ObjFile {
         };
         let mut absurd = Absurd::default();
         let mut ignored: Vec<(String, usize, usize)> = Vec::new();
+        // A polygon of a million corners is a few megabytes of text and a
+        // million triangles: the count is checked as it grows.
+        let mut triangles = 0u64;
         for (n, line) in logical_lines(text) {
             let at = |msg: String| anyhow!("{}:{n}: {msg}", path.display());
             let line = line.trim();
@@ -209,6 +224,15 @@ impl ObjFile {
                     let len = f.corners.len() - start;
                     if len < 3 {
                         bail!(at(format!("a face needs at least 3 vertices, found {len}")));
+                    }
+                    triangles += len as u64 - 2;
+                    if triangles * memory::BYTES_PER_TRIANGLE > available {
+                        bail!(at(format!(
+                            "{triangles} triangles by this line would need {} of memory; \
+                             {} is available",
+                            memory::bytes(triangles * memory::BYTES_PER_TRIANGLE),
+                            memory::bytes(available)
+                        )));
                     }
                     current.faces.push(Face {
                         line: n,
@@ -852,6 +876,24 @@ mod tests {
         .unwrap();
         assert_eq!(p.geometry.indices.len(), 1);
         assert!(p.warnings.iter().any(|w| w.contains("1 degenerate")));
+    }
+
+    #[test]
+    fn triangles_beyond_the_memory_available_are_refused_as_they_come() {
+        let big = format!(
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf{}\n",
+            " 1 2 3".repeat(1000)
+        );
+        let budget = 1000 * memory::BYTES_PER_TRIANGLE;
+        let e = ObjFile::parse_within(Path::new("m.obj"), &big, &mut Vec::new(), budget)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert_eq!(
+            e,
+            "m.obj:5: 2999 triangles by this line would need 586 KiB of memory; 195 KiB is available"
+        );
+        assert!(ObjFile::parse_within(Path::new("m.obj"), QUAD, &mut Vec::new(), budget).is_ok());
     }
 
     #[test]
