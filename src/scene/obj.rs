@@ -10,6 +10,7 @@
 //! are ignored with one warning per file. Materials come from the `mtllib`
 //! files ([`super::mtl`]); a missing MTL or texture is a warning.
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -49,7 +50,7 @@ pub struct ObjFile {
     path: PathBuf,
     positions: Vec<DVec3>,
     /// The line of each position, for errors found once it is placed.
-    position_lines: Vec<usize>,
+    position_lines: Vec<u32>,
     normals: Vec<DVec3>,
     uvs: Vec<Vec2>,
     /// Position, UV and normal indices (0-based; [`NONE`] when absent).
@@ -98,10 +99,13 @@ const SILENT: &[&str] = &["s", "l", "p"];
 
 /// Lines of `text` with `\` continuations joined, numbered from 1 by
 /// their first line.
-fn logical_lines(text: &str) -> impl Iterator<Item = (usize, String)> + '_ {
+fn logical_lines(text: &str) -> impl Iterator<Item = (usize, Cow<'_, str>)> + '_ {
     let mut lines = text.lines().enumerate();
     std::iter::from_fn(move || {
         let (i, first) = lines.next()?;
+        if !first.trim_end().ends_with('\\') {
+            return Some((i + 1, Cow::Borrowed(first)));
+        }
         let mut line = first.to_string();
         while line.trim_end().ends_with('\\') {
             let cut = line.trim_end().len() - 1;
@@ -114,7 +118,7 @@ fn logical_lines(text: &str) -> impl Iterator<Item = (usize, String)> + '_ {
                 None => break,
             }
         }
-        Some((i + 1, line))
+        Some((i + 1, Cow::Owned(line)))
     })
 }
 
@@ -191,7 +195,7 @@ impl ObjFile {
                         ))),
                     };
                     f.positions.push(p);
-                    f.position_lines.push(n);
+                    f.position_lines.push(n as u32);
                 }
                 "vt" => {
                     let v = numbers(rest, n, &mut absurd).map_err(at)?;
