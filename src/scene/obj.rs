@@ -82,16 +82,34 @@ fn index(word: &str, count: usize, what: &str) -> Result<u32, String> {
         .ok_or_else(|| format!("{what} index {k} is out of range ({count} defined so far)"))
 }
 
-/// The numbers of a `v`, `vt` or `vn` statement, up to a trailing comment.
-fn numbers(rest: &str, line: usize, absurd: &mut Absurd) -> Result<Vec<f64>, String> {
-    rest.split_whitespace()
-        .take_while(|w| !w.starts_with('#'))
-        .map(|w| {
-            let x = numbers::parse(w)?;
-            absurd.check(line, x, || w.to_string());
-            Ok(x)
-        })
-        .collect()
+/// The numbers of a `v`, `vt` or `vn` statement (up to a trailing
+/// comment), without allocating: the first seven, and how many there were.
+struct Numbers {
+    values: [f64; 7],
+    total: usize,
+}
+
+impl std::ops::Deref for Numbers {
+    type Target = [f64];
+    fn deref(&self) -> &[f64] {
+        &self.values[..self.total.min(7)]
+    }
+}
+
+fn numbers(rest: &str, line: usize, absurd: &mut Absurd) -> Result<Numbers, String> {
+    let mut n = Numbers {
+        values: [0.0; 7],
+        total: 0,
+    };
+    for w in rest.split_whitespace().take_while(|w| !w.starts_with('#')) {
+        let x = numbers::parse(w)?;
+        absurd.check(line, x, || w.to_string());
+        if let Some(slot) = n.values.get_mut(n.total) {
+            *slot = x;
+        }
+        n.total += 1;
+    }
+    Ok(n)
 }
 
 /// Statements ignored by design, silently.
@@ -168,7 +186,7 @@ impl ObjFile {
             match key {
                 "v" => {
                     let v = numbers(rest, n, &mut absurd).map_err(at)?;
-                    let p = match v[..] {
+                    let p = match *v {
                         [x, y, z] | [x, y, z, _, _, _] => DVec3::new(x, y, z),
                         [x, y, z, w] => {
                             if w == 0.0 {
@@ -191,7 +209,7 @@ impl ObjFile {
                         _ => bail!(at(format!(
                             "a vertex takes 3 coordinates (x y z), optionally with w or an \
                              RGB colour; found {} numbers",
-                            v.len()
+                            v.total
                         ))),
                     };
                     f.positions.push(p);
@@ -199,23 +217,23 @@ impl ObjFile {
                 }
                 "vt" => {
                     let v = numbers(rest, n, &mut absurd).map_err(at)?;
-                    let uv = match v[..] {
+                    let uv = match *v {
                         [u] => Vec2::new(u as f32, 0.0),
                         [u, v] | [u, v, _] => Vec2::new(u as f32, v as f32),
                         _ => bail!(at(format!(
                             "a texture coordinate takes 1 to 3 numbers (u [v [w]]), found {}",
-                            v.len()
+                            v.total
                         ))),
                     };
                     f.uvs.push(uv);
                 }
                 "vn" => {
                     let v = numbers(rest, n, &mut absurd).map_err(at)?;
-                    match v[..] {
+                    match *v {
                         [x, y, z] => f.normals.push(DVec3::new(x, y, z)),
                         _ => bail!(at(format!(
                             "a normal takes 3 numbers (x y z), found {}",
-                            v.len()
+                            v.total
                         ))),
                     }
                 }
@@ -379,14 +397,27 @@ impl ObjFile {
             .unwrap_or_default();
         let mut partial = Vec::new();
         let mut meshes = Vec::with_capacity(self.groups.len());
+        // Welding: the mesh vertex a position was first used as, by
+        // position; corners that reuse a position with other UV or normal
+        // indices go through a map. Reset after each mesh.
+        let mut first: Vec<u32> = vec![NONE; self.positions.len()];
         for g in &self.groups {
-            let mut welded: HashMap<[u32; 3], u32> = HashMap::new();
+            let mut other: HashMap<[u32; 3], u32> = HashMap::new();
             let mut corners: Vec<[u32; 3]> = Vec::new();
             let mut indices = Vec::new();
             for face in &g.faces {
                 let c = &self.corners[face.start..face.start + face.len];
                 let mut id = |corner: [u32; 3]| {
-                    *welded.entry(corner).or_insert_with(|| {
+                    let slot = &mut first[corner[0] as usize];
+                    if *slot == NONE {
+                        *slot = corners.len() as u32;
+                        corners.push(corner);
+                        return *slot;
+                    }
+                    if corners[*slot as usize] == corner {
+                        return *slot;
+                    }
+                    *other.entry(corner).or_insert_with(|| {
                         corners.push(corner);
                         corners.len() as u32 - 1
                     })
@@ -398,6 +429,9 @@ impl ObjFile {
                     indices.push([first, prev, next]);
                     prev = next;
                 }
+            }
+            for c in &corners {
+                first[c[0] as usize] = NONE;
             }
             let mut positions = Vec::with_capacity(corners.len());
             for c in &corners {
