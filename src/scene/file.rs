@@ -282,11 +282,22 @@ pub struct Overrides {
     pub segments: Option<u32>,
 }
 
-/// 1-based line and column of byte offset `at` in `text`.
-fn line_col(text: &str, at: usize) -> (usize, usize) {
-    let before = text.get(..at.min(text.len())).unwrap_or(text);
-    let line = before.matches('\n').count() + 1;
-    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+/// Byte offsets where the lines of `text` start.
+fn line_starts(text: &str) -> Vec<usize> {
+    std::iter::once(0)
+        .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+        .collect()
+}
+
+/// 1-based line and column of byte offset `at` in `text`, given its
+/// [`line_starts`] (a binary search: scenes with many meshes stay linear).
+fn line_col(text: &str, starts: &[usize], at: usize) -> (usize, usize) {
+    let at = at.min(text.len());
+    let line = starts.partition_point(|&s| s <= at).max(1);
+    let col = text
+        .get(starts[line - 1]..at)
+        .map_or(0, |l| l.chars().count())
+        + 1;
     (line, col)
 }
 
@@ -295,7 +306,7 @@ fn parse(path: &Path, text: &str) -> Result<SceneFile> {
         let msg = e.message().trim().to_string();
         match e.span() {
             Some(span) => {
-                let (l, c) = line_col(text, span.start);
+                let (l, c) = line_col(text, &line_starts(text), span.start);
                 anyhow!("{}:{l}:{c}: {msg}", path.display())
             }
             None => anyhow!("{}: {msg}", path.display()),
@@ -314,11 +325,12 @@ const MAX_SEGMENTS: u32 = bezier::MAX_SEGMENTS;
 struct Locator<'a> {
     path: &'a Path,
     text: &'a str,
+    starts: Vec<usize>,
 }
 
 impl Locator<'_> {
     fn at(&self, span: Range<usize>) -> String {
-        let (line, col) = line_col(self.text, span.start);
+        let (line, col) = line_col(self.text, &self.starts, span.start);
         format!("{}:{line}:{col}", self.path.display())
     }
 
@@ -477,7 +489,11 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
     let text = src.read_text(path, Kind::Scene)?;
     let mut f = parse(path, &text)?;
     sanitize(&mut f);
-    let loc = Locator { path, text: &text };
+    let loc = Locator {
+        path,
+        text: &text,
+        starts: line_starts(&text),
+    };
     let mut parts = Parts::default();
     let mut placed: Vec<Placed> = Vec::new();
     for spanned in &f.meshes {
