@@ -31,6 +31,12 @@ pub fn srgb_to_linear(c: f32) -> f32 {
 /// ([`memory::check`]).
 pub const TEXTURE_BUDGET: u64 = 1536 << 20;
 
+/// A decoder's error as one message: its text already holds its cause,
+/// which an error chain would repeat.
+fn image_error(e: impl std::fmt::Display) -> anyhow::Error {
+    anyhow::anyhow!("{e}")
+}
+
 /// Bytes a stored texel takes.
 const TEXEL_BYTES: u64 = std::mem::size_of::<Vec3>() as u64;
 
@@ -54,12 +60,13 @@ impl Texture {
     /// would take more than [`TEXTURE_BUDGET`] (or the memory available) to
     /// decode and store, is refused before anything large is allocated.
     pub fn decode(name: &str, bytes: &[u8]) -> Result<Self> {
-        let mut reader =
-            image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format()?;
+        let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(image_error)?;
         let mut limits = image::Limits::default();
         limits.max_alloc = Some(TEXTURE_BUDGET);
         reader.limits(limits);
-        let decoder = reader.into_decoder()?;
+        let decoder = reader.into_decoder().map_err(image_error)?;
         let (w, h) = decoder.dimensions();
         if w == 0 || h == 0 {
             bail!("the image has no pixels ({w}x{h})");
@@ -77,7 +84,7 @@ impl Texture {
         )?;
         Ok(Self::from_image(
             name,
-            image::DynamicImage::from_decoder(decoder)?,
+            image::DynamicImage::from_decoder(decoder).map_err(image_error)?,
         ))
     }
 
