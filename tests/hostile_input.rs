@@ -34,6 +34,10 @@ fn refused(spec: &str, parts: &[&str]) -> String {
         assert!(e.contains(p), "{spec}: '{p}' missing in: {e}");
     }
     assert!(!e.contains("out of memory"), "{e}");
+    // "Not found" only for what is missing, never for another cause.
+    if !parts.iter().any(|p| p.contains("not found")) {
+        assert!(!e.contains("not found"), "{spec}: misleading: {e}");
+    }
     e
 }
 
@@ -67,6 +71,16 @@ fn scene_with(mesh: &str, extra: &str) -> String {
 
 /// An OBJ using material `a` of `m.mtl` (whatever `m.mtl` is).
 const WITH_MTL: &str = "mtllib m.mtl\nusemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n";
+
+/// Writes an OBJ and its `maps.mtl`, whose material `a` has `map_Kd
+/// texture`; returns the OBJ's path.
+fn with_map(d: &Dir, name: &str, texture: &str) -> String {
+    d.write(
+        "maps.mtl",
+        format!("newmtl a\nKd 1 1 1\nmap_Kd {texture}\n"),
+    );
+    d.write(name, WITH_MTL.replace("m.mtl", "maps.mtl"))
+}
 
 /// A CRC-32 (PNG's), for hand-made image headers.
 fn crc32(bytes: &[u8]) -> u32 {
@@ -154,6 +168,15 @@ fn special_files_are_refused_by_name() {
                 "using the material colour",
             ],
         );
+        warned(
+            &with_map(&d, "fifo-map.obj", &fifo),
+            &[
+                "maps.mtl:3: texture",
+                "fifo.toml",
+                "not a regular file (a FIFO)",
+                "using the material colour",
+            ],
+        );
         let s = d.write("fifo-bpt.toml", scene_with("fifo.bpt", ""));
         d.link("fifo.bpt", &fifo);
         refused(
@@ -165,7 +188,16 @@ fn special_files_are_refused_by_name() {
         refused(&s, &["environment face posx", "fifo.toml", "a FIFO"]);
         std::fs::remove_file(d.path("m.mtl")).unwrap();
     }
-    // Devices, also through symbolic links.
+    // Devices, named directly and through symbolic links.
+    for dev in ["/dev/zero", "/dev/null", "/dev/urandom"] {
+        refused(
+            dev,
+            &[
+                dev,
+                "a scene must be a built-in name, a .toml scene file or a .obj mesh",
+            ],
+        );
+    }
     d.link("zero.obj", "/dev/zero");
     refused(
         d.path("zero.obj").to_str().unwrap(),
@@ -191,6 +223,13 @@ fn special_files_are_refused_by_name() {
     warned(
         &s,
         &["/dev/zero", "not a regular file (a character device)"],
+    );
+    warned(
+        &with_map(&d, "zero-map.obj", "/dev/zero"),
+        &[
+            "maps.mtl:3: texture /dev/zero",
+            "not a regular file (a character device)",
+        ],
     );
     std::fs::remove_file(d.path("m.mtl")).unwrap();
     // Directories.
@@ -219,6 +258,10 @@ fn special_files_are_refused_by_name() {
         scene_with("tri.obj", "material = { texture = \".\" }"),
     );
     warned(&s, &["texture", "a directory"]);
+    warned(
+        &with_map(&d, "dir-map.obj", "."),
+        &["maps.mtl:3: texture", "not a regular file (a directory)"],
+    );
     // Missing files, dangling and looping links.
     let s = d.write("missing.toml", scene_with("nowhere.obj", ""));
     refused(
@@ -242,6 +285,10 @@ fn special_files_are_refused_by_name() {
     warned(
         d.path("with.obj").to_str().unwrap(),
         &["with.obj:1: material library", "m.mtl not found"],
+    );
+    warned(
+        &with_map(&d, "gone-map.obj", "gone.png"),
+        &["maps.mtl:3: texture", "gone.png: not found"],
     );
     // Unreadable (where permissions apply: not as root).
     use std::os::unix::fs::PermissionsExt;
@@ -718,6 +765,37 @@ fn images_without_pixels_or_beyond_the_budget_are_refused() {
             "zero.hdr: the image has no pixels (0x0)",
         ],
     );
+    d.write("zero.png", png_header(0, 0));
+    let s = d.write(
+        "png0.toml",
+        scene_with("tri.obj", "material = { texture = \"zero.png\" }"),
+    );
+    // The decoder's own words, once (not repeated as an error chain).
+    warned(
+        &s,
+        &["zero.png: Format error decoding Png: Invalid image dimensions; using the material colour"],
+    );
+    // 60 bytes of HDR header can declare 100000 x 100000: 251 GiB to decode and store.
+    d.write(
+        "huge.hdr",
+        b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 100000 +X 100000\n",
+    );
+    warned(
+        &with_map(&d, "hdr.obj", "huge.hdr"),
+        &[
+            "maps.mtl:3: texture",
+            "huge.hdr: a 100000x100000 texture would need 251 GiB of memory, over the 1.50 GiB \
+             limit per texture",
+        ],
+    );
+    let s = d.write(
+        "envhdr.toml",
+        scene_with("tri.obj", &FACES.replace("F", "huge.hdr")),
+    );
+    refused(
+        &s,
+        &["environment face posx", "huge.hdr", "would need 251 GiB"],
+    );
     // 420 kB of PNG could declare 12000 x 12000: 2 GiB to decode and store.
     d.write("huge.png", png_header(12000, 12000));
     let s = d.write(
@@ -817,6 +895,22 @@ fn the_binary_says_what_is_wrong_and_never_hangs() {
     fails(
         &["zero.obj"],
         &["zero.obj: not a regular file (a symbolic link to a character device)"],
+    );
+    fails(
+        &["/dev/zero"],
+        &["/dev/zero: a scene must be a built-in name"],
+    );
+    d.write(
+        "huge.hdr",
+        b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 100000 +X 100000\n",
+    );
+    let r = run(&[&with_map(&d, "hdr.obj", "huge.hdr")]);
+    assert!(
+        r.ok()
+            && r.stderr
+                .contains("huge.hdr: a 100000x100000 texture would need 251 GiB"),
+        "{}",
+        r.stderr
     );
     d.write("bom.obj", format!("\u{feff}{TRI}"));
     let r = run(&["bom.obj"]);
