@@ -301,8 +301,9 @@ proptest! {
         let text = obj_text(&pts, |i, p| match (i == bad, via_w) {
             (false, _) => plain(i, p),
             (true, false) => format!("v {} {mantissa}e{exponent} {}", p.x, p.z),
-            // Divided by w beyond f32, or w so small it reads as 0.
-            (true, true) => format!("v 1 {} {} {mantissa}e-{exponent}", p.y, p.z),
+            // w below 1e-39, so 1/w is beyond f32 (3.4e38), or so small it
+            // reads as 0.
+            (true, true) => format!("v 1 {} {} {mantissa}e-{}", p.y, p.z, exponent + 1),
         });
         let e = load_obj(text).expect_err("beyond f32");
         let at = format!("m.obj:{}: ", bad + 1);
