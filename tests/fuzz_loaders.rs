@@ -1,6 +1,8 @@
 //! Fuzzing the loaders: random and mutated OBJ, MTL, TOML and `.bpt` text
 //! (truncated files, wrong and huge indices and counts, non-finite and
-//! absurd numbers, binary garbage, very long lines). Each load must end, in
+//! absurd numbers, huge exponents and w components, byte-order marks and
+//! CRLF or CR-only line endings, binary garbage, very long lines). Each
+//! load must end, in
 //! a time budget, with an error or a scene, never a panic; a scene that
 //! loads holds only finite numbers and valid indices.
 
@@ -12,7 +14,7 @@ use proptest::prelude::*;
 use proptest::sample::Index;
 use rayterm::scene::file::{load_with, Overrides};
 use rayterm::scene::obj::{self, Parts, Placement};
-use rayterm::scene::source::Memory;
+use rayterm::scene::source::{self, Memory};
 use rayterm::scene::{bezier, Geometry, Light};
 
 /// Far more than any of these loads takes; only a hang reaches it.
@@ -149,9 +151,12 @@ fn load_toml(text: Vec<u8>) -> Result<(), TestCaseError> {
     Ok(())
 }
 
-fn load_bpt(text: String) -> Result<(), TestCaseError> {
+fn load_bpt(bytes: Vec<u8>) -> Result<(), TestCaseError> {
     let mesh = within_budget("BPT", move || {
-        bezier::parse_bpt(&text).map(|p| bezier::tessellate(&p[..p.len().min(64)], 3))
+        let text = source::text(Path::new("p.bpt"), bytes).map_err(|e| e.to_string())?;
+        bezier::parse_bpt(&text)
+            .map(|p| bezier::tessellate(&p[..p.len().min(64)], 3))
+            .map_err(|e| e.to_string())
     })?;
     if let Ok(m) = mesh {
         prop_assert!(m.positions.iter().all(|p| p.is_finite()));
@@ -174,7 +179,55 @@ fn number() -> impl Strategy<Value = String> {
         ])
         .prop_map(String::from),
         1 => "[0-9eE+.-]{1,12}",
+        1 => huge_exponent(),
     ]
+}
+
+/// Numbers with exponents around and beyond the ends of f32 and f64.
+fn huge_exponent() -> impl Strategy<Value = String> {
+    (
+        prop::sample::select(vec!["1", "-1", "3.4", "9.99", "0.5"]),
+        prop_oneof![
+            30i32..=40,
+            300i32..=330,
+            Just(99999),
+            -50i32..=-30,
+            -330i32..=-300
+        ],
+    )
+        .prop_map(|(m, e)| format!("{m}e{e}"))
+}
+
+/// A vertex with a w component: ordinary, tiny (dividing to huge or
+/// infinite coordinates), zero or negative.
+fn w_vertex() -> impl Strategy<Value = String> {
+    (
+        prop::collection::vec(number(), 3),
+        prop_oneof![
+            2 => (0.01f64..100.0).prop_map(|w| w.to_string()),
+            1 => huge_exponent(),
+            1 => prop::sample::select(vec!["0", "-0", "1e-45", "-1", "1e-300"]).prop_map(String::from),
+        ],
+    )
+        .prop_map(|(xyz, w)| format!("v {} {w}", xyz.join(" ")))
+}
+
+/// How a whole file is written: as is, with a byte-order mark, with CRLF
+/// or CR-only line endings, or both.
+fn encoding() -> impl Strategy<Value = u8> {
+    0u8..5
+}
+
+fn encode(text: &[u8], how: u8) -> Vec<u8> {
+    let lines =
+        |b: &[u8], nl: &[u8]| -> Vec<u8> { b.split(|&c| c == b'\n').collect::<Vec<_>>().join(nl) };
+    match how {
+        1 => [b"\xEF\xBB\xBF".as_slice(), text].concat(),
+        2 => lines(text, b"\r\n"),
+        3 => lines(text, b"\r"),
+        4 => [b"\xEF\xBB\xBF".as_slice(), &lines(text, b"\r")].concat(),
+        _ => text.to_vec(),
+    }
 }
 
 /// Vertex references of a face: in range, out of range, zero, negative, huge.
@@ -202,6 +255,7 @@ fn face_vertex() -> impl Strategy<Value = String> {
 fn obj_line() -> impl Strategy<Value = String> {
     prop_oneof![
         4 => prop::collection::vec(number(), 2..5).prop_map(|n| format!("v {}", n.join(" "))),
+        1 => w_vertex(),
         1 => prop::collection::vec(number(), 2..4).prop_map(|n| format!("vn {}", n.join(" "))),
         1 => prop::collection::vec(number(), 1..4).prop_map(|n| format!("vt {}", n.join(" "))),
         3 => prop::collection::vec(face_vertex(), 0..7).prop_map(|f| format!("f {}", f.join(" "))),
@@ -297,9 +351,11 @@ proptest! {
         obj in prop::collection::vec(obj_line(), 0..40),
         mtl in prop::collection::vec(mtl_line(), 0..20),
         (e, cut) in edits(),
+        (how, mtl_how) in (encoding(), encoding()),
     ) {
         let obj = mutate(&format!("mtllib m.mtl\n{}", obj.join("\n")), &e, cut);
-        let src = files(("m.obj", obj)).with("m.mtl", mtl.join("\n"));
+        let src = files(("m.obj", encode(&obj, how)))
+            .with("m.mtl", encode(mtl.join("\n").as_bytes(), mtl_how));
         load_obj(src)?;
     }
 
@@ -320,13 +376,14 @@ proptest! {
         which in 0usize..3,
         extra in prop::collection::vec((any::<Index>(), toml_line()), 0..4),
         (e, cut) in edits(),
+        how in encoding(),
     ) {
         let mut lines: Vec<String> = SCENES[which].lines().map(String::from).collect();
         for (at, line) in extra {
             let i = at.index(lines.len() + 1);
             lines.insert(i, line);
         }
-        load_toml(mutate(&lines.join("\n"), &e, cut))?;
+        load_toml(encode(&mutate(&lines.join("\n"), &e, cut), how))?;
     }
 
     #[test]
@@ -335,13 +392,17 @@ proptest! {
         count in prop::option::of(prop::sample::select(vec![
             "0", "1", "33", "4294967296", "18446744073709551615", "-1", "3 3", "",
         ])),
+        exponent in prop::option::of(huge_exponent()),
+        how in encoding(),
     ) {
-        let text = match count {
+        let mut text = match count {
             Some(c) => TEAPOT_BPT.replacen("\n32\n", &format!("\n{c}\n"), 1),
             None => TEAPOT_BPT.to_string(),
         };
-        let bytes = mutate(&text, &e, cut);
-        load_bpt(String::from_utf8_lossy(&bytes).into_owned())?;
+        if let Some(x) = exponent {
+            text = text.replacen("1.4", &x, 1);
+        }
+        load_bpt(encode(&mutate(&text, &e, cut), how))?;
     }
 
     #[test]
@@ -349,7 +410,7 @@ proptest! {
         load_obj(files(("m.obj", bytes.clone())))?;
         load_obj(files(("m.mtl", bytes.clone())))?;
         load_toml(bytes.clone())?;
-        load_bpt(String::from_utf8_lossy(&bytes).into_owned())?;
+        load_bpt(bytes)?;
     }
 }
 
@@ -370,7 +431,7 @@ fn very_long_lines_load_or_fail_in_time() {
     let toml = format!("name = \"{}\"\n{}", "n".repeat(1 << 20), SCENES[0]);
     load_toml(toml.into_bytes()).unwrap();
     load_toml(format!("x = [{}]", "[".repeat(100_000)).into_bytes()).unwrap();
-    load_bpt(format!("1\n3 3\n{}", "0 0 0 ".repeat(300_000))).unwrap();
+    load_bpt(format!("1\n3 3\n{}", "0 0 0 ".repeat(300_000)).into_bytes()).unwrap();
 }
 
 #[test]

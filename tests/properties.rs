@@ -3,6 +3,13 @@
 //! vertices and edges, direction components of 0, -0 and below 1e-30), never
 //! give a NaN or out-of-range hit, spawned rays never re-hit their triangle,
 //! and the BVH agrees with brute force on every ray with both builders.
+//!
+//! And of the loaders: a byte-order mark, CRLF or CR-only line endings and
+//! line continuations change nothing; a w component divides exactly; a
+//! number beyond f32 (huge exponents, also once divided by w) is an error at
+//! its line and one within f32 loads; a mesh far from the origin loads as
+//! it does near it; TOML arrays of the wrong length are errors at their
+//! position.
 
 use glam::Vec3;
 use proptest::prelude::*;
@@ -11,6 +18,9 @@ use rayterm::geometry::offset::{geometric_normal, hit_point, offset_origin};
 use rayterm::geometry::triangle::{intersect, RayShear};
 use rayterm::geometry::Ray;
 use rayterm::report::stability::{grazing, soup};
+use rayterm::scene::file::{load_with, Overrides};
+use rayterm::scene::obj::{self, Parts, Placement};
+use rayterm::scene::source::Memory;
 use rayterm::scene::Builder;
 
 fn coord() -> impl Strategy<Value = f32> {
@@ -189,6 +199,177 @@ proptest! {
             let b = bvh::build(&g, builder);
             let r = grazing::check_rays(&b, &grazing::ancestors(&b), &[Ray::new(origin, dir)]);
             prop_assert_eq!((r.nan, r.disagree, r.box_misses), (0, 0, 0), "{:?} {}", r, builder);
+        }
+    }
+}
+
+/// Loads `text` as the OBJ `m.obj`: its positions and triangles, or the error.
+fn load_obj(text: impl Into<Vec<u8>>) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), String> {
+    let src = Memory::default().with("m.obj", text);
+    let mut parts = Parts::default();
+    obj::load_into(
+        &mut parts,
+        &src,
+        std::path::Path::new("m.obj"),
+        &Placement::default(),
+        None,
+    )
+    .map_err(|e| format!("{e:#}"))?;
+    Ok((parts.geometry.positions, parts.geometry.indices))
+}
+
+/// A small mesh as OBJ text: vertices written with `write`, then faces
+/// (triangles and quads, some with relative indices).
+fn obj_text(points: &[Vec3], write: impl Fn(usize, Vec3) -> String) -> String {
+    let mut s = String::new();
+    for (i, p) in points.iter().enumerate() {
+        s += &write(i, *p);
+        s.push('\n');
+    }
+    let n = points.len();
+    for i in 0..n - 2 {
+        if i % 3 == 2 && i + 3 < n {
+            s += &format!("f {} {} {} {}\n", i + 1, i + 2, i + 3, i + 4);
+        } else {
+            s += &format!("f {} -{} {}\n", i + 1, n - i - 1, i + 3);
+        }
+    }
+    s
+}
+
+fn points() -> impl Strategy<Value = Vec<Vec3>> {
+    prop::collection::vec(point(), 3..12)
+}
+
+/// Points of a mesh about 20 across, on a grid of eighths: exact in f32
+/// and f64, also once moved by a multiple of an eighth.
+fn grid_points() -> impl Strategy<Value = Vec<Vec3>> {
+    prop::collection::vec(
+        (-80i32..=80, -80i32..=80, -80i32..=80)
+            .prop_map(|(x, y, z)| Vec3::new(x as f32, y as f32, z as f32) / 8.0),
+        3..12,
+    )
+}
+
+fn plain(_: usize, p: Vec3) -> String {
+    format!("v {} {} {}", p.x, p.y, p.z)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    #[test]
+    fn boms_line_endings_and_continuations_change_nothing(
+        pts in points(),
+        bom in any::<bool>(),
+        ending in prop::sample::select(vec!["\n", "\r\n", "\r"]),
+        continued in any::<bool>(),
+    ) {
+        let written = obj_text(&pts, plain);
+        let expected = load_obj(written.clone());
+        let mut text = written.replace('\n', ending);
+        if continued {
+            text = text.replacen("f ", "f \\\n", 1).replace("\\\n", &format!("\\{ending}"));
+        }
+        if bom {
+            text.insert(0, '\u{feff}');
+        }
+        prop_assert_eq!(load_obj(text), expected);
+    }
+
+    #[test]
+    fn w_components_divide_exactly(pts in points(), k in -20i32..20) {
+        // A power of two, so that x * w / w is x exactly.
+        let w = 2f64.powi(k);
+        let unweighted = load_obj(obj_text(&pts, plain));
+        let weighted = obj_text(&pts, |_, p| {
+            let q = p.as_dvec3() * w;
+            format!("v {} {} {} {w}", q.x, q.y, q.z)
+        });
+        prop_assert_eq!(load_obj(weighted), unweighted);
+    }
+
+    #[test]
+    fn numbers_beyond_f32_are_errors_at_their_line(
+        pts in points(),
+        which in any::<prop::sample::Index>(),
+        mantissa in 1.0f64..9.99,
+        exponent in prop_oneof![39i32..=45, 300i32..=400, Just(99999)],
+        via_w in any::<bool>(),
+    ) {
+        let bad = which.index(pts.len());
+        let text = obj_text(&pts, |i, p| match (i == bad, via_w) {
+            (false, _) => plain(i, p),
+            (true, false) => format!("v {} {mantissa}e{exponent} {}", p.x, p.z),
+            // w below 1e-39, so 1/w is beyond f32 (3.4e38), or so small it
+            // reads as 0.
+            (true, true) => format!("v 1 {} {} {mantissa}e-{}", p.y, p.z, exponent + 1),
+        });
+        let e = load_obj(text).expect_err("beyond f32");
+        let at = format!("m.obj:{}: ", bad + 1);
+        prop_assert!(e.starts_with(&at), "{}", e);
+        prop_assert!(
+            ["32-bit floats", "not a finite number", "w = 0"].iter().any(|w| e.contains(w)),
+            "{}",
+            e
+        );
+    }
+
+    #[test]
+    fn huge_exponents_within_f32_load_finite(pts in grid_points(), exponent in 18i32..=37) {
+        let text = obj_text(&pts, |_, p| format!("v {}e{exponent} {} {}", p.x, p.y, p.z));
+        let (positions, _) = load_obj(text).map_err(TestCaseError::fail)?;
+        prop_assert!(positions.iter().all(|p| p.is_finite()));
+    }
+
+    #[test]
+    fn far_meshes_load_as_near_ones(
+        pts in grid_points(),
+        offset in (-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0),
+        distance in prop_oneof![Just(1e5), Just(1e7), Just(1e9)],
+    ) {
+        // Written 1e5 to 1e9 sizes out (exactly, in f64), loaded through
+        // the scene loader, which moves it back in f64: every edge and
+        // triangle as in the mesh written near the origin.
+        let off = (glam::DVec3::new(offset.0, offset.1, offset.2) * distance * 20.0 * 8.0).round() / 8.0;
+        let far_text = obj_text(&pts, |_, p| {
+            let q = p.as_dvec3() + off;
+            format!("v {} {} {}", q.x, q.y, q.z)
+        });
+        let near = load_obj(obj_text(&pts, plain));
+        let src = Memory::default()
+            .with("s.toml", "[[mesh]]\nfile = \"m.obj\"\n")
+            .with("m.obj", far_text);
+        let far = load_with(&src, std::path::Path::new("s.toml"), Overrides::default());
+        match (near, far) {
+            (Ok((np, ni)), Ok(scene)) => {
+                let fp = &scene.geometry.positions;
+                prop_assert_eq!(&scene.geometry.indices, &ni);
+                for (a, b) in np.iter().zip(fp) {
+                    prop_assert_eq!(*a - np[0], *b - fp[0]);
+                }
+            }
+            (Err(_), Err(_)) => {}
+            (near, far) => prop_assert!(false, "near {:?}, far {:?}", near.map(|_| ()), far.map(|_| ())),
+        }
+    }
+
+    #[test]
+    fn toml_arrays_of_the_wrong_length_are_errors_at_their_position(n in 0usize..7) {
+        let values = vec!["1"; n].join(", ");
+        let text = format!(
+            "[[mesh]]\nfile = \"m.obj\"\n[[light]]\ntype = \"point\"\ncolor = [1, 1, 1]\n\
+             position = [{values}]\n"
+        );
+        let src = Memory::default()
+            .with("s.toml", text)
+            .with("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+        let r = load_with(&src, std::path::Path::new("s.toml"), Overrides::default());
+        if n == 3 {
+            prop_assert!(r.is_ok());
+        } else {
+            let e = format!("{:#}", r.expect_err("wrong length"));
+            prop_assert!(e.starts_with("s.toml:6:12: invalid length"), "{}", e);
         }
     }
 }

@@ -231,10 +231,12 @@ fn parse_point(
         let parsed: f32 = token
             .parse()
             .map_err(|_| error(line, format!("invalid coordinate '{token}'")))?;
-        if !parsed.is_finite() {
+        // Beyond f32 but finite as written: out of range, not "non-finite".
+        let written_finite = token.parse::<f64>().is_ok_and(f64::is_finite);
+        if !parsed.is_finite() && !written_finite {
             return Err(error(line, format!("non-finite coordinate '{token}'")));
         }
-        if parsed.abs() > MAX_COORDINATE {
+        if !parsed.is_finite() || parsed.abs() > MAX_COORDINATE {
             return Err(error(
                 line,
                 format!("coordinate '{token}' is out of range (|x| <= {MAX_COORDINATE:e})"),

@@ -1,39 +1,102 @@
-//! TOML scene files. Unknown keys, wrong types and non-finite numbers are
-//! errors that name the file, line and column.
+//! TOML scene files. Unknown keys, wrong types, arrays of the wrong length,
+//! out-of-range settings and non-finite numbers are errors that name the
+//! file, line and column; doubtful values (negative colours, absurd
+//! coordinates) are warnings that name them too.
+//!
+//! Coordinates stay in f64 until the whole scene is placed: meshes, camera
+//! and lights then go through one [`Frame`] (moved next to the origin when
+//! far, scaled down when huge) and are rounded to f32 last.
 
+use std::marker::PhantomData;
+use std::ops::{Range, RangeInclusive};
 use std::path::Path;
 
 use anyhow::{anyhow, bail, Context, Result};
-use glam::{Affine3A, EulerRot, Quat, Vec3};
+use glam::{DAffine3, DQuat, DVec3, EulerRot, Vec3};
+use serde::de::{self, Deserializer, IgnoredAny, SeqAccess, Visitor};
 use serde::Deserialize;
+use toml::Spanned;
 
-use super::obj::{self, MeshData, Parts, Placement};
-use super::source::{resolve, Disk, Source};
+use super::frame::Frame;
+use super::numbers::{self, ABSURD};
+use super::obj::{self, Parts, Placed};
+use super::parts::bounds;
+use super::source::{printable, resolve, Disk, Kind, Source};
 use super::texture::FACE_NAMES;
 use super::{
-    bezier, BloomSettings, Builder, Camera, CubeMap, Environment, Light, Material, Scene, Settings,
+    bezier, memory, BloomSettings, Builder, Camera, CubeMap, Environment, Light, Material, Scene,
+    Settings,
 };
 
-/// A number that must be finite; the error carries the value's position.
+/// A number that must be finite (also as f32); kept in f64 until the
+/// scene is placed. The error carries the value's position.
 #[derive(Clone, Copy, Debug, Deserialize)]
 #[serde(try_from = "f64")]
-struct Num(f32);
+struct Num(f64);
 
 impl TryFrom<f64> for Num {
     type Error = String;
     fn try_from(x: f64) -> Result<Self, String> {
-        if x.is_finite() && (x as f32).is_finite() {
-            Ok(Num(x as f32))
-        } else {
-            Err(format!("{x} is not a finite number"))
+        match numbers::unusable(x) {
+            Some(why) => Err(format!("{} {why}", numbers::show(x))),
+            None => Ok(Num(x)),
         }
     }
 }
 
-type V3 = [Num; 3];
+impl Num {
+    fn f32(self) -> f32 {
+        self.0 as f32
+    }
+}
 
-fn v3(v: V3) -> Vec3 {
-    Vec3::new(v[0].0, v[1].0, v[2].0)
+/// An array of exactly `N` values (serde's own arrays ignore extra ones).
+#[derive(Clone, Copy, Debug)]
+struct Exact<T, const N: usize>([T; N]);
+
+impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Exact<T, N> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<T, const N: usize>(PhantomData<T>);
+        impl<'de, T: Deserialize<'de>, const N: usize> Visitor<'de> for V<T, N> {
+            type Value = Exact<T, N>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                write!(f, "an array of {N} values")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+                let mut items = Vec::with_capacity(N);
+                while items.len() < N {
+                    match seq.next_element::<T>()? {
+                        Some(x) => items.push(x),
+                        None => return Err(de::Error::invalid_length(items.len(), &self)),
+                    }
+                }
+                let mut extra = 0;
+                while seq.next_element::<IgnoredAny>()?.is_some() {
+                    extra += 1;
+                }
+                if extra > 0 {
+                    return Err(de::Error::invalid_length(N + extra, &self));
+                }
+                items
+                    .try_into()
+                    .map(Exact)
+                    .map_err(|_| de::Error::invalid_length(0, &self))
+            }
+        }
+        d.deserialize_seq(V(PhantomData))
+    }
+}
+
+type V3 = Exact<Num, 3>;
+/// A colour, with its position for warnings.
+type Rgb = Spanned<V3>;
+
+fn v3(v: V3) -> DVec3 {
+    DVec3::new(v.0[0].0, v.0[1].0, v.0[2].0)
+}
+
+fn rgb(v: &Rgb) -> Vec3 {
+    v3(*v.get_ref()).as_vec3()
 }
 
 #[derive(Deserialize)]
@@ -41,11 +104,11 @@ fn v3(v: V3) -> Vec3 {
 struct SceneFile {
     name: Option<String>,
     description: Option<String>,
-    camera: Option<CameraSpec>,
+    camera: Option<Spanned<CameraSpec>>,
     #[serde(default, rename = "mesh")]
-    meshes: Vec<toml::Spanned<MeshSpec>>,
+    meshes: Vec<Spanned<MeshSpec>>,
     #[serde(default, rename = "light")]
-    lights: Vec<toml::Spanned<LightSpec>>,
+    lights: Vec<Spanned<LightSpec>>,
     environment: Option<EnvSpec>,
     render: Option<RenderSpec>,
 }
@@ -58,21 +121,21 @@ enum CameraSpec {
 }
 
 impl<'de> Deserialize<'de> for CameraSpec {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         struct V;
-        impl<'de> serde::de::Visitor<'de> for V {
+        impl<'de> Visitor<'de> for V {
             type Value = CameraSpec;
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
                 f.write_str("\"auto\" or a table with eye, target, up and fov")
             }
-            fn visit_str<E: serde::de::Error>(self, s: &str) -> Result<CameraSpec, E> {
+            fn visit_str<E: de::Error>(self, s: &str) -> Result<CameraSpec, E> {
                 match s {
                     "auto" => Ok(CameraSpec::Auto),
-                    _ => Err(E::invalid_value(serde::de::Unexpected::Str(s), &self)),
+                    _ => Err(E::invalid_value(de::Unexpected::Str(s), &self)),
                 }
             }
-            fn visit_map<A: serde::de::MapAccess<'de>>(self, m: A) -> Result<CameraSpec, A::Error> {
-                CameraTable::deserialize(serde::de::value::MapAccessDeserializer::new(m))
+            fn visit_map<A: de::MapAccess<'de>>(self, m: A) -> Result<CameraSpec, A::Error> {
+                CameraTable::deserialize(de::value::MapAccessDeserializer::new(m))
                     .map(CameraSpec::Explicit)
             }
         }
@@ -97,22 +160,21 @@ enum ScaleSpec {
 }
 
 impl<'de> Deserialize<'de> for ScaleSpec {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         struct V;
-        impl<'de> serde::de::Visitor<'de> for V {
+        impl<'de> Visitor<'de> for V {
             type Value = ScaleSpec;
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
                 f.write_str("a number or an array of three numbers")
             }
-            fn visit_f64<E: serde::de::Error>(self, x: f64) -> Result<ScaleSpec, E> {
+            fn visit_f64<E: de::Error>(self, x: f64) -> Result<ScaleSpec, E> {
                 Num::try_from(x).map(ScaleSpec::Uniform).map_err(E::custom)
             }
-            fn visit_i64<E: serde::de::Error>(self, x: i64) -> Result<ScaleSpec, E> {
+            fn visit_i64<E: de::Error>(self, x: i64) -> Result<ScaleSpec, E> {
                 self.visit_f64(x as f64)
             }
-            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, s: A) -> Result<ScaleSpec, A::Error> {
-                V3::deserialize(serde::de::value::SeqAccessDeserializer::new(s))
-                    .map(ScaleSpec::Axes)
+            fn visit_seq<A: SeqAccess<'de>>(self, s: A) -> Result<ScaleSpec, A::Error> {
+                V3::deserialize(de::value::SeqAccessDeserializer::new(s)).map(ScaleSpec::Axes)
             }
         }
         d.deserialize_any(V)
@@ -126,9 +188,9 @@ struct MeshSpec {
     translate: Option<V3>,
     /// Degrees about X, then Y, then Z.
     rotate: Option<V3>,
-    scale: Option<ScaleSpec>,
+    scale: Option<Spanned<ScaleSpec>>,
     /// Segments per patch edge for Bézier patch (`.bpt`) files.
-    segments: Option<u32>,
+    segments: Option<Spanned<u32>>,
     material: Option<MaterialSpec>,
 }
 
@@ -136,10 +198,10 @@ struct MeshSpec {
 #[serde(deny_unknown_fields)]
 struct MaterialSpec {
     name: Option<String>,
-    kd: Option<V3>,
-    ks: Option<V3>,
-    ns: Option<Num>,
-    d: Option<Num>,
+    kd: Option<Rgb>,
+    ks: Option<Rgb>,
+    ns: Option<Spanned<Num>>,
+    d: Option<Spanned<Num>>,
     texture: Option<String>,
 }
 
@@ -160,22 +222,22 @@ struct LightSpec {
     #[serde(rename = "type")]
     kind: LightType,
     position: Option<V3>,
-    color: Option<V3>,
+    color: Option<Rgb>,
     a: Option<V3>,
     b: Option<V3>,
-    color_a: Option<V3>,
-    color_b: Option<V3>,
+    color_a: Option<Rgb>,
+    color_b: Option<Rgb>,
     corner: Option<V3>,
     edge1: Option<V3>,
     edge2: Option<V3>,
     /// At corner, corner+edge1, corner+edge1+edge2, corner+edge2.
-    colors: Option<[V3; 4]>,
+    colors: Option<Spanned<Exact<V3, 4>>>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct EnvSpec {
-    color: Option<V3>,
+    color: Option<Rgb>,
     sky: Option<bool>,
     faces: Option<FacesSpec>,
 }
@@ -194,13 +256,13 @@ struct FacesSpec {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RenderSpec {
-    size: Option<[u32; 2]>,
-    spp: Option<u32>,
-    max_depth: Option<u32>,
+    size: Option<Spanned<Exact<u32, 2>>>,
+    spp: Option<Spanned<u32>>,
+    max_depth: Option<Spanned<u32>>,
     builder: Option<Builder>,
-    ambient: Option<V3>,
-    light_samples: Option<u32>,
-    glossy_samples: Option<u32>,
+    ambient: Option<Rgb>,
+    light_samples: Option<Spanned<u32>>,
+    glossy_samples: Option<Spanned<u32>>,
     bloom: Option<BloomSpec>,
 }
 
@@ -208,8 +270,8 @@ struct RenderSpec {
 #[serde(deny_unknown_fields)]
 struct BloomSpec {
     threshold: Option<Num>,
-    sigma: Option<Num>,
-    radius: Option<u32>,
+    sigma: Option<Spanned<Num>>,
+    radius: Option<Spanned<u32>>,
     strength: Option<Num>,
 }
 
@@ -220,11 +282,22 @@ pub struct Overrides {
     pub segments: Option<u32>,
 }
 
-/// 1-based line and column of byte offset `at` in `text`.
-fn line_col(text: &str, at: usize) -> (usize, usize) {
-    let before = &text[..at.min(text.len())];
-    let line = before.matches('\n').count() + 1;
-    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+/// Byte offsets where the lines of `text` start.
+fn line_starts(text: &str) -> Vec<usize> {
+    std::iter::once(0)
+        .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+        .collect()
+}
+
+/// 1-based line and column of byte offset `at` in `text`, given its
+/// [`line_starts`] (a binary search: scenes with many meshes stay linear).
+fn line_col(text: &str, starts: &[usize], at: usize) -> (usize, usize) {
+    let at = at.min(text.len());
+    let line = starts.partition_point(|&s| s <= at).max(1);
+    let col = text
+        .get(starts[line - 1]..at)
+        .map_or(0, |l| l.chars().count())
+        + 1;
     (line, col)
 }
 
@@ -233,7 +306,7 @@ fn parse(path: &Path, text: &str) -> Result<SceneFile> {
         let msg = e.message().trim().to_string();
         match e.span() {
             Some(span) => {
-                let (l, c) = line_col(text, span.start);
+                let (l, c) = line_col(text, &line_starts(text), span.start);
                 anyhow!("{}:{l}:{c}: {msg}", path.display())
             }
             None => anyhow!("{}: {msg}", path.display()),
@@ -245,154 +318,265 @@ pub fn load_path(path: &Path) -> Result<Scene> {
     load_with(&Disk, path, Overrides::default())
 }
 
-/// Largest segment count accepted for Bézier meshes (32 patches x 2 x 1024² ≈ 67M triangles).
-const MAX_SEGMENTS: u32 = 1024;
+/// Largest segment count accepted for Bézier meshes.
+const MAX_SEGMENTS: u32 = bezier::MAX_SEGMENTS;
+
+/// Positions in a scene file, for messages: `file:line:col`.
+struct Locator<'a> {
+    path: &'a Path,
+    text: &'a str,
+    starts: Vec<usize>,
+}
+
+impl Locator<'_> {
+    fn at(&self, span: Range<usize>) -> String {
+        let (line, col) = line_col(self.text, &self.starts, span.start);
+        format!("{}:{line}:{col}", self.path.display())
+    }
+
+    /// `value` within `range`, or an error at the value.
+    fn range(&self, v: &Spanned<u32>, range: RangeInclusive<u32>, what: &str) -> Result<u32> {
+        let x = *v.get_ref();
+        if !range.contains(&x) {
+            let allowed = match (range.start(), range.end()) {
+                (lo, &u32::MAX) => format!("at least {lo}"),
+                (lo, hi) => format!("from {lo} to {hi}"),
+            };
+            bail!("{}: {what} must be {allowed}, not {x}", self.at(v.span()));
+        }
+        Ok(x)
+    }
+
+    /// Warns on a colour with a negative component.
+    fn colour(&self, c: &Rgb, what: &str, warnings: &mut Vec<String>) -> Vec3 {
+        let v = rgb(c);
+        if v.min_element() < 0.0 {
+            warnings.push(format!(
+                "{}: negative {what} [{}, {}, {}]: light and reflectance cannot be negative",
+                self.at(c.span()),
+                v.x,
+                v.y,
+                v.z
+            ));
+        }
+        v
+    }
+}
+
+/// The placement of a `[[mesh]]`: scale, then rotate, then translate.
+fn placement(m: &MeshSpec, loc: &Locator) -> Result<DAffine3> {
+    let mut xf = DAffine3::IDENTITY;
+    if let Some(s) = &m.scale {
+        let v = match s.get_ref() {
+            ScaleSpec::Uniform(s) => DVec3::splat(s.0),
+            ScaleSpec::Axes(a) => v3(*a),
+        };
+        if v.cmpeq(DVec3::ZERO).any() {
+            bail!("{}: scale must not be zero", loc.at(s.span()));
+        }
+        xf = DAffine3::from_scale(v);
+    }
+    if let Some(r) = m.rotate {
+        let r = v3(r);
+        let q = DQuat::from_euler(
+            EulerRot::ZYX,
+            r.z.to_radians(),
+            r.y.to_radians(),
+            r.x.to_radians(),
+        );
+        xf = DAffine3::from_quat(q) * xf;
+    }
+    if let Some(t) = m.translate {
+        xf = DAffine3::from_translation(v3(t)) * xf;
+    }
+    Ok(xf)
+}
+
+/// A `.bpt` mesh tessellated and placed, after checking the memory it needs.
+fn patches(
+    src: &dyn Source,
+    mesh_path: &Path,
+    segments: u32,
+    xf: &DAffine3,
+    material: u32,
+) -> Result<Placed> {
+    let text = src.read_text(mesh_path, Kind::Patches)?;
+    let patches = bezier::parse_bpt(&text)
+        .map_err(|e| anyhow!("{}:{}: {}", mesh_path.display(), e.line, e.message))?;
+    let n = segments as u64;
+    let triangles = patches.len() as u64 * 2 * n * n;
+    let vertices = patches.len() as u64 * (n + 1) * (n + 1);
+    let what = format!(
+        "{}: {} patches at {segments} segments per edge make {triangles} triangles, which",
+        mesh_path.display(),
+        patches.len()
+    );
+    if vertices > u32::MAX as u64 {
+        bail!("{what} is more than 32-bit indices address ({vertices} vertices); lower segments");
+    }
+    memory::check(&what, triangles * memory::BYTES_PER_TRIANGLE, None)
+        .map_err(|e| anyhow!("{e}; lower segments"))?;
+    let pm = bezier::tessellate(&patches, segments);
+    let nxf = xf.matrix3.inverse().transpose();
+    let mut positions = Vec::with_capacity(pm.positions.len());
+    for p in &pm.positions {
+        let q = xf.transform_point3(p.as_dvec3());
+        if let Some(why) = q.to_array().into_iter().find_map(numbers::unusable) {
+            bail!(
+                "{}: once placed, the surface reaches {}, which {why}",
+                mesh_path.display(),
+                numbers::show3(q)
+            );
+        }
+        positions.push(q);
+    }
+    Ok(Placed {
+        name: mesh_path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        positions,
+        normals: Some(
+            pm.normals
+                .iter()
+                .map(|n| (nxf * n.as_dvec3()).normalize_or_zero().as_vec3())
+                .collect(),
+        ),
+        uvs: Some(pm.uvs),
+        indices: pm.indices,
+        material,
+    })
+}
+
+/// Every string of the file with control characters replaced (TOML
+/// escapes can hold them), so no name or path echoed to a terminal can
+/// carry an escape sequence.
+fn sanitize(f: &mut SceneFile) {
+    let clean = |s: &mut String| *s = printable(s);
+    f.name.iter_mut().for_each(clean);
+    f.description.iter_mut().for_each(clean);
+    for m in &mut f.meshes {
+        let m = m.get_mut();
+        clean(&mut m.file);
+        if let Some(mat) = &mut m.material {
+            mat.name.iter_mut().for_each(clean);
+            mat.texture.iter_mut().for_each(clean);
+        }
+    }
+    if let Some(faces) = f.environment.as_mut().and_then(|e| e.faces.as_mut()) {
+        for s in [
+            &mut faces.posx,
+            &mut faces.negx,
+            &mut faces.posy,
+            &mut faces.negy,
+            &mut faces.posz,
+            &mut faces.negz,
+        ] {
+            clean(s);
+        }
+    }
+}
+
+/// A file name written in the scene: an error naming `what` when empty.
+fn named<'a>(written: &'a str, what: &str) -> Result<&'a str> {
+    if written.trim().is_empty() {
+        bail!("{what}: the file name is empty");
+    }
+    Ok(written)
+}
 
 pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> {
-    let bytes = src
-        .read(path)
-        .with_context(|| format!("cannot read {}", path.display()))?;
-    let text =
-        String::from_utf8(bytes).map_err(|_| anyhow!("{}: not UTF-8 text", path.display()))?;
-    let f = parse(path, &text)?;
-    let mut parts = Parts::default();
-    let at = |span: std::ops::Range<usize>| {
-        let (line, col) = line_col(&text, span.start);
-        format!("{}:{line}:{col}", path.display())
+    let text = src.read_text(path, Kind::Scene)?;
+    let mut f = parse(path, &text)?;
+    sanitize(&mut f);
+    let loc = Locator {
+        path,
+        text: &text,
+        starts: line_starts(&text),
     };
+    let mut parts = Parts::default();
+    let mut placed: Vec<Placed> = Vec::new();
     for spanned in &f.meshes {
         let m = spanned.get_ref();
-        let first_vertex = parts.geometry.positions.len();
-        let mesh_path = resolve(path, &m.file);
-        let mut xf = Affine3A::IDENTITY;
-        if let Some(s) = &m.scale {
-            let s = match s {
-                ScaleSpec::Uniform(s) => Vec3::splat(s.0),
-                ScaleSpec::Axes(a) => v3(*a),
-            };
-            if s.cmpeq(Vec3::ZERO).any() {
-                bail!(
-                    "{}: mesh {}: scale must not be zero",
-                    path.display(),
-                    m.file
-                );
-            }
-            xf = Affine3A::from_scale(s);
-        }
-        if let Some(r) = m.rotate {
-            let r = v3(r);
-            let q = Quat::from_euler(
-                EulerRot::ZYX,
-                r.z.to_radians(),
-                r.y.to_radians(),
-                r.x.to_radians(),
-            );
-            xf = Affine3A::from_quat(q) * xf;
-        }
-        if let Some(t) = m.translate {
-            xf = Affine3A::from_translation(v3(t)) * xf;
-        }
-        let place = Placement { transform: xf };
+        let here = loc.at(spanned.span());
+        let mesh_path = resolve(path, named(&m.file, &format!("{here}: mesh"))?);
+        let xf = placement(m, &loc)?;
         let material = m
             .material
             .as_ref()
-            .map(|ms| material_from(&mut parts, src, path, ms));
+            .map(|ms| material_from(&mut parts, src, &loc, ms));
         let is_bpt = mesh_path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("bpt"));
+        let first = placed.len();
         if is_bpt {
-            let segments = ov
-                .segments
-                .or(m.segments)
-                .unwrap_or(8)
-                .clamp(1, MAX_SEGMENTS);
-            let bytes = src.read(&mesh_path).with_context(|| {
-                format!(
-                    "{}: cannot read mesh {}",
-                    path.display(),
-                    mesh_path.display()
-                )
-            })?;
-            let patches = bezier::parse_bpt(&String::from_utf8_lossy(&bytes))
-                .map_err(|e| anyhow!("{}:{}: {}", mesh_path.display(), e.line, e.message))?;
-            let pm = bezier::tessellate(&patches, segments);
-            let mat = match material {
-                Some(mat) => parts.add_material(mat),
-                None => parts.add_material(Material::default()),
+            let segments = match (ov.segments, &m.segments) {
+                (Some(n), _) => n,
+                (None, Some(s)) => loc.range(s, 1..=MAX_SEGMENTS, "segments")?,
+                (None, None) => 8,
             };
-            let name = mesh_path
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            parts.add_mesh(
-                MeshData {
-                    name,
-                    positions: &pm.positions,
-                    normals: Some(&pm.normals),
-                    uvs: Some(&pm.uvs),
-                    indices: &pm.indices,
-                    material: mat,
-                },
-                &place,
+            let mat = parts.add_material(material.unwrap_or_default());
+            placed.push(
+                patches(src, &mesh_path, segments, &xf, mat)
+                    .with_context(|| format!("{here}: mesh {}", m.file))?,
             );
         } else {
-            obj::load_into(&mut parts, src, &mesh_path, &place, material.as_ref())
-                .with_context(|| format!("{}: mesh {}", path.display(), m.file))?;
+            if let Some(s) = &m.segments {
+                parts.warnings.push(format!(
+                    "{}: segments applies to .bpt meshes only: ignored",
+                    loc.at(s.span())
+                ));
+            }
+            placed.extend(
+                obj::load_placed(&mut parts, src, &mesh_path, &xf, material.as_ref())
+                    .with_context(|| format!("{here}: mesh {}", m.file))?,
+            );
         }
-        let reach = parts.geometry.positions[first_vertex..]
+        let reach = placed[first..]
             .iter()
-            .fold(0.0f32, |r, p| r.max(p.abs().max_element()));
-        if reach > obj::ABSURD {
+            .flat_map(|p| &p.positions)
+            .fold(0.0f64, |r, p| r.max(p.abs().max_element()));
+        if reach > ABSURD {
             parts.warnings.push(format!(
-                "{}: mesh {}: coordinates reach {reach:e} once placed; beyond {:e} shading \
-                 and shadows lose all precision",
-                at(spanned.span()),
+                "{here}: mesh {}: coordinates reach {} once placed; beyond {ABSURD:e} \
+                 they are almost certainly a mistake",
                 m.file,
-                obj::ABSURD
+                numbers::show(reach),
             ));
         }
     }
+    let (min, max) = bounds(&placed);
+    let (frame, moved) = Frame::fit(min, max);
+    parts.warnings.extend(
+        moved
+            .into_iter()
+            .map(|w| format!("{}: {w}", path.display())),
+    );
+    for m in placed {
+        parts.add_placed(m, &frame);
+    }
     if parts.geometry.indices.is_empty() {
-        bail!("{}: the scene has no triangles", path.display());
+        bail!(
+            "{}: the scene has no triangles{}",
+            path.display(),
+            parts.why_empty()
+        );
     }
     let bounds = parts.geometry.bounds();
-    let camera = match f.camera {
-        None | Some(CameraSpec::Auto) => Camera::auto(&bounds),
-        Some(CameraSpec::Explicit(c)) => {
-            let cam = Camera {
-                eye: v3(c.eye),
-                target: v3(c.target),
-                up: c.up.map(v3).unwrap_or(Vec3::Y),
-                vfov: c.fov.map_or(45.0, |f| f.0),
-            };
-            let fwd = cam.target - cam.eye;
-            if fwd.length_squared() == 0.0 || fwd.cross(cam.up).length_squared() == 0.0 {
-                bail!(
-                    "{}: camera: eye, target and up must not be collinear",
-                    path.display()
-                );
-            }
-            if !(1.0..179.0).contains(&cam.vfov) {
-                bail!(
-                    "{}: camera: fov must be between 1 and 179 degrees",
-                    path.display()
-                );
-            }
-            if cam.eye.abs().max(cam.target.abs()).max_element() > obj::ABSURD {
-                parts.warnings.push(format!(
-                    "{}: camera beyond {:e}: its rays lose all precision",
-                    path.display(),
-                    obj::ABSURD
-                ));
-            }
-            cam
-        }
+    let camera = match &f.camera {
+        None => Camera::auto(&bounds),
+        Some(c) => match c.get_ref() {
+            CameraSpec::Auto => Camera::auto(&bounds),
+            CameraSpec::Explicit(t) => camera_from(t, &frame, &loc.at(c.span()), &mut parts)?,
+        },
     };
     let lights = f
         .lights
         .iter()
         .map(|l| {
-            let light = light_from(l.get_ref()).map_err(|e| anyhow!("{}: {e}", at(l.span())))?;
+            let here = loc.at(l.span());
+            let light = light_from(l.get_ref(), &frame, &loc, &mut parts.warnings)
+                .map_err(|e| anyhow!("{here}: {e}"))?;
             let reach = match &light {
                 Light::Point { position, .. } => position.abs().max_element(),
                 Light::Segment { a, b, .. } => a.abs().max(b.abs()).max_element(),
@@ -403,11 +587,9 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
                     ..
                 } => (corner.abs() + edge1.abs() + edge2.abs()).max_element(),
             };
-            if reach > obj::ABSURD {
+            if reach as f64 > ABSURD {
                 parts.warnings.push(format!(
-                    "{}: light at {reach:e}: beyond {:e} shading loses all precision",
-                    at(l.span()),
-                    obj::ABSURD
+                    "{here}: light at {reach:e}: beyond {ABSURD:e} shading loses all precision"
                 ));
             }
             Ok(light)
@@ -419,8 +601,8 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
             path.display()
         ));
     }
-    let environment = environment_from(src, path, f.environment)?;
-    let settings = settings_from(path, f.render)?;
+    let environment = environment_from(src, &loc, f.environment, &mut parts.warnings)?;
+    let settings = settings_from(&loc, f.render, &mut parts.warnings)?;
     let stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -440,24 +622,90 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
     })
 }
 
-fn material_from(parts: &mut Parts, src: &dyn Source, path: &Path, m: &MaterialSpec) -> Material {
+fn camera_from(c: &CameraTable, frame: &Frame, here: &str, parts: &mut Parts) -> Result<Camera> {
+    let (eye, target) = (v3(c.eye), v3(c.target));
+    let up = c.up.map_or(DVec3::Y, v3);
+    let fwd = target - eye;
+    if fwd.length_squared() == 0.0 || fwd.cross(up).length_squared() == 0.0 {
+        bail!("{here}: camera: eye, target and up must not be collinear");
+    }
+    let cam = Camera {
+        eye: frame.point(eye),
+        target: frame.point(target),
+        up: up.as_vec3(),
+        vfov: c.fov.map_or(45.0, Num::f32),
+    };
+    if cam.eye == cam.target {
+        bail!("{here}: camera: eye and target are too close to tell apart in f32");
+    }
+    if !(1.0..179.0).contains(&cam.vfov) {
+        bail!("{here}: camera: fov must be between 1 and 179 degrees");
+    }
+    if cam.eye.abs().max(cam.target.abs()).max_element() as f64 > ABSURD {
+        parts.warnings.push(format!(
+            "{here}: camera beyond {ABSURD:e}: its rays lose all precision"
+        ));
+    }
+    Ok(cam)
+}
+
+fn material_from(parts: &mut Parts, src: &dyn Source, loc: &Locator, m: &MaterialSpec) -> Material {
     let d = Material::default();
+    let w = &mut parts.warnings;
+    let kd = m.kd.as_ref().map_or(d.kd, |c| loc.colour(c, "kd", w));
+    let ks = m.ks.as_ref().map_or(d.ks, |c| loc.colour(c, "ks", w));
+    let ns = m.ns.as_ref().map_or(d.ns, |n| {
+        let x = n.get_ref().f32();
+        if x < 0.0 {
+            w.push(format!("{}: negative ns {x}: using 0", loc.at(n.span())));
+        }
+        x.max(0.0)
+    });
+    let dissolve = m.d.as_ref().map_or(d.dissolve, |n| {
+        let x = n.get_ref().f32();
+        if !(0.0..=1.0).contains(&x) {
+            w.push(format!(
+                "{}: d {x} is outside 0..1: clamped",
+                loc.at(n.span())
+            ));
+        }
+        x.clamp(0.0, 1.0)
+    });
+    let from = loc.path.display().to_string();
+    let texture = match m.texture.as_deref() {
+        Some(t) if t.trim().is_empty() => {
+            parts.warnings.push(format!(
+                "{from}: material texture: the file name is empty; using the material colour"
+            ));
+            None
+        }
+        Some(t) => parts.texture(src, &resolve(loc.path, t), &from),
+        None => None,
+    };
     Material {
         name: m.name.clone().unwrap_or_else(|| "inline".into()),
-        kd: m.kd.map(v3).unwrap_or(d.kd),
-        ks: m.ks.map(v3).unwrap_or(d.ks),
-        ns: m.ns.map_or(d.ns, |n| n.0.max(0.0)),
-        dissolve: m.d.map_or(1.0, |x| x.0.clamp(0.0, 1.0)),
-        texture: m
-            .texture
-            .as_ref()
-            .and_then(|t| parts.texture(src, &resolve(path, t), path)),
+        kd,
+        ks,
+        ns,
+        dissolve,
+        texture,
     }
 }
 
-fn light_from(l: &LightSpec) -> Result<Light, String> {
+fn light_from(
+    l: &LightSpec,
+    frame: &Frame,
+    loc: &Locator,
+    warnings: &mut Vec<String>,
+) -> Result<Light, String> {
     let need = |v: Option<V3>, name: &str| {
         v.map(v3)
+            .ok_or_else(|| format!("this light needs `{name}`"))
+    };
+    let point = |v: Option<V3>, name: &str| need(v, name).map(|p| frame.point(p));
+    let vector = |v: Option<V3>, name: &str| need(v, name).map(|p| frame.vector(p));
+    let mut colour = |c: Option<&Rgb>, name: &str| {
+        c.map(|c| loc.colour(c, name, warnings))
             .ok_or_else(|| format!("this light needs `{name}`"))
     };
     let given = |names: &[(&str, bool)]| -> Result<(), String> {
@@ -466,7 +714,8 @@ fn light_from(l: &LightSpec) -> Result<Light, String> {
             None => Ok(()),
         }
     };
-    Ok(match l.kind {
+    let mut negative = None;
+    let light = match l.kind {
         LightType::Point => {
             given(&[
                 ("a", l.a.is_some()),
@@ -475,8 +724,8 @@ fn light_from(l: &LightSpec) -> Result<Light, String> {
                 ("colors", l.colors.is_some()),
             ])?;
             Light::Point {
-                position: need(l.position, "position")?,
-                color: need(l.color, "color")?,
+                position: point(l.position, "position")?,
+                color: colour(l.color.as_ref(), "color")?,
             }
         }
         LightType::Segment => {
@@ -486,10 +735,10 @@ fn light_from(l: &LightSpec) -> Result<Light, String> {
                 ("colors", l.colors.is_some()),
             ])?;
             Light::Segment {
-                a: need(l.a, "a")?,
-                b: need(l.b, "b")?,
-                color_a: need(l.color_a.or(l.color), "color_a")?,
-                color_b: need(l.color_b.or(l.color), "color_b")?,
+                a: point(l.a, "a")?,
+                b: point(l.b, "b")?,
+                color_a: colour(l.color_a.as_ref().or(l.color.as_ref()), "color_a")?,
+                color_b: colour(l.color_b.as_ref().or(l.color.as_ref()), "color_b")?,
             }
         }
         LightType::Parallelogram => {
@@ -498,21 +747,32 @@ fn light_from(l: &LightSpec) -> Result<Light, String> {
                 ("a", l.a.is_some()),
                 ("b", l.b.is_some()),
             ])?;
-            let colors = match (l.colors, l.color) {
-                (Some(c), _) => c.map(v3),
-                (None, Some(c)) => [v3(c); 4],
+            let colors = match (&l.colors, &l.color) {
+                (Some(c), _) => {
+                    let v = c.get_ref().0.map(|c| v3(c).as_vec3());
+                    if v.iter().any(|c| c.min_element() < 0.0) {
+                        negative = Some(format!(
+                            "{}: negative colors: light and reflectance cannot be negative",
+                            loc.at(c.span())
+                        ));
+                    }
+                    v
+                }
+                (None, Some(c)) => [colour(Some(c), "color")?; 4],
                 (None, None) => {
                     return Err("this light needs `colors` (four corners) or `color`".into())
                 }
             };
             Light::Parallelogram {
-                corner: need(l.corner, "corner")?,
-                edge1: need(l.edge1, "edge1")?,
-                edge2: need(l.edge2, "edge2")?,
+                corner: point(l.corner, "corner")?,
+                edge1: vector(l.edge1, "edge1")?,
+                edge2: vector(l.edge2, "edge2")?,
                 colors,
             }
         }
-    })
+    };
+    warnings.extend(negative);
+    Ok(light)
 }
 
 /// The generated sky cube map that ships inside the binary.
@@ -524,10 +784,11 @@ pub fn sky() -> Result<CubeMap> {
 fn load_cube(src: &dyn Source, base: &Path, name: impl Fn(&str) -> String) -> Result<CubeMap> {
     let mut faces = Vec::with_capacity(6);
     for face in FACE_NAMES {
-        let p = resolve(base, &name(face));
+        let written = name(face);
+        let p = resolve(base, named(&written, &format!("environment face {face}"))?);
         let bytes = src
-            .read(&p)
-            .with_context(|| format!("environment face {face}: cannot read {}", p.display()))?;
+            .read(&p, Kind::Image)
+            .with_context(|| format!("environment face {face}"))?;
         faces.push(
             super::Texture::decode(&p.display().to_string(), &bytes)
                 .with_context(|| format!("environment face {face}: {}", p.display()))?,
@@ -539,7 +800,13 @@ fn load_cube(src: &dyn Source, base: &Path, name: impl Fn(&str) -> String) -> Re
     Ok(CubeMap { faces })
 }
 
-fn environment_from(src: &dyn Source, path: &Path, e: Option<EnvSpec>) -> Result<Environment> {
+fn environment_from(
+    src: &dyn Source,
+    loc: &Locator,
+    e: Option<EnvSpec>,
+    warnings: &mut Vec<String>,
+) -> Result<Environment> {
+    let path = loc.path;
     let Some(e) = e else {
         return Ok(Environment::Color(Vec3::ZERO));
     };
@@ -562,39 +829,66 @@ fn environment_from(src: &dyn Source, path: &Path, e: Option<EnvSpec>) -> Result
     if e.sky == Some(true) {
         return Ok(Environment::CubeMap(Box::new(sky()?)));
     }
-    Ok(Environment::Color(e.color.map(v3).unwrap_or(Vec3::ZERO)))
+    Ok(Environment::Color(e.color.map_or(Vec3::ZERO, |c| {
+        loc.colour(&c, "environment color", warnings)
+    })))
 }
 
-fn settings_from(path: &Path, r: Option<RenderSpec>) -> Result<Settings> {
+/// Render settings, range-checked as the command line checks its options.
+fn settings_from(
+    loc: &Locator,
+    r: Option<RenderSpec>,
+    warnings: &mut Vec<String>,
+) -> Result<Settings> {
     let mut s = Settings::default();
     let Some(r) = r else { return Ok(s) };
-    if let Some([w, h]) = r.size {
+    if let Some(size) = &r.size {
+        let [w, h] = size.get_ref().0;
         if w == 0 || h == 0 || w > 16384 || h > 16384 {
             bail!(
-                "{}: render.size must be between 1x1 and 16384x16384",
-                path.display()
+                "{}: render.size must be between 1x1 and 16384x16384, not {w}x{h}",
+                loc.at(size.span())
             );
         }
         (s.width, s.height) = (w, h);
     }
-    s.spp = r.spp.unwrap_or(s.spp).max(1);
-    s.max_depth = r.max_depth.unwrap_or(s.max_depth).min(64);
+    if let Some(v) = &r.spp {
+        s.spp = loc.range(v, 1..=u32::MAX, "render.spp")?;
+    }
+    if let Some(v) = &r.max_depth {
+        s.max_depth = loc.range(v, 0..=64, "render.max_depth")?;
+    }
     s.builder = r.builder.unwrap_or(s.builder);
-    s.ambient = r.ambient.map(v3).unwrap_or(s.ambient);
-    s.light_samples = r.light_samples.unwrap_or(s.light_samples).clamp(1, 4096);
-    s.glossy_samples = r.glossy_samples.unwrap_or(s.glossy_samples).clamp(1, 256);
+    if let Some(c) = &r.ambient {
+        s.ambient = loc.colour(c, "ambient", warnings);
+    }
+    if let Some(v) = &r.light_samples {
+        s.light_samples = loc.range(v, 1..=4096, "render.light_samples")?;
+    }
+    if let Some(v) = &r.glossy_samples {
+        s.glossy_samples = loc.range(v, 1..=256, "render.glossy_samples")?;
+    }
     if let Some(b) = r.bloom {
         let d = BloomSettings::default();
+        let sigma = match &b.sigma {
+            Some(x) if x.get_ref().0 < 0.1 => {
+                bail!("{}: bloom.sigma must be at least 0.1", loc.at(x.span()))
+            }
+            Some(x) => x.get_ref().f32(),
+            None => d.sigma,
+        };
         s.bloom = BloomSettings {
-            threshold: b.threshold.map_or(d.threshold, |x| x.0),
-            sigma: b.sigma.map_or(d.sigma, |x| x.0.max(0.1)),
-            radius: b.radius.unwrap_or(d.radius).min(256),
-            strength: b.strength.map_or(d.strength, |x| x.0),
+            threshold: b.threshold.map_or(d.threshold, Num::f32),
+            sigma,
+            radius: match &b.radius {
+                Some(v) => loc.range(v, 0..=256, "bloom.radius")?,
+                None => d.radius,
+            },
+            strength: b.strength.map_or(d.strength, Num::f32),
         };
     }
     Ok(s)
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -670,7 +964,10 @@ mod tests {
     #[test]
     fn camera_auto_or_table() {
         assert!(matches!(
-            parse(Path::new("a"), "camera = \"auto\"\n").unwrap().camera,
+            parse(Path::new("a"), "camera = \"auto\"\n")
+                .unwrap()
+                .camera
+                .map(Spanned::into_inner),
             Some(CameraSpec::Auto)
         ));
         let f = parse(
@@ -678,7 +975,141 @@ mod tests {
             "[camera]\neye = [0, 1, 2]\ntarget = [0, 0, 0]\nfov = 30\n",
         )
         .unwrap();
-        assert!(matches!(f.camera, Some(CameraSpec::Explicit(_))));
+        assert!(matches!(
+            f.camera.map(Spanned::into_inner),
+            Some(CameraSpec::Explicit(_))
+        ));
         assert!(parse(Path::new("a"), "camera = \"manual\"\n").is_err());
+    }
+
+    const MESH: &str = "[[mesh]]\nfile = \"m.obj\"\n";
+
+    fn load_err(text: &str) -> String {
+        format!("{:#}", load_text(text).expect_err("should fail"))
+    }
+
+    #[test]
+    fn fixed_size_arrays_are_strict() {
+        let light = "[[light]]\ntype = \"point\"\ncolor = [1, 1, 1]\n";
+        for (extra, at) in [
+            (format!("{light}position = [0, 1, 2, 3]\n"), "s.toml:6:12"),
+            (format!("{light}position = [0, 1]\n"), "s.toml:6:12"),
+            ("[render]\nsize = [64, 48, 7]\n".into(), "s.toml:4:8"),
+            (
+                "[[light]]\ntype = \"parallelogram\"\ncorner = [0, 1, 0]\nedge1 = [1, 0, 0]\n\
+                 edge2 = [0, 0, 1]\ncolors = [[1, 1, 1], [1, 1, 1], [1, 1, 1], [1, 1, 1], [1, 1, 1]]\n"
+                    .into(),
+                "s.toml:8:10",
+            ),
+        ] {
+            let e = load_err(&format!("{MESH}{extra}"));
+            assert!(e.starts_with(at) && e.contains("invalid length"), "{extra:?}: {e}");
+        }
+    }
+
+    #[test]
+    fn settings_out_of_range_are_errors_at_the_value() {
+        for (render, at) in [
+            (
+                "spp = 0",
+                "s.toml:4:7: render.spp must be at least 1, not 0",
+            ),
+            (
+                "max_depth = 65",
+                "s.toml:4:13: render.max_depth must be from 0 to 64",
+            ),
+            (
+                "light_samples = 0",
+                "s.toml:4:17: render.light_samples must be from 1 to 4096",
+            ),
+            ("glossy_samples = 257", "s.toml:4:18: render.glossy_samples"),
+            ("size = [0, 48]", "s.toml:4:8: render.size must be between"),
+            ("bloom = { radius = 1000 }", "s.toml:4:20: bloom.radius"),
+            ("bloom = { sigma = 0 }", "s.toml:4:19: bloom.sigma"),
+        ] {
+            let e = load_err(&format!("{MESH}[render]\n{render}\n"));
+            assert!(e.starts_with(at), "{render}: {e}");
+        }
+        let e = load_err("[[mesh]]\nfile = \"p.bpt\"\nsegments = 0\n");
+        assert!(
+            e.starts_with("s.toml:3:12: segments must be from 1 to 1024"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn doubtful_values_warn_at_their_position() {
+        let s = load_text(
+            "[[mesh]]\nfile = \"m.obj\"\nsegments = 4\nmaterial = { kd = [-1, 0, 0], ns = -2, d = 2 }\n\
+             [[light]]\ntype = \"point\"\nposition = [0, 1, 0]\ncolor = [1, -1, 1]\n\
+             [render]\nambient = [-0.1, 0, 0]\n[environment]\ncolor = [0, 0, -1]\n",
+        )
+        .unwrap();
+        let all = s.warnings.join("\n");
+        for part in [
+            "s.toml:3:12: segments applies to .bpt meshes only",
+            "s.toml:4:19: negative kd [-1, 0, 0]",
+            "s.toml:4:36: negative ns -2: using 0",
+            "s.toml:4:44: d 2 is outside 0..1",
+            "s.toml:8:9: negative color [1, -1, 1]",
+            "s.toml:10:11: negative ambient",
+            "s.toml:12:9: negative environment color",
+        ] {
+            assert!(all.contains(part), "missing '{part}' in\n{all}");
+        }
+        assert_eq!(s.materials[0].ns, 0.0);
+        assert_eq!(s.materials[0].dissolve, 1.0);
+    }
+
+    #[test]
+    fn far_scenes_are_moved_in_f64_with_camera_and_lights() {
+        let off = 3.0e7;
+        let s = load_text(&format!(
+            "[camera]\neye = [{e}, 0.25, 4]\ntarget = [{t}, 0.25, 0]\n{MESH}\
+             translate = [{off}, 0, 0]\n[[light]]\ntype = \"point\"\nposition = [{l}, 2, 1]\n\
+             color = [1, 1, 1]\n",
+            e = off + 0.25,
+            t = off + 0.25,
+            l = off + 0.125,
+        ))
+        .unwrap();
+        // Every coordinate exact, though f32 at 3e7 is 2 apart.
+        assert_eq!(
+            s.geometry.positions,
+            [
+                Vec3::new(-0.5, 0.0, 0.0),
+                Vec3::new(0.5, 0.0, 0.0),
+                Vec3::new(-0.5, 1.0, 0.0)
+            ]
+        );
+        assert_eq!(s.camera.eye, Vec3::new(-0.25, 0.25, 4.0));
+        assert!(matches!(s.lights[0], Light::Point { position, .. }
+            if position == Vec3::new(-0.375, 2.0, 1.0)));
+        assert!(
+            s.warnings
+                .iter()
+                .any(|w| w.starts_with("s.toml: the scene lies around")),
+            "{:?}",
+            s.warnings
+        );
+    }
+
+    #[test]
+    fn placements_beyond_f32_are_errors_naming_both_files() {
+        let e = load_err(&format!("{MESH}scale = 3e38\ntranslate = [3e38, 0, 0]\n"));
+        assert!(
+            e.starts_with(
+                "s.toml:1:1: mesh m.obj: m.obj:2: vertex (1, 0, 0) lands at (6e38, 0, 0)"
+            ),
+            "{e}"
+        );
+        // Within f32, a huge scene is scaled down and says so.
+        let s = load_text(&format!("{MESH}scale = 3e38\n")).unwrap();
+        assert!(s.geometry.bounds().extent().max_element() < 2.0);
+        assert!(
+            s.warnings.iter().any(|w| w.contains("scaled by 2^-")),
+            "{:?}",
+            s.warnings
+        );
     }
 }

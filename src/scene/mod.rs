@@ -5,9 +5,14 @@ pub mod bezier;
 pub mod builtin;
 pub mod camera;
 pub mod file;
+pub mod frame;
 pub mod light;
 pub mod material;
+pub mod memory;
+pub mod mtl;
+pub mod numbers;
 pub mod obj;
+pub mod parts;
 mod reach;
 pub mod source;
 pub mod texture;
@@ -201,53 +206,36 @@ impl Scene {
     }
 }
 
-/// A scene whose centre is farther from the origin than this many times its
-/// size is moved next to the origin by [`Scene::recentre`].
-pub const FAR: f32 = 1024.0;
-
 impl Scene {
-    /// Moves a scene that lies far from the origin for its size (see [`FAR`])
-    /// next to it, and says so in `warnings`; returns the shift subtracted.
+    /// Moves a scene that lies far from the origin for its size (see
+    /// [`frame::FAR`]) next to it, and says so in `warnings`; returns the
+    /// shift subtracted. For scenes moved in code (the stability battery):
+    /// the loaders do the same in f64, before rounding ([`frame::Frame`]).
     ///
     /// Far out, f32 positions are coarse (1/16 apart at 1e6): every hit point
     /// and spawned ray origin would be rounded to that grid, which speckles
-    /// shadows and reflections. The positions themselves were read at that
-    /// spacing already; moving them is exact (the difference of two nearby
-    /// floats is a float), so the image becomes the one of the scene as
-    /// stored. Axes on which the scene is not far from the origin are left
-    /// alone.
+    /// shadows and reflections. Moving the stored positions is exact (the
+    /// difference of two nearby floats is a float), so the image becomes the
+    /// one of the scene as stored. Axes on which the scene is not far from
+    /// the origin are left alone.
     pub fn recentre(&mut self) -> Option<Vec3> {
         let b = self.bounds();
         if b.is_empty() {
             return None;
         }
-        let c = b.center();
-        let size = b.extent().max_element();
-        if c.abs().max_element() <= FAR * size || !c.is_finite() {
-            return None;
-        }
-        let shift = Vec3::select(c.abs().cmpgt(Vec3::splat(size)), c, Vec3::ZERO);
-        let spacing = c.abs().max_element().next_up() - c.abs().max_element();
+        let (min, max) = (b.min.as_dvec3(), b.max.as_dvec3());
+        let shift = frame::far_shift(min, max)?.as_vec3();
         self.transform(1.0, -shift);
-        self.warnings.push(format!(
-            "the scene lies around ({}, {}, {}), far from the origin for its size {size}: \
-             f32 positions there are {spacing} apart; moved next to the origin for rendering \
-             (coordinates shown are relative to that point)",
-            shift.x, shift.y, shift.z
-        ));
+        self.warnings
+            .push(frame::far_warning(shift.as_dvec3(), min, max));
         Some(shift)
     }
 }
 
 /// Loads `spec`: a built-in name (`cornell`, `teapot:32`, ...), a `.toml` scene
-/// file or a bare `.obj`; far-away scenes are recentred ([`Scene::recentre`]).
+/// file or a bare `.obj`; far-away and huge scenes are moved and scaled in
+/// f64 as they load ([`frame::Frame`]).
 pub fn load(spec: &str) -> Result<Scene> {
-    let mut scene = load_unmoved(spec)?;
-    scene.recentre();
-    Ok(scene)
-}
-
-fn load_unmoved(spec: &str) -> Result<Scene> {
     if let Some(scene) = builtin::load(spec)? {
         return Ok(scene);
     }

@@ -1,17 +1,286 @@
 //! Where scene files come from: the file system, or the files compiled into
 //! the binary for the built-in scenes. Both go through the same loaders.
+//!
+//! Every read from disk goes through [`read_file`]: only regular files are
+//! read (a FIFO would block forever, `/dev/zero` never ends), and each kind
+//! of file has a size limit ([`Kind::limit`]), so no file makes a loader
+//! hang or exhaust memory. [`text`] turns the bytes of a text file into a
+//! string the parsers share: BOM stripped, UTF-8 checked with the line of
+//! the first bad byte, CR and CRLF line endings turned into LF.
 
+use std::fmt;
+use std::fs::{File, Metadata};
+use std::io::{ErrorKind, Read};
 use std::path::{Component, Path, PathBuf};
 
-pub trait Source: Sync {
-    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>>;
+use anyhow::{anyhow, Result};
+
+/// What a file holds: sets its size limit and names it in messages.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// A TOML scene file.
+    Scene,
+    /// A Wavefront OBJ mesh.
+    Obj,
+    /// A Wavefront MTL material library.
+    Mtl,
+    /// Bézier patches (`.bpt`).
+    Patches,
+    /// An image: a texture or a cube-map face (and image references).
+    Image,
 }
 
+const MIB: u64 = 1 << 20;
+
+impl Kind {
+    /// Largest file of this kind that is read, in bytes.
+    ///
+    /// Scene files, material libraries and patch files are small by nature;
+    /// an OBJ may hold tens of millions of triangles (1 GiB of text is about
+    /// 20 million); an encoded image is bounded here and its decoded size
+    /// by the texture budget ([`super::texture::TEXTURE_BUDGET`]).
+    pub const fn limit(self) -> u64 {
+        match self {
+            Kind::Scene => 16 * MIB,
+            Kind::Obj => 1024 * MIB,
+            Kind::Mtl => 16 * MIB,
+            Kind::Patches => 64 * MIB,
+            Kind::Image => 256 * MIB,
+        }
+    }
+
+    /// The kind in words, as messages name it.
+    pub const fn noun(self) -> &'static str {
+        match self {
+            Kind::Scene => "scene file",
+            Kind::Obj => "OBJ mesh",
+            Kind::Mtl => "material library",
+            Kind::Patches => "patch file",
+            Kind::Image => "image",
+        }
+    }
+}
+
+/// Why a file could not be read.
+#[derive(Debug)]
+pub enum Cause {
+    NotFound,
+    /// Not a regular file: what it is instead ("a FIFO", "a directory", ...).
+    NotRegular(String),
+    TooLarge {
+        size: u64,
+        limit: u64,
+    },
+    PermissionDenied,
+    Other(std::io::Error),
+}
+
+impl fmt::Display for Cause {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        match self {
+            Cause::NotFound => f.write_str("not found"),
+            Cause::NotRegular(what) => write!(f, "not a regular file ({what})"),
+            Cause::TooLarge { size, limit } => write!(
+                f,
+                "too large ({size} bytes, limit {limit} = {})",
+                super::memory::bytes(*limit)
+            ),
+            Cause::PermissionDenied => f.write_str("permission denied"),
+            Cause::Other(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+/// A file that could not be read: which, what it was meant to hold, and why.
+#[derive(Debug)]
+pub struct ReadError {
+    pub path: PathBuf,
+    pub kind: Kind,
+    pub cause: Cause,
+}
+
+impl ReadError {
+    pub fn new(path: &Path, kind: Kind, cause: Cause) -> Self {
+        Self {
+            path: path.to_path_buf(),
+            kind,
+            cause,
+        }
+    }
+
+    pub fn is_not_found(&self) -> bool {
+        matches!(self.cause, Cause::NotFound)
+    }
+}
+
+impl fmt::Display for ReadError {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        write!(
+            f,
+            "cannot read {} {}: {}",
+            self.kind.noun(),
+            self.path.display(),
+            self.cause
+        )
+    }
+}
+
+impl std::error::Error for ReadError {}
+
+impl From<std::io::Error> for Cause {
+    fn from(e: std::io::Error) -> Self {
+        match e.kind() {
+            ErrorKind::NotFound | ErrorKind::NotADirectory => Cause::NotFound,
+            ErrorKind::PermissionDenied => Cause::PermissionDenied,
+            _ => Cause::Other(e),
+        }
+    }
+}
+
+/// What a non-regular file is, in words.
+fn file_type_name(meta: &Metadata) -> &'static str {
+    let t = meta.file_type();
+    if t.is_dir() {
+        return "a directory";
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a FIFO";
+        }
+        if t.is_char_device() {
+            return "a character device";
+        }
+        if t.is_block_device() {
+            return "a block device";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    "not a file"
+}
+
+/// Refuses anything but a regular file within `limit` bytes.
+fn check_meta(path: &Path, meta: &Metadata, limit: u64) -> Result<(), Cause> {
+    if !meta.is_file() {
+        let what = file_type_name(meta);
+        let linked = std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink());
+        return Err(Cause::NotRegular(if linked {
+            format!("a symbolic link to {what}")
+        } else {
+            what.to_string()
+        }));
+    }
+    if meta.len() > limit {
+        return Err(Cause::TooLarge {
+            size: meta.len(),
+            limit,
+        });
+    }
+    Ok(())
+}
+
+fn open_nonblocking(path: &Path) -> std::io::Result<File> {
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    // A FIFO swapped in after the check must not block the open.
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
+    options.open(path)
+}
+
+/// Reads a regular file of at most `kind.limit()` bytes.
+///
+/// The path is checked before it is opened (a FIFO is never opened), and the
+/// opened file again (it may have been replaced in between); the read itself
+/// stops one byte past the limit, so a file growing meanwhile cannot make it
+/// unbounded either.
+pub fn read_file(path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
+    read_limited(path, kind.limit()).map_err(|cause| ReadError::new(path, kind, cause))
+}
+
+fn read_limited(path: &Path, limit: u64) -> Result<Vec<u8>, Cause> {
+    check_meta(path, &std::fs::metadata(path)?, limit)?;
+    let file = open_nonblocking(path)?;
+    let meta = file.metadata()?;
+    check_meta(path, &meta, limit)?;
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(limit + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(Cause::TooLarge {
+            size: bytes.len() as u64,
+            limit,
+        });
+    }
+    Ok(bytes)
+}
+
+/// A control character other than tab and newline: never shown as is (an
+/// escape sequence in a name would reach the terminal).
+fn unprintable(c: char) -> bool {
+    c.is_control() && c != '\n' && c != '\t'
+}
+
+/// `s` with control characters (tab and newline too) replaced by U+FFFD,
+/// for strings decoded from escapes in scene files (names, paths).
+pub fn printable(s: &str) -> String {
+    s.chars()
+        .map(|c| if c.is_control() { '\u{fffd}' } else { c })
+        .collect()
+}
+
+/// The text of a file: a UTF-8 byte-order mark removed, CRLF and lone CR
+/// line endings turned into LF (so files from any system read alike),
+/// other control characters than tab turned into U+FFFD (names and
+/// messages echo the file), and invalid UTF-8 reported with its line.
+pub fn text(path: &Path, bytes: Vec<u8>) -> Result<String> {
+    let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
+    let s = std::str::from_utf8(body).map_err(|e| {
+        let before = &body[..e.valid_up_to()];
+        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+        let column = before.len()
+            - before
+                .iter()
+                .rposition(|&b| b == b'\n')
+                .map_or(0, |i| i + 1)
+            + 1;
+        anyhow!(
+            "{}:{line}: not valid UTF-8 (byte 0x{:02x} at column {column}); save the file as UTF-8",
+            path.display(),
+            body[e.valid_up_to()]
+        )
+    })?;
+    let mut s = if s.contains('\r') {
+        s.replace("\r\n", "\n").replace('\r', "\n")
+    } else {
+        s.to_string()
+    };
+    if s.contains(unprintable) {
+        s = s
+            .chars()
+            .map(|c| if unprintable(c) { '\u{fffd}' } else { c })
+            .collect();
+    }
+    Ok(s)
+}
+
+pub trait Source: Sync {
+    fn read(&self, path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError>;
+
+    /// The file as text (see [`text`]).
+    fn read_text(&self, path: &Path, kind: Kind) -> Result<String> {
+        text(path, self.read(path, kind)?)
+    }
+}
+
+/// The file system, through [`read_file`].
 pub struct Disk;
 
 impl Source for Disk {
-    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
-        std::fs::read(path)
+    fn read(&self, path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
+        read_file(path, kind)
     }
 }
 
@@ -19,41 +288,54 @@ impl Source for Disk {
 pub struct Embedded(pub &'static [(&'static str, &'static [u8])]);
 
 impl Source for Embedded {
-    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
+    fn read(&self, path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
         let key = normalize(path);
         self.0
             .iter()
             .find(|(name, _)| Path::new(name) == key)
             .map(|(_, bytes)| bytes.to_vec())
-            .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::NotFound, "not a built-in file"))
+            .ok_or_else(|| ReadError::new(path, kind, Cause::NotFound))
     }
 }
 
-/// Removes `.` and resolves `..` lexically (embedded paths have no symlinks).
+/// Removes `.` and resolves `name/..` lexically, keeping the `..` that lead
+/// out of the starting folder: `a/../../b` is `../b`. Only for paths with
+/// no symbolic links in them (embedded and in-memory files).
 pub fn normalize(path: &Path) -> PathBuf {
     let mut out = PathBuf::new();
     for c in path.components() {
         match c {
             Component::CurDir => {}
-            Component::ParentDir => {
-                out.pop();
-            }
+            Component::ParentDir => match out.components().next_back() {
+                Some(Component::Normal(_)) => {
+                    out.pop();
+                }
+                // `/..` is `/`.
+                Some(Component::RootDir | Component::Prefix(_)) => {}
+                _ => out.push(".."),
+            },
             c => out.push(c),
         }
     }
     out
 }
 
-/// Resolves a path written inside a file at `base`: relative to its folder,
-/// with Windows backslashes accepted.
+/// Resolves a path written inside the file at `base`: relative to that
+/// file's folder (never to the current directory), with Windows
+/// backslashes accepted. `..` is left for the file system to resolve, as
+/// a shell would, so leading ones are kept and symbolic links followed.
 pub fn resolve(base: &Path, written: &str) -> PathBuf {
     let cleaned = written.trim().trim_matches('"').replace('\\', "/");
     let p = Path::new(&cleaned);
-    if p.is_absolute() {
+    let joined = if p.is_absolute() {
         p.to_path_buf()
     } else {
-        normalize(&base.parent().unwrap_or(Path::new("")).join(p))
-    }
+        base.parent().unwrap_or(Path::new("")).join(p)
+    };
+    joined
+        .components()
+        .filter(|c| *c != Component::CurDir)
+        .collect()
 }
 
 /// Files held in memory, keyed by path: scenes built or mutated in code (the
@@ -69,12 +351,73 @@ impl Memory {
 }
 
 impl Source for Memory {
-    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
+    fn read(&self, path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
         let key = normalize(path);
         self.0
             .iter()
             .find(|(p, _)| *p == key)
             .map(|(_, b)| b.clone())
-            .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"))
+            .ok_or_else(|| ReadError::new(path, kind, Cause::NotFound))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normalize_keeps_leading_parents() {
+        let n = |p: &str| normalize(Path::new(p));
+        assert_eq!(n("a/./b/../c"), PathBuf::from("a/c"));
+        assert_eq!(n("../x"), PathBuf::from("../x"));
+        assert_eq!(n("./../x"), PathBuf::from("../x"));
+        assert_eq!(n("a/../../x"), PathBuf::from("../x"));
+        assert_eq!(n("../../x/../y"), PathBuf::from("../../y"));
+        assert_eq!(n("/../x"), PathBuf::from("/x"));
+        assert_eq!(
+            n("data/scenes/../meshes/a.obj"),
+            PathBuf::from("data/meshes/a.obj")
+        );
+    }
+
+    #[test]
+    fn resolve_is_relative_to_the_file() {
+        let r = |b: &str, w: &str| resolve(Path::new(b), w);
+        assert_eq!(
+            r("env.toml", "../teapot.bpt"),
+            PathBuf::from("../teapot.bpt")
+        );
+        assert_eq!(
+            r("./cornell.toml", "../meshes/cornell.obj"),
+            PathBuf::from("../meshes/cornell.obj")
+        );
+        assert_eq!(
+            r("../amb.toml", "../plane.obj"),
+            PathBuf::from("../../plane.obj")
+        );
+        assert_eq!(r("s/a.toml", "m\\b c.obj"), PathBuf::from("s/m/b c.obj"));
+        assert_eq!(r("s/a.toml", "/abs/x.obj"), PathBuf::from("/abs/x.obj"));
+    }
+
+    #[test]
+    fn text_strips_bom_and_unifies_line_endings() {
+        let p = Path::new("f");
+        assert_eq!(
+            text(p, b"\xEF\xBB\xBFv 1\r\nv 2\rv 3\n".to_vec()).unwrap(),
+            "v 1\nv 2\nv 3\n"
+        );
+        assert_eq!(
+            text(p, b"o \x1b[2J\tx\x00\n".to_vec()).unwrap(),
+            "o \u{fffd}[2J\tx\u{fffd}\n"
+        );
+        assert_eq!(
+            printable("a\u{1b}]0;x\u{7}\nb"),
+            "a\u{fffd}]0;x\u{fffd}\u{fffd}b"
+        );
+        let e = text(p, b"ok\nok\nbad \xff here\n".to_vec()).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "f:3: not valid UTF-8 (byte 0xff at column 5); save the file as UTF-8"
+        );
     }
 }

@@ -1,7 +1,11 @@
 //! Textures (linear RGB, repeat wrapping, nearest or bilinear lookup) and
 //! cube maps in the OpenGL face convention.
 
+use anyhow::{bail, Result};
 use glam::{Vec2, Vec3};
+use image::ImageDecoder;
+
+use super::memory;
 
 #[derive(Clone, Debug)]
 pub struct Texture {
@@ -21,9 +25,24 @@ pub fn srgb_to_linear(c: f32) -> f32 {
     }
 }
 
+/// Most memory one texture may take to decode and store (12 bytes a texel
+/// once stored, plus the decoder's buffers): 1.5 GiB, enough for 8192x8192
+/// RGBA or 10000x10000 RGB. Also never more than the memory available
+/// ([`memory::check`]).
+pub const TEXTURE_BUDGET: u64 = 1536 << 20;
+
+/// A decoder's error as one message: its text already holds its cause,
+/// which an error chain would repeat.
+fn image_error(e: impl std::fmt::Display) -> anyhow::Error {
+    anyhow::anyhow!("{e}")
+}
+
+/// Bytes a stored texel takes.
+const TEXEL_BYTES: u64 = std::mem::size_of::<Vec3>() as u64;
+
 impl Texture {
-    pub fn from_image(name: &str, img: &image::DynamicImage) -> Self {
-        let rgb = img.to_rgb8();
+    pub fn from_image(name: &str, img: image::DynamicImage) -> Self {
+        let rgb = img.into_rgb8();
         let lut: Vec<f32> = (0..256).map(|i| srgb_to_linear(i as f32 / 255.0)).collect();
         let texels = rgb
             .pixels()
@@ -37,8 +56,36 @@ impl Texture {
         }
     }
 
-    pub fn decode(name: &str, bytes: &[u8]) -> Result<Self, image::ImageError> {
-        Ok(Self::from_image(name, &image::load_from_memory(bytes)?))
+    /// Decodes an image file's bytes. An image without pixels, or one that
+    /// would take more than [`TEXTURE_BUDGET`] (or the memory available) to
+    /// decode and store, is refused before anything large is allocated.
+    pub fn decode(name: &str, bytes: &[u8]) -> Result<Self> {
+        let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(image_error)?;
+        let mut limits = image::Limits::default();
+        limits.max_alloc = Some(TEXTURE_BUDGET);
+        reader.limits(limits);
+        let decoder = reader.into_decoder().map_err(image_error)?;
+        let (w, h) = decoder.dimensions();
+        if w == 0 || h == 0 {
+            bail!("the image has no pixels ({w}x{h})");
+        }
+        let texels = w as u64 * h as u64;
+        let converted = match decoder.color_type() {
+            image::ColorType::Rgb8 => 0,
+            _ => 3,
+        };
+        let needed = decoder.total_bytes() + texels * (converted + TEXEL_BYTES);
+        memory::check(
+            &format!("a {w}x{h} texture"),
+            needed,
+            Some((TEXTURE_BUDGET, "per texture")),
+        )?;
+        Ok(Self::from_image(
+            name,
+            image::DynamicImage::from_decoder(decoder).map_err(image_error)?,
+        ))
     }
 
     #[inline]

@@ -1,0 +1,351 @@
+//! Wavefront MTL material libraries: the Phong subset rayterm renders.
+//!
+//! `Kd`, `Ks` (one number for grey or three for RGB), `Ns`, `d` and
+//! `map_Kd` are used; `Ka`, `Tf`, `Ni`, `illum` and `sharpness` are checked
+//! and ignored (the ambient term is the scene's, there is no refraction);
+//! a non-black `Ke`, `Tr`, the other texture maps, texture options and
+//! unknown statements are ignored with one warning per file. Malformed
+//! statements are errors naming the file and line; negative colours and
+//! out-of-range `Ns` or `d` are warnings.
+
+use std::path::Path;
+
+use anyhow::{anyhow, bail, Result};
+use glam::Vec3;
+
+use super::numbers::{self, Absurd};
+
+/// One `newmtl` block as written.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MtlMaterial {
+    pub name: String,
+    pub kd: Option<Vec3>,
+    pub ks: Option<Vec3>,
+    pub ns: Option<f32>,
+    pub dissolve: Option<f32>,
+    /// The `map_Kd` file as written (options removed) and its line.
+    pub map_kd: Option<(String, usize)>,
+}
+
+/// Texture options (`-s 2 2 1`) and how many values each takes; the
+/// position, scale and turbulence ones take one to three numbers.
+const TEXTURE_OPTIONS: &[(&str, usize)] = &[
+    ("-blendu", 1),
+    ("-blendv", 1),
+    ("-bm", 1),
+    ("-boost", 1),
+    ("-cc", 1),
+    ("-clamp", 1),
+    ("-imfchan", 1),
+    ("-mm", 2),
+    ("-o", 3),
+    ("-s", 3),
+    ("-t", 3),
+    ("-texres", 1),
+    ("-type", 1),
+];
+
+/// Splits `map_Kd` arguments into the options (as written) and the file
+/// name, which may hold spaces.
+fn texture_args(rest: &str) -> (Vec<String>, &str) {
+    let mut options = Vec::new();
+    let mut rest = rest.trim_start();
+    while rest.starts_with('-') {
+        let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
+        let name = &rest[..end];
+        let takes = TEXTURE_OPTIONS
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map_or(0, |(_, k)| *k);
+        let numeric = matches!(name, "-o" | "-s" | "-t");
+        let mut option = name.to_string();
+        rest = rest[end..].trim_start();
+        for i in 0..takes {
+            let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
+            let value = &rest[..end];
+            if value.is_empty() || (numeric && i > 0 && value.parse::<f64>().is_err()) {
+                break;
+            }
+            option.push(' ');
+            option.push_str(value);
+            rest = rest[end..].trim_start();
+        }
+        options.push(option);
+    }
+    (options, rest.trim_end())
+}
+
+/// Statements ignored in one file, for one warning: name, first line, count.
+#[derive(Default)]
+struct Ignored(Vec<(String, usize, usize)>);
+
+impl Ignored {
+    fn note(&mut self, what: &str, line: usize) {
+        match self.0.iter_mut().find(|(w, _, _)| w == what) {
+            Some(e) => e.2 += 1,
+            None => self.0.push((what.to_string(), line, 1)),
+        }
+    }
+
+    fn warning(self, path: &Path) -> Option<String> {
+        if self.0.is_empty() {
+            return None;
+        }
+        let list: Vec<String> = self
+            .0
+            .iter()
+            .map(|(w, line, n)| match n {
+                1 => format!("{w} (line {line})"),
+                n => format!("{w} (line {line} and {} more)", n - 1),
+            })
+            .collect();
+        Some(format!(
+            "{}: ignored, not supported: {}",
+            path.display(),
+            list.join(", ")
+        ))
+    }
+}
+
+/// The numbers after a statement, each checked.
+fn numbers(rest: &str, line: usize, absurd: &mut Absurd) -> Result<Vec<f64>, String> {
+    rest.split_whitespace()
+        .map(|w| {
+            let x = numbers::parse(w)?;
+            absurd.check(line, x, || w.to_string());
+            Ok(x)
+        })
+        .collect()
+}
+
+/// Parses an MTL file; warnings are appended to `warnings`.
+pub fn parse(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Vec<MtlMaterial>> {
+    let mut materials: Vec<MtlMaterial> = Vec::new();
+    let mut ignored = Ignored::default();
+    let mut absurd = Absurd::default();
+    let mut orphans = None;
+    for (i, raw) in text.lines().enumerate() {
+        let n = i + 1;
+        let at = |msg: String| anyhow!("{}:{n}: {msg}", path.display());
+        let line = raw.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let (key, rest) = line
+            .split_once(char::is_whitespace)
+            .map_or((line, ""), |(k, r)| (k, r.trim()));
+        if key == "newmtl" {
+            if rest.is_empty() {
+                bail!(at("newmtl needs a material name".into()));
+            }
+            materials.push(MtlMaterial {
+                name: rest.to_string(),
+                ..MtlMaterial::default()
+            });
+            continue;
+        }
+        let Some(m) = materials.last_mut() else {
+            orphans.get_or_insert(n);
+            continue;
+        };
+        let mut colour = |absurd: &mut Absurd| -> Result<Option<Vec3>> {
+            if rest.starts_with("spectral") || rest.starts_with("xyz") {
+                return Ok(None);
+            }
+            let v = numbers(rest, n, absurd).map_err(at)?;
+            let c = match v[..] {
+                [g] => Vec3::splat(g as f32),
+                [r, g, b] => Vec3::new(r as f32, g as f32, b as f32),
+                _ => bail!(at(format!(
+                    "{key} takes 1 or 3 numbers (r [g b]), found {}",
+                    v.len()
+                ))),
+            };
+            if c.min_element() < 0.0 {
+                warnings.push(format!(
+                    "{}:{n}: negative colour {key} {rest}: no surface reflects less than nothing",
+                    path.display()
+                ));
+            }
+            Ok(Some(c))
+        };
+        let single = |absurd: &mut Absurd| -> Result<f32> {
+            match numbers(rest, n, absurd).map_err(at)?[..] {
+                [x] => Ok(x as f32),
+                ref v => bail!(at(format!("{key} takes one number, found {}", v.len()))),
+            }
+        };
+        match key {
+            "Kd" | "Ks" | "Ka" | "Tf" | "Ke" => {
+                let c = colour(&mut absurd)?;
+                match (key, c) {
+                    (_, None) => ignored.note(&format!("{key} {}", rest_word(rest)), n),
+                    ("Kd", c) => m.kd = c,
+                    ("Ks", c) => m.ks = c,
+                    ("Ke", Some(c)) if c != Vec3::ZERO => ignored.note("Ke (emission)", n),
+                    _ => {}
+                }
+            }
+            "Ns" => {
+                let ns = single(&mut absurd)?;
+                if ns < 0.0 {
+                    warnings.push(format!(
+                        "{}:{n}: negative Ns {rest}: using 0",
+                        path.display()
+                    ));
+                }
+                m.ns = Some(ns.max(0.0));
+            }
+            "d" => {
+                let value = match rest.strip_prefix("-halo") {
+                    Some(v) => {
+                        ignored.note("d -halo", n);
+                        v.trim()
+                    }
+                    None => rest,
+                };
+                let d = match numbers(value, n, &mut absurd).map_err(at)?[..] {
+                    [x] => x as f32,
+                    ref v => bail!(at(format!("d takes one number, found {}", v.len()))),
+                };
+                if !(0.0..=1.0).contains(&d) {
+                    warnings.push(format!(
+                        "{}:{n}: d {value} is outside 0..1: clamped",
+                        path.display()
+                    ));
+                }
+                m.dissolve = Some(d.clamp(0.0, 1.0));
+            }
+            "Ni" | "sharpness" => {
+                single(&mut absurd)?;
+            }
+            "Tr" => {
+                single(&mut absurd)?;
+                ignored.note("Tr (opacity is read from d)", n);
+            }
+            "illum" => {}
+            "map_Kd" => {
+                let (options, file) = texture_args(rest);
+                if file.is_empty() {
+                    bail!(at("map_Kd needs a file name".into()));
+                }
+                if !options.is_empty() {
+                    warnings.push(format!(
+                        "{}:{n}: map_Kd options ignored: {} (the texture is applied as is)",
+                        path.display(),
+                        options.join(", ")
+                    ));
+                }
+                m.map_kd = Some((file.to_string(), n));
+            }
+            other => ignored.note(other, n),
+        }
+    }
+    if let Some(n) = orphans {
+        warnings.push(format!(
+            "{}:{n}: statements before the first newmtl belong to no material: ignored",
+            path.display()
+        ));
+    }
+    warnings.extend(absurd.warning(path));
+    warnings.extend(ignored.warning(path));
+    Ok(materials)
+}
+
+/// The first word of `rest` (`spectral`, `xyz`), for the ignored list.
+fn rest_word(rest: &str) -> &str {
+    rest.split_whitespace().next().unwrap_or("")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse_ok(text: &str) -> (Vec<MtlMaterial>, Vec<String>) {
+        let mut w = Vec::new();
+        let m = parse(Path::new("m.mtl"), text, &mut w).unwrap();
+        (m, w)
+    }
+
+    fn parse_err(text: &str) -> String {
+        format!(
+            "{:#}",
+            parse(Path::new("m.mtl"), text, &mut Vec::new()).unwrap_err()
+        )
+    }
+
+    #[test]
+    fn phong_subset() {
+        let (m, w) = parse_ok(
+            "# c\nnewmtl a b\n  Kd 1 0 0\nKs 0.5\nNs 50\nd 0.5\nillum 2\nKa 1 1 1\nKe 0 0 0\n\
+             map_Kd ..\\tex dir\\t 1.png\nnewmtl c\n",
+        );
+        assert!(w.is_empty(), "{w:?}");
+        assert_eq!(m.len(), 2);
+        assert_eq!(m[0].name, "a b");
+        assert_eq!(m[0].kd, Some(Vec3::X));
+        assert_eq!(m[0].ks, Some(Vec3::splat(0.5)));
+        assert_eq!((m[0].ns, m[0].dissolve), (Some(50.0), Some(0.5)));
+        assert_eq!(m[0].map_kd, Some(("..\\tex dir\\t 1.png".into(), 10)));
+        assert_eq!(
+            m[1],
+            MtlMaterial {
+                name: "c".into(),
+                ..MtlMaterial::default()
+            }
+        );
+    }
+
+    #[test]
+    fn short_colours_are_errors_with_the_line() {
+        for (text, line) in [
+            ("newmtl a\nKd 0.5 0.5\n", 2),
+            ("newmtl a\n\nKs\n", 3),
+            ("newmtl a\nKa 1 2 3 4\n", 2),
+            ("newmtl a\nKd 1 zz 1\n", 2),
+            ("newmtl a\nKd nan 0 0\n", 2),
+            ("newmtl a\nNs\n", 2),
+            ("newmtl a\nd 1 2\n", 2),
+            ("newmtl\n", 1),
+            ("newmtl a\nmap_Kd -s 1 1 1\n", 2),
+        ] {
+            let e = parse_err(text);
+            assert!(e.starts_with(&format!("m.mtl:{line}: ")), "{text:?}: {e}");
+        }
+        // One number is grey, as the MTL specification says.
+        assert_eq!(
+            parse_ok("newmtl a\nKd 0.5\n").0[0].kd,
+            Some(Vec3::splat(0.5))
+        );
+    }
+
+    #[test]
+    fn doubtful_values_and_unsupported_options_warn() {
+        let (m, w) = parse_ok(
+            "newmtl a\nKd -0.5 0 0\nNs -3\nd 1.5\nmap_Kd -s 2 2 1 -o 0.5 t.png\nKe 1 1 1\n\
+             map_Bump b.png\nTr 0.2\nfoo 1\nfoo 2\nKd spectral x.rfl\n",
+        );
+        assert_eq!(m[0].ns, Some(0.0));
+        assert_eq!(m[0].dissolve, Some(1.0));
+        assert_eq!(m[0].map_kd, Some(("t.png".into(), 5)));
+        let all = w.join("\n");
+        for part in [
+            "m.mtl:2: negative colour Kd -0.5 0 0",
+            "m.mtl:3: negative Ns",
+            "m.mtl:4: d 1.5 is outside 0..1",
+            "m.mtl:5: map_Kd options ignored: -s 2 2 1, -o 0.5",
+            "Ke (emission) (line 6)",
+            "map_Bump (line 7)",
+            "Tr (opacity is read from d) (line 8)",
+            "foo (line 9 and 1 more)",
+            "Kd spectral (line 11)",
+        ] {
+            assert!(all.contains(part), "missing '{part}' in {all}");
+        }
+        let (_, w) = parse_ok("Kd 1 1 1\nnewmtl a\n");
+        assert!(
+            w[0].starts_with("m.mtl:1: statements before the first newmtl"),
+            "{w:?}"
+        );
+    }
+}

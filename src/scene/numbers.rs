@@ -1,0 +1,144 @@
+//! Numbers in text files (OBJ, MTL): read in f64, and accepted only where
+//! the f32 the renderer stores can hold them. Huge but representable values
+//! load with one warning per file.
+
+use std::path::Path;
+
+/// Coordinates beyond this are legal but almost certainly a mistake.
+pub const ABSURD: f64 = 1e18;
+
+/// Why a value cannot be used, or `None` when it can: NaN, infinite, or
+/// beyond the range of f32.
+pub fn unusable(x: f64) -> Option<&'static str> {
+    if !x.is_finite() {
+        Some("is not a finite number")
+    } else if x.abs() > f32::MAX as f64 {
+        Some("is too large: 32-bit floats are finite only up to 3.4e38")
+    } else {
+        None
+    }
+}
+
+/// Parses one number: an error message (without the location) when it is
+/// not a number or [`unusable`].
+pub fn parse(word: &str) -> Result<f64, String> {
+    let x: f64 = word
+        .parse()
+        .map_err(|_| format!("'{word}' is not a number"))?;
+    match unusable(x) {
+        Some(why) => Err(format!("'{word}' {why}")),
+        None => Ok(x),
+    }
+}
+
+/// A number as messages show it: plain near 1, in exponent form when very
+/// large or small (`1e45`, not forty-five digits).
+pub fn show(x: f64) -> String {
+    let plain = x == 0.0 || (1e-4..1e15).contains(&x.abs());
+    let f = x as f32;
+    if x == 0.0 || (f32::MIN_POSITIVE as f64..=f32::MAX as f64).contains(&x.abs()) {
+        // The shortest form that reads back as the same f32.
+        return if plain {
+            format!("{f}")
+        } else {
+            format!("{f:e}")
+        };
+    }
+    let s = format!("{x:.6e}");
+    match s.split_once('e') {
+        Some((m, e)) if m.contains('.') => {
+            format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.'))
+        }
+        _ => s,
+    }
+}
+
+/// A point as messages show it.
+pub fn show3(p: glam::DVec3) -> String {
+    format!("({}, {}, {})", show(p.x), show(p.y), show(p.z))
+}
+
+/// Counts absurd values ([`ABSURD`]) in one file and says so once.
+#[derive(Default)]
+pub struct Absurd {
+    first: Option<(usize, String)>,
+    more: usize,
+}
+
+impl Absurd {
+    pub fn check(&mut self, line: usize, x: f64, shown: impl FnOnce() -> String) {
+        if x.abs() > ABSURD {
+            match self.first {
+                None => self.first = Some((line, shown())),
+                Some(_) => self.more += 1,
+            }
+        }
+    }
+
+    /// The warning, if any value was absurd.
+    pub fn warning(self, path: &Path) -> Option<String> {
+        let (line, shown) = self.first?;
+        let more = match self.more {
+            0 => String::new(),
+            n => format!(" (and {n} more)"),
+        };
+        Some(format!(
+            "{}:{line}: absurd value {shown}{more}: beyond {ABSURD:e} shading and shadows \
+             lose all precision",
+            path.display()
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_numbers_f32_can_hold() {
+        assert_eq!(parse("1.5"), Ok(1.5));
+        assert_eq!(parse("-1e-45"), Ok(-1e-45));
+        assert_eq!(parse("3e38"), Ok(3e38));
+        for bad in [
+            "nan",
+            "inf",
+            "-infinity",
+            "1e39",
+            "1e400",
+            "1,5",
+            "",
+            "0x10",
+        ] {
+            assert!(parse(bad).is_err(), "{bad}");
+        }
+        assert!(parse("1e39")
+            .unwrap_err()
+            .contains("32-bit floats are finite only"));
+    }
+
+    #[test]
+    fn numbers_show_briefly() {
+        assert_eq!(show(0.5), "0.5");
+        assert_eq!(show(-3.0), "-3");
+        assert_eq!(show(1e45), "1e45");
+        assert_eq!(show(1e-45), "1e-45");
+        assert_eq!(show(1.0 / 1e-45), "1e45");
+        assert_eq!(show(0.1 + 0.2), "0.3");
+        assert_eq!(show(1e-300), "1e-300");
+        assert_eq!(show3(glam::DVec3::new(1.0, 0.0, 2e20)), "(1, 0, 2e20)");
+    }
+
+    #[test]
+    fn absurd_values_warn_once() {
+        let mut a = Absurd::default();
+        a.check(2, 1.0, || "1".into());
+        assert!(Absurd::default().warning(Path::new("f")).is_none());
+        a.check(3, 1e30, || "1e30".into());
+        a.check(4, -1e20, || "-1e20".into());
+        let w = a.warning(Path::new("m.obj")).unwrap();
+        assert!(
+            w.starts_with("m.obj:3: absurd value 1e30 (and 1 more)"),
+            "{w}"
+        );
+    }
+}

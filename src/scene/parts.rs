@@ -1,0 +1,191 @@
+//! Accumulates meshes, materials and textures into one scene.
+//!
+//! Loaders place meshes in f64 ([`Placed`]) and add them once the scene's
+//! [`Frame`] is known, so rounding to f32 comes last; scenes built in code
+//! add f32 meshes directly ([`Parts::add_mesh`]).
+
+use std::path::{Path, PathBuf};
+
+use glam::{Affine3A, DVec3, Vec2, Vec3};
+
+use super::frame::Frame;
+use super::source::{Kind, Source};
+use super::{Geometry, Material, MeshInfo, Texture};
+
+/// Mesh placement for meshes built in code.
+#[derive(Clone, Copy, Debug)]
+pub struct Placement {
+    pub transform: Affine3A,
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Self {
+            transform: Affine3A::IDENTITY,
+        }
+    }
+}
+
+/// One mesh to add: positions and optional per-vertex normals and UVs.
+pub struct MeshData<'a> {
+    pub name: String,
+    pub positions: &'a [Vec3],
+    pub normals: Option<&'a [Vec3]>,
+    pub uvs: Option<&'a [Vec2]>,
+    pub indices: &'a [[u32; 3]],
+    pub material: u32,
+}
+
+/// A mesh placed in file coordinates (f64): every index is in range and
+/// every position finite and within the range of f32.
+#[derive(Clone, Debug)]
+pub struct Placed {
+    pub name: String,
+    pub positions: Vec<DVec3>,
+    /// Unit normals, already transformed.
+    pub normals: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
+    pub indices: Vec<[u32; 3]>,
+    pub material: u32,
+}
+
+/// Bounds of the vertices the triangles of `meshes` use (min > max when none).
+pub fn bounds<'a>(meshes: impl IntoIterator<Item = &'a Placed>) -> (DVec3, DVec3) {
+    let mut b = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    for m in meshes {
+        for &i in m.indices.iter().flatten() {
+            let p = m.positions[i as usize];
+            b = (b.0.min(p), b.1.max(p));
+        }
+    }
+    b
+}
+
+/// Accumulates meshes, materials and textures into one scene.
+#[derive(Debug, Default)]
+pub struct Parts {
+    pub geometry: Geometry,
+    pub meshes: Vec<MeshInfo>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub warnings: Vec<String>,
+    texture_ids: Vec<(PathBuf, Option<u32>)>,
+}
+
+impl Parts {
+    /// Loads a texture once per path; `None` (with a warning naming `from`,
+    /// where it was asked for) when missing, unreadable or too large.
+    pub fn texture(&mut self, src: &dyn Source, path: &Path, from: &str) -> Option<u32> {
+        if let Some((_, id)) = self.texture_ids.iter().find(|(p, _)| p == path) {
+            return *id;
+        }
+        let name = path.display().to_string();
+        let decoded = src
+            .read(path, Kind::Image)
+            .map_err(anyhow::Error::from)
+            .and_then(|bytes| Texture::decode(&name, &bytes));
+        let id = match decoded {
+            Ok(t) => {
+                self.textures.push(t);
+                Some(self.textures.len() as u32 - 1)
+            }
+            Err(e) => {
+                self.warnings.push(format!(
+                    "{from}: texture {name}: {e:#}; using the material colour"
+                ));
+                None
+            }
+        };
+        self.texture_ids.push((path.to_path_buf(), id));
+        id
+    }
+
+    /// Adds a mesh built in code, transformed in f32.
+    pub fn add_mesh(&mut self, m: MeshData, place: &Placement) {
+        let xf = place.transform;
+        let nxf = glam::Mat3::from(xf.matrix3).inverse().transpose();
+        let positions = m.positions.iter().map(|&p| xf.transform_point3(p));
+        let normals = m
+            .normals
+            .map(|n| n.iter().map(|&n| (nxf * n).normalize_or_zero()).collect());
+        self.push(
+            m.name,
+            positions.collect(),
+            normals,
+            m.uvs.map(<[Vec2]>::to_vec),
+            m.indices,
+            m.material,
+        );
+    }
+
+    /// Adds a placed mesh, mapped through the scene's frame and rounded to f32.
+    pub fn add_placed(&mut self, m: Placed, frame: &Frame) {
+        let positions = m.positions.iter().map(|&p| frame.point(p)).collect();
+        self.push(m.name, positions, m.normals, m.uvs, &m.indices, m.material);
+    }
+
+    /// Appends a mesh; drops zero-area triangles and counts them.
+    fn push(
+        &mut self,
+        name: String,
+        positions: Vec<Vec3>,
+        normals: Option<Vec<Vec3>>,
+        uvs: Option<Vec<Vec2>>,
+        indices: &[[u32; 3]],
+        material: u32,
+    ) {
+        let g = &mut self.geometry;
+        let base = g.positions.len() as u32;
+        let mesh_id = self.meshes.len() as u32;
+        let n = positions.len();
+        let (smooth, textured) = (normals.is_some(), uvs.is_some());
+        g.positions.extend(positions);
+        match normals {
+            Some(v) => g.normals.extend(v),
+            None => g.normals.extend(std::iter::repeat_n(Vec3::ZERO, n)),
+        }
+        match uvs {
+            Some(v) => g.uvs.extend(v),
+            None => g.uvs.extend(std::iter::repeat_n(Vec2::ZERO, n)),
+        }
+        let mut degenerate = 0;
+        for tri in indices {
+            let t = tri.map(|i| i + base);
+            let [a, b, c] = t.map(|i| g.positions[i as usize]);
+            // Exactly zero, in f64: in f32 the products (let alone a
+            // squared length) underflow for slivers and tiny triangles.
+            let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
+            if (b - a).cross(c - a) == DVec3::ZERO {
+                degenerate += 1;
+                continue;
+            }
+            g.indices.push(t);
+            g.tri_material.push(material);
+            g.tri_mesh.push(mesh_id);
+        }
+        if degenerate > 0 {
+            self.warnings.push(format!(
+                "{name}: skipped {degenerate} degenerate (zero-area) triangle{}",
+                if degenerate == 1 { "" } else { "s" }
+            ));
+        }
+        self.meshes.push(MeshInfo {
+            name,
+            smooth,
+            textured,
+        });
+    }
+
+    /// The warnings, as the reason a scene came out without triangles.
+    pub fn why_empty(&self) -> String {
+        match self.warnings.is_empty() {
+            true => String::new(),
+            false => format!(" ({})", self.warnings.join("; ")),
+        }
+    }
+
+    pub fn add_material(&mut self, m: Material) -> u32 {
+        self.materials.push(m);
+        self.materials.len() as u32 - 1
+    }
+}

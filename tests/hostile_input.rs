@@ -1,0 +1,983 @@
+//! Hostile input for the loaders: special files (FIFOs, devices,
+//! directories, symbolic links), oversized and truncated files, byte-order
+//! marks and foreign line endings, invalid UTF-8, w components and huge
+//! exponents, out-of-range indices, short MTL colours, loose TOML arrays,
+//! images without pixels or too large to decode, and patch files that ask
+//! for more triangles than memory holds.
+//!
+//! Every case loads through `rayterm::scene::load` on its own thread with a
+//! deadline (a hang fails the test instead of stalling it), or through the
+//! built binary with a deadline, and asserts either a clear error naming the
+//! file (and line where there is one) or a correct scene; none may panic.
+
+mod files;
+
+use files::{rayterm, within_deadline, Dir};
+use rayterm::scene::{self, Scene};
+
+const TRI: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+const CHECKER: &[u8] = include_bytes!("../data/textures/checker.png");
+
+/// Loads `spec` as the command line would, with a deadline.
+fn load(spec: &str) -> Result<Scene, String> {
+    let s = spec.to_string();
+    within_deadline(spec, move || scene::load(&s).map_err(|e| format!("{e:#}")))
+}
+
+/// The load fails, and its message holds every one of `parts`.
+fn refused(spec: &str, parts: &[&str]) -> String {
+    let e = match load(spec) {
+        Ok(s) => panic!("{spec}: loaded, warnings {:?}", s.warnings),
+        Err(e) => e,
+    };
+    for p in parts {
+        assert!(e.contains(p), "{spec}: '{p}' missing in: {e}");
+    }
+    assert!(!e.contains("out of memory"), "{e}");
+    // "Not found" only for what is missing, never for another cause.
+    if !parts.iter().any(|p| p.contains("not found")) {
+        assert!(!e.contains("not found"), "{spec}: misleading: {e}");
+    }
+    e
+}
+
+/// The load succeeds, with a warning holding every one of `parts`.
+fn warned(spec: &str, parts: &[&str]) -> Scene {
+    let s = load(spec).unwrap_or_else(|e| panic!("{spec}: {e}"));
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| parts.iter().all(|p| w.contains(p))),
+        "{spec}: no warning with {parts:?} in {:?}",
+        s.warnings
+    );
+    s
+}
+
+/// The load succeeds without a warning.
+fn clean(spec: &str) -> Scene {
+    let s = load(spec).unwrap_or_else(|e| panic!("{spec}: {e}"));
+    assert!(s.warnings.is_empty(), "{spec}: {:?}", s.warnings);
+    s
+}
+
+/// A scene file with one mesh (and optional extra lines) and a light.
+fn scene_with(mesh: &str, extra: &str) -> String {
+    format!(
+        "[[mesh]]\nfile = \"{mesh}\"\n{extra}\n[[light]]\ntype = \"point\"\nposition = [0, 2, 2]\n\
+         color = [1, 1, 1]\n"
+    )
+}
+
+/// An OBJ using material `a` of `m.mtl` (whatever `m.mtl` is).
+const WITH_MTL: &str = "mtllib m.mtl\nusemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n";
+
+/// Writes an OBJ and its `maps.mtl`, whose material `a` has `map_Kd
+/// texture`; returns the OBJ's path.
+fn with_map(d: &Dir, name: &str, texture: &str) -> String {
+    d.write(
+        "maps.mtl",
+        format!("newmtl a\nKd 1 1 1\nmap_Kd {texture}\n"),
+    );
+    d.write(name, WITH_MTL.replace("m.mtl", "maps.mtl"))
+}
+
+/// A CRC-32 (PNG's), for hand-made image headers.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = !0u32;
+    for &b in bytes {
+        c ^= b as u32;
+        for _ in 0..8 {
+            c = if c & 1 != 0 {
+                0xEDB8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
+
+/// A PNG that declares `w` x `h` RGB pixels and holds none of them: the
+/// header is all a size check needs.
+fn png_header(w: u32, h: u32) -> Vec<u8> {
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend(w.to_be_bytes());
+    ihdr.extend(h.to_be_bytes());
+    ihdr.extend([8, 2, 0, 0, 0]);
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    // IHDR, then the start of an IDAT (a zlib header), then IEND.
+    for chunk in [ihdr, b"IDAT\x78\x9c".to_vec(), b"IEND".to_vec()] {
+        png.extend((chunk.len() as u32 - 4).to_be_bytes());
+        png.extend(&chunk);
+        png.extend(crc32(&chunk).to_be_bytes());
+    }
+    png
+}
+
+/// A Radiance HDR header declaring no pixels at all.
+const HDR_0X0: &[u8] = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 0 +X 0\n";
+
+/// `count` small bicubic patches in `.bpt` text.
+fn patches(count: usize) -> String {
+    let mut s = format!("{count}\n");
+    for p in 0..count {
+        s += "3 3\n";
+        for k in 0..16 {
+            s += &format!("{} {} {}\n", k % 4 + p, k / 4, (k * 7 % 5) as f32 * 0.1);
+        }
+    }
+    s
+}
+
+#[test]
+fn special_files_are_refused_by_name() {
+    let d = Dir::new("hostile-special");
+    d.write("tri.obj", TRI);
+    d.write("with.obj", WITH_MTL);
+    // FIFOs: never opened for a blocking read.
+    if let Some(fifo) = d.fifo("fifo.toml") {
+        refused(
+            &fifo,
+            &[
+                "cannot read scene file",
+                "fifo.toml",
+                "not a regular file (a FIFO)",
+            ],
+        );
+        d.link("fifo.obj", &fifo);
+        refused(
+            d.path("fifo.obj").to_str().unwrap(),
+            &["fifo.obj", "not a regular file (a symbolic link to a FIFO)"],
+        );
+        d.link("m.mtl", &fifo);
+        refused(
+            d.path("with.obj").to_str().unwrap(),
+            &["with.obj:1: mtllib", "material library", "m.mtl", "a FIFO"],
+        );
+        let s = d.write(
+            "fifo-tex.toml",
+            scene_with("tri.obj", "material = { texture = \"fifo.toml\" }"),
+        );
+        warned(
+            &s,
+            &[
+                "texture",
+                "fifo.toml",
+                "a FIFO",
+                "using the material colour",
+            ],
+        );
+        warned(
+            &with_map(&d, "fifo-map.obj", &fifo),
+            &[
+                "maps.mtl:3: texture",
+                "fifo.toml",
+                "not a regular file (a FIFO)",
+                "using the material colour",
+            ],
+        );
+        let s = d.write("fifo-bpt.toml", scene_with("fifo.bpt", ""));
+        d.link("fifo.bpt", &fifo);
+        refused(
+            &s,
+            &["fifo-bpt.toml:1:1: mesh fifo.bpt", "patch file", "a FIFO"],
+        );
+        let faces = FACES.replace("F", "fifo.toml");
+        let s = d.write("fifo-env.toml", scene_with("tri.obj", &faces));
+        refused(&s, &["environment face posx", "fifo.toml", "a FIFO"]);
+        std::fs::remove_file(d.path("m.mtl")).unwrap();
+    }
+    // Devices, named directly and through symbolic links.
+    for dev in ["/dev/zero", "/dev/null", "/dev/urandom"] {
+        refused(
+            dev,
+            &[
+                dev,
+                "a scene must be a built-in name, a .toml scene file or a .obj mesh",
+            ],
+        );
+    }
+    d.link("zero.obj", "/dev/zero");
+    refused(
+        d.path("zero.obj").to_str().unwrap(),
+        &[
+            "zero.obj",
+            "not a regular file (a symbolic link to a character device)",
+        ],
+    );
+    d.link("null.toml", "/dev/null");
+    refused(
+        d.path("null.toml").to_str().unwrap(),
+        &["null.toml", "a character device"],
+    );
+    d.link("m.mtl", "/dev/zero");
+    refused(
+        d.path("with.obj").to_str().unwrap(),
+        &["m.mtl", "a character device"],
+    );
+    let s = d.write(
+        "zero-tex.toml",
+        scene_with("tri.obj", "material = { texture = \"/dev/zero\" }"),
+    );
+    warned(
+        &s,
+        &["/dev/zero", "not a regular file (a character device)"],
+    );
+    warned(
+        &with_map(&d, "zero-map.obj", "/dev/zero"),
+        &[
+            "maps.mtl:3: texture /dev/zero",
+            "not a regular file (a character device)",
+        ],
+    );
+    std::fs::remove_file(d.path("m.mtl")).unwrap();
+    // Directories.
+    std::fs::create_dir_all(d.path("dir.toml")).unwrap();
+    refused(
+        d.path("dir.toml").to_str().unwrap(),
+        &["dir.toml", "not a regular file (a directory)"],
+    );
+    std::fs::create_dir_all(d.path("m.mtl")).unwrap();
+    refused(
+        d.path("with.obj").to_str().unwrap(),
+        &["m.mtl", "a directory"],
+    );
+    std::fs::remove_dir(d.path("m.mtl")).unwrap();
+    let s = d.write("dir-mesh.toml", scene_with("dir.toml", ""));
+    refused(
+        &s,
+        &[
+            "dir-mesh.toml:1:1: mesh dir.toml",
+            "OBJ mesh",
+            "a directory",
+        ],
+    );
+    let s = d.write(
+        "dir-tex.toml",
+        scene_with("tri.obj", "material = { texture = \".\" }"),
+    );
+    warned(&s, &["texture", "a directory"]);
+    warned(
+        &with_map(&d, "dir-map.obj", "."),
+        &["maps.mtl:3: texture", "not a regular file (a directory)"],
+    );
+    // Missing files, dangling and looping links.
+    let s = d.write("missing.toml", scene_with("nowhere.obj", ""));
+    refused(
+        &s,
+        &[
+            "missing.toml:1:1: mesh nowhere.obj",
+            "nowhere.obj: not found",
+        ],
+    );
+    d.link("dangling.obj", d.path("gone.obj"));
+    refused(
+        d.path("dangling.obj").to_str().unwrap(),
+        &["dangling.obj: not found"],
+    );
+    d.link("loop-a.obj", d.path("loop-b.obj"));
+    d.link("loop-b.obj", d.path("loop-a.obj"));
+    refused(
+        d.path("loop-a.obj").to_str().unwrap(),
+        &["cannot read OBJ mesh", "loop-a.obj"],
+    );
+    warned(
+        d.path("with.obj").to_str().unwrap(),
+        &["with.obj:1: material library", "m.mtl not found"],
+    );
+    warned(
+        &with_map(&d, "gone-map.obj", "gone.png"),
+        &["maps.mtl:3: texture", "gone.png: not found"],
+    );
+    // Unreadable (where permissions apply: not as root).
+    use std::os::unix::fs::PermissionsExt;
+    let locked = d.write("locked.obj", TRI);
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o000)).unwrap();
+    if std::fs::read(&locked).is_err() {
+        refused(&locked, &["locked.obj: permission denied"]);
+    } else {
+        eprintln!("skipping the permission case: running with privileges that read anything");
+    }
+}
+
+/// Environment faces, `F` replaced by a file name.
+const FACES: &str = "[environment]\nfaces = { posx = \"F\", negx = \"F\", posy = \"F\", \
+                     negy = \"F\", posz = \"F\", negz = \"F\" }";
+
+#[test]
+fn oversized_files_are_refused_before_reading() {
+    let d = Dir::new("hostile-size");
+    d.write("tri.obj", TRI);
+    let big = d.sparse("big.toml", (16 << 20) + 1);
+    refused(
+        &big,
+        &["big.toml: too large (16777217 bytes, limit 16777216 = 16.0 MiB)"],
+    );
+    let big = d.sparse("big.obj", (1 << 30) + 1);
+    refused(
+        &big,
+        &[
+            "cannot read OBJ mesh",
+            "big.obj: too large (1073741825 bytes",
+        ],
+    );
+    d.sparse("m.mtl", (16 << 20) + 1);
+    let obj = d.write("with.obj", WITH_MTL);
+    refused(&obj, &["material library", "m.mtl: too large"]);
+    d.sparse("big.bpt", (64 << 20) + 1);
+    let s = d.write("bpt.toml", scene_with("big.bpt", ""));
+    refused(&s, &["patch file", "big.bpt: too large"]);
+    d.sparse("big.png", (256 << 20) + 1);
+    let s = d.write(
+        "tex.toml",
+        scene_with("tri.obj", "material = { texture = \"big.png\" }"),
+    );
+    warned(&s, &["image", "big.png: too large"]);
+}
+
+#[test]
+fn byte_order_marks_and_line_endings_change_nothing() {
+    let d = Dir::new("hostile-text");
+    let mtl = "newmtl a\nKd 1 0 0\nnewmtl b\nKd 0 0 1\n";
+    let obj =
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 2 4 3\n";
+    let toml = scene_with("m.obj", "[render]\nspp = 3");
+    d.write("plain/m.mtl", mtl);
+    d.write("plain/m.obj", obj);
+    let plain = clean(&d.write("plain/s.toml", &toml));
+    assert_eq!(plain.geometry.positions[0], glam::Vec3::ZERO);
+    for (name, f) in [
+        (
+            "bom",
+            (|t: &str| format!("\u{feff}{t}")) as fn(&str) -> String,
+        ),
+        ("crlf", |t: &str| t.replace('\n', "\r\n")),
+        ("cr", |t: &str| t.replace('\n', "\r")),
+    ] {
+        d.write(&format!("{name}/m.mtl"), f(mtl));
+        d.write(&format!("{name}/m.obj"), f(obj));
+        let s = clean(&d.write(&format!("{name}/s.toml"), f(&toml)));
+        assert_eq!(s.geometry.positions, plain.geometry.positions, "{name}");
+        assert_eq!(s.geometry.indices, plain.geometry.indices, "{name}");
+        assert_eq!(s.materials, plain.materials, "{name}: first material kept");
+        assert_eq!(s.settings.spp, 3, "{name}");
+        // A bare OBJ and a patch file alike.
+        let bare = clean(&d.write(&format!("{name}/bare.obj"), f(TRI)));
+        assert_eq!(bare.geometry.positions[1], glam::Vec3::X, "{name}");
+        d.write(&format!("{name}/p.bpt"), f(&patches(1)));
+        clean(&d.write(&format!("{name}/p.toml"), f(&scene_with("p.bpt", ""))));
+    }
+}
+
+#[test]
+fn invalid_utf8_names_the_file_and_line() {
+    let d = Dir::new("hostile-utf8");
+    let bad = |t: &str| {
+        let mut b = t.as_bytes().to_vec();
+        b.extend(b"# caf\xe9\n");
+        b
+    };
+    refused(
+        &d.write("a.obj", bad(TRI)),
+        &["a.obj:5: not valid UTF-8 (byte 0xe9 at column 6)"],
+    );
+    let s = d.write("s.toml", bad(&scene_with("tri.obj", "")));
+    refused(&s, &["s.toml:8: not valid UTF-8"]);
+    d.write("tri.obj", TRI);
+    d.write("m.mtl", bad("newmtl a\nKd 1 1 1\n"));
+    refused(
+        &d.write("with.obj", WITH_MTL),
+        &["m.mtl:3: not valid UTF-8"],
+    );
+    d.write("p.bpt", bad(&patches(1)));
+    refused(
+        &d.write("p.toml", scene_with("p.bpt", "")),
+        &["p.bpt:19: not valid UTF-8"],
+    );
+    // A NUL byte is valid UTF-8 but no number.
+    refused(
+        &d.write("nul.obj", "v 0 0 0\nv 1\u{0} 0 0\n"),
+        &["nul.obj:2: '1\u{fffd}' is not a number"],
+    );
+}
+
+#[test]
+fn truncated_and_empty_files_name_the_line() {
+    let d = Dir::new("hostile-truncated");
+    d.write("tri.obj", TRI);
+    refused(
+        &d.write("a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2"),
+        &["a.obj:4: a face needs at least 3 vertices"],
+    );
+    refused(
+        &d.write("b.obj", "v 0 0 0\nv 1 0"),
+        &["b.obj:2: a vertex takes 3 coordinates"],
+    );
+    refused(
+        &d.write("s.toml", "[[mesh]]\nfile = \"tri.o"),
+        &["s.toml:2:", "invalid basic string"],
+    );
+    refused(
+        &d.write("t.toml", "[[mesh]]\nfile = \"tri.obj\"\n[[li"),
+        &["t.toml:3:"],
+    );
+    d.write("m.mtl", "newmtl a\nKd 0.5 0.5");
+    refused(
+        &d.write("with.obj", WITH_MTL),
+        &["m.mtl:2: Kd takes 1 or 3 numbers (r [g b]), found 2"],
+    );
+    let cut = &patches(1)[..120];
+    d.write("p.bpt", cut);
+    refused(
+        &d.write("p.toml", scene_with("p.bpt", "")),
+        &["p.bpt:", "truncated file"],
+    );
+    d.write("t.png", &CHECKER[..CHECKER.len() / 2]);
+    let s = d.write(
+        "tex.toml",
+        scene_with("tri.obj", "material = { texture = \"t.png\" }"),
+    );
+    warned(&s, &["t.png", "using the material colour"]);
+    refused(&d.write("empty.obj", ""), &["empty.obj: no triangles"]);
+    refused(
+        &d.write("empty.toml", ""),
+        &["empty.toml: the scene has no triangles"],
+    );
+    d.write("m.mtl", "");
+    warned(
+        &d.write("with.obj", WITH_MTL),
+        &["with.obj:2: usemtl a: no such material"],
+    );
+}
+
+#[test]
+fn w_components_and_huge_exponents_are_checked_after_every_step() {
+    let d = Dir::new("hostile-numbers");
+    let obj = |name: &str, v2: &str| d.write(name, format!("v 0 0 0\n{v2}\nv 0 1 0\nf 1 2 3\n"));
+    refused(
+        &obj("w.obj", "v 1 0 0 1e-45"),
+        &["w.obj:2: w = 1e-45 divides the vertex to (1e45, 0, 0)"],
+    );
+    refused(
+        &obj("w0.obj", "v 1 0 0 0"),
+        &["w0.obj:2: vertex with w = 0"],
+    );
+    refused(
+        &obj("w300.obj", "v 1 1 1 1e-300"),
+        &["w300.obj:2: w = 1e-300", "32-bit floats"],
+    );
+    let s = clean(&obj("w2.obj", "v 2 0 0 2"));
+    assert_eq!(s.geometry.positions[1], glam::Vec3::X);
+    for (name, v, why) in [
+        (
+            "e39.obj",
+            "v 1e39 0 0",
+            "'1e39' is too large: 32-bit floats are finite only up to",
+        ),
+        ("e308.obj", "v 0 1e308 0", "'1e308' is too large"),
+        (
+            "e99999.obj",
+            "v 0 0 1e99999",
+            "'1e99999' is not a finite number",
+        ),
+        ("neg.obj", "v -1e400 0 0", "'-1e400' is not a finite number"),
+        ("vn.obj", "vn 0 0 1e39", "'1e39' is too large"),
+        ("vt.obj", "vt 1e39 0", "'1e39' is too large"),
+    ] {
+        refused(&obj(name, v), &[&format!("{name}:2: {why}")]);
+    }
+    refused(
+        &obj("nan.obj", "v NaN 0 0"),
+        &["nan.obj:2: 'NaN' is not a finite number"],
+    );
+    // A tiny exponent reads as zero; a huge but representable one warns,
+    // and the scene is scaled down to render.
+    clean(&obj("tiny.obj", "v 1 1e-400 0"));
+    let s = warned(
+        &obj("e30.obj", "v 1e30 0 0"),
+        &["e30.obj:2: absurd value 1e30"],
+    );
+    assert!(s.warnings.iter().any(|w| w.contains("scaled by 2^-")));
+    assert!(s.geometry.bounds().extent().max_element() < 2.0);
+    // Placement in the scene file: beyond f32 only once scaled or moved.
+    d.write("tri.obj", TRI);
+    let s = d.write(
+        "scale.toml",
+        scene_with("tri.obj", "scale = 3e38\ntranslate = [1e38, 0, 0]"),
+    );
+    refused(
+        &s,
+        &[
+            "scale.toml:1:1: mesh tri.obj",
+            "tri.obj:2: vertex (1, 0, 0) lands at (4e38, 0, 0)",
+        ],
+    );
+    let s = d.write(
+        "rot.toml",
+        scene_with("sq.obj", "scale = 3e38\nrotate = [0, 0, 45]"),
+    );
+    d.write("sq.obj", "v 0 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\n");
+    refused(
+        &s,
+        &[
+            "rot.toml:1:1: mesh sq.obj",
+            "sq.obj:2: vertex (1, 1, 0) lands at (",
+            ", 4.2426",
+        ],
+    );
+    let s = d.write(
+        "e39.toml",
+        scene_with("tri.obj", "translate = [0, 1e39, 0]"),
+    );
+    refused(&s, &["e39.toml:3:", "32-bit floats are finite only up to"]);
+    let s = d.write("big.toml", scene_with("tri.obj", "scale = 3e38"));
+    let s = warned(
+        &s,
+        &["big.toml: the scene is 3e38 across", "scaled by 2^-127"],
+    );
+    assert!(s.geometry.positions.iter().all(|p| p.is_finite()));
+    let s = d.write("tiny.toml", scene_with("tri.obj", "scale = 1e-30"));
+    let s = warned(
+        &s,
+        &["tiny.toml: the scene is 1e-30 across", "scaled by 2^100"],
+    );
+    assert_eq!(
+        s.geometry.triangle_count(),
+        1,
+        "a tiny triangle is no degenerate one"
+    );
+    // At 1e30 even f64 cannot tell the vertices of a unit triangle apart:
+    // the error says why the scene came out empty.
+    let s = d.write(
+        "far30.toml",
+        scene_with("tri.obj", "translate = [1e30, 1e30, 1e30]"),
+    );
+    refused(
+        &s,
+        &[
+            "far30.toml: the scene has no triangles (",
+            "coordinates reach 1e30",
+            "skipped 1 degenerate",
+        ],
+    );
+    // Huge exponents in MTL and patch files.
+    d.write("m.mtl", "newmtl a\nNs 1e99999\n");
+    refused(&d.write("with.obj", WITH_MTL), &["m.mtl:2: '1e99999'"]);
+    d.write("p.bpt", patches(1).replacen("0 0 0", "0 1e300 0", 1));
+    refused(
+        &d.write("p.toml", scene_with("p.bpt", "")),
+        &["p.bpt:3:", "out of range"],
+    );
+}
+
+#[test]
+fn indices_are_checked_exactly() {
+    let d = Dir::new("hostile-indices");
+    let base = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nvt 0 0\n";
+    let obj = |name: &str, f: &str| d.write(name, format!("{base}{f}\n"));
+    for (name, face, want) in [
+        (
+            "wrap.obj",
+            "f 1//6148914691236517207 2//1 3//1",
+            "normal index 6148914691236517207 is out of range",
+        ),
+        (
+            "vn.obj",
+            "f 1//4 2//1 3//1",
+            "the face refers to normal 4 but the file defines 3",
+        ),
+        (
+            "vt.obj",
+            "f 1/2 2/1 3/1",
+            "the face refers to texture coordinate 2 but the file defines 1",
+        ),
+        (
+            "v.obj",
+            "f 1 2 4",
+            "the face refers to vertex 4 but the file defines 3",
+        ),
+        (
+            "u32.obj",
+            "f 1 2 4294967296",
+            "vertex index 4294967296 is out of range",
+        ),
+        (
+            "u32m.obj",
+            "f 1 2 4294967295",
+            "the face refers to vertex 4294967295 but the file defines 3",
+        ),
+        (
+            "i64.obj",
+            "f 1 2 99999999999999999999",
+            "'99999999999999999999' is not a valid vertex index",
+        ),
+        ("zero.obj", "f 0 1 2", "vertex index 0 (indices start at 1)"),
+        (
+            "rel.obj",
+            "f -1 -2 -4",
+            "relative vertex index -4 reaches before the first vertex",
+        ),
+        ("relvn.obj", "f 1//-4 2//1 3//1", "relative normal index -4"),
+        (
+            "min.obj",
+            "f -9223372036854775808 1 2",
+            "relative vertex index -9223372036854775808",
+        ),
+        (
+            "slash.obj",
+            "f 1/1/1/1 2 3",
+            "'1/1/1/1' is not a face vertex",
+        ),
+    ] {
+        refused(&obj(name, face), &[&format!("{name}:8: "), want]);
+    }
+    // Relative and forward references that land in range load.
+    clean(&obj("ok.obj", "f -3/-1/-3 -2/1/-2 -1/1/-1"));
+    clean(&d.write("fwd.obj", "f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"));
+}
+
+#[test]
+fn mtl_statements_rayterm_cannot_use_are_errors_or_warnings() {
+    let d = Dir::new("hostile-mtl");
+    let obj = d.write("with.obj", WITH_MTL);
+    let mtl = |text: &str| d.write("m.mtl", format!("newmtl a\n{text}\n"));
+    for (text, want) in [
+        (
+            "Kd 0.5 0.5",
+            "m.mtl:2: Kd takes 1 or 3 numbers (r [g b]), found 2",
+        ),
+        ("Kd", "m.mtl:2: Kd takes 1 or 3 numbers (r [g b]), found 0"),
+        ("Ks 1 2 3 4", "m.mtl:2: Ks takes 1 or 3 numbers"),
+        ("Ka 0.5 0.5", "m.mtl:2: Ka takes 1 or 3 numbers"),
+        ("Ns", "m.mtl:2: Ns takes one number, found 0"),
+        ("map_Kd", "m.mtl:2: map_Kd needs a file name"),
+        ("map_Kd -s 2 2 2", "m.mtl:2: map_Kd needs a file name"),
+    ] {
+        mtl(text);
+        refused(&obj, &[want]);
+    }
+    mtl("Kd 0.5");
+    let s = clean(&obj);
+    assert_eq!(s.materials[0].kd, glam::Vec3::splat(0.5));
+    d.write("t.png", CHECKER);
+    mtl("Kd -1 0.5 0.5\nmap_Kd -s 2 2 1 -o 0.5 0.5 t.png");
+    let s = warned(&obj, &["m.mtl:2: negative colour Kd -1 0.5 0.5"]);
+    assert!(s
+        .warnings
+        .iter()
+        .any(|w| w.contains("m.mtl:3: map_Kd options ignored: -s 2 2 1, -o 0.5 0.5")));
+    assert_eq!(s.textures.len(), 1, "the texture after the options is read");
+    d.write("with.obj", WITH_MTL.replace("usemtl a", "usemtl b"));
+    mtl("Kd 1 1 1");
+    warned(
+        &obj,
+        &["with.obj:2: usemtl b: no such material in", "m.mtl"],
+    );
+}
+
+#[test]
+fn scene_file_arrays_and_settings_are_strict() {
+    let d = Dir::new("hostile-toml");
+    d.write("tri.obj", TRI);
+    let light = "[[light]]\ntype = \"parallelogram\"\ncorner = [0, 1, 0]\nedge1 = [1, 0, 0]\n\
+                 edge2 = [0, 0, 1]\n";
+    for (name, extra, want) in [
+        (
+            "pos.toml",
+            "[[light]]\ntype = \"point\"\nposition = [0, 1, 2, 3]\ncolor = [1, 1, 1]",
+            "pos.toml:5:12: invalid length 4, expected an array of 3 values",
+        ),
+        (
+            "size.toml",
+            "[render]\nsize = [64, 48, 7]",
+            "size.toml:4:8: invalid length 3, expected an array of 2 values",
+        ),
+        (
+            "short.toml",
+            "translate = [1, 2]",
+            "short.toml:3:13: invalid length 2",
+        ),
+        (
+            "spp.toml",
+            "[render]\nspp = 0",
+            "spp.toml:4:7: render.spp must be at least 1, not 0",
+        ),
+        (
+            "depth.toml",
+            "[render]\nmax_depth = 100",
+            "depth.toml:4:13: render.max_depth must be from 0 to 64",
+        ),
+        (
+            "nan.toml",
+            "scale = nan",
+            "nan.toml:3:9: NaN is not a finite number",
+        ),
+    ] {
+        refused(&d.write(name, scene_with("tri.obj", extra)), &[want]);
+    }
+    d.write("p.bpt", patches(1));
+    refused(
+        &d.write("seg.toml", scene_with("p.bpt", "segments = 5000")),
+        &["seg.toml:3:12: segments must be from 1 to 1024, not 5000"],
+    );
+    let colors = format!("{light}colors = [[1, 1, 1], [1, 1, 1], [1, 1, 1], [1, 1, 1], [1, 1, 1]]");
+    refused(
+        &d.write(
+            "colors.toml",
+            format!("[[mesh]]\nfile = \"tri.obj\"\n{colors}\n"),
+        ),
+        &["colors.toml:8:10: invalid length 5, expected an array of 4 values"],
+    );
+    let s = d.write(
+        "neg.toml",
+        "[[mesh]]\nfile = \"tri.obj\"\nmaterial = { kd = [-0.5, 0.5, 0.5] }\n[[light]]\n\
+         type = \"point\"\nposition = [0, 1, 1]\ncolor = [1, 1, -1]\n[render]\nambient = [-0.1, 0, 0]\n",
+    );
+    let s = warned(&s, &["neg.toml:3:19: negative kd [-0.5, 0.5, 0.5]"]);
+    let all = s.warnings.join("\n");
+    assert!(
+        all.contains("neg.toml:7:9: negative color")
+            && all.contains("neg.toml:9:11: negative ambient"),
+        "{all}"
+    );
+}
+
+#[test]
+fn images_without_pixels_or_beyond_the_budget_are_refused() {
+    let d = Dir::new("hostile-images");
+    d.write("tri.obj", TRI);
+    d.write("zero.hdr", HDR_0X0);
+    let s = d.write(
+        "tex0.toml",
+        scene_with("tri.obj", "material = { texture = \"zero.hdr\" }"),
+    );
+    warned(&s, &["texture", "zero.hdr: the image has no pixels (0x0)"]);
+    let s = d.write(
+        "env0.toml",
+        scene_with("tri.obj", &FACES.replace("F", "zero.hdr")),
+    );
+    refused(
+        &s,
+        &[
+            "env0.toml: environment",
+            "environment face posx",
+            "zero.hdr: the image has no pixels (0x0)",
+        ],
+    );
+    d.write("zero.png", png_header(0, 0));
+    let s = d.write(
+        "png0.toml",
+        scene_with("tri.obj", "material = { texture = \"zero.png\" }"),
+    );
+    // The decoder's own words, once (not repeated as an error chain).
+    warned(
+        &s,
+        &["zero.png: Format error decoding Png: Invalid image dimensions; using the material colour"],
+    );
+    // 60 bytes of HDR header can declare 100000 x 100000: 251 GiB to decode and store.
+    d.write(
+        "huge.hdr",
+        b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 100000 +X 100000\n",
+    );
+    warned(
+        &with_map(&d, "hdr.obj", "huge.hdr"),
+        &[
+            "maps.mtl:3: texture",
+            "huge.hdr: a 100000x100000 texture would need 251 GiB of memory, over the 1.50 GiB \
+             limit per texture",
+        ],
+    );
+    let s = d.write(
+        "envhdr.toml",
+        scene_with("tri.obj", &FACES.replace("F", "huge.hdr")),
+    );
+    refused(
+        &s,
+        &["environment face posx", "huge.hdr", "would need 251 GiB"],
+    );
+    // 420 kB of PNG could declare 12000 x 12000: 2 GiB to decode and store.
+    d.write("huge.png", png_header(12000, 12000));
+    let s = d.write(
+        "texbig.toml",
+        scene_with("tri.obj", "material = { texture = \"huge.png\" }"),
+    );
+    warned(
+        &s,
+        &["huge.png: a 12000x12000 texture would need 2.01 GiB of memory, over the 1.50 GiB limit per texture"],
+    );
+    let s = d.write(
+        "envbig.toml",
+        scene_with("tri.obj", &FACES.replace("F", "huge.png")),
+    );
+    refused(&s, &["huge.png", "would need 2.01 GiB"]);
+    d.write("max.png", png_header(u32::MAX >> 1, u32::MAX >> 1));
+    let s = d.write(
+        "texmax.toml",
+        scene_with("tri.obj", "material = { texture = \"max.png\" }"),
+    );
+    warned(&s, &["max.png"]);
+    // An image that is no image.
+    d.write("junk.png", b"\x89PNG\r\n\x1a\nnot a png at all");
+    let s = d.write(
+        "junk.toml",
+        scene_with("tri.obj", "material = { texture = \"junk.png\" }"),
+    );
+    warned(&s, &["junk.png", "using the material colour"]);
+}
+
+#[test]
+fn patch_files_asking_for_too_much_memory_are_refused_up_front() {
+    let d = Dir::new("hostile-patches");
+    d.write("many.bpt", patches(2000));
+    let s = d.write("seg.toml", scene_with("many.bpt", "segments = 1024"));
+    refused(
+        &s,
+        &["many.bpt: 2000 patches at 1024 segments per edge make 4194304000 triangles, which would need 781 GiB of memory", "is available; lower segments"],
+    );
+    d.write("more.bpt", patches(4200));
+    let s = d.write("idx.toml", scene_with("more.bpt", "segments = 1024"));
+    refused(&s, &["4200 patches", "more than 32-bit indices address"]);
+    // The same file at a sane level loads.
+    let s = clean(&d.write("ok.toml", scene_with("many.bpt", "segments = 1")));
+    assert_eq!(s.geometry.triangle_count(), 4000);
+}
+
+/// The binary under hostile input: no hang, no panic, the message on stderr.
+#[test]
+fn the_binary_says_what_is_wrong_and_never_hangs() {
+    let d = Dir::new("hostile-binary");
+    let run = |args: &[&str]| {
+        let mut all = vec!["render"];
+        all.extend(args);
+        all.extend(["--size", "8x8", "--spp", "1", "-o", "out.png"]);
+        let r = rayterm(&d.0, &all);
+        assert!(!r.stderr.contains("panicked"), "{args:?}: {}", r.stderr);
+        r
+    };
+    let fails = |args: &[&str], parts: &[&str]| {
+        let _ = std::fs::remove_file(d.path("out.png"));
+        let r = run(args);
+        assert!(
+            !d.path("out.png").exists(),
+            "{args:?}: an image from a failed load"
+        );
+        assert_eq!(r.code, Some(1), "{args:?}: {}", r.stderr);
+        for p in parts {
+            assert!(
+                r.stderr.contains(p),
+                "{args:?}: '{p}' missing in {}",
+                r.stderr
+            );
+        }
+    };
+    d.write("tri.obj", TRI);
+    if d.fifo("fifo.toml").is_some() {
+        fails(&["fifo.toml"], &["fifo.toml: not a regular file (a FIFO)"]);
+        d.link("m.mtl", d.path("fifo.toml"));
+        d.write("with.obj", WITH_MTL);
+        fails(
+            &["with.obj"],
+            &["with.obj:1: mtllib", "m.mtl: not a regular file"],
+        );
+        d.write(
+            "tex.toml",
+            scene_with("tri.obj", "material = { texture = \"fifo.toml\" }"),
+        );
+        let r = run(&["tex.toml"]);
+        assert!(
+            r.ok() && r.stderr.contains("warning: tex.toml: texture fifo.toml"),
+            "{}",
+            r.stderr
+        );
+    }
+    d.link("zero.obj", "/dev/zero");
+    fails(
+        &["zero.obj"],
+        &["zero.obj: not a regular file (a symbolic link to a character device)"],
+    );
+    fails(
+        &["/dev/zero"],
+        &["/dev/zero: a scene must be a built-in name"],
+    );
+    d.write(
+        "huge.hdr",
+        b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 100000 +X 100000\n",
+    );
+    let r = run(&[&with_map(&d, "hdr.obj", "huge.hdr")]);
+    assert!(
+        r.ok()
+            && r.stderr
+                .contains("huge.hdr: a 100000x100000 texture would need 251 GiB"),
+        "{}",
+        r.stderr
+    );
+    d.write("bom.obj", format!("\u{feff}{TRI}"));
+    let r = run(&["bom.obj"]);
+    assert!(
+        r.ok() && r.stdout.contains("1 triangles"),
+        "{} {}",
+        r.stdout,
+        r.stderr
+    );
+    d.write(
+        "idx.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//6148914691236517207 2//1 3//1\n",
+    );
+    fails(
+        &["idx.obj"],
+        &["idx.obj:5: normal index 6148914691236517207 is out of range"],
+    );
+    d.write("many.bpt", patches(2000));
+    d.write("seg.toml", scene_with("many.bpt", "segments = 1024"));
+    fails(&["seg.toml"], &["would need 781 GiB of memory"]);
+    d.write("zero.hdr", HDR_0X0);
+    d.write(
+        "env0.toml",
+        scene_with("tri.obj", &FACES.replace("F", "zero.hdr")),
+    );
+    fails(&["env0.toml"], &["zero.hdr: the image has no pixels (0x0)"]);
+}
+
+#[test]
+fn control_characters_and_empty_names_are_handled() {
+    let d = Dir::new("hostile-names");
+    d.write("tri.obj", TRI);
+    // Escape sequences in names and statements never reach a terminal.
+    let obj = d.write(
+        "esc.obj",
+        "o \u{1b}]0;title\u{7}\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nfoo\u{1b}[2J 1\n",
+    );
+    let s = warned(&obj, &["foo\u{fffd}[2J (line 6)"]);
+    assert_eq!(s.meshes[0].name, "\u{fffd}]0;title\u{fffd}");
+    let s = d.write(
+        "esc.toml",
+        "name = \"\\u001b[2J\"\ndescription = \"a\\u009bb\"\n[[mesh]]\nfile = \"tri.obj\"\n\
+         material = { name = \"m\\u0007\" }\n[[light]]\ntype = \"point\"\nposition = [0, 1, 1]\n\
+         color = [1, 1, 1]\n",
+    );
+    let s = clean(&s);
+    let text = format!("{}{}{}", s.name, s.description, s.materials[0].name);
+    assert!(!text.chars().any(char::is_control), "{text:?}");
+    // Empty file names.
+    let s = d.write("nomesh.toml", scene_with("", ""));
+    refused(&s, &["nomesh.toml:1:1: mesh: the file name is empty"]);
+    let s = d.write(
+        "notex.toml",
+        scene_with("tri.obj", "material = { texture = \" \" }"),
+    );
+    warned(
+        &s,
+        &["notex.toml: material texture: the file name is empty"],
+    );
+    let s = d.write(
+        "noface.toml",
+        scene_with("tri.obj", &FACES.replace("F", "")),
+    );
+    refused(&s, &["environment face posx: the file name is empty"]);
+    d.write("m.mtl", "newmtl a\nmap_Kd   \n");
+    refused(
+        &d.write("with.obj", WITH_MTL),
+        &["m.mtl:2: map_Kd needs a file name"],
+    );
+}

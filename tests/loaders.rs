@@ -1,0 +1,302 @@
+//! Scene files as users hand them over: paths written in a scene are
+//! relative to the scene file whatever the working directory and however
+//! the scene is named, and a mesh far from the origin renders as it does at
+//! the origin (coordinates are read and moved in f64 before rounding).
+
+mod common;
+mod files;
+
+use std::path::Path;
+
+use files::{rayterm, Dir};
+use glam::{DVec3, Vec3};
+use rayterm::render::Features;
+use rayterm::scene::file::{load_with, Overrides};
+use rayterm::scene::source::Memory;
+use rayterm::scene::{Builder, Scene};
+
+const CHECKER: &[u8] = include_bytes!("../data/textures/checker.png");
+const SPHERE: &str = include_str!("../data/meshes/sphere.obj");
+
+/// A scene in `scenes/` whose OBJ, MTL, texture and patch file sit beside
+/// that folder, all reached through `../`.
+fn scene_tree(d: &Dir) {
+    d.write(
+        "top/scenes/s.toml",
+        "[camera]\neye = [0, 1.5, 4]\ntarget = [0, 0.5, 0]\n\
+         [[mesh]]\nfile = \"../meshes/box.obj\"\n\
+         [[mesh]]\nfile = \"../p.bpt\"\nsegments = 2\ntranslate = [1.2, 0, 0]\n\
+         material = { texture = \"../textures/t.png\" }\n\
+         [[light]]\ntype = \"point\"\nposition = [1, 3, 2]\ncolor = [1, 1, 1]\n",
+    );
+    d.write(
+        "top/meshes/box.obj",
+        "mtllib box.mtl\nusemtl tex\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\n\
+         vt 0 0\nvt 4 0\nvt 4 4\nvt 0 4\nf 1/1 4/4 3/3 2/2\n",
+    );
+    d.write(
+        "top/meshes/box.mtl",
+        "newmtl tex\nKd 1 1 1\nmap_Kd ../textures/t.png\n",
+    );
+    d.write("top/textures/t.png", CHECKER);
+    let mut bpt = String::from("1\n3 3\n");
+    for k in 0..16 {
+        bpt += &format!(
+            "{} {} {}\n",
+            (k % 4) as f32 * 0.3,
+            ((k * 7) % 5) as f32 * 0.1,
+            (k / 4) as f32 * 0.3
+        );
+    }
+    d.write("top/p.bpt", bpt);
+}
+
+/// Decoys that a path losing its `../` would load instead.
+fn decoys(d: &Dir, at: &str) {
+    let other = "v -5 0 -5\nv 5 0 -5\nv 0 3 5\nf 1 3 2\n";
+    for rel in ["meshes/box.obj", "box.obj", "p.bpt", "../p.bpt"] {
+        let p = format!("{at}/{rel}");
+        if rel.ends_with(".bpt") {
+            d.write(
+                &p,
+                "1\n3 3\n".to_string() + &"0 0 0\n1 0 0\n0 1 0\n1 1 1\n".repeat(4),
+            );
+        } else {
+            d.write(&p, other);
+        }
+    }
+}
+
+fn render_from(d: &Dir, cwd: &str, scene: &str) -> Vec<u8> {
+    let out = d.path(&format!("out-{}.png", cwd.replace('/', "_")));
+    let out = out.to_str().unwrap();
+    let r = rayterm(
+        &d.path(cwd),
+        &["render", scene, "--size", "24x16", "--spp", "1", "-o", out],
+    );
+    assert!(r.ok(), "{scene} from {cwd}: {}", r.stderr);
+    assert!(
+        !r.stderr.contains("warning"),
+        "{scene} from {cwd}: {}",
+        r.stderr
+    );
+    std::fs::read(out).unwrap()
+}
+
+#[test]
+fn scene_paths_are_relative_to_the_scene_file() {
+    let d = Dir::new("paths");
+    scene_tree(&d);
+    decoys(&d, "top/scenes");
+    decoys(&d, "top/meshes/sub");
+    let absolute = d.path("top/scenes/s.toml");
+    let reference = render_from(&d, "top/scenes", "s.toml");
+    for (cwd, scene) in [
+        ("top", "scenes/s.toml"),
+        ("top/scenes", "./s.toml"),
+        ("top/meshes", "../scenes/s.toml"),
+        ("top/meshes/sub", "../../scenes/s.toml"),
+        ("top/meshes/sub", absolute.to_str().unwrap()),
+        ("top/scenes", "../scenes/./s.toml"),
+    ] {
+        assert!(
+            render_from(&d, cwd, scene) == reference,
+            "{scene} from {cwd} renders another scene"
+        );
+    }
+    // The decoy would show: the same scene with the decoy as its mesh differs.
+    d.write(
+        "top/scenes/decoyed.toml",
+        std::fs::read_to_string(d.path("top/scenes/s.toml"))
+            .unwrap()
+            .replace("../meshes/box.obj", "meshes/box.obj"),
+    );
+    assert!(render_from(&d, "top/scenes", "decoyed.toml") != reference);
+}
+
+#[test]
+fn a_parent_scene_never_picks_up_a_decoy_in_the_working_directory() {
+    // `rayterm render ../amb.toml` whose mesh is `../plane.obj`, run from a
+    // folder holding a decoy `plane.obj`.
+    let d = Dir::new("decoy");
+    d.write(
+        "plane.obj",
+        "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nf 1 4 3 2\n",
+    );
+    d.write(
+        "a/amb.toml",
+        "[camera]\neye = [0, 3, 0.1]\ntarget = [0, 0, 0]\n[[mesh]]\nfile = \"../plane.obj\"\n\
+         [render]\nambient = [1, 1, 1]\n",
+    );
+    d.write(
+        "a/work/plane.obj",
+        "v -9 0 -9\nv 9 0 -9\nv 0 0 9\nf 1 3 2\n",
+    );
+    let r = rayterm(
+        &d.path("a/work"),
+        &[
+            "render",
+            "../amb.toml",
+            "--size",
+            "8x8",
+            "--spp",
+            "1",
+            "-o",
+            "x.png",
+        ],
+    );
+    assert!(r.ok(), "{}", r.stderr);
+    // The real plane has two triangles, the decoy one.
+    assert!(r.stdout.contains("2 triangles"), "{}", r.stdout);
+    // A missing mesh is named with the path it was looked for at.
+    std::fs::remove_file(d.path("plane.obj")).unwrap();
+    let r = rayterm(&d.path("a/work"), &["render", "../amb.toml", "-o", "x.png"]);
+    assert!(!r.ok());
+    assert!(
+        r.stderr
+            .contains("cannot read OBJ mesh ../../plane.obj: not found"),
+        "{}",
+        r.stderr
+    );
+}
+
+#[test]
+fn built_in_scenes_load_from_any_directory() {
+    let d = Dir::new("builtin");
+    let r = rayterm(
+        &d.0,
+        &[
+            "render", "env", "--size", "8x8", "--spp", "1", "-o", "x.png",
+        ],
+    );
+    assert!(r.ok(), "{}", r.stderr);
+    // Its files on disk, loaded from their own folder and from elsewhere.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("data");
+    for (cwd, scene) in [
+        (root.join("scenes"), "env.toml".to_string()),
+        (root.join("scenes"), "./cornell.toml".to_string()),
+        (
+            d.0.clone(),
+            root.join("scenes/cornell.toml")
+                .to_str()
+                .unwrap()
+                .to_string(),
+        ),
+    ] {
+        let out = d.path("y.png");
+        let r = rayterm(
+            &cwd,
+            &[
+                "render",
+                &scene,
+                "--size",
+                "8x8",
+                "--spp",
+                "1",
+                "-o",
+                out.to_str().unwrap(),
+            ],
+        );
+        assert!(r.ok(), "{scene} from {}: {}", cwd.display(), r.stderr);
+    }
+}
+
+/// The built-in sphere (2 across) under a point light, moved by `offset`:
+/// written into the OBJ text (`in_obj`) or as a TOML `translate`, with the
+/// camera and light moved alike in the scene file.
+fn far_sphere(offset: DVec3, in_obj: bool) -> Scene {
+    let shift = |p: DVec3| if in_obj { p + offset } else { p };
+    let mut obj = String::new();
+    for line in SPHERE.lines() {
+        match line.strip_prefix("v ") {
+            Some(rest) => {
+                let c: Vec<f64> = rest
+                    .split_whitespace()
+                    .map(|w| w.parse().unwrap())
+                    .collect();
+                let p = shift(DVec3::new(c[0], c[1], c[2]));
+                obj += &format!("v {} {} {}\n", p.x, p.y, p.z);
+            }
+            None => obj += &format!("{line}\n"),
+        }
+    }
+    let (e, t, l) = (
+        offset + DVec3::new(0.7, 1.1, 3.4),
+        offset + DVec3::new(0.0, 0.1, 0.0),
+        offset + DVec3::new(-2.0, 3.0, 2.5),
+    );
+    let translate = if in_obj {
+        String::new()
+    } else {
+        format!("translate = [{}, {}, {}]\n", offset.x, offset.y, offset.z)
+    };
+    let toml = format!(
+        "[camera]\neye = [{}, {}, {}]\ntarget = [{}, {}, {}]\nfov = 40\n\
+         [[mesh]]\nfile = \"s.obj\"\n{translate}\
+         [[light]]\ntype = \"point\"\nposition = [{}, {}, {}]\ncolor = [1, 1, 1]\n\
+         [render]\nambient = [0.1, 0.1, 0.1]\n",
+        e.x, e.y, e.z, t.x, t.y, t.z, l.x, l.y, l.z
+    );
+    let src = Memory::default().with("s.toml", toml).with("s.obj", obj);
+    load_with(&src, Path::new("s.toml"), Overrides::default()).unwrap()
+}
+
+/// Mean absolute difference relative to the mean of `a`.
+fn relative_difference(a: &[Vec3], b: &[Vec3]) -> f32 {
+    let diff: f32 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (*x - *y).abs().element_sum())
+        .sum();
+    let mean: f32 = a.iter().map(|x| x.element_sum()).sum();
+    diff / mean
+}
+
+#[test]
+fn far_meshes_render_as_at_the_origin() {
+    let (w, h) = (48, 40);
+    let render = |s: &Scene| common::render(s, w, h, 4, Features::all(), Builder::Sah, 7).image;
+    let origin = far_sphere(DVec3::ZERO, true);
+    assert!(origin.warnings.is_empty(), "{:?}", origin.warnings);
+    let reference = render(&origin);
+    let lit = reference.iter().filter(|c| c.max_element() > 0.2).count();
+    assert!(
+        lit > (w * h / 8) as usize,
+        "the sphere fills part of the view: {lit}"
+    );
+    for sizes in [1e5, 1e7] {
+        // The offset in multiples of the sphere's size (2), on every axis.
+        let offset = DVec3::new(1.0, -0.5, 0.75) * sizes * 2.0;
+        for in_obj in [true, false] {
+            let far = far_sphere(offset, in_obj);
+            let how = if in_obj { "in the OBJ" } else { "by translate" };
+            assert_eq!(
+                far.geometry.triangle_count(),
+                origin.geometry.triangle_count(),
+                "{sizes:e} {how}: {:?}",
+                far.warnings
+            );
+            assert!(
+                far.warnings
+                    .iter()
+                    .any(|w| w.contains("far from the origin")),
+                "{:?}",
+                far.warnings
+            );
+            let d = relative_difference(&reference, &render(&far));
+            assert!(
+                d < 0.01,
+                "{sizes:e} sizes away {how}: {:.3} % different",
+                d * 100.0
+            );
+        }
+    }
+    // The control: the same sphere rounded to f32 where it lies, as it was
+    // read before, collapses (its vertices 2 apart at 2e7).
+    let mut rounded = far_sphere(DVec3::new(1.0, -0.5, 0.75) * 2e7, true);
+    let shift = DVec3::new(1.0, -0.5, 0.75) * 2e7;
+    for p in &mut rounded.geometry.positions {
+        *p = ((p.as_dvec3() + shift).as_vec3().as_dvec3() - shift).as_vec3();
+    }
+    assert!(relative_difference(&reference, &render(&rounded)) > 0.05);
+}
