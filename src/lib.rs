@@ -9,6 +9,7 @@ pub mod cli;
 pub mod geometry;
 pub mod inspect;
 pub mod interrupt;
+pub mod memory;
 pub mod raster;
 pub mod render;
 pub mod report;

@@ -194,7 +194,7 @@ fn special_files_are_refused_by_name() {
             dev,
             &[
                 dev,
-                "a scene must be a built-in name, a .toml scene file or a .obj mesh",
+                "not a regular file (a character device); a scene is a built-in name",
             ],
         );
     }
@@ -898,7 +898,7 @@ fn the_binary_says_what_is_wrong_and_never_hangs() {
     );
     fails(
         &["/dev/zero"],
-        &["/dev/zero: a scene must be a built-in name"],
+        &["/dev/zero: not a regular file (a character device)"],
     );
     d.write(
         "huge.hdr",

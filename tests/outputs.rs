@@ -81,6 +81,28 @@ fn bad_outputs_are_refused_with_the_reason() {
 }
 
 #[test]
+fn a_texture_the_scene_reads_is_not_overwritten() {
+    let d = dir("texture");
+    let p = |n: &str| d.join(n).display().to_string();
+    fs::write(
+        d.join("m.obj"),
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl a\nf 1/1 2/2 3/3\n",
+    )
+    .unwrap();
+    fs::write(d.join("m.mtl"), "newmtl a\nKd 1 1 1\nmap_Kd t.png\n").unwrap();
+    let made = rayterm(&["render", "cornell", "--size", "4x4", "-o", &p("t.png")]);
+    assert!(made.status.success());
+    let texture = fs::read(d.join("t.png")).unwrap();
+    fails_with(
+        &["render", &p("m.obj"), "--size", "8x8", "-o", &p("t.png")],
+        "is an input",
+    );
+    assert_eq!(fs::read(d.join("t.png")).unwrap(), texture);
+    assert_eq!(files(&d), ["m.mtl", "m.obj", "t.png"]);
+    fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
 fn devices_and_fifos_are_written_in_place_never_replaced() {
     let d = dir("dev");
     let null = d.join("null.png");

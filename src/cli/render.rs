@@ -17,17 +17,18 @@ use crate::render::{post, Ended, Film, Progressive, Stop};
 
 pub fn run(a: RenderArgs) -> Result<ExitCode> {
     let stop = stop(&a)?;
-    // Inputs are the scene file, if the scene is one.
-    let inputs: Vec<PathBuf> = std::path::Path::new(&a.scene.scene)
+    // The scene file is checked now, the files it names once they are read.
+    let scene_file: Vec<PathBuf> = std::path::Path::new(&a.scene.scene)
         .is_file()
         .then(|| PathBuf::from(&a.scene.scene))
         .into_iter()
         .collect();
-    let out = Output::check(&a.output, &inputs, Format::RENDERS)?;
+    let out = Output::check(&a.output, &scene_file, Format::RENDERS)?;
     if a.debug.is_some() && out.format != Format::Png {
         bail!("--debug views are PNG images; name the output .png");
     }
     let s = open_scene(&a.scene)?;
+    out.check_not_input(&s.inputs)?;
     if a.explain {
         eprintln!("plan for {}:\n{}", s.scene.name, s.plan.explain());
     }

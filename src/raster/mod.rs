@@ -14,6 +14,8 @@ pub mod png;
 use std::path::Path;
 
 use anyhow::{bail, Result};
+
+use crate::memory::bytes;
 use glam::Vec3;
 
 pub use output::{Format, Output};
@@ -46,22 +48,6 @@ fn open(path: &Path) -> Result<std::fs::File> {
         bail!("{}: not a regular file", path.display());
     }
     std::fs::File::open(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
-}
-
-/// A byte count in binary units.
-fn bytes(n: u64) -> String {
-    let units = ["bytes", "KiB", "MiB", "GiB", "TiB"];
-    let mut v = n as f64;
-    let mut u = 0;
-    while v >= 1024.0 && u + 1 < units.len() {
-        v /= 1024.0;
-        u += 1;
-    }
-    if u == 0 {
-        format!("{n} bytes")
-    } else {
-        format!("{v:.1} {}", units[u])
-    }
 }
 
 /// Formats for linear (unclamped, untoned) images.
@@ -134,13 +120,11 @@ mod tests {
 
     #[test]
     fn sizes_read_in_binary_units() {
-        assert_eq!(bytes(512), "512 bytes");
-        assert_eq!(bytes(120_000_000_000), "111.8 GiB");
         let e = check_size(Path::new("big.hdr"), 100_000, 100_000, 12).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "big.hdr: a 100000x100000 image would need 111.8 GiB to decode; rayterm reads \
-             images up to 1.0 GiB"
+            "big.hdr: a 100000x100000 image would need 112 GiB to decode; rayterm reads \
+             images up to 1.00 GiB"
         );
         assert!(check_size(Path::new("ok.hdr"), 4096, 4096, 12).is_ok());
     }

@@ -78,16 +78,6 @@ impl Output {
         match fs::metadata(path) {
             Ok(m) => {
                 let t = m.file_type();
-                for input in inputs {
-                    if let Ok(i) = fs::metadata(input) {
-                        if (i.dev(), i.ino()) == (m.dev(), m.ino()) {
-                            bail!(
-                                "{shown} is an input of this render ({}); choose another output",
-                                input.display()
-                            );
-                        }
-                    }
-                }
                 if t.is_dir() {
                     bail!("{shown} is a directory; name a file inside it");
                 } else if t.is_file() {
@@ -128,11 +118,33 @@ impl Output {
         if device.is_none() {
             check_directory(path)?;
         }
-        Ok(Output {
+        let out = Output {
             path: path.to_path_buf(),
             format,
             device,
-        })
+        };
+        out.check_not_input(inputs)?;
+        Ok(out)
+    }
+
+    /// Refuses an output that is one of `inputs` (the same file under any
+    /// name).
+    pub fn check_not_input(&self, inputs: &[PathBuf]) -> Result<()> {
+        let Ok(m) = fs::metadata(&self.path) else {
+            return Ok(());
+        };
+        for input in inputs {
+            if let Ok(i) = fs::metadata(input) {
+                if (i.dev(), i.ino()) == (m.dev(), m.ino()) {
+                    bail!(
+                        "{} is an input of this render ({}); choose another output",
+                        self.path.display(),
+                        input.display()
+                    );
+                }
+            }
+        }
+        Ok(())
     }
 }
 

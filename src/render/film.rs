@@ -179,6 +179,10 @@ pub struct Film {
 pub const REL_EPS: f64 = 0.01;
 
 impl Film {
+    /// Memory a render needs per pixel: the statistics, and the linear,
+    /// bloomed and displayed copies of the image made from them.
+    pub const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelStats>() as u64 + 3 * 12 + 3;
+
     pub fn new(width: u32, height: u32) -> Self {
         Self {
             width,

@@ -3,12 +3,13 @@
 //! (the scene, its BVH, the plan, the camera and the image size). The CLI,
 //! the TUI, the reports, the benchmarks and the tests all open scenes here.
 
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use anyhow::Result;
 
 use super::plan::{Plan, PlanPolicy};
-use super::{Features, Tracer};
+use super::{Features, Film, Tracer};
 use crate::bvh::{self, Bvh};
 use crate::scene::{self, Builder, Camera, Scene};
 
@@ -61,15 +62,27 @@ pub struct Session {
     pub width: u32,
     pub height: u32,
     pub seed: u64,
+    /// The files the scene was read from, which no output may replace.
+    pub inputs: Vec<PathBuf>,
 }
 
 impl Session {
     /// Loads the scene `req` names and prepares it; the load warnings are
     /// returned for the caller to show.
     pub fn open(req: &SceneRequest) -> Result<(Session, Vec<String>)> {
-        let scene = scene::load(&req.spec)?;
+        let (scene, inputs) = scene::load_reading(&req.spec)?;
         scene::check_reach(&scene)?;
-        Ok(Self::with_scene(scene, req))
+        let (w, h) = req
+            .size
+            .unwrap_or((scene.settings.width, scene.settings.height));
+        crate::memory::check(
+            &format!("a {w}x{h} film"),
+            w as u64 * h as u64 * Film::BYTES_PER_PIXEL,
+            None,
+        )?;
+        let (mut session, warnings) = Self::with_scene(scene, req);
+        session.inputs = inputs;
+        Ok((session, warnings))
     }
 
     /// Prepares a scene already in memory (built in code, or loaded another
@@ -92,6 +105,7 @@ impl Session {
             width,
             height,
             seed: req.seed,
+            inputs: Vec::new(),
         };
         (session, warnings)
     }

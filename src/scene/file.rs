@@ -17,6 +17,8 @@ use serde::de::{self, Deserializer, IgnoredAny, SeqAccess, Visitor};
 use serde::Deserialize;
 use toml::Spanned;
 
+use crate::memory;
+
 use super::frame::Frame;
 use super::numbers::{self, ABSURD};
 use super::obj::{self, Parts, Placed};
@@ -24,8 +26,7 @@ use super::parts::bounds;
 use super::source::{printable, resolve, Disk, Kind, Source};
 use super::texture::FACE_NAMES;
 use super::{
-    bezier, memory, BloomSettings, Builder, Camera, CubeMap, Environment, Light, Material, Scene,
-    Settings,
+    bezier, BloomSettings, Builder, Camera, CubeMap, Environment, Light, Material, Scene, Settings,
 };
 
 /// A number that must be finite (also as f32); kept in f64 until the
@@ -315,7 +316,7 @@ fn parse(path: &Path, text: &str) -> Result<SceneFile> {
 }
 
 pub fn load_path(path: &Path) -> Result<Scene> {
-    load_with(&Disk, path, Overrides::default())
+    load_with(&Disk::default(), path, Overrides::default())
 }
 
 /// Largest segment count accepted for Bézier meshes.

@@ -8,7 +8,6 @@ pub mod file;
 pub mod frame;
 pub mod light;
 pub mod material;
-pub mod memory;
 pub mod mtl;
 pub mod numbers;
 pub mod obj;
@@ -17,7 +16,7 @@ mod reach;
 pub mod source;
 pub mod texture;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use glam::{Vec2, Vec3};
@@ -236,21 +235,37 @@ impl Scene {
 /// file or a bare `.obj`; far-away and huge scenes are moved and scaled in
 /// f64 as they load ([`frame::Frame`]).
 pub fn load(spec: &str) -> Result<Scene> {
+    load_reading(spec).map(|(scene, _)| scene)
+}
+
+/// As [`load`], with the files read.
+pub fn load_reading(spec: &str) -> Result<(Scene, Vec<PathBuf>)> {
     if let Some(scene) = builtin::load(spec)? {
-        return Ok(scene);
+        return Ok((scene, Vec::new()));
     }
     let path = Path::new(spec);
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
+    let disk = source::Disk::default();
     match ext.as_deref() {
-        Some("toml") => file::load_path(path),
-        Some("obj") => obj::load_bare(path),
+        Some("toml") => file::load_with(&disk, path, file::Overrides::default()),
+        Some("obj") => obj::load_bare_from(&disk, path),
         _ if !path.exists() => {
             bail!("unknown scene '{spec}': not a built-in (see `rayterm scenes`) and no such file")
         }
-        _ => bail!("{spec}: a scene must be a built-in name, a .toml scene file or a .obj mesh"),
+        _ => match std::fs::metadata(path) {
+            Ok(m) if !m.is_file() => bail!(
+                "{spec}: not a regular file ({}); a scene is a built-in name, a .toml scene \
+                 file or a .obj mesh",
+                source::file_type_name(&m)
+            ),
+            _ => {
+                bail!("{spec}: a scene must be a built-in name, a .toml scene file or a .obj mesh")
+            }
+        },
     }
+    .map(|scene| (scene, disk.files()))
     .with_context(|| format!("loading scene '{spec}'"))
 }

@@ -18,11 +18,11 @@ use anyhow::{anyhow, bail, Context, Result};
 use glam::{DAffine3, DVec3, Vec2, Vec3};
 
 use super::frame::Frame;
-use super::memory;
 use super::mtl::{self, MtlMaterial};
 use super::numbers::{self, show, show3, Absurd};
 use super::source::{resolve, Disk, Kind, ReadError, Source};
 use super::{Camera, Environment, Light, Material, Scene, Settings};
+use crate::memory;
 
 pub use super::numbers::ABSURD;
 pub use super::parts::{MeshData, Parts, Placed, Placement};
@@ -653,7 +653,7 @@ pub fn load_into(
 /// A bare OBJ: the shared workload's auto camera and point light; moved
 /// next to the origin (and scaled) in f64 when far or huge ([`Frame`]).
 pub fn load_bare(path: &Path) -> Result<Scene> {
-    load_bare_from(&Disk, path)
+    load_bare_from(&Disk::default(), path)
 }
 
 pub fn load_bare_from(src: &dyn Source, path: &Path) -> Result<Scene> {

@@ -83,7 +83,7 @@ impl fmt::Display for Cause {
             Cause::TooLarge { size, limit } => write!(
                 f,
                 "too large ({size} bytes, limit {limit} = {})",
-                super::memory::bytes(*limit)
+                crate::memory::bytes(*limit)
             ),
             Cause::PermissionDenied => f.write_str("permission denied"),
             Cause::Other(e) => write!(f, "{e}"),
@@ -138,7 +138,7 @@ impl From<std::io::Error> for Cause {
 }
 
 /// What a non-regular file is, in words.
-fn file_type_name(meta: &Metadata) -> &'static str {
+pub fn file_type_name(meta: &Metadata) -> &'static str {
     let t = meta.file_type();
     if t.is_dir() {
         return "a directory";
@@ -275,12 +275,27 @@ pub trait Source: Sync {
     }
 }
 
-/// The file system, through [`read_file`].
-pub struct Disk;
+/// The file system, through [`read_file`], remembering the files it read
+/// (so that no output can overwrite one of them).
+#[derive(Default)]
+pub struct Disk {
+    read: std::sync::Mutex<Vec<PathBuf>>,
+}
+
+impl Disk {
+    /// The files read so far.
+    pub fn files(self) -> Vec<PathBuf> {
+        self.read.into_inner().unwrap_or_else(|e| e.into_inner())
+    }
+}
 
 impl Source for Disk {
     fn read(&self, path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
-        read_file(path, kind)
+        let bytes = read_file(path, kind)?;
+        if let Ok(mut r) = self.read.lock() {
+            r.push(path.to_path_buf());
+        }
+        Ok(bytes)
     }
 }
 

@@ -5,7 +5,7 @@ use anyhow::{bail, Result};
 use glam::{Vec2, Vec3};
 use image::ImageDecoder;
 
-use super::memory;
+use crate::memory;
 
 #[derive(Clone, Debug)]
 pub struct Texture {
