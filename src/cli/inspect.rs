@@ -30,6 +30,10 @@ pub fn run(a: InspectArgs) -> Result<ExitCode> {
         (Some((x, y)), _, _) => (x, y, a.sample),
         (None, Some(w), Some(film)) => match film.worst(w) {
             Some(found) => found,
+            None if s.plan.deterministic && w == crate::render::Worst::Variance => {
+                println!("no pixel varies: nothing in this scene is sampled, the image is exact");
+                return Ok(ExitCode::SUCCESS);
+            }
             None => {
                 println!(
                     "no pixel {} in {} samples per pixel",

@@ -37,9 +37,14 @@ fn v(x: Vec3) -> String {
 }
 
 fn bvh(s: &TraversalStats) -> String {
+    use crate::words::count;
     format!(
-        "bvh: {} nodes visited, {} boxes hit, {} missed, {} leaves, {} triangle tests",
-        s.nodes_visited, s.boxes_hit, s.boxes_missed, s.leaves, s.triangle_tests
+        "bvh: {} visited, {} hit, {} missed, {}, {}",
+        count(s.nodes_visited, "node", "nodes"),
+        count(s.boxes_hit, "box", "boxes"),
+        s.boxes_missed,
+        count(s.leaves, "leaf", "leaves"),
+        count(s.triangle_tests, "triangle test", "triangle tests")
     )
 }
 
@@ -188,22 +193,15 @@ fn ray(out: &mut Out, n: &RayNode, d: usize) {
     );
 }
 
+/// One light sample, its verdict first so that a narrow pane shows it.
 fn sample_line(s: &LightSample) -> (LineKind, String) {
+    let at = format!("point {} colour {}", v(s.point), v(s.color));
     match (&s.shadow_ray, &s.occluder) {
-        (None, _) => (
-            LineKind::Detail,
-            format!(
-                "point {} colour {}: behind the surface",
-                v(s.point),
-                v(s.color)
-            ),
-        ),
+        (None, _) => (LineKind::Detail, format!("behind the surface: {at}")),
         (Some(r), Some((mesh, tri))) => (
             LineKind::Occluded,
             format!(
-                "point {} colour {}: shadow ray o={} d={} occluded by {mesh} triangle {tri}",
-                v(s.point),
-                v(s.color),
+                "occluded by {mesh} triangle {tri}: {at}; shadow ray o={} d={}",
                 v(r.origin),
                 v(r.dir)
             ),
@@ -211,16 +209,32 @@ fn sample_line(s: &LightSample) -> (LineKind, String) {
         (Some(r), None) => (
             LineKind::Visible,
             format!(
-                "point {} colour {}: shadow ray o={} d={} clear; diffuse {} specular {}",
-                v(s.point),
-                v(s.color),
-                v(r.origin),
-                v(r.dir),
+                "clear, diffuse {} specular {}: {at}; shadow ray o={} d={}",
                 v(s.diffuse),
-                v(s.specular)
+                v(s.specular),
+                v(r.origin),
+                v(r.dir)
             ),
         ),
     }
+}
+
+/// How a light's samples ended: `12 clear, 4 occluded`, leaving out the
+/// kinds that did not occur.
+fn verdicts(samples: &[LightSample]) -> String {
+    let behind = samples.iter().filter(|s| s.shadow_ray.is_none()).count();
+    let occluded = samples.iter().filter(|s| s.occluder.is_some()).count();
+    let clear = samples.len() - behind - occluded;
+    let parts: Vec<String> = [
+        (clear, "clear"),
+        (occluded, "occluded"),
+        (behind, "behind the surface"),
+    ]
+    .iter()
+    .filter(|(n, _)| *n > 0)
+    .map(|(n, what)| format!("{n} {what}"))
+    .collect();
+    parts.join(", ")
 }
 
 fn light(out: &mut Out, l: &LightNode, d: usize) {
@@ -250,11 +264,11 @@ fn light(out: &mut Out, l: &LightNode, d: usize) {
             depth: d + 1,
             kind: LineKind::Fold,
             text: format!(
-                "{} {} samples, mean colour {}, {} occluded",
+                "{} {} samples: {}; mean colour {}",
                 if open { "[-]" } else { "[+]" },
                 l.samples.len(),
-                v(mean_colour),
-                l.samples.iter().filter(|s| s.occluder.is_some()).count()
+                verdicts(&l.samples),
+                v(mean_colour)
             ),
             fold: Some((id, open)),
         });

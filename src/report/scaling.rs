@@ -214,10 +214,12 @@ pub fn to_text(r: &ScalingReport) -> String {
         );
     }
     if let (Some(b), Some(r2)) = (r.trace_ns_per_doubling, r.trace_fit_r2) {
+        let change = if b >= 0.0 { "grows" } else { "falls" };
         let _ = writeln!(
             s,
-            "time per primary ray grows by {b:.1} ns per doubling of n (fit against log2 n, r\u{b2} {r2:.2}; \
-             a BVH makes it ~log n)"
+            "time per primary ray {change} by {:.1} ns per doubling of n (fit against log2 n, \
+             r\u{b2} {r2:.2}; a BVH makes it ~log n)",
+            b.abs()
         );
     }
     s

@@ -277,6 +277,7 @@ impl App {
         if !l.too_small {
             self.set_view_size(l.view_size());
             self.inspector.height = l.debug_text.height.max(1) as usize;
+            self.inspector.width = l.debug_text.width as usize;
         }
         self.refresh_inspector();
         if let Some(p) = &mut self.popup {
@@ -552,6 +553,9 @@ impl App {
                 self.say(format!(
                     "no pixel had a NaN or infinite sample in {spp} spp"
                 ));
+            }
+            None if f.exact => {
+                self.say("no pixel varies: nothing in this view is sampled, the image is exact");
             }
             None => {
                 self.say(format!("no pixel varies between samples in {spp} spp"));

@@ -29,8 +29,9 @@ pub struct Inspector {
     /// The cursor line and the first visible line.
     pub cursor: usize,
     pub top: usize,
-    /// Visible lines of the pane.
+    /// Rows and columns of the pane: long lines wrap.
     pub height: usize,
+    pub width: usize,
 }
 
 impl Inspector {
@@ -105,8 +106,11 @@ impl Inspector {
         let height = self.height.max(1);
         if self.cursor < self.top {
             self.top = self.cursor;
-        } else if self.cursor >= self.top + height {
-            self.top = self.cursor + 1 - height;
+        }
+        // Down until the cursor line's last row is on screen.
+        let rows = |i: usize| wrap(&self.lines[i], self.width).len();
+        while self.top < self.cursor && (self.top..=self.cursor).map(rows).sum::<usize>() > height {
+            self.top += 1;
         }
     }
 
@@ -133,5 +137,73 @@ impl Inspector {
         self.cursor = i;
         self.relayout();
         true
+    }
+}
+
+/// `line` indented by its depth and wrapped at spaces to `width` columns,
+/// continuation rows indented further (a word longer than a row is cut
+/// where the row ends). Width 0 leaves the line whole.
+pub fn wrap(line: &TreeLine, width: usize) -> Vec<String> {
+    let indent = "  ".repeat(line.depth);
+    let whole = format!("{indent}{}", line.text);
+    if width == 0 || whole.chars().count() <= width {
+        return vec![whole];
+    }
+    let more = format!("{indent}    ");
+    let mut rows = Vec::new();
+    let mut row = indent.clone();
+    let mut fresh = true;
+    for word in line.text.split(' ') {
+        let room = width.saturating_sub(row.chars().count());
+        let need = word.chars().count() + usize::from(!fresh);
+        if need > room && !fresh {
+            rows.push(std::mem::replace(&mut row, more.clone()));
+            fresh = true;
+        }
+        if !fresh {
+            row.push(' ');
+        }
+        let mut rest: Vec<char> = word.chars().collect();
+        loop {
+            let room = width.saturating_sub(row.chars().count()).max(1);
+            if rest.len() <= room {
+                row.extend(rest);
+                break;
+            }
+            row.extend(rest.drain(..room));
+            rows.push(std::mem::replace(&mut row, more.clone()));
+        }
+        fresh = false;
+    }
+    rows.push(row);
+    rows
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::inspect::LineKind;
+
+    #[test]
+    fn long_lines_wrap_at_spaces_with_nothing_lost() {
+        let line = TreeLine {
+            depth: 2,
+            kind: LineKind::Occluded,
+            text: "occluded by tall_box triangle 29: point (0.1, 0.2, 0.3) shadow ray \
+                   o=(0.0000000001234567890123, 1, 2)"
+                .into(),
+            fold: None,
+        };
+        let rows = wrap(&line, 24);
+        assert!(rows.len() > 3, "{rows:?}");
+        assert!(rows.iter().all(|r| r.chars().count() <= 24), "{rows:?}");
+        assert!(rows[0].starts_with("    occluded by"), "{rows:?}");
+        assert!(rows[1..].iter().all(|r| r.starts_with("        ")));
+        let words: Vec<&str> = line.text.split(' ').collect();
+        let back: String = rows.iter().map(|r| r.trim()).collect::<Vec<_>>().join(" ");
+        // Every character survives, in order (cut words lose only the cut).
+        assert_eq!(back.replace(' ', ""), words.concat());
+        assert_eq!(wrap(&line, 0).len(), 1);
+        assert_eq!(wrap(&line, 500), vec![format!("    {}", line.text)]);
     }
 }

@@ -1,5 +1,6 @@
 //! The debug pane: the selected pixel's ray tree, coloured by line kind,
-//! with a cursor line for folding, scrolled to keep the cursor visible.
+//! with a cursor line for folding, long lines wrapped, scrolled to keep the
+//! cursor visible.
 
 use ratatui::layout::Rect;
 use ratatui::style::{Color, Modifier, Style};
@@ -9,6 +10,7 @@ use ratatui::Frame;
 
 use crate::inspect::LineKind;
 use crate::tui::app::App;
+use crate::tui::inspector::wrap;
 
 fn style(k: LineKind) -> Style {
     match k {
@@ -56,14 +58,16 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App) {
         .iter()
         .enumerate()
         .skip(ins.top)
-        .take(inner.height as usize)
-        .map(|(i, l)| {
+        .flat_map(|(i, l)| {
             let mut s = style(l.kind);
             if i == ins.cursor {
                 s = s.add_modifier(Modifier::REVERSED);
             }
-            Line::styled(format!("{}{}", "  ".repeat(l.depth), l.text), s)
+            wrap(l, inner.width as usize)
+                .into_iter()
+                .map(move |row| Line::styled(row, s))
         })
+        .take(inner.height as usize)
         .collect();
     f.render_widget(Paragraph::new(text), inner);
 }
