@@ -441,3 +441,39 @@ fn the_error_estimate_is_calibrated_for_jittered_and_independent_sampling() {
         }
     }
 }
+
+/// The estimate against the exact image (quadrature over the light and
+/// the pixel's square, no occluder), so no reference noise enters the
+/// truth: at 4, 16 and 64 spp, with jittered and independent sub-pixel and
+/// light samples, under a parallelogram, a segment and a point light (whose
+/// only noise is the sub-pixel position), on pixels large enough for the
+/// shading to vary across them.
+#[test]
+fn the_error_estimate_is_calibrated_against_quadrature() {
+    let (w, h) = (8, 8);
+    let point = Light::Point {
+        position: Vec3::new(0.2, 0.8, -0.1),
+        color: Vec3::new(1.0, 0.9, 0.8),
+    };
+    for light in [parallelogram(), segment(), point] {
+        for stratify in [true, false] {
+            let mut s = plane_under(light.clone());
+            s.settings.light_samples = 16;
+            s.settings.stratify = stratify;
+            let exact = exact_image_area(&s, w, h);
+            let mut cfg = config(w, h, &[4, 16, 64], ReferenceSource::Image(exact));
+            cfg.seeds = 6;
+            let st = study(&s, Features::all().without(&[Feature::Bloom]), &cfg);
+            for p in &st.series[0].points {
+                let r = p.ratio().unwrap();
+                assert!(
+                    (0.75..=1.33).contains(&r),
+                    "{} {}: {}: estimated / true error {r:.3}",
+                    light.kind(),
+                    if stratify { "jittered" } else { "independent" },
+                    p.budget
+                );
+            }
+        }
+    }
+}
