@@ -127,8 +127,9 @@ impl SceneOpts {
 pub struct RenderArgs {
     #[command(flatten)]
     pub scene: SceneOpts,
-    /// Output PNG; a name ending in .hdr gets the linear image before bloom
-    /// as Radiance HDR instead (a reference for `converge` and `tui`).
+    /// Output PNG; a name ending in .exr gets the linear image before bloom
+    /// as OpenEXR (32-bit float, exact) instead, .hdr as Radiance HDR (8-bit
+    /// mantissas): a reference for `converge` and `tui`.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Samples per pixel (default: the scene's).
@@ -201,7 +202,8 @@ pub struct InspectArgs {
 pub struct ConvergeArgs {
     #[command(flatten)]
     pub scene: SceneOpts,
-    /// Reference image (Radiance .hdr) instead of a rendered or cached one.
+    /// Reference image (OpenEXR .exr, or Radiance .hdr with its 8-bit
+    /// mantissas' floor) instead of a rendered or cached one.
     #[arg(long)]
     pub reference: Option<PathBuf>,
     /// Samples per pixel of a rendered reference [default: 64x the largest
@@ -253,11 +255,11 @@ pub struct TuiArgs {
     /// Colours (default: truecolor when COLORTERM says so, else 256).
     #[arg(long, value_enum)]
     pub color: Option<ColorMode>,
-    /// A converged image of the scene (Radiance .hdr, e.g. from `rayterm
-    /// render --spp 1024 -o ref.hdr`, best at a whole multiple of the view's
-    /// size): the true error is shown beside the estimate while the camera
-    /// and features are the starting ones.
-    #[arg(long, value_name = "FILE.hdr")]
+    /// A converged image of the scene (OpenEXR .exr or Radiance .hdr, e.g.
+    /// from `rayterm render --spp 1024 -o ref.exr`, best at a whole multiple
+    /// of the view's size): the true error is shown beside the estimate
+    /// while the camera and features are the starting ones.
+    #[arg(long, value_name = "FILE.exr")]
     pub reference: Option<PathBuf>,
 }
 
