@@ -8,7 +8,7 @@ use rayterm::bvh::{self, Bvh};
 use rayterm::geometry::sampling::Rng;
 use rayterm::geometry::Ray;
 use rayterm::report::stability::scale::{
-    aimed_leaks, image_difference, own_surface, probe_render, TRANSFORMS,
+    aimed_leaks, image_difference, interior_lost, own_surface, place, probe_render, TRANSFORMS,
 };
 use rayterm::report::stability::topology::{Crossing, Topology};
 use rayterm::report::stability::watertight::{aimed_rays, random_rays, sphere, teapot};
@@ -36,8 +36,8 @@ fn scale_and_offset_rows_pass() {
     let scene = scene::load("cornell").unwrap();
     let rows = st::scale_offset(&scene, &small()).unwrap();
     all_pass(&rows);
-    // Acne and leaks for every transform, and an image row for all but the identity.
-    assert_eq!(rows.len(), 3 * TRANSFORMS.len() - 1);
+    // Acne, shadows and leaks for every transform, and an image row for all but the identity.
+    assert_eq!(rows.len(), 4 * TRANSFORMS.len() - 1);
 }
 
 #[test]
@@ -52,9 +52,10 @@ fn scale_cases_measure_something() {
         reference.primary.iter().all(|&h| h),
         "the box fills the view"
     );
+    let (umbra, _) = interior_lost(&reference.shadowed, &reference.shadowed, 24, 24);
+    assert!(umbra >= 4, "{umbra} pixels inside the blocks' shadows");
     for t in TRANSFORMS {
-        let mut s = base.clone();
-        s.transform(t.scale, t.offset_vec());
+        let s = place(&base, t).0;
         let b = bvh::build(&s.geometry, Builder::Sah);
         let p = probe_render(&s, &b, 24, 24, 1);
         assert_eq!(p.acne, 0, "{}", t.label());
@@ -85,6 +86,24 @@ fn image_difference_forgives_one_pixel_edges_only() {
     let mut darker = img.clone();
     darker[20] *= 0.5;
     assert_eq!(image_difference(&img, &darker, 8, 8), 1.0 / 64.0);
+}
+
+#[test]
+fn lost_shadows_count_inside_shadows_only() {
+    // A 6x6 shadow in an 8x8 image: its 4x4 interior is checked; a lit
+    // pixel on its edge (rounding moving the edge) is not a loss, a lit
+    // pixel inside is.
+    let shadow: Vec<bool> = (0..64)
+        .map(|i| (1..7).contains(&(i % 8)) && (1..7).contains(&(i / 8)))
+        .collect();
+    assert_eq!(interior_lost(&shadow, &shadow, 8, 8), (16, 0));
+    let mut edge = shadow.clone();
+    edge[8 + 3] = false;
+    assert_eq!(interior_lost(&shadow, &edge, 8, 8), (16, 0));
+    let mut inside = shadow.clone();
+    inside[3 * 8 + 3] = false;
+    assert_eq!(interior_lost(&shadow, &inside, 8, 8), (16, 1));
+    assert_eq!(interior_lost(&shadow, &[false; 64], 8, 8), (16, 16));
 }
 
 #[test]

@@ -151,8 +151,10 @@ impl SceneOpts {
 pub struct RenderArgs {
     #[command(flatten)]
     pub scene: SceneOpts,
-    /// Output image: .png (after bloom), or .hdr for the linear film before
-    /// bloom (a reference for `converge` and `tui`). Checked before rendering.
+    /// Output: .png (the picture, after bloom), or the linear film before
+    /// bloom as .exr (OpenEXR, 32-bit float, exact) or .hdr (Radiance, 8-bit
+    /// mantissas): a reference for `converge` and `tui`. Checked before
+    /// rendering.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Samples per pixel (default: the scene's).
@@ -224,7 +226,8 @@ pub struct InspectArgs {
 pub struct ConvergeArgs {
     #[command(flatten)]
     pub scene: SceneOpts,
-    /// Reference image (Radiance .hdr) instead of a rendered or cached one.
+    /// Reference image (OpenEXR .exr, or Radiance .hdr with its 8-bit
+    /// mantissas' floor) instead of a rendered or cached one.
     #[arg(long)]
     pub reference: Option<PathBuf>,
     /// Samples per pixel of a rendered reference [default: 64x the largest
@@ -276,11 +279,11 @@ pub struct TuiArgs {
     /// Colours (default: truecolor when COLORTERM says so, else 256).
     #[arg(long, value_enum)]
     pub color: Option<ColorMode>,
-    /// A converged image of the scene (Radiance .hdr, e.g. from `rayterm
-    /// render --spp 1024 -o ref.hdr`, best at a whole multiple of the view's
-    /// size): the true error is shown beside the estimate while the camera
-    /// and features are the starting ones.
-    #[arg(long, value_name = "FILE.hdr")]
+    /// A converged image of the scene (OpenEXR .exr or Radiance .hdr, e.g.
+    /// from `rayterm render --spp 1024 -o ref.exr`, best at a whole multiple
+    /// of the view's size): the true error is shown beside the estimate
+    /// while the camera and features are the starting ones.
+    #[arg(long, value_name = "FILE.exr")]
     pub reference: Option<PathBuf>,
 }
 

@@ -32,8 +32,26 @@ pub struct TreeLine {
     pub fold: Option<(usize, bool)>,
 }
 
+/// `x` to `digits` significant digits: fixed from 1e-3 to 1e5, scientific
+/// outside (a coordinate of a scene 1e-6 across must not read 0.0000).
+fn num(x: f32, digits: usize) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() {
+        format!("{x}")
+    } else if (1e-3..1e5).contains(&a) {
+        let decimals = (digits as i32 - 1 - a.log10().floor() as i32).max(0) as usize;
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.*e}", digits - 1)
+    }
+}
+
 fn v(x: Vec3) -> String {
-    format!("({:.4}, {:.4}, {:.4})", x.x, x.y, x.z)
+    format!("({}, {}, {})", num(x.x, 5), num(x.y, 5), num(x.z, 5))
+}
+
+fn uv(x: glam::Vec2) -> String {
+    format!("({}, {})", num(x.x, 5), num(x.y, 5))
 }
 
 fn bvh(s: &TraversalStats) -> String {
@@ -119,8 +137,8 @@ fn ray(out: &mut Out, n: &RayNode, d: usize) {
             d + 1,
             LineKind::Detail,
             format!(
-                "hit t={:.6} at {} mesh {} material {} triangle {}",
-                h.t,
+                "hit t={} at {} mesh {} material {} triangle {}",
+                num(h.t, 7),
                 v(h.point),
                 h.mesh,
                 h.material,
@@ -148,15 +166,11 @@ fn ray(out: &mut Out, n: &RayNode, d: usize) {
                 format!("vertex normals {} {} {}", v(vn[0]), v(vn[1]), v(vn[2])),
             );
         }
-        if let Some(uv) = h.uv {
+        if let Some(c) = h.uv {
             let texel = h
                 .texel
                 .map_or(String::new(), |t| format!(" texel {}", v(t)));
-            out.push(
-                d + 2,
-                LineKind::Detail,
-                format!("uv ({:.4}, {:.4}){texel}", uv.x, uv.y),
-            );
+            out.push(d + 2, LineKind::Detail, format!("uv {}{texel}", uv(c)));
         }
         out.push(
             d + 2,
@@ -166,10 +180,9 @@ fn ray(out: &mut Out, n: &RayNode, d: usize) {
     }
     if let Some(m) = &n.miss {
         let text = match (&m.face, m.uv) {
-            (Some(f), Some(uv)) => format!(
-                "miss: environment face {f} uv ({:.4}, {:.4}) colour {}",
-                uv.x,
-                uv.y,
+            (Some(f), Some(c)) => format!(
+                "miss: environment face {f} uv {} colour {}",
+                uv(c),
                 v(m.color)
             ),
             _ => format!("miss: background {}", v(m.color)),
@@ -288,4 +301,25 @@ pub fn to_text(tree: &PixelTree, expand_all: bool) -> String {
         .iter()
         .map(|l| format!("{}{}\n", "  ".repeat(l.depth), l.text))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::num;
+
+    #[test]
+    fn numbers_keep_their_significant_digits_at_any_scale() {
+        assert_eq!(num(0.0, 5), "0");
+        assert_eq!(num(1.0, 5), "1.0000");
+        assert_eq!(num(-0.25, 5), "-0.25000");
+        assert_eq!(num(3.4, 5), "3.4000");
+        assert_eq!(num(1234.5678, 5), "1234.6");
+        assert_eq!(num(0.0012345, 5), "0.0012345");
+        assert_eq!(num(1.2345e-6, 5), "1.2345e-6");
+        assert_eq!(num(-3.4e-6, 5), "-3.4000e-6");
+        assert_eq!(num(2.0e7, 5), "2.0000e7");
+        assert_eq!(num(3.4e-6, 7), "3.400000e-6");
+        assert_eq!(num(f32::NAN, 5), "NaN");
+        assert_eq!(num(f32::INFINITY, 5), "inf");
+    }
 }

@@ -145,7 +145,7 @@ impl Study {
         );
         let _ = writeln!(
             o,
-            "errors on luminance: rel err = sqrt(relMSE), relMSE = mean (x - ref)^2 / (ref^2 + 0.01); est = the film's own estimate\n"
+            "errors on luminance: rel err = sqrt(relMSE), relMSE = mean (x - ref)^2 / (ref^2 + 0.01); est = the film's own estimate (- = unknown: below 2 samples per pixel)\n"
         );
         for (i, s) in self.series.iter().enumerate() {
             if i > 0 && self.series.len() > 1 && i == 1 {

@@ -1,12 +1,13 @@
-//! Scale and offset: the scene scaled by 1e-4 .. 1e6 and moved up to 1e6
-//! from the origin, rendered through the integrator with a recorder that
-//! watches every shadow ray. Acne is a shadow ray from a surface facing the
-//! light that its own surface (its triangle, or one coplanar with it)
-//! blocks; a leak is a ray that must hit the scene and does not; the image
-//! is compared with the unit-scale render.
+//! Scale and offset: the scene scaled by 1e-8 .. 1e8 and moved up to 1e7
+//! times its size from the origin, rendered through the integrator with a
+//! recorder that watches every shadow ray. Acne is a shadow ray from a
+//! surface facing the light that its own surface (its triangle, or one
+//! coplanar with it) blocks; a lost shadow is a pixel in a light's umbra at
+//! unit scale that is not here; a leak is a ray that must hit the scene and
+//! does not; the image is compared with the unit-scale render.
 
 use anyhow::Result;
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::topology::{aimed, Crossing, Topology};
@@ -19,21 +20,39 @@ use crate::render::recorder::{HitInfo, LightSample, RayKind, Recorder};
 use crate::render::{Feature, Features, Plan, PlanPolicy, Tracer};
 use crate::scene::{Builder, Geometry, Light, Scene};
 
-/// A uniform scale, then a move by `offset * (1, -0.5, 0.75)` (exact in f32
-/// for the offsets used, and off every axis).
+/// A uniform scale, then a move by `offset` times the (scaled) scene's size
+/// along `(1, -0.5, 0.75)` (off every axis). `recentred`: the scene as the
+/// loaders hand a file that far out to the renderer, moved next to the
+/// origin in f64 before its coordinates are rounded to f32; otherwise it is
+/// rendered out there, where f32 positions and hit points are coarse.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Transform {
     pub scale: f32,
     pub offset: f32,
+    pub recentred: bool,
 }
 
 impl Transform {
     pub const fn new(scale: f32, offset: f32) -> Self {
-        Self { scale, offset }
+        Self {
+            scale,
+            offset,
+            recentred: false,
+        }
     }
 
-    pub fn offset_vec(&self) -> Vec3 {
-        Vec3::new(1.0, -0.5, 0.75) * self.offset
+    /// The same transform, with the scene moved next to the origin before
+    /// rounding.
+    pub const fn recentred(self) -> Self {
+        Self {
+            recentred: true,
+            ..self
+        }
+    }
+
+    /// The move, for a scene `size` across before scaling.
+    pub fn offset_vec(&self, size: f64) -> DVec3 {
+        DVec3::new(1.0, -0.5, 0.75) * (self.offset as f64 * self.scale as f64 * size)
     }
 
     pub fn is_identity(&self) -> bool {
@@ -42,26 +61,44 @@ impl Transform {
 
     pub fn label(&self) -> String {
         let e = |x: f32| format!("{x:e}").replace("e0", "");
+        let moved = |o: f32| {
+            let place = if self.recentred { ", recentred" } else { "" };
+            format!("offset {} sizes{place}", e(o))
+        };
         match (self.scale == 1.0, self.offset == 0.0) {
             (_, true) => format!("scale {}", e(self.scale)),
-            (true, false) => format!("offset {}", e(self.offset)),
-            (false, false) => format!("scale {} offset {}", e(self.scale), e(self.offset)),
+            (true, false) => moved(self.offset),
+            (false, false) => format!("scale {} {}", e(self.scale), moved(self.offset)),
         }
     }
 }
 
-/// The transforms of the battery; the identity is the reference.
-pub const TRANSFORMS: [Transform; 10] = [
+/// The transforms of the battery; the identity is the reference. Scales
+/// from 1e-8 to 1e8. Up to 1e4 times its size from the origin the scene is
+/// rendered out there, where f32 positions are 1e-3 of its size apart
+/// (0.1 pixel at the default size; at 1e5 sizes they are a pixel apart, and
+/// hit points rounded to them move shadow edges by a pixel). Farther out,
+/// f32 cannot hold the scene, and the loaders move it next to the origin
+/// before rounding: those cases are that scene.
+pub const TRANSFORMS: [Transform; 18] = [
+    Transform::new(1e-8, 0.0),
+    Transform::new(1e-6, 0.0),
     Transform::new(1e-4, 0.0),
     Transform::new(1e-2, 0.0),
     Transform::new(1.0, 0.0),
     Transform::new(1e2, 0.0),
     Transform::new(1e4, 0.0),
     Transform::new(1e6, 0.0),
+    Transform::new(1e8, 0.0),
     Transform::new(1.0, 1e2),
+    Transform::new(1.0, 1e3),
     Transform::new(1.0, 1e4),
-    Transform::new(1.0, 1e6),
-    Transform::new(1e4, 1e6),
+    Transform::new(1e-6, 1e4),
+    Transform::new(1e4, 1e4),
+    Transform::new(1.0, 1e5).recentred(),
+    Transform::new(1.0, 1e7).recentred(),
+    Transform::new(1e-8, 1e7).recentred(),
+    Transform::new(1e8, 1e7).recentred(),
 ];
 
 /// Largest fraction of pixels allowed to differ from the reference (see
@@ -72,14 +109,18 @@ pub const IMAGE_LIMIT_PIXELS: f64 = 4.0;
 pub const PIXEL_TOLERANCE: f32 = 0.02;
 
 /// Watches the integrator: the triangle hit by each open ray (with the
-/// barycentrics of the hit), whether the camera ray hit, whether a shadow
-/// ray from its hit was blocked, and every shadow ray from a surface facing
-/// its light.
+/// barycentrics of the hit), whether the camera ray hit, whether its hit is
+/// in the umbra of a light (every shadow ray toward it blocked), and every
+/// shadow ray from a surface facing its light.
 struct Probe<'g> {
     geom: &'g Geometry,
     stack: Vec<Option<(u32, f32, f32)>>,
     primary: bool,
     shadowed: bool,
+    /// Shadow rays from the camera hit toward the current light, and how
+    /// many were blocked.
+    traced: u32,
+    blocked: u32,
     lit: u64,
     acne: u64,
 }
@@ -100,18 +141,29 @@ impl Recorder for Probe<'_> {
         }
     }
 
+    fn begin_light(&mut self, _index: usize, _kind: &'static str) {
+        (self.traced, self.blocked) = (0, 0);
+    }
+
     fn light_sample(&mut self, s: LightSample) {
         if s.shadow_ray.is_none() {
             return;
         }
         self.lit += 1;
-        if self.stack.len() == 1 && s.occluder.is_some() {
-            self.shadowed = true;
+        if self.stack.len() == 1 {
+            self.traced += 1;
+            self.blocked += s.occluder.is_some() as u32;
         }
         if let (Some((_, occ)), Some(Some((tri, u, v)))) = (s.occluder, self.stack.last()) {
             if own_surface(self.geom, *tri, occ, *u, *v) {
                 self.acne += 1;
             }
+        }
+    }
+
+    fn end_light(&mut self, _diffuse: Vec3, _specular: Vec3) {
+        if self.stack.len() == 1 && self.traced > 0 && self.blocked == self.traced {
+            self.shadowed = true;
         }
     }
 
@@ -144,7 +196,10 @@ pub struct Probed {
     pub image: Vec<Vec3>,
     /// Whether each pixel's camera ray hit the scene.
     pub primary: Vec<bool>,
-    /// Whether a shadow ray from each pixel's camera hit was blocked.
+    /// Whether each pixel's camera hit is in the umbra of a light: every
+    /// shadow ray from it toward that light blocked (a point light's shadow;
+    /// an area light's penumbra is left out, since one of its rays grazing
+    /// an occluder's edge flips with any rounding).
     pub shadowed: Vec<bool>,
     /// Shadow rays from surfaces facing their light, and those that hit their own surface.
     pub lit: u64,
@@ -164,6 +219,8 @@ pub fn probe_render(scene: &Scene, bvh: &Bvh, w: u32, h: u32, seed: u64) -> Prob
                 stack: Vec::new(),
                 primary: false,
                 shadowed: false,
+                traced: 0,
+                blocked: 0,
                 lit: 0,
                 acne: 0,
             };
@@ -277,8 +334,7 @@ pub fn interior_lost(reference: &[bool], probed: &[bool], w: u32, h: u32) -> (u6
     (n, leaks)
 }
 
-/// The scene with every point mapped by `f` and every vector scaled by `s`
-/// (the f64 inverse of [`Scene::transform`]).
+/// The scene with every point mapped by `f` and every vector scaled by `s`.
 fn map_scene(scene: &Scene, f: impl Fn(Vec3) -> Vec3, s: f32) -> Scene {
     let mut out = scene.clone();
     for p in &mut out.geometry.positions {
@@ -308,8 +364,43 @@ fn map_scene(scene: &Scene, f: impl Fn(Vec3) -> Vec3, s: f32) -> Scene {
     out
 }
 
-/// The scale and offset rows for `scene`: acne, leaks and image difference
-/// for every transform.
+/// The largest extent of `scene`'s geometry (1 for an empty or flat-out
+/// degenerate scene, so offsets stay defined).
+fn size(scene: &Scene) -> f64 {
+    let e = scene.bounds().extent().max_element() as f64;
+    if e > 0.0 && e.is_finite() {
+        e
+    } else {
+        1.0
+    }
+}
+
+/// `scene` under `t`, and the shift subtracted from it: every point scaled
+/// and moved in f64 and rounded once to f32, as the loaders place a file's
+/// coordinates; for a recentred transform the shift is the one
+/// [`Scene::recentre`] picks for the scene out there, subtracted before
+/// rounding, as the loaders do for a scene far from the origin.
+pub fn place(scene: &Scene, t: Transform) -> (Scene, DVec3) {
+    let (s, off) = (t.scale as f64, t.offset_vec(size(scene)));
+    let put = |shift: DVec3| {
+        map_scene(
+            scene,
+            |p| (p.as_dvec3() * s + off - shift).as_vec3(),
+            t.scale,
+        )
+    };
+    let out = put(DVec3::ZERO);
+    if !t.recentred {
+        return (out, DVec3::ZERO);
+    }
+    match out.clone().recentre() {
+        Some(shift) => (put(shift.as_dvec3()), shift.as_dvec3()),
+        None => (out, DVec3::ZERO),
+    }
+}
+
+/// The scale and offset rows for `scene`: acne, lost shadows, leaks and
+/// image difference for every transform.
 pub fn scale_offset(scene: &Scene, o: &Options) -> Result<Vec<Row>> {
     let base_bvh = bvh::build(&scene.geometry, Builder::Sah);
     let reference = probe_render(scene, &base_bvh, o.width, o.height, o.seed);
@@ -321,15 +412,41 @@ pub fn scale_offset(scene: &Scene, o: &Options) -> Result<Vec<Row>> {
     Ok(per.concat())
 }
 
-/// Acne, leaks and image difference of `scene` under `t`.
+/// Renders `scene` through the probe.
+fn probe_scene(scene: &Scene, o: &Options) -> (Probed, Bvh) {
+    let bvh = bvh::build(&scene.geometry, Builder::Sah);
+    (probe_render(scene, &bvh, o.width, o.height, o.seed), bvh)
+}
+
+/// Acne, lost shadows, leaks and image difference of `scene` under `t`.
 fn transform_rows(scene: &Scene, t: Transform, reference: &Probed, o: &Options) -> Vec<Row> {
     let (w, h) = (o.width, o.height);
     let mut rows = Vec::new();
-    let off = t.offset_vec();
-    let mut moved = scene.clone();
-    moved.transform(t.scale, off);
-    let bvh = bvh::build(&moved.geometry, Builder::Sah);
-    let probed = probe_render(&moved, &bvh, w, h, o.seed);
+    let (moved, shift) = place(scene, t);
+    let (probed, bvh) = probe_scene(&moved, o);
+    // The reference: this scene's own (rounded) geometry mapped back to
+    // unit scale in f64, so the figures measure the renderer and not the
+    // rounding of the input (the original scene's figures are given too).
+    let unit = if t.is_identity() {
+        None
+    } else {
+        let (s, off) = (t.scale as f64, t.offset_vec(size(scene)));
+        let undone = map_scene(
+            &moved,
+            |p| ((p.as_dvec3() + shift - off) / s).as_vec3(),
+            1.0 / t.scale,
+        );
+        Some(probe_scene(&undone, o).0)
+    };
+    let unit_ref = unit.as_ref().unwrap_or(reference);
+    // A recentred case against the same scene rounded to f32 out there
+    // first (and then recentred, exactly): what a loader reading in f32
+    // would give.
+    let coarse = t.recentred.then(|| {
+        let mut c = place(scene, Transform::new(t.scale, t.offset)).0;
+        c.recentre();
+        probe_scene(&c, o).0
+    });
     let label = t.label();
     rows.push(Row::at_most(
         format!("{label}: acne"),
@@ -339,6 +456,25 @@ fn transform_rows(scene: &Scene, t: Transform, reference: &Probed, o: &Options) 
             "{} of {} shadow rays from lit surfaces hit their own surface",
             probed.acne, probed.lit
         ),
+    ));
+    let (sn, sl) = interior_lost(&unit_ref.shadowed, &probed.shadowed, w, h);
+    let mut detail = format!(
+        "{sl} of {sn} pixels in a light's umbra (as are their 8 neighbours) in the \
+         unit-scale render of the same geometry lit here"
+    );
+    if unit.is_some() {
+        let (on, ol) = interior_lost(&reference.shadowed, &probed.shadowed, w, h);
+        detail += &format!("; {ol} of {on} of the original scene's");
+    }
+    if let Some(c) = &coarse {
+        let (_, cl) = interior_lost(&reference.shadowed, &c.shadowed, w, h);
+        detail += &format!(", {cl} if rounded to f32 out there");
+    }
+    rows.push(Row::at_most(
+        format!("{label}: shadows"),
+        sl as f64 / sn.max(1) as f64,
+        0.0,
+        detail,
     ));
     let (pn, pl) = interior_lost(&reference.primary, &probed.primary, w, h);
     let (an, al) = aimed_leaks(&moved, &bvh, o.rays / 10, o.seed);
@@ -351,28 +487,16 @@ fn transform_rows(scene: &Scene, t: Transform, reference: &Probed, o: &Options) 
              edges, vertices and faces missed"
         ),
     ));
-    if !t.is_identity() {
+    if let Some(unit) = &unit {
         // As `scene::load` would hand it to the renderer: recentred
         // when far from the origin.
         let mut shown = moved.clone();
         let recentred = shown.recentre().is_some();
         let image = if recentred {
-            let b = bvh::build(&shown.geometry, Builder::Sah);
-            probe_render(&shown, &b, w, h, o.seed).image
+            probe_scene(&shown, o).0.image
         } else {
             probed.image.clone()
         };
-        // The reference: this scene's own (rounded) geometry mapped back
-        // to unit scale in f64, so the figure measures the renderer and
-        // not the rounding of the input.
-        let (s, off64) = (t.scale as f64, off.as_dvec3());
-        let undone = map_scene(
-            &moved,
-            |p| ((p.as_dvec3() - off64) / s).as_vec3(),
-            1.0 / t.scale,
-        );
-        let ubvh = bvh::build(&undone.geometry, Builder::Sah);
-        let unit = probe_render(&undone, &ubvh, w, h, o.seed);
         let mut detail = format!(
             "pixels off by > {PIXEL_TOLERANCE} from all 3x3 neighbours in the unit-scale \
              render of the same geometry; {} against the original scene",
@@ -382,6 +506,12 @@ fn transform_rows(scene: &Scene, t: Transform, reference: &Probed, o: &Options) 
             detail += &format!(
                 "; recentred at load, {} without",
                 format_figure(image_difference(&probed.image, &unit.image, w, h))
+            );
+        }
+        if let Some(c) = &coarse {
+            detail += &format!(
+                ", {} if rounded to f32 out there",
+                format_figure(image_difference(&c.image, &reference.image, w, h))
             );
         }
         rows.push(Row::at_most(
@@ -397,21 +527,38 @@ fn transform_rows(scene: &Scene, t: Transform, reference: &Probed, o: &Options) 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::DVec3;
 
     #[test]
     fn labels_are_short() {
         assert_eq!(Transform::new(1e-4, 0.0).label(), "scale 1e-4");
-        assert_eq!(Transform::new(1.0, 1e6).label(), "offset 1e6");
-        assert_eq!(Transform::new(1e4, 1e6).label(), "scale 1e4 offset 1e6");
+        assert_eq!(Transform::new(1.0, 1e5).label(), "offset 1e5 sizes");
+        assert_eq!(
+            Transform::new(1e4, 1e7).recentred().label(),
+            "scale 1e4 offset 1e7 sizes, recentred"
+        );
     }
 
     #[test]
-    fn offsets_are_exact() {
-        for t in TRANSFORMS {
-            let v = t.offset_vec().as_dvec3();
-            let exact = DVec3::new(1.0, -0.5, 0.75) * t.offset as f64;
-            assert_eq!(v, exact);
+    fn far_cases_are_placed_in_f64_and_moved_back() {
+        let scene = crate::scene::load("cornell").unwrap();
+        let t = Transform::new(1.0, 1e7).recentred();
+        let (near, shift) = place(&scene, t);
+        // Cornell is 2 across: its centre lands near (2e7, -1e7, 1.5e7),
+        // where f32 positions are 2 apart; moved back before rounding,
+        // every coordinate is within an f32 ulp of the original.
+        let off = t.offset_vec(2.0);
+        assert!((shift - off).abs().max_element() < 4.0, "{shift}");
+        for (a, b) in near
+            .geometry
+            .positions
+            .iter()
+            .zip(&scene.geometry.positions)
+        {
+            let back = a.as_dvec3() + shift - off;
+            assert!((back - b.as_dvec3()).abs().max_element() < 1e-6, "{a} {b}");
         }
+        let (out, none) = place(&scene, Transform::new(1.0, 1e5));
+        assert_eq!(none, DVec3::ZERO);
+        assert!(out.bounds().min.x > 1e5);
     }
 }
