@@ -35,12 +35,13 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     if let Some(view) = a.debug {
         return super::debug::run(&s, view, &out);
     }
-    let stop = stop.unwrap_or(Stop::spp(s.scene.settings.spp));
-    if s.plan.deterministic && stop != Stop::spp(1) {
+    // A note only where the user asked for more than the one exact pass.
+    if s.plan.deterministic && stop.is_some_and(|st| st != Stop::spp(1)) {
         eprintln!(
             "note: nothing in this scene is sampled, so one pass is exact; extra passes skipped"
         );
     }
+    let stop = stop.unwrap_or(Stop::spp(s.scene.settings.spp));
     let interrupted = interrupt::flag();
     let tracer = s.tracer();
     let bar = progress_bar(&stop, s.plan.deterministic);
