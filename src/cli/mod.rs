@@ -20,9 +20,27 @@ pub use args::{parse_size, Cli, Command, SceneOpts};
 use crate::render::Session;
 use crate::scene::Scene;
 
+/// `rayterm SCENE [OPTIONS]` (anything but a command, help or version
+/// first) means `rayterm tui SCENE [OPTIONS]`.
+fn with_default_command(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    use clap::CommandFactory;
+    let Some(first) = args.get(1).and_then(|a| a.to_str()) else {
+        return args;
+    };
+    let cli = Cli::command();
+    let named = cli
+        .get_subcommands()
+        .any(|c| c.get_name() == first || c.get_all_aliases().any(|a| a == first));
+    let own = ["-h", "--help", "-V", "--version", "help"].contains(&first);
+    if !named && !own {
+        args.insert(1, "tui".into());
+    }
+    args
+}
+
 pub fn main() -> ExitCode {
     crate::interrupt::default_sigpipe();
-    let cli = Cli::parse();
+    let cli = Cli::parse_from(with_default_command(std::env::args_os().collect()));
     if let Some(n) = cli.threads() {
         if let Err(e) = rayon::ThreadPoolBuilder::new()
             .num_threads(n)
@@ -81,4 +99,39 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
     e.chain()
         .filter_map(|c| c.downcast_ref::<std::io::Error>())
         .any(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parsed(args: &[&str]) -> Vec<String> {
+        with_default_command(args.iter().map(Into::into).collect())
+            .into_iter()
+            .map(|a| a.into_string().unwrap())
+            .collect()
+    }
+
+    #[test]
+    fn a_scene_first_opens_the_tui() {
+        assert_eq!(
+            parsed(&["rayterm", "cornell"]),
+            ["rayterm", "tui", "cornell"]
+        );
+        assert_eq!(
+            parsed(&["rayterm", "--color", "256"]),
+            ["rayterm", "tui", "--color", "256"]
+        );
+        for kept in [
+            &["rayterm"][..],
+            &["rayterm", "render", "cornell", "-o", "x.png"],
+            &["rayterm", "--help"],
+            &["rayterm", "help"],
+            &["rayterm", "scenes"],
+        ] {
+            assert_eq!(parsed(kept), kept);
+        }
+        let cli = Cli::try_parse_from(parsed(&["rayterm", "m.obj", "--size", "64x48"])).unwrap();
+        assert!(matches!(cli.command, Some(Command::Tui(_))));
+    }
 }

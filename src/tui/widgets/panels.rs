@@ -106,7 +106,9 @@ pub fn feature_lines(app: &App, width: u16, wrap: bool) -> Vec<Line<'static>> {
             continue;
         } else {
             // Narrow: the short reason, which says as much in fewer words.
-            let short = why.map_or(state.clone(), |w| match state.as_str() {
+            // "needs textures" alone still says it is off.
+            let bare = state.strip_prefix("off: ").unwrap_or(&state).to_string();
+            let short = why.map_or(bare, |w| match state.as_str() {
                 "off" => format!("off ({})", w.short()),
                 _ => w.short().to_string(),
             });
