@@ -3,8 +3,6 @@
 //! mouse capture off, canonical mode on), and the exit status says which
 //! signal it was.
 
-use std::fs::File;
-use std::io::Read;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -24,16 +22,7 @@ fn ended_by(signal: i32) {
         .spawn()
         .unwrap();
     // Everything the TUI writes, read as it comes so it never blocks.
-    let mut reader = File::from(master);
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let mut buf = [0u8; 1 << 16];
-        while let Ok(n) = reader.read(&mut buf) {
-            if n == 0 || tx.send(buf[..n].to_vec()).is_err() {
-                break;
-            }
-        }
-    });
+    let rx = pty::reader(master);
     let mut out = Vec::new();
     let collect = |until: Instant, out: &mut Vec<u8>| {
         while let Ok(b) = rx.recv_timeout(until.saturating_duration_since(Instant::now())) {

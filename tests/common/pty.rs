@@ -49,7 +49,7 @@ pub fn run_tui(
     keys: &[u8],
     patience: std::time::Duration,
 ) -> (Option<std::process::ExitStatus>, Vec<u8>) {
-    use std::io::{Read, Write};
+    use std::io::Write;
     use std::time::Instant;
     let (master, slave) = pty(cols, rows);
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_rayterm"))
@@ -62,16 +62,7 @@ pub fn run_tui(
         .spawn()
         .unwrap();
     let mut writer = std::fs::File::from(master.try_clone().unwrap());
-    let mut reader = std::fs::File::from(master);
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let mut buf = [0u8; 1 << 16];
-        while let Ok(n) = reader.read(&mut buf) {
-            if n == 0 || tx.send(buf[..n].to_vec()).is_err() {
-                break;
-            }
-        }
-    });
+    let rx = reader(master);
     let mut out = Vec::new();
     let deadline = Instant::now() + patience;
     let seen = |out: &[u8]| out.windows(wait_for.len()).any(|w| w == wait_for);
@@ -103,4 +94,22 @@ pub fn run_tui(
         out.extend(b);
     }
     (status, out)
+}
+
+/// Everything written to the terminal whose master side is `master`, read
+/// on a thread as it comes, so the program never blocks on a full pty.
+#[allow(dead_code)]
+pub fn reader(master: OwnedFd) -> std::sync::mpsc::Receiver<Vec<u8>> {
+    use std::io::Read;
+    let mut reader = std::fs::File::from(master);
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut buf = [0u8; 1 << 16];
+        while let Ok(n) = reader.read(&mut buf) {
+            if n == 0 || tx.send(buf[..n].to_vec()).is_err() {
+                break;
+            }
+        }
+    });
+    rx
 }
