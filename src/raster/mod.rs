@@ -1,4 +1,5 @@
-//! Images as data: drawing onto them ([`canvas`]), and image files, the
+//! Images as data: drawing onto them ([`canvas`]), measuring them against
+//! a reference ([`metrics`], [`resample`]), and image files, the
 //! one place rayterm reads and writes them: PNG for
 //! pictures, OpenEXR (32-bit float) and Radiance `.hdr` (8-bit mantissas)
 //! for linear images such as references. Every write goes through
@@ -7,9 +8,11 @@
 
 pub mod canvas;
 pub mod hdr;
+pub mod metrics;
 pub mod openexr;
 pub mod output;
 pub mod png;
+pub mod resample;
 
 use std::path::Path;
 

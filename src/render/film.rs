@@ -31,8 +31,7 @@ use glam::{DVec3, Vec3};
 
 use crate::geometry::sampling::{PIXEL_GRID, PIXEL_STRATA};
 
-/// Rec. 709 luminance weights.
-pub const LUMA: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
+pub use crate::raster::metrics::{LUMA, REL_EPS};
 
 /// How many non-finite samples are listed individually.
 const MAX_LISTED: usize = 1000;
@@ -173,10 +172,6 @@ pub struct Film {
     pub bad_count: u64,
     pub bad: Vec<BadSample>,
 }
-
-/// Offset in relative errors (`x^2 + REL_EPS` below the squared error) so
-/// black pixels do not dominate them.
-pub const REL_EPS: f64 = 0.01;
 
 impl Film {
     /// Memory a render needs per pixel: the statistics, and the linear,

@@ -8,11 +8,9 @@
 //! `relMSE = mean over pixels of (x - ref)^2 / (ref^2 + 0.01)`, and the
 //! "relative error" is its square root.
 
-mod metrics;
 mod plot;
 mod reference;
 mod report;
-mod resample;
 
 use std::path::PathBuf;
 
@@ -20,16 +18,15 @@ use anyhow::{bail, Context, Result};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
-pub use metrics::{luminance, rel_mse, rel_mse_on, rmse};
+pub use crate::raster::metrics::{luminance, rel_mse, rel_mse_on, rmse};
 pub use plot::draw as plot;
 pub use reference::{default_cache_dir, format_floor, load_reference, save_reference};
-pub use resample::{resample, Resampled};
+pub use crate::raster::resample::{resample, Resampled};
 
 use crate::bvh::Bvh;
 use crate::render::{Film, Plan, Progressive, Stop, Tracer};
-use crate::report::stats::{fit_log_log, median};
+use crate::report::stats::{fit_log_log, log_lerp, median};
 use crate::scene::{Scene, Settings};
-use metrics::log_lerp;
 use reference::reference_key;
 
 /// A rendered reference has this many times the samples of the largest budget...

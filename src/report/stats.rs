@@ -50,6 +50,15 @@ pub fn fit_log_log(xy: &[(f64, f64)]) -> Option<(f64, f64)> {
     fit_line(&x, &y).map(|(slope, intercept, _)| (slope, intercept))
 }
 
+/// `y` at `x` on the straight line through two points in log-log space.
+pub fn log_lerp(x: f64, (x0, y0): (f64, f64), (x1, y1): (f64, f64)) -> f64 {
+    if (x1 / x0).ln().abs() < 1e-12 {
+        return y0;
+    }
+    let t = (x / x0).ln() / (x1 / x0).ln();
+    (y0.ln() + t * (y1 / y0).ln()).exp()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -20,7 +20,8 @@ use crate::render::debug_view::{self, DebugView};
 use crate::render::overlay::Layer;
 use crate::render::recorder::WorkCounter;
 use crate::render::{post, Plan, Progressive, Stop, Tracer, WorstPixels};
-use crate::report::converge::{rel_mse_on, resample};
+use crate::raster::metrics::rel_mse_on;
+use crate::raster::resample::resample;
 use crate::scene::{Builder, Camera, Scene};
 
 /// A full pass slower than this is preceded by a quarter-resolution pass

@@ -1,8 +1,14 @@
-//! Error measures on luminance, and straight lines in log-log space.
+//! Error measures on luminance: RMSE and relMSE of an image against a
+//! reference, the measure the film's own error estimate follows.
 
 use glam::Vec3;
 
-use crate::render::film::{LUMA, REL_EPS};
+/// Rec. 709 luminance weights.
+pub const LUMA: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
+
+/// Offset in relative errors (`x^2 + REL_EPS` below the squared error) so
+/// that black pixels do not dominate them.
+pub const REL_EPS: f64 = 0.01;
 
 /// Luminance of a linear colour.
 #[inline]
@@ -52,15 +58,6 @@ pub fn rel_mse_on(img: &[Vec3], pairs: &[(u32, Vec3)]) -> f64 {
         })
         .sum();
     sum / pairs.len() as f64
-}
-
-/// `y` at `x` on the straight line through two points in log-log space.
-pub(super) fn log_lerp(x: f64, (x0, y0): (f64, f64), (x1, y1): (f64, f64)) -> f64 {
-    if (x1 / x0).ln().abs() < 1e-12 {
-        return y0;
-    }
-    let t = (x / x0).ln() / (x1 / x0).ln();
-    (y0.ln() + t * (y1 / y0).ln()).exp()
 }
 
 #[cfg(test)]
