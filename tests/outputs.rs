@@ -233,3 +233,38 @@ fn a_full_disk_leaves_no_temporary_file() {
     let _ = Command::new("umount").arg(&d).status();
     fs::remove_dir_all(d).unwrap();
 }
+
+#[test]
+fn absurd_budgets_end_at_the_cap_and_empty_references_are_refused() {
+    let d = dir("budgets");
+    let p = |n: &str| d.join(n).display().to_string();
+    let out = rayterm(&[
+        "render",
+        "cornell-area",
+        "--size",
+        "8x8",
+        "--time",
+        "1e300",
+        "--max-spp",
+        "2",
+        "-o",
+        &p("t.png"),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(String::from_utf8_lossy(&out.stdout).contains(", 2 spp,"));
+    fs::write(
+        d.join("zero.hdr"),
+        "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 0 +X 0\n",
+    )
+    .unwrap();
+    let out = rayterm(&["converge", "cornell-area", "--reference", &p("zero.hdr")]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("zero.hdr") && !err.contains("--size 0x0"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    fs::remove_dir_all(d).unwrap();
+}

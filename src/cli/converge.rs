@@ -12,6 +12,9 @@ use crate::report::converge::{self, Budget, Config, ReferenceSource, Subject};
 /// Small enough that a whole study takes seconds; `--size` changes it.
 const DEFAULT_SIZE: (u32, u32) = (64, 64);
 
+/// The longest budget: an hour a run (several seeds and strategies each).
+const MAX_SECONDS: f64 = 3600.0;
+
 pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
     // Outputs are checked before the study runs, which can take minutes.
     let inputs: Vec<std::path::PathBuf> = a.reference.iter().cloned().collect();
@@ -34,8 +37,11 @@ pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
         }
         a.spp.iter().map(|&n| Budget::Spp(n)).collect::<Vec<_>>()
     } else {
-        if a.times.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
-            bail!("--times must be positive numbers of seconds");
+        if a.times
+            .iter()
+            .any(|t| !(t.is_finite() && *t > 0.0 && *t <= MAX_SECONDS))
+        {
+            bail!("--times must be positive numbers of seconds, each at most {MAX_SECONDS}");
         }
         a.times.iter().map(|&t| Budget::Seconds(t)).collect()
     };

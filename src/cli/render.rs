@@ -89,7 +89,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         (Ended::Spp, Some(e)) if stop.spp.is_some() => format!(
             " (stopped at the --max-spp cap of {} before reaching {}%)",
             film.spp,
-            e * 100.0
+            percent(e)
         ),
         _ => String::new(),
     };
@@ -152,6 +152,19 @@ fn progress_bar(stop: &Stop, exact: bool) -> ProgressBar {
     }
 }
 
+/// A target error as a percentage, as short as it reads: `1`, `0.25`,
+/// `1.00e-298`.
+fn percent(e: f64) -> String {
+    let p = e * 100.0;
+    let fixed = format!("{p:.6}");
+    let fixed = fixed.trim_end_matches('0').trim_end_matches('.');
+    if fixed == "0" || fixed == "-0" {
+        format!("{p:.2e}")
+    } else {
+        fixed.to_string()
+    }
+}
+
 /// The estimated error, or that it is not known yet.
 fn error_text(film: &Film) -> String {
     match film.relative_error() {
@@ -174,7 +187,7 @@ fn progress(film: &Film, stop: &Stop, elapsed: f64) -> String {
     if let (Some(target), Some(err)) = (stop.error, err) {
         let need = (film.spp as f64 * (err / target).powi(2)).min(cap);
         left = left.min((need - film.spp as f64).max(0.0) * per_spp);
-        text += &format!(" (target {}%, about {need:.0} spp)", target * 100.0);
+        text += &format!(" (target {}%, about {need:.0} spp)", percent(target));
     }
     left = left.min((cap - film.spp as f64).max(0.0) * per_spp);
     if left.is_finite() {
@@ -195,6 +208,13 @@ fn duration(ms: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn targets_read_short() {
+        assert_eq!(percent(0.01), "1");
+        assert_eq!(percent(0.0025), "0.25");
+        assert_eq!(percent(1e-300), "1.00e-298");
+    }
 
     #[test]
     fn durations_read_in_the_unit_that_fits() {

@@ -98,6 +98,12 @@ pub fn read_linear(path: &Path) -> Result<Image> {
         Linear::Exr => openexr::read(path)?,
         Linear::Hdr => hdr::read(path)?,
     };
+    if width == 0 || height == 0 {
+        bail!(
+            "{}: the image has no pixels ({width}x{height})",
+            path.display()
+        );
+    }
     Ok(Image {
         width,
         height,

@@ -182,9 +182,12 @@ impl Progressive {
     ) -> Outcome {
         let start = Instant::now();
         let (rays, seconds) = (self.rays, self.seconds);
-        let deadline = stop
-            .seconds
-            .map(|t| start + std::time::Duration::from_secs_f64(t));
+        // A time too long for the clock is no deadline at all.
+        let deadline = stop.seconds.and_then(|t| {
+            std::time::Duration::try_from_secs_f64(t)
+                .ok()
+                .and_then(|d| start.checked_add(d))
+        });
         let past = || deadline.is_some_and(|d| Instant::now() >= d);
         let stop_rows = || cancel() || past();
         let mut passes = 0;

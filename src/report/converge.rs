@@ -19,9 +19,9 @@ use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
 pub use crate::raster::metrics::{luminance, rel_mse, rel_mse_on, rmse};
+pub use crate::raster::resample::{resample, Resampled};
 pub use plot::draw as plot;
 pub use reference::{default_cache_dir, format_floor, load_reference, save_reference};
-pub use crate::raster::resample::{resample, Resampled};
 
 use crate::bvh::Bvh;
 use crate::render::{Film, Plan, Progressive, Stop, Tracer};

@@ -16,12 +16,12 @@ use anyhow::{Context, Result};
 use glam::Vec3;
 
 use crate::bvh::{self, Bvh};
+use crate::raster::metrics::rel_mse_on;
+use crate::raster::resample::resample;
 use crate::render::debug_view::{self, DebugView};
 use crate::render::overlay::Layer;
 use crate::render::recorder::WorkCounter;
 use crate::render::{post, Plan, Progressive, Stop, Tracer, WorstPixels};
-use crate::raster::metrics::rel_mse_on;
-use crate::raster::resample::resample;
 use crate::scene::{Builder, Camera, Scene};
 
 /// A full pass slower than this is preceded by a quarter-resolution pass
