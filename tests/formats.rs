@@ -381,3 +381,280 @@ fn malformed_files_say_which_file_and_where() {
     );
     assert!(!d.path("x.png").exists());
 }
+
+/// A 4x4 PNG: the columns of u < 0.5 red, the others blue.
+fn half_red_png() -> Vec<u8> {
+    let img = image::RgbImage::from_fn(4, 4, |x, _| {
+        if x < 2 {
+            image::Rgb([255, 0, 0])
+        } else {
+            image::Rgb([0, 0, 255])
+        }
+    });
+    let mut png = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    png
+}
+
+/// The binary buffer of the test's glTF: a unit quad in the XY plane
+/// (positions, glTF UVs, u16 indices) and the PNG; the JSON that
+/// describes it, its buffer given by `buffer`.
+fn gltf_parts(buffer: serde_json::Value) -> (serde_json::Value, Vec<u8>) {
+    let mut bin = Vec::new();
+    for p in [
+        [-0.5f32, -0.5, 0.0],
+        [0.5, -0.5, 0.0],
+        [0.5, 0.5, 0.0],
+        [-0.5, 0.5, 0.0],
+    ] {
+        p.iter().for_each(|x| bin.extend(x.to_le_bytes()));
+    }
+    for uv in [[0.0f32, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]] {
+        uv.iter().for_each(|x| bin.extend(x.to_le_bytes()));
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend(i.to_le_bytes());
+    }
+    let png = half_red_png();
+    bin.extend(&png);
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let mut buffer = buffer;
+    buffer["byteLength"] = bin.len().into();
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_clearcoat"],
+        "scene": 0,
+        "scenes": [{"nodes": [0, 4, 6]}],
+        "nodes": [
+            {"name": "Root", "scale": [2.0, 2.0, 2.0], "children": [1, 3]},
+            // 90 degrees about z: u runs along world +y.
+            {"name": "Arm", "translation": [-0.6, 0.0, 0.0],
+             "rotation": [0.0, 0.0, std::f64::consts::FRAC_1_SQRT_2, std::f64::consts::FRAC_1_SQRT_2],
+             "children": [2]},
+            {"name": "Tile", "mesh": 0},
+            {"name": "Mirror", "translation": [0.6, 0.0, 0.0], "mesh": 1},
+            {"name": "Rig", "translation": [0.0, 0.0, 3.0], "children": [5]},
+            {"name": "Eye", "translation": [0.0, 0.0, 3.0], "camera": 0},
+            {"name": "Lamp", "translation": [0.0, 0.0, 6.0],
+             "extensions": {"KHR_lights_punctual": {"light": 0}}}
+        ],
+        "extensions": {"KHR_lights_punctual": {"lights": [
+            {"type": "point", "color": [1.0, 1.0, 1.0], "intensity": 5.0}
+        ]}},
+        "cameras": [{"type": "perspective",
+                     "perspective": {"yfov": 0.8, "znear": 0.1, "aspectRatio": 1.333}}],
+        "meshes": [
+            {"name": "TileMesh", "primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1},
+                                                 "indices": 2, "material": 0}]},
+            {"name": "MirrorMesh", "primitives": [{"attributes": {"POSITION": 0},
+                                                   "indices": 2, "material": 1}]}
+        ],
+        "materials": [
+            {"name": "Checker", "pbrMetallicRoughness": {
+                "baseColorFactor": [0.5, 1.0, 1.0, 1.0], "metallicFactor": 0.0,
+                "baseColorTexture": {"index": 0}},
+             "normalTexture": {"index": 0}},
+            {"name": "Chrome", "pbrMetallicRoughness": {
+                "baseColorFactor": [0.2, 0.8, 0.2, 1.0], "metallicFactor": 1.0,
+                "roughnessFactor": 0.0},
+             "emissiveFactor": [1.0, 0.0, 0.0]}
+        ],
+        "textures": [{"source": 0, "sampler": 0}],
+        "samplers": [{"wrapS": 33071, "wrapT": 33648}],
+        "images": [{"bufferView": 3, "mimeType": "image/png"}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [-0.5, -0.5, 0.0], "max": [0.5, 0.5, 0.0]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 12},
+            {"buffer": 0, "byteOffset": 92, "byteLength": png.len()}
+        ],
+        "buffers": [buffer]
+    });
+    (json, bin)
+}
+
+fn glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut j = serde_json::to_vec(json).unwrap();
+    while !j.len().is_multiple_of(4) {
+        j.push(b' ');
+    }
+    let total = 12 + 8 + j.len() + 8 + bin.len();
+    let mut b = b"glTF".to_vec();
+    b.extend(2u32.to_le_bytes());
+    b.extend((total as u32).to_le_bytes());
+    b.extend((j.len() as u32).to_le_bytes());
+    b.extend(b"JSON");
+    b.extend(&j);
+    b.extend((bin.len() as u32).to_le_bytes());
+    b.extend(b"BIN\0");
+    b.extend(bin);
+    b
+}
+
+/// The colour of the pixel whose centre sees `world`, and the cosine at
+/// which the light (at the eye) meets the plane z = 0 there.
+fn pixel_at(s: &Scene, img: &[Vec3], w: u32, h: u32, world: Vec3) -> (Vec3, f32) {
+    let f = s.camera.frame(w, h);
+    let (x, y) = f.project(world).unwrap();
+    let (px, py) = (x.floor(), y.floor());
+    let ray = f.ray(px + 0.5, py + 0.5);
+    let t = -ray.origin.z / ray.dir.z;
+    let hit = ray.origin + ray.dir * t;
+    let cos = (s.camera.eye - hit).normalize().z;
+    (img[py as usize * w as usize + px as usize], cos)
+}
+
+#[test]
+fn a_gltf_scene_renders_with_its_hierarchy_materials_camera_and_light() {
+    let d = Dir::new("formats-gltf");
+    let (json, bin) = gltf_parts(serde_json::json!({}));
+    let file = d.write("scene.glb", glb(&json, &bin));
+    let s = load(&file).unwrap();
+    // The node chain: Root scale 2, Arm turned 90 degrees and moved.
+    let tile = s
+        .meshes
+        .iter()
+        .position(|m| m.name == "TileMesh (node Tile)")
+        .unwrap();
+    let first = s
+        .geometry
+        .tri_mesh
+        .iter()
+        .position(|&m| m as usize == tile)
+        .unwrap();
+    let corners: Vec<Vec3> = s.geometry.indices[first]
+        .iter()
+        .map(|&i| s.geometry.positions[i as usize])
+        .collect();
+    let near = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
+    // (-0.5, -0.5) turned to (0.5, -0.5), moved to (-0.1, -0.5), doubled.
+    assert!(near(corners[0], Vec3::new(-0.2, -1.0, 0.0)), "{corners:?}");
+    assert!(near(corners[1], Vec3::new(-0.2, 1.0, 0.0)), "{corners:?}");
+    assert!(near(corners[2], Vec3::new(-2.2, 1.0, 0.0)), "{corners:?}");
+    // Camera (Rig then Eye) and light from the file; the light at 1.
+    assert!(near(s.camera.eye, Vec3::new(0.0, 0.0, 6.0)));
+    assert!((s.camera.vfov - 0.8f32.to_degrees()).abs() < 1e-4);
+    assert_eq!(
+        s.lights,
+        [rayterm::scene::Light::Point {
+            position: Vec3::new(0.0, 0.0, 6.0),
+            color: Vec3::ONE
+        }]
+    );
+    // The metallic material, mapped.
+    let chrome = s.materials.iter().find(|m| m.name == "Chrome").unwrap();
+    assert_eq!(chrome.kd, Vec3::ZERO);
+    assert!(near(chrome.ks, Vec3::new(0.2, 0.8, 0.2)));
+    assert!(chrome.ns >= 1000.0 && chrome.texture.is_none());
+    // What was not mapped, once each.
+    let w = s.warnings.join("\n");
+    for part in [
+        "KHR_materials_clearcoat",
+        "normal maps (material Checker)",
+        "emission (material Chrome)",
+    ] {
+        assert!(w.contains(part), "{part} missing in {w}");
+    }
+    assert_eq!(s.warnings.len(), 1, "{w}");
+    // Hand-checked pixels: kd = red texel * factor 0.5 (dielectric),
+    // ambient 0.1, the light at the eye, and the 0.04 highlight of a
+    // dielectric of roughness 1 (Phong exponent 0).
+    let (w_, h_) = (64, 48);
+    let img = common::render(&s, w_, h_, 1, exact(), Builder::Sah, 1).image;
+    let (red, cos) = pixel_at(&s, &img, w_, h_, Vec3::new(-1.2, -0.5, 0.0));
+    let want = Vec3::new(0.5 * 0.1 + 0.5 * cos + 0.04, 0.04, 0.04);
+    assert!(
+        (red - want).abs().max_element() < 1e-4,
+        "{red} against {want}"
+    );
+    let (blue, cos) = pixel_at(&s, &img, w_, h_, Vec3::new(-1.2, 0.5, 0.0));
+    let want = Vec3::new(0.04, 0.04, 0.1 + cos + 0.04);
+    assert!(
+        (blue - want).abs().max_element() < 1e-4,
+        "{blue} against {want}"
+    );
+    // The mirror shows the black sky; the background is black.
+    let (chrome_px, _) = pixel_at(&s, &img, w_, h_, Vec3::new(1.7, 0.5, 0.0));
+    assert!(chrome_px.max_element() < 1e-3, "{chrome_px}");
+    assert_eq!(img[0], Vec3::ZERO);
+    // The inspector names the glTF mesh, node and material.
+    let f = s.camera.frame(w_, h_);
+    let (x, y) = f.project(Vec3::new(-1.2, -0.5, 0.0)).unwrap();
+    let pixel = format!("{},{}", x as u32, y as u32);
+    let r = rayterm(
+        &d.0,
+        &["inspect", "scene.glb", "--pixel", &pixel, "--size", "64x48"],
+    );
+    assert!(
+        r.ok()
+            && r.stdout
+                .contains("mesh TileMesh (node Tile) material Checker"),
+        "{}{}",
+        r.stdout,
+        r.stderr
+    );
+    // The same file as .gltf with its buffer beside it loads the same.
+    let (json, bin) = gltf_parts(serde_json::json!({"uri": "scene%20data.bin"}));
+    d.write("scene data.bin", &bin);
+    let t = load(&d.write("scene.gltf", serde_json::to_vec(&json).unwrap())).unwrap();
+    assert_eq!(t.geometry.positions, s.geometry.positions);
+    assert!(common::render(&t, w_, h_, 1, exact(), Builder::Sah, 1).image == img);
+    // As a mesh of a scene file: the meshes, with a note on the rest.
+    let toml = d.write(
+        "s.toml",
+        "[[mesh]]\nfile = \"scene.glb\"\n[[light]]\ntype = \"point\"\nposition = [0, 0, 6]\n\
+         color = [1, 1, 1]\n",
+    );
+    let in_scene = load(&toml).unwrap();
+    assert_eq!(in_scene.geometry.positions, s.geometry.positions);
+    assert!(in_scene
+        .warnings
+        .iter()
+        .any(|w| w.contains("its camera and lights are used")));
+}
+
+#[test]
+fn malformed_gltf_files_say_what_is_wrong() {
+    let d = Dir::new("formats-gltf-bad");
+    let (json, bin) = gltf_parts(serde_json::json!({}));
+    let mut bad_accessor = json.clone();
+    bad_accessor["meshes"][0]["primitives"][0]["indices"] = 99.into();
+    let mut bad_index = bin.clone();
+    bad_index[80..82].copy_from_slice(&7u16.to_le_bytes());
+    let mut cut = glb(&json, &bin);
+    cut.truncate(cut.len() - 100);
+    let (ext, ext_bin) = gltf_parts(serde_json::json!({"uri": "gone.bin"}));
+    let mut short_bin = ext_bin.clone();
+    short_bin.truncate(50);
+    let mut cycle = json.clone();
+    cycle["nodes"][2]["children"] = serde_json::json!([0]);
+    for (name, bytes, want) in [
+        ("accessor.glb", glb(&bad_accessor, &bin), "accessor.glb: not a valid glTF file"),
+        (
+            "index.glb",
+            glb(&json, &bad_index),
+            "index.glb: mesh TileMesh primitive 0 (node Tile): index 0 is 7, out of range (4 vertices)",
+        ),
+        ("cut.glb", cut, "cut.glb: not a valid glTF file"),
+        ("missing.gltf", serde_json::to_vec(&ext).unwrap(), "missing.gltf: buffer buffer 0"),
+        ("cycle.glb", glb(&cycle, &bin), "is its own ancestor"),
+        ("junk.glb", b"glTF\x02\x00\x00\x00junk".to_vec(), "junk.glb: not a valid glTF file"),
+    ] {
+        let e = load(&d.write(name, bytes)).err().unwrap_or_else(|| panic!("{name} loaded"));
+        assert!(e.contains(want), "{name}: {e}\nwanted: {want}");
+    }
+    let e = load(&d.path("missing.gltf").to_string_lossy()).unwrap_err();
+    assert!(e.contains("gone.bin: not found"), "{e}");
+    d.write("gone.bin", &short_bin);
+    let e = load(&d.path("missing.gltf").to_string_lossy()).unwrap_err();
+    assert!(e.contains("holds 50 bytes, the file declares"), "{e}");
+}

@@ -1,5 +1,5 @@
 //! Fuzzing the loaders: random and mutated OBJ, MTL, TOML and `.bpt` text,
-//! PLY (ASCII and binary) and STL (ASCII and binary) files
+//! PLY (ASCII and binary), STL (ASCII and binary) and glTF files
 //! (truncated files, wrong and huge indices and counts, non-finite and
 //! absurd numbers, huge exponents and w components, byte-order marks and
 //! CRLF or CR-only line endings, binary garbage, very long lines). Each
@@ -127,14 +127,16 @@ fn load_obj(src: Memory) -> Result<(), TestCaseError> {
     Ok(())
 }
 
-/// Loads `bytes` as a mesh file of `format` (named `m.ply` or `m.stl`).
+/// Loads `bytes` as a mesh file of `format` (named `m.ply`, `m.stl` or
+/// `m.gltf`; a glTF's `m.bin` is the one of [`gltf_file`]).
 fn load_mesh(format: Format, bytes: Vec<u8>) -> Result<(), TestCaseError> {
     let name = match format {
         Format::Ply => "m.ply",
+        Format::Gltf => "m.gltf",
         _ => "m.stl",
     };
     let parts = within_budget(name, move || {
-        let src = files((name, bytes));
+        let src = files((name, bytes)).with("m.bin", gltf_bin());
         let mut parts = Parts::default();
         let path = Path::new(name);
         mesh::load_placed(format, &mut parts, &src, path, &DAffine3::IDENTITY, None).map(|m| {
@@ -207,6 +209,43 @@ fn ply_file(format: &str, float: &str, index: &str) -> Vec<u8> {
         b.extend([0u8; 8]);
     }
     b
+}
+
+/// The buffer of [`gltf_file`]: a triangle's positions, u16 indices.
+fn gltf_bin() -> Vec<u8> {
+    let mut b = Vec::new();
+    for x in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+        b.extend(x.to_le_bytes());
+    }
+    for i in [0u16, 1, 2, 0] {
+        b.extend(i.to_le_bytes());
+    }
+    b
+}
+
+/// A glTF with a node chain, a material and a camera; its buffer is
+/// `m.bin` or embedded as a data URI.
+fn gltf_file(embedded: bool) -> String {
+    use base64::Engine;
+    let uri = if embedded {
+        format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(gltf_bin())
+        )
+    } else {
+        "m.bin".into()
+    };
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+"nodes":[{{"children":[1],"scale":[2,2,2]}},{{"mesh":0,"translation":[1,0,0]}},{{"camera":0}}],
+"cameras":[{{"type":"perspective","perspective":{{"yfov":0.7,"znear":0.1}}}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1,"material":0,"mode":4}}]}}],
+"materials":[{{"pbrMetallicRoughness":{{"baseColorFactor":[1,0,0,1],"metallicFactor":0.5}}}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+{{"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":6}}],
+"buffers":[{{"byteLength":44,"uri":"{uri}"}}]}}"#
+    )
 }
 
 /// A binary STL of `n` triangles; the count in the header may lie.
@@ -582,7 +621,33 @@ proptest! {
     }
 
     #[test]
+    fn mutated_gltf_files(
+        embedded in any::<bool>(),
+        (e, cut) in edits(),
+        swap in prop::option::of(prop::sample::select(vec![
+            ("\"indices\":1", "\"indices\":7"),
+            ("\"count\":3,\"type\":\"SCALAR\"", "\"count\":4000000000,\"type\":\"SCALAR\""),
+            ("\"mode\":4", "\"mode\":5"),
+            ("\"mode\":4", "\"mode\":6"),
+            ("\"mode\":4", "\"mode\":1"),
+            ("\"children\":[1]", "\"children\":[0]"),
+            ("\"byteLength\":44", "\"byteLength\":4400"),
+            ("\"scale\":[2,2,2]", "\"scale\":[1e38,1e38,1e38]"),
+            ("\"yfov\":0.7", "\"yfov\":0"),
+            ("m.bin", "../nowhere.bin"),
+        ])),
+    ) {
+        let mut text = gltf_file(embedded);
+        if let Some((from, to)) = swap {
+            text = text.replacen(from, to, 1);
+        }
+        load_mesh(Format::Gltf, mutate(&text, &e, cut))?;
+    }
+
+    #[test]
     fn binary_garbage(bytes in prop::collection::vec(any::<u8>(), 0..4096)) {
+        load_mesh(Format::Gltf, bytes.clone())?;
+        load_mesh(Format::Gltf, [b"glTF\x02\x00\x00\x00".as_slice(), &bytes].concat())?;
         load_mesh(Format::Ply, [b"ply\nformat binary_little_endian 1.0\n".as_slice(), &bytes].concat())?;
         load_mesh(Format::Ply, bytes.clone())?;
         load_mesh(Format::Stl, bytes.clone())?;
@@ -612,6 +677,20 @@ fn the_unmutated_ply_and_stl_files_load() {
             assert_eq!(m[0].indices, [[0, 1, 2], [0, 2, 3]]);
             assert!(m[0].normals.is_some() && m[0].uvs.is_some() && m[0].colors.is_some());
         }
+    }
+    for embedded in [false, true] {
+        let mut parts = Parts::default();
+        let src = files(("m.gltf", gltf_file(embedded).into_bytes())).with("m.bin", gltf_bin());
+        let m = mesh::load_placed(
+            Format::Gltf,
+            &mut parts,
+            &src,
+            Path::new("m.gltf"),
+            &DAffine3::IDENTITY,
+            None,
+        )
+        .unwrap();
+        assert_eq!(m[0].positions[1], glam::DVec3::new(4.0, 0.0, 0.0));
     }
     for bytes in [stl_file(5, 5), STL_ASCII.as_bytes().to_vec()] {
         let mut parts = Parts::default();

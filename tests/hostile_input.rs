@@ -337,9 +337,9 @@ fn oversized_files_are_refused_before_reading() {
 }
 
 #[test]
-fn ply_and_stl_files_are_read_as_carefully_as_obj() {
+fn ply_stl_and_gltf_files_are_read_as_carefully_as_obj() {
     let d = Dir::new("hostile-mesh");
-    for name in ["m.ply", "m.stl"] {
+    for name in ["m.ply", "m.stl", "m.glb", "m.gltf"] {
         if let Some(fifo) = d.fifo(&format!("fifo-{name}")) {
             refused(&fifo, &[&fifo, "not a regular file (a FIFO)"]);
         }

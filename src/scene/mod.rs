@@ -1,12 +1,13 @@
 //! Scenes: geometry, materials, textures, lights, camera and environment,
 //! loaded from built-in names, TOML scene files or bare mesh files (OBJ,
-//! PLY, STL).
+//! PLY, STL, glTF).
 
 pub mod bezier;
 pub mod builtin;
 pub mod camera;
 pub mod file;
 pub mod frame;
+pub mod gltf;
 pub mod light;
 pub mod material;
 pub mod mesh;
@@ -29,7 +30,7 @@ pub use camera::Camera;
 pub use light::Light;
 pub use material::Material;
 pub use reach::check_reach;
-pub use texture::{CubeMap, Texture};
+pub use texture::{CubeMap, Texture, Wrap};
 
 use crate::geometry::Aabb;
 

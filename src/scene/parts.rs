@@ -246,6 +246,12 @@ impl Parts {
         }
     }
 
+    /// Adds a texture decoded by the caller (one held inside a file).
+    pub fn add_texture(&mut self, t: Texture) -> u32 {
+        self.textures.push(t);
+        self.textures.len() as u32 - 1
+    }
+
     pub fn add_material(&mut self, m: Material) -> u32 {
         self.materials.push(m);
         self.materials.len() as u32 - 1

@@ -28,6 +28,10 @@ pub enum Kind {
     Ply,
     /// An STL mesh.
     Stl,
+    /// A glTF file (`.gltf` JSON, which may embed its buffers, or `.glb`).
+    Gltf,
+    /// A glTF buffer (`.bin`).
+    Buffer,
     /// Bézier patches (`.bpt`).
     Patches,
     /// An image: a texture or a cube-map face (and image references).
@@ -49,7 +53,7 @@ impl Kind {
             Kind::Scene => 16 * MIB,
             Kind::Obj => 1024 * MIB,
             Kind::Mtl => 16 * MIB,
-            Kind::Ply | Kind::Stl => 2048 * MIB,
+            Kind::Ply | Kind::Stl | Kind::Gltf | Kind::Buffer => 2048 * MIB,
             Kind::Patches => 64 * MIB,
             Kind::Image => 256 * MIB,
         }
@@ -63,6 +67,8 @@ impl Kind {
             Kind::Mtl => "material library",
             Kind::Ply => "PLY mesh",
             Kind::Stl => "STL mesh",
+            Kind::Gltf => "glTF file",
+            Kind::Buffer => "glTF buffer",
             Kind::Patches => "patch file",
             Kind::Image => "image",
         }
