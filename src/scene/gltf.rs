@@ -142,7 +142,7 @@ fn uri_path(base: &Path, uri: &str) -> PathBuf {
 /// The Phong material for a glTF metallic-roughness material:
 /// `kd = base * (1 - metallic)`, `ks = mix(0.04, base, metallic)`, `ns`
 /// the Phong exponent of the same highlight width as the roughness
-/// (`2 / roughness^4 - 2`, a mirror from roughness 0.1 down), and the
+/// (`2 / roughness^4 - 2`, a mirror from roughness 0.21 down), and the
 /// alpha of `BLEND` (and of `MASK`, 0 or 1 by its cutoff) as dissolve.
 pub fn phong(
     base: [f32; 4],
