@@ -1,4 +1,5 @@
-//! Fuzzing the loaders: random and mutated OBJ, MTL, TOML and `.bpt` text
+//! Fuzzing the loaders: random and mutated OBJ, MTL, TOML and `.bpt` text,
+//! PLY (ASCII and binary), STL (ASCII and binary) and glTF files
 //! (truncated files, wrong and huge indices and counts, non-finite and
 //! absurd numbers, huge exponents and w components, byte-order marks and
 //! CRLF or CR-only line endings, binary garbage, very long lines). Each
@@ -10,9 +11,12 @@ use std::path::Path;
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
 
+use glam::DAffine3;
 use proptest::prelude::*;
 use proptest::sample::Index;
 use rayterm::scene::file::{load_with, Overrides};
+use rayterm::scene::frame::Frame;
+use rayterm::scene::mesh::{self, Format};
 use rayterm::scene::obj::{self, Parts, Placement};
 use rayterm::scene::source::{self, Memory};
 use rayterm::scene::{bezier, Geometry, Light};
@@ -121,6 +125,163 @@ fn load_obj(src: Memory) -> Result<(), TestCaseError> {
             .all(|m| m.kd.is_finite() && m.ks.is_finite() && m.ns.is_finite()));
     }
     Ok(())
+}
+
+/// Loads `bytes` as a mesh file of `format` (named `m.ply`, `m.stl` or
+/// `m.gltf`; a glTF's `m.bin` is the one of [`gltf_file`]).
+fn load_mesh(format: Format, bytes: Vec<u8>) -> Result<(), TestCaseError> {
+    let name = match format {
+        Format::Ply => "m.ply",
+        Format::Gltf => "m.gltf",
+        _ => "m.stl",
+    };
+    let parts = within_budget(name, move || {
+        let src = files((name, bytes)).with("m.bin", gltf_bin());
+        let mut parts = Parts::default();
+        let path = Path::new(name);
+        mesh::load_placed(format, &mut parts, &src, path, &DAffine3::IDENTITY, None).map(|m| {
+            for m in m {
+                parts.add_placed(m, &Frame::IDENTITY);
+            }
+            parts
+        })
+    })?;
+    if let Ok(p) = parts {
+        finite_geometry(&p.geometry)?;
+        prop_assert!(p.geometry.colors.iter().all(|c| c.is_finite()));
+    }
+    Ok(())
+}
+
+/// A small PLY file in `format` with normals, UVs and colours of `types`.
+fn ply_file(format: &str, float: &str, index: &str) -> Vec<u8> {
+    let mut b = format!(
+        "ply\nformat {format} 1.0\ncomment TextureFile t.png\nelement vertex 4\n\
+         property {float} x\nproperty {float} y\nproperty {float} z\nproperty {float} nx\n\
+         property {float} ny\nproperty {float} nz\nproperty {float} u\nproperty {float} v\n\
+         property uchar red\nproperty uchar green\nproperty uchar blue\n\
+         element face 2\nproperty list uchar {index} vertex_indices\nelement edge 1\n\
+         property int a\nproperty int b\nend_header\n"
+    )
+    .into_bytes();
+    let vertices = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    let big = format.contains("big");
+    for (i, p) in vertices.iter().enumerate() {
+        let values = [p[0], p[1], p[2], 0.0, 0.0, 1.0, p[0], p[1]];
+        if format == "ascii" {
+            let v: Vec<String> = values.iter().map(f64::to_string).collect();
+            b.extend(format!("{} {} 128 {}\n", v.join(" "), i * 60, 255 - i).bytes());
+            continue;
+        }
+        for x in values {
+            match (float, big) {
+                ("double", true) => b.extend(x.to_be_bytes()),
+                ("double", false) => b.extend(x.to_le_bytes()),
+                (_, true) => b.extend((x as f32).to_be_bytes()),
+                _ => b.extend((x as f32).to_le_bytes()),
+            }
+        }
+        b.extend([i as u8 * 60, 128, 255 - i as u8]);
+    }
+    for f in [[0u32, 1, 2], [0, 2, 3]] {
+        if format == "ascii" {
+            b.extend(format!("3 {} {} {}\n", f[0], f[1], f[2]).bytes());
+            continue;
+        }
+        b.push(3);
+        for i in f {
+            match (index, big) {
+                ("ushort", true) => b.extend((i as u16).to_be_bytes()),
+                ("ushort", false) => b.extend((i as u16).to_le_bytes()),
+                (_, true) => b.extend(i.to_be_bytes()),
+                _ => b.extend(i.to_le_bytes()),
+            }
+        }
+    }
+    if format == "ascii" {
+        b.extend(b"0 1\n");
+    } else {
+        b.extend([0u8; 8]);
+    }
+    b
+}
+
+/// The buffer of [`gltf_file`]: a triangle's positions, u16 indices.
+fn gltf_bin() -> Vec<u8> {
+    let mut b = Vec::new();
+    for x in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+        b.extend(x.to_le_bytes());
+    }
+    for i in [0u16, 1, 2, 0] {
+        b.extend(i.to_le_bytes());
+    }
+    b
+}
+
+/// A glTF with a node chain, a material and a camera; its buffer is
+/// `m.bin` or embedded as a data URI.
+fn gltf_file(embedded: bool) -> String {
+    use base64::Engine;
+    let uri = if embedded {
+        format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(gltf_bin())
+        )
+    } else {
+        "m.bin".into()
+    };
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+"nodes":[{{"children":[1],"scale":[2,2,2]}},{{"mesh":0,"translation":[1,0,0]}},{{"camera":0}}],
+"cameras":[{{"type":"perspective","perspective":{{"yfov":0.7,"znear":0.1}}}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1,"material":0,"mode":4}}]}}],
+"materials":[{{"pbrMetallicRoughness":{{"baseColorFactor":[1,0,0,1],"metallicFactor":0.5}}}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+{{"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":6}}],
+"buffers":[{{"byteLength":44,"uri":"{uri}"}}]}}"#
+    )
+}
+
+/// A binary STL of `n` triangles; the count in the header may lie.
+fn stl_file(n: u32, count: u32) -> Vec<u8> {
+    let mut b = b"solid binary".to_vec();
+    b.resize(80, b' ');
+    b.extend(count.to_le_bytes());
+    for k in 0..n {
+        b.extend([0u8; 12]);
+        for v in [[0.0, 0.0, k as f32], [1.0, 0.0, 0.0], [0.0, 1.0, 0.5]] {
+            for x in v {
+                b.extend(x.to_le_bytes());
+            }
+        }
+        b.extend([0u8; 2]);
+    }
+    b
+}
+
+const STL_ASCII: &str = "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n\
+                         vertex 1 1 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid s\n";
+
+/// Byte edits anywhere in a binary file (header, counts, numbers).
+fn mutate_bytes(mut b: Vec<u8>, edits: &[(Index, u8)], cut: Option<Index>) -> Vec<u8> {
+    for (at, byte) in edits {
+        if b.is_empty() {
+            break;
+        }
+        let i = at.index(b.len());
+        b[i] = *byte;
+    }
+    if let Some(cut) = cut {
+        let n = cut.index(b.len() + 1);
+        b.truncate(n);
+    }
+    b
 }
 
 fn load_toml(text: Vec<u8>) -> Result<(), TestCaseError> {
@@ -406,11 +567,144 @@ proptest! {
     }
 
     #[test]
+    fn mutated_ply_files(
+        format in prop::sample::select(vec!["ascii", "binary_little_endian", "binary_big_endian"]),
+        float in prop::sample::select(vec!["float", "double"]),
+        index in prop::sample::select(vec!["int", "uint", "ushort"]),
+        bytes in prop::collection::vec((any::<Index>(), any::<u8>()), 0..8),
+        (e, cut) in edits(),
+        header in prop::option::of(prop::sample::select(vec![
+            ("element vertex 4", "element vertex 4294967295"),
+            ("element vertex 4", "element vertex 3"),
+            ("element face 2", "element face 99999999999"),
+            ("element face 2", "element face 3"),
+            ("uchar red", "float red"),
+            ("list uchar", "list float"),
+            ("list uchar", "list int"),
+            ("end_header", "end_heade"),
+            ("format", "format binary_middle_endian 1.0\nformat"),
+        ])),
+    ) {
+        let mut b = ply_file(format, float, index);
+        if let Some((from, to)) = header {
+            let text = String::from_utf8_lossy(&b).replacen(from, to, 1);
+            if format == "ascii" {
+                b = text.into_bytes();
+            } else {
+                let at = b.windows(11).position(|w| w == b"end_header\n").map_or(0, |i| i + 11);
+                let head = String::from_utf8_lossy(&b[..at]).replacen(from, to, 1);
+                b = [head.as_bytes(), &b[at..]].concat();
+            }
+        }
+        let b = if format == "ascii" {
+            mutate(&String::from_utf8_lossy(&b), &e, cut)
+        } else {
+            mutate_bytes(b, &bytes, cut)
+        };
+        load_mesh(Format::Ply, b)?;
+    }
+
+    #[test]
+    fn mutated_stl_files(
+        n in 0u32..6,
+        count in prop_oneof![Just(None), any::<u32>().prop_map(Some), (0u32..8).prop_map(Some)],
+        bytes in prop::collection::vec((any::<Index>(), any::<u8>()), 0..8),
+        (e, cut) in edits(),
+        ascii in any::<bool>(),
+    ) {
+        let b = if ascii {
+            mutate(STL_ASCII, &e, cut)
+        } else {
+            mutate_bytes(stl_file(n, count.unwrap_or(n)), &bytes, cut)
+        };
+        load_mesh(Format::Stl, b)?;
+    }
+
+    #[test]
+    fn mutated_gltf_files(
+        embedded in any::<bool>(),
+        (e, cut) in edits(),
+        swap in prop::option::of(prop::sample::select(vec![
+            ("\"indices\":1", "\"indices\":7"),
+            ("\"count\":3,\"type\":\"SCALAR\"", "\"count\":4000000000,\"type\":\"SCALAR\""),
+            ("\"mode\":4", "\"mode\":5"),
+            ("\"mode\":4", "\"mode\":6"),
+            ("\"mode\":4", "\"mode\":1"),
+            ("\"children\":[1]", "\"children\":[0]"),
+            ("\"byteLength\":44", "\"byteLength\":4400"),
+            ("\"scale\":[2,2,2]", "\"scale\":[1e38,1e38,1e38]"),
+            ("\"yfov\":0.7", "\"yfov\":0"),
+            ("m.bin", "../nowhere.bin"),
+        ])),
+    ) {
+        let mut text = gltf_file(embedded);
+        if let Some((from, to)) = swap {
+            text = text.replacen(from, to, 1);
+        }
+        load_mesh(Format::Gltf, mutate(&text, &e, cut))?;
+    }
+
+    #[test]
     fn binary_garbage(bytes in prop::collection::vec(any::<u8>(), 0..4096)) {
+        load_mesh(Format::Gltf, bytes.clone())?;
+        load_mesh(Format::Gltf, [b"glTF\x02\x00\x00\x00".as_slice(), &bytes].concat())?;
+        load_mesh(Format::Ply, [b"ply\nformat binary_little_endian 1.0\n".as_slice(), &bytes].concat())?;
+        load_mesh(Format::Ply, bytes.clone())?;
+        load_mesh(Format::Stl, bytes.clone())?;
         load_obj(files(("m.obj", bytes.clone())))?;
         load_obj(files(("m.mtl", bytes.clone())))?;
         load_toml(bytes.clone())?;
         load_bpt(bytes)?;
+    }
+}
+
+#[test]
+fn the_unmutated_ply_and_stl_files_load() {
+    // The fuzzed files start from valid ones: each loads, all of it.
+    for format in ["ascii", "binary_little_endian", "binary_big_endian"] {
+        for (float, index) in [("float", "int"), ("double", "uint"), ("float", "ushort")] {
+            let src = files(("m.ply", ply_file(format, float, index)));
+            let mut parts = Parts::default();
+            let m = mesh::load_placed(
+                Format::Ply,
+                &mut parts,
+                &src,
+                Path::new("m.ply"),
+                &DAffine3::IDENTITY,
+                None,
+            )
+            .unwrap_or_else(|e| panic!("{format} {float} {index}: {e:#}"));
+            assert_eq!(m[0].indices, [[0, 1, 2], [0, 2, 3]]);
+            assert!(m[0].normals.is_some() && m[0].uvs.is_some() && m[0].colors.is_some());
+        }
+    }
+    for embedded in [false, true] {
+        let mut parts = Parts::default();
+        let src = files(("m.gltf", gltf_file(embedded).into_bytes())).with("m.bin", gltf_bin());
+        let m = mesh::load_placed(
+            Format::Gltf,
+            &mut parts,
+            &src,
+            Path::new("m.gltf"),
+            &DAffine3::IDENTITY,
+            None,
+        )
+        .unwrap();
+        assert_eq!(m[0].positions[1], glam::DVec3::new(4.0, 0.0, 0.0));
+    }
+    for bytes in [stl_file(5, 5), STL_ASCII.as_bytes().to_vec()] {
+        let mut parts = Parts::default();
+        let src = files(("m.stl", bytes));
+        let m = mesh::load_placed(
+            Format::Stl,
+            &mut parts,
+            &src,
+            Path::new("m.stl"),
+            &DAffine3::IDENTITY,
+            None,
+        )
+        .unwrap();
+        assert!(!m[0].indices.is_empty());
     }
 }
 

@@ -337,6 +337,75 @@ fn oversized_files_are_refused_before_reading() {
 }
 
 #[test]
+fn ply_stl_and_gltf_files_are_read_as_carefully_as_obj() {
+    let d = Dir::new("hostile-mesh");
+    for name in ["m.ply", "m.stl", "m.glb", "m.gltf"] {
+        if let Some(fifo) = d.fifo(&format!("fifo-{name}")) {
+            refused(&fifo, &[&fifo, "not a regular file (a FIFO)"]);
+        }
+        std::fs::create_dir_all(d.path(&format!("dir-{name}"))).unwrap();
+        refused(
+            d.path(&format!("dir-{name}")).to_str().unwrap(),
+            &["not a regular file (a directory)"],
+        );
+        let big = d.sparse(&format!("big-{name}"), (2 << 30) + 1);
+        refused(&big, &[&big, "too large (2147483649 bytes"]);
+        let empty = d.write(&format!("empty-{name}"), "");
+        refused(&empty, &[&empty]);
+        let s = d.write("s.toml", scene_with(&format!("big-{name}"), ""));
+        refused(&s, &["s.toml:1:1: mesh big-", "too large"]);
+    }
+    let dev = d.link("zero.ply", "/dev/zero");
+    refused(
+        &dev,
+        &["not a regular file (a symbolic link to a character device)"],
+    );
+    // Counts that would allocate far more than the file holds.
+    let ply = d.write(
+        "huge.ply",
+        "ply\nformat binary_little_endian 1.0\nelement vertex 4294967295\nproperty float x\n\
+         property float y\nproperty float z\nend_header\n",
+    );
+    refused(
+        &ply,
+        &[
+            &ply,
+            "4294967295 vertices: more than 32-bit indices address",
+        ],
+    );
+    let ply = d.write(
+        "many.ply",
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n\
+         property float y\nproperty float z\nelement face 4000000000\n\
+         property list uchar int vertex_indices\nend_header\n",
+    );
+    refused(
+        &ply,
+        &[
+            &ply,
+            "truncated: the header declares element vertex 3, element face 4000000000:",
+        ],
+    );
+    let mut stl = vec![b' '; 80];
+    stl.extend(u32::MAX.to_le_bytes());
+    let stl = d.write("many.stl", stl);
+    refused(
+        &stl,
+        &[
+            &stl,
+            "truncated binary STL: the header counts 4294967295 triangles",
+        ],
+    );
+    // A mesh without triangles says so.
+    let ply = d.write(
+        "points.ply",
+        "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+         property float z\nend_header\n0 0 0\n",
+    );
+    refused(&ply, &[&ply, "no triangles"]);
+}
+
+#[test]
 fn byte_order_marks_and_line_endings_change_nothing() {
     let d = Dir::new("hostile-text");
     let mtl = "newmtl a\nKd 1 0 0\nnewmtl b\nKd 0 0 1\n";

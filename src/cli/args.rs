@@ -97,7 +97,8 @@ pub fn parse_threads(s: &str) -> Result<u32, String> {
 /// Options shared by every command that renders a scene.
 #[derive(Args, Debug, Clone)]
 pub struct SceneOpts {
-    /// Built-in name (see `rayterm scenes`), a .toml scene file or a .obj mesh.
+    /// Built-in name (see `rayterm scenes`), a .toml scene file or a mesh file
+    /// (.obj, .ply, .stl, .gltf, .glb).
     #[arg(default_value = "cornell")]
     pub scene: String,
     /// Image size, WIDTHxHEIGHT (default: the scene's).

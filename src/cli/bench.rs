@@ -47,7 +47,7 @@ pub enum BenchCommand {
 
 #[derive(Args, Debug)]
 pub struct TuiBenchArgs {
-    /// Built-in name, .toml scene file or .obj mesh.
+    /// Built-in name, .toml scene file or mesh file (.obj, .ply, .stl, .gltf, .glb).
     #[arg(default_value = "cornell")]
     pub scene: String,
     /// Terminal size, COLUMNSxROWS (two pixels per cell vertically).
@@ -60,7 +60,7 @@ pub struct TuiBenchArgs {
 
 #[derive(Args, Debug)]
 pub struct RaysArgs {
-    /// A .obj mesh (or any scene: its triangles, with the workload's auto camera).
+    /// A mesh file (or any scene: its triangles, with the workload's auto camera).
     pub mesh: String,
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, value_parser = parse_size, default_value = "1024x768")]

@@ -21,7 +21,7 @@ pub fn run() -> Result<ExitCode> {
         );
     }
     println!(
-        "\nAlso: teapot:N (N segments per patch edge, 1..1024), any .toml scene file or .obj mesh."
+        "\nAlso: teapot:N (N segments per patch edge, 1..1024), any .toml scene file or mesh file (.obj, .ply, .stl, .gltf, .glb)."
     );
     Ok(ExitCode::SUCCESS)
 }

@@ -202,6 +202,10 @@ impl<'a> Tracer<'a> {
                 kd = c;
             }
         }
+        if mesh.colored {
+            let c = idx.map(|i| geo.colors[i as usize]);
+            kd *= c[0] * b.x + c[1] * b.y + c[2] * b.z;
+        }
         let v = -ray.dir.normalize();
         if R::ACTIVE {
             rec.hit(HitInfo {

@@ -20,8 +20,9 @@ use toml::Spanned;
 use crate::memory;
 
 use super::frame::Frame;
+use super::mesh;
 use super::numbers::{self, ABSURD};
-use super::obj::{self, Parts, Placed};
+use super::obj::{Parts, Placed};
 use super::parts::bounds;
 use super::source::{printable, resolve, Disk, Kind, Source};
 use super::texture::FACE_NAMES;
@@ -444,6 +445,7 @@ fn patches(
                 .collect(),
         ),
         uvs: Some(pm.uvs),
+        colors: None,
         indices: pm.indices,
         material,
     })
@@ -528,8 +530,10 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
                     loc.at(s.span())
                 ));
             }
+            // An unknown extension is read as OBJ, as it always was.
+            let format = mesh::Format::of(&mesh_path).unwrap_or(mesh::Format::Obj);
             placed.extend(
-                obj::load_placed(&mut parts, src, &mesh_path, &xf, material.as_ref())
+                mesh::load_placed(format, &mut parts, src, &mesh_path, &xf, material.as_ref())
                     .with_context(|| format!("{here}: mesh {}", m.file))?,
             );
         }

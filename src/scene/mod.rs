@@ -1,19 +1,24 @@
 //! Scenes: geometry, materials, textures, lights, camera and environment,
-//! loaded from built-in names, TOML scene files or bare OBJ files.
+//! loaded from built-in names, TOML scene files or bare mesh files (OBJ,
+//! PLY, STL, glTF).
 
 pub mod bezier;
 pub mod builtin;
 pub mod camera;
 pub mod file;
 pub mod frame;
+pub mod gltf;
 pub mod light;
 pub mod material;
+pub mod mesh;
 pub mod mtl;
 pub mod numbers;
 pub mod obj;
 pub mod parts;
+pub mod ply;
 mod reach;
 pub mod source;
+pub mod stl;
 pub mod texture;
 
 use std::path::{Path, PathBuf};
@@ -25,7 +30,7 @@ pub use camera::Camera;
 pub use light::Light;
 pub use material::Material;
 pub use reach::check_reach;
-pub use texture::{CubeMap, Texture};
+pub use texture::{CubeMap, Texture, Wrap};
 
 use crate::geometry::Aabb;
 
@@ -38,6 +43,9 @@ pub struct Geometry {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
     pub uvs: Vec<Vec2>,
+    /// Linear RGB per vertex when some mesh has colours (white for the
+    /// others); empty when none has.
+    pub colors: Vec<Vec3>,
     pub indices: Vec<[u32; 3]>,
     pub tri_material: Vec<u32>,
     pub tri_mesh: Vec<u32>,
@@ -66,6 +74,8 @@ pub struct MeshInfo {
     pub name: String,
     pub smooth: bool,
     pub textured: bool,
+    /// Vertex colours multiply the material's diffuse colour.
+    pub colored: bool,
 }
 
 /// What a ray that leaves the scene sees.
@@ -232,7 +242,7 @@ impl Scene {
 }
 
 /// Loads `spec`: a built-in name (`cornell`, `teapot:32`, ...), a `.toml` scene
-/// file or a bare `.obj`; far-away and huge scenes are moved and scaled in
+/// file or a bare mesh file ([`mesh::Format`]); far-away and huge scenes are moved and scaled in
 /// f64 as they load ([`frame::Frame`]).
 pub fn load(spec: &str) -> Result<Scene> {
     load_reading(spec).map(|(scene, _)| scene)
@@ -251,18 +261,25 @@ pub fn load_reading(spec: &str) -> Result<(Scene, Vec<PathBuf>)> {
     let disk = source::Disk::default();
     match ext.as_deref() {
         Some("toml") => file::load_with(&disk, path, file::Overrides::default()),
-        Some("obj") => obj::load_bare_from(&disk, path),
+        _ if mesh::Format::of(path).is_some() => {
+            let format = mesh::Format::of(path).unwrap_or(mesh::Format::Obj);
+            mesh::load_bare_from(&disk, path, format)
+        }
         _ if !path.exists() => {
             bail!("unknown scene '{spec}': not a built-in (see `rayterm scenes`) and no such file")
         }
         _ => match std::fs::metadata(path) {
             Ok(m) if !m.is_file() => bail!(
                 "{spec}: not a regular file ({}); a scene is a built-in name, a .toml scene \
-                 file or a .obj mesh",
-                source::file_type_name(&m)
+                 file or a {} mesh",
+                source::file_type_name(&m),
+                mesh::EXTENSIONS
             ),
             _ => {
-                bail!("{spec}: a scene must be a built-in name, a .toml scene file or a .obj mesh")
+                bail!(
+                    "{spec}: a scene must be a built-in name, a .toml scene file or a {} mesh",
+                    mesh::EXTENSIONS
+                )
             }
         },
     }

@@ -15,13 +15,13 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail, Context, Result};
-use glam::{DAffine3, DVec3, Vec2, Vec3};
+use glam::{DAffine3, DVec3, Vec2};
 
 use super::frame::Frame;
 use super::mtl::{self, MtlMaterial};
 use super::numbers::{self, show, show3, Absurd};
-use super::source::{resolve, Disk, Kind, ReadError, Source};
-use super::{Camera, Environment, Light, Material, Scene, Settings};
+use super::source::{resolve, Kind, ReadError, Source};
+use super::Material;
 use crate::memory;
 
 pub use super::numbers::ABSURD;
@@ -476,6 +476,7 @@ impl ObjFile {
                 positions,
                 normals,
                 uvs,
+                colors: None,
                 indices,
                 material: material(g.material.as_ref()),
             });
@@ -650,55 +651,11 @@ pub fn load_into(
     Ok(())
 }
 
-/// A bare OBJ: the shared workload's auto camera and point light; moved
-/// next to the origin (and scaled) in f64 when far or huge ([`Frame`]).
-pub fn load_bare(path: &Path) -> Result<Scene> {
-    load_bare_from(&Disk::default(), path)
-}
-
-pub fn load_bare_from(src: &dyn Source, path: &Path) -> Result<Scene> {
-    let mut parts = Parts::default();
-    let meshes = load_placed(&mut parts, src, path, &DAffine3::IDENTITY, None)?;
-    let (min, max) = super::parts::bounds(&meshes);
-    let (frame, moved) = Frame::fit(min, max);
-    parts.warnings.extend(
-        moved
-            .into_iter()
-            .map(|w| format!("{}: {w}", path.display())),
-    );
-    for m in meshes {
-        parts.add_placed(m, &frame);
-    }
-    if parts.geometry.indices.is_empty() {
-        bail!("{}: no triangles{}", path.display(), parts.why_empty());
-    }
-    let b = parts.geometry.bounds();
-    let name = path.display().to_string();
-    Ok(Scene {
-        description: format!("mesh {name}"),
-        name,
-        camera: Camera::auto(&b),
-        lights: vec![Light::Point {
-            position: Camera::auto_light(&b),
-            color: Vec3::ONE,
-        }],
-        environment: Environment::Color(Vec3::ZERO),
-        settings: Settings {
-            ambient: Vec3::splat(0.1),
-            ..Settings::default()
-        },
-        geometry: parts.geometry,
-        meshes: parts.meshes,
-        materials: parts.materials,
-        textures: parts.textures,
-        warnings: parts.warnings,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::scene::source::Memory;
+    use glam::Vec3;
 
     fn load(files: Vec<(&'static str, String)>) -> Result<Parts> {
         let src = files

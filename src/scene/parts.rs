@@ -6,11 +6,13 @@
 
 use std::path::{Path, PathBuf};
 
-use glam::{Affine3A, DVec3, Vec2, Vec3};
+use anyhow::Result;
+use glam::{Affine3A, DAffine3, DVec3, Vec2, Vec3};
 
 use super::frame::Frame;
 use super::source::{Kind, Source};
 use super::{Geometry, Material, MeshInfo, Texture};
+use crate::memory;
 
 /// Mesh placement for meshes built in code.
 #[derive(Clone, Copy, Debug)]
@@ -45,8 +47,51 @@ pub struct Placed {
     /// Unit normals, already transformed.
     pub normals: Option<Vec<Vec3>>,
     pub uvs: Option<Vec<Vec2>>,
+    /// Linear RGB per vertex, multiplying the material's diffuse colour.
+    pub colors: Option<Vec<Vec3>>,
     pub indices: Vec<[u32; 3]>,
     pub material: u32,
+}
+
+/// `points` placed by `xf` in f64; a point that lands beyond the range of
+/// f32 is an error made by `err(index, point, placed, why)`.
+pub fn place_positions(
+    points: &[DVec3],
+    xf: &DAffine3,
+    err: impl Fn(usize, DVec3, DVec3, &str) -> anyhow::Error,
+) -> Result<Vec<DVec3>> {
+    let mut out = Vec::with_capacity(points.len());
+    for (i, &p) in points.iter().enumerate() {
+        let q = xf.transform_point3(p);
+        if let Some(why) = q.to_array().into_iter().find_map(super::numbers::unusable) {
+            return Err(err(i, p, q, why));
+        }
+        out.push(q);
+    }
+    Ok(out)
+}
+
+/// Normals turned by `xf` (its inverse transpose) and made unit length.
+pub fn place_normals(normals: &[DVec3], xf: &DAffine3) -> Vec<Vec3> {
+    let nxf = xf.matrix3.inverse().transpose();
+    normals
+        .iter()
+        .map(|&n| (nxf * n).normalize_or_zero().as_vec3())
+        .collect()
+}
+
+/// Refuses `triangles` when they would take more than `available` bytes
+/// ([`memory::BYTES_PER_TRIANGLE`] each): the message, without a place.
+pub fn triangles_fit(triangles: u64, available: u64) -> Result<(), String> {
+    let needed = triangles.saturating_mul(memory::BYTES_PER_TRIANGLE);
+    if needed > available {
+        return Err(format!(
+            "{triangles} triangles would need {} of memory; {} is available",
+            memory::bytes(needed),
+            memory::bytes(available)
+        ));
+    }
+    Ok(())
 }
 
 /// Bounds of the vertices the triangles of `meshes` use (min > max when none).
@@ -111,7 +156,7 @@ impl Parts {
         self.push(
             m.name,
             positions.collect(),
-            normals,
+            [normals, None],
             m.uvs.map(<[Vec2]>::to_vec),
             m.indices,
             m.material,
@@ -121,7 +166,14 @@ impl Parts {
     /// Adds a placed mesh, mapped through the scene's frame and rounded to f32.
     pub fn add_placed(&mut self, m: Placed, frame: &Frame) {
         let positions = m.positions.iter().map(|&p| frame.point(p)).collect();
-        self.push(m.name, positions, m.normals, m.uvs, &m.indices, m.material);
+        self.push(
+            m.name,
+            positions,
+            [m.normals, m.colors],
+            m.uvs,
+            &m.indices,
+            m.material,
+        );
     }
 
     /// Appends a mesh; drops zero-area triangles and counts them.
@@ -129,7 +181,7 @@ impl Parts {
         &mut self,
         name: String,
         positions: Vec<Vec3>,
-        normals: Option<Vec<Vec3>>,
+        [normals, colors]: [Option<Vec<Vec3>>; 2],
         uvs: Option<Vec<Vec2>>,
         indices: &[[u32; 3]],
         material: u32,
@@ -138,7 +190,16 @@ impl Parts {
         let base = g.positions.len() as u32;
         let mesh_id = self.meshes.len() as u32;
         let n = positions.len();
-        let (smooth, textured) = (normals.is_some(), uvs.is_some());
+        let (smooth, textured, colored) = (normals.is_some(), uvs.is_some(), colors.is_some());
+        // Colours are stored once some mesh has them, white for the others.
+        if colored && g.colors.is_empty() {
+            g.colors.resize(g.positions.len(), Vec3::ONE);
+        }
+        match colors {
+            Some(v) => g.colors.extend(v),
+            None if !g.colors.is_empty() => g.colors.extend(std::iter::repeat_n(Vec3::ONE, n)),
+            None => {}
+        }
         g.positions.extend(positions);
         match normals {
             Some(v) => g.normals.extend(v),
@@ -173,6 +234,7 @@ impl Parts {
             name,
             smooth,
             textured,
+            colored,
         });
     }
 
@@ -182,6 +244,12 @@ impl Parts {
             true => String::new(),
             false => format!(" ({})", self.warnings.join("; ")),
         }
+    }
+
+    /// Adds a texture decoded by the caller (one held inside a file).
+    pub fn add_texture(&mut self, t: Texture) -> u32 {
+        self.textures.push(t);
+        self.textures.len() as u32 - 1
     }
 
     pub fn add_material(&mut self, m: Material) -> u32 {

@@ -24,6 +24,14 @@ pub enum Kind {
     Obj,
     /// A Wavefront MTL material library.
     Mtl,
+    /// A PLY mesh.
+    Ply,
+    /// An STL mesh.
+    Stl,
+    /// A glTF file (`.gltf` JSON, which may embed its buffers, or `.glb`).
+    Gltf,
+    /// A glTF buffer (`.bin`).
+    Buffer,
     /// Bézier patches (`.bpt`).
     Patches,
     /// An image: a texture or a cube-map face (and image references).
@@ -37,13 +45,15 @@ impl Kind {
     ///
     /// Scene files, material libraries and patch files are small by nature;
     /// an OBJ may hold tens of millions of triangles (1 GiB of text is about
-    /// 20 million); an encoded image is bounded here and its decoded size
+    /// 20 million), and so may binary meshes (2 GiB is 40 million triangles
+    /// of binary STL, 100 million of binary PLY); an encoded image is bounded here and its decoded size
     /// by the texture budget ([`super::texture::TEXTURE_BUDGET`]).
     pub const fn limit(self) -> u64 {
         match self {
             Kind::Scene => 16 * MIB,
             Kind::Obj => 1024 * MIB,
             Kind::Mtl => 16 * MIB,
+            Kind::Ply | Kind::Stl | Kind::Gltf | Kind::Buffer => 2048 * MIB,
             Kind::Patches => 64 * MIB,
             Kind::Image => 256 * MIB,
         }
@@ -55,6 +65,10 @@ impl Kind {
             Kind::Scene => "scene file",
             Kind::Obj => "OBJ mesh",
             Kind::Mtl => "material library",
+            Kind::Ply => "PLY mesh",
+            Kind::Stl => "STL mesh",
+            Kind::Gltf => "glTF file",
+            Kind::Buffer => "glTF buffer",
             Kind::Patches => "patch file",
             Kind::Image => "image",
         }

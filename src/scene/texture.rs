@@ -1,5 +1,5 @@
-//! Textures (linear RGB, repeat wrapping, nearest or bilinear lookup) and
-//! cube maps in the OpenGL face convention.
+//! Textures (linear RGB, repeat, clamped or mirrored wrapping, nearest or
+//! bilinear lookup) and cube maps in the OpenGL face convention.
 
 use anyhow::{bail, Result};
 use glam::{Vec2, Vec3};
@@ -14,6 +14,54 @@ pub struct Texture {
     pub height: u32,
     /// Row 0 is the top of the image; values are linear (sRGB decoded).
     pub texels: Vec<Vec3>,
+    /// How coordinates outside 0..1 wrap, along u and v.
+    pub wrap: [Wrap; 2],
+}
+
+/// How texture coordinates outside 0..1 (and neighbours across an edge)
+/// are found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Wrap {
+    #[default]
+    Repeat,
+    Clamp,
+    Mirror,
+}
+
+impl Wrap {
+    /// A coordinate brought into 0..1.
+    #[inline]
+    fn unit(self, x: f32) -> f32 {
+        match self {
+            Wrap::Repeat => x - x.floor(),
+            Wrap::Clamp => x.clamp(0.0, 1.0),
+            Wrap::Mirror => {
+                let k = x.rem_euclid(2.0);
+                if k > 1.0 {
+                    2.0 - k
+                } else {
+                    k
+                }
+            }
+        }
+    }
+
+    /// A texel index brought into 0..n.
+    #[inline]
+    fn index(self, i: i64, n: i64) -> usize {
+        (match self {
+            Wrap::Repeat => i.rem_euclid(n),
+            Wrap::Clamp => i.clamp(0, n - 1),
+            Wrap::Mirror => {
+                let k = i.rem_euclid(2 * n);
+                if k >= n {
+                    2 * n - 1 - k
+                } else {
+                    k
+                }
+            }
+        }) as usize
+    }
 }
 
 /// sRGB transfer function, decoded to linear.
@@ -53,6 +101,7 @@ impl Texture {
             width: rgb.width(),
             height: rgb.height(),
             texels,
+            wrap: [Wrap::Repeat; 2],
         }
     }
 
@@ -90,8 +139,8 @@ impl Texture {
 
     #[inline]
     fn texel(&self, x: i64, y: i64) -> Vec3 {
-        let x = x.rem_euclid(self.width as i64) as usize;
-        let y = y.rem_euclid(self.height as i64) as usize;
+        let x = self.wrap[0].index(x, self.width as i64);
+        let y = self.wrap[1].index(y, self.height as i64);
         self.texels[y * self.width as usize + x]
     }
 
@@ -101,8 +150,8 @@ impl Texture {
         let u = if uv.x.is_finite() { uv.x } else { 0.0 };
         let v = if uv.y.is_finite() { uv.y } else { 0.0 };
         (
-            (u - u.floor()) * self.width as f32,
-            (1.0 - (v - v.floor())) * self.height as f32,
+            self.wrap[0].unit(u) * self.width as f32,
+            (1.0 - self.wrap[1].unit(v)) * self.height as f32,
         )
     }
 
@@ -192,6 +241,7 @@ mod tests {
                 .flat_map(|y| (0..w).map(move |x| (x, y)))
                 .map(|(x, y)| f(x, y))
                 .collect(),
+            wrap: [Wrap::Repeat; 2],
         }
     }
 
@@ -207,6 +257,21 @@ mod tests {
         assert!((t.bilinear(Vec2::new(0.5, 0.75)).x - 0.5).abs() < 1e-6);
         // Across the wrap: between x=1 and x=0 of the top row.
         assert!((t.bilinear(Vec2::new(0.0, 0.75)).x - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn clamped_and_mirrored_wrapping() {
+        let mut t = tex(2, 1, |x, _| Vec3::splat(x as f32));
+        t.wrap = [Wrap::Clamp; 2];
+        assert_eq!(t.nearest(Vec2::new(1.75, 0.5)), Vec3::ONE);
+        assert_eq!(t.nearest(Vec2::new(-3.0, 0.5)), Vec3::ZERO);
+        // No blending with the far edge across u = 0.
+        assert_eq!(t.bilinear(Vec2::new(0.0, 0.5)), Vec3::ZERO);
+        t.wrap = [Wrap::Mirror; 2];
+        assert_eq!(t.nearest(Vec2::new(1.25, 0.5)), Vec3::ONE);
+        assert_eq!(t.nearest(Vec2::new(1.75, 0.5)), Vec3::ZERO);
+        assert_eq!(t.nearest(Vec2::new(-0.25, 0.5)), Vec3::ZERO);
+        assert_eq!(t.bilinear(Vec2::new(1.0, 0.5)), Vec3::ONE);
     }
 
     #[test]

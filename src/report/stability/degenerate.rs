@@ -165,6 +165,7 @@ fn raw_scene(loaded: &Scene) -> Scene {
             name: "raw".into(),
             smooth: true,
             textured: true,
+            colored: false,
         }],
         ..loaded.clone()
     }

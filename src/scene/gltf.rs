@@ -1,0 +1,655 @@
+//! glTF 2.0 (`.gltf` with external or embedded buffers, and `.glb`),
+//! through the `gltf` crate for the document (parsed and validated); its
+//! buffers and images are read through the scene's [`Source`], with the
+//! same limits as every other file.
+//!
+//! Read: the default scene (or the first) through its node hierarchy, each
+//! node's transform applied in f64; triangle primitives (strips and fans
+//! turned into triangles) with positions, normals, the first UV set and
+//! `COLOR_0`; materials mapped onto Phong (see [`phong`]) with the
+//! `baseColorTexture` and its sampler's wrap modes; the first perspective
+//! camera; `KHR_lights_punctual` lights (spot lights become point lights,
+//! directional lights point lights far away). What cannot be mapped is
+//! listed once in the warnings.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use ::gltf::camera::Projection;
+use ::gltf::khr_lights_punctual::Kind as LightKind;
+use ::gltf::material::AlphaMode;
+use ::gltf::mesh::Mode;
+use ::gltf::texture::WrappingMode;
+use anyhow::{anyhow, bail, Context, Result};
+use base64::Engine;
+use glam::{DAffine3, DMat4, DVec3, Vec2, Vec3};
+
+use super::numbers::{self, show3};
+use super::parts::{place_normals, place_positions, triangles_fit, Parts, Placed};
+use super::source::{resolve, Kind, Source};
+use super::texture::{Texture, Wrap};
+use super::Material;
+use crate::memory;
+
+/// A camera of the file, placed in f64.
+#[derive(Clone, Copy, Debug)]
+pub struct FileCamera {
+    pub eye: DVec3,
+    pub forward: DVec3,
+    pub up: DVec3,
+    /// Vertical field of view, degrees.
+    pub vfov: f64,
+}
+
+/// A light of the file, placed in f64.
+#[derive(Clone, Copy, Debug)]
+pub enum FileLight {
+    Point {
+        position: DVec3,
+        color: Vec3,
+    },
+    /// Light travelling along `direction`.
+    Directional {
+        direction: DVec3,
+        color: Vec3,
+    },
+}
+
+/// What a glTF file holds, placed.
+pub struct GltfScene {
+    pub meshes: Vec<Placed>,
+    pub camera: Option<FileCamera>,
+    pub lights: Vec<FileLight>,
+}
+
+/// Things of the file rayterm cannot show, each listed once with where it
+/// was first found and how often.
+#[derive(Default)]
+struct Unmapped(Vec<(String, String, usize)>);
+
+impl Unmapped {
+    fn note(&mut self, what: &str, first: impl FnOnce() -> String) {
+        match self.0.iter_mut().find(|(w, _, _)| w == what) {
+            Some(e) => e.2 += 1,
+            None => self.0.push((what.to_string(), first(), 1)),
+        }
+    }
+
+    fn warning(&self, path: &Path) -> Option<String> {
+        if self.0.is_empty() {
+            return None;
+        }
+        let list: Vec<String> = self
+            .0
+            .iter()
+            .map(|(w, first, n)| match n {
+                1 => format!("{w} ({first})"),
+                n => format!("{w} ({first} and {} more)", n - 1),
+            })
+            .collect();
+        Some(format!(
+            "{}: not shown, rayterm has no equivalent: {}",
+            path.display(),
+            list.join(", ")
+        ))
+    }
+}
+
+/// A name of the file, or its kind and index when it has none.
+fn named(name: Option<&str>, kind: &str, index: usize) -> String {
+    match name {
+        Some(n) if !n.trim().is_empty() => super::source::printable(n),
+        _ => format!("{kind} {index}"),
+    }
+}
+
+/// Decodes a `data:` URI's base64 payload.
+fn data_uri(uri: &str) -> Option<Result<Vec<u8>, String>> {
+    let rest = uri.strip_prefix("data:")?;
+    Some(match rest.split_once(";base64,") {
+        Some((_, payload)) => base64::engine::general_purpose::STANDARD
+            .decode(payload)
+            .map_err(|e| format!("its base64 data is broken: {e}")),
+        None => Err("only base64 data URIs are read".into()),
+    })
+}
+
+/// A relative URI as a path beside `base`, percent escapes decoded.
+fn uri_path(base: &Path, uri: &str) -> PathBuf {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = |b: u8| (b as char).to_digit(16);
+        match (
+            bytes[i],
+            bytes.get(i + 1).and_then(|&b| hex(b)),
+            bytes.get(i + 2).and_then(|&b| hex(b)),
+        ) {
+            (b'%', Some(h), Some(l)) => {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+            }
+            (b, _, _) => {
+                out.push(b);
+                i += 1;
+            }
+        }
+    }
+    resolve(base, &String::from_utf8_lossy(&out))
+}
+
+/// The Phong material for a glTF metallic-roughness material:
+/// `kd = base * (1 - metallic)`, `ks = mix(0.04, base, metallic)`, `ns`
+/// the Phong exponent of the same highlight width as the roughness
+/// (`2 / roughness^4 - 2`, a mirror from roughness 0.21 down), and the
+/// alpha of `BLEND` (and of `MASK`, 0 or 1 by its cutoff) as dissolve.
+pub fn phong(
+    base: [f32; 4],
+    metallic: f32,
+    roughness: f32,
+    alpha: AlphaMode,
+    cutoff: f32,
+) -> Material {
+    let b = Vec3::new(base[0], base[1], base[2]).clamp(Vec3::ZERO, Vec3::ONE);
+    let m = metallic.clamp(0.0, 1.0);
+    let a2 = roughness.clamp(0.0, 1.0).powi(4);
+    let ns = if a2 > 0.0 {
+        (2.0 / a2 - 2.0).min(1e6)
+    } else {
+        1e6
+    };
+    Material {
+        name: String::new(),
+        kd: b * (1.0 - m),
+        ks: Vec3::splat(0.04).lerp(b, m),
+        ns,
+        dissolve: match alpha {
+            AlphaMode::Opaque => 1.0,
+            AlphaMode::Blend => base[3].clamp(0.0, 1.0),
+            AlphaMode::Mask => {
+                if base[3] >= cutoff {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+        },
+        texture: None,
+    }
+}
+
+fn wrap(mode: WrappingMode) -> Wrap {
+    match mode {
+        WrappingMode::Repeat => Wrap::Repeat,
+        WrappingMode::ClampToEdge => Wrap::Clamp,
+        WrappingMode::MirroredRepeat => Wrap::Mirror,
+    }
+}
+
+struct Reader<'a> {
+    path: &'a Path,
+    src: &'a dyn Source,
+    buffers: Vec<Vec<u8>>,
+    unmapped: Unmapped,
+    /// Decoded images by index (`None` when they could not be).
+    images: HashMap<usize, Option<Texture>>,
+    /// Materials made so far: glTF index to rayterm id.
+    materials: HashMap<Option<usize>, u32>,
+    /// Triangles so far, against the memory available.
+    triangles: u64,
+    available: u64,
+}
+
+impl Reader<'_> {
+    fn at(&self) -> String {
+        self.path.display().to_string()
+    }
+
+    /// An image's texture, decoded once.
+    fn image(&mut self, parts: &mut Parts, image: ::gltf::Image) -> Option<Texture> {
+        let index = image.index();
+        if let Some(t) = self.images.get(&index) {
+            return t.clone();
+        }
+        let name = named(image.name(), "image", index);
+        let from = format!("{}: image {name}", self.at());
+        let decoded = match image.source() {
+            ::gltf::image::Source::View { view, .. } => {
+                let bytes = self
+                    .buffers
+                    .get(view.buffer().index())
+                    .and_then(|b| b.get(view.offset()..view.offset().checked_add(view.length())?));
+                match bytes {
+                    Some(b) => Texture::decode(&from, b).map_err(|e| format!("{e:#}")),
+                    None => Err("its buffer view lies outside the buffer".into()),
+                }
+            }
+            ::gltf::image::Source::Uri { uri, .. } => match data_uri(uri) {
+                Some(Ok(b)) => Texture::decode(&from, &b).map_err(|e| format!("{e:#}")),
+                Some(Err(e)) => Err(e),
+                None => {
+                    // Read, decoded and warned about as every texture is.
+                    let p = uri_path(self.path, uri);
+                    let id = parts.texture(self.src, &p, &from);
+                    let t = id.map(|i| parts.textures[i as usize].clone());
+                    self.images.insert(index, t.clone());
+                    return t;
+                }
+            },
+        };
+        let t = match decoded {
+            Ok(t) => Some(t),
+            Err(e) => {
+                parts
+                    .warnings
+                    .push(format!("{from}: {e}; using the material colour"));
+                None
+            }
+        };
+        self.images.insert(index, t.clone());
+        t
+    }
+
+    /// The rayterm material of a primitive's material, made once.
+    fn material(&mut self, parts: &mut Parts, m: ::gltf::Material) -> u32 {
+        let key = m.index();
+        if let Some(&id) = self.materials.get(&key) {
+            return id;
+        }
+        let Some(index) = key else {
+            // No material: rayterm's default, as for an OBJ without one.
+            let id = parts.add_material(Material::default());
+            self.materials.insert(key, id);
+            return id;
+        };
+        let name = named(m.name(), "material", index);
+        let pbr = m.pbr_metallic_roughness();
+        let base = pbr.base_color_factor();
+        let mut mat = phong(
+            base,
+            pbr.metallic_factor(),
+            pbr.roughness_factor(),
+            m.alpha_mode(),
+            m.alpha_cutoff().unwrap_or(0.5),
+        );
+        mat.name = name.clone();
+        let here = || format!("material {name}");
+        if let Some(info) = pbr.base_color_texture() {
+            if info.tex_coord() != 0 {
+                self.unmapped.note("textures on a second UV set", here);
+            }
+            let sampler = info.texture().sampler();
+            if let Some(mut t) = self.image(parts, info.texture().source()) {
+                // The texture takes the place of kd: the factor and the
+                // metallic share of kd are multiplied into its texels.
+                let tint = mat.kd;
+                if tint != Vec3::ONE {
+                    for c in &mut t.texels {
+                        *c *= tint;
+                    }
+                }
+                t.wrap = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
+                mat.texture = Some(parts.add_texture(t));
+            }
+        }
+        if pbr.metallic_roughness_texture().is_some() {
+            self.unmapped.note("metallic-roughness textures", here);
+        }
+        if m.normal_texture().is_some() {
+            self.unmapped.note("normal maps", here);
+        }
+        if m.occlusion_texture().is_some() {
+            self.unmapped.note("occlusion maps", here);
+        }
+        if m.emissive_texture().is_some() || m.emissive_factor() != [0.0; 3] {
+            self.unmapped.note("emission", here);
+        }
+        if m.alpha_mode() != AlphaMode::Opaque && pbr.base_color_texture().is_some() {
+            self.unmapped.note("alpha from textures", here);
+        }
+        let id = parts.add_material(mat);
+        self.materials.insert(key, id);
+        id
+    }
+
+    /// The triangles of one primitive, placed by `xf`.
+    #[allow(clippy::too_many_arguments)]
+    fn primitive(
+        &mut self,
+        parts: &mut Parts,
+        p: ::gltf::Primitive,
+        mesh_name: &str,
+        node_name: &str,
+        xf: &DAffine3,
+        material: Option<u32>,
+    ) -> Result<Option<Placed>> {
+        let here = format!(
+            "{}: mesh {mesh_name} primitive {} (node {node_name})",
+            self.at(),
+            p.index()
+        );
+        let mode = p.mode();
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            self.unmapped
+                .note("points and lines", || format!("mesh {mesh_name}"));
+            return Ok(None);
+        }
+        let buffers = &self.buffers;
+        let reader = p.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+        let Some(positions) = reader.read_positions() else {
+            bail!("{here}: no POSITION attribute");
+        };
+        let positions: Vec<DVec3> = positions
+            .map(|v| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
+            .collect();
+        if let Some((i, v)) = positions.iter().enumerate().find(|(_, v)| {
+            v.to_array()
+                .into_iter()
+                .any(|x| numbers::unusable(x).is_some())
+        }) {
+            bail!("{here}: position {i} is {}, not a finite number", show3(*v));
+        }
+        let n = positions.len();
+        let count_of = |what: &str, len: usize| -> Result<()> {
+            if len != n {
+                bail!("{here}: {what} has {len} values for {n} positions");
+            }
+            Ok(())
+        };
+        let normals: Option<Vec<DVec3>> = reader.read_normals().map(|it| {
+            it.map(|v| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
+                .collect()
+        });
+        if let Some(v) = &normals {
+            count_of("NORMAL", v.len())?;
+        }
+        // glTF puts v = 0 at the top of the image, rayterm at the bottom.
+        let uvs: Option<Vec<Vec2>> = reader
+            .read_tex_coords(0)
+            .map(|t| t.into_f32().map(|[u, v]| Vec2::new(u, 1.0 - v)).collect());
+        if let Some(v) = &uvs {
+            count_of("TEXCOORD_0", v.len())?;
+        }
+        let colors: Option<Vec<Vec3>> = reader
+            .read_colors(0)
+            .map(|c| c.into_rgb_f32().map(Vec3::from_array).collect());
+        if let Some(v) = &colors {
+            count_of("COLOR_0", v.len())?;
+        }
+        let finite = |ok: bool, what: &str| -> Result<()> {
+            if !ok {
+                bail!("{here}: {what} holds a number that is not finite");
+            }
+            Ok(())
+        };
+        finite(normals.iter().flatten().all(|v| v.is_finite()), "NORMAL")?;
+        finite(uvs.iter().flatten().all(|v| v.is_finite()), "TEXCOORD_0")?;
+        finite(colors.iter().flatten().all(|v| v.is_finite()), "COLOR_0")?;
+        let corners: Vec<u32> = match reader.read_indices() {
+            Some(ix) => ix.into_u32().collect(),
+            None => (0..n as u32).collect(),
+        };
+        if let Some((k, &i)) = corners.iter().enumerate().find(|(_, &i)| i as usize >= n) {
+            bail!("{here}: index {k} is {i}, out of range ({n} vertices)");
+        }
+        let indices: Vec<[u32; 3]> = match mode {
+            Mode::TriangleStrip => (2..corners.len())
+                .map(|k| {
+                    let [a, b, c] = [corners[k - 2], corners[k - 1], corners[k]];
+                    // Every other triangle of a strip turns the other way.
+                    if k % 2 == 0 {
+                        [a, b, c]
+                    } else {
+                        [b, a, c]
+                    }
+                })
+                .collect(),
+            Mode::TriangleFan => (2..corners.len())
+                .map(|k| [corners[0], corners[k - 1], corners[k]])
+                .collect(),
+            _ => corners
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect(),
+        };
+        self.triangles += indices.len() as u64;
+        triangles_fit(self.triangles, self.available).map_err(|e| anyhow!("{here}: {e}"))?;
+        let placed = place_positions(&positions, xf, |i, p, q, why| {
+            anyhow!(
+                "{here}: position {i} {} lands at {} once placed, which {why}",
+                show3(p),
+                show3(q)
+            )
+        })?;
+        let material = match material {
+            Some(m) => m,
+            None => self.material(parts, p.material()),
+        };
+        let name = match mesh_name == node_name {
+            true => mesh_name.to_string(),
+            false => format!("{mesh_name} (node {node_name})"),
+        };
+        Ok(Some(Placed {
+            name,
+            positions: placed,
+            normals: normals.map(|n| place_normals(&n, xf)),
+            uvs,
+            colors,
+            indices,
+            material,
+        }))
+    }
+}
+
+/// Reads a glTF file: materials and textures go into `parts`; meshes,
+/// the first perspective camera and the lights come back placed by `xf`
+/// in f64. `material` replaces the file's materials when given.
+pub fn load(
+    parts: &mut Parts,
+    src: &dyn Source,
+    path: &Path,
+    xf: &DAffine3,
+    material: Option<&Material>,
+) -> Result<GltfScene> {
+    let bytes = src.read(path, Kind::Gltf)?;
+    let invalid =
+        |e: &dyn std::fmt::Display| anyhow!("{}: not a valid glTF file: {e}", path.display());
+    let file = ::gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| invalid(&e))?;
+    drop(bytes);
+    let json = file.document.into_json();
+    // The crate's validation indexes the POSITION accessor before
+    // checking it: checked here first.
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let position = prim
+                .attributes
+                .get(&::gltf::json::validation::Checked::Valid(
+                    ::gltf::json::mesh::Semantic::Positions,
+                ))
+                .map(|i| i.value());
+            if let Some(i) = position.filter(|&i| i >= json.accessors.len()) {
+                bail!(invalid(&format!(
+                    "meshes[{m}].primitives[{p}].attributes.POSITION: accessor {i} does not exist \
+                     ({} accessors)",
+                    json.accessors.len()
+                )));
+            }
+        }
+    }
+    let doc = ::gltf::Document::from_json(json).map_err(|e| invalid(&e))?;
+    let mut blob = file.blob;
+    let mut buffers = Vec::new();
+    for b in doc.buffers() {
+        let name = named(b.name(), "buffer", b.index());
+        let data = match b.source() {
+            ::gltf::buffer::Source::Bin => blob.take().ok_or_else(|| {
+                anyhow!(
+                    "{}: buffer {name} is the binary chunk of a .glb, and the file has none",
+                    path.display()
+                )
+            })?,
+            ::gltf::buffer::Source::Uri(uri) => match data_uri(uri) {
+                Some(d) => d.map_err(|e| anyhow!("{}: buffer {name}: {e}", path.display()))?,
+                None => {
+                    let p = uri_path(path, uri);
+                    src.read(&p, Kind::Buffer)
+                        .with_context(|| format!("{}: buffer {name}", path.display()))?
+                }
+            },
+        };
+        if data.len() < b.length() {
+            bail!(
+                "{}: buffer {name} holds {} bytes, the file declares {} (truncated?)",
+                path.display(),
+                data.len(),
+                b.length()
+            );
+        }
+        buffers.push(data);
+    }
+    let mut r = Reader {
+        path,
+        src,
+        buffers,
+        unmapped: Unmapped::default(),
+        images: HashMap::new(),
+        materials: HashMap::new(),
+        triangles: 0,
+        available: memory::available(),
+    };
+    for ext in doc.extensions_used() {
+        if ext != "KHR_lights_punctual" {
+            r.unmapped.note(ext, || "extensionsUsed".into());
+        }
+    }
+    if doc.animations().next().is_some() {
+        r.unmapped.note("animations", || "shown at rest".into());
+    }
+    if doc.skins().next().is_some() {
+        r.unmapped.note("skins", || "shown at rest".into());
+    }
+    let override_id = material.map(|m| parts.add_material(m.clone()));
+    let scene = doc.default_scene().or_else(|| doc.scenes().next());
+    let mut out = GltfScene {
+        meshes: Vec::new(),
+        camera: None,
+        lights: Vec::new(),
+    };
+    let Some(scene) = scene else {
+        // Without scenes, nothing is placed (the spec says so).
+        parts.warnings.extend(r.unmapped.warning(path));
+        return Ok(out);
+    };
+    // Depth first, with each node's world transform in f64; the path
+    // guards against cycles, the triangle budget against repeated
+    // instances.
+    let mut stack: Vec<(::gltf::Node, DAffine3, Vec<usize>)> =
+        scene.nodes().map(|n| (n, *xf, Vec::new())).collect();
+    stack.reverse();
+    let mut brightest = 0.0f32;
+    while let Some((node, parent, mut trail)) = stack.pop() {
+        if trail.contains(&node.index()) {
+            bail!(
+                "{}: node {} is its own ancestor (a cycle in the node hierarchy)",
+                path.display(),
+                named(node.name(), "node", node.index())
+            );
+        }
+        trail.push(node.index());
+        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
+        let world = parent * DAffine3::from_mat4(local);
+        let node_name = named(node.name(), "node", node.index());
+        if let Some(mesh) = node.mesh() {
+            let mesh_name = named(mesh.name(), "mesh", mesh.index());
+            if node.weights().is_some() || mesh.weights().is_some() {
+                r.unmapped
+                    .note("morph targets", || format!("mesh {mesh_name}"));
+            }
+            for p in mesh.primitives() {
+                out.meshes.extend(r.primitive(
+                    parts,
+                    p,
+                    &mesh_name,
+                    &node_name,
+                    &world,
+                    override_id,
+                )?);
+            }
+        }
+        if let Some(cam) = node.camera() {
+            match cam.projection() {
+                Projection::Perspective(p) if out.camera.is_none() => {
+                    let c = FileCamera {
+                        eye: world.transform_point3(DVec3::ZERO),
+                        forward: world.transform_vector3(DVec3::NEG_Z),
+                        up: world.transform_vector3(DVec3::Y),
+                        vfov: (p.yfov() as f64).to_degrees().clamp(1.0, 179.0),
+                    };
+                    let usable = c.eye.is_finite()
+                        && c.forward.cross(c.up).length_squared() > 0.0
+                        && c.forward.cross(c.up).is_finite();
+                    match usable {
+                        true => out.camera = Some(c),
+                        false => r
+                            .unmapped
+                            .note("cameras scaled to nothing", || format!("node {node_name}")),
+                    }
+                }
+                Projection::Perspective(_) => {}
+                Projection::Orthographic(_) => r
+                    .unmapped
+                    .note("orthographic cameras", || format!("node {node_name}")),
+            }
+        }
+        if let Some(light) = node.light() {
+            let color = Vec3::from_array(light.color()) * light.intensity().max(0.0);
+            let color = if color.is_finite() { color } else { Vec3::ZERO };
+            brightest = brightest.max(color.max_element());
+            let position = world.transform_point3(DVec3::ZERO);
+            match light.kind() {
+                LightKind::Point => out.lights.push(FileLight::Point { position, color }),
+                LightKind::Spot { .. } => {
+                    r.unmapped
+                        .note("spot cones (spot lights shine all round)", || {
+                            format!("node {node_name}")
+                        });
+                    out.lights.push(FileLight::Point { position, color });
+                }
+                LightKind::Directional => {
+                    r.unmapped.note(
+                        "directional lights (placed as distant point lights)",
+                        || format!("node {node_name}"),
+                    );
+                    out.lights.push(FileLight::Directional {
+                        direction: world.transform_vector3(DVec3::NEG_Z),
+                        color,
+                    });
+                }
+            }
+            if light.range().is_some() {
+                r.unmapped
+                    .note("light ranges", || format!("node {node_name}"));
+            }
+        }
+        for child in node.children().collect::<Vec<_>>().into_iter().rev() {
+            stack.push((child, world, trail.clone()));
+        }
+    }
+    // rayterm's lights do not fall off with distance: intensities keep
+    // their ratios, the brightest light of the file at 1.
+    if brightest > 0.0 {
+        for l in &mut out.lights {
+            match l {
+                FileLight::Point { color, .. } | FileLight::Directional { color, .. } => {
+                    *color /= brightest
+                }
+            }
+        }
+    }
+    parts.warnings.extend(r.unmapped.warning(path));
+    Ok(out)
+}

@@ -1,0 +1,186 @@
+//! Mesh files of every format: which loader reads a file (by its
+//! extension), and a bare mesh file as a scene with the auto camera and
+//! light (or the file's own, where the format has them: glTF).
+
+use std::path::Path;
+
+use anyhow::{bail, Result};
+use glam::{DAffine3, Vec3};
+
+use super::frame::Frame;
+use super::gltf::{self, FileLight};
+use super::obj;
+use super::parts::{Parts, Placed};
+use super::source::{resolve, Kind, Source};
+use super::{Camera, Environment, Light, Material, Scene, Settings};
+
+/// The mesh formats, by extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Obj,
+    Ply,
+    Stl,
+    Gltf,
+}
+
+/// The extensions a bare mesh file may have, as messages list them.
+pub const EXTENSIONS: &str = ".obj, .ply, .stl, .gltf or .glb";
+
+impl Format {
+    /// The format of `path` by its extension (any case).
+    pub fn of(path: &Path) -> Option<Format> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        Some(match ext.as_str() {
+            "obj" => Format::Obj,
+            "ply" => Format::Ply,
+            "stl" => Format::Stl,
+            "gltf" | "glb" => Format::Gltf,
+            _ => return None,
+        })
+    }
+}
+
+/// Reads a mesh file in `format`: materials and textures go into `parts`,
+/// the meshes come back placed by `xf` in f64. `material` replaces the
+/// file's materials when given.
+pub fn load_placed(
+    format: Format,
+    parts: &mut Parts,
+    src: &dyn Source,
+    path: &Path,
+    xf: &DAffine3,
+    material: Option<&Material>,
+) -> Result<Vec<Placed>> {
+    match format {
+        Format::Obj => obj::load_placed(parts, src, path, xf, material),
+        Format::Gltf => {
+            let g = gltf::load(parts, src, path, xf, material)?;
+            if g.camera.is_some() || !g.lights.is_empty() {
+                parts.warnings.push(format!(
+                    "{}: its camera and lights are used when it is opened on its own, \
+                     not as a mesh of a scene file",
+                    path.display()
+                ));
+            }
+            Ok(g.meshes)
+        }
+        Format::Stl => {
+            let bytes = src.read(path, Kind::Stl)?;
+            let id = parts.add_material(material.cloned().unwrap_or_default());
+            super::stl::parse(path, &bytes, xf, id, &mut parts.warnings)
+        }
+        Format::Ply => {
+            let bytes = src.read(path, Kind::Ply)?;
+            let ply = super::ply::parse(path, &bytes, &mut parts.warnings)?;
+            drop(bytes);
+            let material = match material {
+                Some(m) => m.clone(),
+                None => {
+                    let texture = ply.texture.as_ref().and_then(|(file, line)| {
+                        let from = format!("{}:{line}", path.display());
+                        parts.texture(src, &resolve(path, file), &from)
+                    });
+                    Material {
+                        name: "ply".into(),
+                        // Vertex colours are the diffuse colour as they are.
+                        kd: if ply.colors.is_some() || texture.is_some() {
+                            Vec3::ONE
+                        } else {
+                            Material::default().kd
+                        },
+                        texture,
+                        ..Material::default()
+                    }
+                }
+            };
+            let id = parts.add_material(material);
+            Ok(vec![ply.placed(path, xf, id)?])
+        }
+    }
+}
+
+/// A bare mesh file: its own camera and lights where it has them (glTF),
+/// else the shared workload's auto camera and point light; moved next to
+/// the origin (and scaled) in f64 when far or huge ([`Frame`]).
+pub fn load_bare_from(src: &dyn Source, path: &Path, format: Format) -> Result<Scene> {
+    let mut parts = Parts::default();
+    let (meshes, camera, file_lights) = match format {
+        Format::Gltf => {
+            let g = gltf::load(&mut parts, src, path, &DAffine3::IDENTITY, None)?;
+            (g.meshes, g.camera, g.lights)
+        }
+        _ => (
+            load_placed(format, &mut parts, src, path, &DAffine3::IDENTITY, None)?,
+            None,
+            Vec::new(),
+        ),
+    };
+    let (min, max) = super::parts::bounds(&meshes);
+    let (frame, moved) = Frame::fit(min, max);
+    parts.warnings.extend(
+        moved
+            .into_iter()
+            .map(|w| format!("{}: {w}", path.display())),
+    );
+    for m in meshes {
+        parts.add_placed(m, &frame);
+    }
+    if parts.geometry.indices.is_empty() {
+        bail!("{}: no triangles{}", path.display(), parts.why_empty());
+    }
+    let b = parts.geometry.bounds();
+    let (centre, radius) = ((min + max) * 0.5, (max - min).length() * 0.5);
+    let camera = match camera {
+        Some(c) => {
+            // The target, about which the view orbits: as far ahead as
+            // the scene's centre.
+            let ahead = c.forward.normalize();
+            let d = (centre - c.eye).dot(ahead);
+            let d = if d > 0.0 { d } else { radius.max(1e-9) };
+            Camera {
+                eye: frame.point(c.eye),
+                target: frame.point(c.eye + ahead * d),
+                up: c.up.normalize().as_vec3(),
+                vfov: c.vfov as f32,
+            }
+        }
+        None => Camera::auto(&b),
+    };
+    let mut lights: Vec<Light> = file_lights
+        .iter()
+        .map(|l| match *l {
+            FileLight::Point { position, color } => Light::Point {
+                position: frame.point(position),
+                color,
+            },
+            // Far enough that its rays are all but parallel.
+            FileLight::Directional { direction, color } => Light::Point {
+                position: frame.point(centre - direction.normalize() * radius * 1000.0),
+                color,
+            },
+        })
+        .collect();
+    if lights.is_empty() {
+        lights.push(Light::Point {
+            position: Camera::auto_light(&b),
+            color: Vec3::ONE,
+        });
+    }
+    let name = path.display().to_string();
+    Ok(Scene {
+        description: format!("mesh {name}"),
+        name,
+        camera,
+        lights,
+        environment: Environment::Color(Vec3::ZERO),
+        settings: Settings {
+            ambient: Vec3::splat(0.1),
+            ..Settings::default()
+        },
+        geometry: parts.geometry,
+        meshes: parts.meshes,
+        materials: parts.materials,
+        textures: parts.textures,
+        warnings: parts.warnings,
+    })
+}

@@ -1,0 +1,914 @@
+//! PLY (Stanford polygon files), ASCII and binary little- or big-endian,
+//! with errors that name the file, the element and its index (and the line
+//! of an ASCII file, the byte of a binary one).
+//!
+//! Read: `vertex` `x y z`, normals `nx ny nz`, texture coordinates (`u v`,
+//! `s t`, `texture_u texture_v` or `texture_s texture_t`), colours (`red
+//! green blue`, sRGB as images are, 0..255 for integers, 0..1 for floats)
+//! and `face` `vertex_indices` (or `vertex_index`) lists, polygons becoming
+//! fans; MeshLab's `comment TextureFile` names the texture. Other elements
+//! and properties are skipped with one warning. The header's counts are
+//! checked against the file's size before anything is allocated, and every
+//! index against the vertex count.
+
+use std::path::Path;
+
+use anyhow::{anyhow, bail, Result};
+use glam::{DAffine3, DVec3, Vec2, Vec3};
+
+use super::numbers::{self, show3, ABSURD};
+use super::parts::{place_normals, place_positions, triangles_fit, Placed};
+use super::texture::srgb_to_linear;
+use crate::memory;
+
+/// The header must end within this many bytes.
+const MAX_HEADER: usize = 1 << 20;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl Scalar {
+    fn parse(name: &str) -> Option<Scalar> {
+        Some(match name {
+            "char" | "int8" => Scalar::I8,
+            "uchar" | "uint8" => Scalar::U8,
+            "short" | "int16" => Scalar::I16,
+            "ushort" | "uint16" => Scalar::U16,
+            "int" | "int32" => Scalar::I32,
+            "uint" | "uint32" => Scalar::U32,
+            "float" | "float32" => Scalar::F32,
+            "double" | "float64" => Scalar::F64,
+            _ => return None,
+        })
+    }
+
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::F64 => 8,
+        }
+    }
+
+    fn is_int(self) -> bool {
+        !matches!(self, Scalar::F32 | Scalar::F64)
+    }
+
+    /// The value of full intensity for a colour of this type.
+    fn full(self) -> f64 {
+        match self {
+            Scalar::U16 => 65535.0,
+            t if t.is_int() => 255.0,
+            _ => 1.0,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    Scalar(Scalar),
+    /// Count type, item type.
+    List(Scalar, Scalar),
+}
+
+/// What a property of the vertex or face element becomes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Role {
+    Ignored,
+    Position(usize),
+    Normal(usize),
+    Uv(usize),
+    Color(usize),
+    Indices,
+}
+
+struct Property {
+    name: String,
+    kind: Kind,
+    role: Role,
+}
+
+struct Element {
+    name: String,
+    count: u64,
+    props: Vec<Property>,
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Format {
+    Ascii,
+    Binary { big: bool },
+}
+
+struct Header {
+    format: Format,
+    elements: Vec<Element>,
+    /// Byte offset of the body, and its first line.
+    body: usize,
+    body_line: usize,
+    texture: Option<(String, usize)>,
+}
+
+/// What a PLY file holds, in file coordinates.
+pub struct PlyMesh {
+    pub positions: Vec<DVec3>,
+    pub normals: Option<Vec<DVec3>>,
+    pub uvs: Option<Vec<Vec2>>,
+    pub colors: Option<Vec<Vec3>>,
+    pub indices: Vec<[u32; 3]>,
+    /// `comment TextureFile` as written, with its line.
+    pub texture: Option<(String, usize)>,
+}
+
+impl PlyMesh {
+    /// The mesh placed by `xf` in f64.
+    pub fn placed(self, path: &Path, xf: &DAffine3, material: u32) -> Result<Placed> {
+        let positions = place_positions(&self.positions, xf, |i, p, q, why| {
+            anyhow!(
+                "{}: vertex {i}: {} lands at {} once placed, which {why}",
+                path.display(),
+                show3(p),
+                show3(q)
+            )
+        })?;
+        Ok(Placed {
+            name: path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            positions,
+            normals: self.normals.map(|n| place_normals(&n, xf)),
+            uvs: self.uvs,
+            colors: self.colors,
+            indices: self.indices,
+            material,
+        })
+    }
+}
+
+fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Header> {
+    let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let skipped = bytes.len() - body.len();
+    if !(body.starts_with(b"ply\n") || body.starts_with(b"ply\r\n")) {
+        bail!(
+            "{}: not a PLY file: it does not start with a 'ply' line",
+            path.display()
+        );
+    }
+    let mut format = None;
+    let mut elements: Vec<Element> = Vec::new();
+    let mut texture = None;
+    let mut start = 0;
+    let mut n = 0;
+    let mut ignored_elements: Vec<String> = Vec::new();
+    loop {
+        n += 1;
+        let at = |msg: String| anyhow!("{}:{n}: {msg}", path.display());
+        let Some(len) = body[start..].iter().position(|&b| b == b'\n') else {
+            bail!(at("the header has no 'end_header' line".into()));
+        };
+        if start + len > MAX_HEADER {
+            bail!(at(format!(
+                "no 'end_header' within the first {}",
+                memory::bytes(MAX_HEADER as u64)
+            )));
+        }
+        let raw = &body[start..start + len];
+        start += len + 1;
+        let line = std::str::from_utf8(raw.strip_suffix(b"\r").unwrap_or(raw))
+            .map_err(|_| at("the header is not text (invalid UTF-8)".into()))?;
+        let line = super::source::printable(line);
+        let words: Vec<&str> = line.split_whitespace().collect();
+        match words.as_slice() {
+            ["ply"] if n == 1 => {}
+            ["format", f, version] => {
+                if *version != "1.0" {
+                    warnings.push(format!(
+                        "{}:{n}: PLY version {version}: read as 1.0",
+                        path.display()
+                    ));
+                }
+                format = Some(match *f {
+                    "ascii" => Format::Ascii,
+                    "binary_little_endian" => Format::Binary { big: false },
+                    "binary_big_endian" => Format::Binary { big: true },
+                    other => bail!(at(format!(
+                        "unknown format '{other}' (ascii, binary_little_endian or \
+                         binary_big_endian)"
+                    ))),
+                });
+            }
+            ["comment", "TextureFile", ..] => {
+                let name =
+                    line.trim_start()["comment".len()..].trim_start()["TextureFile".len()..].trim();
+                if !name.is_empty() {
+                    texture = Some((name.to_string(), n));
+                }
+            }
+            ["comment", ..] | ["obj_info", ..] | [] => {}
+            ["element", name, count] => {
+                let count: u64 = count
+                    .parse()
+                    .map_err(|_| at(format!("element {name}: '{count}' is not a count")))?;
+                if elements.iter().any(|e| e.name == *name) {
+                    bail!(at(format!("element {name} is declared twice")));
+                }
+                elements.push(Element {
+                    name: name.to_string(),
+                    count,
+                    props: Vec::new(),
+                });
+            }
+            ["property", rest @ ..] => {
+                let Some(e) = elements.last_mut() else {
+                    bail!(at("a property before any element".into()));
+                };
+                let ty = |t: &str| {
+                    Scalar::parse(t).ok_or_else(|| at(format!("unknown property type '{t}'")))
+                };
+                let (kind, name) = match rest {
+                    ["list", count, item, name] => {
+                        let count = ty(count)?;
+                        if !count.is_int() {
+                            bail!(at(format!(
+                                "list {name}: the count must be an integer type"
+                            )));
+                        }
+                        (Kind::List(count, ty(item)?), *name)
+                    }
+                    [t, name] => (Kind::Scalar(ty(t)?), *name),
+                    _ => bail!(at(
+                        "a property is 'property TYPE NAME' or 'property list COUNT ITEM NAME'"
+                            .into()
+                    )),
+                };
+                if e.props.iter().any(|p| p.name == name) {
+                    bail!(at(format!(
+                        "element {}: property {name} is declared twice",
+                        e.name
+                    )));
+                }
+                let role = role(&e.name, name, kind);
+                if role == Role::Indices {
+                    if let Kind::List(_, item) = kind {
+                        if !item.is_int() {
+                            bail!(at(format!("{name}: indices must be of an integer type")));
+                        }
+                    }
+                }
+                e.props.push(Property {
+                    name: name.to_string(),
+                    kind,
+                    role,
+                });
+            }
+            ["end_header"] => break,
+            _ => bail!(at(format!(
+                "not a header line: '{}'",
+                line.chars().take(40).collect::<String>()
+            ))),
+        }
+    }
+    let Some(format) = format else {
+        bail!("{}: the header has no 'format' line", path.display());
+    };
+    for e in &elements {
+        if e.name != "vertex" && e.name != "face" {
+            ignored_elements.push(format!("{} ({})", e.name, e.count));
+        }
+    }
+    let mut ignored_props: Vec<String> = elements
+        .iter()
+        .filter(|e| e.name == "vertex" || e.name == "face")
+        .flat_map(|e| {
+            e.props
+                .iter()
+                .filter(|p| p.role == Role::Ignored)
+                .map(move |p| format!("{} {}", e.name, p.name))
+        })
+        .collect();
+    ignored_props.splice(
+        0..0,
+        ignored_elements.iter().map(|e| format!("element {e}")),
+    );
+    if !ignored_props.is_empty() {
+        warnings.push(format!(
+            "{}: ignored, not used: {}",
+            path.display(),
+            ignored_props.join(", ")
+        ));
+    }
+    Ok(Header {
+        format,
+        elements,
+        body: skipped + start,
+        body_line: n + 1,
+        texture,
+    })
+}
+
+fn role(element: &str, name: &str, kind: Kind) -> Role {
+    match (element, name, kind) {
+        ("vertex", _, Kind::Scalar(_)) => match name {
+            "x" => Role::Position(0),
+            "y" => Role::Position(1),
+            "z" => Role::Position(2),
+            "nx" => Role::Normal(0),
+            "ny" => Role::Normal(1),
+            "nz" => Role::Normal(2),
+            "u" | "s" | "texture_u" | "texture_s" => Role::Uv(0),
+            "v" | "t" | "texture_v" | "texture_t" => Role::Uv(1),
+            "red" | "diffuse_red" => Role::Color(0),
+            "green" | "diffuse_green" => Role::Color(1),
+            "blue" | "diffuse_blue" => Role::Color(2),
+            _ => Role::Ignored,
+        },
+        ("face", "vertex_indices" | "vertex_index", Kind::List(..)) => Role::Indices,
+        _ => Role::Ignored,
+    }
+}
+
+/// Values of the body, read element by element.
+trait Values {
+    /// Starts the next element (an ASCII line).
+    fn begin(&mut self) -> Result<(), String>;
+    /// Ends an element (no values left on an ASCII line).
+    fn end(&mut self) -> Result<(), String>;
+    fn float(&mut self, t: Scalar) -> Result<f64, String>;
+    fn int(&mut self, t: Scalar) -> Result<i64, String>;
+    /// Where the reader is, for messages: `file:line` or `file (byte N)`.
+    fn place(&self, path: &Path) -> String;
+    /// What follows the last element, if anything.
+    fn rest(&mut self) -> Option<String>;
+}
+
+struct Binary<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+    big: bool,
+}
+
+impl Binary<'_> {
+    #[inline]
+    fn take<const N: usize>(&mut self) -> Result<[u8; N], String> {
+        let b = self
+            .bytes
+            .get(self.pos..self.pos + N)
+            .ok_or("the file ends here (truncated)")?;
+        self.pos += N;
+        let mut a: [u8; N] = b.try_into().map_err(|_| "the file ends here (truncated)")?;
+        if self.big {
+            a.reverse();
+        }
+        Ok(a)
+    }
+}
+
+impl Values for Binary<'_> {
+    fn begin(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+    fn end(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+    #[inline]
+    fn float(&mut self, t: Scalar) -> Result<f64, String> {
+        Ok(match t {
+            Scalar::I8 => i8::from_le_bytes(self.take()?) as f64,
+            Scalar::U8 => u8::from_le_bytes(self.take()?) as f64,
+            Scalar::I16 => i16::from_le_bytes(self.take()?) as f64,
+            Scalar::U16 => u16::from_le_bytes(self.take()?) as f64,
+            Scalar::I32 => i32::from_le_bytes(self.take()?) as f64,
+            Scalar::U32 => u32::from_le_bytes(self.take()?) as f64,
+            Scalar::F32 => f32::from_le_bytes(self.take()?) as f64,
+            Scalar::F64 => f64::from_le_bytes(self.take()?),
+        })
+    }
+    #[inline]
+    fn int(&mut self, t: Scalar) -> Result<i64, String> {
+        // Integer types only (checked with the header): exact in f64.
+        self.float(t).map(|x| x as i64)
+    }
+    fn place(&self, path: &Path) -> String {
+        format!("{} (byte {})", path.display(), self.pos)
+    }
+    fn rest(&mut self) -> Option<String> {
+        let left = self.bytes.len() - self.pos.min(self.bytes.len());
+        (left > 0).then(|| format!("{left} bytes"))
+    }
+}
+
+struct Ascii<'a> {
+    lines: std::iter::Enumerate<std::str::Lines<'a>>,
+    first_line: usize,
+    line: usize,
+    words: std::str::SplitWhitespace<'a>,
+}
+
+impl Ascii<'_> {
+    fn word(&mut self) -> Result<&str, String> {
+        self.words
+            .next()
+            .ok_or_else(|| "the line ends before the element does".to_string())
+    }
+}
+
+impl Values for Ascii<'_> {
+    fn begin(&mut self) -> Result<(), String> {
+        loop {
+            let Some((i, l)) = self.lines.next() else {
+                return Err("the file ends here (truncated)".into());
+            };
+            self.line = self.first_line + i;
+            if !l.trim().is_empty() {
+                self.words = l.split_whitespace();
+                return Ok(());
+            }
+        }
+    }
+    fn end(&mut self) -> Result<(), String> {
+        match self.words.clone().count() {
+            0 => Ok(()),
+            n => Err(format!(
+                "{n} more value{} on the line than the header declares",
+                if n == 1 { "" } else { "s" }
+            )),
+        }
+    }
+    fn float(&mut self, t: Scalar) -> Result<f64, String> {
+        if t.is_int() {
+            return self.int(t).map(|x| x as f64);
+        }
+        let w = self.word()?;
+        numbers::parse(w)
+    }
+    fn int(&mut self, _: Scalar) -> Result<i64, String> {
+        let w = self.word()?;
+        w.parse().map_err(|_| format!("'{w}' is not an integer"))
+    }
+    fn place(&self, path: &Path) -> String {
+        format!("{}:{}", path.display(), self.line)
+    }
+    fn rest(&mut self) -> Option<String> {
+        let (i, _) = self.lines.find(|(_, l)| !l.trim().is_empty())?;
+        Some(format!("line {}", self.first_line + i))
+    }
+}
+
+/// Least bytes an element can take in the body (ASCII: a digit and a
+/// separator a value; a list may be empty).
+fn least_bytes(e: &Element, format: Format) -> u64 {
+    e.props
+        .iter()
+        .map(|p| match (format, p.kind) {
+            (Format::Ascii, _) => 2,
+            (_, Kind::Scalar(t)) | (_, Kind::List(t, _)) => t.size() as u64,
+        })
+        .sum()
+}
+
+/// Parses a PLY file's bytes.
+pub fn parse(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<PlyMesh> {
+    parse_within(path, bytes, warnings, memory::available())
+}
+
+fn parse_within(
+    path: &Path,
+    bytes: &[u8],
+    warnings: &mut Vec<String>,
+    available: u64,
+) -> Result<PlyMesh> {
+    let h = header(path, bytes, warnings)?;
+    let body = &bytes[h.body..];
+    let vertices = h.elements.iter().find(|e| e.name == "vertex");
+    let Some(vertices) = vertices else {
+        bail!("{}: no 'element vertex' in the header", path.display());
+    };
+    for axis in ["x", "y", "z"] {
+        if !vertices.props.iter().any(|p| p.name == axis) {
+            bail!("{}: element vertex has no property {axis}", path.display());
+        }
+    }
+    if vertices.count >= u32::MAX as u64 {
+        bail!(
+            "{}: {} vertices: more than 32-bit indices address",
+            path.display(),
+            vertices.count
+        );
+    }
+    let least = h.elements.iter().fold(0u64, |s, e| {
+        s.saturating_add(e.count.saturating_mul(least_bytes(e, h.format)))
+    });
+    if least > body.len() as u64 {
+        let counts: Vec<String> = h
+            .elements
+            .iter()
+            .map(|e| format!("element {} {}", e.name, e.count))
+            .collect();
+        bail!(
+            "{}: truncated: the header declares {}: at least {least} bytes after the header, \
+             and {} follow it",
+            path.display(),
+            counts.join(", "),
+            body.len()
+        );
+    }
+    let faces = h
+        .elements
+        .iter()
+        .find(|e| e.name == "face")
+        .map_or(0, |e| e.count);
+    triangles_fit(faces, available).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    match h.format {
+        Format::Binary { big } => {
+            let mut r = Binary {
+                bytes,
+                pos: h.body,
+                big,
+            };
+            body_from(path, &h, &mut r, warnings, available)
+        }
+        Format::Ascii => {
+            let text = super::source::text(path, bytes.to_vec())?;
+            let mut lines = text.lines().enumerate();
+            // The header, already read.
+            lines.nth(h.body_line - 2);
+            let mut r = Ascii {
+                lines,
+                first_line: 1,
+                line: h.body_line,
+                words: "".split_whitespace(),
+            };
+            body_from(path, &h, &mut r, warnings, available)
+        }
+    }
+}
+
+fn body_from<R: Values>(
+    path: &Path,
+    h: &Header,
+    r: &mut R,
+    warnings: &mut Vec<String>,
+    available: u64,
+) -> Result<PlyMesh> {
+    let vertex_count = h
+        .elements
+        .iter()
+        .find(|e| e.name == "vertex")
+        .map_or(0, |e| e.count as usize);
+    let mut m = PlyMesh {
+        positions: Vec::with_capacity(vertex_count),
+        normals: None,
+        uvs: None,
+        colors: None,
+        indices: Vec::new(),
+        texture: h.texture.clone(),
+    };
+    let mut normals = Vec::new();
+    let mut uvs = Vec::new();
+    let mut colors = Vec::new();
+    // The first absurd coordinate (vertex, value) and how many more.
+    let mut absurd: (Option<(u64, f64)>, u64) = (None, 0);
+    let mut triangles = 0u64;
+    let mut corners: Vec<u32> = Vec::new();
+    for e in &h.elements {
+        let has = |f: fn(Role) -> bool| e.props.iter().filter(|p| f(p.role)).count();
+        let (n_normal, n_uv, n_color) = (
+            has(|r| matches!(r, Role::Normal(_))),
+            has(|r| matches!(r, Role::Uv(_))),
+            has(|r| matches!(r, Role::Color(_))),
+        );
+        let color_full = e
+            .props
+            .iter()
+            .find_map(|p| match (p.role, p.kind) {
+                (Role::Color(_), Kind::Scalar(t)) => Some(t.full()),
+                _ => None,
+            })
+            .unwrap_or(1.0);
+        if e.name == "vertex" {
+            if n_normal == 3 {
+                normals.reserve_exact(vertex_count);
+            }
+            if n_uv == 2 {
+                uvs.reserve_exact(vertex_count);
+            }
+            if n_color == 3 {
+                colors.reserve_exact(vertex_count);
+            }
+        }
+        for i in 0..e.count {
+            let fail = |r: &R, prop: Option<&str>, msg: String| {
+                let place = r.place(path);
+                let prop = prop.map(|p| format!(", {p}")).unwrap_or_default();
+                anyhow!(
+                    "{place}: element {} {i} (of {}){prop}: {msg}",
+                    e.name,
+                    e.count
+                )
+            };
+            r.begin().map_err(|m| fail(r, None, m))?;
+            let mut p = [0.0; 3];
+            let mut nrm = [0.0; 3];
+            let mut uv = [0.0; 2];
+            let mut rgb = [0.0; 3];
+            for prop in &e.props {
+                let name = Some(prop.name.as_str());
+                match (prop.kind, prop.role) {
+                    (Kind::Scalar(t), role) => {
+                        let x = r.float(t).map_err(|m| fail(r, name, m))?;
+                        if role == Role::Ignored {
+                            continue;
+                        }
+                        if let Some(why) = numbers::unusable(x) {
+                            return Err(fail(r, name, format!("{} {why}", numbers::show(x))));
+                        }
+                        match role {
+                            Role::Position(k) => {
+                                if x.abs() > ABSURD {
+                                    match absurd.0 {
+                                        None => absurd.0 = Some((i, x)),
+                                        Some(_) => absurd.1 += 1,
+                                    }
+                                }
+                                p[k] = x;
+                            }
+                            Role::Normal(k) => nrm[k] = x,
+                            Role::Uv(k) => uv[k] = x,
+                            Role::Color(k) => rgb[k] = x,
+                            _ => {}
+                        }
+                    }
+                    (Kind::List(ct, item), role) => {
+                        let n = r.int(ct).map_err(|m| fail(r, name, m))?;
+                        if n < 0 {
+                            return Err(fail(r, name, format!("negative count {n}")));
+                        }
+                        if role != Role::Indices {
+                            for _ in 0..n {
+                                r.float(item).map_err(|m| fail(r, name, m))?;
+                            }
+                            continue;
+                        }
+                        if n < 3 {
+                            return Err(fail(
+                                r,
+                                name,
+                                format!("a face needs at least 3 vertices, found {n}"),
+                            ));
+                        }
+                        triangles += n as u64 - 2;
+                        triangles_fit(triangles, available).map_err(|m| fail(r, name, m))?;
+                        corners.clear();
+                        for _ in 0..n {
+                            let k = r.int(item).map_err(|m| fail(r, name, m))?;
+                            if k < 0 || k as u64 >= vertex_count as u64 {
+                                return Err(fail(
+                                    r,
+                                    name,
+                                    format!(
+                                        "vertex index {k} is out of range ({vertex_count} \
+                                         vertices)"
+                                    ),
+                                ));
+                            }
+                            corners.push(k as u32);
+                        }
+                        for k in 2..corners.len() {
+                            m.indices.push([corners[0], corners[k - 1], corners[k]]);
+                        }
+                    }
+                }
+            }
+            r.end().map_err(|m| fail(r, None, m))?;
+            if e.name == "vertex" {
+                m.positions.push(DVec3::from_array(p));
+                if n_normal == 3 {
+                    normals.push(DVec3::from_array(nrm));
+                }
+                if n_uv == 2 {
+                    uvs.push(Vec2::new(uv[0] as f32, uv[1] as f32));
+                }
+                if n_color == 3 {
+                    colors.push(Vec3::from_array(
+                        rgb.map(|c| srgb_to_linear((c / color_full).clamp(0.0, 1.0) as f32)),
+                    ));
+                }
+            }
+        }
+    }
+    if let Some(rest) = r.rest() {
+        warnings.push(format!(
+            "{}: data after the last element ({rest}): ignored",
+            path.display()
+        ));
+    }
+    for (n, what) in [
+        (n_of(h, "normal"), "normal"),
+        (n_of(h, "uv"), "texture coordinate"),
+    ] {
+        if n > 0 && n < if what == "normal" { 3 } else { 2 } {
+            warnings.push(format!(
+                "{}: element vertex has only some {what} properties: ignored",
+                path.display()
+            ));
+        }
+    }
+    if n_of(h, "color") > 0 && n_of(h, "color") < 3 {
+        warnings.push(format!(
+            "{}: element vertex has only some of red, green and blue: ignored",
+            path.display()
+        ));
+    }
+    if let (Some((i, x)), more) = absurd {
+        let more = if more > 0 {
+            format!(" (and {more} more)")
+        } else {
+            String::new()
+        };
+        warnings.push(format!(
+            "{}: vertex {i}: absurd value {}{more}: beyond {ABSURD:e} shading and shadows \
+             lose all precision",
+            path.display(),
+            numbers::show(x)
+        ));
+    }
+    m.normals = (!normals.is_empty()).then_some(normals);
+    m.uvs = (!uvs.is_empty()).then_some(uvs);
+    m.colors = (!colors.is_empty()).then_some(colors);
+    Ok(m)
+}
+
+/// How many properties of the vertex element have the role named `what`.
+fn n_of(h: &Header, what: &str) -> usize {
+    h.elements
+        .iter()
+        .filter(|e| e.name == "vertex")
+        .flat_map(|e| &e.props)
+        .filter(|p| {
+            matches!(
+                (what, p.role),
+                ("normal", Role::Normal(_)) | ("uv", Role::Uv(_)) | ("color", Role::Color(_))
+            )
+        })
+        .count()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const HEAD: &str = "ply\nformat ascii 1.0\ncomment made by hand\nelement vertex 4\n\
+                        property float x\nproperty float y\nproperty float z\n\
+                        element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    const QUAD: &str = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
+
+    fn read(bytes: &[u8]) -> Result<(PlyMesh, Vec<String>)> {
+        let mut w = Vec::new();
+        let m = parse(Path::new("p.ply"), bytes, &mut w)?;
+        Ok((m, w))
+    }
+
+    fn err(text: &str) -> String {
+        format!("{:#}", read(text.as_bytes()).err().expect("should fail"))
+    }
+
+    fn binary(big: bool) -> Vec<u8> {
+        let mut b = format!(
+            "ply\nformat binary_{}_endian 1.0\nelement vertex 4\nproperty float x\n\
+             property float y\nproperty float z\nproperty uchar red\nproperty uchar green\n\
+             property uchar blue\nelement face 1\nproperty list uchar uint vertex_indices\n\
+             end_header\n",
+            if big { "big" } else { "little" }
+        )
+        .into_bytes();
+        let f = |x: f32| {
+            if big {
+                x.to_be_bytes()
+            } else {
+                x.to_le_bytes()
+            }
+        };
+        for p in [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ] {
+            for x in p {
+                b.extend(f(x));
+            }
+            b.extend([255, 0, 128]);
+        }
+        b.push(4);
+        for i in 0u32..4 {
+            b.extend(if big {
+                i.to_be_bytes()
+            } else {
+                i.to_le_bytes()
+            });
+        }
+        b
+    }
+
+    #[test]
+    fn ascii_and_binary_read_alike() {
+        let (a, w) = read(format!("{HEAD}{QUAD}").as_bytes()).unwrap();
+        assert!(w.is_empty(), "{w:?}");
+        assert_eq!(a.indices, [[0, 1, 2], [0, 2, 3]]);
+        for big in [false, true] {
+            let (b, w) = read(&binary(big)).unwrap();
+            assert!(w.is_empty(), "{w:?}");
+            assert_eq!(b.positions, a.positions);
+            assert_eq!(b.indices, a.indices);
+            let c = b.colors.unwrap()[0];
+            assert_eq!(c, Vec3::new(1.0, 0.0, srgb_to_linear(128.0 / 255.0)));
+        }
+    }
+
+    #[test]
+    fn malformed_files_name_element_and_place() {
+        let cases = [
+            (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 9\n"), "p.ply:15: element face 0 (of 1), vertex_indices: vertex index 9 is out of range (4 vertices)"),
+            (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2\n"), "p.ply:15: element face 0 (of 1), vertex_indices: the line ends"),
+            (format!("{HEAD}0 0 0 7\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n"), "p.ply:11: element vertex 0 (of 4): 1 more value"),
+            (format!("{HEAD}0 0 nan\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n"), "p.ply:11: element vertex 0 (of 4), z: 'nan' is not a finite"),
+            (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 1\n"), "p.ply:15: element face 0 (of 1), vertex_indices: a face needs at least 3"),
+            (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 -1\n"), "p.ply:15: element face 0 (of 1), vertex_indices: vertex index -1 is out of range"),
+            (HEAD.replace("vertex 4", "vertex 4000"), "p.ply: truncated: the header declares element vertex 4000, element face 1:"),
+            (HEAD.replace("float x", "float33 x"), "p.ply:5: unknown property type 'float33'"),
+            (HEAD.replace("format ascii 1.0\n", ""), "p.ply: the header has no 'format' line"),
+            (HEAD.replace("end_header\n", ""), "p.ply:10: the header has no 'end_header' line"),
+            (HEAD.replace("property float z\n", ""), "p.ply: element vertex has no property z"),
+            (HEAD.replace("uchar int vertex", "uchar float vertex"), "p.ply:9: vertex_indices: indices must be of an integer type"),
+            ("plyx\n".into(), "p.ply: not a PLY file"),
+        ];
+        for (text, want) in cases {
+            let e = err(&text);
+            assert!(e.starts_with(want), "{text:?}:\n{e}\nwanted {want}");
+        }
+        let mut cut = binary(false);
+        cut.truncate(cut.len() - 2);
+        let e = format!("{:#}", read(&cut).err().unwrap());
+        assert!(
+            e.ends_with("element face 0 (of 1), vertex_indices: the file ends here (truncated)"),
+            "{e}"
+        );
+        cut.truncate(cut.len() - 20);
+        let e = format!("{:#}", read(&cut).err().unwrap());
+        assert!(
+            e.starts_with(
+                "p.ply: truncated: the header declares element vertex 4, element face 1:"
+            ),
+            "{e}"
+        );
+        let mut bad = binary(true);
+        let n = bad.len();
+        bad[n - 1] = 7;
+        let e = format!("{:#}", read(&bad).err().unwrap());
+        assert!(
+            e.starts_with(&format!(
+                "p.ply (byte {n}): element face 0 (of 1), vertex_indices: vertex index 7"
+            )),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn other_elements_and_properties_are_skipped_with_a_warning() {
+        let text = "ply\nformat ascii 1.0\nelement material 1\nproperty list uchar float k\n\
+                    element vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+                    property float confidence\nproperty float nx\nelement face 1\n\
+                    property list uchar int vertex_index\nproperty uchar flags\nend_header\n\
+                    2 0.5 0.5\n0 0 0 1 0\n1 0 0 1 0\n0 1 0 1 0\n3 0 1 2 9\n\n";
+        let (m, w) = read(text.as_bytes()).unwrap();
+        assert_eq!(m.indices, [[0, 1, 2]]);
+        assert!(m.normals.is_none());
+        assert_eq!(
+            w,
+            [
+                "p.ply: ignored, not used: element material (1), vertex confidence, face flags",
+                "p.ply: element vertex has only some normal properties: ignored"
+            ]
+        );
+    }
+
+    #[test]
+    fn face_counts_are_checked_against_memory() {
+        let text = format!("{HEAD}{QUAD}");
+        let e = parse_within(Path::new("p.ply"), text.as_bytes(), &mut Vec::new(), 1)
+            .err()
+            .map(|e| e.to_string());
+        assert!(e.is_some_and(|e| e.contains("1 triangles would need")));
+    }
+}

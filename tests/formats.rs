@@ -1,0 +1,660 @@
+//! Mesh formats beside OBJ: one mesh written as OBJ, ASCII and binary PLY
+//! (both byte orders) and STL (ASCII and binary) loads to the same
+//! geometry and renders the same image, bit for bit; PLY vertex colours
+//! shade; every format opens bare, from the command line and as a
+//! `[[mesh]]`; malformed files say which file and where.
+
+mod common;
+mod files;
+
+use files::{rayterm, within_deadline, Dir};
+use glam::Vec3;
+use rayterm::render::{Feature, Features};
+use rayterm::scene::{self, Builder, Scene};
+
+/// Positions, vertex normals and triangles of a mesh.
+type Mesh = (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<[u32; 3]>);
+
+/// A lumpy sphere with distinct f32 vertices in the order faces first use
+/// them, its vertex normals, and its triangles.
+fn lumpy_sphere() -> Mesh {
+    let (rings, segments) = (9u32, 14u32);
+    let mut p: Vec<[f32; 3]> = vec![[0.0, 1.0, 0.0]];
+    for r in 1..rings {
+        let th = std::f32::consts::PI * r as f32 / rings as f32;
+        for s in 0..segments {
+            let ph = std::f32::consts::TAU * s as f32 / segments as f32;
+            let k = 1.0 + 0.15 * (3.0 * ph).sin() * th.sin();
+            p.push([
+                k * th.sin() * ph.cos(),
+                k * th.cos(),
+                k * th.sin() * ph.sin(),
+            ]);
+        }
+    }
+    p.push([0.0, -1.0, 0.0]);
+    let last = p.len() as u32 - 1;
+    let at = |r: u32, s: u32| 1 + (r - 1) * segments + s % segments;
+    let mut t = Vec::new();
+    for s in 0..segments {
+        t.push([0, at(1, s + 1), at(1, s)]);
+    }
+    for r in 1..rings - 1 {
+        for s in 0..segments {
+            t.push([at(r, s), at(r, s + 1), at(r + 1, s + 1)]);
+            t.push([at(r, s), at(r + 1, s + 1), at(r + 1, s)]);
+        }
+    }
+    for s in 0..segments {
+        t.push([at(rings - 1, s), at(rings - 1, s + 1), last]);
+    }
+    // Renumber in order of first use, as every loader orders vertices.
+    let mut new = vec![u32::MAX; p.len()];
+    let mut order = Vec::new();
+    for &i in t.iter().flatten() {
+        if new[i as usize] == u32::MAX {
+            new[i as usize] = order.len() as u32;
+            order.push(i);
+        }
+    }
+    let t = t.iter().map(|tri| tri.map(|i| new[i as usize])).collect();
+    let p: Vec<[f32; 3]> = order.iter().map(|&i| p[i as usize]).collect();
+    let n = p
+        .iter()
+        .map(|v| Vec3::from_array(*v).normalize().to_array())
+        .collect();
+    (p, n, t)
+}
+
+/// An f32 as text that reads back exactly (through f64, as loaders read).
+fn num(x: f32) -> String {
+    format!("{}", x as f64)
+}
+
+fn obj(p: &[[f32; 3]], n: Option<&[[f32; 3]]>, t: &[[u32; 3]]) -> String {
+    let mut s = String::new();
+    for v in p {
+        s += &format!("v {} {} {}\n", num(v[0]), num(v[1]), num(v[2]));
+    }
+    for v in n.unwrap_or(&[]) {
+        s += &format!("vn {} {} {}\n", num(v[0]), num(v[1]), num(v[2]));
+    }
+    for f in t {
+        let [a, b, c] = f.map(|i| match n {
+            Some(_) => format!("{0}//{0}", i + 1),
+            None => format!("{}", i + 1),
+        });
+        s += &format!("f {a} {b} {c}\n");
+    }
+    s
+}
+
+/// A PLY file: `format` is `ascii`, `binary_little_endian` or
+/// `binary_big_endian`; polygons as `uchar`-counted `int` lists.
+fn ply(format: &str, p: &[[f32; 3]], n: Option<&[[f32; 3]]>, t: &[[u32; 3]]) -> Vec<u8> {
+    let normals = if n.is_some() {
+        "property float nx\nproperty float ny\nproperty float nz\n"
+    } else {
+        ""
+    };
+    let mut b = format!(
+        "ply\nformat {format} 1.0\ncomment written by the test\nelement vertex {}\n\
+         property float x\nproperty float y\nproperty float z\n{normals}element face {}\n\
+         property list uchar int vertex_indices\nend_header\n",
+        p.len(),
+        t.len()
+    )
+    .into_bytes();
+    let big = format == "binary_big_endian";
+    let f = |b: &mut Vec<u8>, x: f32| {
+        b.extend(if big {
+            x.to_be_bytes()
+        } else {
+            x.to_le_bytes()
+        })
+    };
+    for (i, v) in p.iter().enumerate() {
+        let mut all = v.to_vec();
+        if let Some(n) = n {
+            all.extend(n[i]);
+        }
+        if format == "ascii" {
+            let words: Vec<String> = all.iter().map(|&x| num(x)).collect();
+            b.extend(format!("{}\n", words.join(" ")).bytes());
+        } else {
+            for x in all {
+                f(&mut b, x);
+            }
+        }
+    }
+    for tri in t {
+        if format == "ascii" {
+            b.extend(format!("3 {} {} {}\n", tri[0], tri[1], tri[2]).bytes());
+        } else {
+            b.push(3);
+            for &i in tri {
+                b.extend(if big {
+                    (i as i32).to_be_bytes()
+                } else {
+                    (i as i32).to_le_bytes()
+                });
+            }
+        }
+    }
+    b
+}
+
+fn stl_binary(p: &[[f32; 3]], t: &[[u32; 3]]) -> Vec<u8> {
+    let mut b = b"solid written by the test, binary all the same".to_vec();
+    b.resize(80, 0);
+    b.extend((t.len() as u32).to_le_bytes());
+    for tri in t {
+        b.extend([0u8; 12]);
+        for &i in tri {
+            for x in p[i as usize] {
+                b.extend(x.to_le_bytes());
+            }
+        }
+        b.extend([0u8; 2]);
+    }
+    b
+}
+
+fn stl_ascii(p: &[[f32; 3]], t: &[[u32; 3]]) -> String {
+    let mut s = String::from("solid lumpy\n");
+    for tri in t {
+        s += "  facet normal 0 0 0\n    outer loop\n";
+        for &i in tri {
+            let v = p[i as usize];
+            s += &format!("      vertex {} {} {}\n", num(v[0]), num(v[1]), num(v[2]));
+        }
+        s += "    endloop\n  endfacet\n";
+    }
+    s + "endsolid lumpy\n"
+}
+
+fn load(spec: &str) -> Result<Scene, String> {
+    let s = spec.to_string();
+    within_deadline(spec, move || scene::load(&s).map_err(|e| format!("{e:#}")))
+}
+
+/// Deterministic: one pass is exact.
+fn exact() -> Features {
+    Features::all().without(&[Feature::Supersampling, Feature::Bloom])
+}
+
+fn image(s: &Scene) -> Vec<Vec3> {
+    common::render(s, 48, 40, 1, exact(), Builder::Sah, 1).image
+}
+
+#[test]
+fn one_mesh_in_every_format_renders_the_same_image() {
+    let d = Dir::new("formats-same");
+    let (p, n, t) = lumpy_sphere();
+    let flat = [
+        d.write("m.obj", obj(&p, None, &t)),
+        d.write("m.ply", ply("ascii", &p, None, &t)),
+        d.write("le.ply", ply("binary_little_endian", &p, None, &t)),
+        d.write("be.PLY", ply("binary_big_endian", &p, None, &t)),
+        d.write("b.stl", stl_binary(&p, &t)),
+        d.write("a.stl", stl_ascii(&p, &t)),
+    ];
+    let smooth = [
+        d.write("n.obj", obj(&p, Some(&n), &t)),
+        d.write("n.ply", ply("ascii", &p, Some(&n), &t)),
+        d.write("nle.ply", ply("binary_little_endian", &p, Some(&n), &t)),
+        d.write("nbe.ply", ply("binary_big_endian", &p, Some(&n), &t)),
+    ];
+    for files in [&flat[..], &smooth[..]] {
+        let reference = load(&files[0]).unwrap();
+        assert!(reference.warnings.is_empty(), "{:?}", reference.warnings);
+        assert_eq!(reference.geometry.positions.len(), p.len());
+        let want = image(&reference);
+        assert!(want.iter().any(|c| c.max_element() > 0.1), "a black image");
+        for f in &files[1..] {
+            let s = load(f).unwrap();
+            assert!(s.warnings.is_empty(), "{f}: {:?}", s.warnings);
+            let (g, r) = (&s.geometry, &reference.geometry);
+            assert_eq!(g.positions, r.positions, "{f}");
+            assert_eq!(g.indices, r.indices, "{f}");
+            assert_eq!(g.normals, r.normals, "{f}");
+            assert_eq!(s.camera, reference.camera, "{f}");
+            assert_eq!(s.lights, reference.lights, "{f}");
+            assert!(image(&s) == want, "{f}: another image");
+        }
+    }
+    // Smooth normals make a difference the comparison above would see.
+    assert!(image(&load(&flat[1]).unwrap()) != image(&load(&smooth[1]).unwrap()));
+}
+
+#[test]
+fn ply_vertex_colours_are_the_diffuse_colour() {
+    let d = Dir::new("formats-colours");
+    let quad = |rgb: &str| {
+        format!(
+            "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+             property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
+             element face 1\nproperty list uchar int vertex_indices\nend_header\n\
+             -1 -1 0 {rgb}\n1 -1 0 {rgb}\n1 1 0 {rgb}\n-1 1 0 {rgb}\n4 0 1 2 3\n"
+        )
+    };
+    let red = load(&d.write("red.ply", quad("255 0 0"))).unwrap();
+    let white = load(&d.write("white.ply", quad("255 255 255"))).unwrap();
+    assert!(red.meshes[0].colored);
+    let (r, w) = (image(&red), image(&white));
+    // The middle pixel: red keeps white's red channel and loses the others.
+    let mid = 20 * 48 + 24;
+    assert!(w[mid].min_element() > 0.05, "{:?}", w[mid]);
+    assert_eq!(r[mid].x, w[mid].x);
+    assert_eq!((r[mid].y, r[mid].z), (0.0, 0.0));
+}
+
+#[test]
+fn every_format_opens_from_the_command_line_and_in_scene_files() {
+    let d = Dir::new("formats-cli");
+    let (p, _, t) = lumpy_sphere();
+    d.write("m.ply", ply("binary_little_endian", &p, None, &t));
+    d.write("m.stl", stl_binary(&p, &t));
+    d.write("m.obj", obj(&p, None, &t));
+    for file in ["m.ply", "m.stl"] {
+        let r = rayterm(
+            &d.0,
+            &[
+                "render", file, "--size", "16x12", "--spp", "1", "-o", "out.png",
+            ],
+        );
+        assert!(
+            r.ok() && !r.stderr.contains("warning"),
+            "{file}: {}",
+            r.stderr
+        );
+        let r = rayterm(
+            &d.0,
+            &["inspect", file, "--pixel", "8,6", "--size", "16x12"],
+        );
+        assert!(
+            r.ok() && r.stdout.contains("mesh m "),
+            "{file}: {}{}",
+            r.stdout,
+            r.stderr
+        );
+        let r = rayterm(
+            &d.0,
+            &["bench", "rays", file, "--size", "8x8", "--reps", "1"],
+        );
+        assert!(
+            r.ok() && r.stdout.contains("primary_rays"),
+            "{file}: {}",
+            r.stderr
+        );
+    }
+    // As meshes of a scene file, placed like an OBJ.
+    let scene = |mesh: &str| {
+        format!(
+            "[[mesh]]\nfile = \"{mesh}\"\ntranslate = [1, 0, 0]\n[[mesh]]\nfile = \"m.obj\"\n\
+             translate = [-1.5, 0, 0]\n[[light]]\ntype = \"point\"\nposition = [0, 3, 3]\n\
+             color = [1, 1, 1]\n"
+        )
+    };
+    let reference = load(&d.write("obj.toml", scene("m.obj"))).unwrap();
+    for mesh in ["m.ply", "m.stl"] {
+        let s = load(&d.write("s.toml", scene(mesh))).unwrap();
+        assert!(s.warnings.is_empty(), "{mesh}: {:?}", s.warnings);
+        assert_eq!(s.geometry.positions, reference.geometry.positions, "{mesh}");
+        assert!(image(&s) == image(&reference), "{mesh}");
+    }
+}
+
+#[test]
+fn malformed_files_say_which_file_and_where() {
+    let d = Dir::new("formats-bad");
+    let (p, _, t) = lumpy_sphere();
+    let mut cut = stl_binary(&p, &t);
+    cut.truncate(cut.len() - 10);
+    let stl = d.write("cut.stl", &cut);
+    let mut bad_index = ply("binary_little_endian", &p, None, &t);
+    let n = bad_index.len();
+    bad_index[n - 4..].copy_from_slice(&(p.len() as i32).to_le_bytes());
+    let ply_index = d.write("index.ply", &bad_index);
+    let mut short = ply("binary_big_endian", &p, None, &t);
+    short.truncate(short.len() / 2);
+    let ply_short = d.write("short.ply", &short);
+    let ascii = String::from_utf8(ply("ascii", &p, None, &t)).unwrap();
+    let ply_count = d.write(
+        "count.ply",
+        ascii.replacen(
+            &format!("element face {}", t.len()),
+            "element face 999999",
+            1,
+        ),
+    );
+    let ply_extra = d.write("extra.ply", ascii.replacen("\n3 ", "\n3 0 ", 1));
+    let stl_text = d.write(
+        "text.stl",
+        stl_ascii(&p, &t).replacen("endloop", "vertex 1 2", 1),
+    );
+    let faces = t.len();
+    for (file, want) in [
+        (
+            stl.clone(),
+            format!("{stl}: truncated binary STL: the header counts {faces} triangles"),
+        ),
+        (
+            ply_index.clone(),
+            format!(
+                "{ply_index} (byte {n}): element face {} (of {faces}), vertex_indices: vertex \
+                 index {} is out of range ({} vertices)",
+                faces - 1,
+                p.len(),
+                p.len()
+            ),
+        ),
+        (
+            ply_short.clone(),
+            "vertex_indices: the file ends here (truncated)".into(),
+        ),
+        (
+            ply_count.clone(),
+            format!("{ply_count}: truncated: the header declares"),
+        ),
+        (
+            ply_extra.clone(),
+            format!("{ply_extra}:{}: element face 0", 11 + p.len()),
+        ),
+        (
+            stl_text.clone(),
+            format!("{stl_text}:7: a vertex takes 3 coordinates"),
+        ),
+    ] {
+        let e = load(&file).err().unwrap_or_else(|| panic!("{file} loaded"));
+        assert!(
+            e.contains(&want) && e.contains(&file),
+            "{e}\nwanted: {want}"
+        );
+    }
+    // Through the binary: the message and a failure, nothing else.
+    let r = rayterm(&d.0, &["render", "cut.stl", "-o", "x.png"]);
+    assert!(
+        !r.ok() && r.stderr.contains("cut.stl: truncated binary STL"),
+        "{}",
+        r.stderr
+    );
+    assert!(!d.path("x.png").exists());
+}
+
+/// A 4x4 PNG: the columns of u < 0.5 red, the others blue.
+fn half_red_png() -> Vec<u8> {
+    let img = image::RgbImage::from_fn(4, 4, |x, _| {
+        if x < 2 {
+            image::Rgb([255, 0, 0])
+        } else {
+            image::Rgb([0, 0, 255])
+        }
+    });
+    let mut png = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    png
+}
+
+/// The binary buffer of the test's glTF: a unit quad in the XY plane
+/// (positions, glTF UVs, u16 indices) and the PNG; the JSON that
+/// describes it, its buffer given by `buffer`.
+fn gltf_parts(buffer: serde_json::Value) -> (serde_json::Value, Vec<u8>) {
+    let mut bin = Vec::new();
+    for p in [
+        [-0.5f32, -0.5, 0.0],
+        [0.5, -0.5, 0.0],
+        [0.5, 0.5, 0.0],
+        [-0.5, 0.5, 0.0],
+    ] {
+        p.iter().for_each(|x| bin.extend(x.to_le_bytes()));
+    }
+    for uv in [[0.0f32, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]] {
+        uv.iter().for_each(|x| bin.extend(x.to_le_bytes()));
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend(i.to_le_bytes());
+    }
+    let png = half_red_png();
+    bin.extend(&png);
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let mut buffer = buffer;
+    buffer["byteLength"] = bin.len().into();
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_clearcoat"],
+        "scene": 0,
+        "scenes": [{"nodes": [0, 4, 6]}],
+        "nodes": [
+            {"name": "Root", "scale": [2.0, 2.0, 2.0], "children": [1, 3]},
+            // 90 degrees about z: u runs along world +y.
+            {"name": "Arm", "translation": [-0.6, 0.0, 0.0],
+             "rotation": [0.0, 0.0, std::f64::consts::FRAC_1_SQRT_2, std::f64::consts::FRAC_1_SQRT_2],
+             "children": [2]},
+            {"name": "Tile", "mesh": 0},
+            {"name": "Mirror", "translation": [0.6, 0.0, 0.0], "mesh": 1},
+            {"name": "Rig", "translation": [0.0, 0.0, 3.0], "children": [5]},
+            {"name": "Eye", "translation": [0.0, 0.0, 3.0], "camera": 0},
+            {"name": "Lamp", "translation": [0.0, 0.0, 6.0],
+             "extensions": {"KHR_lights_punctual": {"light": 0}}}
+        ],
+        "extensions": {"KHR_lights_punctual": {"lights": [
+            {"type": "point", "color": [1.0, 1.0, 1.0], "intensity": 5.0}
+        ]}},
+        "cameras": [{"type": "perspective",
+                     "perspective": {"yfov": 0.8, "znear": 0.1, "aspectRatio": 1.333}}],
+        "meshes": [
+            {"name": "TileMesh", "primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1},
+                                                 "indices": 2, "material": 0}]},
+            {"name": "MirrorMesh", "primitives": [{"attributes": {"POSITION": 0},
+                                                   "indices": 2, "material": 1}]}
+        ],
+        "materials": [
+            {"name": "Checker", "pbrMetallicRoughness": {
+                "baseColorFactor": [0.5, 1.0, 1.0, 1.0], "metallicFactor": 0.0,
+                "baseColorTexture": {"index": 0}},
+             "normalTexture": {"index": 0}},
+            {"name": "Chrome", "pbrMetallicRoughness": {
+                "baseColorFactor": [0.2, 0.8, 0.2, 1.0], "metallicFactor": 1.0,
+                "roughnessFactor": 0.0},
+             "emissiveFactor": [1.0, 0.0, 0.0]}
+        ],
+        "textures": [{"source": 0, "sampler": 0}],
+        "samplers": [{"wrapS": 33071, "wrapT": 33648}],
+        "images": [{"bufferView": 3, "mimeType": "image/png"}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [-0.5, -0.5, 0.0], "max": [0.5, 0.5, 0.0]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 12},
+            {"buffer": 0, "byteOffset": 92, "byteLength": png.len()}
+        ],
+        "buffers": [buffer]
+    });
+    (json, bin)
+}
+
+fn glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut j = serde_json::to_vec(json).unwrap();
+    while !j.len().is_multiple_of(4) {
+        j.push(b' ');
+    }
+    let total = 12 + 8 + j.len() + 8 + bin.len();
+    let mut b = b"glTF".to_vec();
+    b.extend(2u32.to_le_bytes());
+    b.extend((total as u32).to_le_bytes());
+    b.extend((j.len() as u32).to_le_bytes());
+    b.extend(b"JSON");
+    b.extend(&j);
+    b.extend((bin.len() as u32).to_le_bytes());
+    b.extend(b"BIN\0");
+    b.extend(bin);
+    b
+}
+
+/// The colour of the pixel whose centre sees `world`, and the cosine at
+/// which the light (at the eye) meets the plane z = 0 there.
+fn pixel_at(s: &Scene, img: &[Vec3], w: u32, h: u32, world: Vec3) -> (Vec3, f32) {
+    let f = s.camera.frame(w, h);
+    let (x, y) = f.project(world).unwrap();
+    let (px, py) = (x.floor(), y.floor());
+    let ray = f.ray(px + 0.5, py + 0.5);
+    let t = -ray.origin.z / ray.dir.z;
+    let hit = ray.origin + ray.dir * t;
+    let cos = (s.camera.eye - hit).normalize().z;
+    (img[py as usize * w as usize + px as usize], cos)
+}
+
+#[test]
+fn a_gltf_scene_renders_with_its_hierarchy_materials_camera_and_light() {
+    let d = Dir::new("formats-gltf");
+    let (json, bin) = gltf_parts(serde_json::json!({}));
+    let file = d.write("scene.glb", glb(&json, &bin));
+    let s = load(&file).unwrap();
+    // The node chain: Root scale 2, Arm turned 90 degrees and moved.
+    let tile = s
+        .meshes
+        .iter()
+        .position(|m| m.name == "TileMesh (node Tile)")
+        .unwrap();
+    let first = s
+        .geometry
+        .tri_mesh
+        .iter()
+        .position(|&m| m as usize == tile)
+        .unwrap();
+    let corners: Vec<Vec3> = s.geometry.indices[first]
+        .iter()
+        .map(|&i| s.geometry.positions[i as usize])
+        .collect();
+    let near = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
+    // (-0.5, -0.5) turned to (0.5, -0.5), moved to (-0.1, -0.5), doubled.
+    assert!(near(corners[0], Vec3::new(-0.2, -1.0, 0.0)), "{corners:?}");
+    assert!(near(corners[1], Vec3::new(-0.2, 1.0, 0.0)), "{corners:?}");
+    assert!(near(corners[2], Vec3::new(-2.2, 1.0, 0.0)), "{corners:?}");
+    // Camera (Rig then Eye) and light from the file; the light at 1.
+    assert!(near(s.camera.eye, Vec3::new(0.0, 0.0, 6.0)));
+    assert!((s.camera.vfov - 0.8f32.to_degrees()).abs() < 1e-4);
+    assert_eq!(
+        s.lights,
+        [rayterm::scene::Light::Point {
+            position: Vec3::new(0.0, 0.0, 6.0),
+            color: Vec3::ONE
+        }]
+    );
+    // The metallic material, mapped.
+    let chrome = s.materials.iter().find(|m| m.name == "Chrome").unwrap();
+    assert_eq!(chrome.kd, Vec3::ZERO);
+    assert!(near(chrome.ks, Vec3::new(0.2, 0.8, 0.2)));
+    assert!(chrome.ns >= 1000.0 && chrome.texture.is_none());
+    // What was not mapped, once each.
+    let w = s.warnings.join("\n");
+    for part in [
+        "KHR_materials_clearcoat",
+        "normal maps (material Checker)",
+        "emission (material Chrome)",
+    ] {
+        assert!(w.contains(part), "{part} missing in {w}");
+    }
+    assert_eq!(s.warnings.len(), 1, "{w}");
+    // Hand-checked pixels: kd = red texel * factor 0.5 (dielectric),
+    // ambient 0.1, the light at the eye, and the 0.04 highlight of a
+    // dielectric of roughness 1 (Phong exponent 0).
+    let (w_, h_) = (64, 48);
+    let img = common::render(&s, w_, h_, 1, exact(), Builder::Sah, 1).image;
+    let (red, cos) = pixel_at(&s, &img, w_, h_, Vec3::new(-1.2, -0.5, 0.0));
+    let want = Vec3::new(0.5 * 0.1 + 0.5 * cos + 0.04, 0.04, 0.04);
+    assert!(
+        (red - want).abs().max_element() < 1e-4,
+        "{red} against {want}"
+    );
+    let (blue, cos) = pixel_at(&s, &img, w_, h_, Vec3::new(-1.2, 0.5, 0.0));
+    let want = Vec3::new(0.04, 0.04, 0.1 + cos + 0.04);
+    assert!(
+        (blue - want).abs().max_element() < 1e-4,
+        "{blue} against {want}"
+    );
+    // The mirror shows the black sky; the background is black.
+    let (chrome_px, _) = pixel_at(&s, &img, w_, h_, Vec3::new(1.7, 0.5, 0.0));
+    assert!(chrome_px.max_element() < 1e-3, "{chrome_px}");
+    assert_eq!(img[0], Vec3::ZERO);
+    // The inspector names the glTF mesh, node and material.
+    let f = s.camera.frame(w_, h_);
+    let (x, y) = f.project(Vec3::new(-1.2, -0.5, 0.0)).unwrap();
+    let pixel = format!("{},{}", x as u32, y as u32);
+    let r = rayterm(
+        &d.0,
+        &["inspect", "scene.glb", "--pixel", &pixel, "--size", "64x48"],
+    );
+    assert!(
+        r.ok()
+            && r.stdout
+                .contains("mesh TileMesh (node Tile) material Checker"),
+        "{}{}",
+        r.stdout,
+        r.stderr
+    );
+    // The same file as .gltf with its buffer beside it loads the same.
+    let (json, bin) = gltf_parts(serde_json::json!({"uri": "scene%20data.bin"}));
+    d.write("scene data.bin", &bin);
+    let t = load(&d.write("scene.gltf", serde_json::to_vec(&json).unwrap())).unwrap();
+    assert_eq!(t.geometry.positions, s.geometry.positions);
+    assert!(common::render(&t, w_, h_, 1, exact(), Builder::Sah, 1).image == img);
+    // As a mesh of a scene file: the meshes, with a note on the rest.
+    let toml = d.write(
+        "s.toml",
+        "[[mesh]]\nfile = \"scene.glb\"\n[[light]]\ntype = \"point\"\nposition = [0, 0, 6]\n\
+         color = [1, 1, 1]\n",
+    );
+    let in_scene = load(&toml).unwrap();
+    assert_eq!(in_scene.geometry.positions, s.geometry.positions);
+    assert!(in_scene
+        .warnings
+        .iter()
+        .any(|w| w.contains("its camera and lights are used")));
+}
+
+#[test]
+fn malformed_gltf_files_say_what_is_wrong() {
+    let d = Dir::new("formats-gltf-bad");
+    let (json, bin) = gltf_parts(serde_json::json!({}));
+    let mut bad_accessor = json.clone();
+    bad_accessor["meshes"][0]["primitives"][0]["indices"] = 99.into();
+    let mut bad_index = bin.clone();
+    bad_index[80..82].copy_from_slice(&7u16.to_le_bytes());
+    let mut cut = glb(&json, &bin);
+    cut.truncate(cut.len() - 100);
+    let (ext, ext_bin) = gltf_parts(serde_json::json!({"uri": "gone.bin"}));
+    let mut short_bin = ext_bin.clone();
+    short_bin.truncate(50);
+    let mut cycle = json.clone();
+    cycle["nodes"][2]["children"] = serde_json::json!([0]);
+    for (name, bytes, want) in [
+        ("accessor.glb", glb(&bad_accessor, &bin), "accessor.glb: not a valid glTF file"),
+        (
+            "index.glb",
+            glb(&json, &bad_index),
+            "index.glb: mesh TileMesh primitive 0 (node Tile): index 0 is 7, out of range (4 vertices)",
+        ),
+        ("cut.glb", cut, "cut.glb: not a valid glTF file"),
+        ("missing.gltf", serde_json::to_vec(&ext).unwrap(), "missing.gltf: buffer buffer 0"),
+        ("cycle.glb", glb(&cycle, &bin), "is its own ancestor"),
+        ("junk.glb", b"glTF\x02\x00\x00\x00junk".to_vec(), "junk.glb: not a valid glTF file"),
+    ] {
+        let e = load(&d.write(name, bytes)).err().unwrap_or_else(|| panic!("{name} loaded"));
+        assert!(e.contains(want), "{name}: {e}\nwanted: {want}");
+    }
+    let e = load(&d.path("missing.gltf").to_string_lossy()).unwrap_err();
+    assert!(e.contains("gone.bin: not found"), "{e}");
+    d.write("gone.bin", &short_bin);
+    let e = load(&d.path("missing.gltf").to_string_lossy()).unwrap_err();
+    assert!(e.contains("holds 50 bytes, the file declares"), "{e}");
+}
