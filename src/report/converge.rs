@@ -72,6 +72,8 @@ pub struct Strategy {
     pub light_samples: u32,
     pub glossy_samples: u32,
     pub stratify: bool,
+    /// Passes after the minimum go to the pixels with the highest error.
+    pub adaptive: bool,
 }
 
 /// Which sampled effects the plan runs, so labels name only those.
@@ -98,6 +100,7 @@ impl Strategy {
             light_samples: s.light_samples,
             glossy_samples: s.glossy_samples,
             stratify: s.stratify,
+            adaptive: false,
         }
     }
 
@@ -131,6 +134,9 @@ impl Strategy {
         if parts.is_empty() {
             return "nothing sampled".into();
         }
+        if self.adaptive {
+            parts.push("adaptive".into());
+        }
         parts.join(" ")
     }
 
@@ -146,11 +152,15 @@ impl Strategy {
         if !self.stratify {
             o.push("--independent".to_string());
         }
+        if self.adaptive {
+            o.push("adaptive: render --time or --target-error".to_string());
+        }
         o.join(" ")
     }
 
     /// The strategies worth comparing with `base` on a scene that uses `uses`:
-    /// light samples per hit, glossy samples per hit, independent sampling.
+    /// light samples per hit, glossy samples per hit, independent sampling,
+    /// adaptive sampling.
     pub fn alternatives(base: Strategy, uses: Uses) -> Vec<Strategy> {
         let mut out = Vec::new();
         if uses.area_lights {
@@ -168,6 +178,12 @@ impl Strategy {
         if uses.area_lights || uses.supersampling {
             out.push(Strategy {
                 stratify: !base.stratify,
+                ..base
+            });
+        }
+        if uses.area_lights || uses.glossy || uses.supersampling {
+            out.push(Strategy {
+                adaptive: true,
                 ..base
             });
         }
@@ -393,19 +409,34 @@ struct Run {
     rays: u64,
 }
 
-/// Renders one independent run: passes of one sample until the budget is met.
-fn run_once(tracer: &Tracer, budget: Budget, passes: &mut u64) -> Run {
-    let stop = match budget {
-        Budget::Spp(n) => Stop::spp(n),
-        Budget::Seconds(t) => Stop::seconds(t),
-    };
+/// Renders one independent run: passes of one sample (adaptive: of a block
+/// to the noisiest pixels after the minimum) until the budget is met; an
+/// adaptive spp budget is the mean over pixels, with no cap on any one.
+fn run_once(tracer: &Tracer, budget: Budget, adaptive: bool, passes: &mut u64) -> Run {
     let mut p = Progressive::new(tracer.width, tracer.height);
-    let o = p.run(tracer, &stop, &|| false, |_, _| {});
-    *passes += o.passes as u64;
+    p.adaptive = adaptive;
+    match budget {
+        Budget::Spp(n) if adaptive && !tracer.plan.deterministic => {
+            while p.film.spp_range().1 < n as f64 {
+                *passes += 1;
+                let pass = p.pass(tracer, &Stop::default(), &|| false);
+                if pass.is_none_or(|s| s.pixels == 0) {
+                    break;
+                }
+            }
+        }
+        _ => {
+            let stop = match budget {
+                Budget::Spp(n) => Stop::spp(n),
+                Budget::Seconds(t) => Stop::seconds(t),
+            };
+            *passes += p.run(tracer, &stop, &|| false, |_, _| {}).passes as u64;
+        }
+    }
     Run {
+        seconds: p.seconds,
+        rays: p.rays,
         film: p.film,
-        seconds: o.seconds,
-        rays: o.rays,
     }
 }
 
@@ -440,9 +471,9 @@ impl Subject<'_> {
             let seed = cfg.seed.wrapping_add(i as u64);
             let frame = scene.camera.frame(cfg.width, cfg.height);
             let tracer = Tracer::new(&scene, self.bvh, self.plan, frame, seed);
-            let r = run_once(&tracer, budget, passes);
+            let r = run_once(&tracer, budget, strategy.adaptive, passes);
             let img = r.film.image();
-            spp += r.film.spp as f64 / n;
+            spp += r.film.spp_range().1 / n;
             times.push(r.seconds);
             rays += r.rays as f64 / n;
             mse += rmse(&img, reference).powi(2) / n;
@@ -631,7 +662,7 @@ impl Subject<'_> {
             // One pass is the answer: it is its own reference unless one is given.
             let frame = self.scene.camera.frame(cfg.width, cfg.height);
             let tracer = Tracer::new(self.scene, self.bvh, self.plan, frame, cfg.seed);
-            let r = run_once(&tracer, Budget::Spp(1), &mut passes);
+            let r = run_once(&tracer, Budget::Spp(1), false, &mut passes);
             let img = r.film.image();
             let (reference, info) = match cfg.reference {
                 ReferenceSource::Render { .. } => (
