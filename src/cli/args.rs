@@ -173,6 +173,11 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 4096,
           value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub max_spp: u32,
+    /// With --time or --target-error, give every pixel the same samples
+    /// (adaptive otherwise: after 32 spp, samples go to the pixels with the
+    /// highest estimated error).
+    #[arg(long)]
+    pub uniform: bool,
     /// Worker threads (default: all cores; at most 4x the cores).
     #[arg(long, value_parser = parse_threads)]
     pub threads: Option<u32>,

@@ -274,17 +274,6 @@ impl Film {
         Some((per_sample / n as f64 / (lum * lum + REL_EPS)).sqrt())
     }
 
-    /// The film's relative error predicted from the decision blocks: what an
-    /// adaptive render stops on, so no image sample decides anything.
-    pub fn predicted_relative_error(&self) -> Option<f64> {
-        let n = self.pixels.len();
-        let mut sum = 0.0;
-        for i in 0..n {
-            sum += self.predicted_error(i)?.powi(2);
-        }
-        (n > 0).then(|| (sum / n as f64).sqrt())
-    }
-
     /// Adds sample `sample` (drawn in sub-pixel `stratum` when jittered),
     /// or records it as bad when not finite.
     pub fn add(&mut self, x: u32, y: u32, sample: u32, stratum: Option<u32>, c: Vec3) {

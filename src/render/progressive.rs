@@ -166,33 +166,20 @@ impl Progressive {
                 a.spp.iter().map(|&n| upto.saturating_sub(n)).collect(),
             ));
         }
-        let target = stop.error.unwrap_or(0.0);
         let block = PIXEL_STRATA.min(cap);
-        // A pixel's squared error falls by about e² b / n for b more of its
-        // n image samples: giving blocks by e / √n minimises the film's
-        // relMSE for the samples spent (e alone would equalise the pixels'
-        // errors, which leaves the film's no lower than uniform sampling).
-        let errors: Vec<f64> = (0..a.spp.len())
-            .map(|i| match f.predicted_error(i) {
-                _ if a.spp[i].saturating_add(block) > cap => -1.0,
-                // Non-finite samples left nothing to decide on.
-                None => f64::INFINITY,
-                Some(e) if e > target => e / (f.pixels[i].n.max(1) as f64).sqrt(),
-                Some(_) => -1.0,
-            })
-            .collect();
-        let mut open: Vec<f64> = errors.iter().copied().filter(|&e| e >= 0.0).collect();
-        if open.is_empty() {
-            return None;
+        // Pixels predicted below the target rest, unless the film as a whole
+        // is not there yet (the one use of the image's own estimate, as a
+        // uniform render's stop: see docs/adaptive.md).
+        let targets = [stop.error.unwrap_or(0.0), 0.0];
+        for target in targets {
+            if let Some(g) = give_blocks(f, a, target, block, cap) {
+                return Some(g);
+            }
+            if stop.error.is_none() || f.relative_error().is_some_and(|r| r < target) {
+                break;
+            }
         }
-        let mid = open.len() / 2;
-        let median = *open.select_nth_unstable_by(mid, f64::total_cmp).1;
-        Some(Give::Each(
-            errors
-                .iter()
-                .map(|&e| if e >= median { block } else { 0 })
-                .collect(),
-        ))
+        None
     }
 
     /// Runs one pass of up to `samples_per_pass` samples (never past the
@@ -259,13 +246,10 @@ impl Progressive {
         if stop.seconds.is_some_and(|t| elapsed >= t) {
             return Some(Ended::Time);
         }
-        let Some(e) = stop.error else { return None };
-        if f.adaptive.is_some() {
-            // Decided from the decision blocks alone, as every adaptive choice.
-            if f.spp >= MIN_SPP && f.predicted_relative_error().is_some_and(|r| r < e) {
-                return Some(Ended::Error);
-            }
-        } else if f.error_is_meaningful() && f.relative_error().is_some_and(|r| r < e) {
+        if stop
+            .error
+            .is_some_and(|e| f.error_is_meaningful() && f.relative_error().is_some_and(|r| r < e))
+        {
             return Some(Ended::Error);
         }
         None
@@ -329,6 +313,37 @@ impl Progressive {
         p.run(tracer, &Stop::spp(spp), &|| false, |_, _| {});
         p.film
     }
+}
+
+/// One block to each pixel under the spp cap whose error predicted from its
+/// decision blocks is above `target` and whose gain from more samples is in
+/// the higher half of those; `None` when no pixel is.
+fn give_blocks(f: &Film, a: &Allocation, target: f64, block: u32, cap: u32) -> Option<Give> {
+    // A pixel's squared error falls by about e² b / n for b more of its n
+    // image samples: giving blocks by e / √n minimises the film's relMSE for
+    // the samples spent (e alone would equalise the pixels' errors, which
+    // leaves the film's no lower than uniform sampling).
+    let gains: Vec<f64> = (0..a.spp.len())
+        .map(|i| match f.predicted_error(i) {
+            _ if a.spp[i].saturating_add(block) > cap => -1.0,
+            // Non-finite samples left nothing to decide on.
+            None => f64::INFINITY,
+            Some(e) if e > target => e / (f.pixels[i].n.max(1) as f64).sqrt(),
+            Some(_) => -1.0,
+        })
+        .collect();
+    let mut open: Vec<f64> = gains.iter().copied().filter(|&g| g >= 0.0).collect();
+    if open.is_empty() {
+        return None;
+    }
+    let mid = open.len() / 2;
+    let median = *open.select_nth_unstable_by(mid, f64::total_cmp).1;
+    Some(Give::Each(
+        gains
+            .iter()
+            .map(|&g| if g >= median { block } else { 0 })
+            .collect(),
+    ))
 }
 
 /// One row of a film, with the adaptive parts when there are any.
