@@ -24,6 +24,7 @@ fn config(w: u32, h: u32, budgets: &[u32], reference: ReferenceSource) -> Config
         seeds: 2,
         seed: 5,
         compare: false,
+        adaptive: false,
         reference,
         target: 0.01,
         verbose: false,

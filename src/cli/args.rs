@@ -259,6 +259,10 @@ pub struct ConvergeArgs {
     /// Only the scene's own settings: no strategy comparison.
     #[arg(long)]
     pub no_compare: bool,
+    /// Measure the scene's settings with adaptive sampling (spp budgets are
+    /// the mean over pixels).
+    #[arg(long)]
+    pub adaptive: bool,
     /// Write every measured point as CSV.
     #[arg(long)]
     pub csv: Option<PathBuf>,

@@ -183,7 +183,7 @@ impl Strategy {
         }
         if uses.area_lights || uses.glossy || uses.supersampling {
             out.push(Strategy {
-                adaptive: true,
+                adaptive: !base.adaptive,
                 ..base
             });
         }
@@ -368,6 +368,8 @@ pub struct Config {
     pub seed: u64,
     /// Compare the strategies of [`Strategy::alternatives`] too.
     pub compare: bool,
+    /// Measure the scene's settings with adaptive sampling.
+    pub adaptive: bool,
     pub reference: ReferenceSource,
     /// The relative error the conclusion is about.
     pub target: f64,
@@ -629,7 +631,10 @@ impl Subject<'_> {
             bail!("at least one seed is needed");
         }
         let uses = Uses::of(self.scene, self.plan);
-        let base = Strategy::of(&self.scene.settings);
+        let base = Strategy {
+            adaptive: cfg.adaptive,
+            ..Strategy::of(&self.scene.settings)
+        };
         let mut notes = Vec::new();
         let bar = if cfg.verbose {
             let b = ProgressBar::new_spinner().with_style(
@@ -766,6 +771,7 @@ mod tests {
                 light_samples: 1,
                 glossy_samples: 1,
                 stratify: true,
+                adaptive: false,
             },
             label: "x".into(),
             points: errs
@@ -800,11 +806,12 @@ mod tests {
     }
 
     #[test]
-    fn alternatives_cover_light_glossy_and_stratification_once() {
+    fn alternatives_cover_light_glossy_stratification_and_adaptive_once() {
         let base = Strategy {
             light_samples: 16,
             glossy_samples: 1,
             stratify: true,
+            adaptive: false,
         };
         let uses = Uses {
             area_lights: true,
@@ -821,7 +828,8 @@ mod tests {
                 "L64 G1 jittered",
                 "L16 G4 jittered",
                 "L16 G16 jittered",
-                "L16 G1 independent"
+                "L16 G1 independent",
+                "L16 G1 jittered adaptive"
             ]
         );
         let none = Uses {
