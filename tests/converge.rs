@@ -14,7 +14,7 @@ use rayterm::report::converge::{
     load_reference, rmse, Budget, Config, ReferenceSource, Study, Subject,
 };
 use rayterm::report::stats::fit_log_log;
-use rayterm::scene::{self, Builder, Camera, Light, Scene};
+use rayterm::scene::{self, Builder, Light, Scene};
 
 fn config(w: u32, h: u32, budgets: &[u32], reference: ReferenceSource) -> Config {
     Config {

@@ -274,6 +274,17 @@ impl Film {
         Some((per_sample / n as f64 / (lum * lum + REL_EPS)).sqrt())
     }
 
+    /// The fraction of an adaptive film's pixels whose predicted error is
+    /// below `target` (`None` on a uniform film).
+    pub fn converged(&self, target: f64) -> Option<f64> {
+        self.adaptive.as_ref()?;
+        let n = self.pixels.len().max(1);
+        let below = (0..self.pixels.len())
+            .filter(|&i| self.predicted_error(i).is_some_and(|e| e < target))
+            .count();
+        Some(below as f64 / n as f64)
+    }
+
     /// Adds sample `sample` (drawn in sub-pixel `stratum` when jittered),
     /// or records it as bad when not finite.
     pub fn add(&mut self, x: u32, y: u32, sample: u32, stratum: Option<u32>, c: Vec3) {

@@ -147,13 +147,9 @@ impl Progressive {
     }
 
     /// What the next pass gives each pixel; `None` when no pixel needs more.
-    fn give(&mut self, plan: &Plan, stop: &Stop) -> Option<Give> {
+    fn give(&self, stop: &Stop) -> Option<Give> {
         let cap = stop.spp.unwrap_or(u32::MAX);
-        let f = &mut self.film;
-        if self.adaptive && !plan.deterministic && f.adaptive.is_none() && f.spp == 0 {
-            let (w, h) = (f.width, f.height);
-            *f = Film::new_adaptive(w, h);
-        }
+        let f = &self.film;
         let Some(a) = &f.adaptive else {
             let left = cap.saturating_sub(f.spp);
             return Some(Give::All(self.samples_per_pass.clamp(1, left.max(1))));
@@ -203,7 +199,11 @@ impl Progressive {
         cancel: &(dyn Fn() -> bool + Sync),
     ) -> Option<(PassStats, R)> {
         let start = Instant::now();
-        let give = self.give(tracer.plan, stop);
+        let f = &mut self.film;
+        if self.adaptive && !tracer.plan.deterministic && f.adaptive.is_none() && f.spp == 0 {
+            *f = Film::new_adaptive(f.width, f.height);
+        }
+        let give = self.give(stop);
         let (samples, pixels) = match &give {
             Some(Give::All(n)) => (*n, self.film.pixels.len() as u64),
             Some(Give::Each(g)) => (
@@ -252,13 +252,16 @@ impl Progressive {
         {
             return Some(Ended::Error);
         }
+        // An adaptive film with no pixel left to sample: all are below the
+        // target error or at the spp cap.
+        if f.adaptive.is_some() && f.spp >= MIN_SPP && self.give(stop).is_none() {
+            return Some(if stop.error.is_some() {
+                Ended::Error
+            } else {
+                Ended::Spp
+            });
+        }
         None
-    }
-
-    /// Whether an adaptive film has no pixel left to sample under `stop`:
-    /// all are below the target error or at the spp cap.
-    fn settled(&mut self, plan: &Plan, stop: &Stop) -> bool {
-        self.film.adaptive.is_some() && self.film.spp >= MIN_SPP && self.give(plan, stop).is_none()
     }
 
     /// Adds passes until `stop` (or `cancel`); `on_pass` sees the film
@@ -281,13 +284,6 @@ impl Progressive {
         let ended = loop {
             if let Some(e) = self.finished(tracer.plan, stop, start.elapsed().as_secs_f64()) {
                 break e;
-            }
-            if self.settled(tracer.plan, stop) {
-                break if stop.error.is_some() {
-                    Ended::Error
-                } else {
-                    Ended::Spp
-                };
             }
             let pass = self.pass(tracer, stop, &stop_rows);
             if cancel() {
