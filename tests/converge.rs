@@ -225,7 +225,8 @@ fn strategies_are_compared_and_reported() {
             "L1 jittered",
             "L4 jittered",
             "L64 jittered",
-            "L16 independent"
+            "L16 independent",
+            "L16 jittered adaptive"
         ]
     );
     let text = st.text();
