@@ -14,7 +14,7 @@ use rayterm::report::converge::{
     load_reference, rmse, Budget, Config, ReferenceSource, Study, Subject,
 };
 use rayterm::report::stats::fit_log_log;
-use rayterm::scene::{self, Builder, Camera, Light, Scene};
+use rayterm::scene::{self, Builder, Light, Scene};
 
 fn config(w: u32, h: u32, budgets: &[u32], reference: ReferenceSource) -> Config {
     Config {
@@ -24,6 +24,7 @@ fn config(w: u32, h: u32, budgets: &[u32], reference: ReferenceSource) -> Config
         seeds: 2,
         seed: 5,
         compare: false,
+        adaptive: false,
         reference,
         target: 0.01,
         verbose: false,
@@ -224,7 +225,8 @@ fn strategies_are_compared_and_reported() {
             "L1 jittered",
             "L4 jittered",
             "L64 jittered",
-            "L16 independent"
+            "L16 independent",
+            "L16 jittered adaptive"
         ]
     );
     let text = st.text();
@@ -359,52 +361,6 @@ fn a_rendered_exr_or_hdr_is_a_reference_for_converge() {
         );
     }
     std::fs::remove_dir_all(&dir).unwrap();
-}
-
-/// A box on a plane under `light`, seen from above at an angle: edges and
-/// soft shadows inside pixels, where jittered sub-pixel samples are far
-/// from independent.
-fn box_under(light: Light) -> Scene {
-    let (pp, pt) = quad_y(-2.0, -2.0, 2.0, 2.0, 0.0);
-    let corner = |i: u32| {
-        Vec3::new(0.05, 0.25, -0.1)
-            + 0.25
-                * Vec3::new(
-                    if i & 1 == 0 { -1.0 } else { 1.0 },
-                    if i & 2 == 0 { -1.0 } else { 1.0 },
-                    if i & 4 == 0 { -1.0 } else { 1.0 },
-                )
-    };
-    let bt = vec![
-        [0, 1, 3],
-        [0, 3, 2],
-        [4, 6, 7],
-        [4, 7, 5],
-        [0, 4, 5],
-        [0, 5, 1],
-        [2, 3, 7],
-        [2, 7, 6],
-        [0, 2, 6],
-        [0, 6, 4],
-        [1, 5, 7],
-        [1, 7, 3],
-    ];
-    let floor = material(Vec3::splat(0.15), Vec3::ZERO, 1.0);
-    let m = material(KD, Vec3::ZERO, 1.0);
-    let mut s = scene(
-        &[(pp, pt, floor), ((0..8).map(corner).collect(), bt, m)],
-        vec![light],
-        Camera {
-            eye: Vec3::new(0.2, 1.6, 1.3),
-            target: Vec3::new(0.0, 0.1, -0.1),
-            up: Vec3::Y,
-            vfov: 40.0,
-        },
-    );
-    s.settings.ambient = Vec3::splat(0.02);
-    s.settings.max_depth = 0;
-    s.settings.light_samples = 16;
-    s
 }
 
 /// The estimate against the truth (a reference of 64x the largest budget)

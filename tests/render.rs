@@ -230,6 +230,61 @@ fn cli_renders_a_png_and_prints_a_summary() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `--target-error --adaptive`: the summary gives the fewest, mean and most
+/// samples per pixel; uniform (the default) gives one count; both reach the
+/// target.
+#[test]
+fn cli_target_error_adaptive_and_uniform() {
+    let dir = std::env::temp_dir().join(format!("rayterm-cli-target-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("a.exr");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            "cornell-area",
+            "-o",
+            out.to_str().unwrap(),
+            "--size",
+            "24x24",
+            "--target-error",
+            "0.02",
+        ];
+        args.extend(extra);
+        let o = rayterm(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).to_string()
+    };
+    let error = |s: &str| -> f64 {
+        let e = s.split("error ").nth(1).unwrap();
+        e[..e.find('%').unwrap()].parse().unwrap()
+    };
+    let adaptive = run(&["--adaptive"]);
+    assert!(
+        adaptive.contains(" spp (min / mean / max, adaptive)") && error(&adaptive) < 2.0,
+        "{adaptive}"
+    );
+    let spp: Vec<f64> = adaptive
+        .split(", render ")
+        .nth(1)
+        .unwrap()
+        .split(", ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    assert!(
+        spp[0] == 32.0 && spp[1] > spp[0] && spp[2] > spp[1],
+        "{adaptive}"
+    );
+    let uniform = run(&[]);
+    assert!(
+        !uniform.contains("adaptive") && error(&uniform) < 2.0,
+        "{uniform}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn cli_errors_name_the_problem() {
     let o = rayterm(&["render", "no-such-scene", "-o", "/tmp/x.png"]);

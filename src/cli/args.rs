@@ -174,6 +174,11 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 4096,
           value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub max_spp: u32,
+    /// With --time or --target-error, after 32 spp give samples to the
+    /// pixels with the highest estimated error (docs/adaptive.md); every
+    /// pixel gets the same samples otherwise.
+    #[arg(long)]
+    pub adaptive: bool,
     /// Worker threads (default: all cores; at most 4x the cores).
     #[arg(long, value_parser = parse_threads)]
     pub threads: Option<u32>,
@@ -255,6 +260,10 @@ pub struct ConvergeArgs {
     /// Only the scene's own settings: no strategy comparison.
     #[arg(long)]
     pub no_compare: bool,
+    /// Measure the scene's settings with adaptive sampling (spp budgets are
+    /// the mean over pixels).
+    #[arg(long)]
+    pub adaptive: bool,
     /// Write every measured point as CSV.
     #[arg(long)]
     pub csv: Option<PathBuf>,

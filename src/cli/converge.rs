@@ -68,6 +68,7 @@ pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
         seeds: a.seeds,
         seed: p.seed,
         compare: !a.no_compare,
+        adaptive: a.adaptive,
         reference,
         target: a.target,
         verbose: true,

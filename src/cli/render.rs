@@ -46,10 +46,11 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     let tracer = s.tracer();
     let bar = progress_bar(&stop, s.plan.deterministic);
     let mut p = Progressive::new(s.width, s.height);
+    p.adaptive = a.adaptive && (stop.seconds.is_some() || stop.error.is_some());
     let start = Instant::now();
     let cancel = || interrupted.load(std::sync::atomic::Ordering::Relaxed);
     let outcome = p.run(&tracer, &stop, &cancel, |film, _| {
-        bar.set_position(film.spp as u64);
+        bar.set_position(film.spp_range().1 as u64);
         if stop.spp.is_none() || stop.error.is_some() {
             bar.set_message(progress(film, &stop, start.elapsed().as_secs_f64()));
         }
@@ -88,19 +89,19 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     let capped = match (outcome.ended, stop.error) {
         (Ended::Spp, Some(e)) if stop.spp.is_some() => format!(
             " (stopped at the --max-spp cap of {} before reaching {}%)",
-            film.spp,
+            film.spp_range().2,
             percent(e)
         ),
         _ => String::new(),
     };
     println!(
-        "{}: {} triangles, build {:.1} ms ({}), render {}, {} spp, {:.2} Mrays/s, {}{}{} -> {}",
+        "{}: {} triangles, build {:.1} ms ({}), render {}, {}, {:.2} Mrays/s, {}{}{} -> {}",
         s.scene.name,
         s.scene.geometry.triangle_count(),
         s.bvh.stats.build_ms,
         s.bvh.stats.builder,
         duration(render_ms),
-        film.spp,
+        spp_text(film),
         outcome.rays as f64 / render_ms.max(1e-9) / 1e3,
         err,
         capped,
@@ -165,6 +166,16 @@ fn percent(e: f64) -> String {
     }
 }
 
+/// `64 spp`, or `32 / 75.4 / 880 spp (min / mean / max, adaptive)`.
+fn spp_text(film: &Film) -> String {
+    match film.spp_range() {
+        (min, mean, max) if film.adaptive.is_some() => {
+            format!("{min} / {mean:.1} / {max} spp (min / mean / max, adaptive)")
+        }
+        (n, ..) => format!("{n} spp"),
+    }
+}
+
 /// The estimated error, or that it is not known yet.
 fn error_text(film: &Film) -> String {
     match film.relative_error() {
@@ -177,7 +188,9 @@ fn error_text(film: &Film) -> String {
 /// the error of a sampled image falls as 1/sqrt(spp), which says how many
 /// samples the target needs.
 fn progress(film: &Film, stop: &Stop, elapsed: f64) -> String {
-    let per_spp = elapsed / film.spp.max(1) as f64;
+    // An adaptive film's mean spp: what its time is spent on.
+    let spp = film.spp_range().1;
+    let per_spp = elapsed / spp.max(1.0);
     let cap = stop.spp.unwrap_or(u32::MAX) as f64;
     let mut left = stop
         .seconds
@@ -185,11 +198,11 @@ fn progress(film: &Film, stop: &Stop, elapsed: f64) -> String {
     let mut text = error_text(film);
     let err = film.relative_error().filter(|&e| e > 0.0);
     if let (Some(target), Some(err)) = (stop.error, err) {
-        let need = (film.spp as f64 * (err / target).powi(2)).min(cap);
-        left = left.min((need - film.spp as f64).max(0.0) * per_spp);
+        let need = (spp * (err / target).powi(2)).min(cap);
+        left = left.min((need - spp).max(0.0) * per_spp);
         text += &format!(" (target {}%, about {need:.0} spp)", percent(target));
     }
-    left = left.min((cap - film.spp as f64).max(0.0) * per_spp);
+    left = left.min((cap - spp).max(0.0) * per_spp);
     if left.is_finite() {
         text += &format!(", eta {}", duration(left * 1e3));
     }

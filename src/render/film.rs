@@ -162,21 +162,53 @@ pub struct BadSample {
     pub sample: u32,
 }
 
+/// Blocks of [`PIXEL_STRATA`] samples of an adaptive film that decide
+/// where samples go: block `j` of a pixel decides when
+/// `j % DECIDE_EVERY == DECIDE_AT`, and every other block makes the image.
+pub const DECIDE_EVERY: u32 = 8;
+const DECIDE_AT: u32 = 1;
+
+/// Where an adaptive film's samples went. Every choice of how many samples
+/// a pixel gets is made from its decision blocks alone, which never enter
+/// its image or its error estimate: given those choices the image blocks
+/// are independent draws, so the image is unbiased and its estimate as
+/// calibrated as a uniform film's (docs/adaptive.md).
+#[derive(Clone, Debug)]
+pub struct Allocation {
+    /// Samples attempted per pixel: the index of each pixel's next sample.
+    pub spp: Vec<u32>,
+    /// Statistics of each pixel's decision blocks.
+    pub decide: Vec<PixelStats>,
+}
+
+impl Allocation {
+    /// Whether sample `k` of a pixel belongs to a decision block.
+    pub fn decides(k: u32) -> bool {
+        (k / PIXEL_STRATA) % DECIDE_EVERY == DECIDE_AT
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Film {
     pub width: u32,
     pub height: u32,
+    /// The image's statistics: all samples of a uniform film, the image
+    /// blocks of an adaptive one.
     pub pixels: Vec<PixelStats>,
-    /// Samples per pixel attempted so far (the next pass starts at this index).
+    /// Samples per pixel attempted so far: the next pass's first index on a
+    /// uniform film, the fewest any pixel has on an adaptive one.
     pub spp: u32,
+    /// Per-pixel counts and decision statistics of an adaptive film.
+    pub adaptive: Option<Allocation>,
     pub bad_count: u64,
     pub bad: Vec<BadSample>,
 }
 
 impl Film {
-    /// Memory a render needs per pixel: the statistics, and the linear,
-    /// bloomed and displayed copies of the image made from them.
-    pub const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelStats>() as u64 + 3 * 12 + 3;
+    /// Memory a render needs per pixel: the statistics (twice, with an
+    /// adaptive film's count), and the linear, bloomed and displayed copies
+    /// of the image made from them.
+    pub const BYTES_PER_PIXEL: u64 = 2 * std::mem::size_of::<PixelStats>() as u64 + 4 + 3 * 12 + 3;
 
     pub fn new(width: u32, height: u32) -> Self {
         Self {
@@ -184,16 +216,82 @@ impl Film {
             height,
             pixels: vec![PixelStats::default(); width as usize * height as usize],
             spp: 0,
+            adaptive: None,
             bad_count: 0,
             bad: Vec::new(),
         }
     }
 
+    /// An empty film whose pixels each keep their own sample count.
+    pub fn new_adaptive(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        Self {
+            adaptive: Some(Allocation {
+                spp: vec![0; n],
+                decide: vec![PixelStats::default(); n],
+            }),
+            ..Self::new(width, height)
+        }
+    }
+
+    /// Samples pixel `i` has had (its next sample index).
+    pub fn pixel_spp(&self, i: usize) -> u32 {
+        self.adaptive.as_ref().map_or(self.spp, |a| a.spp[i])
+    }
+
+    /// The fewest, mean and most samples per pixel.
+    pub fn spp_range(&self) -> (u32, f64, u32) {
+        match &self.adaptive {
+            Some(a) if !a.spp.is_empty() => {
+                let min = a.spp.iter().copied().min().unwrap_or(0);
+                let max = a.spp.iter().copied().max().unwrap_or(0);
+                let sum: u64 = a.spp.iter().map(|&n| n as u64).sum();
+                (min, sum as f64 / a.spp.len() as f64, max)
+            }
+            _ => (self.spp, self.spp as f64, self.spp),
+        }
+    }
+
+    /// Pixel `i`'s relative error predicted from its decision blocks alone
+    /// (`None` on a uniform film, or before the pixel has two finite
+    /// decision samples and an image sample). Only decides where samples go: the variance of
+    /// one sample is the geometric mean of the decision blocks' design-based
+    /// figure (its within-strata part has few degrees of freedom) and their
+    /// sample variance (an upper bound), over the image blocks' count.
+    pub fn predicted_error(&self, i: usize) -> Option<f64> {
+        let d = &self.adaptive.as_ref()?.decide[i];
+        let n = self.pixels[i].n;
+        if d.n < 2 || n == 0 {
+            return None;
+        }
+        let per_sample = (d.mean_variance()? * d.n as f64 * d.variance()).sqrt();
+        let lum = d.mean.dot(LUMA.as_dvec3());
+        Some((per_sample / n as f64 / (lum * lum + REL_EPS)).sqrt())
+    }
+
+    /// The fraction of an adaptive film's pixels whose predicted error is
+    /// below `target` (`None` on a uniform film).
+    pub fn converged(&self, target: f64) -> Option<f64> {
+        self.adaptive.as_ref()?;
+        let n = self.pixels.len().max(1);
+        let below = (0..self.pixels.len())
+            .filter(|&i| self.predicted_error(i).is_some_and(|e| e < target))
+            .count();
+        Some(below as f64 / n as f64)
+    }
+
     /// Adds sample `sample` (drawn in sub-pixel `stratum` when jittered),
     /// or records it as bad when not finite.
     pub fn add(&mut self, x: u32, y: u32, sample: u32, stratum: Option<u32>, c: Vec3) {
+        let i = (y * self.width + x) as usize;
+        if let Some(a) = &mut self.adaptive {
+            a.spp[i] = a.spp[i].max(sample + 1);
+        }
         if c.is_finite() {
-            self.pixels[(y * self.width + x) as usize].add(sample, c, stratum);
+            match &mut self.adaptive {
+                Some(a) if Allocation::decides(sample) => a.decide[i].add(sample, c, stratum),
+                _ => self.pixels[i].add(sample, c, stratum),
+            }
         } else {
             self.record_bad(BadSample { x, y, sample });
         }

@@ -17,6 +17,6 @@ pub use features::{Feature, Features};
 pub use film::{Film, Worst, WorstPixels};
 pub use integrator::Tracer;
 pub use plan::{Decision, Plan, PlanPolicy};
-pub use progressive::{Ended, Outcome, PassStats, Progressive, Stop};
+pub use progressive::{Ended, Outcome, PassStats, Progressive, Stop, MIN_SPP};
 pub use recorder::{RayCounter, Recorder};
 pub use session::{SceneRequest, Session};

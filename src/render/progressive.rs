@@ -1,10 +1,16 @@
-//! The one progressive loop: passes that each add samples to every pixel of
+//! The one progressive loop: passes that each add samples to the pixels of
 //! a [`Film`], until a [`Stop`] says enough. `render`, exports, `converge`,
 //! `inspect`, the debug views, the benchmarks, the stability battery, the
 //! TUI's worker and the tests all drive films through [`Progressive`].
 //!
-//! Results depend only on (pixel, sample index, seed), never on threads:
-//! rows run in parallel, and a pass gives every pixel the same sample indices.
+//! A uniform pass gives every pixel the same sample indices. An adaptive
+//! one ([`Progressive::adaptive`]), once every pixel has [`MIN_SPP`], gives a
+//! block of strata to each pixel whose error, predicted from its decision
+//! blocks ([`Film::predicted_error`]), is above the target and whose gain
+//! from more samples is in the higher half of those still above it; each
+//! pixel's next sample index is its own count. Either way results depend only on (pixel, sample index,
+//! seed), never on threads: rows run in parallel, and what a pass gives a
+//! pixel is decided before it starts.
 
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;
@@ -13,7 +19,12 @@ use std::time::Instant;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::film::{BadSample, Film};
+use super::film::{Allocation, BadSample, Film, PixelStats};
+use crate::geometry::sampling::PIXEL_STRATA;
+
+/// Samples every pixel of an adaptive film gets before any decision: one
+/// image block and one decision block of strata.
+pub const MIN_SPP: u32 = 2 * PIXEL_STRATA;
 use super::recorder::{RayCounter, Recorder, WorkCounter};
 use super::{Plan, Tracer};
 
@@ -61,8 +72,10 @@ pub enum Ended {
 /// One finished pass.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PassStats {
-    /// Samples each pixel received.
+    /// Samples each pixel given any received.
     pub samples: u32,
+    /// Pixels that received samples.
+    pub pixels: u64,
     pub rays: u64,
     pub ms: f64,
 }
@@ -94,6 +107,18 @@ pub struct Progressive {
     pub samples_per_pass: u32,
     /// Counts the rows each pass finishes, for a progress readout.
     pub rows_done: Option<Arc<AtomicU32>>,
+    /// Whether passes after [`MIN_SPP`] go to the pixels with the highest
+    /// predicted error (set before the first pass; a scene where nothing is
+    /// sampled stays uniform).
+    pub adaptive: bool,
+}
+
+/// What a pass gives the pixels.
+enum Give {
+    /// `n` samples to every pixel, from the film's `spp`.
+    All(u32),
+    /// Samples to each pixel, from its own count.
+    Each(Vec<u32>),
 }
 
 impl Progressive {
@@ -109,7 +134,48 @@ impl Progressive {
             seconds: 0.0,
             samples_per_pass: 1,
             rows_done: None,
+            adaptive: false,
         }
+    }
+
+    /// An empty film whose passes are adaptive after [`MIN_SPP`].
+    pub fn new_adaptive(width: u32, height: u32) -> Self {
+        Self {
+            adaptive: true,
+            ..Self::new(width, height)
+        }
+    }
+
+    /// What the next pass gives each pixel; `None` when no pixel needs more.
+    fn give(&self, stop: &Stop) -> Option<Give> {
+        let cap = stop.spp.unwrap_or(u32::MAX);
+        let f = &self.film;
+        let Some(a) = &f.adaptive else {
+            let left = cap.saturating_sub(f.spp);
+            return Some(Give::All(self.samples_per_pass.clamp(1, left.max(1))));
+        };
+        if f.spp < MIN_SPP.min(cap) {
+            let upto = MIN_SPP
+                .min(cap)
+                .min(f.spp.saturating_add(self.samples_per_pass.max(1)));
+            return Some(Give::Each(
+                a.spp.iter().map(|&n| upto.saturating_sub(n)).collect(),
+            ));
+        }
+        let block = PIXEL_STRATA.min(cap);
+        // Pixels predicted below the target rest, unless the film as a whole
+        // is not there yet (the one use of the image's own estimate, as a
+        // uniform render's stop: see docs/adaptive.md).
+        let targets = [stop.error.unwrap_or(0.0), 0.0];
+        for target in targets {
+            if let Some(g) = give_blocks(f, a, target, block, cap) {
+                return Some(g);
+            }
+            if stop.error.is_none() || f.relative_error().is_some_and(|r| r < target) {
+                break;
+            }
+        }
+        None
     }
 
     /// Runs one pass of up to `samples_per_pass` samples (never past the
@@ -132,21 +198,39 @@ impl Progressive {
         stop: &Stop,
         cancel: &(dyn Fn() -> bool + Sync),
     ) -> Option<(PassStats, R)> {
-        let left = stop
-            .spp
-            .map_or(u32::MAX, |n| n.saturating_sub(self.film.spp));
-        let samples = self.samples_per_pass.clamp(1, left.max(1));
         let start = Instant::now();
+        let f = &mut self.film;
+        if self.adaptive && !tracer.plan.deterministic && f.adaptive.is_none() && f.spp == 0 {
+            *f = Film::new_adaptive(f.width, f.height);
+        }
+        let give = self.give(stop);
+        let (samples, pixels) = match &give {
+            Some(Give::All(n)) => (*n, self.film.pixels.len() as u64),
+            Some(Give::Each(g)) => (
+                g.iter().copied().max().unwrap_or(0),
+                g.iter().filter(|&&n| n > 0).count() as u64,
+            ),
+            None => (0, 0),
+        };
         if let Some(r) = &self.rows_done {
             r.store(0, Ordering::Relaxed);
         }
         let rows = self.rows_done.as_deref();
-        let rec: R = sample_rows(tracer, &mut self.film, samples, cancel, rows);
+        let rec: R = match &give {
+            Some(g) => sample_rows(tracer, &mut self.film, g, cancel, rows),
+            None => R::default(),
+        };
         let ms = start.elapsed().as_secs_f64() * 1e3;
         let rays = rec.rays();
         self.rays += rays;
         self.seconds += ms / 1e3;
-        (!cancel()).then_some((PassStats { samples, rays, ms }, rec))
+        let stats = PassStats {
+            samples,
+            pixels,
+            rays,
+            ms,
+        };
+        (!cancel()).then_some((stats, rec))
     }
 
     /// Which limit of `stop` the film has reached, if any; `elapsed` is the
@@ -167,6 +251,15 @@ impl Progressive {
             .is_some_and(|e| f.error_is_meaningful() && f.relative_error().is_some_and(|r| r < e))
         {
             return Some(Ended::Error);
+        }
+        // An adaptive film with no pixel left to sample: all are below the
+        // target error or at the spp cap.
+        if f.adaptive.is_some() && f.spp >= MIN_SPP && self.give(stop).is_none() {
+            return Some(if stop.error.is_some() {
+                Ended::Error
+            } else {
+                Ended::Spp
+            });
         }
         None
     }
@@ -221,39 +314,115 @@ impl Progressive {
     }
 }
 
-/// Adds `samples` samples to every pixel of `film`, rows in parallel;
+/// One block to each pixel under the spp cap whose error predicted from its
+/// decision blocks is above `target` and whose gain from more samples is in
+/// the higher half of those; `None` when no pixel is.
+fn give_blocks(f: &Film, a: &Allocation, target: f64, block: u32, cap: u32) -> Option<Give> {
+    // A pixel's squared error falls by about e² b / n for b more of its n
+    // image samples: giving blocks by e / √n minimises the film's relMSE for
+    // the samples spent (e alone would equalise the pixels' errors, which
+    // leaves the film's no lower than uniform sampling).
+    let gains: Vec<f64> = (0..a.spp.len())
+        .map(|i| match f.predicted_error(i) {
+            _ if a.spp[i].saturating_add(block) > cap => -1.0,
+            // Non-finite samples left nothing to decide on.
+            None => f64::INFINITY,
+            Some(e) if e > target => e / (f.pixels[i].n.max(1) as f64).sqrt(),
+            Some(_) => -1.0,
+        })
+        .collect();
+    let mut open: Vec<f64> = gains.iter().copied().filter(|&g| g >= 0.0).collect();
+    if open.is_empty() {
+        return None;
+    }
+    let mid = open.len() / 2;
+    let median = *open.select_nth_unstable_by(mid, f64::total_cmp).1;
+    Some(Give::Each(
+        gains
+            .iter()
+            .map(|&g| if g >= median { block } else { 0 })
+            .collect(),
+    ))
+}
+
+/// One row of a film, with the adaptive parts when there are any.
+struct Row<'a> {
+    y: usize,
+    pixels: &'a mut [PixelStats],
+    decide: Option<&'a mut [PixelStats]>,
+    spp: Option<&'a mut [u32]>,
+}
+
+/// Adds what `give` says to the pixels of `film`, rows in parallel;
 /// `cancel` is polled between rows and `rows_done` counts finished rows.
 fn sample_rows<R: Recorder + Default + Send + Merge>(
     tracer: &Tracer,
     film: &mut Film,
-    samples: u32,
+    give: &Give,
     cancel: &(dyn Fn() -> bool + Sync),
     rows_done: Option<&AtomicU32>,
 ) -> R {
-    let w = film.width as usize;
+    let w = (film.width as usize).max(1);
     let first = film.spp;
-    let results: Vec<(R, Vec<BadSample>, bool)> = film
-        .pixels
-        .par_chunks_mut(w.max(1))
-        .enumerate()
-        .map(|(y, row)| {
+    let rows: Vec<Row> = match &mut film.adaptive {
+        None => film
+            .pixels
+            .chunks_mut(w)
+            .enumerate()
+            .map(|(y, pixels)| Row {
+                y,
+                pixels,
+                decide: None,
+                spp: None,
+            })
+            .collect(),
+        Some(a) => film
+            .pixels
+            .chunks_mut(w)
+            .zip(a.decide.chunks_mut(w))
+            .zip(a.spp.chunks_mut(w))
+            .enumerate()
+            .map(|(y, ((pixels, decide), spp))| Row {
+                y,
+                pixels,
+                decide: Some(decide),
+                spp: Some(spp),
+            })
+            .collect(),
+    };
+    let results: Vec<(R, Vec<BadSample>, bool)> = rows
+        .into_par_iter()
+        .map(|mut row| {
             let mut rec = R::default();
             let mut bad = Vec::new();
             if cancel() {
                 return (rec, bad, false);
             }
-            for (x, px) in row.iter_mut().enumerate() {
-                for k in first..first + samples {
-                    let c: Vec3 = tracer.sample(x as u32, y as u32, k, &mut rec);
-                    if c.is_finite() {
-                        px.add(k, c, tracer.stratum(x as u32, y as u32, k));
-                    } else {
+            let y = row.y as u32;
+            for x in 0..row.pixels.len() {
+                let (k0, n) = match give {
+                    Give::All(n) => (first, *n),
+                    Give::Each(g) => (row.spp.as_ref().map_or(first, |s| s[x]), g[row.y * w + x]),
+                };
+                let xu = x as u32;
+                for k in k0..k0 + n {
+                    let c: Vec3 = tracer.sample(xu, y, k, &mut rec);
+                    if !c.is_finite() {
                         bad.push(BadSample {
-                            x: x as u32,
-                            y: y as u32,
+                            x: xu,
+                            y,
                             sample: k,
                         });
+                        continue;
                     }
+                    let stratum = tracer.stratum(xu, y, k);
+                    match &mut row.decide {
+                        Some(d) if Allocation::decides(k) => d[x].add(k, c, stratum),
+                        _ => row.pixels[x].add(k, c, stratum),
+                    }
+                }
+                if let Some(s) = &mut row.spp {
+                    s[x] = k0 + n;
                 }
             }
             if let Some(r) = rows_done {
@@ -262,9 +431,11 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             (rec, bad, true)
         })
         .collect();
-    // A pass cut between rows leaves `spp` at what every pixel has.
-    if results.iter().all(|r| r.2) {
-        film.spp += samples;
+    match (&film.adaptive, give) {
+        (Some(a), _) => film.spp = a.spp.iter().copied().min().unwrap_or(0),
+        // A pass cut between rows leaves `spp` at what every pixel has.
+        (None, Give::All(n)) if results.iter().all(|r| r.2) => film.spp += n,
+        _ => {}
     }
     let mut total = R::default();
     for (rec, bad, _) in results {

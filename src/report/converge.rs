@@ -69,6 +69,8 @@ pub struct Strategy {
     pub light_samples: u32,
     pub glossy_samples: u32,
     pub stratify: bool,
+    /// Passes after the minimum go to the pixels with the highest error.
+    pub adaptive: bool,
 }
 
 /// Which sampled effects the plan runs, so labels name only those.
@@ -95,6 +97,7 @@ impl Strategy {
             light_samples: s.light_samples,
             glossy_samples: s.glossy_samples,
             stratify: s.stratify,
+            adaptive: false,
         }
     }
 
@@ -128,6 +131,9 @@ impl Strategy {
         if parts.is_empty() {
             return "nothing sampled".into();
         }
+        if self.adaptive {
+            parts.push("adaptive".into());
+        }
         parts.join(" ")
     }
 
@@ -143,11 +149,15 @@ impl Strategy {
         if !self.stratify {
             o.push("--independent".to_string());
         }
+        if self.adaptive {
+            o.push("adaptive: render --time or --target-error".to_string());
+        }
         o.join(" ")
     }
 
     /// The strategies worth comparing with `base` on a scene that uses `uses`:
-    /// light samples per hit, glossy samples per hit, independent sampling.
+    /// light samples per hit, glossy samples per hit, independent sampling,
+    /// adaptive sampling.
     pub fn alternatives(base: Strategy, uses: Uses) -> Vec<Strategy> {
         let mut out = Vec::new();
         if uses.area_lights {
@@ -165,6 +175,12 @@ impl Strategy {
         if uses.area_lights || uses.supersampling {
             out.push(Strategy {
                 stratify: !base.stratify,
+                ..base
+            });
+        }
+        if uses.area_lights || uses.glossy || uses.supersampling {
+            out.push(Strategy {
+                adaptive: !base.adaptive,
                 ..base
             });
         }
@@ -349,6 +365,8 @@ pub struct Config {
     pub seed: u64,
     /// Compare the strategies of [`Strategy::alternatives`] too.
     pub compare: bool,
+    /// Measure the scene's settings with adaptive sampling.
+    pub adaptive: bool,
     pub reference: ReferenceSource,
     /// The relative error the conclusion is about.
     pub target: f64,
@@ -390,19 +408,34 @@ struct Run {
     rays: u64,
 }
 
-/// Renders one independent run: passes of one sample until the budget is met.
-fn run_once(tracer: &Tracer, budget: Budget, passes: &mut u64) -> Run {
-    let stop = match budget {
-        Budget::Spp(n) => Stop::spp(n),
-        Budget::Seconds(t) => Stop::seconds(t),
-    };
+/// Renders one independent run: passes of one sample (adaptive: of a block
+/// to the noisiest pixels after the minimum) until the budget is met; an
+/// adaptive spp budget is the mean over pixels, with no cap on any one.
+fn run_once(tracer: &Tracer, budget: Budget, adaptive: bool, passes: &mut u64) -> Run {
     let mut p = Progressive::new(tracer.width, tracer.height);
-    let o = p.run(tracer, &stop, &|| false, |_, _| {});
-    *passes += o.passes as u64;
+    p.adaptive = adaptive;
+    match budget {
+        Budget::Spp(n) if adaptive && !tracer.plan.deterministic => {
+            while p.film.spp_range().1 < n as f64 {
+                *passes += 1;
+                let pass = p.pass(tracer, &Stop::default(), &|| false);
+                if pass.is_none_or(|s| s.pixels == 0) {
+                    break;
+                }
+            }
+        }
+        _ => {
+            let stop = match budget {
+                Budget::Spp(n) => Stop::spp(n),
+                Budget::Seconds(t) => Stop::seconds(t),
+            };
+            *passes += p.run(tracer, &stop, &|| false, |_, _| {}).passes as u64;
+        }
+    }
     Run {
+        seconds: p.seconds,
+        rays: p.rays,
         film: p.film,
-        seconds: o.seconds,
-        rays: o.rays,
     }
 }
 
@@ -437,9 +470,9 @@ impl Subject<'_> {
             let seed = cfg.seed.wrapping_add(i as u64);
             let frame = scene.camera.frame(cfg.width, cfg.height);
             let tracer = Tracer::new(&scene, self.bvh, self.plan, frame, seed);
-            let r = run_once(&tracer, budget, passes);
+            let r = run_once(&tracer, budget, strategy.adaptive, passes);
             let img = r.film.image();
-            spp += r.film.spp as f64 / n;
+            spp += r.film.spp_range().1 / n;
             times.push(r.seconds);
             rays += r.rays as f64 / n;
             mse += rmse(&img, reference).powi(2) / n;
@@ -595,7 +628,10 @@ impl Subject<'_> {
             bail!("at least one seed is needed");
         }
         let uses = Uses::of(self.scene, self.plan);
-        let base = Strategy::of(&self.scene.settings);
+        let base = Strategy {
+            adaptive: cfg.adaptive,
+            ..Strategy::of(&self.scene.settings)
+        };
         let mut notes = Vec::new();
         let bar = if cfg.verbose {
             let b = ProgressBar::new_spinner().with_style(
@@ -628,7 +664,7 @@ impl Subject<'_> {
             // One pass is the answer: it is its own reference unless one is given.
             let frame = self.scene.camera.frame(cfg.width, cfg.height);
             let tracer = Tracer::new(self.scene, self.bvh, self.plan, frame, cfg.seed);
-            let r = run_once(&tracer, Budget::Spp(1), &mut passes);
+            let r = run_once(&tracer, Budget::Spp(1), false, &mut passes);
             let img = r.film.image();
             let (reference, info) = match cfg.reference {
                 ReferenceSource::Render { .. } => (
@@ -732,6 +768,7 @@ mod tests {
                 light_samples: 1,
                 glossy_samples: 1,
                 stratify: true,
+                adaptive: false,
             },
             label: "x".into(),
             points: errs
@@ -766,11 +803,12 @@ mod tests {
     }
 
     #[test]
-    fn alternatives_cover_light_glossy_and_stratification_once() {
+    fn alternatives_cover_light_glossy_stratification_and_adaptive_once() {
         let base = Strategy {
             light_samples: 16,
             glossy_samples: 1,
             stratify: true,
+            adaptive: false,
         };
         let uses = Uses {
             area_lights: true,
@@ -787,7 +825,8 @@ mod tests {
                 "L64 G1 jittered",
                 "L16 G4 jittered",
                 "L16 G16 jittered",
-                "L16 G1 independent"
+                "L16 G1 independent",
+                "L16 G1 jittered adaptive"
             ]
         );
         let none = Uses {

@@ -31,6 +31,9 @@ const COARSE_ABOVE_MS: f64 = 20.0;
 const COARSE: u32 = 4;
 /// Accumulation stops here; the image no longer visibly changes.
 pub const MAX_SPP: u32 = 1024;
+/// A pixel counts as converged in the Render panel below this predicted
+/// relative error (the default target of `rayterm converge`).
+pub const CONVERGED_BELOW: f64 = 0.01;
 
 /// What to render: a camera, the plan of what runs, and the size.
 #[derive(Clone, Debug, PartialEq)]
@@ -162,6 +165,10 @@ pub struct Snapshot {
     /// A quarter-resolution preview, not yet a sample of the film.
     pub coarse: bool,
     pub spp: u32,
+    /// Mean samples per pixel (adaptive films differ per pixel).
+    pub spp_mean: f64,
+    /// Fraction of pixels predicted below [`CONVERGED_BELOW`] (adaptive).
+    pub converged: Option<f64>,
     pub pass_ms: f64,
     pub mrays: f64,
     /// The film's estimated relative error ([`Film::relative_error`]),
@@ -290,6 +297,8 @@ impl Worker {
 
     fn restart(&mut self) {
         let (w, h) = self.view.as_ref().map_or((0, 0), View::size);
+        // Uniform passes: adaptive ones do not yet reach an error sooner
+        // (docs/adaptive.md), and spend half the first 32 spp on decisions.
         self.film = Progressive::new(w, h);
         self.film.rows_done = Some(self.progress.rows_done.clone());
         // A pass is slow when the last one was, or when it is the first
@@ -455,6 +464,8 @@ impl Worker {
             pre_bloom: shown.before_bloom,
             coarse: false,
             spp: film.spp,
+            spp_mean: film.spp_range().1,
+            converged: film.converged(CONVERGED_BELOW),
             pass_ms: self.last_full_ms.map_or(0.0, |l| l.0),
             mrays: self.last_mrays,
             error: film.relative_error(),
@@ -503,6 +514,8 @@ impl Worker {
             pre_bloom: shown.before_bloom,
             coarse: true,
             spp: 0,
+            spp_mean: 0.0,
+            converged: None,
             pass_ms: pass.ms,
             mrays: pass.mrays_per_s(),
             error: None,

@@ -12,7 +12,7 @@ use crate::render::plan::not_needed;
 use crate::render::{Decision, Feature};
 use crate::tui::app::App;
 use crate::tui::keys::{self, Action};
-use crate::tui::worker::{Snapshot, Truth};
+use crate::tui::worker::{Snapshot, Truth, CONVERGED_BELOW};
 use crate::words::{self, si};
 
 fn panel(title: String) -> Block<'static> {
@@ -148,12 +148,17 @@ pub fn render(f: &mut Frame, area: Rect, app: &App) {
                 Some(e) => format!("error {:.2}% (estimated)", e * 100.0),
             };
             let done = if s.done && !s.exact { " (done)" } else { "" };
+            let spp = match s.converged {
+                Some(c) => format!(
+                    "{:.1} spp mean, {:.0}% below {}%",
+                    s.spp_mean,
+                    c * 100.0,
+                    CONVERGED_BELOW * 100.0
+                ),
+                None => format!("{} spp", s.spp),
+            };
             let mut v = vec![
-                Line::from(format!(
-                    "{} spp{done} · {}/pass",
-                    s.spp,
-                    words::ms(s.pass_ms)
-                )),
+                Line::from(format!("{spp}{done} · {}/pass", words::ms(s.pass_ms))),
                 Line::from(format!(
                     "{} · {:.1} s",
                     words::rays_per_s(s.mrays * 1e6),
