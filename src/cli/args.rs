@@ -273,7 +273,8 @@ pub struct ConvergeArgs {
 pub struct TuiArgs {
     #[command(flatten)]
     pub scene: SceneOpts,
-    /// Colours (default: truecolor when COLORTERM says so, else 256).
+    /// Colours (default: truecolor when COLORTERM or the terminfo entry of
+    /// TERM says so, else 256 with dithering).
     #[arg(long, value_enum)]
     pub color: Option<ColorMode>,
     /// A converged image of the scene (Radiance .hdr, e.g. from `rayterm

@@ -5,32 +5,34 @@
 //! render `worker` on its own thread), `inspector` (the ray-tree pane),
 //! `jobs` (PNG `export`, the stability battery) and `popup`; `keys` is the
 //! one key table, `layout` places everything before each draw, `widgets`
-//! draw (and only draw), `color` turns pixels into half-block cells and
-//! `bench` measures the pass time and terminal bandwidth.
+//! draw (and only draw), `graphics` turns the viewport's pixels into cells
+//! in the colours of `color`, `term` writes to the terminal, and `bench`
+//! measures the pass time and terminal bandwidth.
 
 pub mod app;
 pub mod bench;
 pub mod camera;
 pub mod color;
 pub mod export;
+pub mod graphics;
 pub mod inspector;
 pub mod jobs;
 pub mod keys;
 pub mod layout;
 pub mod link;
 pub mod popup;
+pub mod term;
 pub mod widgets;
 pub mod worker;
 
-use std::io::{self, BufWriter, IsTerminal, Stdout, Write};
+use std::io::{self, IsTerminal, Stdout, Write};
 use std::path::Path;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, Once};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Once;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
-use ratatui::backend::CrosstermBackend;
 use ratatui::crossterm::event::{self, DisableMouseCapture, EnableMouseCapture};
 use ratatui::crossterm::terminal::{
     disable_raw_mode, enable_raw_mode, EnterAlternateScreen, LeaveAlternateScreen,
@@ -42,6 +44,7 @@ use ratatui::Terminal;
 use crate::render::{SceneRequest, Session};
 use app::App;
 use color::ColorMode;
+use term::screen::Screen;
 
 /// At most this many frames per second are drawn.
 const FRAME: Duration = Duration::from_millis(33);
@@ -66,22 +69,24 @@ pub fn run(
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    let color =
-        color.unwrap_or_else(|| ColorMode::detect(std::env::var("COLORTERM").ok().as_deref()));
-    let mut app = App::new(session, warnings, color, reference)?;
+    let (detected, hint) = term::detect_colour(|v| std::env::var(v).ok());
+    let mut app = App::new(session, warnings, color.unwrap_or(detected), reference)?;
     app.export_size = req.size;
+    if let (None, Some(hint)) = (color, hint) {
+        let said = match app.status.as_str() {
+            "" => hint.to_string(),
+            s => format!("{s} · {hint}"),
+        };
+        app.say(said);
+    }
     // SIGTERM, SIGHUP and an outside SIGINT quit like `q`: the loop sees the
     // flag and the guard below restores the terminal.
     crate::interrupt::flag();
-    let bytes = Arc::new(AtomicU64::new(0));
     let guard = TerminalGuard::enter()?;
-    let writer = CountingWriter {
-        inner: BufWriter::with_capacity(1 << 16, io::stdout()),
-        count: bytes.clone(),
-    };
-    let result = Terminal::new(CrosstermBackend::new(writer))
+    let result = Screen::new(io::stdout(), None)
+        .and_then(Terminal::new)
         .context("cannot set up the terminal")
-        .and_then(|mut t| event_loop(&mut t, &mut app, &bytes));
+        .and_then(|mut t| event_loop(&mut t, &mut app));
     drop(guard);
     if app.jobs.cancel_export() {
         eprintln!("rayterm: an unfinished PNG export was cancelled");
@@ -94,18 +99,15 @@ pub fn run(
     })
 }
 
-fn event_loop<W: Write>(
-    terminal: &mut Terminal<CrosstermBackend<W>>,
-    app: &mut App,
-    bytes: &AtomicU64,
-) -> Result<()> {
+fn event_loop<W: Write>(terminal: &mut Terminal<Screen<W>>, app: &mut App) -> Result<()> {
     let mut dirty = true;
     let mut last_draw = Instant::now() - FRAME;
     loop {
         dirty |= app.poll()?;
-        dirty |= app.note_bytes(bytes.load(Ordering::Relaxed));
+        dirty |= app.note_bytes(terminal.backend().written());
         if dirty && last_draw.elapsed() >= FRAME {
             draw(terminal, app)?;
+            terminal.backend_mut().pump(usize::MAX)?;
             last_draw = Instant::now();
             dirty = false;
         }
@@ -143,24 +145,6 @@ where
     app.update(Rect::new(0, 0, size.width, size.height));
     terminal.draw(|f| widgets::draw(f, app))?;
     Ok(())
-}
-
-/// Counts the bytes written to the terminal, for the bandwidth readout.
-pub struct CountingWriter<W> {
-    pub inner: W,
-    pub count: Arc<AtomicU64>,
-}
-
-impl<W: Write> Write for CountingWriter<W> {
-    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
-        let n = self.inner.write(buf)?;
-        self.count.fetch_add(n as u64, Ordering::Relaxed);
-        Ok(n)
-    }
-
-    fn flush(&mut self) -> io::Result<()> {
-        self.inner.flush()
-    }
 }
 
 /// Whether the terminal is in the TUI's state (raw mode, alternate screen).

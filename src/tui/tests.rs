@@ -8,7 +8,8 @@ use ratatui::style::Color;
 use ratatui::Terminal;
 
 use super::app::App;
-use super::color::ColorMode;
+use super::color::{self, ColorMode};
+use super::graphics::symbols::{self, Symbols};
 use super::keys::Key;
 use crate::render::{post, Feature, Features, PlanPolicy, Progressive, SceneRequest, Session};
 
@@ -75,12 +76,25 @@ fn a_frame_shows_every_panel() {
     }
     assert!(s.contains("spp") && s.contains("rays/s"), "{s}");
     assert!(s.contains("wide nodes"), "{s}");
-    // The viewport is half blocks with two colours each.
+    // The viewport is half blocks: each cell shows its two pixels.
     let b = t.backend().buffer();
     let v = app.layout.image;
-    let cell = &b[(v.x + v.width / 2, v.y + v.height / 2)];
-    assert_eq!(cell.symbol(), "▀");
-    assert!(matches!(cell.fg, Color::Rgb(..)) && matches!(cell.bg, Color::Rgb(..)));
+    let frame = app.link.current_frame().unwrap();
+    for (cx, cy) in [
+        (v.width / 2, v.height / 2),
+        (1, 1),
+        (v.width - 1, v.height - 1),
+    ] {
+        let cell = &b[(v.x + cx, v.y + cy)];
+        assert!(["▀", "▄", " "].contains(&cell.symbol()), "{cell:?}");
+        let shown = symbols::shown_cell(Symbols::Half, cell.symbol(), cell.fg, cell.bg).unwrap();
+        let px = |y: u32| color::srgb(frame.image[(y * frame.width + cx as u32) as usize]);
+        assert_eq!(
+            shown,
+            vec![px(2 * cy as u32), px(2 * cy as u32 + 1)],
+            "{cell:?}"
+        );
+    }
     assert_eq!(app.view_size, (v.width as u32, 2 * v.height as u32));
 }
 
@@ -386,4 +400,45 @@ fn the_pixel_before_and_after_bloom_is_the_films_as_inspect_gives_it() {
         (want.pixel_before_bloom, want.pixel_after_bloom)
     );
     assert_eq!(tree.color, want.color);
+}
+
+#[test]
+fn sixteen_colours_are_written_as_ansi_codes() {
+    use super::term::screen::Screen;
+    use ratatui::layout::Size;
+    let req = SceneRequest {
+        size: Some((24, 16)),
+        ..SceneRequest::new("cornell")
+    };
+    let (session, warnings) = Session::open(&req).unwrap();
+    let mut app = App::new(session, warnings, ColorMode::Ansi16, None).unwrap();
+    let mut t = Terminal::new(Screen::new(Vec::new(), Some(Size::new(100, 30))).unwrap()).unwrap();
+    app.update(ratatui::layout::Rect::new(0, 0, 100, 30));
+    assert!(app.wait_frame(WAIT).unwrap());
+    super::draw(&mut t, &mut app).unwrap();
+    t.backend_mut().pump(usize::MAX).unwrap();
+    let out = String::from_utf8_lossy(t.backend_mut().writer()).into_owned();
+    for extended in ["38;5;", "48;5;", "38;2;", "48;2;"] {
+        assert!(!out.contains(extended), "{extended} in 16 colours");
+    }
+    // The viewport's colours: foregrounds 30-37/90-97, backgrounds
+    // 40-47/100-107, in the SGR sequences written.
+    let codes: Vec<u32> = out
+        .split("\x1b[")
+        .filter_map(|s| s.split_once('m'))
+        .filter(|(p, _)| p.bytes().all(|b| b.is_ascii_digit() || b == b';'))
+        .flat_map(|(p, _)| {
+            p.split(';')
+                .filter_map(|n| n.parse().ok())
+                .collect::<Vec<u32>>()
+        })
+        .collect();
+    let has = |r: std::ops::RangeInclusive<u32>| codes.iter().any(|c| r.contains(c));
+    assert!(has(30..=37) && has(40..=47) && has(90..=97), "{codes:?}");
+    assert!(
+        codes
+            .iter()
+            .all(|&c| c <= 9 || (30..=49).contains(&c) || (90..=107).contains(&c)),
+        "{codes:?}"
+    );
 }

@@ -11,6 +11,7 @@ use super::rays;
 use crate::raster::canvas::Canvas;
 use crate::tui::app::App;
 use crate::tui::color::{self, ColorMode};
+use crate::tui::graphics::symbols::{self, Symbols};
 use crate::tui::worker::Snapshot;
 
 /// Colour of the marks around the selected pixel.
@@ -67,13 +68,13 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App) {
     if let (true, Some(s)) = (current, app.inspector.selected) {
         mark(&mut px, w, h, s.x, s.y);
     }
-    color::paint(f.buffer_mut(), inner, &px, w, h, app.color);
+    symbols::paint(f.buffer_mut(), inner, &px, (w, h), Symbols::Half, app.color);
 }
 
 /// Paints a snapshot as the viewport does, without overlays (for the benchmark).
 pub fn paint_view(buf: &mut Buffer, area: Rect, s: &Snapshot, mode: ColorMode) {
     let px: Vec<[u8; 3]> = s.image.iter().map(|c| color::srgb(*c)).collect();
-    color::paint(buf, area, &px, s.width, s.height, mode);
+    symbols::paint(buf, area, &px, (s.width, s.height), Symbols::Half, mode);
 }
 
 /// Four short arms around pixel (x, y), leaving the pixel itself visible.
