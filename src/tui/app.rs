@@ -14,6 +14,7 @@ use ratatui::layout::Rect;
 use super::camera::CameraControl;
 use super::color::ColorMode;
 use super::export;
+use super::graphics::symbols::Symbols;
 use super::inspector::Inspector;
 use super::jobs::Jobs;
 use super::keys::{self, Action, Key, Mode};
@@ -102,6 +103,8 @@ pub struct App {
     pub builder: Builder,
     pub camera: CameraControl,
     pub color: ColorMode,
+    /// The block symbols the viewport is drawn with.
+    pub symbols: Symbols,
     pub link: RenderLink,
     /// The viewport's size in pixels, from the layout.
     pub view_size: (u32, u32),
@@ -186,6 +189,7 @@ impl App {
             plan,
             camera: CameraControl::new(home),
             color,
+            symbols: Symbols::Half,
             link: RenderLink::new(worker),
             view_size: (0, 0),
             inspector: Inspector::default(),

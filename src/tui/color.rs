@@ -392,7 +392,7 @@ mod tests {
                 let c = &buf[(cx, cy)];
                 let px = symbols::shown_cell(Symbols::Half, c.symbol(), c.fg, c.bg).unwrap();
                 for (j, p) in px.iter().enumerate() {
-                    dithered[(2 * cy as usize + j) * w as usize + cx as usize] = *p;
+                    dithered[(2 * cy as usize + j) * w as usize + cx as usize] = p.map(|v| v as u8);
                 }
             }
         }

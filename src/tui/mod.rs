@@ -44,6 +44,7 @@ use ratatui::Terminal;
 use crate::render::{SceneRequest, Session};
 use app::App;
 use color::ColorMode;
+use graphics::symbols::Symbols;
 use term::screen::Screen;
 
 /// At most this many frames per second are drawn.
@@ -56,6 +57,7 @@ const POLL_IDLE: Duration = Duration::from_millis(250);
 pub fn run(
     req: &SceneRequest,
     color: Option<ColorMode>,
+    symbols: Symbols,
     reference: Option<&Path>,
 ) -> Result<ExitCode> {
     if !io::stdout().is_terminal() {
@@ -72,6 +74,7 @@ pub fn run(
     let (detected, hint) = term::detect_colour(|v| std::env::var(v).ok());
     let mut app = App::new(session, warnings, color.unwrap_or(detected), reference)?;
     app.export_size = req.size;
+    app.symbols = symbols;
     if let (None, Some(hint)) = (color, hint) {
         let said = match app.status.as_str() {
             "" => hint.to_string(),

@@ -88,7 +88,9 @@ fn a_frame_shows_every_panel() {
         let cell = &b[(v.x + cx, v.y + cy)];
         assert!(["▀", "▄", " "].contains(&cell.symbol()), "{cell:?}");
         let shown = symbols::shown_cell(Symbols::Half, cell.symbol(), cell.fg, cell.bg).unwrap();
-        let px = |y: u32| color::srgb(frame.image[(y * frame.width + cx as u32) as usize]);
+        let px = |y: u32| {
+            color::srgb(frame.image[(y * frame.width + cx as u32) as usize]).map(f32::from)
+        };
         assert_eq!(
             shown,
             vec![px(2 * cy as u32), px(2 * cy as u32 + 1)],
@@ -441,4 +443,57 @@ fn sixteen_colours_are_written_as_ansi_codes() {
             .all(|&c| c <= 9 || (30..=49).contains(&c) || (90..=107).contains(&c)),
         "{codes:?}"
     );
+}
+
+#[test]
+fn octants_show_four_times_the_pixels_and_selection_follows() {
+    let mut app = app("cornell", &[]);
+    app.symbols = Symbols::Octant;
+    let mut t = terminal(100, 30);
+    settle(&mut t, &mut app);
+    let v = app.layout.image;
+    assert_eq!(app.view_size, (2 * v.width as u32, 4 * v.height as u32));
+    // Every cell shows the least-squares fit of its 2x4 pixels.
+    let frame = app.link.current_frame().unwrap();
+    let b = t.backend().buffer();
+    let mut glyphs = std::collections::HashSet::new();
+    for cy in 0..v.height {
+        for cx in 0..v.width {
+            let cell = &b[(v.x + cx, v.y + cy)];
+            glyphs.insert(cell.symbol().to_string());
+            let shown = symbols::shown_cell(Symbols::Octant, cell.symbol(), cell.fg, cell.bg)
+                .unwrap_or_else(|| panic!("{cell:?}"));
+            let px: Vec<[f32; 3]> = (0..8)
+                .map(|j| {
+                    let (x, y) = (2 * cx as u32 + j % 2, 4 * cy as u32 + j / 2);
+                    color::srgb(frame.image[(y * frame.width + x) as usize]).map(f32::from)
+                })
+                .collect();
+            let fit = symbols::fit(&px, Symbols::Octant);
+            let err: f32 = shown
+                .iter()
+                .zip(&px)
+                .map(|(s, p)| (0..3).map(|c| (s[c] - p[c]).powi(2)).sum::<f32>())
+                .sum();
+            // The fit's colours, rounded to 8 bits.
+            assert!(
+                err <= fit.error + 8.0 * 3.0 * 0.25 + 1.0,
+                "{cell:?}: {err} vs {}",
+                fit.error
+            );
+        }
+    }
+    assert!(glyphs.len() > 4, "{glyphs:?}");
+    // A click selects the top left pixel of the cell; the mark is drawn.
+    let click = ratatui::crossterm::event::Event::Mouse(ratatui::crossterm::event::MouseEvent {
+        kind: ratatui::crossterm::event::MouseEventKind::Down(
+            ratatui::crossterm::event::MouseButton::Left,
+        ),
+        column: v.x + 5,
+        row: v.y + 3,
+        modifiers: ratatui::crossterm::event::KeyModifiers::NONE,
+    });
+    app.handle_event(&click);
+    let s = app.inspector.selected.unwrap();
+    assert_eq!((s.x, s.y), (10, 12));
 }

@@ -125,14 +125,103 @@ fn octant(mask: u8) -> Option<char> {
     char::from_u32(0x1CD00 + mask as u32 - 1 - below)
 }
 
-/// The fit of one cell: the sub-pixels in `mask` take `fg`, the others `bg`.
+/// What a cell's foreground covers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shape {
+    /// The sub-pixels whose bits are set (`0`: none, one colour).
+    Mask(u8),
+    /// The upper half block on the sextant grid: the top row, half of the
+    /// middle one. Every font has it, and a gradient across the cell is
+    /// better served by it than by any two-colour sextant.
+    UpperHalf,
+}
+
+/// Coverage of [`Shape::UpperHalf`] on the 2x3 sextant grid.
+const UPPER_HALF_ON_SEXTANTS: [f32; 6] = [1.0, 1.0, 0.5, 0.5, 0.0, 0.0];
+
+/// The fit of one cell: `fg` where `shape` covers, `bg` elsewhere.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Fit {
-    pub mask: u8,
+    pub shape: Shape,
     pub fg: [f32; 3],
     pub bg: [f32; 3],
     /// Sum of squared differences over the sub-pixels (sRGB, 0..255).
     pub error: f32,
+}
+
+impl Fit {
+    /// What sub-pixel `j` shows.
+    pub fn at(&self, j: usize) -> [f32; 3] {
+        let a = coverage(self.shape, j);
+        [0, 1, 2].map(|c| a * self.fg[c] + (1.0 - a) * self.bg[c])
+    }
+}
+
+/// How much of sub-pixel `j` the foreground of `shape` covers.
+fn coverage(shape: Shape, j: usize) -> f32 {
+    match shape {
+        Shape::Mask(m) => (m >> j & 1) as f32,
+        Shape::UpperHalf => UPPER_HALF_ON_SEXTANTS[j],
+    }
+}
+
+/// The least-squares fit of `px` (the cell's sub-pixels, up to 8, in mask
+/// order) with the shapes of `symbols`: every two-colour partition, and on
+/// the sextant grid also the upper half block.
+pub fn fit(px: &[[f32; 3]], symbols: Symbols) -> Fit {
+    let best = fit_partition(px);
+    if symbols != Symbols::Sextant || px.len() != 6 {
+        return best;
+    }
+    let half = fit_coverage(px, Shape::UpperHalf);
+    if half.error < best.error {
+        half
+    } else {
+        best
+    }
+}
+
+/// The least-squares colours for a shape with partial coverage α: the 2x2
+/// normal equations of `Σ|p - αF - (1-α)B|²`, per channel. Colours outside
+/// 0..255 cannot be shown; the area means (what a coarser render would
+/// give) are taken instead then.
+fn fit_coverage(px: &[[f32; 3]], shape: Shape) -> Fit {
+    let (mut a11, mut a12, mut a22) = (0f32, 0f32, 0f32);
+    let (mut r1, mut r2) = ([0f32; 3], [0f32; 3]);
+    for (j, p) in px.iter().enumerate() {
+        let a = coverage(shape, j);
+        a11 += a * a;
+        a12 += a * (1.0 - a);
+        a22 += (1.0 - a) * (1.0 - a);
+        for c in 0..3 {
+            r1[c] += a * p[c];
+            r2[c] += (1.0 - a) * p[c];
+        }
+    }
+    let det = a11 * a22 - a12 * a12;
+    let mut fg = [0, 1, 2].map(|c| (a22 * r1[c] - a12 * r2[c]) / det);
+    let mut bg = [0, 1, 2].map(|c| (a11 * r2[c] - a12 * r1[c]) / det);
+    let in_range = |v: &[f32; 3]| v.iter().all(|x| (0.0..=255.0).contains(x));
+    if !(in_range(&fg) && in_range(&bg)) {
+        let (wf, wb) = (a11 + a12, a22 + a12);
+        fg = r1.map(|v| v / wf);
+        bg = r2.map(|v| v / wb);
+    }
+    let mut f = Fit {
+        shape,
+        fg,
+        bg,
+        error: 0.0,
+    };
+    f.error = px
+        .iter()
+        .enumerate()
+        .map(|(j, p)| {
+            let q = f.at(j);
+            (0..3).map(|c| (p[c] - q[c]).powi(2)).sum::<f32>()
+        })
+        .sum();
+    f
 }
 
 /// The least-squares two-colour fit of `px` (up to 8 sub-pixels). The error
@@ -141,22 +230,23 @@ pub struct Fit {
 /// two terms; partitions are visited in Gray-code order (one sub-pixel
 /// moves per step) with the last sub-pixel always in B, since a partition
 /// and its complement fit alike.
-pub fn fit(px: &[[f32; 3]]) -> Fit {
+fn fit_partition(px: &[[f32; 3]]) -> Fit {
     let n = px.len();
     debug_assert!((1..=8).contains(&n));
-    let mut total = [0f32; 3];
-    let mut sq = 0f32;
+    // In f64: the terms are large and close, and f32 would misjudge near ties.
+    let mut total = [0f64; 3];
+    let mut sq = 0f64;
     for p in px {
         for i in 0..3 {
-            total[i] += p[i];
-            sq += p[i] * p[i];
+            total[i] += p[i] as f64;
+            sq += (p[i] as f64).powi(2);
         }
     }
-    let norm2 = |v: [f32; 3]| v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    let norm2 = |v: [f64; 3]| v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
     // The uniform cell (A empty) first.
-    let mut best_score = norm2(total) / n as f32;
+    let mut best_score = norm2(total) / n as f64;
     let mut best_mask = 0u32;
-    let mut sum_a = [0f32; 3];
+    let mut sum_a = [0f64; 3];
     let mut count_a = 0u32;
     let mut gray = 0u32;
     for i in 1u32..(1 << (n - 1)) {
@@ -164,12 +254,12 @@ pub fn fit(px: &[[f32; 3]]) -> Fit {
         let bit = (g ^ gray).trailing_zeros() as usize;
         let sign = if g & (1 << bit) != 0 { 1.0 } else { -1.0 };
         for c in 0..3 {
-            sum_a[c] += sign * px[bit][c];
+            sum_a[c] += sign * px[bit][c] as f64;
         }
         count_a = if sign > 0.0 { count_a + 1 } else { count_a - 1 };
         gray = g;
         let sum_b = [0, 1, 2].map(|c| total[c] - sum_a[c]);
-        let score = norm2(sum_a) / count_a as f32 + norm2(sum_b) / (n as u32 - count_a) as f32;
+        let score = norm2(sum_a) / count_a as f64 + norm2(sum_b) / (n as u32 - count_a) as f64;
         if score > best_score {
             best_score = score;
             best_mask = g;
@@ -195,10 +285,10 @@ pub fn fit(px: &[[f32; 3]]) -> Fit {
         mean(best_mask, true)
     };
     Fit {
-        mask: best_mask as u8,
+        shape: Shape::Mask(best_mask as u8),
         fg,
         bg,
-        error: (sq - best_score).max(0.0),
+        error: (sq - best_score).max(0.0) as f32,
     }
 }
 
@@ -262,19 +352,19 @@ pub fn paint(
                 pos[j] = (sx, sy);
                 px[j] = img[(y * w + x) as usize].map(f32::from);
             }
-            let f = fit(&px[..n]);
-            // Dither each colour at the first sub-pixel it paints, so half
-            // blocks dither exactly as the pixels would.
+            let f = fit(&px[..n], symbols);
+            // Dither each colour at the first sub-pixel it paints most, so
+            // half blocks dither exactly as the pixels would.
             let first = |want: bool| {
                 (0..n)
-                    .find(|&j| (f.mask >> j & 1 == 1) == want)
+                    .find(|&j| (coverage(f.shape, j) >= 0.5) == want)
                     .map_or(pos[0], |j| pos[j])
             };
             let to = |c: [f32; 3], (x, y): (u32, u32)| {
                 to_color(c.map(|v| v.round().clamp(0.0, 255.0) as u8), mode, x, y)
             };
             let bg = to(f.bg, first(false));
-            let fg = if f.mask == 0 {
+            let fg = if f.shape == Shape::Mask(0) {
                 bg
             } else {
                 to(f.fg, first(true))
@@ -282,26 +372,28 @@ pub fn paint(
             let Some(cell) = buf.cell_mut((area.x + cx, area.y + cy)) else {
                 continue;
             };
-            let (symbol, fg, bg) = if fg == bg || f.mask == 0 || f.mask == full {
+            let (straight, swapped) = match f.shape {
+                Shape::Mask(m) => (symbols.glyph(m), symbols.glyph(!m & full)),
+                Shape::UpperHalf => (Some('▀'), Some('▄')),
+            };
+            let (symbol, fg, bg) = match (f.shape, straight, swapped) {
                 // One colour: a space on it, the foreground left as it was.
-                (' ', prev_fg, if f.mask == full { fg } else { bg })
-            } else {
-                let straight = symbols.glyph(f.mask).map(|g| (g, fg, bg));
-                let swapped = symbols.glyph(!f.mask & full).map(|g| (g, bg, fg));
-                match (straight, swapped) {
-                    (Some(a), Some(b)) => {
-                        let same = |o: &(char, Color, Color)| {
-                            (o.1 == prev_fg) as u8 + (o.2 == prev_bg) as u8
-                        };
-                        if same(&b) > same(&a) {
-                            b
-                        } else {
-                            a
-                        }
+                (Shape::Mask(0), ..) => (' ', prev_fg, bg),
+                (Shape::Mask(m), ..) if m == full => (' ', prev_fg, fg),
+                _ if fg == bg => (' ', prev_fg, bg),
+                (_, Some(g), Some(h)) => {
+                    let (a, b) = ((g, fg, bg), (h, bg, fg));
+                    let same =
+                        |o: &(char, Color, Color)| (o.1 == prev_fg) as u8 + (o.2 == prev_bg) as u8;
+                    if same(&b) > same(&a) {
+                        b
+                    } else {
+                        a
                     }
-                    (Some(a), None) | (None, Some(a)) => a,
-                    (None, None) => (' ', prev_fg, bg),
                 }
+                (_, Some(g), None) => (g, fg, bg),
+                (_, None, Some(h)) => (h, bg, fg),
+                (_, None, None) => (' ', prev_fg, bg),
             };
             let mut utf8 = [0u8; 4];
             cell.set_symbol(symbol.encode_utf8(&mut utf8));
@@ -322,27 +414,31 @@ fn symbol_fg(symbol: char, fg: Color, prev: Color) -> Color {
     }
 }
 
-/// The sub-pixels a painted cell shows, as sRGB in mask order (for tests
-/// and the benchmark's error figures).
-pub fn shown_cell(symbols: Symbols, symbol: &str, fg: Color, bg: Color) -> Option<Vec<[u8; 3]>> {
+/// The sub-pixels a painted cell shows, in mask order (sRGB; a sub-pixel
+/// half covered shows the mean of the two colours). For tests and error
+/// figures.
+pub fn shown_cell(symbols: Symbols, symbol: &str, fg: Color, bg: Color) -> Option<Vec<[f32; 3]>> {
     let (gx, gy) = symbols.grid();
     let n = gx * gy;
     let full = ((1u32 << n) - 1) as u8;
     let ch = symbol.chars().next()?;
-    let mask = if ch == ' ' {
-        0
-    } else {
-        (0..=full).find(|&m| symbols.glyph(m) == Some(ch) && m != 0)?
+    let shape = match ch {
+        ' ' => Shape::Mask(0),
+        '▀' if symbols == Symbols::Sextant => Shape::UpperHalf,
+        '▄' if symbols == Symbols::Sextant => {
+            return shown_cell(symbols, "▀", bg, fg);
+        }
+        _ => Shape::Mask((1..=full).find(|&m| symbols.glyph(m) == Some(ch))?),
     };
-    let (f, b) = (
-        crate::tui::color::shown(fg).unwrap_or([0; 3]),
-        crate::tui::color::shown(bg)?,
-    );
-    Some(
-        (0..n)
-            .map(|j| if mask >> j & 1 == 1 { f } else { b })
-            .collect(),
-    )
+    let f = Fit {
+        shape,
+        fg: crate::tui::color::shown(fg)
+            .unwrap_or([0; 3])
+            .map(f32::from),
+        bg: crate::tui::color::shown(bg)?.map(f32::from),
+        error: 0.0,
+    };
+    Some((0..n as usize).map(|j| f.at(j)).collect())
 }
 
 #[cfg(test)]
@@ -388,7 +484,10 @@ mod tests {
         for n in [2usize, 4, 6, 8] {
             for _ in 0..50 {
                 let px: Vec<[f32; 3]> = (0..n).map(|_| [next(), next(), next()]).collect();
-                let f = fit(&px);
+                let f = fit_partition(&px);
+                let Shape::Mask(mask) = f.shape else {
+                    panic!("{f:?}")
+                };
                 let err = |mask: u32| {
                     let mean = |want: bool| {
                         let v: Vec<_> = px
@@ -418,7 +517,7 @@ mod tests {
                     "{n}: {} vs {best}",
                     f.error
                 );
-                assert!((err(f.mask as u32) - f.error).abs() <= 1e-2 * best.max(1.0));
+                assert!((err(mask as u32) - f.error).abs() <= 1e-2 * best.max(1.0));
             }
         }
     }
@@ -438,7 +537,126 @@ mod tests {
         for (x, top, bottom) in [(0, img[0], img[2]), (1, img[1], img[3])] {
             let c = &buf[(x, 0)];
             let shown = shown_cell(Symbols::Half, c.symbol(), c.fg, c.bg).unwrap();
-            assert_eq!(shown, vec![top, bottom], "{c:?}");
+            assert_eq!(
+                shown,
+                vec![top.map(f32::from), bottom.map(f32::from)],
+                "{c:?}"
+            );
+        }
+    }
+
+    /// The scene rendered at `w x h`, as sRGB.
+    fn render(scene: &str, w: u32, h: u32) -> Vec<[f32; 3]> {
+        use crate::render::{post, Progressive, SceneRequest, Session};
+        let req = SceneRequest {
+            size: Some((w, h)),
+            ..SceneRequest::new(scene)
+        };
+        let (s, _) = Session::open(&req).unwrap();
+        let film = Progressive::render(&s.tracer(), 2);
+        let shown = post::display(film.image(), w, h, &s.plan, &s.scene.settings.bloom);
+        shown
+            .image
+            .iter()
+            .map(|c| crate::tui::color::srgb(*c).map(f32::from))
+            .collect()
+    }
+
+    fn sse(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| {
+                (0..3)
+                    .map(|c| (p[c] as f64 - q[c] as f64).powi(2))
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+
+    fn psnr(sse: f64, samples: usize) -> f64 {
+        10.0 * (255.0f64.powi(2) / (sse / (3 * samples) as f64)).log10()
+    }
+
+    /// What half blocks at the same cell count show on a cell's `gx x gy`
+    /// sub-pixels: the area means of its top and bottom halves, the middle
+    /// row of an odd grid half of each.
+    fn half_blocks(cell: &[[f32; 3]], gx: usize, gy: usize) -> Vec<[f32; 3]> {
+        let cover = |r: usize| (gy as f32 / 2.0 - r as f32).clamp(0.0, 1.0);
+        let (mut top, mut bottom, mut wt, mut wb) = ([0f32; 3], [0f32; 3], 0f32, 0f32);
+        for (j, p) in cell.iter().enumerate() {
+            let a = cover(j / gx);
+            for c in 0..3 {
+                top[c] += a * p[c];
+                bottom[c] += (1.0 - a) * p[c];
+            }
+            wt += a;
+            wb += 1.0 - a;
+        }
+        let (top, bottom) = (top.map(|v| v / wt), bottom.map(|v| v / wb));
+        (0..cell.len())
+            .map(|j| {
+                let a = cover(j / gx);
+                [0, 1, 2].map(|c| a * top[c] + (1.0 - a) * bottom[c])
+            })
+            .collect()
+    }
+
+    #[test]
+    fn finer_symbols_beat_half_blocks_on_every_scene() {
+        let (cols, rows) = (60u32, 20u32);
+        for (scene, _) in crate::scene::builtin::SCENES {
+            for symbols in [Symbols::Quad, Symbols::Sextant, Symbols::Octant] {
+                let (gx, gy) = symbols.grid();
+                let (w, h) = (cols * gx, rows * gy);
+                let truth = render(scene, w, h);
+                let (n, gxu) = ((gx * gy) as usize, gx as usize);
+                let cell_px = |cx: u32, cy: u32, img: &[[f32; 3]]| -> Vec<[f32; 3]> {
+                    (0..n)
+                        .map(|j| {
+                            let (x, y) = (cx * gx + j as u32 % gx, cy * gy + j as u32 / gx);
+                            img[(y * w + x) as usize]
+                        })
+                        .collect()
+                };
+                // Painted in truecolor as the viewport paints, and read back.
+                let u8s: Vec<[u8; 3]> = truth.iter().map(|p| p.map(|v| v as u8)).collect();
+                let area = Rect::new(0, 0, cols as u16, rows as u16);
+                let mut buf = Buffer::empty(area);
+                paint(&mut buf, area, &u8s, (w, h), symbols, ColorMode::Truecolor);
+                let (mut fitted, mut halves, mut worse) = (0.0, 0.0, 0);
+                for cy in 0..rows {
+                    for cx in 0..cols {
+                        let px = cell_px(cx, cy, &truth);
+                        let c = &buf[(cx as u16, cy as u16)];
+                        let shown = shown_cell(symbols, c.symbol(), c.fg, c.bg).unwrap();
+                        let half = half_blocks(&px, gxu, gy as usize);
+                        // Half blocks show 8-bit colours too.
+                        let half_u8: Vec<[f32; 3]> =
+                            half.iter().map(|p| p.map(|v| v.round())).collect();
+                        fitted += sse(&shown, &px);
+                        halves += sse(&half_u8, &px);
+                        // Per cell, the least-squares fit is never worse
+                        // than half blocks (before either is rounded).
+                        let f = fit(&px, symbols);
+                        let fit_shown: Vec<[f32; 3]> = (0..n).map(|j| f.at(j)).collect();
+                        let (e, eh) = (sse(&fit_shown, &px), sse(&half, &px));
+                        if e > eh * (1.0 + 1e-4) + 1e-3 {
+                            worse += 1;
+                            eprintln!("{scene} {symbols:?} cell ({cx}, {cy}): {e} > {eh}");
+                        }
+                    }
+                }
+                let count = (w * h) as usize;
+                let (p, ph) = (psnr(fitted, count), psnr(halves, count));
+                eprintln!(
+                    "{scene:14} {:11} PSNR {p:6.2} dB, half blocks {ph:6.2} dB",
+                    symbols.name()
+                );
+                assert_eq!(worse, 0, "{scene} {symbols:?}");
+                if symbols != Symbols::Quad {
+                    assert!(p > ph, "{scene} {symbols:?}: {p} <= {ph}");
+                }
+            }
         }
     }
 }

@@ -123,7 +123,8 @@ impl<W: Write> Screen<W> {
             pen.move_to(buf, x, y);
             pen.style(buf, cell.fg, cell.bg, cell.modifier);
             buf.extend_from_slice(cell.symbol().as_bytes());
-            pen.at = (x as usize + width < w).then(|| (x + width as u16, y));
+            pen.at = (x as usize + width < w && !unsure_width(cell.symbol()))
+                .then(|| (x + width as u16, y));
         }
         self.shown[i] = Some(cell.clone());
         if covered == 1 {
@@ -144,6 +145,16 @@ impl<W: Write> Screen<W> {
         self.control.extend_from_slice(b"\x1b[0m\x1b[H\x1b[2J");
         Ok(())
     }
+}
+
+/// Whether the terminal may not know how wide `symbol` is: octants came
+/// with Unicode 16 (2024), and a terminal whose tables are older may draw
+/// nothing or two columns. The next cell is then placed explicitly, so
+/// that the rest of the screen stays in place.
+fn unsure_width(symbol: &str) -> bool {
+    symbol
+        .chars()
+        .any(|c| ('\u{1CC00}'..='\u{1CEBF}').contains(&c))
 }
 
 /// The terminal's cursor and colours while a chunk is written.
@@ -402,6 +413,14 @@ mod tests {
         // Two cells on one row: one move, a forward step, no clear.
         frame(&mut t, ["0123456789", "  X  Y", ""]);
         assert_eq!(out(&mut t), "\x1b[2;3H\x1b[0mX\x1b[2CY\x1b[0m");
+        // After an octant the next cell is placed explicitly.
+        frame(&mut t, ["0123456789", "  X  Y", "\u{1CD00}\u{1CD01}"]);
+        assert_eq!(
+            out(&mut t),
+            "\x1b[3H\x1b[0m\u{1CD00}\x1b[3;2H\u{1CD01}\x1b[0m"
+        );
+        frame(&mut t, ["0123456789", "  X  Y", ""]);
+        out(&mut t);
         // A small budget writes a few cells per call and resumes where it
         // stopped, until the sweep is complete; a frame drawn meanwhile
         // replaces what was not yet written.

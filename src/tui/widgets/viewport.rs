@@ -1,4 +1,4 @@
-//! The viewport: the newest pass in half blocks, with the BVH overlay the
+//! The viewport: the newest pass in block symbols, with the BVH overlay the
 //! worker drew for this view, the selected pixel's rays and its mark.
 
 use ratatui::buffer::Buffer;
@@ -20,10 +20,11 @@ const MARK: [u8; 3] = [255, 0, 255];
 pub fn draw(f: &mut Frame, area: Rect, app: &App) {
     let inner = app.layout.image;
     let mut title = format!(
-        " {} · {}x{} px · {}",
+        " {} · {}x{} px · {} · {}",
         app.session.scene.name,
         app.view_size.0,
         app.view_size.1,
+        app.symbols.name(),
         app.color.name()
     );
     if app.inspector.select_mode {
@@ -68,7 +69,7 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App) {
     if let (true, Some(s)) = (current, app.inspector.selected) {
         mark(&mut px, w, h, s.x, s.y);
     }
-    symbols::paint(f.buffer_mut(), inner, &px, (w, h), Symbols::Half, app.color);
+    symbols::paint(f.buffer_mut(), inner, &px, (w, h), app.symbols, app.color);
 }
 
 /// Paints a snapshot as the viewport does, without overlays (for the benchmark).
