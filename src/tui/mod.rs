@@ -29,11 +29,12 @@ use std::io::{self, IsTerminal, Stdout, Write};
 use std::path::Path;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::RecvTimeoutError;
 use std::sync::Once;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
-use ratatui::crossterm::event::{self, DisableMouseCapture, EnableMouseCapture};
+use ratatui::crossterm::event::{DisableMouseCapture, EnableMouseCapture};
 use ratatui::crossterm::terminal::{
     disable_raw_mode, enable_raw_mode, EnterAlternateScreen, LeaveAlternateScreen,
 };
@@ -45,13 +46,18 @@ use crate::render::{SceneRequest, Session};
 use app::App;
 use color::ColorMode;
 use graphics::symbols::Symbols;
+use term::input::{Input, Reader, Reply};
+use term::output::{Output, Shown};
 use term::screen::Screen;
 
 /// At most this many frames per second are drawn.
 const FRAME: Duration = Duration::from_millis(33);
-/// How often the loop looks for new passes while rendering, and while idle.
+/// How often the loop looks for new passes while rendering or waiting for
+/// the terminal, and while idle (a resize is seen within that).
 const POLL_BUSY: Duration = Duration::from_millis(8);
-const POLL_IDLE: Duration = Duration::from_millis(250);
+const POLL_IDLE: Duration = Duration::from_millis(100);
+/// How long leaving waits for the terminal's last answers.
+const LEAVE_WAIT: Duration = Duration::from_secs(1);
 
 /// Opens the TUI on the scene; returns when the user quits.
 pub fn run(
@@ -86,10 +92,17 @@ pub fn run(
     // flag and the guard below restores the terminal.
     crate::interrupt::flag();
     let guard = TerminalGuard::enter()?;
-    let result = Screen::new(io::stdout(), None)
-        .and_then(Terminal::new)
-        .context("cannot set up the terminal")
-        .and_then(|mut t| event_loop(&mut t, &mut app));
+    let result = Keyboard::open().and_then(|keyboard| {
+        let reader = Reader::spawn(keyboard.fd())?;
+        let mut terminal = Screen::new(io::stdout(), None)
+            .and_then(Terminal::new)
+            .context("cannot set up the terminal")?;
+        let mut out = Output::default();
+        out.start(terminal.backend_mut(), Instant::now())?;
+        let result = event_loop(&mut terminal, &mut app, &reader, &mut out);
+        leave(terminal.backend_mut(), &reader, &mut out);
+        result
+    });
     drop(guard);
     if app.jobs.cancel_export() {
         eprintln!("rayterm: an unfinished PNG export was cancelled");
@@ -102,38 +115,124 @@ pub fn run(
     })
 }
 
-fn event_loop<W: Write>(terminal: &mut Terminal<Screen<W>>, app: &mut App) -> Result<()> {
+/// Where keys come from: standard input when it is the terminal, else the
+/// controlling terminal.
+enum Keyboard {
+    Stdin,
+    Tty(std::fs::File),
+}
+
+impl Keyboard {
+    fn open() -> Result<Keyboard> {
+        if io::stdin().is_terminal() {
+            return Ok(Keyboard::Stdin);
+        }
+        let tty = std::fs::File::open("/dev/tty").context("cannot read keys from /dev/tty")?;
+        Ok(Keyboard::Tty(tty))
+    }
+
+    fn fd(&self) -> i32 {
+        use std::os::fd::AsRawFd;
+        match self {
+            Keyboard::Stdin => io::stdin().as_raw_fd(),
+            Keyboard::Tty(f) => f.as_raw_fd(),
+        }
+    }
+}
+
+/// Draws at most every [`FRAME`] when something changed, writes what the
+/// link has room for, and takes keys and the terminal's answers as they
+/// come: a key acts within a loop turn, whatever the link's speed.
+fn event_loop<W: Write>(
+    terminal: &mut Terminal<Screen<W>>,
+    app: &mut App,
+    reader: &Reader,
+    out: &mut Output,
+) -> Result<()> {
     let mut dirty = true;
     let mut last_draw = Instant::now() - FRAME;
+    let mut size = terminal.size()?;
     loop {
         dirty |= app.poll()?;
-        dirty |= app.note_bytes(terminal.backend().written());
+        let now_size = terminal.size()?;
+        dirty |= std::mem::replace(&mut size, now_size) != now_size;
+        dirty |= app.note_output(out.figures());
         if dirty && last_draw.elapsed() >= FRAME {
             draw(terminal, app)?;
-            terminal.backend_mut().pump(usize::MAX)?;
+            out.drawn(terminal.backend(), shown(app));
             last_draw = Instant::now();
             dirty = false;
         }
-        let idle = app.idle();
+        out.pump(terminal.backend_mut(), Instant::now())?;
         let wait = if dirty {
             FRAME.saturating_sub(last_draw.elapsed())
-        } else if idle {
+        } else if app.idle() && !out.waiting() {
             POLL_IDLE
         } else {
             POLL_BUSY
         };
-        if event::poll(wait)? {
-            // Take every pending event before drawing again.
-            loop {
-                app.handle_event(&event::read()?);
-                if app.quit || !event::poll(Duration::ZERO)? {
-                    break;
+        let mut next = match reader.rx.recv_timeout(wait) {
+            Ok(input) => Some(input),
+            Err(RecvTimeoutError::Timeout) => None,
+            // The terminal is gone.
+            Err(RecvTimeoutError::Disconnected) => return Ok(()),
+        };
+        // Take everything that came before drawing again.
+        while let Some(input) = next {
+            match input {
+                Input::Event(ev) => {
+                    app.handle_event(&ev);
+                    dirty = true;
                 }
+                Input::Reply(Reply::CursorPosition(..)) => out.answered(Instant::now()),
+                Input::Reply(_) => {}
             }
-            dirty = true;
+            if app.quit {
+                break;
+            }
+            next = reader.rx.try_recv().ok();
         }
         if app.quit || crate::interrupt::requested() {
             return Ok(());
+        }
+    }
+}
+
+/// What the viewport shows: the newest pass's view, and whether it is a
+/// full pass of the current one.
+fn shown(app: &App) -> Shown {
+    let frame = app.link.frame.as_deref();
+    Shown {
+        generation: frame.map_or(0, |f| f.generation),
+        full: frame.is_some_and(|f| !f.coarse && f.generation == app.generation()),
+    }
+}
+
+/// Leaves the alternate screen behind whatever is still on its way, and
+/// waits (a second at most) for the answers still due, so that none
+/// arrives at the shell.
+fn leave<W: Write>(screen: &mut Screen<W>, reader: &Reader, out: &mut Output) {
+    let mut bytes = Vec::new();
+    let _ = ratatui::crossterm::queue!(
+        bytes,
+        DisableMouseCapture,
+        LeaveAlternateScreen,
+        cursor::Show
+    );
+    if out.pacer.paced() {
+        bytes.extend_from_slice(term::pace::PROBE);
+    }
+    if screen.send(&bytes).is_err() {
+        return;
+    }
+    out.pacer.sent(bytes.len(), Instant::now());
+    let end = Instant::now() + LEAVE_WAIT;
+    while out.waiting() {
+        let left = end.saturating_duration_since(Instant::now());
+        match reader.rx.recv_timeout(left) {
+            Ok(Input::Reply(Reply::CursorPosition(..))) => out.answered(Instant::now()),
+            Ok(_) => {}
+            Err(_) => return,
         }
     }
 }

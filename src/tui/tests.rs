@@ -497,3 +497,35 @@ fn octants_show_four_times_the_pixels_and_selection_follows() {
     let s = app.inspector.selected.unwrap();
     assert_eq!((s.x, s.y), (10, 12));
 }
+
+#[test]
+fn the_render_panel_says_when_the_view_reached_the_screen() {
+    use super::term::output::Output;
+    use super::term::screen::Screen;
+    use ratatui::layout::Size;
+    use std::time::Instant;
+    let mut app = app("cornell", &[]);
+    let mut t = Terminal::new(Screen::new(Vec::new(), Some(Size::new(100, 30))).unwrap()).unwrap();
+    let mut out = Output::default();
+    out.start(t.backend_mut(), Instant::now()).unwrap();
+    app.update(ratatui::layout::Rect::new(0, 0, 100, 30));
+    assert!(app.wait_frame(WAIT).unwrap());
+    super::draw(&mut t, &mut app).unwrap();
+    out.drawn(t.backend(), super::shown(&app));
+    // Written, and not on screen until the terminal answers.
+    out.pump(t.backend_mut(), Instant::now()).unwrap();
+    app.note_output(out.figures());
+    assert_eq!(app.view_shown_in(), None);
+    // The terminal answers each chunk; more is written as answers come.
+    while out.waiting() {
+        out.answered(Instant::now());
+        out.pump(t.backend_mut(), Instant::now()).unwrap();
+    }
+    app.note_output(out.figures());
+    let secs = app.view_shown_in().expect("the full pass is on screen");
+    assert!(secs < WAIT.as_secs_f64());
+    super::draw(&mut t, &mut app).unwrap();
+    let b = t.backend().wanted_text();
+    assert!(b.contains("view shown in"), "{b}");
+    assert!(b.contains("frames/s"), "{b}");
+}

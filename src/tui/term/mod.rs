@@ -1,6 +1,11 @@
-//! The terminal itself: what we send it (`screen`, a ratatui backend that
-//! writes only what changed) and what it can do (`terminfo`).
+//! The terminal itself: what it sends (`input`: keys, mouse, answers),
+//! what we send it (`screen`, a ratatui backend that writes only what
+//! changed; `output`, which writes it as fast as the link absorbs, paced by
+//! `pace`) and what it can do (`terminfo`).
 
+pub mod input;
+pub mod output;
+pub mod pace;
 pub mod screen;
 pub mod terminfo;
 

@@ -24,8 +24,9 @@ pub struct Screen<W: Write> {
     /// What the app drew, and what the terminal shows (`None`: unknown).
     wanted: Vec<Cell>,
     shown: Vec<Option<Cell>>,
-    /// Where the next sweep starts.
+    /// Where the next sweep starts, and how many cells were swept so far.
     sweep: usize,
+    swept: u64,
     /// Control sequences (clears, cursor visibility) for the next write.
     control: Vec<u8>,
     cursor_visible: bool,
@@ -46,6 +47,7 @@ impl<W: Write> Screen<W> {
             wanted: Vec::new(),
             shown: Vec::new(),
             sweep: 0,
+            swept: 0,
             control: Vec::new(),
             cursor_visible: true,
             cursor: Position::ORIGIN,
@@ -74,6 +76,34 @@ impl<W: Write> Screen<W> {
         &mut self.out
     }
 
+    /// The text the app drew, row by row (for tests).
+    pub fn wanted_text(&self) -> String {
+        self.wanted
+            .chunks(self.width.max(1) as usize)
+            .map(|row| row.iter().map(Cell::symbol).collect::<String>())
+            .collect::<Vec<_>>()
+            .join("\n")
+    }
+
+    /// Cells on the screen.
+    pub fn cells(&self) -> usize {
+        self.wanted.len()
+    }
+
+    /// Cells swept so far: every cell has been brought up to date since
+    /// this was `k` once it reaches `k + cells()`.
+    pub fn swept(&self) -> u64 {
+        self.swept
+    }
+
+    /// Writes `bytes` (a request, a picture) straight to the terminal.
+    pub fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.out.write_all(bytes)?;
+        self.out.flush()?;
+        self.written += bytes.len() as u64;
+        Ok(())
+    }
+
     /// Writes the cells that differ, from where the last call stopped,
     /// until about `budget` bytes are written (at least one cell) or the
     /// screen is up to date. Returns the bytes written and whether the
@@ -92,6 +122,7 @@ impl<W: Write> Screen<W> {
             let i = self.sweep;
             let skip = self.write_cell(i, &mut buf, &mut pen);
             visited += 1 + skip;
+            self.swept += 1 + skip as u64;
             self.sweep = (i + 1 + skip) % n.max(1);
         }
         if pen.used {
