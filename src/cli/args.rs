@@ -8,6 +8,7 @@ use crate::render::debug_view::DebugView;
 use crate::render::{Feature, Features, PlanPolicy, SceneRequest, Worst};
 use crate::scene::Builder;
 use crate::tui::color::ColorMode;
+use crate::tui::graphics::symbols::Symbols;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -286,9 +287,15 @@ pub struct ConvergeArgs {
 pub struct TuiArgs {
     #[command(flatten)]
     pub scene: SceneOpts,
-    /// Colours (default: truecolor when COLORTERM says so, else 256).
+    /// Colours (default: truecolor when COLORTERM or the terminfo entry of
+    /// TERM says so, else 256 with dithering).
     #[arg(long, value_enum)]
     pub color: Option<ColorMode>,
+    /// Block symbols for the viewport: half blocks (1x2 pixels per cell,
+    /// every terminal), quadrants (2x2), sextants (2x3, Unicode 13) or
+    /// octants (2x4, Unicode 16; fonts are newer).
+    #[arg(long, value_enum, default_value = "half")]
+    pub symbols: Symbols,
     /// A converged image of the scene (OpenEXR .exr or Radiance .hdr, e.g.
     /// from `rayterm render --spp 1024 -o ref.exr`, best at a whole multiple
     /// of the view's size): the true error is shown beside the estimate

@@ -61,7 +61,12 @@ pub fn main() -> ExitCode {
         Command::Scenes => scenes::run(),
         Command::Inspect(a) => inspect::run(a),
         Command::Converge(a) => converge::run(a),
-        Command::Tui(a) => crate::tui::run(&a.scene.request(), a.color, a.reference.as_deref()),
+        Command::Tui(a) => crate::tui::run(
+            &a.scene.request(),
+            a.color,
+            a.symbols,
+            a.reference.as_deref(),
+        ),
         Command::Stability(a) => stability::run(a),
         Command::Bench(a) => bench::run(a),
     };

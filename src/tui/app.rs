@@ -14,12 +14,14 @@ use ratatui::layout::Rect;
 use super::camera::CameraControl;
 use super::color::ColorMode;
 use super::export;
+use super::graphics::symbols::Symbols;
 use super::inspector::Inspector;
 use super::jobs::Jobs;
 use super::keys::{self, Action, Key, Mode};
 use super::layout::Layout;
 use super::link::RenderLink;
 use super::popup::{self, Popup};
+use super::term::output::Figures;
 use super::worker::{self, Msg, Reference, Snapshot, Truth, View, Worker};
 use crate::bvh::debug::HeatMeasure;
 use crate::render::debug_view::DebugView;
@@ -102,6 +104,8 @@ pub struct App {
     pub builder: Builder,
     pub camera: CameraControl,
     pub color: ColorMode,
+    /// The block symbols the viewport is drawn with.
+    pub symbols: Symbols,
     pub link: RenderLink,
     /// The viewport's size in pixels, from the layout.
     pub view_size: (u32, u32),
@@ -120,9 +124,13 @@ pub struct App {
     /// The export size `--size` asked for; otherwise exports take the
     /// view's shape at the scene's size.
     pub export_size: Option<(u32, u32)>,
-    /// Terminal bytes per second, and the (time, total) it was last taken at.
+    /// What the terminal output measured (see [`term::output`]).
+    pub output: Figures,
+    /// Bytes and pictures per second written to the terminal, and the
+    /// (time, figures) they were last taken at.
     pub bytes_per_sec: f64,
-    bytes_mark: (Instant, u64),
+    pub frames_per_sec: f64,
+    output_mark: (Instant, Figures),
     /// The layout of the last update.
     pub layout: Layout,
     /// When a slow pass's progress was last shown.
@@ -186,6 +194,7 @@ impl App {
             plan,
             camera: CameraControl::new(home),
             color,
+            symbols: Symbols::Half,
             link: RenderLink::new(worker),
             view_size: (0, 0),
             inspector: Inspector::default(),
@@ -200,8 +209,10 @@ impl App {
             jobs: Jobs::default(),
             export_dir: std::env::current_dir().unwrap_or_else(|_| PathBuf::from(".")),
             export_size: None,
+            output: Figures::default(),
             bytes_per_sec: 0.0,
-            bytes_mark: (Instant::now(), 0),
+            frames_per_sec: 0.0,
+            output_mark: (Instant::now(), Figures::default()),
             layout: Layout::default(),
             progress_shown: Instant::now(),
             quit: false,
@@ -676,19 +687,33 @@ impl App {
         }
     }
 
-    /// Updates the bytes-per-second readout from the terminal writer's
-    /// total, once a second; true when the readout changed.
-    pub fn note_bytes(&mut self, total: u64) -> bool {
-        let (since, base) = self.bytes_mark;
+    /// Takes the terminal output's figures; the rates are updated once a
+    /// second. True when a readout changed.
+    pub fn note_output(&mut self, figures: Figures) -> bool {
+        let picture_changed = figures.picture != self.output.picture;
+        self.output = figures;
+        let (since, base) = self.output_mark;
         let dt = since.elapsed().as_secs_f64();
         if dt < 1.0 {
-            return false;
+            return picture_changed;
         }
-        let rate = total.saturating_sub(base) as f64 / dt;
-        self.bytes_mark = (Instant::now(), total);
-        let changed = rate != self.bytes_per_sec;
-        self.bytes_per_sec = rate;
-        changed
+        let bytes = figures.written.saturating_sub(base.written) as f64 / dt;
+        let frames = figures.frames.saturating_sub(base.frames) as f64 / dt;
+        self.output_mark = (Instant::now(), figures);
+        let changed = bytes != self.bytes_per_sec || frames != self.frames_per_sec;
+        self.bytes_per_sec = bytes;
+        self.frames_per_sec = frames;
+        changed || picture_changed
+    }
+
+    /// Seconds from the start of the current view (a camera move, a
+    /// toggle, the launch) until its first full picture was on screen.
+    pub fn view_shown_in(&self) -> Option<f64> {
+        let (generation, at) = self.output.picture?;
+        (generation == self.generation()).then(|| {
+            at.saturating_duration_since(self.link.started)
+                .as_secs_f64()
+        })
     }
 
     /// Whether nothing more will change on screen without input.

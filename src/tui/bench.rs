@@ -2,20 +2,17 @@
 //! code path, and bytes written to the terminal per frame.
 
 use std::io;
-use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{bail, Result};
-use ratatui::backend::CrosstermBackend;
-use ratatui::layout::Rect;
-use ratatui::{Terminal, TerminalOptions, Viewport};
+use ratatui::layout::Size;
+use ratatui::Terminal;
 use serde::Serialize;
 
 use super::color::ColorMode;
+use super::term::screen::Screen;
 use super::widgets::paint_view;
 use super::worker::{Cmd, Msg, View, Worker};
-use super::CountingWriter;
 use crate::render::{SceneRequest, Session};
 use crate::report::stats::median;
 
@@ -48,21 +45,13 @@ pub struct TuiPassStats {
 }
 
 /// A terminal of `cols x rows` that counts what it would write.
-type Counting = Terminal<CrosstermBackend<CountingWriter<io::Sink>>>;
+type Counting = Terminal<Screen<io::Sink>>;
 
-fn counting_terminal(cols: u16, rows: u16) -> Result<(Counting, Arc<AtomicU64>)> {
-    let count = Arc::new(AtomicU64::new(0));
-    let backend = CrosstermBackend::new(CountingWriter {
-        inner: io::sink(),
-        count: count.clone(),
-    });
-    let t = Terminal::with_options(
-        backend,
-        TerminalOptions {
-            viewport: Viewport::Fixed(Rect::new(0, 0, cols, rows)),
-        },
-    )?;
-    Ok((t, count))
+fn counting_terminal(cols: u16, rows: u16) -> Result<Counting> {
+    Ok(Terminal::new(Screen::new(
+        io::sink(),
+        Some(Size::new(cols, rows)),
+    )?)?)
 }
 
 /// Renders `passes` progressive passes of the scene `req` asks for at the
@@ -86,8 +75,8 @@ pub fn measure_pass(req: &SceneRequest, cols: u16, rows: u16, passes: u32) -> Re
             height,
         }),
     ));
-    let (mut term, bytes) = counting_terminal(cols, rows)?;
-    let (mut term256, bytes256) = counting_terminal(cols, rows)?;
+    let mut term = counting_terminal(cols, rows)?;
+    let mut term256 = counting_terminal(cols, rows)?;
     let (mut pass_ms, mut step_ms, mut frame_bytes, mut frame_bytes_256) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut rays = Vec::new();
@@ -105,21 +94,15 @@ pub fn measure_pass(req: &SceneRequest, cols: u16, rows: u16, passes: u32) -> Re
         pass_ms.push(s.pass_ms);
         step_ms.push(step);
         rays.push(s.mrays * s.pass_ms * 1e3);
-        for (t, count, mode, out) in [
-            (&mut term, &bytes, ColorMode::Truecolor, &mut frame_bytes),
-            (
-                &mut term256,
-                &bytes256,
-                ColorMode::Palette256,
-                &mut frame_bytes_256,
-            ),
+        for (t, mode, out) in [
+            (&mut term, ColorMode::Truecolor, &mut frame_bytes),
+            (&mut term256, ColorMode::Palette256, &mut frame_bytes_256),
         ] {
-            let before = count.load(Ordering::Relaxed);
             t.draw(|f| {
                 let area = f.area();
                 paint_view(f.buffer_mut(), area, &s, mode);
             })?;
-            out.push(count.load(Ordering::Relaxed) - before);
+            out.push(t.backend_mut().pump(usize::MAX)?.0 as u64);
         }
     }
     if pass_ms.is_empty() {

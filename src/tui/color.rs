@@ -1,25 +1,21 @@
-//! Pixels to terminal cells: two vertically stacked pixels per cell with the
-//! upper half block (foreground = top pixel, background = bottom pixel), in
-//! truecolor or quantized to the xterm 256-colour or the 16 ANSI colours.
+//! Terminal colours: truecolor, or sRGB quantized with ordered dithering to
+//! the xterm 256-colour palette or the 16 ANSI colours. `graphics::symbols`
+//! turns pixels into cells with them.
 
 use std::sync::OnceLock;
 
 use glam::Vec3;
-use ratatui::buffer::Buffer;
-use ratatui::layout::Rect;
 use ratatui::style::Color;
 use rayon::prelude::*;
 
 use crate::render::post::encode_srgb;
 
-/// The upper half block: its foreground paints the top pixel of a cell.
-pub const UPPER_HALF: &str = "▀";
-
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum ColorMode {
     /// 24-bit colour.
     Truecolor,
-    /// The xterm 256-colour palette (6x6x6 cube and grey ramp).
+    /// The xterm 256-colour palette (6x6x6 cube and grey ramp), with
+    /// ordered dithering.
     #[value(name = "256")]
     Palette256,
     /// The 16 ANSI colours, with ordered dithering.
@@ -28,10 +24,12 @@ pub enum ColorMode {
 }
 
 impl ColorMode {
-    /// Truecolor when `COLORTERM` says the terminal has it, else 256 colours.
-    pub fn detect(colorterm: Option<&str>) -> Self {
+    /// Truecolor when `COLORTERM` says so or the terminal's terminfo entry
+    /// declares it (`rgb`: `RGB` or `Tc`), else 256 colours.
+    pub fn detect(colorterm: Option<&str>, rgb: bool) -> Self {
         match colorterm.map(str::to_ascii_lowercase).as_deref() {
             Some("truecolor" | "24bit") => ColorMode::Truecolor,
+            _ if rgb => ColorMode::Truecolor,
             _ => ColorMode::Palette256,
         }
     }
@@ -80,7 +78,7 @@ pub fn palette256(i: u8) -> [u8; 3] {
 
 /// CIELAB (D65) of an sRGB colour: distances in it follow perceived
 /// differences, which keeps hues right where the cube is coarse.
-fn lab(c: [u8; 3]) -> [f32; 3] {
+pub fn lab(c: [u8; 3]) -> [f32; 3] {
     let lin = |v: u8| {
         let v = v as f32 / 255.0;
         if v <= 0.040_45 {
@@ -170,89 +168,81 @@ const ANSI16: [(Color, [u8; 3]); 16] = [
 /// 4x4 Bayer matrix: thresholds for ordered dithering.
 const BAYER: [[u8; 4]; 4] = [[0, 8, 2, 10], [12, 4, 14, 6], [3, 11, 1, 9], [15, 7, 13, 5]];
 
-fn nearest16(c: [i32; 3]) -> usize {
+fn nearest16(c: [i32; 3]) -> u8 {
     let c = c.map(|v| v.clamp(0, 255) as u8);
-    (0..16).min_by_key(|&i| dist(c, ANSI16[i].1)).unwrap_or(0)
+    (0..16).min_by_key(|&i| dist(c, ANSI16[i].1)).unwrap_or(0) as u8
 }
 
-/// One of the 16 ANSI colours for pixel `c` at (x, y), ordered-dithered
-/// between the nearest colour and the nearest one on the other side of the
-/// pixel, in proportion to where the pixel lies between them. Colours in
-/// the palette come out exactly.
-pub fn quantize16(c: [u8; 3], x: u32, y: u32) -> Color {
+/// Ordered dithering with any palette: pixel `c` at (x, y) becomes the
+/// nearest entry or the nearest one on the other side of the pixel, in
+/// proportion to where the pixel lies between them, so that a patch of
+/// pixels averages to about its colour. Colours in the palette come out
+/// exactly.
+fn dither(
+    c: [u8; 3],
+    x: u32,
+    y: u32,
+    nearest: impl Fn([i32; 3]) -> u8,
+    rgb: impl Fn(u8) -> [u8; 3],
+) -> u8 {
     let p = c.map(i32::from);
-    let a = nearest16(p);
-    let ca = ANSI16[a].1.map(i32::from);
-    let b = nearest16([0, 1, 2].map(|i| 2 * p[i] - ca[i]));
-    let cb = ANSI16[b].1.map(i32::from);
+    let a = nearest(p);
+    let ca = rgb(a).map(i32::from);
+    let b = nearest([0, 1, 2].map(|i| 2 * p[i] - ca[i]));
+    let cb = rgb(b).map(i32::from);
     let ab: [i32; 3] = [0, 1, 2].map(|i| cb[i] - ca[i]);
     let len2: i32 = ab.iter().map(|v| v * v).sum();
     if len2 == 0 {
-        return ANSI16[a].0;
+        return a;
     }
     let along: i32 = (0..3).map(|i| (p[i] - ca[i]) * ab[i]).sum();
     let ratio = (along as f32 / len2 as f32).clamp(0.0, 1.0);
     let threshold = (BAYER[y as usize % 4][x as usize % 4] as f32 + 0.5) / 16.0;
-    ANSI16[if threshold < ratio { b } else { a }].0
+    if threshold < ratio {
+        b
+    } else {
+        a
+    }
+}
+
+/// One of the 16 ANSI colours for pixel `c` at (x, y), ordered-dithered.
+pub fn quantize16(c: [u8; 3], x: u32, y: u32) -> Color {
+    ANSI16[dither16(c, x, y) as usize].0
+}
+
+/// The index (0..16) of [`quantize16`]'s colour.
+pub fn dither16(c: [u8; 3], x: u32, y: u32) -> u8 {
+    dither(c, x, y, nearest16, |i| ANSI16[i as usize].1)
+}
+
+/// The 256-colour entry for pixel `c` at (x, y), ordered-dithered between
+/// cube and ramp entries, which breaks up the bands of smooth gradients.
+pub fn dither256(c: [u8; 3], x: u32, y: u32) -> u8 {
+    let clamp = |p: [i32; 3]| p.map(|v| v.clamp(0, 255) as u8);
+    dither(c, x, y, |p| quantize256(clamp(p)), palette256)
 }
 
 /// The terminal colour of sRGB pixel `c` at image position (x, y).
 pub fn to_color(c: [u8; 3], mode: ColorMode, x: u32, y: u32) -> Color {
     match mode {
         ColorMode::Truecolor => Color::Rgb(c[0], c[1], c[2]),
-        ColorMode::Palette256 => Color::Indexed(quantize256(c)),
+        ColorMode::Palette256 => Color::Indexed(dither256(c, x, y)),
         ColorMode::Ansi16 => quantize16(c, x, y),
     }
 }
 
-/// Paints a `w x h` sRGB image into `area`, two pixels per cell. An image
-/// of another size than the area's (during a resize) is scaled to fit.
-pub fn paint(buf: &mut Buffer, area: Rect, img: &[[u8; 3]], w: u32, h: u32, mode: ColorMode) {
-    if w == 0 || h == 0 || img.len() < (w * h) as usize {
-        return;
-    }
-    let rows = area.height as u32 * 2;
-    let px = |cx: u32, py: u32| {
-        let x = cx * w / area.width.max(1) as u32;
-        let y = py * h / rows.max(1);
-        (x, y, img[(y * w + x) as usize])
-    };
-    for cy in 0..area.height {
-        for cx in 0..area.width {
-            let (tx, ty, top) = px(cx as u32, 2 * cy as u32);
-            let (bx, by, bottom) = px(cx as u32, 2 * cy as u32 + 1);
-            if let Some(cell) = buf.cell_mut((area.x + cx, area.y + cy)) {
-                cell.set_symbol(UPPER_HALF);
-                cell.fg = to_color(top, mode, tx, ty);
-                cell.bg = to_color(bottom, mode, bx, by);
-            }
-        }
+/// The sRGB a terminal shows for `c` (xterm's defaults for the 16 colours).
+pub fn shown(c: Color) -> Option<[u8; 3]> {
+    match c {
+        Color::Rgb(r, g, b) => Some([r, g, b]),
+        Color::Indexed(i) => Some(palette256(i)),
+        c => ANSI16.iter().find(|(a, _)| *a == c).map(|(_, rgb)| *rgb),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn half_block_puts_top_in_foreground() {
-        let img = [[255, 0, 0], [0, 0, 255], [0, 255, 0], [10, 20, 30]];
-        let mut buf = Buffer::empty(Rect::new(0, 0, 2, 1));
-        paint(
-            &mut buf,
-            Rect::new(0, 0, 2, 1),
-            &img,
-            2,
-            2,
-            ColorMode::Truecolor,
-        );
-        let c = &buf[(0, 0)];
-        assert_eq!(c.symbol(), UPPER_HALF);
-        assert_eq!(c.fg, Color::Rgb(255, 0, 0));
-        assert_eq!(c.bg, Color::Rgb(0, 255, 0));
-        assert_eq!(buf[(1, 0)].fg, Color::Rgb(0, 0, 255));
-        assert_eq!(buf[(1, 0)].bg, Color::Rgb(10, 20, 30));
-    }
 
     #[test]
     fn linear_values_are_gamma_encoded() {
@@ -262,11 +252,18 @@ mod tests {
     }
 
     #[test]
-    fn detection_reads_colorterm() {
-        assert_eq!(ColorMode::detect(Some("truecolor")), ColorMode::Truecolor);
-        assert_eq!(ColorMode::detect(Some("24bit")), ColorMode::Truecolor);
-        assert_eq!(ColorMode::detect(None), ColorMode::Palette256);
-        assert_eq!(ColorMode::detect(Some("")), ColorMode::Palette256);
+    fn detection_reads_colorterm_and_terminfo() {
+        assert_eq!(
+            ColorMode::detect(Some("truecolor"), false),
+            ColorMode::Truecolor
+        );
+        assert_eq!(
+            ColorMode::detect(Some("24bit"), false),
+            ColorMode::Truecolor
+        );
+        assert_eq!(ColorMode::detect(None, false), ColorMode::Palette256);
+        assert_eq!(ColorMode::detect(Some(""), false), ColorMode::Palette256);
+        assert_eq!(ColorMode::detect(None, true), ColorMode::Truecolor);
     }
 
     #[test]
@@ -333,5 +330,87 @@ mod tests {
         }
         assert_eq!(seen, [Color::Black, Color::DarkGray].into());
         assert!((sum / 16).abs_diff(64) < 8, "{}", sum / 16);
+    }
+
+    /// Mean CIELAB ΔE between `a` and `b` after both are averaged over 4x4
+    /// blocks in linear light, as the eye averages neighbouring pixels.
+    fn blurred_delta_e(a: &[[u8; 3]], b: &[[u8; 3]], w: usize, rows: usize) -> f32 {
+        let lin = |v: u8| crate::scene::texture::srgb_to_linear(v as f32 / 255.0);
+        let mean = |img: &[[u8; 3]], bx: usize, by: usize| {
+            let mut s = [0f32; 3];
+            for y in by * 4..by * 4 + 4 {
+                for x in bx * 4..bx * 4 + 4 {
+                    for c in 0..3 {
+                        s[c] += lin(img[y * w + x][c]) / 16.0;
+                    }
+                }
+            }
+            s.map(encode_srgb)
+        };
+        let mut total = 0.0;
+        let mut n = 0;
+        for by in 0..rows / 4 {
+            for bx in 0..w / 4 {
+                let (p, q) = (lab(mean(a, bx, by)), lab(mean(b, bx, by)));
+                total += (0..3).map(|i| (p[i] - q[i]).powi(2)).sum::<f32>().sqrt();
+                n += 1;
+            }
+        }
+        total / n as f32
+    }
+
+    #[test]
+    fn dithering_brings_256_colours_closer_to_the_sky() {
+        use crate::render::{post, Progressive, SceneRequest, Session};
+        use crate::tui::graphics::symbols::{self, Symbols};
+        use ratatui::buffer::Buffer;
+        use ratatui::layout::Rect;
+        // The env scene at the size of a 160x48 viewport in half blocks;
+        // its top sixth is sky, a smooth gradient.
+        let (w, h) = (160u32, 96u32);
+        let req = SceneRequest {
+            size: Some((w, h)),
+            ..SceneRequest::new("env")
+        };
+        let (s, _) = Session::open(&req).unwrap();
+        let film = Progressive::render(&s.tracer(), 1);
+        let shown = post::display(film.image(), w, h, &s.plan, &s.scene.settings.bloom);
+        let truth: Vec<[u8; 3]> = shown.image.iter().map(|c| srgb(*c)).collect();
+        let area = Rect::new(0, 0, w as u16, (h / 2) as u16);
+        let mut buf = Buffer::empty(area);
+        symbols::paint(
+            &mut buf,
+            area,
+            &truth,
+            (w, h),
+            Symbols::Half,
+            ColorMode::Palette256,
+        );
+        let mut dithered = vec![[0u8; 3]; truth.len()];
+        for cy in 0..area.height {
+            for cx in 0..area.width {
+                let c = &buf[(cx, cy)];
+                let px = symbols::shown_cell(Symbols::Half, c.symbol(), c.fg, c.bg).unwrap();
+                for (j, p) in px.iter().enumerate() {
+                    dithered[(2 * cy as usize + j) * w as usize + cx as usize] = p.map(|v| v as u8);
+                }
+            }
+        }
+        let nearest: Vec<[u8; 3]> = truth.iter().map(|c| palette256(quantize256(*c))).collect();
+        let sky = (h / 6) as usize / 4 * 4;
+        let (d, n) = (
+            blurred_delta_e(&dithered, &truth, w as usize, sky),
+            blurred_delta_e(&nearest, &truth, w as usize, sky),
+        );
+        eprintln!("sky: mean ΔE {d:.3} dithered, {n:.3} nearest");
+        assert!(d < 0.7 * n, "dithered {d} vs nearest {n}");
+        // Over the whole picture too.
+        let all = h as usize;
+        let (d, n) = (
+            blurred_delta_e(&dithered, &truth, w as usize, all),
+            blurred_delta_e(&nearest, &truth, w as usize, all),
+        );
+        eprintln!("whole image: mean ΔE {d:.3} dithered, {n:.3} nearest");
+        assert!(d < n, "dithered {d} vs nearest {n}");
     }
 }

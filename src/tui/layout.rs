@@ -36,6 +36,8 @@ pub struct Layout {
     /// Whether feature reasons get lines of their own.
     pub wrap_features: bool,
     pub render: Rect,
+    /// Pixels per cell of the image, across and down.
+    pub grid: (u32, u32),
     pub status: Rect,
     pub hints: Rect,
 }
@@ -44,6 +46,7 @@ impl Layout {
     pub fn compute(area: Rect, app: &App) -> Layout {
         let mut l = Layout {
             area,
+            grid: app.symbols.grid(),
             ..Layout::default()
         };
         if area.width < MIN_SIZE.0 || area.height < MIN_SIZE.1 {
@@ -85,16 +88,18 @@ impl Layout {
         l
     }
 
-    /// The view's size in pixels: two per cell vertically.
+    /// The view's size in pixels: the symbols' grid in every cell.
     pub fn view_size(&self) -> (u32, u32) {
-        (self.image.width as u32, self.image.height as u32 * 2)
+        let (gx, gy) = self.grid;
+        (self.image.width as u32 * gx, self.image.height as u32 * gy)
     }
 
-    /// The pixel under a terminal cell, when it lies in the image.
+    /// The top left pixel under a terminal cell, when it lies in the image.
     pub fn pixel_at(&self, column: u16, row: u16) -> Option<(u32, u32)> {
         let r = self.image;
+        let (gx, gy) = self.grid;
         let inside = column >= r.x && column < r.x + r.width && row >= r.y && row < r.y + r.height;
-        inside.then(|| ((column - r.x) as u32, (row - r.y) as u32 * 2))
+        inside.then(|| ((column - r.x) as u32 * gx, (row - r.y) as u32 * gy))
     }
 
     /// Whether a terminal cell lies in the debug pane.

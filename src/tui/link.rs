@@ -13,8 +13,9 @@ use crate::scene::Builder;
 
 pub struct RenderLink {
     worker: worker::Handle,
-    /// Bumped on every change that restarts rendering.
+    /// Bumped on every change that restarts rendering, and when.
     generation: u64,
+    pub started: Instant,
     /// The newest pass.
     pub frame: Option<Box<Snapshot>>,
     /// The newest BVH overlay.
@@ -30,6 +31,7 @@ impl RenderLink {
         Self {
             worker,
             generation: 0,
+            started: Instant::now(),
             frame: None,
             overlay: None,
             shown: (0, Instant::now()),
@@ -44,12 +46,14 @@ impl RenderLink {
     /// Renders `view` from now on, cancelling the pass in flight.
     pub fn send_view(&mut self, view: View) {
         self.generation += 1;
+        self.started = Instant::now();
         self.worker.send(Cmd::View(self.generation, Box::new(view)));
     }
 
     /// Rebuilds the BVH, then renders the current view again.
     pub fn rebuild(&mut self, builder: Builder) {
         self.generation += 1;
+        self.started = Instant::now();
         self.rebuilding = true;
         self.worker.send(Cmd::Builder(self.generation, builder));
     }

@@ -5,33 +5,36 @@
 //! render `worker` on its own thread), `inspector` (the ray-tree pane),
 //! `jobs` (PNG `export`, the stability battery) and `popup`; `keys` is the
 //! one key table, `layout` places everything before each draw, `widgets`
-//! draw (and only draw), `color` turns pixels into half-block cells and
-//! `bench` measures the pass time and terminal bandwidth.
+//! draw (and only draw), `graphics` turns the viewport's pixels into cells
+//! in the colours of `color`, `term` writes to the terminal, and `bench`
+//! measures the pass time and terminal bandwidth.
 
 pub mod app;
 pub mod bench;
 pub mod camera;
 pub mod color;
 pub mod export;
+pub mod graphics;
 pub mod inspector;
 pub mod jobs;
 pub mod keys;
 pub mod layout;
 pub mod link;
 pub mod popup;
+pub mod term;
 pub mod widgets;
 pub mod worker;
 
-use std::io::{self, BufWriter, IsTerminal, Stdout, Write};
+use std::io::{self, IsTerminal, Stdout, Write};
 use std::path::Path;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, Once};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::RecvTimeoutError;
+use std::sync::Once;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
-use ratatui::backend::CrosstermBackend;
-use ratatui::crossterm::event::{self, DisableMouseCapture, EnableMouseCapture};
+use ratatui::crossterm::event::{DisableMouseCapture, EnableMouseCapture};
 use ratatui::crossterm::terminal::{
     disable_raw_mode, enable_raw_mode, EnterAlternateScreen, LeaveAlternateScreen,
 };
@@ -42,17 +45,25 @@ use ratatui::Terminal;
 use crate::render::{SceneRequest, Session};
 use app::App;
 use color::ColorMode;
+use graphics::symbols::Symbols;
+use term::input::{Input, Reader, Reply};
+use term::output::{Output, Shown};
+use term::screen::Screen;
 
 /// At most this many frames per second are drawn.
 const FRAME: Duration = Duration::from_millis(33);
-/// How often the loop looks for new passes while rendering, and while idle.
+/// How often the loop looks for new passes while rendering or waiting for
+/// the terminal, and while idle (a resize is seen within that).
 const POLL_BUSY: Duration = Duration::from_millis(8);
-const POLL_IDLE: Duration = Duration::from_millis(250);
+const POLL_IDLE: Duration = Duration::from_millis(100);
+/// How long leaving waits for the terminal's last answers.
+const LEAVE_WAIT: Duration = Duration::from_secs(1);
 
 /// Opens the TUI on the scene; returns when the user quits.
 pub fn run(
     req: &SceneRequest,
     color: Option<ColorMode>,
+    symbols: Symbols,
     reference: Option<&Path>,
 ) -> Result<ExitCode> {
     if !io::stdout().is_terminal() {
@@ -66,22 +77,32 @@ pub fn run(
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    let color =
-        color.unwrap_or_else(|| ColorMode::detect(std::env::var("COLORTERM").ok().as_deref()));
-    let mut app = App::new(session, warnings, color, reference)?;
+    let (detected, hint) = term::detect_colour(|v| std::env::var(v).ok());
+    let mut app = App::new(session, warnings, color.unwrap_or(detected), reference)?;
     app.export_size = req.size;
+    app.symbols = symbols;
+    if let (None, Some(hint)) = (color, hint) {
+        let said = match app.status.as_str() {
+            "" => hint.to_string(),
+            s => format!("{s} · {hint}"),
+        };
+        app.say(said);
+    }
     // SIGTERM, SIGHUP and an outside SIGINT quit like `q`: the loop sees the
     // flag and the guard below restores the terminal.
     crate::interrupt::flag();
-    let bytes = Arc::new(AtomicU64::new(0));
     let guard = TerminalGuard::enter()?;
-    let writer = CountingWriter {
-        inner: BufWriter::with_capacity(1 << 16, io::stdout()),
-        count: bytes.clone(),
-    };
-    let result = Terminal::new(CrosstermBackend::new(writer))
-        .context("cannot set up the terminal")
-        .and_then(|mut t| event_loop(&mut t, &mut app, &bytes));
+    let result = Keyboard::open().and_then(|keyboard| {
+        let reader = Reader::spawn(keyboard.fd())?;
+        let mut terminal = Screen::new(io::stdout(), None)
+            .and_then(Terminal::new)
+            .context("cannot set up the terminal")?;
+        let mut out = Output::default();
+        out.start(terminal.backend_mut(), Instant::now())?;
+        let result = event_loop(&mut terminal, &mut app, &reader, &mut out);
+        leave(terminal.backend_mut(), &reader, &mut out);
+        result
+    });
     drop(guard);
     if app.jobs.cancel_export() {
         eprintln!("rayterm: an unfinished PNG export was cancelled");
@@ -94,41 +115,124 @@ pub fn run(
     })
 }
 
+/// Where keys come from: standard input when it is the terminal, else the
+/// controlling terminal.
+enum Keyboard {
+    Stdin,
+    Tty(std::fs::File),
+}
+
+impl Keyboard {
+    fn open() -> Result<Keyboard> {
+        if io::stdin().is_terminal() {
+            return Ok(Keyboard::Stdin);
+        }
+        let tty = std::fs::File::open("/dev/tty").context("cannot read keys from /dev/tty")?;
+        Ok(Keyboard::Tty(tty))
+    }
+
+    fn fd(&self) -> i32 {
+        use std::os::fd::AsRawFd;
+        match self {
+            Keyboard::Stdin => io::stdin().as_raw_fd(),
+            Keyboard::Tty(f) => f.as_raw_fd(),
+        }
+    }
+}
+
+/// Draws at most every [`FRAME`] when something changed, writes what the
+/// link has room for, and takes keys and the terminal's answers as they
+/// come: a key acts within a loop turn, whatever the link's speed.
 fn event_loop<W: Write>(
-    terminal: &mut Terminal<CrosstermBackend<W>>,
+    terminal: &mut Terminal<Screen<W>>,
     app: &mut App,
-    bytes: &AtomicU64,
+    reader: &Reader,
+    out: &mut Output,
 ) -> Result<()> {
     let mut dirty = true;
     let mut last_draw = Instant::now() - FRAME;
+    let mut size = terminal.size()?;
     loop {
         dirty |= app.poll()?;
-        dirty |= app.note_bytes(bytes.load(Ordering::Relaxed));
+        let now_size = terminal.size()?;
+        dirty |= std::mem::replace(&mut size, now_size) != now_size;
+        dirty |= app.note_output(out.figures());
         if dirty && last_draw.elapsed() >= FRAME {
             draw(terminal, app)?;
+            out.drawn(terminal.backend(), shown(app));
             last_draw = Instant::now();
             dirty = false;
         }
-        let idle = app.idle();
+        out.pump(terminal.backend_mut(), Instant::now())?;
         let wait = if dirty {
             FRAME.saturating_sub(last_draw.elapsed())
-        } else if idle {
+        } else if app.idle() && !out.waiting() {
             POLL_IDLE
         } else {
             POLL_BUSY
         };
-        if event::poll(wait)? {
-            // Take every pending event before drawing again.
-            loop {
-                app.handle_event(&event::read()?);
-                if app.quit || !event::poll(Duration::ZERO)? {
-                    break;
+        let mut next = match reader.rx.recv_timeout(wait) {
+            Ok(input) => Some(input),
+            Err(RecvTimeoutError::Timeout) => None,
+            // The terminal is gone.
+            Err(RecvTimeoutError::Disconnected) => return Ok(()),
+        };
+        // Take everything that came before drawing again.
+        while let Some(input) = next {
+            match input {
+                Input::Event(ev) => {
+                    app.handle_event(&ev);
+                    dirty = true;
                 }
+                Input::Reply(Reply::CursorPosition(..)) => out.answered(Instant::now()),
+                Input::Reply(_) => {}
             }
-            dirty = true;
+            if app.quit {
+                break;
+            }
+            next = reader.rx.try_recv().ok();
         }
         if app.quit || crate::interrupt::requested() {
             return Ok(());
+        }
+    }
+}
+
+/// What the viewport shows: the newest pass's view, and whether it is a
+/// full pass of the current one.
+fn shown(app: &App) -> Shown {
+    let frame = app.link.frame.as_deref();
+    Shown {
+        generation: frame.map_or(0, |f| f.generation),
+        full: frame.is_some_and(|f| !f.coarse && f.generation == app.generation()),
+    }
+}
+
+/// Leaves the alternate screen behind whatever is still on its way, and
+/// waits (a second at most) for the answers still due, so that none
+/// arrives at the shell.
+fn leave<W: Write>(screen: &mut Screen<W>, reader: &Reader, out: &mut Output) {
+    let mut bytes = Vec::new();
+    let _ = ratatui::crossterm::queue!(
+        bytes,
+        DisableMouseCapture,
+        LeaveAlternateScreen,
+        cursor::Show
+    );
+    if out.pacer.paced() {
+        bytes.extend_from_slice(term::pace::PROBE);
+    }
+    if screen.send(&bytes).is_err() {
+        return;
+    }
+    out.pacer.sent(bytes.len(), Instant::now());
+    let end = Instant::now() + LEAVE_WAIT;
+    while out.waiting() {
+        let left = end.saturating_duration_since(Instant::now());
+        match reader.rx.recv_timeout(left) {
+            Ok(Input::Reply(Reply::CursorPosition(..))) => out.answered(Instant::now()),
+            Ok(_) => {}
+            Err(_) => return,
         }
     }
 }
@@ -143,24 +247,6 @@ where
     app.update(Rect::new(0, 0, size.width, size.height));
     terminal.draw(|f| widgets::draw(f, app))?;
     Ok(())
-}
-
-/// Counts the bytes written to the terminal, for the bandwidth readout.
-pub struct CountingWriter<W> {
-    pub inner: W,
-    pub count: Arc<AtomicU64>,
-}
-
-impl<W: Write> Write for CountingWriter<W> {
-    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
-        let n = self.inner.write(buf)?;
-        self.count.fetch_add(n as u64, Ordering::Relaxed);
-        Ok(n)
-    }
-
-    fn flush(&mut self) -> io::Result<()> {
-        self.inner.flush()
-    }
 }
 
 /// Whether the terminal is in the TUI's state (raw mode, alternate screen).

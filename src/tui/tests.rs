@@ -8,7 +8,8 @@ use ratatui::style::Color;
 use ratatui::Terminal;
 
 use super::app::App;
-use super::color::ColorMode;
+use super::color::{self, ColorMode};
+use super::graphics::symbols::{self, Symbols};
 use super::keys::Key;
 use crate::render::{post, Feature, Features, PlanPolicy, Progressive, SceneRequest, Session};
 
@@ -75,12 +76,27 @@ fn a_frame_shows_every_panel() {
     }
     assert!(s.contains("spp") && s.contains("rays/s"), "{s}");
     assert!(s.contains("wide nodes"), "{s}");
-    // The viewport is half blocks with two colours each.
+    // The viewport is half blocks: each cell shows its two pixels.
     let b = t.backend().buffer();
     let v = app.layout.image;
-    let cell = &b[(v.x + v.width / 2, v.y + v.height / 2)];
-    assert_eq!(cell.symbol(), "▀");
-    assert!(matches!(cell.fg, Color::Rgb(..)) && matches!(cell.bg, Color::Rgb(..)));
+    let frame = app.link.current_frame().unwrap();
+    for (cx, cy) in [
+        (v.width / 2, v.height / 2),
+        (1, 1),
+        (v.width - 1, v.height - 1),
+    ] {
+        let cell = &b[(v.x + cx, v.y + cy)];
+        assert!(["▀", "▄", " "].contains(&cell.symbol()), "{cell:?}");
+        let shown = symbols::shown_cell(Symbols::Half, cell.symbol(), cell.fg, cell.bg).unwrap();
+        let px = |y: u32| {
+            color::srgb(frame.image[(y * frame.width + cx as u32) as usize]).map(f32::from)
+        };
+        assert_eq!(
+            shown,
+            vec![px(2 * cy as u32), px(2 * cy as u32 + 1)],
+            "{cell:?}"
+        );
+    }
     assert_eq!(app.view_size, (v.width as u32, 2 * v.height as u32));
 }
 
@@ -386,4 +402,130 @@ fn the_pixel_before_and_after_bloom_is_the_films_as_inspect_gives_it() {
         (want.pixel_before_bloom, want.pixel_after_bloom)
     );
     assert_eq!(tree.color, want.color);
+}
+
+#[test]
+fn sixteen_colours_are_written_as_ansi_codes() {
+    use super::term::screen::Screen;
+    use ratatui::layout::Size;
+    let req = SceneRequest {
+        size: Some((24, 16)),
+        ..SceneRequest::new("cornell")
+    };
+    let (session, warnings) = Session::open(&req).unwrap();
+    let mut app = App::new(session, warnings, ColorMode::Ansi16, None).unwrap();
+    let mut t = Terminal::new(Screen::new(Vec::new(), Some(Size::new(100, 30))).unwrap()).unwrap();
+    app.update(ratatui::layout::Rect::new(0, 0, 100, 30));
+    assert!(app.wait_frame(WAIT).unwrap());
+    super::draw(&mut t, &mut app).unwrap();
+    t.backend_mut().pump(usize::MAX).unwrap();
+    let out = String::from_utf8_lossy(t.backend_mut().writer()).into_owned();
+    for extended in ["38;5;", "48;5;", "38;2;", "48;2;"] {
+        assert!(!out.contains(extended), "{extended} in 16 colours");
+    }
+    // The viewport's colours: foregrounds 30-37/90-97, backgrounds
+    // 40-47/100-107, in the SGR sequences written.
+    let codes: Vec<u32> = out
+        .split("\x1b[")
+        .filter_map(|s| s.split_once('m'))
+        .filter(|(p, _)| p.bytes().all(|b| b.is_ascii_digit() || b == b';'))
+        .flat_map(|(p, _)| {
+            p.split(';')
+                .filter_map(|n| n.parse().ok())
+                .collect::<Vec<u32>>()
+        })
+        .collect();
+    let has = |r: std::ops::RangeInclusive<u32>| codes.iter().any(|c| r.contains(c));
+    assert!(has(30..=37) && has(40..=47) && has(90..=97), "{codes:?}");
+    assert!(
+        codes
+            .iter()
+            .all(|&c| c <= 9 || (30..=49).contains(&c) || (90..=107).contains(&c)),
+        "{codes:?}"
+    );
+}
+
+#[test]
+fn octants_show_four_times_the_pixels_and_selection_follows() {
+    let mut app = app("cornell", &[]);
+    app.symbols = Symbols::Octant;
+    let mut t = terminal(100, 30);
+    settle(&mut t, &mut app);
+    let v = app.layout.image;
+    assert_eq!(app.view_size, (2 * v.width as u32, 4 * v.height as u32));
+    // Every cell shows the least-squares fit of its 2x4 pixels.
+    let frame = app.link.current_frame().unwrap();
+    let b = t.backend().buffer();
+    let mut glyphs = std::collections::HashSet::new();
+    for cy in 0..v.height {
+        for cx in 0..v.width {
+            let cell = &b[(v.x + cx, v.y + cy)];
+            glyphs.insert(cell.symbol().to_string());
+            let shown = symbols::shown_cell(Symbols::Octant, cell.symbol(), cell.fg, cell.bg)
+                .unwrap_or_else(|| panic!("{cell:?}"));
+            let px: Vec<[f32; 3]> = (0..8)
+                .map(|j| {
+                    let (x, y) = (2 * cx as u32 + j % 2, 4 * cy as u32 + j / 2);
+                    color::srgb(frame.image[(y * frame.width + x) as usize]).map(f32::from)
+                })
+                .collect();
+            let fit = symbols::fit(&px, Symbols::Octant);
+            let err: f32 = shown
+                .iter()
+                .zip(&px)
+                .map(|(s, p)| (0..3).map(|c| (s[c] - p[c]).powi(2)).sum::<f32>())
+                .sum();
+            // The fit's colours, rounded to 8 bits.
+            assert!(
+                err <= fit.error + 8.0 * 3.0 * 0.25 + 1.0,
+                "{cell:?}: {err} vs {}",
+                fit.error
+            );
+        }
+    }
+    assert!(glyphs.len() > 4, "{glyphs:?}");
+    // A click selects the top left pixel of the cell; the mark is drawn.
+    let click = ratatui::crossterm::event::Event::Mouse(ratatui::crossterm::event::MouseEvent {
+        kind: ratatui::crossterm::event::MouseEventKind::Down(
+            ratatui::crossterm::event::MouseButton::Left,
+        ),
+        column: v.x + 5,
+        row: v.y + 3,
+        modifiers: ratatui::crossterm::event::KeyModifiers::NONE,
+    });
+    app.handle_event(&click);
+    let s = app.inspector.selected.unwrap();
+    assert_eq!((s.x, s.y), (10, 12));
+}
+
+#[test]
+fn the_render_panel_says_when_the_view_reached_the_screen() {
+    use super::term::output::Output;
+    use super::term::screen::Screen;
+    use ratatui::layout::Size;
+    use std::time::Instant;
+    let mut app = app("cornell", &[]);
+    let mut t = Terminal::new(Screen::new(Vec::new(), Some(Size::new(100, 30))).unwrap()).unwrap();
+    let mut out = Output::default();
+    out.start(t.backend_mut(), Instant::now()).unwrap();
+    app.update(ratatui::layout::Rect::new(0, 0, 100, 30));
+    assert!(app.wait_frame(WAIT).unwrap());
+    super::draw(&mut t, &mut app).unwrap();
+    out.drawn(t.backend(), super::shown(&app));
+    // Written, and not on screen until the terminal answers.
+    out.pump(t.backend_mut(), Instant::now()).unwrap();
+    app.note_output(out.figures());
+    assert_eq!(app.view_shown_in(), None);
+    // The terminal answers each chunk; more is written as answers come.
+    while out.waiting() {
+        out.answered(Instant::now());
+        out.pump(t.backend_mut(), Instant::now()).unwrap();
+    }
+    app.note_output(out.figures());
+    let secs = app.view_shown_in().expect("the full pass is on screen");
+    assert!(secs < WAIT.as_secs_f64());
+    super::draw(&mut t, &mut app).unwrap();
+    let b = t.backend().wanted_text();
+    assert!(b.contains("view shown in"), "{b}");
+    assert!(b.contains("frames/s"), "{b}");
 }

@@ -130,17 +130,40 @@ pub fn features(f: &mut Frame, area: Rect, lines: Vec<Line<'static>>) {
     );
 }
 
+/// What goes to the terminal: bytes and pictures per second, the link's
+/// measured rate, and how long the view took to appear.
+fn output_lines(app: &App) -> Vec<Line<'static>> {
+    let mut v = vec![Line::from(format!(
+        "terminal {}B/s · {:.1} frames/s",
+        si(app.bytes_per_sec),
+        app.frames_per_sec
+    ))];
+    let link = app.output.link_rate.map(|r| format!("link {}B/s", si(r)));
+    let shown = app
+        .view_shown_in()
+        .map(|s| format!("view shown in {}", words::ms(s * 1e3)));
+    let parts: Vec<String> = link.into_iter().chain(shown).collect();
+    if !parts.is_empty() {
+        v.push(Line::from(parts.join(" · ")));
+    }
+    v
+}
+
 pub fn render(f: &mut Frame, area: Rect, app: &App) {
     let block = panel(" Render ".into());
     let inner = block.inner(area);
     f.render_widget(block, area);
-    let bytes = format!("terminal {}B/s", si(app.bytes_per_sec));
+    let bytes = output_lines(app);
     let mut text = match app.current_frame() {
-        None => vec![Line::from("starting..."), Line::from(bytes)],
-        Some(s) if s.coarse => vec![
-            Line::from(format!("coarse preview in {}", words::ms(s.pass_ms))),
-            Line::from(bytes),
-        ],
+        None => [vec![Line::from("starting...")], bytes].concat(),
+        Some(s) if s.coarse => [
+            vec![Line::from(format!(
+                "coarse preview in {}",
+                words::ms(s.pass_ms)
+            ))],
+            bytes,
+        ]
+        .concat(),
         Some(s) => {
             let error = match s.error {
                 _ if s.exact => "error: exact (nothing sampled)".to_string(),
@@ -169,7 +192,7 @@ pub fn render(f: &mut Frame, area: Rect, app: &App) {
             if app.reference.is_some() {
                 v.extend(truth_lines(s));
             }
-            v.push(Line::from(bytes));
+            v.extend(bytes);
             if s.bad_samples > 0 {
                 v.push(Line::styled(
                     format!("{} NaN/Inf samples (n finds one)", s.bad_samples),

@@ -1,4 +1,4 @@
-//! The viewport: the newest pass in half blocks, with the BVH overlay the
+//! The viewport: the newest pass in block symbols, with the BVH overlay the
 //! worker drew for this view, the selected pixel's rays and its mark.
 
 use ratatui::buffer::Buffer;
@@ -11,6 +11,7 @@ use super::rays;
 use crate::raster::canvas::Canvas;
 use crate::tui::app::App;
 use crate::tui::color::{self, ColorMode};
+use crate::tui::graphics::symbols::{self, Symbols};
 use crate::tui::worker::Snapshot;
 
 /// Colour of the marks around the selected pixel.
@@ -19,10 +20,11 @@ const MARK: [u8; 3] = [255, 0, 255];
 pub fn draw(f: &mut Frame, area: Rect, app: &App) {
     let inner = app.layout.image;
     let mut title = format!(
-        " {} · {}x{} px · {}",
+        " {} · {}x{} px · {} · {}",
         app.session.scene.name,
         app.view_size.0,
         app.view_size.1,
+        app.symbols.name(),
         app.color.name()
     );
     if app.inspector.select_mode {
@@ -67,13 +69,13 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App) {
     if let (true, Some(s)) = (current, app.inspector.selected) {
         mark(&mut px, w, h, s.x, s.y);
     }
-    color::paint(f.buffer_mut(), inner, &px, w, h, app.color);
+    symbols::paint(f.buffer_mut(), inner, &px, (w, h), app.symbols, app.color);
 }
 
 /// Paints a snapshot as the viewport does, without overlays (for the benchmark).
 pub fn paint_view(buf: &mut Buffer, area: Rect, s: &Snapshot, mode: ColorMode) {
     let px: Vec<[u8; 3]> = s.image.iter().map(|c| color::srgb(*c)).collect();
-    color::paint(buf, area, &px, s.width, s.height, mode);
+    symbols::paint(buf, area, &px, (s.width, s.height), Symbols::Half, mode);
 }
 
 /// Four short arms around pixel (x, y), leaving the pixel itself visible.

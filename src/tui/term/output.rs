@@ -1,0 +1,178 @@
+//! Output to the terminal as the link allows: the [`Screen`]'s changed
+//! cells in chunks the [`Pacer`] makes room for, and which pictures have
+//! reached the screen (every cell written since they were drawn, and the
+//! terminal has answered for those bytes), for the frame rate and the time
+//! a view took to appear.
+
+use std::collections::VecDeque;
+use std::io::{self, Write};
+use std::time::Instant;
+
+use super::pace::{Pacer, PROBE};
+use super::screen::Screen;
+
+/// What the viewport showed in a draw.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shown {
+    pub generation: u64,
+    /// A full-resolution pass (not the coarse preview, not an older view).
+    pub full: bool,
+}
+
+/// The output's figures, for the Render panel.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Figures {
+    /// Bytes written so far.
+    pub written: u64,
+    /// Pictures that reached the screen so far.
+    pub frames: u64,
+    /// The link's measured delivery rate in bytes per second.
+    pub link_rate: Option<f64>,
+    /// The first full picture of a view to reach the screen: its
+    /// generation and when.
+    pub picture: Option<(u64, Instant)>,
+}
+
+#[derive(Default)]
+pub struct Output {
+    pub pacer: Pacer,
+    /// Draws not yet on screen in full: the screen's sweep count when
+    /// drawn, and what they showed.
+    drawn: VecDeque<(u64, Shown)>,
+    /// Pictures written in full, waiting for the terminal's answer: the
+    /// bytes written by then.
+    landing: VecDeque<(u64, Shown)>,
+    figures: Figures,
+}
+
+impl Output {
+    /// Starts pacing: the first request measures the round trip.
+    pub fn start<W: Write>(&mut self, screen: &mut Screen<W>, now: Instant) -> io::Result<()> {
+        screen.send(PROBE)?;
+        self.pacer.sent(PROBE.len(), now);
+        Ok(())
+    }
+
+    /// A frame showing `shown` was drawn into the screen.
+    pub fn drawn<W: Write>(&mut self, screen: &Screen<W>, shown: Shown) {
+        self.drawn.push_back((screen.swept(), shown));
+    }
+
+    /// The terminal answered a request.
+    pub fn answered(&mut self, now: Instant) {
+        self.pacer.answered(now);
+        self.land(now);
+    }
+
+    /// Writes what the pacer has room for, then notes which pictures are
+    /// on screen.
+    pub fn pump<W: Write>(&mut self, screen: &mut Screen<W>, now: Instant) -> io::Result<()> {
+        self.pacer.check(now);
+        while screen.pending() {
+            let room = self.pacer.room();
+            if room == 0 {
+                break;
+            }
+            let (n, _) = screen.pump(room.saturating_sub(PROBE.len()).max(1))?;
+            let mut sent = n;
+            if self.pacer.paced() {
+                screen.send(PROBE)?;
+                sent += PROBE.len();
+            }
+            self.pacer.sent(sent, now);
+        }
+        // A draw is written in full once every cell has been swept since,
+        // or nothing differs any more.
+        let mut covered = None;
+        while let Some(&(at, shown)) = self.drawn.front() {
+            if screen.pending() && screen.swept() < at + screen.cells() as u64 {
+                break;
+            }
+            self.drawn.pop_front();
+            covered = Some(shown);
+        }
+        if let Some(shown) = covered {
+            self.landing.push_back((screen.written(), shown));
+        }
+        self.land(now);
+        self.figures.written = screen.written();
+        self.figures.link_rate = self.pacer.rate();
+        Ok(())
+    }
+
+    /// Pictures whose bytes the terminal has answered for are on screen.
+    fn land(&mut self, now: Instant) {
+        while let Some(&(bytes, shown)) = self.landing.front() {
+            if self.pacer.acked() < bytes {
+                break;
+            }
+            self.landing.pop_front();
+            self.figures.frames += 1;
+            let new_view = self
+                .figures
+                .picture
+                .is_none_or(|(g, _)| g != shown.generation);
+            if shown.full && new_view {
+                self.figures.picture = Some((shown.generation, now));
+            }
+        }
+    }
+
+    pub fn figures(&self) -> Figures {
+        self.figures
+    }
+
+    /// Whether requests are still unanswered.
+    pub fn waiting(&self) -> bool {
+        self.pacer.paced() && self.pacer.waiting() > 0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ratatui::layout::Size;
+    use ratatui::style::Style;
+    use ratatui::Terminal;
+    use std::time::Duration;
+
+    #[test]
+    fn a_picture_lands_when_every_cell_is_written_and_answered() {
+        let mut t =
+            Terminal::new(Screen::new(Vec::new(), Some(Size::new(40, 10))).unwrap()).unwrap();
+        let mut out = Output::default();
+        let t0 = Instant::now();
+        out.start(t.backend_mut(), t0).unwrap();
+        let shown = Shown {
+            generation: 1,
+            full: true,
+        };
+        t.draw(|f| {
+            for y in 0..10 {
+                f.buffer_mut().set_string(
+                    0,
+                    y,
+                    "x".repeat(40),
+                    Style::new().fg(ratatui::style::Color::Indexed(200)),
+                );
+            }
+        })
+        .unwrap();
+        out.drawn(t.backend(), shown);
+        out.pump(t.backend_mut(), t0).unwrap();
+        // Written (the first chunk's room covers it) but not answered yet.
+        assert!(!t.backend().pending());
+        assert_eq!(out.figures().frames, 0);
+        assert!(out.figures().picture.is_none());
+        // Each chunk ended with a request; answering all lands the picture.
+        let later = t0 + Duration::from_millis(30);
+        while out.waiting() {
+            out.answered(later);
+        }
+        assert_eq!(out.figures().frames, 1);
+        assert_eq!(out.figures().picture, Some((1, later)));
+        let written = String::from_utf8_lossy(t.backend_mut().writer()).into_owned();
+        assert!(written.starts_with("\x1b[6n"), "{written:?}");
+        assert!(written.ends_with("\x1b[6n"), "{written:?}");
+    }
+}
