@@ -37,13 +37,19 @@ pub use crate::raster::metrics::{LUMA, REL_EPS};
 const MAX_LISTED: usize = 1000;
 
 /// One pixel's statistics: everything its error estimate needs, and
-/// everything an exact merge of two films over consecutive sample ranges
-/// needs (Chan et al.: counts, means and M2 of the samples and of the
-/// complete blocks' means; sums of the checkerboard contrasts and of the
-/// incomplete blocks' terms; the open block's index, count, sum and
-/// checkerboard difference, to finish it with the other film's samples).
+/// everything an exact merge of films over disjoint sample ranges needs.
+/// The colour is summed exactly (fixed point, [`FIXED_ONE`]), so a film
+/// merged from parts holds the very mean a single render computes; the
+/// luminance statistics merge by Chan et al. (counts, means and M2 of the
+/// samples and of the complete blocks' means; sums of the checkerboard
+/// contrasts and of the incomplete blocks' terms), and the blocks a range
+/// boundary cuts are kept as pieces (`head`, `tail`) that the neighbouring
+/// range completes.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PixelStats {
+    /// Sum of the samples per channel, in units of 1 / [`FIXED_ONE`].
+    pub sum: [i128; 3],
+    /// The mean colour: `sum / n`.
     pub mean: DVec3,
     /// Sum of squared deviations of the luminance (Welford's M2).
     pub m2: f64,
@@ -51,19 +57,71 @@ pub struct PixelStats {
     /// Complete blocks of strata.
     pub blocks: u32,
     /// Mean and M2 of the complete blocks' mean luminances.
-    block_mean: f64,
-    block_m2: f64,
+    pub block_mean: f64,
+    pub block_m2: f64,
     /// Sum over complete blocks of `(Σ black - Σ white)² / 16`, each an
     /// estimate of `σ_w²`.
-    checker: f64,
+    pub checker: f64,
     /// Sum of `r (16 - r)` over blocks left incomplete.
-    open: u32,
-    /// The block being filled: its index, samples, luminance sum and
-    /// checkerboard difference (black minus white).
-    part_block: u32,
-    part_n: u32,
-    part_sum: f64,
-    part_diff: f64,
+    pub open: u32,
+    /// The first block seen, while incomplete: the one a range that starts
+    /// inside a block shares with the range before it.
+    pub head: Piece,
+    /// The block being filled after the first.
+    pub tail: Piece,
+}
+
+/// Part of a block of strata: its index, samples, luminance sum and
+/// checkerboard difference (black minus white).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Piece {
+    pub block: u32,
+    pub n: u32,
+    pub sum: f64,
+    pub diff: f64,
+}
+
+impl Piece {
+    /// `r (16 - r)`: what an incomplete block adds to the variance.
+    fn open(&self) -> u32 {
+        self.n * (PIXEL_STRATA - self.n)
+    }
+
+    fn join(self, o: Piece) -> Piece {
+        Piece {
+            block: self.block,
+            n: self.n + o.n,
+            sum: self.sum + o.sum,
+            diff: self.diff + o.diff,
+        }
+    }
+}
+
+/// One in the fixed point the colour sums are kept in: 2^64. A sample is
+/// exact from 2^-41 up (below, its bits under 2^-64 are dropped) and
+/// clamped to ±[`FIXED_MAX`], so a million samples cannot overflow.
+pub const FIXED_ONE: f64 = 18_446_744_073_709_551_616.0;
+/// The largest sample magnitude summed (2^41, about 2.2e12).
+pub const FIXED_MAX: f32 = 2_199_023_255_552.0;
+
+/// A sample channel in fixed point.
+#[inline]
+fn fixed(x: f32) -> i128 {
+    (x.clamp(-FIXED_MAX, FIXED_MAX) as f64 * FIXED_ONE) as i128
+}
+
+/// Merges counts, means and M2 of two sets of values (Chan et al.).
+fn chan(a: (u32, f64, f64), b: (u32, f64, f64)) -> (u32, f64, f64) {
+    match (a.0, b.0) {
+        (_, 0) => a,
+        (0, _) => b,
+        (na, nb) => {
+            let n = na + nb;
+            let d = b.1 - a.1;
+            let w = na as f64 * nb as f64 / n as f64;
+            (n, a.1 + d * nb as f64 / n as f64, a.2 + b.2 + d * d * w)
+        }
+    }
 }
 
 impl PixelStats {
@@ -71,11 +129,14 @@ impl PixelStats {
     /// pixel samples are jittered.
     #[inline]
     pub fn add(&mut self, k: u32, c: Vec3, stratum: Option<u32>) {
-        let c = c.as_dvec3();
-        self.n += 1;
-        let n = self.n as f64;
+        let q = [fixed(c.x), fixed(c.y), fixed(c.z)];
         let lum_old = self.mean.dot(LUMA.as_dvec3());
-        self.mean += (c - self.mean) / n;
+        self.n += 1;
+        for (s, q) in self.sum.iter_mut().zip(q) {
+            *s += q;
+        }
+        self.mean = self.mean_of_sum();
+        let c = DVec3::from_array(q.map(|v| v as f64 / FIXED_ONE));
         let lum = c.dot(LUMA.as_dvec3());
         self.m2 += (lum - lum_old) * (lum - self.mean.dot(LUMA.as_dvec3()));
         if let Some(s) = stratum {
@@ -83,28 +144,120 @@ impl PixelStats {
         }
     }
 
+    fn mean_of_sum(&self) -> DVec3 {
+        if self.n == 0 {
+            return DVec3::ZERO;
+        }
+        let n = self.n as f64;
+        DVec3::from_array(self.sum.map(|s| s as f64 / FIXED_ONE / n))
+    }
+
     fn add_stratified(&mut self, block: u32, lum: f64, stratum: u32) {
-        if self.part_n > 0 && block != self.part_block {
-            // A sample of the open block was dropped (not finite).
-            self.open += self.part_n * (PIXEL_STRATA - self.part_n);
-            self.part_n = 0;
-        }
-        if self.part_n == 0 {
-            (self.part_block, self.part_sum, self.part_diff) = (block, 0.0, 0.0);
-        }
-        self.part_n += 1;
-        self.part_sum += lum;
         let black = (stratum % PIXEL_GRID + stratum / PIXEL_GRID).is_multiple_of(2);
-        self.part_diff += if black { lum } else { -lum };
-        if self.part_n == PIXEL_STRATA {
-            self.blocks += 1;
-            let m = self.part_sum / PIXEL_STRATA as f64;
-            let d = m - self.block_mean;
-            self.block_mean += d / self.blocks as f64;
-            self.block_m2 += d * (m - self.block_mean);
-            self.checker += self.part_diff * self.part_diff / PIXEL_STRATA as f64;
-            self.part_n = 0;
+        let first = self.n == 1;
+        let piece = if first || (self.head.n > 0 && self.head.block == block) {
+            &mut self.head
+        } else {
+            if self.tail.n > 0 && block != self.tail.block {
+                // A sample of the block being filled was dropped (not finite).
+                self.open += self.tail.open();
+                self.tail = Piece::default();
+            }
+            &mut self.tail
+        };
+        if piece.n == 0 {
+            *piece = Piece {
+                block,
+                ..Piece::default()
+            };
         }
+        piece.n += 1;
+        piece.sum += lum;
+        piece.diff += if black { lum } else { -lum };
+        if piece.n == PIXEL_STRATA {
+            let p = std::mem::take(piece);
+            self.close_block(p);
+        }
+    }
+
+    /// Counts a complete block.
+    fn close_block(&mut self, p: Piece) {
+        let m = p.sum / PIXEL_STRATA as f64;
+        (self.blocks, self.block_mean, self.block_m2) =
+            chan((self.blocks, self.block_mean, self.block_m2), (1, m, 0.0));
+        self.checker += p.diff * p.diff / PIXEL_STRATA as f64;
+    }
+
+    /// Whether the only block piece is the first, incomplete one.
+    fn only_head(&self) -> bool {
+        self.head.n > 0 && self.tail.n == 0 && self.blocks == 0 && self.open == 0
+    }
+
+    /// The statistics of this pixel's samples followed by `b`'s, whose
+    /// sample indices all come after this one's: the colour exactly, the
+    /// rest as the sequential sums up to rounding.
+    pub fn merge(&self, b: &PixelStats) -> PixelStats {
+        if b.n == 0 {
+            return *self;
+        }
+        if self.n == 0 {
+            return *b;
+        }
+        let a = self;
+        let n = a.n + b.n;
+        let mut sum = a.sum;
+        for (s, t) in sum.iter_mut().zip(b.sum) {
+            *s += t;
+        }
+        let luma = LUMA.as_dvec3();
+        let (_, _, m2) = chan((a.n, a.mean.dot(luma), a.m2), (b.n, b.mean.dot(luma), b.m2));
+        let mut out = PixelStats { sum, n, m2, ..*a };
+        out.mean = out.mean_of_sum();
+        // a's last piece and b's first one may be halves of one block.
+        let last_is_head = a.only_head();
+        let last = if a.tail.n > 0 {
+            Some(std::mem::take(&mut out.tail))
+        } else if last_is_head {
+            Some(std::mem::take(&mut out.head))
+        } else {
+            None
+        };
+        let first = (b.head.n > 0).then_some(b.head);
+        let b_only_head = b.only_head();
+        let place = |out: &mut PixelStats, p: Piece, is_first: bool, is_last: bool| {
+            if p.n == PIXEL_STRATA {
+                out.close_block(p);
+            } else if is_first {
+                out.head = p;
+            } else if is_last {
+                out.tail = p;
+            } else {
+                out.open += p.open();
+            }
+        };
+        match (last, first) {
+            (Some(l), Some(f)) if l.block == f.block => {
+                place(&mut out, l.join(f), last_is_head, b_only_head);
+            }
+            (l, f) => {
+                if let Some(l) = l {
+                    place(&mut out, l, last_is_head, false);
+                }
+                if let Some(f) = f {
+                    place(&mut out, f, false, b_only_head);
+                }
+            }
+        }
+        (out.blocks, out.block_mean, out.block_m2) = chan(
+            (out.blocks, out.block_mean, out.block_m2),
+            (b.blocks, b.block_mean, b.block_m2),
+        );
+        out.checker += b.checker;
+        out.open += b.open;
+        if b.tail.n > 0 {
+            out.tail = b.tail;
+        }
+        out
     }
 
     /// Sample variance of the luminance.
@@ -125,7 +278,7 @@ impl PixelStats {
         let (n, s2) = (self.n as f64, self.variance());
         let strata = PIXEL_STRATA as f64;
         // Σ r (16 - r) over the groups of strata drawn without replacement.
-        let g = (self.open + self.part_n * (PIXEL_STRATA - self.part_n)) as f64;
+        let g = (self.open + self.head.open() + self.tail.open()) as f64;
         if self.blocks == 0 {
             if g == 0.0 {
                 // Independent samples.
@@ -149,7 +302,7 @@ impl PixelStats {
     /// (below that a jittered estimate assumes how the variance splits, and
     /// a few independent ones can all miss a small bright feature).
     pub fn estimate_is_design_based(&self) -> bool {
-        let jittered = self.blocks > 0 || self.part_n > 0 || self.open > 0;
+        let jittered = self.blocks > 0 || self.head.n > 0 || self.tail.n > 0 || self.open > 0;
         self.n >= PIXEL_STRATA && (self.blocks > 0 || !jittered)
     }
 }
@@ -195,9 +348,13 @@ pub struct Film {
     /// The image's statistics: all samples of a uniform film, the image
     /// blocks of an adaptive one.
     pub pixels: Vec<PixelStats>,
-    /// Samples per pixel attempted so far: the next pass's first index on a
-    /// uniform film, the fewest any pixel has on an adaptive one.
+    /// Samples per pixel attempted so far on a uniform film (the next
+    /// pass's first index is `start + spp`), the fewest any pixel has on an
+    /// adaptive one.
     pub spp: u32,
+    /// The first sample index of a uniform film: 0, except for a part of a
+    /// split render (`render --samples A..B`), which starts at A.
+    pub start: u32,
     /// Per-pixel counts and decision statistics of an adaptive film.
     pub adaptive: Option<Allocation>,
     pub bad_count: u64,
@@ -216,6 +373,7 @@ impl Film {
             height,
             pixels: vec![PixelStats::default(); width as usize * height as usize],
             spp: 0,
+            start: 0,
             adaptive: None,
             bad_count: 0,
             bad: Vec::new(),
@@ -294,6 +452,24 @@ impl Film {
             }
         } else {
             self.record_bad(BadSample { x, y, sample });
+        }
+    }
+
+    /// Appends the samples of `later`, a uniform film of the same size
+    /// whose sample indices all come after this one's (the next part of a
+    /// split render): the mean is the very one a single render computes,
+    /// the error statistics equal up to rounding.
+    pub fn merge(&mut self, later: &Film) {
+        assert_eq!((self.width, self.height), (later.width, later.height));
+        for (p, q) in self.pixels.iter_mut().zip(&later.pixels) {
+            *p = p.merge(q);
+        }
+        self.spp += later.spp;
+        self.bad_count += later.bad_count;
+        for &b in &later.bad {
+            if self.bad.len() < MAX_LISTED {
+                self.bad.push(b);
+            }
         }
     }
 
@@ -539,6 +715,73 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A pixel's samples `range`, jittered, with some dropped.
+    fn stats(range: std::ops::Range<u32>, drop: &[u32]) -> PixelStats {
+        let mut px = PixelStats::default();
+        for k in range.filter(|k| !drop.contains(k)) {
+            let (s, v) = sample(7, k, 1.0, 1.0);
+            px.add(k, Vec3::new(v as f32, 0.5 * v as f32, 1e-30), Some(s));
+        }
+        px
+    }
+
+    #[test]
+    fn merged_ranges_equal_one_range() {
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1e-300);
+        for drop in [&[][..], &[0, 5, 20, 47], &[9, 10, 11, 12, 13, 14, 15]] {
+            let whole = stats(0..70, drop);
+            for cuts in [
+                vec![35],
+                vec![9, 16],
+                vec![3, 7, 11, 50],
+                vec![1, 2, 3, 4, 5, 6],
+                vec![16, 32, 48, 64],
+                vec![10, 20, 30, 40, 50, 60],
+            ] {
+                let mut bounds = vec![0];
+                bounds.extend(&cuts);
+                bounds.push(70);
+                let mut m = PixelStats::default();
+                for w in bounds.windows(2) {
+                    m = m.merge(&stats(w[0]..w[1], drop));
+                }
+                let what = format!("drop {drop:?} cuts {cuts:?}");
+                assert_eq!(m.sum, whole.sum, "{what}");
+                assert_eq!(m.mean.to_array(), whole.mean.to_array(), "{what}");
+                assert_eq!(
+                    (m.n, m.blocks, m.open, m.head.n, m.tail.n),
+                    (
+                        whole.n,
+                        whole.blocks,
+                        whole.open,
+                        whole.head.n,
+                        whole.tail.n
+                    ),
+                    "{what}"
+                );
+                for (a, b) in [
+                    (m.m2, whole.m2),
+                    (m.block_mean, whole.block_mean),
+                    (m.block_m2, whole.block_m2),
+                    (m.checker, whole.checker),
+                    (m.mean_variance().unwrap(), whole.mean_variance().unwrap()),
+                ] {
+                    assert!(close(a, b), "{what}: {a} vs {b}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn colour_sums_are_exact_and_clamped() {
+        let mut px = PixelStats::default();
+        px.add(0, Vec3::new(0.1, 3.0e38, -1.0), None);
+        px.add(1, Vec3::new(0.2, 1.0, -1.0), None);
+        assert_eq!(px.mean.x, (0.1f32 as f64 + 0.2f32 as f64) / 2.0);
+        assert_eq!(px.mean.y, (FIXED_MAX as f64 + 1.0) / 2.0);
+        assert_eq!(px.mean.z, -1.0);
     }
 
     #[test]

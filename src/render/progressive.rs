@@ -363,7 +363,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
     rows_done: Option<&AtomicU32>,
 ) -> R {
     let w = (film.width as usize).max(1);
-    let first = film.spp;
+    let first = film.start + film.spp;
     let rows: Vec<Row> = match &mut film.adaptive {
         None => film
             .pixels
