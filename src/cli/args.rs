@@ -37,6 +37,13 @@ impl Cli {
 pub enum Command {
     /// Render a scene to a PNG file.
     Render(RenderArgs),
+    /// Merge the partial films of a split render into one image.
+    ///
+    /// The parts (from `render --part K/N` or `--samples A..B`) must come
+    /// from the same scene, size and seed, and may not overlap; the image is
+    /// the one a single render of all their samples makes, post-processed
+    /// the same way.
+    Merge(MergeArgs),
     /// List the built-in scenes.
     Scenes,
     /// Print the ray tree of one pixel: every ray the renderer traced for it.
@@ -76,7 +83,41 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 }
 
 /// The most samples per pixel any render takes.
-pub const MAX_SPP: u32 = 1 << 20;
+pub use crate::render::partial::MAX_SPP;
+
+/// `A..B`: sample indices A to B-1, within 0..MAX_SPP.
+pub fn parse_samples(s: &str) -> Result<std::ops::Range<u32>, String> {
+    let (a, b) = s
+        .split_once("..")
+        .ok_or_else(|| format!("'{s}' is not A..B (sample indices A to B-1)"))?;
+    let num = |v: &str, what: &str| -> Result<u32, String> {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&n| n <= MAX_SPP)
+            .ok_or_else(|| format!("the {what} of '{s}' is not a whole number from 0 to {MAX_SPP}"))
+    };
+    let (a, b) = (num(a, "start")?, num(b, "end")?);
+    if a >= b {
+        return Err(format!("'{s}' is empty: the end must be above the start"));
+    }
+    Ok(a..b)
+}
+
+/// `K/N`: the K-th of N equal ranges of samples, 1 <= K <= N.
+pub fn parse_part(s: &str) -> Result<(u32, u32), String> {
+    let (k, n) = s
+        .split_once('/')
+        .ok_or_else(|| format!("'{s}' is not K/N (part K of N)"))?;
+    let k: u32 = k.trim().parse().map_err(|_| format!("bad K in '{s}'"))?;
+    let n: u32 = n.trim().parse().map_err(|_| format!("bad N in '{s}'"))?;
+    if n == 0 || k == 0 || k > n {
+        return Err(format!(
+            "part '{s}': K must be from 1 to N, and N at least 1"
+        ));
+    }
+    Ok((k, n))
+}
 
 /// A thread count from 1 to four times the machine's cores: more only
 /// slows the machine down.
@@ -190,6 +231,41 @@ pub struct RenderArgs {
     /// image), bvh-leaves, bvh-heat (nodes visited per pixel) or bvh-heat:tests.
     #[arg(long, value_name = "VIEW", conflicts_with_all = ["spp", "time", "target_error"])]
     pub debug: Option<DebugView>,
+    /// Render only sample indices A to B-1 of every pixel and write a
+    /// partial film (-o part.exr) for `rayterm merge`.
+    #[arg(long, value_name = "A..B", value_parser = parse_samples,
+          conflicts_with_all = ["spp", "time", "target_error", "adaptive", "debug"])]
+    pub samples: Option<std::ops::Range<u32>>,
+    /// Render part K of N equal sample ranges of --spp (default: the
+    /// scene's) and write a partial film (-o part.exr) for `rayterm merge`.
+    /// Parts are uniform: not with --adaptive.
+    #[arg(long, value_name = "K/N", value_parser = parse_part,
+          conflicts_with_all = ["samples", "time", "target_error", "adaptive", "debug"])]
+    pub part: Option<(u32, u32)>,
+    /// Write the film so far to this partial film (.exr) every few seconds,
+    /// at the end, and when stopped by Ctrl-C or SIGTERM, atomically.
+    #[arg(long, value_name = "FILE.exr", conflicts_with_all = ["adaptive", "debug"])]
+    pub checkpoint: Option<PathBuf>,
+    /// Continue from a checkpoint (or a part) of this same render: its
+    /// samples are kept, and rendering goes on to the requested spp, time
+    /// or error.
+    #[arg(long, value_name = "FILE.exr", conflicts_with_all = ["adaptive", "debug"])]
+    pub resume: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+pub struct MergeArgs {
+    /// Partial films, in any order.
+    #[arg(required = true, value_name = "PART")]
+    pub parts: Vec<PathBuf>,
+    /// Output: .png (the picture, after bloom), .exr or .hdr (the linear
+    /// film before bloom), as `render` writes them.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Write the image even when ranges of samples are missing (it has
+    /// fewer samples, and says so).
+    #[arg(long)]
+    pub allow_missing: bool,
 }
 
 /// `X,Y`, e.g. `400,300`.

@@ -5,6 +5,7 @@ mod bench;
 mod converge;
 mod debug;
 mod inspect;
+mod merge;
 mod render;
 mod scenes;
 mod stability;
@@ -58,6 +59,7 @@ pub fn main() -> ExitCode {
     });
     let result = match command {
         Command::Render(a) => render::run(a),
+        Command::Merge(a) => merge::run(a),
         Command::Scenes => scenes::run(),
         Command::Inspect(a) => inspect::run(a),
         Command::Converge(a) => converge::run(a),

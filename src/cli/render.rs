@@ -2,6 +2,7 @@
 //! bar and an estimate of the time left, stopped cleanly by Ctrl-C, SIGTERM
 //! or SIGHUP. The output is checked before anything renders.
 
+use std::ops::Range;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -9,11 +10,13 @@ use std::time::Instant;
 use anyhow::{bail, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use super::args::RenderArgs;
+use super::args::{RenderArgs, MAX_SPP};
 use super::open_scene;
 use crate::interrupt;
 use crate::raster::{png, Format, Output};
-use crate::render::{post, Ended, Film, Progressive, Stop};
+use crate::render::partial::{self, Meta, Part};
+use crate::render::{post, Ended, Film, Progressive, Session, Stop};
+use crate::scene::BloomSettings;
 
 pub fn run(a: RenderArgs) -> Result<ExitCode> {
     let stop = stop(&a)?;
@@ -23,12 +26,42 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         .then(|| PathBuf::from(&a.scene.scene))
         .into_iter()
         .collect();
-    let out = Output::check(&a.output, &scene_file, Format::RENDERS)?;
+    let split = a.samples.is_some() || a.part.is_some();
+    let formats = if split {
+        &[Format::Exr][..]
+    } else {
+        Format::RENDERS
+    };
+    let out = Output::check(&a.output, &scene_file, formats).map_err(|e| {
+        if split {
+            e.context("a part is a partial film: name it .exr")
+        } else {
+            e
+        }
+    })?;
     if a.debug.is_some() && out.format != Format::Png {
         bail!("--debug views are PNG images; name the output .png");
     }
+    let checkpoint = match &a.checkpoint {
+        Some(c) => {
+            if same_path(c, &a.output) {
+                bail!(
+                    "{} is the output; name the checkpoint another file",
+                    c.display()
+                );
+            }
+            Some(
+                Output::check(c, &scene_file, &[Format::Exr])
+                    .map_err(|e| e.context("a checkpoint is a partial film: name it .exr"))?,
+            )
+        }
+        None => None,
+    };
     let s = open_scene(&a.scene)?;
     out.check_not_input(&s.inputs)?;
+    if let Some(c) = &checkpoint {
+        c.check_not_input(&s.inputs)?;
+    }
     if a.explain {
         eprintln!("plan for {}:\n{}", s.scene.name, s.plan.explain());
     }
@@ -36,55 +69,91 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         return super::debug::run(&s, view, &out);
     }
     // A note only where the user asked for more than the one exact pass.
-    if s.plan.deterministic && stop.is_some_and(|st| st != Stop::spp(1)) {
+    if s.plan.deterministic && stop.is_some_and(|st| st != Stop::spp(1)) && !split {
         eprintln!(
             "note: nothing in this scene is sampled, so one pass is exact; extra passes skipped"
         );
     }
-    let stop = stop.unwrap_or(Stop::spp(s.scene.settings.spp));
+    let range = sample_range(&a, &s)?;
+    let stop = match &range {
+        Some((r, _)) => Stop::spp(r.end - r.start),
+        None => stop.unwrap_or(Stop::spp(s.scene.settings.spp)),
+    };
+    let total = match &range {
+        Some((_, total)) => *total,
+        None => stop
+            .spp
+            .filter(|_| stop.seconds.is_none() && stop.error.is_none()),
+    };
+    let mut meta = Meta::of(&s, total);
+    let mut p = match &a.resume {
+        Some(path) => resumed(path, &s, &meta, range.as_ref().map(|r| &r.0), &stop)?,
+        None => {
+            let mut p = Progressive::new(s.width, s.height);
+            p.film.start = range.as_ref().map_or(0, |r| r.0.start);
+            p
+        }
+    };
+    let (rays_before, seconds_before) = (p.rays, p.seconds);
+    p.adaptive = a.adaptive && (stop.seconds.is_some() || stop.error.is_some());
+    p.whole_passes = checkpoint.is_some();
     let interrupted = interrupt::flag();
     let tracer = s.tracer();
     let bar = progress_bar(&stop, s.plan.deterministic);
-    let mut p = Progressive::new(s.width, s.height);
-    p.adaptive = a.adaptive && (stop.seconds.is_some() || stop.error.is_some());
     let start = Instant::now();
     let cancel = || interrupted.load(std::sync::atomic::Ordering::Relaxed);
-    let outcome = p.run(&tracer, &stop, &cancel, |film, _| {
+    let mut last_checkpoint = Instant::now();
+    let mut work = (rays_before, seconds_before);
+    let mut failed = None;
+    let outcome = p.run(&tracer, &stop, &cancel, |film, pass| {
         bar.set_position(film.spp_range().1 as u64);
         if stop.spp.is_none() || stop.error.is_some() {
             bar.set_message(progress(film, &stop, start.elapsed().as_secs_f64()));
         }
+        work.0 += pass.rays;
+        work.1 += pass.ms / 1e3;
+        if let Some(c) = &checkpoint {
+            if last_checkpoint.elapsed().as_secs_f64() >= CHECKPOINT_SECONDS && failed.is_none() {
+                (meta.rays, meta.seconds) = work;
+                failed = write_part(c, film, &meta).err();
+                last_checkpoint = Instant::now();
+            }
+        }
     });
+    if let Some(e) = failed {
+        bar.abandon();
+        return Err(e);
+    }
+    (meta.rays, meta.seconds) = (p.rays, p.seconds);
     if outcome.ended == Ended::Cancelled {
         bar.abandon();
-        eprintln!("interrupted: nothing written");
+        match &checkpoint {
+            Some(c) => {
+                write_part(c, &p.film, &meta)?;
+                let f = &p.film;
+                eprintln!(
+                    "interrupted: {} holds samples {}..{}; continue with --resume {}",
+                    c.path.display(),
+                    f.start,
+                    f.start + f.spp,
+                    c.path.display()
+                );
+            }
+            None => eprintln!("interrupted: nothing written"),
+        }
         return Ok(ExitCode::from(interrupt::exit_code()));
     }
     bar.finish_and_clear();
+    if let Some(c) = &checkpoint {
+        write_part(c, &p.film, &meta)?;
+    }
     let film = &p.film;
-    let bytes = match out.format {
-        // The film's mean as it is: what `converge` and the TUI's
-        // `--reference` compare against.
-        Format::Hdr | Format::Exr | Format::Csv => {
-            out.format.encode_linear(s.width, s.height, &film.image())?
-        }
-        Format::Png => {
-            let shown = post::display(
-                film.image(),
-                s.width,
-                s.height,
-                &s.plan,
-                &s.scene.settings.bloom,
-            );
-            png::encode(&post::to_rgb8(&shown.image, s.width, s.height))?
-        }
+    let bytes = if split {
+        partial::encode(film, &meta)?
+    } else {
+        image_bytes(out.format, film, s.width, s.height, meta.bloom.as_ref())?
     };
     out.write(&bytes)?;
-    let err = if s.plan.deterministic {
-        "error exact".to_string()
-    } else {
-        error_text(film)
-    };
     let render_ms = outcome.seconds * 1e3;
     let capped = match (outcome.ended, stop.error) {
         (Ended::Spp, Some(e)) if stop.spp.is_some() => format!(
@@ -94,25 +163,167 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         ),
         _ => String::new(),
     };
-    println!(
-        "{}: {} triangles, build {:.1} ms ({}), render {}, {}, {:.2} Mrays/s, {}{}{} -> {}",
+    let head = format!(
+        "{}: {} triangles, build {:.1} ms ({}), render {}",
         s.scene.name,
         s.scene.geometry.triangle_count(),
         s.bvh.stats.build_ms,
         s.bvh.stats.builder,
         duration(render_ms),
-        spp_text(film),
-        outcome.rays as f64 / render_ms.max(1e-9) / 1e3,
-        err,
-        capped,
+    );
+    println!(
+        "{}",
+        summary(
+            &head,
+            film,
+            split,
+            outcome.rays,
+            render_ms,
+            s.plan.deterministic,
+            &capped,
+            &a.output
+        )
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Seconds between checkpoints.
+const CHECKPOINT_SECONDS: f64 = 5.0;
+
+/// The image file `render` and `merge` write from a film: the linear mean
+/// as it is for .exr and .hdr (what `converge` and the TUI's `--reference`
+/// compare against), the post-processed picture for .png.
+pub fn image_bytes(
+    format: Format,
+    film: &Film,
+    width: u32,
+    height: u32,
+    bloom: Option<&BloomSettings>,
+) -> Result<Vec<u8>> {
+    match format {
+        Format::Hdr | Format::Exr | Format::Csv => {
+            format.encode_linear(width, height, &film.image())
+        }
+        Format::Png => {
+            let shown = post::display_with(film.image(), width, height, bloom);
+            png::encode(&post::to_rgb8(&shown.image, width, height))
+        }
+    }
+}
+
+/// The line a render or merge ends with: `head`, the samples, speed and
+/// error, and the output.
+#[allow(clippy::too_many_arguments)]
+pub fn summary(
+    head: &str,
+    film: &Film,
+    split: bool,
+    rays: u64,
+    render_ms: f64,
+    exact: bool,
+    capped: &str,
+    output: &std::path::Path,
+) -> String {
+    let err = if exact {
+        "error exact".to_string()
+    } else {
+        error_text(film)
+    };
+    let samples = if split {
+        format!(
+            "{} spp (samples {}..{})",
+            film.spp,
+            film.start,
+            film.start + film.spp
+        )
+    } else {
+        spp_text(film)
+    };
+    format!(
+        "{head}, {samples}, {:.2} Mrays/s, {err}{capped}{} -> {}",
+        rays as f64 / render_ms.max(1e-9) / 1e3,
         if film.bad_count > 0 {
             format!(", {} NaN/Inf samples dropped", film.bad_count)
         } else {
             String::new()
         },
-        a.output.display()
-    );
-    Ok(ExitCode::SUCCESS)
+        output.display()
+    )
+}
+
+/// Whether two paths name the same file, existing or not.
+fn same_path(a: &std::path::Path, b: &std::path::Path) -> bool {
+    match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => std::path::absolute(a).ok() == std::path::absolute(b).ok(),
+    }
+}
+
+/// Writes `film` as a partial film to `out`, atomically.
+fn write_part(out: &Output, film: &Film, meta: &Meta) -> Result<()> {
+    out.write(&partial::encode(film, meta)?)
+}
+
+/// The sample range a split render renders, and the total it is part of.
+fn sample_range(a: &RenderArgs, s: &Session) -> Result<Option<(Range<u32>, Option<u32>)>> {
+    let total = a.spp.unwrap_or(s.scene.settings.spp).min(MAX_SPP);
+    let range = match (&a.samples, a.part) {
+        (Some(r), _) => (r.clone(), None),
+        (None, Some((k, n))) => {
+            let at = |i: u32| (i as u64 * total as u64 / n as u64) as u32;
+            let r = at(k - 1)..at(k);
+            if r.is_empty() {
+                bail!(
+                    "part {k}/{n} of {total} samples has none: split {total} samples into at                      most {total} parts"
+                );
+            }
+            (r, Some(total))
+        }
+        (None, None) => return Ok(None),
+    };
+    if s.plan.deterministic && range.0 != (0..1) {
+        bail!(
+            "nothing in this scene is sampled, so one sample is the exact image: render samples              0..1 (or part 1/1) only"
+        );
+    }
+    Ok(Some(range))
+}
+
+/// The driver continuing a checkpoint of this render.
+fn resumed(
+    path: &std::path::Path,
+    s: &Session,
+    meta: &Meta,
+    range: Option<&Range<u32>>,
+    stop: &Stop,
+) -> Result<Progressive> {
+    let part = Part::read(path)?;
+    part.check_same(
+        meta,
+        (s.width, s.height),
+        &path.display().to_string(),
+        "this render",
+    )?;
+    let want = range.map_or(0, |r| r.start);
+    let held = part.range();
+    if held.start != want {
+        bail!(
+            "{} holds samples {}..{}; this render starts at sample {want}",
+            path.display(),
+            held.start,
+            held.end
+        );
+    }
+    if let Some(n) = stop.spp.filter(|&n| part.film.spp > n) {
+        bail!(
+            "{} already holds {} samples per pixel, more than the {n} asked for",
+            path.display(),
+            part.film.spp
+        );
+    }
+    let mut p = Progressive::resume(part.film);
+    (p.rays, p.seconds) = (part.meta.rays, part.meta.seconds);
+    Ok(p)
 }
 
 /// The stop the options ask for; `None` means the scene's spp.

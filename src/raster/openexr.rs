@@ -1,8 +1,9 @@
 //! OpenEXR with 32-bit float RGB channels: every f32 stored exactly, so a
-//! reference carries no error of its own format (through the `exr` crate,
-//! which can also write the custom channels and header attributes partial
-//! films will need).
+//! reference carries no error of its own format; and images of any named
+//! f32 and u32 channels with text attributes, which partial films are
+//! (through the `exr` crate).
 
+use std::collections::HashMap;
 use std::io::{BufReader, Seek};
 use std::path::Path;
 
@@ -59,6 +60,123 @@ pub fn read(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
     let size = image.layer_data.size;
     let (_, pixels) = image.layer_data.channel_data.pixels;
     Ok((size.0 as u32, size.1 as u32, pixels))
+}
+
+/// One channel's samples, row-major.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Samples {
+    F32(Vec<f32>),
+    U32(Vec<u32>),
+}
+
+/// An image of named channels and text attributes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Channels {
+    pub width: u32,
+    pub height: u32,
+    pub channels: HashMap<String, Samples>,
+    pub attributes: HashMap<String, String>,
+}
+
+/// `c` encoded as OpenEXR: one layer, its channels losslessly compressed
+/// (run lengths: fast to write and read); attribute values that are not
+/// Latin-1 have those characters replaced by `?`.
+pub fn encode_channels(c: &Channels) -> Result<Vec<u8>> {
+    use exr::prelude::*;
+    let (w, h) = (c.width as usize, c.height as usize);
+    let mut list = SmallVec::<[AnyChannel<FlatSamples>; 4]>::new();
+    for (name, s) in &c.channels {
+        let samples = match s {
+            Samples::F32(v) => FlatSamples::F32(v.clone()),
+            Samples::U32(v) => FlatSamples::U32(v.clone()),
+        };
+        let len = match s {
+            Samples::F32(v) => v.len(),
+            Samples::U32(v) => v.len(),
+        };
+        if len != w * h {
+            bail!("channel {name}: {len} samples for a {w}x{h} image");
+        }
+        list.push(AnyChannel::new(text(name), samples));
+    }
+    let mut attributes = LayerAttributes::default();
+    for (k, v) in &c.attributes {
+        attributes
+            .other
+            .insert(text(k), AttributeValue::Text(text(v)));
+    }
+    let encoding = Encoding {
+        compression: Compression::RLE,
+        ..Encoding::default()
+    };
+    let layer = Layer::new((w, h), attributes, encoding, AnyChannels::sort(list));
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    Image::from_layer(layer)
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok(bytes.into_inner())
+}
+
+fn text(s: &str) -> exr::meta::attribute::Text {
+    let latin1: String = s
+        .chars()
+        .map(|c| if (c as u32) < 256 { c } else { '?' })
+        .collect();
+    exr::meta::attribute::Text::new_or_none(latin1).unwrap_or_default()
+}
+
+/// Reads an image of named channels (one flat layer, f32 and u32 samples)
+/// and its text attributes, refusing more than `per_pixel` bytes per pixel
+/// in all (what the caller will make of them included) beyond
+/// [`super::MAX_DECODED_BYTES`] before decoding.
+pub fn read_channels(path: &Path, per_pixel: u64) -> Result<Channels> {
+    use exr::prelude::*;
+    let err = |e: exr::error::Error| anyhow::anyhow!("{}: {e}", path.display());
+    let mut file = BufReader::new(super::open(path)?);
+    let meta = exr::meta::MetaData::read_from_buffered(&mut file, false).map_err(err)?;
+    let [h] = meta.headers.as_slice() else {
+        bail!(
+            "{}: {} layers; expected one",
+            path.display(),
+            meta.headers.len()
+        );
+    };
+    if h.deep {
+        bail!("{}: deep data; expected a flat image", path.display());
+    }
+    let clamp = |v: usize| v.min(u32::MAX as usize) as u32;
+    let bytes = per_pixel + 4 * h.channels.list.len() as u64;
+    super::check_size(path, clamp(h.layer_size.0), clamp(h.layer_size.1), bytes)?;
+    file.rewind()?;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(file)
+        .map_err(err)?;
+    let layer = image.layer_data;
+    let mut out = Channels {
+        width: clamp(layer.size.0),
+        height: clamp(layer.size.1),
+        ..Channels::default()
+    };
+    for ch in layer.channel_data.list {
+        let s = match ch.sample_data {
+            FlatSamples::F32(v) => Samples::F32(v),
+            FlatSamples::U32(v) => Samples::U32(v),
+            FlatSamples::F16(_) => bail!("{}: channel {} is half float", path.display(), ch.name),
+        };
+        out.channels.insert(ch.name.to_string(), s);
+    }
+    for (k, v) in layer.attributes.other {
+        if let AttributeValue::Text(t) = v {
+            out.attributes.insert(k.to_string(), t.to_string());
+        }
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

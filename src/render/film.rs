@@ -144,7 +144,8 @@ impl PixelStats {
         }
     }
 
-    fn mean_of_sum(&self) -> DVec3 {
+    /// The mean colour the exact sums give.
+    pub fn mean_of_sum(&self) -> DVec3 {
         if self.n == 0 {
             return DVec3::ZERO;
         }

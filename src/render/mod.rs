@@ -2,11 +2,13 @@
 //! the one shading code path (generic over a [`Recorder`]), the film, the
 //! one progressive loop and the one post-processing step.
 
+pub mod content;
 pub mod debug_view;
 pub mod features;
 pub mod film;
 pub mod integrator;
 pub mod overlay;
+pub mod partial;
 pub mod plan;
 pub mod post;
 pub mod progressive;

@@ -25,12 +25,23 @@ pub fn display(
     plan: &Plan,
     s: &BloomSettings,
 ) -> Displayed {
-    if !plan.bloom {
+    display_with(mean, width, height, plan.bloom.then_some(s))
+}
+
+/// [`display`] with bloom's settings when it runs (what a merge of partial
+/// films knows instead of the plan).
+pub fn display_with(
+    mean: Vec<Vec3>,
+    width: u32,
+    height: u32,
+    bloom_with: Option<&BloomSettings>,
+) -> Displayed {
+    let Some(s) = bloom_with else {
         return Displayed {
             image: mean,
             before_bloom: None,
         };
-    }
+    };
     let mut image = mean.clone();
     bloom(&mut image, width as usize, height as usize, s);
     Displayed {

@@ -111,6 +111,11 @@ pub struct Progressive {
     /// predicted error (set before the first pass; a scene where nothing is
     /// sampled stays uniform).
     pub adaptive: bool,
+    /// Whether a uniform pass cut short (cancelled, or at the deadline) is
+    /// undone, so that the film holds whole passes only: every pixel the
+    /// same samples, as a checkpoint must. Each row is copied before it is
+    /// sampled, which needs the film's statistics twice over.
+    pub whole_passes: bool,
 }
 
 /// What a pass gives the pixels.
@@ -135,6 +140,7 @@ impl Progressive {
             samples_per_pass: 1,
             rows_done: None,
             adaptive: false,
+            whole_passes: false,
         }
     }
 
@@ -216,8 +222,9 @@ impl Progressive {
             r.store(0, Ordering::Relaxed);
         }
         let rows = self.rows_done.as_deref();
+        let whole = self.whole_passes;
         let rec: R = match &give {
-            Some(g) => sample_rows(tracer, &mut self.film, g, cancel, rows),
+            Some(g) => sample_rows(tracer, &mut self.film, g, cancel, rows, whole),
             None => R::default(),
         };
         let ms = start.elapsed().as_secs_f64() * 1e3;
@@ -355,13 +362,16 @@ struct Row<'a> {
 
 /// Adds what `give` says to the pixels of `film`, rows in parallel;
 /// `cancel` is polled between rows and `rows_done` counts finished rows.
+/// With `whole`, a pass cut short leaves a uniform film as it was.
 fn sample_rows<R: Recorder + Default + Send + Merge>(
     tracer: &Tracer,
     film: &mut Film,
     give: &Give,
     cancel: &(dyn Fn() -> bool + Sync),
     rows_done: Option<&AtomicU32>,
+    whole: bool,
 ) -> R {
+    let whole = whole && film.adaptive.is_none();
     let w = (film.width as usize).max(1);
     let first = film.start + film.spp;
     let rows: Vec<Row> = match &mut film.adaptive {
@@ -390,14 +400,19 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             })
             .collect(),
     };
-    let results: Vec<(R, Vec<BadSample>, bool)> = rows
+    let results: Vec<(R, Vec<BadSample>, bool, Vec<PixelStats>)> = rows
         .into_par_iter()
         .map(|mut row| {
             let mut rec = R::default();
             let mut bad = Vec::new();
             if cancel() {
-                return (rec, bad, false);
+                return (rec, bad, false, Vec::new());
             }
+            let before = if whole {
+                row.pixels.to_vec()
+            } else {
+                Vec::new()
+            };
             let y = row.y as u32;
             for x in 0..row.pixels.len() {
                 let (k0, n) = match give {
@@ -428,18 +443,29 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             if let Some(r) = rows_done {
                 r.fetch_add(1, Ordering::Relaxed);
             }
-            (rec, bad, true)
+            (rec, bad, true, before)
         })
         .collect();
+    let cut = results.iter().any(|r| !r.2);
+    if whole && cut {
+        for (row, r) in film.pixels.chunks_mut(w).zip(&results) {
+            if r.2 {
+                row.copy_from_slice(&r.3);
+            }
+        }
+    }
     match (&film.adaptive, give) {
         (Some(a), _) => film.spp = a.spp.iter().copied().min().unwrap_or(0),
         // A pass cut between rows leaves `spp` at what every pixel has.
-        (None, Give::All(n)) if results.iter().all(|r| r.2) => film.spp += n,
+        (None, Give::All(n)) if !cut => film.spp += n,
         _ => {}
     }
     let mut total = R::default();
-    for (rec, bad, _) in results {
+    for (rec, bad, ..) in results {
         total.merge(&rec);
+        if whole && cut {
+            continue;
+        }
         for b in bad {
             film.record_bad(b);
         }

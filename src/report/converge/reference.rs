@@ -11,9 +11,10 @@ use glam::Vec3;
 
 use super::luminance;
 use crate::raster::{self, Linear};
+use crate::render::content::{self, Fnv};
 use crate::render::film::LUMA;
 use crate::render::Plan;
-use crate::scene::{Environment, Scene};
+use crate::scene::Scene;
 
 /// Loads a linear reference image (.exr or .hdr by its extension),
 /// row-major from the top.
@@ -58,32 +59,6 @@ pub fn default_cache_dir() -> Option<PathBuf> {
     Some(base.join("rayterm"))
 }
 
-/// FNV-1a, 64 bit: a hash that stays the same across builds, for cache names.
-struct Fnv(u64);
-
-impl Fnv {
-    fn bytes(&mut self, b: &[u8]) {
-        for &x in b {
-            self.0 = (self.0 ^ x as u64).wrapping_mul(0x100_0000_01b3);
-        }
-    }
-
-    fn vec3s(&mut self, v: &[Vec3]) {
-        for c in v {
-            for x in c.to_array() {
-                self.bytes(&x.to_bits().to_le_bytes());
-            }
-        }
-    }
-}
-
-impl std::fmt::Write for Fnv {
-    fn write_str(&mut self, s: &str) -> std::fmt::Result {
-        self.bytes(s.as_bytes());
-        Ok(())
-    }
-}
-
 /// Everything that decides a reference's pixels.
 pub(super) fn reference_key(
     scene: &Scene,
@@ -93,41 +68,13 @@ pub(super) fn reference_key(
     spp: u32,
     seed: u64,
 ) -> u64 {
-    let mut h = Fnv(0xcbf2_9ce4_8422_2325);
+    let mut h = Fnv::new();
     let _ = write!(
         h,
-        "rayterm reference 1 {} {width}x{height} {spp} {seed} {:?} {} {:?} {:?} {:?} {:?} {:?}",
-        env!("CARGO_PKG_VERSION"),
-        plan.features,
-        plan.explain(),
-        scene.settings,
-        scene.lights,
-        scene.materials,
-        scene.camera,
-        scene.meshes,
+        "rayterm reference 2 {:016x} {width}x{height} {spp} {seed}",
+        content::scene_hash(scene, plan)
     );
-    let g = &scene.geometry;
-    h.vec3s(&g.positions);
-    h.vec3s(&g.normals);
-    for uv in &g.uvs {
-        h.bytes(&uv.x.to_bits().to_le_bytes());
-        h.bytes(&uv.y.to_bits().to_le_bytes());
-    }
-    for (i, (&m, &o)) in g.indices.iter().zip(g.tri_material.iter().zip(&g.tri_mesh)) {
-        let _ = write!(h, "{i:?}{m},{o};");
-    }
-    let mut textures: Vec<_> = scene.textures.iter().collect();
-    match &scene.environment {
-        Environment::Color(c) => {
-            let _ = write!(h, "env {c:?}");
-        }
-        Environment::CubeMap(cube) => textures.extend(cube.faces.iter()),
-    }
-    for t in textures {
-        let _ = write!(h, "tex {}x{}", t.width, t.height);
-        h.vec3s(&t.texels);
-    }
-    h.0
+    h.finish()
 }
 
 #[cfg(test)]

@@ -1,0 +1,92 @@
+//! The content hash of what a scene renders: geometry, materials,
+//! textures, lights, camera, environment, settings and the plan's stages,
+//! with the rayterm version. Films rendered apart (parts of a split render,
+//! checkpoints) carry it, so only films of the same scene are merged; cached
+//! references are named by it.
+
+use std::fmt::Write as _;
+
+use glam::Vec3;
+
+use super::Plan;
+use crate::scene::{Environment, Scene};
+
+/// FNV-1a, 64 bit: a hash that stays the same across builds and machines.
+pub struct Fnv(u64);
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Fnv {
+    pub fn new() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+
+    pub fn bytes(&mut self, b: &[u8]) {
+        for &x in b {
+            self.0 = (self.0 ^ x as u64).wrapping_mul(0x100_0000_01b3);
+        }
+    }
+
+    fn vec3s(&mut self, v: &[Vec3]) {
+        for c in v {
+            for x in c.to_array() {
+                self.bytes(&x.to_bits().to_le_bytes());
+            }
+        }
+    }
+
+    pub fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+impl std::fmt::Write for Fnv {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        self.bytes(s.as_bytes());
+        Ok(())
+    }
+}
+
+/// Everything but the image size, the seed and the samples that decides a
+/// film's pixels.
+pub fn scene_hash(scene: &Scene, plan: &Plan) -> u64 {
+    let mut h = Fnv::new();
+    let _ = write!(
+        h,
+        "rayterm scene 1 {} {:?} {} {:?} {:?} {:?} {:?} {:?}",
+        env!("CARGO_PKG_VERSION"),
+        plan.features,
+        plan.explain(),
+        scene.settings,
+        scene.lights,
+        scene.materials,
+        scene.camera,
+        scene.meshes,
+    );
+    let g = &scene.geometry;
+    h.vec3s(&g.positions);
+    h.vec3s(&g.normals);
+    for uv in &g.uvs {
+        h.bytes(&uv.x.to_bits().to_le_bytes());
+        h.bytes(&uv.y.to_bits().to_le_bytes());
+    }
+    for (i, (&m, &o)) in g.indices.iter().zip(g.tri_material.iter().zip(&g.tri_mesh)) {
+        let _ = write!(h, "{i:?}{m},{o};");
+    }
+    let mut textures: Vec<_> = scene.textures.iter().collect();
+    match &scene.environment {
+        Environment::Color(c) => {
+            let _ = write!(h, "env {c:?}");
+        }
+        Environment::CubeMap(cube) => textures.extend(cube.faces.iter()),
+    }
+    for t in textures {
+        let _ = write!(h, "tex {}x{}", t.width, t.height);
+        h.vec3s(&t.texels);
+    }
+    h.finish()
+}
