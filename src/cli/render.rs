@@ -274,7 +274,7 @@ fn sample_range(a: &RenderArgs, s: &Session) -> Result<Option<(Range<u32>, Optio
             let r = at(k - 1)..at(k);
             if r.is_empty() {
                 bail!(
-                    "part {k}/{n} of {total} samples has none: split {total} samples into at                      most {total} parts"
+                    "part {k}/{n} of {total} samples has none: split {total} samples into at most {total} parts"
                 );
             }
             (r, Some(total))
@@ -283,7 +283,7 @@ fn sample_range(a: &RenderArgs, s: &Session) -> Result<Option<(Range<u32>, Optio
     };
     if s.plan.deterministic && range.0 != (0..1) {
         bail!(
-            "nothing in this scene is sampled, so one sample is the exact image: render samples              0..1 (or part 1/1) only"
+            "nothing in this scene is sampled, so one sample is the exact image: render samples 0..1 (or part 1/1) only"
         );
     }
     Ok(Some(range))

@@ -132,7 +132,9 @@ fn text(s: &str) -> exr::meta::attribute::Text {
 /// [`super::MAX_DECODED_BYTES`] before decoding.
 pub fn read_channels(path: &Path, per_pixel: u64) -> Result<Channels> {
     use exr::prelude::*;
-    let err = |e: exr::error::Error| anyhow::anyhow!("{}: {e}", path.display());
+    let err = |e: exr::error::Error| {
+        anyhow::anyhow!("{}: not a readable OpenEXR file ({e})", path.display())
+    };
     let mut file = BufReader::new(super::open(path)?);
     let meta = exr::meta::MetaData::read_from_buffered(&mut file, false).map_err(err)?;
     let [h] = meta.headers.as_slice() else {

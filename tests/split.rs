@@ -1,0 +1,491 @@
+//! Split renders: parts of a render's samples merge into exactly the image
+//! one render makes; mismatched, overlapping, missing and damaged parts are
+//! refused with a message naming them; a checkpoint resumes into the render
+//! that was never interrupted; GNU parallel and the Slurm scripts of
+//! `examples/slurm` run the README's way.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_rayterm");
+const SCENE: [&str; 3] = ["cornell-area", "--size", "40x28"];
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("rayterm-split-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn rayterm(d: &Path, args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .current_dir(d)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap()
+}
+
+fn ok(d: &Path, args: &[&str]) -> String {
+    let out = rayterm(d, args);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// The one-line error of a command that must fail, having written nothing
+/// to `output`.
+fn refused(d: &Path, args: &[&str], output: &str) -> String {
+    let out = rayterm(d, args);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success(), "{args:?} succeeded");
+    assert!(!err.contains("panicked"), "{args:?}: {err}");
+    assert!(!d.join(output).exists(), "{args:?} wrote {output}");
+    err
+}
+
+fn render(d: &Path, extra: &[&str], out: &str) {
+    let mut args = vec!["render"];
+    args.extend(SCENE);
+    args.extend(extra);
+    args.extend(["-o", out]);
+    ok(d, &args);
+}
+
+fn bytes(d: &Path, f: &str) -> Vec<u8> {
+    std::fs::read(d.join(f)).unwrap()
+}
+
+/// Sample ranges that split 0..`total` into `n` uneven parts.
+fn uneven(total: u32, n: u32) -> Vec<String> {
+    let cuts: Vec<u32> = (1..n).map(|i| i * i * (total - n) / (n * n) + i).collect();
+    let mut at = 0;
+    let mut out = Vec::new();
+    for c in cuts.into_iter().chain([total]) {
+        if c > at {
+            out.push(format!("{at}..{c}"));
+            at = c;
+        }
+    }
+    assert_eq!(out.len(), n as usize, "{out:?}");
+    out
+}
+
+#[test]
+fn merged_parts_equal_one_render_to_the_byte() {
+    let d = dir("exact");
+    let spp = 37;
+    render(&d, &["--spp", &spp.to_string()], "single.png");
+    render(&d, &["--spp", &spp.to_string()], "single.exr");
+    let (png, exr) = (bytes(&d, "single.png"), bytes(&d, "single.exr"));
+    for n in [1, 2, 4, 7] {
+        let ranges = uneven(spp, n);
+        let mut parts = Vec::new();
+        for (i, r) in ranges.iter().enumerate() {
+            let name = format!("p{n}-{i}.exr");
+            render(&d, &["--samples", r], &name);
+            parts.push(name);
+        }
+        // Any order: reversed, and the first part moved to the end.
+        parts.reverse();
+        parts.rotate_left(1);
+        for out in ["merged.png", "merged.exr"] {
+            let mut args = vec!["merge"];
+            args.extend(parts.iter().map(String::as_str));
+            args.extend(["-o", out]);
+            let line = ok(&d, &args);
+            assert!(
+                line.contains(&format!("{spp} spp")) && line.contains("error "),
+                "{line}"
+            );
+        }
+        assert!(bytes(&d, "merged.png") == png, "{n} parts: the PNG differs");
+        assert!(bytes(&d, "merged.exr") == exr, "{n} parts: the EXR differs");
+    }
+    // --part K/N splits the scene's or --spp's samples the same way.
+    for k in 1..=3 {
+        render(
+            &d,
+            &["--spp", &spp.to_string(), "--part", &format!("{k}/3")],
+            &format!("k{k}.exr"),
+        );
+    }
+    ok(&d, &["merge", "k2.exr", "k3.exr", "k1.exr", "-o", "k.png"]);
+    assert!(bytes(&d, "k.png") == png, "--part: the PNG differs");
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
+fn parts_of_other_renders_overlaps_and_gaps_are_refused() {
+    let d = dir("refused");
+    render(&d, &["--spp", "8", "--part", "1/2"], "a1.exr");
+    render(&d, &["--spp", "8", "--part", "2/2"], "a2.exr");
+    render(&d, &["--samples", "0..4", "--seed", "9"], "seed.exr");
+    ok(
+        &d,
+        &[
+            "render",
+            "cornell-area",
+            "--size",
+            "40x20",
+            "--samples",
+            "4..8",
+            "-o",
+            "size.exr",
+        ],
+    );
+    ok(
+        &d,
+        &[
+            "render",
+            "cornell",
+            "--size",
+            "40x28",
+            "--samples",
+            "4..8",
+            "-o",
+            "scene.exr",
+        ],
+    );
+    render(&d, &["--samples", "2..6"], "over.exr");
+    render(&d, &["--spp", "16", "--part", "2/2"], "other-total.exr");
+    for (part, says) in [
+        ("seed.exr", "differ in seed: 9 against 1"),
+        ("size.exr", "differ in size: 40x20 against 40x28"),
+        ("scene.exr", "differ in scene"),
+        ("over.exr", "overlap"),
+        ("other-total.exr", "is a part of 16 samples"),
+        ("a1.exr", "overlap"),
+    ] {
+        let err = refused(&d, &["merge", "a1.exr", part, "-o", "m.png"], "m.png");
+        assert!(err.contains(says) && err.contains(part), "{part}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+    let err = refused(&d, &["merge", "a2.exr", "-o", "m.png"], "m.png");
+    assert!(
+        err.contains("samples 0..4 of 0..8 are missing") && err.contains("--allow-missing"),
+        "{err}"
+    );
+    let out = rayterm(&d, &["merge", "a2.exr", "--allow-missing", "-o", "m.png"]);
+    assert!(out.status.success() && d.join("m.png").exists());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("the image has 4 of 8 spp"), "{err}");
+    // The output may not replace a part.
+    let err = refused(&d, &["merge", "a1.exr", "a2.exr", "-o", "a1.exr"], "none");
+    assert!(err.contains("is an input"), "{err}");
+    // Bad ranges and parts.
+    for (args, says) in [
+        (&["--part", "0/4"][..], "K must be from 1 to N"),
+        (&["--part", "5/4"], "K must be from 1 to N"),
+        (&["--samples", "5..3"], "is empty"),
+        (
+            &["--samples", "0..4294967295"],
+            "not a whole number from 0 to",
+        ),
+        (&["--spp", "4", "--part", "5/8"], "has none"),
+        (&["--part", "1/4", "--adaptive"], "cannot be used with"),
+    ] {
+        let mut all = vec!["render"];
+        all.extend(SCENE);
+        all.extend(args);
+        all.extend(["-o", "x.exr"]);
+        let err = refused(&d, &all, "x.exr");
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
+    let err = refused(
+        &d,
+        &["render", "cornell-area", "--samples", "0..2", "-o", "x.png"],
+        "x.png",
+    );
+    assert!(err.contains("partial film"), "{err}");
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
+fn damaged_parts_are_refused_naming_the_file() {
+    let d = dir("damaged");
+    render(&d, &["--samples", "0..4"], "a.exr");
+    render(&d, &["--samples", "4..8"], "b.exr");
+    render(&d, &["--spp", "8"], "image.exr");
+    let whole = bytes(&d, "b.exr");
+    std::fs::write(d.join("short.exr"), &whole[..whole.len() / 2]).unwrap();
+    std::fs::write(d.join("header.exr"), &whole[..200]).unwrap();
+    let mut flipped = whole.clone();
+    let at = whole.len() * 3 / 4;
+    for b in &mut flipped[at..at + 64] {
+        *b ^= 0x5a;
+    }
+    std::fs::write(d.join("flipped.exr"), &flipped).unwrap();
+    std::fs::write(d.join("empty.exr"), b"").unwrap();
+    // A valid OpenEXR image that is not a partial film.
+    for bad in [
+        "short.exr",
+        "header.exr",
+        "flipped.exr",
+        "empty.exr",
+        "image.exr",
+    ] {
+        let err = refused(&d, &["merge", "a.exr", bad, "-o", "m.png"], "m.png");
+        assert!(err.contains(bad), "{bad}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{bad}: {err}");
+        let mut args = vec!["render"];
+        args.extend(SCENE);
+        args.extend(["--spp", "12", "--resume", bad, "-o", "r.png"]);
+        let err = refused(&d, &args, "r.png");
+        assert!(err.contains(bad), "{bad}: {err}");
+    }
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
+fn a_checkpoint_resumes_into_the_uninterrupted_render() {
+    let d = dir("resume");
+    render(&d, &["--spp", "9", "--checkpoint", "c.exr"], "first.png");
+    render(&d, &["--spp", "30", "--resume", "c.exr"], "resumed.png");
+    render(&d, &["--spp", "30"], "whole.png");
+    assert!(bytes(&d, "resumed.png") == bytes(&d, "whole.png"));
+    // A part continues from its own checkpoint too.
+    render(
+        &d,
+        &["--samples", "5..11", "--checkpoint", "pc.exr"],
+        "p-early.exr",
+    );
+    render(&d, &["--samples", "5..20", "--resume", "pc.exr"], "p.exr");
+    render(&d, &["--samples", "0..5"], "p0.exr");
+    render(&d, &["--samples", "20..30"], "p2.exr");
+    ok(&d, &["merge", "p0.exr", "p.exr", "p2.exr", "-o", "m.png"]);
+    assert!(bytes(&d, "m.png") == bytes(&d, "whole.png"));
+    // Another render's checkpoint, or one past the requested samples.
+    let err = refused(
+        &d,
+        &[
+            "render",
+            "cornell-area",
+            "--size",
+            "40x28",
+            "--seed",
+            "3",
+            "--resume",
+            "c.exr",
+            "-o",
+            "x.png",
+        ],
+        "x.png",
+    );
+    assert!(err.contains("differ in seed"), "{err}");
+    let err = refused(
+        &d,
+        &[
+            "render",
+            "cornell-area",
+            "--size",
+            "40x28",
+            "--spp",
+            "4",
+            "--resume",
+            "c.exr",
+            "-o",
+            "x.png",
+        ],
+        "x.png",
+    );
+    let err = refused(
+        &d,
+        &[
+            "render",
+            "cornell-area",
+            "--size",
+            "40x28",
+            "--samples",
+            "3..9",
+            "--resume",
+            "c.exr",
+            "-o",
+            "x.exr",
+        ],
+        "x.exr",
+    );
+    assert!(err.contains("starts at sample 3"), "{err}");
+    let err = refused(
+        &d,
+        &[
+            "render",
+            "cornell-area",
+            "--spp",
+            "4",
+            "--checkpoint",
+            "same.png",
+            "-o",
+            "same.png",
+        ],
+        "same.png",
+    );
+    assert!(err.contains("is the output"), "{err}");
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+/// SIGTERM during a render with --checkpoint leaves a checkpoint of whole
+/// passes, and resuming it gives the render never interrupted.
+#[test]
+fn a_signal_writes_the_checkpoint() {
+    let d = dir("signal");
+    let mut child = Command::new(BIN)
+        .args([
+            "render",
+            "cornell-area",
+            "--size",
+            "40x28",
+            "--spp",
+            "1000000",
+        ])
+        .args(["--checkpoint", "c.exr", "-o", "never.png"])
+        .current_dir(&d)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    // SAFETY: signalling the child this test started.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGTERM) }, 0);
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        assert!(Instant::now() < deadline, "the render did not stop");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
+    assert_eq!(status.code(), Some(128 + libc::SIGTERM), "{err}");
+    assert!(!d.join("never.png").exists());
+    // "interrupted: c.exr holds samples 0..N; continue with --resume c.exr"
+    let held = err
+        .split("holds samples 0..")
+        .nth(1)
+        .and_then(|s| s.split(';').next())
+        .and_then(|n| n.parse::<u32>().ok())
+        .unwrap_or_else(|| panic!("{err}"));
+    let spp = (held + 3).to_string();
+    render(&d, &["--spp", &spp, "--resume", "c.exr"], "resumed.png");
+    render(&d, &["--spp", &spp], "whole.png");
+    assert!(bytes(&d, "resumed.png") == bytes(&d, "whole.png"));
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+/// Runs `script` with bash in `d`, the built rayterm first on PATH.
+fn bash(d: &Path, script: &str, env: &[(&str, &str)]) -> Output {
+    let bin_dir = Path::new(BIN).parent().unwrap();
+    let path = format!(
+        "{}:{}",
+        bin_dir.display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    Command::new("bash")
+        .args(["-c", script])
+        .current_dir(d)
+        .env("PATH", path)
+        .envs(env.iter().copied())
+        .stdin(Stdio::null())
+        .output()
+        .unwrap()
+}
+
+/// The README's GNU parallel command, as written.
+#[test]
+fn gnu_parallel_renders_the_parts() {
+    let d = dir("parallel");
+    if !bash(&d, "command -v parallel", &[]).status.success() {
+        eprintln!("skipping: GNU parallel is not installed (.ci/run installs it)");
+        return;
+    }
+    let run = bash(
+        &d,
+        "parallel -j2 rayterm render cornell-area --size 40x28 --spp 16 --part {}/8 -o part-{}.exr ::: $(seq 8) \
+         && rayterm merge part-*.exr -o out.png",
+        &[],
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    render(&d, &["--spp", "16"], "single.png");
+    assert!(bytes(&d, "out.png") == bytes(&d, "single.png"));
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+/// The Slurm scripts: valid bash; submit.sh queues the array and a merge
+/// that depends on it; the array's and the merge's command lines, run here
+/// with the array variables set, make the single render's image.
+#[test]
+fn the_slurm_scripts_run_their_commands() {
+    let d = dir("slurm");
+    let ex = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/slurm");
+    let script = |name: &str| ex.join(name).display().to_string();
+    for s in ["render.sbatch", "merge.sbatch", "submit.sh"] {
+        let out = bash(&d, &format!("bash -n {}", script(s)), &[]);
+        assert!(
+            out.status.success(),
+            "{s}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let text = std::fs::read_to_string(ex.join("render.sbatch")).unwrap();
+    assert!(text.contains("#SBATCH --array=1-"));
+    // sbatch stands in: records its arguments, answers a job id.
+    std::fs::write(
+        d.join("sbatch"),
+        "#!/bin/sh\necho \"$@\" >> sbatch.log\necho 4242\n",
+    )
+    .unwrap();
+    let out = bash(
+        &d,
+        &format!(
+            "chmod +x sbatch && PATH=$PWD:$PATH {} 4",
+            script("submit.sh")
+        ),
+        &[],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let log = std::fs::read_to_string(d.join("sbatch.log")).unwrap();
+    assert!(
+        log.contains("--array=1-4") && log.contains("--dependency=afterok:4242"),
+        "{log}"
+    );
+    let env = [
+        ("SCENE", "cornell-area"),
+        ("SIZE", "40x28"),
+        ("SPP", "12"),
+        ("SLURM_ARRAY_TASK_COUNT", "4"),
+        ("OUTPUT", "out.png"),
+    ];
+    for k in ["3", "1", "4", "2"] {
+        let mut env = env.to_vec();
+        env.push(("SLURM_ARRAY_TASK_ID", k));
+        let out = bash(&d, &script("render.sbatch"), &env);
+        assert!(
+            out.status.success(),
+            "task {k}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let out = bash(&d, &script("merge.sbatch"), &env);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    render(&d, &["--spp", "12"], "single.png");
+    assert!(bytes(&d, "out.png") == bytes(&d, "single.png"));
+    std::fs::remove_dir_all(d).unwrap();
+}
