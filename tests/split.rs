@@ -293,6 +293,7 @@ fn a_checkpoint_resumes_into_the_uninterrupted_render() {
         ],
         "x.png",
     );
+    assert!(err.contains("more than the 4 asked for"), "{err}");
     let err = refused(
         &d,
         &[
