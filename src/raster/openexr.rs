@@ -106,7 +106,7 @@ pub fn encode_channels(c: &Channels) -> Result<Vec<u8>> {
             .insert(text(k), AttributeValue::Text(text(v)));
     }
     let encoding = Encoding {
-        compression: Compression::RLE,
+        compression: Compression::Uncompressed,
         ..Encoding::default()
     };
     let layer = Layer::new((w, h), attributes, encoding, AnyChannels::sort(list));
@@ -127,10 +127,12 @@ fn text(s: &str) -> exr::meta::attribute::Text {
 }
 
 /// Reads an image of named channels (one flat layer, f32 and u32 samples)
-/// and its text attributes, refusing more than `per_pixel` bytes per pixel
-/// in all (what the caller will make of them included) beyond
-/// [`super::MAX_DECODED_BYTES`] before decoding.
-pub fn read_channels(path: &Path, per_pixel: u64) -> Result<Channels> {
+/// and its text attributes; `admit` sees the size and channel count the
+/// header declares and may refuse them before anything is decoded.
+pub fn read_channels(
+    path: &Path,
+    admit: &dyn Fn(u32, u32, usize) -> Result<()>,
+) -> Result<Channels> {
     use exr::prelude::*;
     let err = |e: exr::error::Error| {
         anyhow::anyhow!("{}: not a readable OpenEXR file ({e})", path.display())
@@ -148,8 +150,11 @@ pub fn read_channels(path: &Path, per_pixel: u64) -> Result<Channels> {
         bail!("{}: deep data; expected a flat image", path.display());
     }
     let clamp = |v: usize| v.min(u32::MAX as usize) as u32;
-    let bytes = per_pixel + 4 * h.channels.list.len() as u64;
-    super::check_size(path, clamp(h.layer_size.0), clamp(h.layer_size.1), bytes)?;
+    admit(
+        clamp(h.layer_size.0),
+        clamp(h.layer_size.1),
+        h.channels.list.len(),
+    )?;
     file.rewind()?;
     let image = read()
         .no_deep_data()

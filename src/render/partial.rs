@@ -25,6 +25,9 @@ pub const MAX_SPP: u32 = 1 << 20;
 
 const KIND: &str = "rayterm partial film 1";
 
+/// The widest and tallest film rayterm renders.
+const MAX_SIDE: u32 = 16384;
+
 /// What a partial film says about where it came from.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Meta {
@@ -117,8 +120,22 @@ impl Part {
     /// Reads a partial film, refusing anything that is not one rayterm
     /// wrote whole: every error names the file.
     pub fn read(path: &Path) -> Result<Part> {
-        let per_pixel = Film::BYTES_PER_PIXEL + std::mem::size_of::<PixelStats>() as u64;
-        let c = openexr::read_channels(path, per_pixel)?;
+        let admit = |w: u32, h: u32, channels: usize| -> Result<()> {
+            if w > MAX_SIDE || h > MAX_SIDE || channels > 64 {
+                bail!(
+                    "{}: {w}x{h} pixels of {channels} channels is no partial film rayterm writes",
+                    path.display()
+                );
+            }
+            // The decoded channels, the film and the image made from it.
+            let per_pixel = 4 * channels as u64 + Film::BYTES_PER_PIXEL;
+            crate::memory::check(
+                &format!("{}: a {w}x{h} partial film", path.display()),
+                w as u64 * h as u64 * per_pixel,
+                None,
+            )
+        };
+        let c = openexr::read_channels(path, &admit)?;
         decode(c).with_context(|| format!("{}: not a usable partial film", path.display()))
     }
 }
