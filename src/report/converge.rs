@@ -771,12 +771,9 @@ impl Subject<'_> {
                 } else {
                     // Double the spp until the run takes as long as the scene's largest budget.
                     let mut n = 1;
-                    loop {
-                        let Some(p) =
-                            self.measure(s, Budget::Spp(n), cfg, &reference, &mut passes, &bar)
-                        else {
-                            break;
-                        };
+                    while let Some(p) =
+                        self.measure(s, Budget::Spp(n), cfg, &reference, &mut passes, &bar)
+                    {
                         let done = p.seconds >= t_max || n >= MAX_COMPARE_SPP;
                         series.points.push(p);
                         if done {
