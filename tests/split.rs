@@ -238,6 +238,15 @@ fn damaged_parts_are_refused_naming_the_file() {
         let err = refused(&d, &args, "r.png");
         assert!(err.contains(bad), "{bad}: {err}");
     }
+    // One flipped bit anywhere, in a sum, a count, a mean or an attribute.
+    for i in 1..24 {
+        let mut one = whole.clone();
+        let at = whole.len() * i / 24;
+        one[at] ^= 1 << (i % 8);
+        std::fs::write(d.join("bit.exr"), &one).unwrap();
+        let err = refused(&d, &["merge", "a.exr", "bit.exr", "-o", "m.png"], "m.png");
+        assert!(err.contains("bit.exr"), "byte {at}: {err}");
+    }
     std::fs::remove_dir_all(d).unwrap();
 }
 

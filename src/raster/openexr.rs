@@ -78,9 +78,10 @@ pub struct Channels {
     pub attributes: HashMap<String, String>,
 }
 
-/// `c` encoded as OpenEXR: one layer, its channels losslessly compressed
-/// (run lengths: fast to write and read); attribute values that are not
-/// Latin-1 have those characters replaced by `?`.
+/// `c` encoded as OpenEXR: one layer, its channels uncompressed (the words
+/// of exact sums and statistics hardly compress, and reading them back is
+/// most of a merge's time); attribute values that are not Latin-1 have
+/// those characters replaced by `?` ([`stored_text`]).
 pub fn encode_channels(c: &Channels) -> Result<Vec<u8>> {
     use exr::prelude::*;
     let (w, h) = (c.width as usize, c.height as usize);
@@ -119,11 +120,14 @@ pub fn encode_channels(c: &Channels) -> Result<Vec<u8>> {
 }
 
 fn text(s: &str) -> exr::meta::attribute::Text {
-    let latin1: String = s
-        .chars()
+    exr::meta::attribute::Text::new_or_none(stored_text(s)).unwrap_or_default()
+}
+
+/// `s` as an attribute reads back: characters beyond Latin-1 become `?`.
+pub fn stored_text(s: &str) -> String {
+    s.chars()
         .map(|c| if (c as u32) < 256 { c } else { '?' })
-        .collect();
-    exr::meta::attribute::Text::new_or_none(latin1).unwrap_or_default()
+        .collect()
 }
 
 /// Reads an image of named channels (one flat layer, f32 and u32 samples)

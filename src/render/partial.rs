@@ -195,12 +195,54 @@ pub fn encode(f: &Film, meta: &Meta) -> Result<Vec<u8>> {
     if let Some(t) = m.total {
         attributes.insert("rayterm.total".into(), t.to_string());
     }
-    openexr::encode_channels(&Channels {
+    let mut c = Channels {
         width: f.width,
         height: f.height,
         channels: ch,
         attributes,
-    })
+    };
+    let sum = format!("{:08x}", checksum(&c));
+    c.attributes.insert(CHECKSUM.into(), sum);
+    openexr::encode_channels(&c)
+}
+
+/// The attribute holding [`checksum`].
+const CHECKSUM: &str = "rayterm.checksum";
+
+/// CRC-32 of every channel's samples and every other attribute, as the
+/// file stores them, in name order. OpenEXR keeps no checksum of its own,
+/// and a damaged word of a sum is often a plausible one: without this, a
+/// flipped bit would merge into a wrong image.
+fn checksum(c: &Channels) -> u32 {
+    let mut h = crc32fast::Hasher::new();
+    h.update(&c.width.to_le_bytes());
+    h.update(&c.height.to_le_bytes());
+    let mut names: Vec<&String> = c.channels.keys().collect();
+    names.sort();
+    let mut buf = Vec::new();
+    for name in names {
+        h.update(name.as_bytes());
+        h.update(&[0]);
+        buf.clear();
+        match &c.channels[name] {
+            Samples::F32(v) => buf.extend(v.iter().flat_map(|x| x.to_bits().to_le_bytes())),
+            Samples::U32(v) => buf.extend(v.iter().flat_map(|x| x.to_le_bytes())),
+        }
+        h.update(&buf);
+    }
+    let mut attrs: Vec<(&String, &String)> = c
+        .attributes
+        .iter()
+        .filter(|(k, _)| *k != CHECKSUM)
+        .collect();
+    attrs.sort();
+    for (k, v) in attrs {
+        for s in [k, v] {
+            h.update(openexr::stored_text(s).as_bytes());
+            h.update(&[0]);
+        }
+    }
+    h.finalize()
 }
 
 /// The one-word fields of a pixel.
@@ -236,6 +278,10 @@ fn decode(mut c: Channels) -> Result<Part> {
     };
     if attr("film").ok().map(String::as_str) != Some(KIND) {
         bail!("no rayterm.film attribute saying \"{KIND}\"");
+    }
+    let stored = attr(&CHECKSUM["rayterm.".len()..])?;
+    if u32::from_str_radix(stored, 16).ok() != Some(checksum(&c)) {
+        bail!("its data do not match their checksum: the file is damaged");
     }
     fn num<T: std::str::FromStr>(k: &str, v: &str) -> Result<T> {
         v.parse()
