@@ -254,6 +254,17 @@ fn damaged_parts_are_refused_naming_the_file() {
 fn a_checkpoint_resumes_into_the_uninterrupted_render() {
     let d = dir("resume");
     render(&d, &["--spp", "9", "--checkpoint", "c.exr"], "first.png");
+    // Rerunning without --resume would throw the checkpoint's work away.
+    let kept = bytes(&d, "c.exr");
+    let mut again = vec!["render"];
+    again.extend(SCENE);
+    again.extend(["--spp", "30", "--checkpoint", "c.exr", "-o", "again.png"]);
+    let err = refused(&d, &again, "again.png");
+    assert!(
+        err.contains("c.exr already exists") && err.contains("--resume c.exr"),
+        "{err}"
+    );
+    assert!(bytes(&d, "c.exr") == kept);
     render(&d, &["--spp", "30", "--resume", "c.exr"], "resumed.png");
     render(&d, &["--spp", "30"], "whole.png");
     assert!(bytes(&d, "resumed.png") == bytes(&d, "whole.png"));

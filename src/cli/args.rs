@@ -248,7 +248,8 @@ pub struct RenderArgs {
           conflicts_with_all = ["samples", "time", "target_error", "adaptive", "debug"])]
     pub part: Option<(u32, u32)>,
     /// Write the film so far to this partial film (.exr) every few seconds,
-    /// at the end, and when stopped by Ctrl-C or SIGTERM, atomically.
+    /// at the end, and when stopped by Ctrl-C or SIGTERM, atomically. An
+    /// existing FILE is only continued (--resume FILE), never replaced.
     #[arg(long, value_name = "FILE.exr", conflicts_with_all = ["adaptive", "debug"])]
     pub checkpoint: Option<PathBuf>,
     /// Continue from a checkpoint (or a part) of this same render: its

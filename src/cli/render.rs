@@ -50,6 +50,14 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
                     c.display()
                 );
             }
+            // A checkpoint left by an interrupted render is work to keep.
+            if c.is_file() && !a.resume.as_deref().is_some_and(|r| same_path(r, c)) {
+                bail!(
+                    "{} already exists: continue the render it holds with --resume {}, or remove it",
+                    c.display(),
+                    c.display()
+                );
+            }
             Some(
                 Output::check(c, &scene_file, &[Format::Exr])
                     .map_err(|e| e.context("a checkpoint is a partial film: name it .exr"))?,
