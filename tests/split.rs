@@ -279,6 +279,21 @@ fn a_checkpoint_resumes_into_the_uninterrupted_render() {
     render(&d, &["--samples", "20..30"], "p2.exr");
     ok(&d, &["merge", "p0.exr", "p.exr", "p2.exr", "-o", "m.png"]);
     assert!(bytes(&d, "m.png") == bytes(&d, "whole.png"));
+    // --time is the whole render's: resuming a finished one adds nothing.
+    let spp_of = |line: &str| {
+        let head = line.split(" spp").next().unwrap();
+        head.rsplit(' ').next().unwrap().parse::<u32>().unwrap()
+    };
+    let timed = |extra: &[&str]| {
+        let mut args = vec!["render"];
+        args.extend(SCENE);
+        args.extend(["--time", "0.5"]);
+        args.extend(extra);
+        args.extend(["-o", "timed.png"]);
+        spp_of(&ok(&d, &args))
+    };
+    let first = timed(&["--checkpoint", "t.exr"]);
+    assert_eq!(timed(&["--resume", "t.exr"]), first);
     // Another render's checkpoint, or one past the requested samples.
     let err = refused(
         &d,

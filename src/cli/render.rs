@@ -103,6 +103,11 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         }
     };
     let (rays_before, seconds_before) = (p.rays, p.seconds);
+    // --time is the whole render's: a resumed one has spent some of it.
+    let stop = Stop {
+        seconds: stop.seconds.map(|t| (t - seconds_before).max(0.0)),
+        ..stop
+    };
     p.adaptive = a.adaptive && (stop.seconds.is_some() || stop.error.is_some());
     p.whole_passes = checkpoint.is_some();
     let interrupted = interrupt::flag();
