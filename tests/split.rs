@@ -1,8 +1,8 @@
 //! Split renders: parts of a render's samples merge into exactly the image
 //! one render makes; mismatched, overlapping, missing and damaged parts are
 //! refused with a message naming them; a checkpoint resumes into the render
-//! that was never interrupted; GNU parallel and the Slurm scripts of
-//! `examples/slurm` run the README's way.
+//! that was never interrupted; the README's commands (GNU parallel, a
+//! checkpoint) and the Slurm scripts of `examples/slurm` run as written.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -432,27 +432,90 @@ fn bash(d: &Path, script: &str, env: &[(&str, &str)]) -> Output {
         .unwrap()
 }
 
-/// The README's GNU parallel command, as written.
+/// The runnable (`bash`) blocks of the README's section on split renders.
+fn readme_split_commands() -> (String, Vec<String>) {
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
+    let from = text
+        .find("## Split renders and checkpoints")
+        .expect("the README's split render section");
+    let section = &text[from..];
+    let section = &section[..section[3..].find("\n## ").map_or(section.len(), |e| e + 3)];
+    let mut lines = Vec::new();
+    let mut inside = false;
+    for line in section.lines() {
+        if line.starts_with("```") {
+            inside = !inside && line.trim() == "```bash";
+        } else if inside && !line.trim().is_empty() {
+            lines.push(line.to_string());
+        }
+    }
+    (section.to_string(), lines)
+}
+
+/// The README's split render commands, run as written in a directory like
+/// a fresh clone's: the GNU parallel parts merge into the single render's
+/// image, and the checkpointed render resumed into the uninterrupted one.
 #[test]
-fn gnu_parallel_renders_the_parts() {
-    let d = dir("parallel");
+fn the_readme_split_commands_run_as_written() {
+    let (section, lines) = readme_split_commands();
+    assert!(section.contains("--sshlogin") && section.contains("examples/slurm/submit.sh"));
+    let d = dir("readme");
+    std::os::unix::fs::symlink(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("data"),
+        d.join("data"),
+    )
+    .unwrap();
     if !bash(&d, "command -v parallel", &[]).status.success() {
         eprintln!("skipping: GNU parallel is not installed (.ci/run installs it)");
         return;
     }
-    let run = bash(
-        &d,
-        "parallel -j2 rayterm render cornell-area --size 40x28 --spp 16 --part {}/8 -o part-{}.exr ::: $(seq 8) \
-         && rayterm merge part-*.exr -o out.png",
-        &[],
-    );
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    render(&d, &["--spp", "16"], "single.png");
-    assert!(bytes(&d, "out.png") == bytes(&d, "single.png"));
+    for line in &lines {
+        let out = bash(&d, line, &[]);
+        assert!(
+            out.status.success(),
+            "{line}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    // parallel -j2 rayterm render ARGS --part {}/8 -o part-{}.exr ::: ...
+    let split = lines
+        .iter()
+        .find(|l| l.starts_with("parallel -j2 rayterm render") && l.contains(":::"))
+        .expect("the GNU parallel line");
+    let args = &split["parallel -j2 ".len()..split.find(" --part").unwrap()];
+    let merged = lines
+        .iter()
+        .find(|l| l.starts_with("rayterm merge part-*.exr -o "))
+        .expect("the merge line");
+    let out = merged.rsplit(' ').next().unwrap();
+    bash(&d, &format!("{args} -o single-{out}"), &[]);
+    assert!(bytes(&d, out) == bytes(&d, &format!("single-{out}")));
+    // The resumed render equals one never stopped.
+    let resumed = lines
+        .iter()
+        .find(|l| l.contains("--resume"))
+        .expect("the resume line");
+    let words: Vec<&str> = resumed.split_whitespace().collect();
+    let mut whole = Vec::new();
+    let mut i = 0;
+    while i < words.len() {
+        match words[i] {
+            "--resume" | "--checkpoint" => i += 2,
+            "-o" => {
+                whole.extend(["-o", "whole.png"]);
+                i += 2;
+            }
+            w => {
+                whole.push(w);
+                i += 1;
+            }
+        }
+    }
+    let out = bash(&d, &whole.join(" "), &[]);
+    assert!(out.status.success(), "{whole:?}");
+    let target = words[words.iter().position(|w| *w == "-o").unwrap() + 1];
+    assert!(bytes(&d, target) == bytes(&d, "whole.png"));
     std::fs::remove_dir_all(d).unwrap();
 }
 
