@@ -10,39 +10,37 @@ use super::args::MergeArgs;
 use super::render::{image_bytes, summary};
 use crate::interrupt;
 use crate::raster::{Format, Output};
-use crate::render::partial::{self, ranges_text, Part};
+use crate::render::partial::{self, ranges_text};
 
 pub fn run(a: MergeArgs) -> Result<ExitCode> {
     let out = Output::check(&a.output, &a.parts, Format::RENDERS)?;
     let interrupted = interrupt::flag();
     let cancel = || interrupted.load(std::sync::atomic::Ordering::Relaxed);
     let start = Instant::now();
-    let mut parts = Vec::with_capacity(a.parts.len());
-    for path in &a.parts {
-        if cancel() {
-            break;
+    let plan = partial::plan(&a.parts)?;
+    let count = plan.parts.len();
+    if !plan.missing.is_empty() {
+        let what = format!(
+            "samples {} of 0..{} are missing",
+            ranges_text(&plan.missing),
+            plan.total
+        );
+        if !a.allow_missing {
+            bail!("{what}: render those parts, or merge what there is with --allow-missing");
         }
-        parts.push((path.clone(), Part::read(path)?));
+        let held: u32 = plan.parts.iter().map(|(_, h)| h.range.len() as u32).sum();
+        eprintln!(
+            "warning: {what}: the image has {held} of {} spp",
+            plan.total
+        );
     }
-    let count = parts.len();
-    let merged = partial::merge(parts, &cancel);
+    let merged = partial::merge(&plan, &cancel);
     if cancel() {
         eprintln!("interrupted: nothing written");
         return Ok(ExitCode::from(interrupt::exit_code()));
     }
     let merged = merged?;
-    let (film, meta) = (&merged.part.film, &merged.part.meta);
-    let total = meta.total.unwrap_or(film.spp);
-    if !merged.missing.is_empty() {
-        let what = format!(
-            "samples {} of 0..{total} are missing",
-            ranges_text(&merged.missing)
-        );
-        if !a.allow_missing {
-            bail!("{what}: render those parts, or merge what there is with --allow-missing");
-        }
-        eprintln!("warning: {what}: the image has {} of {total} spp", film.spp);
-    }
+    let (film, meta) = (&merged.film, &merged.meta);
     let bytes = image_bytes(
         out.format,
         film,
@@ -73,7 +71,7 @@ pub fn run(a: MergeArgs) -> Result<ExitCode> {
         "",
         &a.output,
     );
-    if !merged.missing.is_empty() {
+    if !plan.missing.is_empty() {
         line = line.replacen(" spp,", " spp (samples missing),", 1);
     }
     println!("{line}");

@@ -311,7 +311,7 @@ fn resumed(
     stop: &Stop,
 ) -> Result<Progressive> {
     let part = Part::read(path)?;
-    part.check_same(
+    part.header().check_same(
         meta,
         (s.width, s.height),
         &path.display().to_string(),

@@ -130,19 +130,26 @@ pub fn stored_text(s: &str) -> String {
         .collect()
 }
 
-/// Reads an image of named channels (one flat layer, f32 and u32 samples)
-/// and its text attributes; `admit` sees the size and channel count the
-/// header declares and may refuse them before anything is decoded.
-pub fn read_channels(
+/// The size and text attributes of an image of named channels, from its
+/// header alone; `admit` sees the size and channel count the header
+/// declares and may refuse them.
+pub fn read_header(
     path: &Path,
     admit: &dyn Fn(u32, u32, usize) -> Result<()>,
-) -> Result<Channels> {
-    use exr::prelude::*;
-    let err = |e: exr::error::Error| {
-        anyhow::anyhow!("{}: not a readable OpenEXR file ({e})", path.display())
-    };
+) -> Result<(u32, u32, HashMap<String, String>)> {
     let mut file = BufReader::new(super::open(path)?);
-    let meta = exr::meta::MetaData::read_from_buffered(&mut file, false).map_err(err)?;
+    header(path, &mut file, admit)
+}
+
+/// Reads the one flat layer's header from `file`, leaving it wherever the
+/// header ends.
+fn header(
+    path: &Path,
+    file: &mut BufReader<std::fs::File>,
+    admit: &dyn Fn(u32, u32, usize) -> Result<()>,
+) -> Result<(u32, u32, HashMap<String, String>)> {
+    let meta =
+        exr::meta::MetaData::read_from_buffered(file, false).map_err(|e| unreadable(path, e))?;
     let [h] = meta.headers.as_slice() else {
         bail!(
             "{}: {} layers; expected one",
@@ -153,12 +160,42 @@ pub fn read_channels(
     if h.deep {
         bail!("{}: deep data; expected a flat image", path.display());
     }
-    let clamp = |v: usize| v.min(u32::MAX as usize) as u32;
-    admit(
-        clamp(h.layer_size.0),
-        clamp(h.layer_size.1),
-        h.channels.list.len(),
-    )?;
+    let (w, hh) = (clamp(h.layer_size.0), clamp(h.layer_size.1));
+    admit(w, hh, h.channels.list.len())?;
+    Ok((w, hh, texts(&h.own_attributes.other)))
+}
+
+fn clamp(v: usize) -> u32 {
+    v.min(u32::MAX as usize) as u32
+}
+
+fn unreadable(path: &Path, e: exr::error::Error) -> anyhow::Error {
+    anyhow::anyhow!("{}: not a readable OpenEXR file ({e})", path.display())
+}
+
+/// The text attributes among `a`.
+fn texts(
+    a: &HashMap<exr::meta::attribute::Text, exr::meta::attribute::AttributeValue>,
+) -> HashMap<String, String> {
+    a.iter()
+        .filter_map(|(k, v)| match v {
+            exr::meta::attribute::AttributeValue::Text(t) => Some((k.to_string(), t.to_string())),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Reads an image of named channels (one flat layer, f32 and u32 samples)
+/// and its text attributes; `admit` sees the size and channel count the
+/// header declares and may refuse them before anything is decoded.
+pub fn read_channels(
+    path: &Path,
+    admit: &dyn Fn(u32, u32, usize) -> Result<()>,
+) -> Result<Channels> {
+    use exr::prelude::*;
+    let err = |e: exr::error::Error| unreadable(path, e);
+    let mut file = BufReader::new(super::open(path)?);
+    header(path, &mut file, admit)?;
     file.rewind()?;
     let image = read()
         .no_deep_data()
@@ -182,11 +219,7 @@ pub fn read_channels(
         };
         out.channels.insert(ch.name.to_string(), s);
     }
-    for (k, v) in layer.attributes.other {
-        if let AttributeValue::Text(t) = v {
-            out.attributes.insert(k.to_string(), t.to_string());
-        }
-    }
+    out.attributes = texts(&layer.attributes.other);
     Ok(out)
 }
 

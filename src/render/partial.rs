@@ -80,6 +80,45 @@ impl Part {
         self.film.start..self.film.start + self.film.spp
     }
 
+    /// What its header says.
+    pub fn header(&self) -> Header {
+        Header {
+            meta: self.meta.clone(),
+            range: self.range(),
+            size: (self.film.width, self.film.height),
+        }
+    }
+
+    /// The partial film as OpenEXR bytes.
+    pub fn encode(&self) -> Result<Vec<u8>> {
+        encode(&self.film, &self.meta)
+    }
+
+    /// Reads a partial film, refusing anything that is not one rayterm
+    /// wrote whole: every error names the file.
+    pub fn read(path: &Path) -> Result<Part> {
+        let c = openexr::read_channels(path, &admit(path))?;
+        decode(c).with_context(|| format!("{}: not a usable partial film", path.display()))
+    }
+}
+
+/// What a partial film's header says: enough to check and order the parts
+/// of a merge before any pixel is read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Header {
+    pub meta: Meta,
+    pub range: Range<u32>,
+    pub size: (u32, u32),
+}
+
+impl Header {
+    /// Reads a partial film's header, naming the file in every error.
+    pub fn read(path: &Path) -> Result<Header> {
+        let (w, h, attributes) = openexr::read_header(path, &admit(path))?;
+        header_of(w, h, &attributes)
+            .with_context(|| format!("{}: not a usable partial film", path.display()))
+    }
+
     /// Refuses a part that another film cannot be merged with or continue:
     /// another rayterm version, scene, size or seed, named by `this` and
     /// `that`.
@@ -91,7 +130,7 @@ impl Part {
         if m.version != other.version {
             differ("rayterm version", m.version.clone(), other.version.clone())?;
         }
-        let own = (self.film.width, self.film.height);
+        let own = self.size;
         if own != size {
             differ(
                 "size",
@@ -111,32 +150,25 @@ impl Part {
         }
         Ok(())
     }
+}
 
-    /// The partial film as OpenEXR bytes.
-    pub fn encode(&self) -> Result<Vec<u8>> {
-        encode(&self.film, &self.meta)
-    }
-
-    /// Reads a partial film, refusing anything that is not one rayterm
-    /// wrote whole: every error names the file.
-    pub fn read(path: &Path) -> Result<Part> {
-        let admit = |w: u32, h: u32, channels: usize| -> Result<()> {
-            if w > MAX_SIDE || h > MAX_SIDE || channels > 64 {
-                bail!(
-                    "{}: {w}x{h} pixels of {channels} channels is no partial film rayterm writes",
-                    path.display()
-                );
-            }
-            // The decoded channels, the film and the image made from it.
-            let per_pixel = 4 * channels as u64 + Film::BYTES_PER_PIXEL;
-            crate::memory::check(
-                &format!("{}: a {w}x{h} partial film", path.display()),
-                w as u64 * h as u64 * per_pixel,
-                None,
-            )
-        };
-        let c = openexr::read_channels(path, &admit)?;
-        decode(c).with_context(|| format!("{}: not a usable partial film", path.display()))
+/// Refuses, from its header, a film no rayterm render writes or this
+/// machine cannot hold.
+fn admit(path: &Path) -> impl Fn(u32, u32, usize) -> Result<()> + '_ {
+    move |w, h, channels| {
+        if w > MAX_SIDE || h > MAX_SIDE || channels > 64 {
+            bail!(
+                "{}: {w}x{h} pixels of {channels} channels is no partial film rayterm writes",
+                path.display()
+            );
+        }
+        // The decoded channels, the film and the image made from it.
+        let per_pixel = 4 * channels as u64 + Film::BYTES_PER_PIXEL;
+        crate::memory::check(
+            &format!("{}: a {w}x{h} partial film", path.display()),
+            w as u64 * h as u64 * per_pixel,
+            None,
+        )
     }
 }
 
@@ -270,19 +302,28 @@ const F64S: [Double; 8] = [
     ("tail.diff", |p| p.tail.diff),
 ];
 
-fn decode(mut c: Channels) -> Result<Part> {
+/// Refuses attributes that are not a partial film's.
+fn check_kind(a: &HashMap<String, String>) -> Result<()> {
+    if a.get("rayterm.film").map(String::as_str) != Some(KIND) {
+        bail!("no rayterm.film attribute saying \"{KIND}\"");
+    }
+    if !a.contains_key(CHECKSUM) {
+        bail!("no {CHECKSUM} attribute");
+    }
+    Ok(())
+}
+
+/// The header of a `w` x `h` partial film with attributes `a`.
+fn header_of(w: u32, h: u32, attrs: &HashMap<String, String>) -> Result<Header> {
+    check_kind(attrs)?;
+    if w == 0 || h == 0 {
+        bail!("the film has no pixels ({w}x{h})");
+    }
     let attr = |k: &str| -> Result<&String> {
-        c.attributes
+        attrs
             .get(&format!("rayterm.{k}"))
             .ok_or_else(|| anyhow::anyhow!("no rayterm.{k} attribute"))
     };
-    if attr("film").ok().map(String::as_str) != Some(KIND) {
-        bail!("no rayterm.film attribute saying \"{KIND}\"");
-    }
-    let stored = attr(&CHECKSUM["rayterm.".len()..])?;
-    if u32::from_str_radix(stored, 16).ok() != Some(checksum(&c)) {
-        bail!("its data do not match their checksum: the file is damaged");
-    }
     fn num<T: std::str::FromStr>(k: &str, v: &str) -> Result<T> {
         v.parse()
             .map_err(|_| anyhow::anyhow!("rayterm.{k} is not a number: {v:?}"))
@@ -295,11 +336,11 @@ fn decode(mut c: Channels) -> Result<Part> {
     if start >= end || end > MAX_SPP {
         bail!("rayterm.samples {start}..{end} is not a range within 0..{MAX_SPP}");
     }
-    let total = match c.attributes.get("rayterm.total") {
+    let total = match attrs.get("rayterm.total") {
         None => None,
         Some(t) => Some(num::<u32>("total", t)?).filter(|&t| t >= end && t <= MAX_SPP),
     };
-    if c.attributes.contains_key("rayterm.total") && total.is_none() {
+    if attrs.contains_key("rayterm.total") && total.is_none() {
         bail!("rayterm.total is not a sample count from the range's end to {MAX_SPP}");
     }
     let bloom = match attr("bloom")?.as_str() {
@@ -342,10 +383,25 @@ fn decode(mut c: Channels) -> Result<Part> {
             bail!("rayterm.seconds is not a duration")
         },
     };
-    let (w, h) = (c.width, c.height);
-    if w == 0 || h == 0 {
-        bail!("the film has no pixels ({w}x{h})");
+    Ok(Header {
+        meta,
+        range: start..end,
+        size: (w, h),
+    })
+}
+
+fn decode(mut c: Channels) -> Result<Part> {
+    check_kind(&c.attributes)?;
+    let stored = &c.attributes[CHECKSUM];
+    if u32::from_str_radix(stored, 16).ok() != Some(checksum(&c)) {
+        bail!("its data do not match their checksum: the file is damaged");
     }
+    let Header {
+        meta,
+        range: Range { start, end },
+        ..
+    } = header_of(c.width, c.height, &c.attributes)?;
+    let (w, h) = (c.width, c.height);
     let count = w as usize * h as usize;
     let mut word = |name: &str| -> Result<Vec<u32>> {
         match c.channels.remove(name) {
@@ -438,24 +494,28 @@ fn check_pixel(p: &PixelStats, spp: u32, start: u32, end: u32) -> Result<()> {
     Ok(())
 }
 
-/// Parts merged into one film, and what is missing from it.
-pub struct Merged {
-    pub part: Part,
-    /// Ranges of samples no part holds, within the render's total.
+/// The parts of one render, checked from their headers and put in range
+/// order, with the render's total and the ranges no part holds.
+pub struct Plan {
+    pub parts: Vec<(PathBuf, Header)>,
+    pub total: u32,
     pub missing: Vec<Range<u32>>,
 }
 
-/// Checks that `parts` (named by their paths) come from one render and do
-/// not overlap, then merges them in range order. Missing ranges are
-/// returned; the caller decides whether they may be.
-pub fn merge(mut parts: Vec<(PathBuf, Part)>, cancel: &dyn Fn() -> bool) -> Result<Merged> {
+/// Reads the headers of `paths` and checks that they come from one render
+/// and do not overlap. Missing ranges are returned; the caller decides
+/// whether they may be.
+pub fn plan(paths: &[PathBuf]) -> Result<Plan> {
+    let mut parts = Vec::with_capacity(paths.len());
+    for p in paths {
+        parts.push((p.clone(), Header::read(p)?));
+    }
     let Some((first_path, first)) = parts.first() else {
         bail!("no parts to merge");
     };
     let name = |p: &Path| p.display().to_string();
-    let size = (first.film.width, first.film.height);
     for (p, part) in &parts[1..] {
-        part.check_same(&first.meta, size, &name(p), &name(first_path))?;
+        part.check_same(&first.meta, first.size, &name(p), &name(first_path))?;
     }
     let mut total = None::<(u32, PathBuf)>;
     for (p, part) in &parts {
@@ -469,47 +529,63 @@ pub fn merge(mut parts: Vec<(PathBuf, Part)>, cancel: &dyn Fn() -> bool) -> Resu
             _ => {}
         }
     }
-    parts.sort_by_key(|(_, part)| part.film.start);
+    parts.sort_by_key(|(_, part)| part.range.start);
     for pair in parts.windows(2) {
         let ((p, a), (q, b)) = (&pair[0], &pair[1]);
-        if a.range().end > b.film.start {
+        if a.range.end > b.range.start {
             bail!(
                 "{} (samples {:?}) and {} (samples {:?}) overlap",
                 name(p),
-                a.range(),
+                a.range,
                 name(q),
-                b.range()
+                b.range
             );
         }
     }
-    let end = parts.last().map_or(0, |(_, p)| p.range().end);
+    let end = parts.last().map_or(0, |(_, p)| p.range.end);
     let total = total.map_or(end, |t| t.0);
     let mut missing = Vec::new();
     let mut at = 0;
     for (_, part) in &parts {
-        if part.film.start > at {
-            missing.push(at..part.film.start);
+        if part.range.start > at {
+            missing.push(at..part.range.start);
         }
-        at = part.range().end;
+        at = part.range.end;
     }
     if total > at {
         missing.push(at..total);
     }
-    let mut iter = parts.into_iter();
-    let (_, mut merged) = iter.next().expect("one part at least");
-    for (_, part) in iter {
-        if cancel() {
-            bail!("interrupted");
-        }
-        merged.film.merge(&part.film);
-        merged.meta.rays += part.meta.rays;
-        merged.meta.seconds += part.meta.seconds;
-    }
-    merged.meta.total = Some(total);
-    Ok(Merged {
-        part: merged,
+    Ok(Plan {
+        parts,
+        total,
         missing,
     })
+}
+
+/// Reads the planned parts in range order and merges them, holding one
+/// part at a time beside the sum so far.
+pub fn merge(plan: &Plan, cancel: &dyn Fn() -> bool) -> Result<Part> {
+    let mut merged: Option<Part> = None;
+    for (path, header) in &plan.parts {
+        if cancel() {
+            return Err(crate::interrupt::Interrupted.into());
+        }
+        let part = Part::read(path)?;
+        if part.header() != *header {
+            bail!("{}: changed while being merged", path.display());
+        }
+        match &mut merged {
+            None => merged = Some(part),
+            Some(m) => {
+                m.film.merge(&part.film);
+                m.meta.rays += part.meta.rays;
+                m.meta.seconds += part.meta.seconds;
+            }
+        }
+    }
+    let mut merged = merged.ok_or_else(|| anyhow::anyhow!("no parts to merge"))?;
+    merged.meta.total = Some(plan.total);
+    Ok(merged)
 }
 
 /// `0..16 and 48..64`.
