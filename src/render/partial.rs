@@ -410,15 +410,6 @@ fn decode(mut c: Channels) -> Result<Part> {
             None => bail!("no channel {name}"),
         }
     };
-    let mut pixels = vec![PixelStats::default(); count];
-    let mut set = |name: &str, put: &dyn Fn(&mut PixelStats, u32)| -> Result<()> {
-        for (p, v) in pixels.iter_mut().zip(word(name)?) {
-            put(p, v);
-        }
-        Ok(())
-    };
-    let lo = |x: f64, v: u32| f64::from_bits((x.to_bits() & !0xffff_ffff) | v as u64);
-    let hi = |x: f64, v: u32| f64::from_bits((x.to_bits() & 0xffff_ffff) | (v as u64) << 32);
     type Put = fn(&mut PixelStats, u32);
     let words: [(&str, Put); 7] = [
         ("n", |p, v| p.n = v),
@@ -429,9 +420,6 @@ fn decode(mut c: Channels) -> Result<Part> {
         ("tail.block", |p, v| p.tail.block = v),
         ("tail.n", |p, v| p.tail.n = v),
     ];
-    for (name, put) in words {
-        set(name, &put)?;
-    }
     type Field = fn(&mut PixelStats) -> &mut f64;
     let doubles: [(&str, Field); 8] = [
         ("m2", |p| &mut p.m2),
@@ -443,18 +431,43 @@ fn decode(mut c: Channels) -> Result<Part> {
         ("tail.sum", |p| &mut p.tail.sum),
         ("tail.diff", |p| &mut p.tail.diff),
     ];
-    for (name, field) in doubles {
-        set(&format!("{name}.lo"), &|p, v| *field(p) = lo(*field(p), v))?;
-        set(&format!("{name}.hi"), &|p, v| *field(p) = hi(*field(p), v))?;
+    // The columns in the order the pixels are built from: the words, each
+    // f64's low and high word, each colour sum's four words from the low.
+    let mut names: Vec<String> = words.iter().map(|(n, _)| n.to_string()).collect();
+    for (name, _) in &doubles {
+        names.extend([format!("{name}.lo"), format!("{name}.hi")]);
     }
-    for (c, cname) in ["R", "G", "B"].into_iter().enumerate() {
-        for wd in 0..4 {
-            set(&format!("sum.{cname}.{wd}"), &|p, v| {
-                let shift = 32 * wd;
-                p.sum[c] = (p.sum[c] & !(0xffff_ffffi128 << shift)) | ((v as i128) << shift);
-            })?;
-        }
+    for cname in ["R", "G", "B"] {
+        names.extend((0..4).map(|wd| format!("sum.{cname}.{wd}")));
     }
+    let columns = names
+        .iter()
+        .map(|n| word(n))
+        .collect::<Result<Vec<Vec<u32>>>>()?;
+    // One pass over the pixels, each written once: reading the columns
+    // side by side streams them, where a pass per column would not.
+    let (first_double, first_sum) = (words.len(), words.len() + 2 * doubles.len());
+    let pixels: Vec<PixelStats> = (0..count)
+        .map(|i| {
+            let at = |k: usize| columns[k][i];
+            let mut p = PixelStats::default();
+            for (k, (_, put)) in words.iter().enumerate() {
+                put(&mut p, at(k));
+            }
+            for (k, (_, field)) in doubles.iter().enumerate() {
+                let j = first_double + 2 * k;
+                *field(&mut p) = f64::from_bits(at(j) as u64 | (at(j + 1) as u64) << 32);
+            }
+            for (c, sum) in p.sum.iter_mut().enumerate() {
+                let j = first_sum + 4 * c;
+                let bits = (0..4).fold(0u128, |s, wd| s | (at(j + wd) as u128) << (32 * wd));
+                *sum = bits as i128;
+            }
+            p
+        })
+        .collect();
+    drop(columns);
+    let mut pixels = pixels;
     let spp = end - start;
     let mut bad = 0u64;
     for (i, p) in pixels.iter_mut().enumerate() {
