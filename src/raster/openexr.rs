@@ -78,10 +78,10 @@ pub struct Channels {
     pub attributes: HashMap<String, String>,
 }
 
-/// `c` encoded as OpenEXR: one layer, its channels uncompressed (the words
-/// of exact sums and statistics hardly compress, and reading them back is
-/// most of a merge's time); attribute values that are not Latin-1 have
-/// those characters replaced by `?` ([`stored_text`]).
+/// `c` encoded as OpenEXR: one layer, its channels uncompressed (a merge
+/// reads them back with no decompression on the way); attribute values
+/// that are not Latin-1 have those characters replaced by `?`
+/// ([`stored_text`]).
 pub fn encode_channels(c: &Channels) -> Result<Vec<u8>> {
     use exr::prelude::*;
     let (w, h) = (c.width as usize, c.height as usize);
