@@ -86,12 +86,16 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         error_text(film)
     };
     let render_ms = outcome.seconds * 1e3;
-    let capped = match (outcome.ended, stop.error) {
-        (Ended::Spp, Some(e)) if stop.spp.is_some() => format!(
-            " (stopped at the --max-spp cap of {} before reaching {}%)",
-            film.spp_range().2,
+    // A --time or --target-error render that the --max-spp cap ended says so.
+    let cap = film.spp_range().2;
+    let capped = match (outcome.ended, stop.error, stop.seconds) {
+        (Ended::Spp, Some(e), _) if a.spp.is_none() => format!(
+            " (stopped at the --max-spp cap of {cap} before reaching {}%)",
             percent(e)
         ),
+        (Ended::Spp, None, Some(t)) if a.spp.is_none() => {
+            format!(" (stopped at the --max-spp cap of {cap} before the --time of {t} s)")
+        }
         _ => String::new(),
     };
     println!(

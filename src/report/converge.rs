@@ -614,6 +614,9 @@ impl Subject<'_> {
                 let img = p.film.image();
                 let cached = |f: &std::path::Path| -> Result<()> {
                     if let Some(dir) = f.parent() {
+                        if dir.exists() && !dir.is_dir() {
+                            bail!("{} is not a directory", dir.display());
+                        }
                         std::fs::create_dir_all(dir)
                             .with_context(|| format!("cannot create {}", dir.display()))?;
                     }
@@ -747,8 +750,7 @@ impl Subject<'_> {
                 && (r as f64) < REFERENCE_FACTOR as f64 * max_spp
             {
                 notes.push(format!(
-                    "the reference has {:.0}x the samples of the largest budget ({}x advised): its own noise adds about {:.1} % to the relMSE measured there (--reference-spp to raise it)",
-                    r as f64 / max_spp,
+                    "the reference has {r} samples per pixel against {max_spp:.0} in the largest budget ({}x that advised): its own noise adds about {:.1} % to the relMSE measured there (--reference-spp to raise it)",
                     REFERENCE_FACTOR,
                     100.0 * max_spp / r as f64
                 ));
@@ -848,6 +850,44 @@ mod tests {
         // answer, rather than an infinite or absurd sample count.
         let flat = series(&[(1.0, 0.01, 2.79), (4.0, 0.04, 2.78), (16.0, 0.16, 2.774)]);
         assert_eq!(flat.reach(0.01), None);
+    }
+
+    #[test]
+    fn far_extrapolations_give_a_bound_not_a_figure() {
+        let study = |target: f64| Study {
+            scene: "x".into(),
+            width: 8,
+            height: 8,
+            seeds: 1,
+            uses: Uses {
+                area_lights: true,
+                glossy: false,
+                supersampling: false,
+            },
+            exact: false,
+            reference: ReferenceInfo {
+                source: "rendered".into(),
+                spp: Some(1024),
+                seconds: 0.0,
+            },
+            series: vec![series(&[
+                (1.0, 0.01, 0.1),
+                (4.0, 0.04, 0.05),
+                (16.0, 0.16, 0.025),
+            ])],
+            passes: 3,
+            target,
+            notes: Vec::new(),
+        };
+        // 100 spp is within reach of the data; 1.6e11 is not.
+        let near = study(0.01).conclusion();
+        assert!(
+            near.contains("you need about 10") && near.contains("(extrapolated)"),
+            "{near}"
+        );
+        let far = study(1e-6).conclusion();
+        assert!(far.contains("more than 16000 spp"), "{far}");
+        assert!(!far.contains("about"), "{far}");
     }
 
     #[test]
