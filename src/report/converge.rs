@@ -414,6 +414,8 @@ struct Run {
     film: Film,
     seconds: f64,
     rays: u64,
+    /// The first pass took longer than the time budget.
+    overran: bool,
 }
 
 /// Renders one independent run: passes of one sample (adaptive: of a block
@@ -422,6 +424,7 @@ struct Run {
 fn run_once(tracer: &Tracer, budget: Budget, adaptive: bool, passes: &mut u64) -> Run {
     let mut p = Progressive::new(tracer.width, tracer.height);
     p.adaptive = adaptive;
+    let mut overran = false;
     match budget {
         Budget::Spp(n) if adaptive && !tracer.plan.deterministic => {
             while p.film.spp_range().1 < n as f64 {
@@ -437,15 +440,22 @@ fn run_once(tracer: &Tracer, budget: Budget, adaptive: bool, passes: &mut u64) -
                 Budget::Spp(n) => Stop::spp(n),
                 Budget::Seconds(t) => Stop::seconds(t),
             };
+            let mut first = None;
             *passes += p
-                .run(tracer, &stop, &interrupt::requested, |_, _| {})
+                .run(tracer, &stop, &interrupt::requested, |_, pass| {
+                    first.get_or_insert(pass.ms / 1e3);
+                })
                 .passes as u64;
+            // A render always completes its first pass: one that overran a
+            // time budget says the budget is too short.
+            overran = matches!((budget, first), (Budget::Seconds(t), Some(f)) if f > t);
         }
     }
     Run {
         seconds: p.seconds,
         rays: p.rays,
         film: p.film,
+        overran,
     }
 }
 
@@ -483,7 +493,7 @@ impl Subject<'_> {
             let r = run_once(&tracer, budget, strategy.adaptive, passes);
             // A time budget shorter than one sample per pixel measures
             // nothing: an unsampled pixel is not an error of the method.
-            if r.film.spp_range().0 == 0 {
+            if r.overran || r.film.spp_range().0 == 0 {
                 return None;
             }
             let img = r.film.image();
