@@ -984,7 +984,7 @@ fn the_binary_says_what_is_wrong_and_never_hangs() {
     d.write("bom.obj", format!("\u{feff}{TRI}"));
     let r = run(&["bom.obj"]);
     assert!(
-        r.ok() && r.stdout.contains("1 triangles"),
+        r.ok() && r.stdout.contains("1 triangle,"),
         "{} {}",
         r.stdout,
         r.stderr

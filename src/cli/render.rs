@@ -14,6 +14,7 @@ use super::open_scene;
 use crate::interrupt;
 use crate::raster::{png, Format, Output};
 use crate::render::{post, Ended, Film, Progressive, Stop};
+use crate::words;
 
 pub fn run(a: RenderArgs) -> Result<ExitCode> {
     let stop = stop(&a)?;
@@ -99,14 +100,18 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         _ => String::new(),
     };
     println!(
-        "{}: {} triangles, build {:.1} ms ({}), render {}, {}, {:.2} Mrays/s, {}{}{} -> {}",
+        "{}: {}, build {:.1} ms ({}), render {}, {}, {}, {}{}{} -> {}",
         s.scene.name,
-        s.scene.geometry.triangle_count(),
+        words::count(
+            s.scene.geometry.triangle_count() as u64,
+            "triangle",
+            "triangles"
+        ),
         s.bvh.stats.build_ms,
         s.bvh.stats.builder,
         duration(render_ms),
         spp_text(film),
-        outcome.rays as f64 / render_ms.max(1e-9) / 1e3,
+        words::rays_per_s(outcome.rays as f64 / (render_ms.max(1e-9) / 1e3)),
         err,
         capped,
         if film.bad_count > 0 {
