@@ -702,7 +702,52 @@ fn malformed_gltf_files_say_what_is_wrong() {
     short_bin.truncate(50);
     let mut cycle = json.clone();
     cycle["nodes"][2]["children"] = serde_json::json!([0]);
+    // The crate's reader trusts accessors: wrong types, short strides and
+    // views beyond the buffer must be caught before it reads them.
+    let edit = |f: &dyn Fn(&mut serde_json::Value)| {
+        let mut j = json.clone();
+        f(&mut j);
+        glb(&j, &bin)
+    };
+    let float_indices = edit(&|j| j["accessors"][2]["componentType"] = 5126.into());
+    let vec2_positions = edit(&|j| j["accessors"][0]["type"] = "VEC2".into());
+    let short_stride = edit(&|j| j["bufferViews"][0]["byteStride"] = 4.into());
+    let beyond = edit(&|j| j["accessors"][0]["count"] = 4_000_000_000u64.into());
+    let unaligned = edit(&|j| j["accessors"][0]["byteOffset"] = 1.into());
+    // A node shared by two parents, doubling at every level, would be
+    // placed 2^30 times.
+    let shared = edit(&|j| {
+        let nodes: Vec<_> = (0..31)
+            .map(|i| serde_json::json!({"mesh": 0, "children": [i + 1, i + 1]}))
+            .chain([serde_json::json!({"mesh": 0})])
+            .collect();
+        j["nodes"] = nodes.into();
+        j["scenes"] = serde_json::json!([{"nodes": [0]}]);
+    });
+    let wide_fov = edit(&|j| j["cameras"][1]["perspective"]["yfov"] = 3.2.into());
+    let bright = edit(&|j| {
+        j["materials"][1]["pbrMetallicRoughness"]["baseColorFactor"] =
+            serde_json::json!([2.0, 0.0, 0.0, 1.0])
+    });
+    let rough =
+        edit(&|j| j["materials"][1]["pbrMetallicRoughness"]["roughnessFactor"] = (-1.0).into());
+    let uri = |u: &str| {
+        let (mut j, _) = gltf_parts(serde_json::json!({"uri": "x.bin"}));
+        j["buffers"][0]["uri"] = u.into();
+        serde_json::to_vec(&j).unwrap()
+    };
     for (name, bytes, want) in [
+        ("wide.glb", wide_fov, "camera SideCam: yfov 3.2 radians is not between 1 and 179 degrees"),
+        ("bright.glb", bright, "material Chrome: baseColorFactor 2 is outside 0 to 1"),
+        ("rough.glb", rough, "material Chrome: roughnessFactor -1 is outside 0 to 1"),
+        ("http.gltf", uri("http://example.com/x.bin"), "http.gltf: buffer 0: http: URIs are not read"),
+        ("empty-uri.gltf", uri(""), "empty-uri.gltf: buffer 0: its uri is empty"),
+        ("float-indices.glb", float_indices, "indices (accessor 2) is Scalar F32; glTF allows Scalar of U8, U16, U32"),
+        ("vec2.glb", vec2_positions, "POSITION (accessor 0) is Vec2 F32"),
+        ("stride.glb", short_stride, "byteStride 4 is smaller than one element (12 bytes)"),
+        ("beyond.glb", beyond, "its 4000000000 elements end at byte 48000000000 of a 48-byte buffer view"),
+        ("unaligned.glb", unaligned, "not aligned to its 4-byte components"),
+        ("shared.glb", shared, "node 1 is the child of 2 nodes; glTF node hierarchies are trees"),
         ("accessor.glb", glb(&bad_accessor, &bin), "accessor.glb: not a valid glTF file"),
         (
             "index.glb",
@@ -710,8 +755,8 @@ fn malformed_gltf_files_say_what_is_wrong() {
             "index.glb: mesh TileMesh primitive 0 (node Tile): index 0 is 7, out of range (4 vertices)",
         ),
         ("cut.glb", cut, "cut.glb: not a valid glTF file"),
-        ("missing.gltf", serde_json::to_vec(&ext).unwrap(), "missing.gltf: buffer buffer 0"),
-        ("cycle.glb", glb(&cycle, &bin), "is its own ancestor"),
+        ("missing.gltf", serde_json::to_vec(&ext).unwrap(), "missing.gltf: buffer 0"),
+        ("cycle.glb", glb(&cycle, &bin), "a cycle in the node hierarchy"),
         ("junk.glb", b"glTF\x02\x00\x00\x00junk".to_vec(), "junk.glb: not a valid glTF file"),
     ] {
         let e = load(&d.write(name, bytes)).err().unwrap_or_else(|| panic!("{name} loaded"));
@@ -722,4 +767,12 @@ fn malformed_gltf_files_say_what_is_wrong() {
     d.write("gone.bin", &short_bin);
     let e = load(&d.path("missing.gltf").to_string_lossy()).unwrap_err();
     assert!(e.contains("holds 50 bytes, the file declares"), "{e}");
+    // A byte-order mark before the JSON changes nothing.
+    let (j, b) = gltf_parts(serde_json::json!({"uri": "ok.bin"}));
+    d.write("ok.bin", &b);
+    let mut text = "\u{feff}".as_bytes().to_vec();
+    text.extend(serde_json::to_vec(&j).unwrap());
+    let s = load(&d.write("bom.gltf", text)).unwrap();
+    let plain = load(&d.write("plain.glb", glb(&json, &bin))).unwrap();
+    assert_eq!(s.geometry.positions, plain.geometry.positions);
 }

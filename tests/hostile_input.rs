@@ -984,7 +984,7 @@ fn the_binary_says_what_is_wrong_and_never_hangs() {
     d.write("bom.obj", format!("\u{feff}{TRI}"));
     let r = run(&["bom.obj"]);
     assert!(
-        r.ok() && r.stdout.contains("1 triangles"),
+        r.ok() && r.stdout.contains("1 triangle,"),
         "{} {}",
         r.stdout,
         r.stderr
@@ -1048,5 +1048,124 @@ fn control_characters_and_empty_names_are_handled() {
     refused(
         &d.write("with.obj", WITH_MTL),
         &["m.mtl:2: map_Kd needs a file name"],
+    );
+}
+
+#[test]
+fn extreme_arguments_are_bounded_or_refused_before_loading() {
+    let d = Dir::new("hostile-arguments");
+    let run = |args: &[&str]| {
+        let r = rayterm(&d.0, args);
+        assert!(!r.stderr.contains("panicked"), "{args:?}: {}", r.stderr);
+        r
+    };
+    // A frame smaller than the benchmark's pixel sample.
+    let r = run(&[
+        "bench", "--size", "1x1", "--reps", "1", "--scene", "cornell",
+    ]);
+    assert!(r.ok() && r.stdout.contains("cornell"), "{}", r.stderr);
+    // However short the time, the image has one full pass.
+    let r = run(&[
+        "render", "cornell", "--size", "8x8", "--time", "1e-9", "-o", "t.png",
+    ]);
+    assert!(r.ok() && r.stdout.contains(", 1 spp,"), "{}", r.stdout);
+    // The cap that ended a timed render is named.
+    let r = run(&[
+        "render",
+        "cornell",
+        "--size",
+        "8x8",
+        "--time",
+        "100",
+        "--max-spp",
+        "3",
+        "-o",
+        "t.png",
+    ]);
+    assert!(
+        r.ok()
+            && r.stdout.contains("3 spp")
+            && r.stdout
+                .contains("stopped at the --max-spp cap of 3 before the --time of 100 s"),
+        "{}",
+        r.stdout
+    );
+    // An adaptive target is judged once every pixel has its first 32.
+    let r = run(&[
+        "render",
+        "cornell-area",
+        "--size",
+        "8x8",
+        "--target-error",
+        "0.9",
+        "--adaptive",
+        "-o",
+        "t.png",
+    ]);
+    assert!(r.ok() && r.stdout.contains("32 / "), "{}", r.stdout);
+    // Sample counts beyond the renderer's cap, and targets beyond any render,
+    // are refused before the scene loads.
+    for (args, why) in [
+        (
+            &["converge", "cornell", "--spp", "1,2000000"][..],
+            "--spp budgets must be 1 to 1048576",
+        ),
+        (
+            &["converge", "cornell", "--target", "1e-20"][..],
+            "--target must be a fraction from 1e-6",
+        ),
+        (
+            &["converge", "cornell", "--reference-spp", "2000000"][..],
+            "2000000",
+        ),
+        (
+            &["inspect", "cornell", "--pixel", "1,1", "--spp", "2000000"][..],
+            "2000000",
+        ),
+    ] {
+        let r = run(args);
+        assert!(
+            !r.ok() && r.stderr.contains(why),
+            "{args:?}: '{why}' missing in {}",
+            r.stderr
+        );
+    }
+    // A light the automatic rescale puts out of range: the file is named,
+    // and the rescale that did it.
+    d.write("tri.obj", TRI);
+    d.write("tiny.toml", scene_with("tri.obj", "scale = 1e-300"));
+    std::fs::remove_file(d.path("t.png")).unwrap();
+    let r = run(&["render", "tiny.toml", "--size", "8x8", "-o", "t.png"]);
+    assert!(
+        r.code == Some(1)
+            && r.stderr
+                .contains("tiny.toml: light 1 is beyond f32's range")
+            && r.stderr
+                .contains("note: tiny.toml: the scene is 1e-300 across"),
+        "{}",
+        r.stderr
+    );
+    assert!(!d.path("t.png").exists());
+}
+
+#[test]
+fn cube_faces_of_unequal_sizes_are_warned_about() {
+    let d = Dir::new("hostile-faces");
+    let hdr = |w: usize, h: usize| {
+        let mut b = format!("#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {h} +X {w}\n").into_bytes();
+        b.extend([128u8, 128, 128, 129].repeat(w * h));
+        b
+    };
+    d.write("tri.obj", TRI);
+    d.write("a.hdr", hdr(2, 2));
+    d.write("b.hdr", hdr(1, 1));
+    clean(&d.write(
+        "same.toml",
+        scene_with("tri.obj", &FACES.replace("F", "a.hdr")),
+    ));
+    let mixed = FACES.replacen("F", "b.hdr", 2).replace("F", "a.hdr");
+    warned(
+        &d.write("mixed.toml", scene_with("tri.obj", &mixed)),
+        &["mixed.toml: environment faces are not squares of one size (posx 1x1, negx 1x1, posy 2x2, "],
     );
 }

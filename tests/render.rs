@@ -214,7 +214,7 @@ fn cli_renders_a_png_and_prints_a_summary() {
         "32 triangles",
         "build",
         "render",
-        "Mrays/s",
+        "rays/s",
         "2 spp",
     ] {
         assert!(stdout.contains(part), "summary lacks '{part}': {stdout}");

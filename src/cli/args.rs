@@ -285,6 +285,7 @@ pub fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
 }
 
 #[derive(Args, Debug)]
+#[command(group(clap::ArgGroup::new("which").args(["pixel", "worst"]).required(true)))]
 pub struct InspectArgs {
     #[command(flatten)]
     pub scene: SceneOpts,
@@ -300,7 +301,7 @@ pub struct InspectArgs {
     /// Samples per pixel of the image rendered to find the worst pixel
     /// (default 16) and, when bloom runs, for the pixel's value before and
     /// after bloom (default 1).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub spp: Option<u32>,
     /// Print JSON (schema in docs/inspect-json.md) instead of text.
     #[arg(long)]
@@ -321,7 +322,7 @@ pub struct ConvergeArgs {
     pub reference: Option<PathBuf>,
     /// Samples per pixel of a rendered reference [default: 64x the largest
     /// --spp budget, at most 1024].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..), conflicts_with = "reference")]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64), conflicts_with = "reference")]
     pub reference_spp: Option<u32>,
     /// Budgets in samples per pixel, comma separated.
     #[arg(

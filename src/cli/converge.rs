@@ -4,7 +4,7 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Result};
 
-use super::args::ConvergeArgs;
+use super::args::{ConvergeArgs, MAX_SPP};
 use super::open_scene;
 use crate::raster::{png, Format, Output};
 use crate::report::converge::{self, Budget, Config, ReferenceSource, Subject};
@@ -14,6 +14,9 @@ const DEFAULT_SIZE: (u32, u32) = (64, 64);
 
 /// The longest budget: an hour a run (several seeds and strategies each).
 const MAX_SECONDS: f64 = 3600.0;
+
+/// The smallest relative error a conclusion is about.
+const MIN_TARGET: f64 = 1e-6;
 
 pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
     // Outputs are checked before the study runs, which can take minutes.
@@ -28,12 +31,10 @@ pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
         .as_ref()
         .map(|p| Output::check(p, &inputs, &[Format::Png]))
         .transpose()?;
-    let mut opts = a.scene.clone();
-    opts.size = opts.size.or(Some(DEFAULT_SIZE));
-    let p = open_scene(&opts)?;
+    // Every option is checked before the scene loads.
     let mut budgets = if a.times.is_empty() {
-        if a.spp.contains(&0) {
-            bail!("--spp budgets must be at least 1");
+        if a.spp.iter().any(|&n| n == 0 || n > MAX_SPP) {
+            bail!("--spp budgets must be 1 to {MAX_SPP} samples per pixel");
         }
         a.spp.iter().map(|&n| Budget::Spp(n)).collect::<Vec<_>>()
     } else {
@@ -51,9 +52,13 @@ pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
     };
     budgets.sort_by(|x, y| key(x).total_cmp(&key(y)));
     budgets.dedup();
-    if !(a.target > 0.0 && a.target < 1.0) {
-        bail!("--target must be a fraction between 0 and 1 (0.01 for 1 %)");
+    // Below 1e-6 the answer would be beyond any render (and f32 films).
+    if !(a.target >= MIN_TARGET && a.target < 1.0) {
+        bail!("--target must be a fraction from {MIN_TARGET:e} to below 1 (0.01 for 1 %)");
     }
+    let mut opts = a.scene.clone();
+    opts.size = opts.size.or(Some(DEFAULT_SIZE));
+    let p = open_scene(&opts)?;
     let reference = match a.reference {
         Some(f) => ReferenceSource::File(f),
         None => ReferenceSource::Render {

@@ -36,13 +36,14 @@ pub fn run(a: InspectArgs) -> Result<ExitCode> {
             }
             None => {
                 println!(
-                    "no pixel {} in {} samples per pixel",
+                    "no pixel {} in {} sample{} per pixel",
                     match w {
                         crate::render::Worst::Nan => "had a NaN or infinite sample",
                         crate::render::Worst::Variance => "varies between samples",
                         crate::render::Worst::Brightest => "exists",
                     },
-                    film.spp
+                    film.spp,
+                    if film.spp == 1 { "" } else { "s" }
                 );
                 return Ok(ExitCode::SUCCESS);
             }

@@ -11,6 +11,7 @@ use super::render::{image_bytes, summary};
 use crate::interrupt;
 use crate::raster::{Format, Output};
 use crate::render::partial::{self, ranges_text};
+use crate::words;
 
 pub fn run(a: MergeArgs) -> Result<ExitCode> {
     let out = Output::check(&a.output, &a.parts, Format::RENDERS)?;
@@ -54,11 +55,11 @@ pub fn run(a: MergeArgs) -> Result<ExitCode> {
     }
     out.write(&bytes)?;
     let head = format!(
-        "{}: {} triangles, merged {count} part{} in {:.1} ms, render {:.1} s in all",
+        "{}: {}, merged {} in {}, render {:.1} s in all",
         meta.scene,
-        meta.triangles,
-        if count == 1 { "" } else { "s" },
-        start.elapsed().as_secs_f64() * 1e3,
+        words::count(meta.triangles, "triangle", "triangles"),
+        words::count(count as u64, "part", "parts"),
+        words::ms(start.elapsed().as_secs_f64() * 1e3),
         meta.seconds
     );
     let mut line = summary(

@@ -17,6 +17,7 @@ use crate::raster::{png, Format, Output};
 use crate::render::partial::{self, Meta, Part};
 use crate::render::{post, Ended, Film, Progressive, Session, Stop};
 use crate::scene::BloomSettings;
+use crate::words;
 
 pub fn run(a: RenderArgs) -> Result<ExitCode> {
     let stop = stop(&a)?;
@@ -168,18 +169,26 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     };
     out.write(&bytes)?;
     let render_ms = outcome.seconds * 1e3;
-    let capped = match (outcome.ended, stop.error) {
-        (Ended::Spp, Some(e)) if stop.spp.is_some() => format!(
-            " (stopped at the --max-spp cap of {} before reaching {}%)",
-            film.spp_range().2,
+    // A --time or --target-error render that the --max-spp cap ended says so.
+    let cap = film.spp_range().2;
+    let capped = match (outcome.ended, stop.error, stop.seconds) {
+        (Ended::Spp, Some(e), _) if a.spp.is_none() => format!(
+            " (stopped at the --max-spp cap of {cap} before reaching {}%)",
             percent(e)
         ),
+        (Ended::Spp, None, Some(t)) if a.spp.is_none() => {
+            format!(" (stopped at the --max-spp cap of {cap} before the --time of {t} s)")
+        }
         _ => String::new(),
     };
     let head = format!(
-        "{}: {} triangles, build {:.1} ms ({}), render {}",
+        "{}: {}, build {:.1} ms ({}), render {}",
         s.scene.name,
-        s.scene.geometry.triangle_count(),
+        words::count(
+            s.scene.geometry.triangle_count() as u64,
+            "triangle",
+            "triangles"
+        ),
         s.bvh.stats.build_ms,
         s.bvh.stats.builder,
         duration(render_ms),
@@ -253,8 +262,8 @@ pub fn summary(
         spp_text(film)
     };
     format!(
-        "{head}, {samples}, {:.2} Mrays/s, {err}{capped}{} -> {}",
-        rays as f64 / render_ms.max(1e-9) / 1e3,
+        "{head}, {samples}, {}, {err}{capped}{} -> {}",
+        words::rays_per_s(rays as f64 / (render_ms.max(1e-9) / 1e3)),
         if film.bad_count > 0 {
             format!(", {} NaN/Inf samples dropped", film.bad_count)
         } else {

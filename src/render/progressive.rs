@@ -36,7 +36,7 @@ pub struct Stop {
     /// Samples per pixel.
     pub spp: Option<u32>,
     /// Seconds of rendering; the pass in flight at the deadline stops there,
-    /// between rows.
+    /// between rows, except the first, which always completes.
     pub seconds: Option<f64>,
     /// The film's estimated relative error, once the estimate is meaningful.
     pub error: Option<f64>,
@@ -250,12 +250,18 @@ impl Progressive {
         if stop.spp.is_some_and(|n| f.spp >= n) {
             return Some(Ended::Spp);
         }
-        if stop.seconds.is_some_and(|t| elapsed >= t) {
+        // However short the time, the film gets one full pass: an image of
+        // no samples is no render.
+        if f.spp >= 1 && stop.seconds.is_some_and(|t| elapsed >= t) {
             return Some(Ended::Time);
         }
-        if stop
-            .error
-            .is_some_and(|e| f.error_is_meaningful() && f.relative_error().is_some_and(|r| r < e))
+        // An adaptive film's error counts once every pixel has its first
+        // blocks: they are what the later passes are decided on.
+        let decided = f.adaptive.is_none() || f.spp >= MIN_SPP;
+        if decided
+            && stop.error.is_some_and(|e| {
+                f.error_is_meaningful() && f.relative_error().is_some_and(|r| r < e)
+            })
         {
             return Some(Ended::Error);
         }
@@ -289,12 +295,14 @@ impl Progressive {
                 .and_then(|d| start.checked_add(d))
         });
         let past = || deadline.is_some_and(|d| Instant::now() >= d);
-        let stop_rows = || cancel() || past();
         let mut passes = 0;
         let ended = loop {
             if let Some(e) = self.finished(tracer.plan, stop, start.elapsed().as_secs_f64()) {
                 break e;
             }
+            // The deadline never cuts the first pass (see `finished`).
+            let first = self.film.spp == 0;
+            let stop_rows = || cancel() || (!first && past());
             let pass = self.pass(tracer, stop, &stop_rows);
             if cancel() {
                 break Ended::Cancelled;
@@ -544,6 +552,11 @@ mod tests {
         assert!(o.seconds < 1.0, "{}", o.seconds);
         let o = p.run(&t, &Stop::default(), &|| true, |_, _| {});
         assert_eq!(o.ended, Ended::Cancelled);
+        // A time too short for anything still gives one full pass.
+        let mut p = Progressive::new(12, 8);
+        let o = p.run(&t, &Stop::seconds(1e-12), &|| false, |_, _| {});
+        assert_eq!((o.ended, o.passes, p.film.spp), (Ended::Time, 1, 1));
+        assert!(p.film.pixels.iter().all(|px| px.n == 1));
     }
 
     #[test]

@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use anyhow::Result;
+use anyhow::{bail, Result};
 
 use super::plan::{Plan, PlanPolicy};
 use super::{Features, Film, Tracer};
@@ -74,7 +74,15 @@ impl Session {
     /// returned for the caller to show.
     pub fn open(req: &SceneRequest) -> Result<(Session, Vec<String>)> {
         let (scene, inputs) = scene::load_reading(&req.spec, req.camera.as_deref())?;
-        scene::check_reach(&scene)?;
+        if let Err(e) = scene::check_reach(&scene) {
+            // The load's warnings (a rescale, say) may be why, and would
+            // otherwise never be shown.
+            let mut msg = format!("{}: {e:#}", req.spec);
+            for w in &scene.warnings {
+                msg += &format!("\n  note: {w}");
+            }
+            bail!(msg);
+        }
         let (w, h) = req
             .size
             .unwrap_or((scene.settings.width, scene.settings.height));

@@ -256,8 +256,10 @@ fn brute(scene: &Scene, bvh: &Bvh, o: &BenchOptions) -> Brute {
     let tracer = Tracer::new(scene, bvh, &plan, scene.camera.frame(o.width, o.height), 1);
     let total = o.width as usize * o.height as usize;
     // About 4e7 triangle tests per primary ray sample: a fraction of a second.
-    let n =
-        (4e7 / scene.geometry.triangle_count().max(1) as f64).clamp(64.0, total as f64) as usize;
+    // At least 64 pixels, or all of a smaller frame.
+    let n = (4e7 / scene.geometry.triangle_count().max(1) as f64)
+        .max(64.0)
+        .min(total as f64) as usize;
     let stride = total / n;
     let start = Instant::now();
     (0..n).into_par_iter().for_each(|i| {

@@ -414,6 +414,8 @@ struct Run {
     film: Film,
     seconds: f64,
     rays: u64,
+    /// The first pass took longer than the time budget.
+    overran: bool,
 }
 
 /// Renders one independent run: passes of one sample (adaptive: of a block
@@ -422,6 +424,7 @@ struct Run {
 fn run_once(tracer: &Tracer, budget: Budget, adaptive: bool, passes: &mut u64) -> Run {
     let mut p = Progressive::new(tracer.width, tracer.height);
     p.adaptive = adaptive;
+    let mut overran = false;
     match budget {
         Budget::Spp(n) if adaptive && !tracer.plan.deterministic => {
             while p.film.spp_range().1 < n as f64 {
@@ -437,15 +440,22 @@ fn run_once(tracer: &Tracer, budget: Budget, adaptive: bool, passes: &mut u64) -
                 Budget::Spp(n) => Stop::spp(n),
                 Budget::Seconds(t) => Stop::seconds(t),
             };
+            let mut first = None;
             *passes += p
-                .run(tracer, &stop, &interrupt::requested, |_, _| {})
+                .run(tracer, &stop, &interrupt::requested, |_, pass| {
+                    first.get_or_insert(pass.ms / 1e3);
+                })
                 .passes as u64;
+            // A render always completes its first pass: one that overran a
+            // time budget says the budget is too short.
+            overran = matches!((budget, first), (Budget::Seconds(t), Some(f)) if f > t);
         }
     }
     Run {
         seconds: p.seconds,
         rays: p.rays,
         film: p.film,
+        overran,
     }
 }
 
@@ -483,7 +493,7 @@ impl Subject<'_> {
             let r = run_once(&tracer, budget, strategy.adaptive, passes);
             // A time budget shorter than one sample per pixel measures
             // nothing: an unsampled pixel is not an error of the method.
-            if r.film.spp_range().0 == 0 {
+            if r.overran || r.film.spp_range().0 == 0 {
                 return None;
             }
             let img = r.film.image();
@@ -614,6 +624,9 @@ impl Subject<'_> {
                 let img = p.film.image();
                 let cached = |f: &std::path::Path| -> Result<()> {
                     if let Some(dir) = f.parent() {
+                        if dir.exists() && !dir.is_dir() {
+                            bail!("{} is not a directory", dir.display());
+                        }
                         std::fs::create_dir_all(dir)
                             .with_context(|| format!("cannot create {}", dir.display()))?;
                     }
@@ -747,8 +760,7 @@ impl Subject<'_> {
                 && (r as f64) < REFERENCE_FACTOR as f64 * max_spp
             {
                 notes.push(format!(
-                    "the reference has {:.0}x the samples of the largest budget ({}x advised): its own noise adds about {:.1} % to the relMSE measured there (--reference-spp to raise it)",
-                    r as f64 / max_spp,
+                    "the reference has {r} samples per pixel against {max_spp:.0} in the largest budget ({}x that advised): its own noise adds about {:.1} % to the relMSE measured there (--reference-spp to raise it)",
                     REFERENCE_FACTOR,
                     100.0 * max_spp / r as f64
                 ));
@@ -848,6 +860,44 @@ mod tests {
         // answer, rather than an infinite or absurd sample count.
         let flat = series(&[(1.0, 0.01, 2.79), (4.0, 0.04, 2.78), (16.0, 0.16, 2.774)]);
         assert_eq!(flat.reach(0.01), None);
+    }
+
+    #[test]
+    fn far_extrapolations_give_a_bound_not_a_figure() {
+        let study = |target: f64| Study {
+            scene: "x".into(),
+            width: 8,
+            height: 8,
+            seeds: 1,
+            uses: Uses {
+                area_lights: true,
+                glossy: false,
+                supersampling: false,
+            },
+            exact: false,
+            reference: ReferenceInfo {
+                source: "rendered".into(),
+                spp: Some(1024),
+                seconds: 0.0,
+            },
+            series: vec![series(&[
+                (1.0, 0.01, 0.1),
+                (4.0, 0.04, 0.05),
+                (16.0, 0.16, 0.025),
+            ])],
+            passes: 3,
+            target,
+            notes: Vec::new(),
+        };
+        // 100 spp is within reach of the data; 1.6e11 is not.
+        let near = study(0.01).conclusion();
+        assert!(
+            near.contains("you need about 10") && near.contains("(extrapolated)"),
+            "{near}"
+        );
+        let far = study(1e-6).conclusion();
+        assert!(far.contains("more than 16000 spp"), "{far}");
+        assert!(!far.contains("about"), "{far}");
     }
 
     #[test]

@@ -829,6 +829,26 @@ fn environment_from(
             names[i].clone()
         })
         .with_context(|| format!("{}: environment", path.display()))?;
+        // Faces of unequal sizes or not square are read as they are, but
+        // were hardly meant: their edges will not meet texel for texel.
+        let sizes: Vec<String> = cube
+            .faces
+            .iter()
+            .zip(FACE_NAMES)
+            .map(|(t, face)| format!("{face} {}x{}", t.width, t.height))
+            .collect();
+        let first = (cube.faces[0].width, cube.faces[0].height);
+        if cube
+            .faces
+            .iter()
+            .any(|t| (t.width, t.height) != first || t.width != t.height)
+        {
+            warnings.push(format!(
+                "{}: environment faces are not squares of one size ({}): their edges will show",
+                path.display(),
+                sizes.join(", ")
+            ));
+        }
         return Ok(Environment::CubeMap(Box::new(cube)));
     }
     if e.sky == Some(true) {

@@ -15,6 +15,7 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
+use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::camera::Projection;
 use ::gltf::khr_lights_punctual::Kind as LightKind;
 use ::gltf::material::AlphaMode;
@@ -99,22 +100,42 @@ impl Unmapped {
     }
 }
 
-/// A name of the file, or its kind and index when it has none.
-fn named(name: Option<&str>, kind: &str, index: usize) -> String {
+/// An object's name in the file, or its index when it has none (messages
+/// put the kind before either: `mesh Body`, `mesh 3`).
+fn named(name: Option<&str>, index: usize) -> String {
     match name {
         Some(n) if !n.trim().is_empty() => super::source::printable(n),
-        _ => format!("{kind} {index}"),
+        _ => index.to_string(),
     }
 }
 
-/// Decodes a `data:` URI's base64 payload.
-fn data_uri(uri: &str) -> Option<Result<Vec<u8>, String>> {
-    let rest = uri.strip_prefix("data:")?;
-    Some(match rest.split_once(";base64,") {
-        Some((_, payload)) => base64::engine::general_purpose::STANDARD
-            .decode(payload)
-            .map_err(|e| format!("its base64 data is broken: {e}")),
-        None => Err("only base64 data URIs are read".into()),
+/// The bytes a URI holds itself (a `data:` URI's base64 payload), or why it
+/// cannot be read; `None` for a relative reference, a file beside the glTF.
+fn inline_uri(uri: &str) -> Option<Result<Vec<u8>, String>> {
+    if uri.trim().is_empty() {
+        return Some(Err("its uri is empty".into()));
+    }
+    if let Some(rest) = uri.strip_prefix("data:") {
+        return Some(match rest.split_once(";base64,") {
+            Some((_, payload)) => base64::engine::general_purpose::STANDARD
+                .decode(payload)
+                .map_err(|e| format!("its base64 data is broken: {e}")),
+            None => Err("only base64 data URIs are read".into()),
+        });
+    }
+    // A scheme (two letters or more: `C:` is a drive) names something
+    // elsewhere, which a renderer has no business fetching.
+    let scheme = uri.split_once(':').map(|(s, _)| s).filter(|s| {
+        s.len() > 1
+            && s.starts_with(|c: char| c.is_ascii_alphabetic())
+            && s.chars()
+                .all(|c| c.is_ascii_alphanumeric() || "+.-".contains(c))
+    });
+    scheme.map(|s| {
+        Err(format!(
+            "{}: URIs are not read; rayterm reads files beside the glTF and data: URIs",
+            super::source::printable(s)
+        ))
     })
 }
 
@@ -216,7 +237,7 @@ impl Reader<'_> {
         if let Some(t) = self.images.get(&index) {
             return t.clone();
         }
-        let name = named(image.name(), "image", index);
+        let name = named(image.name(), index);
         let from = format!("{}: image {name}", self.at());
         let decoded = match image.source() {
             ::gltf::image::Source::View { view, .. } => {
@@ -229,7 +250,7 @@ impl Reader<'_> {
                     None => Err("its buffer view lies outside the buffer".into()),
                 }
             }
-            ::gltf::image::Source::Uri { uri, .. } => match data_uri(uri) {
+            ::gltf::image::Source::Uri { uri, .. } => match inline_uri(uri) {
                 Some(Ok(b)) => Texture::decode(&from, &b).map_err(|e| format!("{e:#}")),
                 Some(Err(e)) => Err(e),
                 None => {
@@ -267,7 +288,7 @@ impl Reader<'_> {
             self.materials.insert(key, id);
             return id;
         };
-        let name = named(m.name(), "material", index);
+        let name = named(m.name(), index);
         let pbr = m.pbr_metallic_roughness();
         let base = pbr.base_color_factor();
         let mut mat = phong(
@@ -277,7 +298,10 @@ impl Reader<'_> {
             m.alpha_mode(),
             m.alpha_cutoff().unwrap_or(0.5),
         );
-        mat.name = name.clone();
+        mat.name = match m.name() {
+            Some(n) if !n.trim().is_empty() => name.clone(),
+            _ => format!("material {name}"),
+        };
         let here = || format!("material {name}");
         if let Some(info) = pbr.base_color_texture() {
             if info.tex_coord() != 0 {
@@ -317,6 +341,68 @@ impl Reader<'_> {
         id
     }
 
+    /// Checks what the crate's reader takes on trust (it panics or reads
+    /// garbage otherwise): the accessor's type is one glTF allows for
+    /// `what`, and every element it reads lies, aligned, inside its view
+    /// and buffer.
+    fn check_accessor(
+        &self,
+        here: &str,
+        what: &str,
+        a: &::gltf::Accessor,
+        types: &[DataType],
+        dims: &[Dimensions],
+    ) -> Result<()> {
+        let name = format!("{here}: {what} (accessor {})", a.index());
+        if !types.contains(&a.data_type()) || !dims.contains(&a.dimensions()) {
+            bail!(
+                "{name} is {:?} {:?}; glTF allows {} of {}",
+                a.dimensions(),
+                a.data_type(),
+                dims.iter()
+                    .map(|d| format!("{d:?}"))
+                    .collect::<Vec<_>>()
+                    .join(" or "),
+                types
+                    .iter()
+                    .map(|t| format!("{t:?}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        if a.sparse().is_some() {
+            bail!("{name} is sparse, which rayterm does not read");
+        }
+        let Some(view) = a.view() else {
+            bail!("{name} has no buffer view");
+        };
+        if a.count() == 0 {
+            bail!("{name} has no elements (count 0)");
+        }
+        let component = a.data_type().size() as u128;
+        let element = a.size() as u128;
+        let stride = view.stride().map_or(element, |s| s as u128);
+        if stride < element {
+            bail!("{name}: the buffer view's byteStride {stride} is smaller than one element ({element} bytes)");
+        }
+        let start = view.offset() as u128 + a.offset() as u128;
+        if !start.is_multiple_of(component) || !stride.is_multiple_of(component) {
+            bail!("{name} is not aligned to its {component}-byte components (offset {start}, stride {stride})");
+        }
+        let end_in_view = a.offset() as u128 + stride * (a.count() as u128 - 1) + element;
+        let buffer = self.buffers.get(view.buffer().index()).map_or(0, Vec::len) as u128;
+        let view_end = view.offset() as u128 + view.length() as u128;
+        if end_in_view > view.length() as u128 || view_end > buffer {
+            bail!(
+                "{name}: its {} elements end at byte {end_in_view} of a {}-byte buffer view \
+                 ending at byte {view_end} of a {buffer}-byte buffer (truncated or wrong counts?)",
+                a.count(),
+                view.length()
+            );
+        }
+        Ok(())
+    }
+
     /// The triangles of one primitive, placed by `xf`.
     #[allow(clippy::too_many_arguments)]
     fn primitive(
@@ -342,10 +428,29 @@ impl Reader<'_> {
                 .note("points and lines", || format!("mesh {mesh_name}"));
             return Ok(None);
         }
+        use ::gltf::mesh::Semantic;
+        use DataType::{F32, U16, U32, U8};
+        use Dimensions::{Scalar, Vec2 as V2, Vec3 as V3, Vec4 as V4};
+        let Some(position) = p.get(&Semantic::Positions) else {
+            bail!("{here}: no POSITION attribute");
+        };
+        self.check_accessor(&here, "POSITION", &position, &[F32], &[V3])?;
+        if let Some(a) = p.get(&Semantic::Normals) {
+            self.check_accessor(&here, "NORMAL", &a, &[F32], &[V3])?;
+        }
+        if let Some(a) = p.get(&Semantic::TexCoords(0)) {
+            self.check_accessor(&here, "TEXCOORD_0", &a, &[F32, U8, U16], &[V2])?;
+        }
+        if let Some(a) = p.get(&Semantic::Colors(0)) {
+            self.check_accessor(&here, "COLOR_0", &a, &[F32, U8, U16], &[V3, V4])?;
+        }
+        if let Some(a) = p.indices() {
+            self.check_accessor(&here, "indices", &a, &[U8, U16, U32], &[Scalar])?;
+        }
         let buffers = &self.buffers;
         let reader = p.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let Some(positions) = reader.read_positions() else {
-            bail!("{here}: no POSITION attribute");
+            bail!("{here}: POSITION cannot be read");
         };
         let positions: Vec<DVec3> = positions
             .map(|v| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
@@ -433,9 +538,13 @@ impl Reader<'_> {
             Some(m) => m,
             None => self.material(parts, p.material()),
         };
-        let name = match mesh_name == node_name {
-            true => mesh_name.to_string(),
-            false => format!("{mesh_name} (node {node_name})"),
+        // An unnamed mesh or node is known by its index.
+        let name = if mesh_name.parse::<usize>().is_ok() {
+            format!("mesh {mesh_name} (node {node_name})")
+        } else if mesh_name == node_name {
+            mesh_name.to_string()
+        } else {
+            format!("{mesh_name} (node {node_name})")
         };
         Ok(Some(Placed {
             name,
@@ -447,6 +556,93 @@ impl Reader<'_> {
             material,
         }))
     }
+}
+
+/// An error for a material factor or camera field outside the range glTF
+/// allows: such values would render as nonsense (an infinite colour, a
+/// view of nothing) rather than fail.
+fn check_values(path: &Path, doc: &::gltf::Document) -> Result<()> {
+    let unit = |v: f32| (0.0..=1.0).contains(&v);
+    for (i, m) in doc.materials().enumerate() {
+        let pbr = m.pbr_metallic_roughness();
+        let fields = [
+            ("baseColorFactor", pbr.base_color_factor().to_vec()),
+            ("metallicFactor", vec![pbr.metallic_factor()]),
+            ("roughnessFactor", vec![pbr.roughness_factor()]),
+        ];
+        for (field, v) in fields {
+            if let Some(bad) = v.iter().find(|&&x| !unit(x)) {
+                bail!(
+                    "{}: material {}: {field} {bad} is outside 0 to 1",
+                    path.display(),
+                    named(m.name(), i)
+                );
+            }
+        }
+        if let Some(bad) = m.emissive_factor().iter().find(|&&x| !unit(x)) {
+            bail!(
+                "{}: material {}: emissiveFactor {bad} is outside 0 to 1",
+                path.display(),
+                named(m.name(), i)
+            );
+        }
+    }
+    for c in doc.cameras() {
+        if let ::gltf::camera::Projection::Perspective(p) = c.projection() {
+            // The range a scene file's camera allows.
+            let y = p.yfov();
+            if !(1.0..179.0).contains(&y.to_degrees()) {
+                bail!(
+                    "{}: camera {}: yfov {y} radians is not between 1 and 179 degrees",
+                    path.display(),
+                    named(c.name(), c.index())
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a node hierarchy that is not a forest of trees below the
+/// scene's roots, as glTF requires: a node with two parents, or a root
+/// that is also a child, would be visited many times (exponentially many
+/// in a chain of shared nodes) or forever (a cycle).
+fn check_trees(path: &Path, doc: &::gltf::Document, scene: &::gltf::Scene) -> Result<()> {
+    let mut parents = vec![0usize; doc.nodes().len()];
+    for n in doc.nodes() {
+        for c in n.children() {
+            parents[c.index()] += 1;
+        }
+    }
+    let name = |n: &::gltf::Node| named(n.name(), n.index());
+    if let Some(n) = doc.nodes().find(|n| parents[n.index()] > 1) {
+        bail!(
+            "{}: node {} is the child of {} nodes; glTF node hierarchies are trees \
+             (one parent at most)",
+            path.display(),
+            name(&n),
+            parents[n.index()]
+        );
+    }
+    let mut seen = vec![false; parents.len()];
+    for n in scene.nodes() {
+        if parents[n.index()] > 0 {
+            bail!(
+                "{}: node {} is a root of the scene and the child of another node \
+                 (a cycle in the node hierarchy?)",
+                path.display(),
+                name(&n)
+            );
+        }
+        if std::mem::replace(&mut seen[n.index()], true) {
+            bail!(
+                "{}: node {} is listed twice among the scene's nodes",
+                path.display(),
+                name(&n)
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Reads a glTF file: materials and textures go into `parts`; meshes,
@@ -462,7 +658,10 @@ pub fn load(
     let bytes = src.read(path, Kind::Gltf)?;
     let invalid =
         |e: &dyn std::fmt::Display| anyhow!("{}: not a valid glTF file: {e}", path.display());
-    let file = ::gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| invalid(&e))?;
+    // A .gltf is JSON text, read with or without a byte-order mark as every
+    // text file is (a .glb starts with its magic number).
+    let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
+    let file = ::gltf::Gltf::from_slice_without_validation(body).map_err(|e| invalid(&e))?;
     drop(bytes);
     let json = file.document.into_json();
     // The crate's validation indexes the POSITION accessor before
@@ -488,7 +687,7 @@ pub fn load(
     let mut blob = file.blob;
     let mut buffers = Vec::new();
     for b in doc.buffers() {
-        let name = named(b.name(), "buffer", b.index());
+        let name = named(b.name(), b.index());
         let data = match b.source() {
             ::gltf::buffer::Source::Bin => blob.take().ok_or_else(|| {
                 anyhow!(
@@ -496,7 +695,7 @@ pub fn load(
                     path.display()
                 )
             })?,
-            ::gltf::buffer::Source::Uri(uri) => match data_uri(uri) {
+            ::gltf::buffer::Source::Uri(uri) => match inline_uri(uri) {
                 Some(d) => d.map_err(|e| anyhow!("{}: buffer {name}: {e}", path.display()))?,
                 None => {
                     let p = uri_path(path, uri);
@@ -548,27 +747,20 @@ pub fn load(
         parts.warnings.extend(r.unmapped.warning(path));
         return Ok(out);
     };
-    // Depth first, with each node's world transform in f64; the path
-    // guards against cycles, the triangle budget against repeated
-    // instances.
-    let mut stack: Vec<(::gltf::Node, DAffine3, Vec<usize>)> =
-        scene.nodes().map(|n| (n, *xf, Vec::new())).collect();
+    // Depth first, with each node's world transform in f64: each node
+    // once, as the hierarchy is a forest; the triangle budget guards
+    // against meshes instanced many times.
+    check_trees(path, &doc, &scene)?;
+    check_values(path, &doc)?;
+    let mut stack: Vec<(::gltf::Node, DAffine3)> = scene.nodes().map(|n| (n, *xf)).collect();
     stack.reverse();
     let mut brightest = 0.0f32;
-    while let Some((node, parent, mut trail)) = stack.pop() {
-        if trail.contains(&node.index()) {
-            bail!(
-                "{}: node {} is its own ancestor (a cycle in the node hierarchy)",
-                path.display(),
-                named(node.name(), "node", node.index())
-            );
-        }
-        trail.push(node.index());
+    while let Some((node, parent)) = stack.pop() {
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         let world = parent * DAffine3::from_mat4(local);
-        let node_name = named(node.name(), "node", node.index());
+        let node_name = named(node.name(), node.index());
         if let Some(mesh) = node.mesh() {
-            let mesh_name = named(mesh.name(), "mesh", mesh.index());
+            let mesh_name = named(mesh.name(), mesh.index());
             if node.weights().is_some() || mesh.weights().is_some() {
                 r.unmapped
                     .note("morph targets", || format!("mesh {mesh_name}"));
@@ -597,7 +789,7 @@ pub fn load(
                         eye: world.transform_point3(DVec3::ZERO),
                         forward: world.transform_vector3(DVec3::NEG_Z),
                         up: world.transform_vector3(DVec3::Y),
-                        vfov: (p.yfov() as f64).to_degrees().clamp(1.0, 179.0),
+                        vfov: (p.yfov() as f64).to_degrees(),
                     };
                     let usable = c.eye.is_finite()
                         && c.forward.cross(c.up).length_squared() > 0.0
@@ -645,7 +837,7 @@ pub fn load(
             }
         }
         for child in node.children().collect::<Vec<_>>().into_iter().rev() {
-            stack.push((child, world, trail.clone()));
+            stack.push((child, world));
         }
     }
     // rayterm's lights do not fall off with distance: intensities keep

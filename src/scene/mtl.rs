@@ -226,7 +226,7 @@ pub fn parse(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Vec<
             "illum" => {}
             "map_Kd" => {
                 let (options, file) = texture_args(rest);
-                if file.is_empty() {
+                if file.trim_matches('"').trim().is_empty() {
                     bail!(at("map_Kd needs a file name".into()));
                 }
                 if !options.is_empty() {
@@ -308,6 +308,7 @@ mod tests {
             ("newmtl a\nd 1 2\n", 2),
             ("newmtl\n", 1),
             ("newmtl a\nmap_Kd -s 1 1 1\n", 2),
+            ("newmtl a\n\nmap_Kd \"\"\n", 3),
         ] {
             let e = parse_err(text);
             assert!(e.starts_with(&format!("m.mtl:{line}: ")), "{text:?}: {e}");

@@ -258,7 +258,17 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
                         e.name
                     )));
                 }
-                let role = role(&e.name, name, kind);
+                let Some(role) = role(&e.name, name, kind) else {
+                    bail!(at(format!(
+                        "element {}: property {name} must be {}",
+                        e.name,
+                        if matches!(kind, Kind::List(..)) {
+                            "a single value, not a list"
+                        } else {
+                            "a list"
+                        }
+                    )));
+                };
                 if role == Role::Indices {
                     if let Kind::List(_, item) = kind {
                         if !item.is_int() {
@@ -317,9 +327,12 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
     })
 }
 
-fn role(element: &str, name: &str, kind: Kind) -> Role {
-    match (element, name, kind) {
-        ("vertex", _, Kind::Scalar(_)) => match name {
+/// What a property holds; `None` for a name rayterm reads declared with
+/// the wrong shape (a list position, a scalar index), which would otherwise
+/// be read as nothing.
+fn role(element: &str, name: &str, kind: Kind) -> Option<Role> {
+    let role = match element {
+        "vertex" => match name {
             "x" => Role::Position(0),
             "y" => Role::Position(1),
             "z" => Role::Position(2),
@@ -333,8 +346,14 @@ fn role(element: &str, name: &str, kind: Kind) -> Role {
             "blue" | "diffuse_blue" => Role::Color(2),
             _ => Role::Ignored,
         },
-        ("face", "vertex_indices" | "vertex_index", Kind::List(..)) => Role::Indices,
+        "face" if matches!(name, "vertex_indices" | "vertex_index") => Role::Indices,
         _ => Role::Ignored,
+    };
+    let list = matches!(kind, Kind::List(..));
+    match role {
+        Role::Ignored => Some(role),
+        Role::Indices => list.then_some(role),
+        _ => (!list).then_some(role),
     }
 }
 
@@ -900,6 +919,26 @@ mod tests {
                 "p.ply: ignored, not used: element material (1), vertex confidence, face flags",
                 "p.ply: element vertex has only some normal properties: ignored"
             ]
+        );
+    }
+
+    #[test]
+    fn a_property_rayterm_reads_in_the_wrong_shape_is_an_error() {
+        let list_x = "ply\nformat ascii 1.0\nelement vertex 3\nproperty list uchar float x\n\
+                      property float y\nproperty float z\nelement face 1\n\
+                      property list uchar int vertex_indices\nend_header\n";
+        let e = format!("{:#}", read(list_x.as_bytes()).err().unwrap());
+        assert_eq!(
+            e,
+            "p.ply:4: element vertex: property x must be a single value, not a list"
+        );
+        let scalar_faces = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n\
+                            property float y\nproperty float z\nelement face 1\n\
+                            property int vertex_indices\nend_header\n";
+        let e = format!("{:#}", read(scalar_faces.as_bytes()).err().unwrap());
+        assert_eq!(
+            e,
+            "p.ply:8: element face: property vertex_indices must be a list"
         );
     }
 

@@ -4,6 +4,9 @@ use std::fmt::Write as _;
 
 use super::{Budget, Reach, Series, Study};
 
+/// How far past the largest budget an extrapolated sample count is given.
+const FAR: f64 = 1000.0;
+
 fn pct(x: f64) -> String {
     format!("{:.3} %", 100.0 * x)
 }
@@ -68,7 +71,15 @@ impl Study {
         }
         let t = format!("{} %", short(100.0 * self.target));
         let main = &self.series[0];
-        let how = |r: &Reach| {
+        let how = |s: &Series, r: &Reach| {
+            let measured = s.points.iter().map(|p| p.spp).fold(0.0, f64::max);
+            // Three decades past the data, a straight line says little.
+            if !r.measured && r.spp > FAR * measured {
+                return format!(
+                    "more than {:.0} spp ({FAR:.0}x the largest budget) by extrapolation, beyond what these budgets can tell",
+                    FAR * measured
+                );
+            }
             format!(
                 "about {:.0} spp, {:.2} s at {size} on this machine ({})",
                 r.spp.ceil(),
@@ -84,7 +95,7 @@ impl Study {
             Some(r) => format!(
                 "To reach {t} error with the scene's settings ({}) you need {}.",
                 main.label,
-                how(&r)
+                how(main, &r)
             ),
             None => format!(
                 "The scene's settings ({}) show no falling error, so no sample count for {t} can be given.{}",
@@ -108,7 +119,7 @@ impl Study {
                         " {} ({}) gets there first: {}.",
                         s.label,
                         s.strategy.options(self.uses),
-                        how(&r)
+                        how(s, &r)
                     );
                 }
                 None => {}
