@@ -578,6 +578,21 @@ fn the_slurm_scripts_run_their_commands() {
             String::from_utf8_lossy(&out.stderr)
         );
     }
+    // Task 2 preempted and requeued: it continues from its checkpoint
+    // (samples 3..5 of its 3..6).
+    std::fs::remove_file(d.join("parts/part-2.exr")).unwrap();
+    let mut ckpt = vec!["render", "cornell-area", "--size", "40x28"];
+    ckpt.extend(["--samples", "3..5", "-o", "parts/part-2.ckpt.exr"]);
+    ok(&d, &ckpt);
+    let mut requeued = env.to_vec();
+    requeued.push(("SLURM_ARRAY_TASK_ID", "2"));
+    let out = bash(&d, &script("render.sbatch"), &requeued);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "requeued task: {err}");
+    assert!(
+        !d.join("parts/part-2.ckpt.exr").exists() && d.join("parts/part-2.exr").exists(),
+        "{err}"
+    );
     let out = bash(&d, &script("merge.sbatch"), &env);
     assert!(
         out.status.success(),
