@@ -9,6 +9,7 @@ use crate::render::{Feature, Features, PlanPolicy, SceneRequest, Worst};
 use crate::scene::Builder;
 use crate::tui::color::ColorMode;
 use crate::tui::graphics::symbols::Symbols;
+use crate::tui::graphics::GraphicsArg;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -296,6 +297,10 @@ pub struct TuiArgs {
     /// octants (2x4, Unicode 16; fonts are newer).
     #[arg(long, value_enum, default_value = "half")]
     pub symbols: Symbols,
+    /// Pixel graphics for the viewport: ask the terminal (auto), a
+    /// protocol, or block symbols only; auto falls back to the symbols.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub graphics: GraphicsArg,
     /// A converged image of the scene (OpenEXR .exr or Radiance .hdr, e.g.
     /// from `rayterm render --spp 1024 -o ref.exr`, best at a whole multiple
     /// of the view's size): the true error is shown beside the estimate
