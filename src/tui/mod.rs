@@ -306,6 +306,11 @@ impl Images {
         }
         self.bands.overwritten(mode, &rows);
         *due |= cleared || rows.iter().any(|&r| r);
+        if rows.iter().any(|&r| r) {
+            out.queue_first(self.bands.uncover(mode, !out.pieces_written(), |row| {
+                screen.row_has_text(row, area)
+            }));
+        }
         if let Some(pieces) = self.encoder.done() {
             let (pieces, dropped) = self
                 .bands

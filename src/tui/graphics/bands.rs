@@ -41,6 +41,9 @@ pub struct Bands {
     /// Per band, how often it was taken off the screen: pieces encoded
     /// before then are stale.
     epoch: Vec<u64>,
+    /// Per band, deleted while pieces were still queued: one of them may
+    /// show it again, so it is deleted again with the next picture.
+    late: Vec<bool>,
     layout: Option<Frame>,
 }
 
@@ -154,6 +157,33 @@ impl Bands {
         }
     }
 
+    /// Deletes the kitty images on rows text now lies over (a popup
+    /// opened), at once rather than with the next picture: they are drawn
+    /// above the text. `queued`: pieces are still to be written.
+    pub fn uncover(
+        &mut self,
+        mode: &PixelMode,
+        queued: bool,
+        covered: impl Fn(u16) -> bool,
+    ) -> Vec<Vec<u8>> {
+        let mut out = Vec::new();
+        let Some((area, ..)) = self.layout else {
+            return out;
+        };
+        if mode.protocol != Protocol::Kitty {
+            return out;
+        }
+        for b in 0..self.sent.len() {
+            let top = area.y + b as u16 * BAND_ROWS;
+            let bottom = (top + BAND_ROWS).min(area.y + area.height);
+            if self.sent[b].is_some() && (top..bottom).any(&covered) && self.off(b) {
+                out.push(wrap(mode, &kitty::delete(KITTY_ID + b as u32)));
+                self.late[b] = queued;
+            }
+        }
+        out
+    }
+
     /// What brings the screen to `pic`: output to write now (deleting kitty
     /// images), and the changed bands to encode. `covered(row)` says
     /// whether text lies over a screen row of the area; such bands are not
@@ -173,6 +203,7 @@ impl Bands {
             self.layout = Some(layout);
             self.sent = vec![None; count];
             self.epoch = vec![0; count];
+            self.late = vec![false; count];
         }
         let mut plan = Plan {
             mode: *mode,
@@ -187,7 +218,8 @@ impl Bands {
             let top = b as u16 * BAND_ROWS;
             let rows = BAND_ROWS.min(area.height - top);
             if (area.y + top..area.y + top + rows).any(&covered) {
-                if self.off(b) && mode.protocol == Protocol::Kitty {
+                let late = std::mem::take(&mut self.late[b]);
+                if (self.off(b) || late) && mode.protocol == Protocol::Kitty {
                     now.push(wrap(mode, &kitty::delete(KITTY_ID + b as u32)));
                 }
                 continue;
@@ -361,6 +393,21 @@ mod tests {
         let pieces = bands.update(&m, &pic2, |r| r == 3);
         assert_eq!(pieces, vec![kitty::delete(KITTY_ID)]);
         assert_eq!(bands.update(&m, &pic2, |_| false).len(), 1);
+        // A popup over rows 5-8 (bands 1-3): deleted at once, without a
+        // picture; deleted again with the next one when pieces were still
+        // queued (one of them may show a band again).
+        let over = |r: u16| (5..=8).contains(&r);
+        let deletes: Vec<_> = (1..4).map(|b| kitty::delete(KITTY_ID + b)).collect();
+        assert_eq!(bands.uncover(&m, true, over), deletes);
+        assert!(bands.uncover(&m, true, over).is_empty());
+        assert_eq!(bands.update(&m, &pic2, over), deletes);
+        assert!(bands.update(&m, &pic2, over).is_empty());
+        // Sixel and iTerm2 images are erased by the text itself.
+        let mut sixel = Bands::default();
+        sixel.update(&mode(Protocol::Sixel), &pic2, |_| false);
+        assert!(sixel
+            .uncover(&mode(Protocol::Sixel), false, over)
+            .is_empty());
     }
 
     #[test]

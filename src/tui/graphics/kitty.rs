@@ -1,6 +1,8 @@
 //! The kitty graphics protocol: RGB pixels, zlib-compressed, base64 in
-//! chunks of 4096 bytes, placed at the cursor over a given number of cells
-//! and below the text (so that popups show over it).
+//! chunks of 4096 bytes, placed at the cursor over a given number of cells,
+//! above the text: images under text take a path of kitty's that leaves
+//! changed glyphs drawn over their old ones (seen with Mesa's software
+//! OpenGL), so the bands under text (a popup) are deleted instead.
 
 use std::io::Write;
 
@@ -11,8 +13,8 @@ use flate2::Compression;
 
 /// The largest payload per escape sequence the protocol allows.
 const CHUNK: usize = 4096;
-/// Below the text, above cell backgrounds.
-const Z: i32 = -1;
+/// Above the text.
+const Z: i32 = 1;
 
 /// Image `id` (replacing any earlier one of that id): the `w x h` sRGB
 /// pixels shown over `cols x rows` cells from the cursor, which stays.

@@ -69,6 +69,14 @@ impl Output {
         self.pieces.extend(pieces);
     }
 
+    /// Queues pieces to go before any other.
+    pub fn queue_first(&mut self, pieces: Vec<Vec<u8>>) {
+        self.queued += pieces.len() as u64;
+        for p in pieces.into_iter().rev() {
+            self.pieces.push_front(p);
+        }
+    }
+
     /// Whether every queued piece has been written.
     pub fn pieces_written(&self) -> bool {
         self.pieces.is_empty()
