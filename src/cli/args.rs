@@ -297,8 +297,11 @@ pub struct TuiArgs {
     /// octants (2x4, Unicode 16; fonts are newer).
     #[arg(long, value_enum, default_value = "half")]
     pub symbols: Symbols,
-    /// Pixel graphics for the viewport: ask the terminal (auto), a
-    /// protocol, or block symbols only; auto falls back to the symbols.
+    /// Pixel graphics for the viewport: ask the terminal (auto, within a
+    /// second; block symbols when it has no protocol, or inside tmux
+    /// without allow-passthrough), a protocol, or block symbols only. A
+    /// protocol named here is used even where the terminal does not claim
+    /// it (the status line says so).
     #[arg(long, value_enum, default_value = "auto")]
     pub graphics: GraphicsArg,
     /// A converged image of the scene (OpenEXR .exr or Radiance .hdr, e.g.

@@ -138,8 +138,12 @@ pub fn run(
             kept,
         );
         if let (Some(mode), Some(images)) = (&app.pixels, &mut images) {
-            out.queue(images.bands.clear(mode));
-            let _ = out.pump(terminal.backend_mut(), Instant::now());
+            // Images still queued stay unsent, and those on screen go at
+            // once, whatever the link's room: kitty's outlive the screen.
+            out.drop_pieces();
+            let _ = terminal
+                .backend_mut()
+                .send(&images.bands.clear(mode).concat());
         }
         leave(terminal.backend_mut(), &reader, &mut out);
         result

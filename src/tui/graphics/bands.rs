@@ -289,11 +289,15 @@ impl Bands {
         out
     }
 
-    /// Removes what is on screen (kitty images outlive the text).
+    /// Removes what is on screen (kitty images outlive the text): every
+    /// band's image, since one written before it was taken off may still
+    /// show.
     pub fn clear(&mut self, mode: &PixelMode) -> Vec<Vec<u8>> {
         let mut out = Vec::new();
         for b in 0..self.sent.len() {
-            if self.off(b) && mode.protocol == Protocol::Kitty {
+            self.off(b);
+            self.late[b] = false;
+            if mode.protocol == Protocol::Kitty {
                 out.push(wrap(mode, &kitty::delete(KITTY_ID + b as u32)));
             }
         }

@@ -18,6 +18,9 @@ pub const WAIT: Duration = Duration::from_millis(1000);
 /// after tmux's own answer to DA1.
 const TMUX_GRACE: Duration = Duration::from_millis(150);
 
+/// A cell's width and height in pixels believed from an answer.
+const CELL_PX: std::ops::RangeInclusive<u32> = 2..=256;
+
 const KITTY_QUERY: &[u8] = b"\x1b_Gi=31,s=1,v=1,a=q,t=d,f=24;AAAA\x1b\\";
 const CELL_SIZE: &[u8] = b"\x1b[16t";
 const WINDOW_PIXELS: &[u8] = b"\x1b[14t";
@@ -177,16 +180,26 @@ pub fn choose(
     let from_window = answers
         .window
         .map(|(w, h)| (w / cols_rows.0.max(1) as u32, h / cols_rows.1.max(1) as u32));
+    // A size no font has is garbage (it would make images of gigapixels).
+    let sane = |&(w, h): &(u32, u32)| CELL_PX.contains(&w) && CELL_PX.contains(&h);
     let measured = answers
         .cell
-        .or(cell_ioctl)
-        .or(from_window)
-        .filter(|&(w, h)| w > 0 && h > 0);
+        .filter(sane)
+        .or(cell_ioctl.filter(sane))
+        .or(from_window.filter(sane));
     let cell = measured.unwrap_or((8, 16));
     let colours = answers.registers.unwrap_or(256).min(256);
     let mut said = format!("{}, cells {}x{} px", protocol.name(), cell.0, cell.1);
     if measured.is_none() {
         said += " (assumed: the terminal did not say)";
+    }
+    let claimed = match protocol {
+        Protocol::Kitty => answers.kitty,
+        Protocol::Sixel => answers.sixel,
+        Protocol::Iterm2 => iterm,
+    };
+    if answers.answered && !claimed {
+        said += " (as asked: the terminal does not claim it)";
     }
     if protocol == Protocol::Sixel {
         said += &format!(", {colours} colours");
@@ -295,6 +308,19 @@ mod tests {
         );
         assert_eq!(m.unwrap().cell, (8, 16));
         assert!(said.contains("assumed"), "{said}");
+        // Garbage sizes are not believed: the next source is.
+        let a = answers(b"\x1b[6;65535;65535t\x1b[4;480;800t\x1b[?62c");
+        let (m, said) = choose(GraphicsArg::Sixel, &a, Some((0, 7)), (100, 30), none, None);
+        assert_eq!(m.unwrap().cell, (8, 16));
+        assert!(!said.contains("assumed"), "{said}");
+        let a = answers(b"\x1b[6;1;9000t\x1b[?62c");
+        let (m, said) = choose(GraphicsArg::Kitty, &a, None, (100, 30), none, None);
+        assert_eq!(m.unwrap().cell, (8, 16));
+        assert!(said.contains("assumed"), "{said}");
+        // Sixel asked of a terminal whose DA1 lacks it: used, and said so.
+        let (m, said) = choose(GraphicsArg::Sixel, &a, None, (100, 30), none, None);
+        assert_eq!(m.unwrap().protocol, Protocol::Sixel);
+        assert!(said.contains("does not claim it"), "{said}");
         // iTerm2 known from the environment.
         let env = |v: &str| (v == "LC_TERMINAL").then(|| "iTerm2".to_string());
         let (m, _) = choose(

@@ -77,6 +77,12 @@ impl Output {
         }
     }
 
+    /// Drops the pieces not yet written (leaving: the images they hold
+    /// would outlive the TUI).
+    pub fn drop_pieces(&mut self) {
+        self.pieces.clear();
+    }
+
     /// Whether every queued piece has been written.
     pub fn pieces_written(&self) -> bool {
         self.pieces.is_empty()
