@@ -32,6 +32,11 @@ pub fn flag() -> Arc<AtomicBool> {
     .clone()
 }
 
+/// The error of work a signal cut short; its callers write nothing.
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted")]
+pub struct Interrupted;
+
 /// Whether a signal asked the process to stop.
 pub fn requested() -> bool {
     FLAG.get().is_some_and(|f| f.load(Ordering::Relaxed))

@@ -427,7 +427,7 @@ fn gltf_parts(buffer: serde_json::Value) -> (serde_json::Value, Vec<u8>) {
         "asset": {"version": "2.0"},
         "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_clearcoat"],
         "scene": 0,
-        "scenes": [{"nodes": [0, 4, 6]}],
+        "scenes": [{"nodes": [0, 4, 6, 7]}],
         "nodes": [
             {"name": "Root", "scale": [2.0, 2.0, 2.0], "children": [1, 3]},
             // 90 degrees about z: u runs along world +y.
@@ -439,13 +439,19 @@ fn gltf_parts(buffer: serde_json::Value) -> (serde_json::Value, Vec<u8>) {
             {"name": "Rig", "translation": [0.0, 0.0, 3.0], "children": [5]},
             {"name": "Eye", "translation": [0.0, 0.0, 3.0], "camera": 0},
             {"name": "Lamp", "translation": [0.0, 0.0, 6.0],
-             "extensions": {"KHR_lights_punctual": {"light": 0}}}
+             "extensions": {"KHR_lights_punctual": {"light": 0}}},
+            // A second camera, turned to look along -x.
+            {"name": "Side", "translation": [4.0, 0.0, 0.0],
+             "rotation": [0.0, std::f64::consts::FRAC_1_SQRT_2, 0.0, std::f64::consts::FRAC_1_SQRT_2],
+             "camera": 1}
         ],
         "extensions": {"KHR_lights_punctual": {"lights": [
             {"type": "point", "color": [1.0, 1.0, 1.0], "intensity": 5.0}
         ]}},
         "cameras": [{"type": "perspective",
-                     "perspective": {"yfov": 0.8, "znear": 0.1, "aspectRatio": 1.333}}],
+                     "perspective": {"yfov": 0.8, "znear": 0.1, "aspectRatio": 1.333}},
+                    {"name": "SideCam", "type": "perspective",
+                     "perspective": {"yfov": 0.5, "znear": 0.1}}],
         "meshes": [
             {"name": "TileMesh", "primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1},
                                                  "indices": 2, "material": 0}]},
@@ -620,6 +626,65 @@ fn a_gltf_scene_renders_with_its_hierarchy_materials_camera_and_light() {
         .warnings
         .iter()
         .any(|w| w.contains("its camera and lights are used")));
+}
+
+#[test]
+fn a_gltf_camera_is_chosen_by_name_or_number() {
+    let d = Dir::new("formats-gltf-camera");
+    let (json, bin) = gltf_parts(serde_json::json!({}));
+    let file = d.write("scene.glb", glb(&json, &bin));
+    let with = |camera: &str| scene::load_reading(&file, Some(camera)).map(|(s, _)| s.camera);
+    let near = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
+    for name in ["Side", "SideCam", "2"] {
+        let c = with(name).unwrap();
+        assert!(near(c.eye, Vec3::new(4.0, 0.0, 0.0)), "{name}: {c:?}");
+        assert!((c.target - c.eye).normalize().x < -0.999, "{name}: {c:?}");
+        assert!((c.vfov - 0.5f32.to_degrees()).abs() < 1e-4);
+    }
+    for name in ["Eye", "1"] {
+        assert!(near(with(name).unwrap().eye, Vec3::new(0.0, 0.0, 6.0)));
+    }
+    for name in ["Nope", "0", "3"] {
+        let e = format!("{:#}", with(name).unwrap_err());
+        assert!(
+            e.contains(&format!("--camera {name}"))
+                && e.contains("scene.glb")
+                && e.contains("Eye (1), Side / SideCam (2)"),
+            "{e}"
+        );
+    }
+    // Files without named cameras, and scene files, say so.
+    let obj = d.write("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let toml = d.write("s.toml", "[[mesh]]\nfile = \"m.obj\"\n");
+    for spec in ["cornell", obj.as_str(), toml.as_str()] {
+        let e = format!("{:#}", scene::load_reading(spec, Some("Side")).unwrap_err());
+        assert!(e.contains("--camera Side"), "{e}");
+    }
+    // From the command line, the chosen camera is the one rendered.
+    let r = rayterm(
+        &d.0,
+        &[
+            "render",
+            "scene.glb",
+            "--camera",
+            "Side",
+            "--size",
+            "8x8",
+            "-o",
+            "side.png",
+        ],
+    );
+    assert!(r.ok(), "{}", r.stderr);
+    let r = rayterm(
+        &d.0,
+        &["render", "scene.glb", "--camera", "Top", "-o", "top.png"],
+    );
+    assert!(
+        !r.ok() && r.stderr.contains("its cameras are"),
+        "{}",
+        r.stderr
+    );
+    assert!(!d.0.join("top.png").exists());
 }
 
 #[test]

@@ -198,6 +198,48 @@ fn a_signal_during_a_render_writes_nothing() {
     fs::remove_dir_all(d).unwrap();
 }
 
+/// `converge` stopped while it renders its reference: no result printed, no
+/// CSV, no cached reference, no temporary file.
+#[test]
+fn a_signal_during_converge_writes_nothing() {
+    let d = dir("converge-signal");
+    for signal in [libc::SIGINT, libc::SIGTERM] {
+        let child = Command::new(env!("CARGO_BIN_EXE_rayterm"))
+            .args(["converge", "cornell-area", "--reference-spp", "1000000"])
+            .args(["--csv", "out.csv", "--cache-dir", "cache"])
+            .current_dir(&d)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(1500));
+        // SAFETY: signalling the child we started.
+        assert_eq!(unsafe { libc::kill(child.id() as i32, signal) }, 0);
+        let res = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&res.stderr);
+        assert_eq!(res.status.code(), Some(128 + signal), "{err}");
+        assert!(err.contains("interrupted: nothing written"), "{err}");
+        assert!(
+            res.stdout.is_empty(),
+            "{}",
+            String::from_utf8_lossy(&res.stdout)
+        );
+        let cache = d.join("cache");
+        let cached = if cache.exists() {
+            files(&cache)
+        } else {
+            vec![]
+        };
+        let _ = fs::remove_dir(&cache);
+        assert!(
+            files(&d).is_empty() && cached.is_empty(),
+            "{:?} {cached:?}",
+            files(&d)
+        );
+    }
+    fs::remove_dir_all(d).unwrap();
+}
+
 #[test]
 fn a_full_disk_leaves_no_temporary_file() {
     let d = dir("full");
@@ -235,7 +277,7 @@ fn a_full_disk_leaves_no_temporary_file() {
 }
 
 #[test]
-fn absurd_budgets_end_at_the_cap_and_empty_references_are_refused() {
+fn absurd_budgets_are_capped_or_refused_and_empty_references_too() {
     let d = dir("budgets");
     let p = |n: &str| d.join(n).display().to_string();
     let out = rayterm(&[
@@ -266,5 +308,12 @@ fn absurd_budgets_end_at_the_cap_and_empty_references_are_refused() {
         "{err}"
     );
     assert!(!err.contains("panicked"), "{err}");
+    // A budget too short for one sample per pixel is not scored as an error.
+    let cache = p("cache");
+    let args = ["converge", "cornell-area", "--reference-spp", "8"];
+    let out = rayterm(&[&args[..], &["--cache-dir", &cache, "--times", "1e-9"]].concat());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("too short for one sample per pixel"), "{err}");
     fs::remove_dir_all(d).unwrap();
 }

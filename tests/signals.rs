@@ -72,3 +72,52 @@ fn sighup_restores_the_terminal() {
 fn sigint_from_outside_restores_the_terminal() {
     ended_by(libc::SIGINT);
 }
+
+/// The terminal closes under the TUI (the ssh connection drops, the tmux
+/// pane is killed) without a signal reaching it: it must notice and end,
+/// not spin on a dead terminal.
+#[test]
+fn a_closed_terminal_ends_the_tui() {
+    let (master, slave) = pty(100, 30);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rayterm"))
+        .args(["tui", "cornell"])
+        .env("TERM", "xterm-256color")
+        .stdin(Stdio::from(slave.try_clone().unwrap()))
+        .stdout(Stdio::from(slave.try_clone().unwrap()))
+        .stderr(Stdio::from(slave))
+        .spawn()
+        .unwrap();
+    // Read here rather than on a thread, so that no copy of the master
+    // outlives the hangup.
+    let mut term = std::fs::File::from(master);
+    let mut out: Vec<u8> = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while !out.windows(8).any(|w| w == b"\x1b[?1049h") && Instant::now() < deadline {
+        let mut fds = libc::pollfd {
+            fd: std::os::fd::AsRawFd::as_raw_fd(&term),
+            events: libc::POLLIN,
+            revents: 0,
+        };
+        // SAFETY: one valid pollfd for a descriptor we own.
+        if unsafe { libc::poll(&mut fds, 1, 100) } > 0 {
+            let mut buf = [0u8; 1 << 16];
+            let n = std::io::Read::read(&mut term, &mut buf).unwrap();
+            out.extend(&buf[..n]);
+        }
+    }
+    assert!(Instant::now() < deadline, "the TUI never started");
+    // Hang up the line: the last descriptor of the master side closed.
+    drop(term);
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            panic!("the TUI kept running after its terminal closed");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert!(status.code().is_some(), "{status:?}");
+}

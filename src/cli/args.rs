@@ -127,6 +127,10 @@ pub struct SceneOpts {
     /// Independent uniform samples instead of jittered (stratified) ones.
     #[arg(long)]
     pub independent: bool,
+    /// Look through this camera of a glTF file (its node's name, its own
+    /// name, or its number from 1) instead of the first.
+    #[arg(long, value_name = "NAME")]
+    pub camera: Option<String>,
 }
 
 impl SceneOpts {
@@ -146,6 +150,7 @@ impl SceneOpts {
             light_samples: self.light_samples,
             glossy_samples: self.glossy_samples,
             independent: self.independent,
+            camera: self.camera.clone(),
         }
     }
 }

@@ -78,7 +78,15 @@ pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
         bvh: &p.bvh,
         plan: &p.plan,
     };
-    let study = subject.study(&cfg)?;
+    // Ctrl-C, SIGTERM or SIGHUP cut the runs short; what they measured is
+    // then not the study asked for, so nothing is printed or written.
+    crate::interrupt::flag();
+    let study = subject.study(&cfg);
+    if crate::interrupt::requested() {
+        eprintln!("interrupted: nothing written");
+        return Ok(ExitCode::from(crate::interrupt::exit_code()));
+    }
+    let study = study?;
     print!("{}", study.text());
     if let Some(out) = csv {
         out.write(study.csv().as_bytes())?;

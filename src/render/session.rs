@@ -31,6 +31,8 @@ pub struct SceneRequest {
     pub glossy_samples: Option<u32>,
     /// Independent instead of jittered sub-pixel and light samples.
     pub independent: bool,
+    /// Which of a glTF file's cameras to look through (name or number).
+    pub camera: Option<String>,
 }
 
 impl SceneRequest {
@@ -46,6 +48,7 @@ impl SceneRequest {
             light_samples: None,
             glossy_samples: None,
             independent: false,
+            camera: None,
         }
     }
 }
@@ -70,7 +73,7 @@ impl Session {
     /// Loads the scene `req` names and prepares it; the load warnings are
     /// returned for the caller to show.
     pub fn open(req: &SceneRequest) -> Result<(Session, Vec<String>)> {
-        let (scene, inputs) = scene::load_reading(&req.spec)?;
+        let (scene, inputs) = scene::load_reading(&req.spec, req.camera.as_deref())?;
         scene::check_reach(&scene)?;
         let (w, h) = req
             .size

@@ -24,7 +24,8 @@ pub use plot::draw as plot;
 pub use reference::{default_cache_dir, format_floor, load_reference, save_reference};
 
 use crate::bvh::Bvh;
-use crate::render::{Film, Plan, Progressive, Stop, Tracer};
+use crate::interrupt;
+use crate::render::{Ended, Film, Plan, Progressive, Stop, Tracer};
 use crate::report::stats::{fit_log_log, log_lerp, median};
 use crate::scene::{Scene, Settings};
 use reference::reference_key;
@@ -42,6 +43,9 @@ const GLOSSY_SAMPLES: [u32; 3] = [1, 4, 16];
 /// Compared strategies double their spp until they reach the scene's
 /// largest time, or this many spp.
 const MAX_COMPARE_SPP: u32 = 4096;
+/// The flattest slope of log(error) against log(spp) extrapolated from.
+const MIN_FALL: f64 = -0.1;
+
 /// Error against samples or time once strata are used up: Monte Carlo's.
 const ASYMPTOTIC_SLOPE: f64 = -0.5;
 /// A run that overshoots a time by at most this factor still counts as at it.
@@ -324,16 +328,20 @@ impl Series {
             ..self.clone()
         };
         // Never faster than -0.5: beyond a block of strata, samples are
-        // independent, so a steeper tail is a transient.
+        // independent, so a steeper tail is a transient. An error that
+        // hardly falls (a bias, or a reference of something else) gives no
+        // answer rather than an absurd one.
         let s_spp = tail.slope_spp()?.max(ASYMPTOTIC_SLOPE);
-        let s_time = tail.slope_time()?.max(ASYMPTOTIC_SLOPE);
-        if s_spp >= 0.0 || s_time >= 0.0 {
+        if s_spp > MIN_FALL {
             return None;
         }
-        let k = target / last.rel_err();
-        Some(Reach {
-            spp: last.spp * k.powf(1.0 / s_spp),
-            seconds: last.seconds * k.powf(1.0 / s_time),
+        let spp = last.spp * (target / last.rel_err()).powf(1.0 / s_spp);
+        // Time follows the samples at the last point's rate: a fit of the
+        // error against noisy timings would be steered by the noise.
+        let seconds = last.seconds * spp / last.spp;
+        (spp.is_finite() && seconds.is_finite()).then_some(Reach {
+            spp,
+            seconds,
             measured: false,
         })
     }
@@ -418,7 +426,7 @@ fn run_once(tracer: &Tracer, budget: Budget, adaptive: bool, passes: &mut u64) -
         Budget::Spp(n) if adaptive && !tracer.plan.deterministic => {
             while p.film.spp_range().1 < n as f64 {
                 *passes += 1;
-                let pass = p.pass(tracer, &Stop::default(), &|| false);
+                let pass = p.pass(tracer, &Stop::default(), &interrupt::requested);
                 if pass.is_none_or(|s| s.pixels == 0) {
                     break;
                 }
@@ -429,7 +437,9 @@ fn run_once(tracer: &Tracer, budget: Budget, adaptive: bool, passes: &mut u64) -
                 Budget::Spp(n) => Stop::spp(n),
                 Budget::Seconds(t) => Stop::seconds(t),
             };
-            *passes += p.run(tracer, &stop, &|| false, |_, _| {}).passes as u64;
+            *passes += p
+                .run(tracer, &stop, &interrupt::requested, |_, _| {})
+                .passes as u64;
         }
     }
     Run {
@@ -455,7 +465,7 @@ impl Subject<'_> {
         reference: &[Vec3],
         passes: &mut u64,
         bar: &ProgressBar,
-    ) -> Point {
+    ) -> Option<Point> {
         bar.set_message(format!(
             "{}: {budget}",
             strategy.label(Uses::of(self.scene, self.plan))
@@ -471,6 +481,11 @@ impl Subject<'_> {
             let frame = scene.camera.frame(cfg.width, cfg.height);
             let tracer = Tracer::new(&scene, self.bvh, self.plan, frame, seed);
             let r = run_once(&tracer, budget, strategy.adaptive, passes);
+            // A time budget shorter than one sample per pixel measures
+            // nothing: an unsampled pixel is not an error of the method.
+            if r.film.spp_range().0 == 0 {
+                return None;
+            }
             let img = r.film.image();
             spp += r.film.spp_range().1 / n;
             times.push(r.seconds);
@@ -479,7 +494,7 @@ impl Subject<'_> {
             rel += rel_mse(&img, reference) / n;
             est = est.zip(r.film.estimated_rel_mse()).map(|(a, b)| a + b / n);
         }
-        Point {
+        Some(Point {
             budget,
             spp,
             seconds: median(&mut times),
@@ -487,7 +502,7 @@ impl Subject<'_> {
             rmse: mse.sqrt(),
             rel_mse: rel,
             est_rel_mse: est,
-        }
+        })
     }
 
     fn reference(
@@ -585,9 +600,16 @@ impl Subject<'_> {
                 let mut p = Progressive::new(w, h);
                 // Several samples per pass keep the pass overhead small.
                 p.samples_per_pass = 8;
-                let o = p.run(&tracer, &Stop::spp(spp), &|| false, |film, _| {
-                    bar.set_message(format!("reference: {}/{spp} spp", film.spp))
-                });
+                let o = p.run(
+                    &tracer,
+                    &Stop::spp(spp),
+                    &interrupt::requested,
+                    |film, _| bar.set_message(format!("reference: {}/{spp} spp", film.spp)),
+                );
+                // A cut reference must not be cached as a whole one.
+                if o.ended == Ended::Cancelled {
+                    bail!(interrupt::Interrupted);
+                }
                 let seconds = o.seconds;
                 let img = p.film.image();
                 let cached = |f: &std::path::Path| -> Result<()> {
@@ -704,8 +726,19 @@ impl Subject<'_> {
             points: Vec::new(),
         };
         for &b in &cfg.budgets {
-            main.points
-                .push(self.measure(base, b, cfg, &reference, &mut passes, &bar));
+            match self.measure(base, b, cfg, &reference, &mut passes, &bar) {
+                Some(p) => main.points.push(p),
+                None => notes.push(format!(
+                    "{b} is too short for one sample per pixel here; not measured"
+                )),
+            }
+        }
+        if main.points.is_empty() {
+            bail!(
+                "every budget is too short for one sample per pixel at {}x{}; give longer --times",
+                cfg.width,
+                cfg.height
+            );
         }
         let t_max = main.points.iter().map(|p| p.seconds).fold(0.0, f64::max);
         let max_spp = main.points.iter().map(|p| p.spp).fold(0.0, f64::max);
@@ -730,16 +763,17 @@ impl Subject<'_> {
                     points: Vec::new(),
                 };
                 if matches!(cfg.budgets[0], Budget::Seconds(_)) {
-                    for &b in &cfg.budgets {
-                        series
-                            .points
-                            .push(self.measure(s, b, cfg, &reference, &mut passes, &bar));
-                    }
+                    series.points.extend(
+                        cfg.budgets.iter().filter_map(|&b| {
+                            self.measure(s, b, cfg, &reference, &mut passes, &bar)
+                        }),
+                    );
                 } else {
                     // Double the spp until the run takes as long as the scene's largest budget.
                     let mut n = 1;
-                    loop {
-                        let p = self.measure(s, Budget::Spp(n), cfg, &reference, &mut passes, &bar);
+                    while let Some(p) =
+                        self.measure(s, Budget::Spp(n), cfg, &reference, &mut passes, &bar)
+                    {
                         let done = p.seconds >= t_max || n >= MAX_COMPARE_SPP;
                         series.points.push(p);
                         if done {
@@ -800,6 +834,20 @@ mod tests {
         );
         assert_eq!(s.error_at(0.001), None);
         assert_eq!(s.error_at(1.0), None);
+    }
+
+    #[test]
+    fn reach_follows_samples_not_noisy_times_and_refuses_flat_errors() {
+        // err = 0.1 / sqrt(spp), but the timings are noise: the last run
+        // happened to be quicker than the one before.
+        let s = series(&[(1.0, 0.01, 0.1), (4.0, 0.09, 0.05), (16.0, 0.08, 0.025)]);
+        let r = s.reach(0.01).unwrap();
+        assert!(!r.measured && (r.spp - 100.0).abs() < 1e-6);
+        assert!((r.seconds - 0.08 * 100.0 / 16.0).abs() < 1e-9, "{r:?}");
+        // An error that does not fall (a reference of another scene): no
+        // answer, rather than an infinite or absurd sample count.
+        let flat = series(&[(1.0, 0.01, 2.79), (4.0, 0.04, 2.78), (16.0, 0.16, 2.774)]);
+        assert_eq!(flat.reach(0.01), None);
     }
 
     #[test]

@@ -7,8 +7,8 @@
 //! node's transform applied in f64; triangle primitives (strips and fans
 //! turned into triangles) with positions, normals, the first UV set and
 //! `COLOR_0`; materials mapped onto Phong (see [`phong`]) with the
-//! `baseColorTexture` and its sampler's wrap modes; the first perspective
-//! camera; `KHR_lights_punctual` lights (spot lights become point lights,
+//! `baseColorTexture` and its sampler's wrap modes; perspective cameras
+//! (the first, or the one `--camera` names); `KHR_lights_punctual` lights (spot lights become point lights,
 //! directional lights point lights far away). What cannot be mapped is
 //! listed once in the warnings.
 
@@ -32,8 +32,10 @@ use super::Material;
 use crate::memory;
 
 /// A camera of the file, placed in f64.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct FileCamera {
+    /// The names `--camera` knows it by: its node's and its own.
+    pub names: Vec<String>,
     pub eye: DVec3,
     pub forward: DVec3,
     pub up: DVec3,
@@ -58,7 +60,9 @@ pub enum FileLight {
 /// What a glTF file holds, placed.
 pub struct GltfScene {
     pub meshes: Vec<Placed>,
-    pub camera: Option<FileCamera>,
+    /// The usable perspective cameras, in the order the scene's nodes
+    /// are visited.
+    pub cameras: Vec<FileCamera>,
     pub lights: Vec<FileLight>,
 }
 
@@ -446,7 +450,7 @@ impl Reader<'_> {
 }
 
 /// Reads a glTF file: materials and textures go into `parts`; meshes,
-/// the first perspective camera and the lights come back placed by `xf`
+/// the perspective cameras and the lights come back placed by `xf`
 /// in f64. `material` replaces the file's materials when given.
 pub fn load(
     parts: &mut Parts,
@@ -536,7 +540,7 @@ pub fn load(
     let scene = doc.default_scene().or_else(|| doc.scenes().next());
     let mut out = GltfScene {
         meshes: Vec::new(),
-        camera: None,
+        cameras: Vec::new(),
         lights: Vec::new(),
     };
     let Some(scene) = scene else {
@@ -582,8 +586,14 @@ pub fn load(
         }
         if let Some(cam) = node.camera() {
             match cam.projection() {
-                Projection::Perspective(p) if out.camera.is_none() => {
+                Projection::Perspective(p) => {
+                    let names = [node.name(), cam.name()]
+                        .into_iter()
+                        .flatten()
+                        .map(str::to_string)
+                        .collect();
                     let c = FileCamera {
+                        names,
                         eye: world.transform_point3(DVec3::ZERO),
                         forward: world.transform_vector3(DVec3::NEG_Z),
                         up: world.transform_vector3(DVec3::Y),
@@ -593,13 +603,12 @@ pub fn load(
                         && c.forward.cross(c.up).length_squared() > 0.0
                         && c.forward.cross(c.up).is_finite();
                     match usable {
-                        true => out.camera = Some(c),
+                        true => out.cameras.push(c),
                         false => r
                             .unmapped
                             .note("cameras scaled to nothing", || format!("node {node_name}")),
                     }
                 }
-                Projection::Perspective(_) => {}
                 Projection::Orthographic(_) => r
                     .unmapped
                     .note("orthographic cameras", || format!("node {node_name}")),

@@ -8,7 +8,7 @@ use anyhow::{bail, Result};
 use glam::{DAffine3, Vec3};
 
 use super::frame::Frame;
-use super::gltf::{self, FileLight};
+use super::gltf::{self, FileCamera, FileLight};
 use super::obj;
 use super::parts::{Parts, Placed};
 use super::source::{resolve, Kind, Source};
@@ -55,7 +55,7 @@ pub fn load_placed(
         Format::Obj => obj::load_placed(parts, src, path, xf, material),
         Format::Gltf => {
             let g = gltf::load(parts, src, path, xf, material)?;
-            if g.camera.is_some() || !g.lights.is_empty() {
+            if !g.cameras.is_empty() || !g.lights.is_empty() {
                 parts.warnings.push(format!(
                     "{}: its camera and lights are used when it is opened on its own, \
                      not as a mesh of a scene file",
@@ -99,21 +99,39 @@ pub fn load_placed(
     }
 }
 
-/// A bare mesh file: its own camera and lights where it has them (glTF),
-/// else the shared workload's auto camera and point light; moved next to
-/// the origin (and scaled) in f64 when far or huge ([`Frame`]).
-pub fn load_bare_from(src: &dyn Source, path: &Path, format: Format) -> Result<Scene> {
+/// A bare mesh file: its own camera (the first, or the one named by
+/// `camera`) and lights where it has them (glTF), else the shared
+/// workload's auto camera and point light; moved next to the origin (and
+/// scaled) in f64 when far or huge ([`Frame`]).
+pub fn load_bare_from(
+    src: &dyn Source,
+    path: &Path,
+    format: Format,
+    camera: Option<&str>,
+) -> Result<Scene> {
     let mut parts = Parts::default();
     let (meshes, camera, file_lights) = match format {
         Format::Gltf => {
             let g = gltf::load(&mut parts, src, path, &DAffine3::IDENTITY, None)?;
-            (g.meshes, g.camera, g.lights)
+            let camera = match camera {
+                Some(name) => Some(pick_camera(path, g.cameras, name)?),
+                None => g.cameras.into_iter().next(),
+            };
+            (g.meshes, camera, g.lights)
         }
-        _ => (
-            load_placed(format, &mut parts, src, path, &DAffine3::IDENTITY, None)?,
-            None,
-            Vec::new(),
-        ),
+        _ => {
+            if let Some(name) = camera {
+                bail!(
+                    "--camera {name}: {} has no cameras (only glTF files name theirs)",
+                    path.display()
+                );
+            }
+            (
+                load_placed(format, &mut parts, src, path, &DAffine3::IDENTITY, None)?,
+                None,
+                Vec::new(),
+            )
+        }
     };
     let (min, max) = super::parts::bounds(&meshes);
     let (frame, moved) = Frame::fit(min, max);
@@ -183,4 +201,36 @@ pub fn load_bare_from(src: &dyn Source, path: &Path, format: Format) -> Result<S
         textures: parts.textures,
         warnings: parts.warnings,
     })
+}
+
+/// The camera of `cameras` that `name` names (its node's name or its own),
+/// or the `name`-th (from 1); else an error listing what there is.
+fn pick_camera(path: &Path, cameras: Vec<FileCamera>, name: &str) -> Result<FileCamera> {
+    let by_number = name.parse::<usize>().ok().filter(|&i| i >= 1);
+    let found = cameras
+        .iter()
+        .position(|c| c.names.iter().any(|n| n == name))
+        .or(by_number.map(|i| i - 1).filter(|&i| i < cameras.len()));
+    match found {
+        Some(i) => Ok(cameras.into_iter().nth(i).expect("an index of cameras")),
+        None if cameras.is_empty() => bail!(
+            "--camera {name}: {} has no perspective camera",
+            path.display()
+        ),
+        None => {
+            let listed: Vec<String> = cameras
+                .iter()
+                .enumerate()
+                .map(|(i, c)| match c.names.as_slice() {
+                    [] => format!("{}", i + 1),
+                    names => format!("{} ({})", names.join(" / "), i + 1),
+                })
+                .collect();
+            bail!(
+                "--camera {name}: {} has no such camera; its cameras are {}",
+                path.display(),
+                listed.join(", ")
+            )
+        }
+    }
 }

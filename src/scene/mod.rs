@@ -245,12 +245,16 @@ impl Scene {
 /// file or a bare mesh file ([`mesh::Format`]); far-away and huge scenes are moved and scaled in
 /// f64 as they load ([`frame::Frame`]).
 pub fn load(spec: &str) -> Result<Scene> {
-    load_reading(spec).map(|(scene, _)| scene)
+    load_reading(spec, None).map(|(scene, _)| scene)
 }
 
-/// As [`load`], with the files read.
-pub fn load_reading(spec: &str) -> Result<(Scene, Vec<PathBuf>)> {
+/// As [`load`], with the camera named `camera` where the file names its
+/// cameras (glTF), and the files read.
+pub fn load_reading(spec: &str, camera: Option<&str>) -> Result<(Scene, Vec<PathBuf>)> {
     if let Some(scene) = builtin::load(spec)? {
+        if let Some(name) = camera {
+            bail!("--camera {name}: the built-in scene {spec} has one camera, no named ones");
+        }
         return Ok((scene, Vec::new()));
     }
     let path = Path::new(spec);
@@ -260,10 +264,14 @@ pub fn load_reading(spec: &str) -> Result<(Scene, Vec<PathBuf>)> {
         .map(str::to_ascii_lowercase);
     let disk = source::Disk::default();
     match ext.as_deref() {
+        Some("toml") if camera.is_some() => bail!(
+            "--camera {}: {spec} is a scene file: its [camera] is the one used",
+            camera.unwrap_or_default()
+        ),
         Some("toml") => file::load_with(&disk, path, file::Overrides::default()),
         _ if mesh::Format::of(path).is_some() => {
             let format = mesh::Format::of(path).unwrap_or(mesh::Format::Obj);
-            mesh::load_bare_from(&disk, path, format)
+            mesh::load_bare_from(&disk, path, format, camera)
         }
         _ if !path.exists() => {
             bail!("unknown scene '{spec}': not a built-in (see `rayterm scenes`) and no such file")

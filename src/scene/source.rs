@@ -361,10 +361,16 @@ pub fn resolve(base: &Path, written: &str) -> PathBuf {
     } else {
         base.parent().unwrap_or(Path::new("")).join(p)
     };
-    joined
+    let path: PathBuf = joined
         .components()
         .filter(|c| *c != Component::CurDir)
-        .collect()
+        .collect();
+    // `.` beside a file in the working directory is that directory, not "".
+    if path.as_os_str().is_empty() {
+        PathBuf::from(".")
+    } else {
+        path
+    }
 }
 
 /// Files held in memory, keyed by path: scenes built or mutated in code (the
@@ -412,6 +418,7 @@ mod tests {
     #[test]
     fn resolve_is_relative_to_the_file() {
         let r = |b: &str, w: &str| resolve(Path::new(b), w);
+        assert_eq!(r("m.obj", "."), PathBuf::from("."));
         assert_eq!(
             r("env.toml", "../teapot.bpt"),
             PathBuf::from("../teapot.bpt")

@@ -23,6 +23,12 @@ pub fn pty(cols: u16, rows: u16) -> (OwnedFd, OwnedFd) {
         )
     };
     assert_eq!(r, 0, "openpty failed");
+    // Close-on-exec, so that programs other tests start at the same time do
+    // not inherit (and keep open) this terminal.
+    for fd in [master, slave] {
+        // SAFETY: fcntl on the descriptors openpty just returned.
+        unsafe { libc::fcntl(fd, libc::F_SETFD, libc::FD_CLOEXEC) };
+    }
     // SAFETY: both descriptors are fresh and owned here alone.
     unsafe { (OwnedFd::from_raw_fd(master), OwnedFd::from_raw_fd(slave)) }
 }

@@ -87,8 +87,14 @@ impl Study {
                 how(&r)
             ),
             None => format!(
-                "The scene's settings ({}) show no falling error, so no sample count for {t} can be given.",
-                main.label
+                "The scene's settings ({}) show no falling error, so no sample count for {t} can be given.{}",
+                main.label,
+                // A given reference (no spp of its own) may be of something else.
+                if self.reference.spp.is_none() {
+                    " Is the reference an image of this scene, camera and size?"
+                } else {
+                    ""
+                }
             ),
         };
         if self.series.len() > 1 {
