@@ -141,9 +141,7 @@ pub fn run(
             // Images still queued stay unsent, and those on screen go at
             // once, whatever the link's room: kitty's outlive the screen.
             out.drop_pieces();
-            let _ = terminal
-                .backend_mut()
-                .send(&images.bands.clear(mode).concat());
+            let _ = terminal.backend_mut().send(&images.bands.leave(mode));
         }
         leave(terminal.backend_mut(), &reader, &mut out);
         result

@@ -45,6 +45,8 @@ pub struct Bands {
     /// show it again, so it is deleted again with the next picture.
     late: Vec<bool>,
     layout: Option<Frame>,
+    /// The most bands any layout had: kitty ids in use up to there.
+    most: usize,
 }
 
 /// Bands to encode: each with its pixels, and for sixel the whole picture
@@ -204,6 +206,7 @@ impl Bands {
             self.sent = vec![None; count];
             self.epoch = vec![0; count];
             self.late = vec![false; count];
+            self.most = self.most.max(count);
         }
         let mut plan = Plan {
             mode: *mode,
@@ -293,15 +296,27 @@ impl Bands {
     /// band's image, since one written before it was taken off may still
     /// show.
     pub fn clear(&mut self, mode: &PixelMode) -> Vec<Vec<u8>> {
-        let mut out = Vec::new();
         for b in 0..self.sent.len() {
             self.off(b);
             self.late[b] = false;
-            if mode.protocol == Protocol::Kitty {
-                out.push(wrap(mode, &kitty::delete(KITTY_ID + b as u32)));
-            }
         }
-        out
+        Self::delete(mode, 0..self.sent.len())
+    }
+
+    /// Removes every image any layout showed, on leaving: deletes queued
+    /// with a new layout may not have been written.
+    pub fn leave(&mut self, mode: &PixelMode) -> Vec<u8> {
+        self.clear(mode);
+        Self::delete(mode, 0..self.most).concat()
+    }
+
+    fn delete(mode: &PixelMode, bands: std::ops::Range<usize>) -> Vec<Vec<u8>> {
+        match mode.protocol {
+            Protocol::Kitty => bands
+                .map(|b| wrap(mode, &kitty::delete(KITTY_ID + b as u32)))
+                .collect(),
+            _ => Vec::new(),
+        }
     }
 }
 

@@ -15,6 +15,14 @@ use ratatui::layout::{Position, Rect, Size};
 use ratatui::style::{Color, Modifier};
 use unicode_width::UnicodeWidthStr;
 
+/// The most of a terminal the TUI uses (from the top left): a window the
+/// ioctl says is larger (up to 65535 x 65535 cells) would need gigabytes
+/// of cells; this is an 8K display in a 6 x 12 px font.
+pub const MAX_SIZE: Size = Size {
+    width: 1280,
+    height: 360,
+};
+
 pub struct Screen<W: Write> {
     out: W,
     /// A fixed size (tests, the benchmark), else the terminal's.
@@ -404,7 +412,10 @@ impl<W: Write> Backend for Screen<W> {
             Some(s) => Ok(s),
             None => {
                 let (width, height) = ratatui::crossterm::terminal::size()?;
-                Ok(Size { width, height })
+                Ok(Size {
+                    width: width.min(MAX_SIZE.width),
+                    height: height.min(MAX_SIZE.height),
+                })
             }
         }
     }
