@@ -330,3 +330,26 @@ fn garbage_answers_and_huge_windows_neither_hang_nor_abort() {
         assert!(contains(&out, b"\x1b[?1049l"));
     }
 }
+
+#[test]
+fn quit_typed_while_the_terminal_is_asked_ends_the_wait() {
+    // A terminal that answers nothing but the pacing requests: the wait
+    // for answers would last a second; `q` typed during it ends it, and
+    // rayterm leaves before drawing anything.
+    fn silent(q: &[u8]) -> &'static [u8] {
+        match q {
+            b"\x1b[6n" => b"\x1b[1;1R",
+            _ => b"",
+        }
+    }
+    let mut t = Term::start(&["cornell"], (100, 30), silent);
+    assert!(t.run_until(PATIENCE, |o| contains(o, b"\x1b[c")));
+    let (status, out) = t.quit();
+    assert_eq!(status, Some(0));
+    assert!(contains(&out, b"\x1b[?1049l"));
+    assert!(
+        !contains(&out, b"block symbols:") && !contains(&out, b"cornell \xc2\xb7"),
+        "a frame was drawn: {}",
+        String::from_utf8_lossy(&out)
+    );
+}

@@ -103,7 +103,7 @@ pub fn run(
             passthrough: tmux == Some(true),
         };
         let screen = terminal.backend_mut();
-        let (answers, kept) = detect::ask(ask, |b| screen.send(b), &reader, tmux.is_some())?;
+        let (answers, kept) = detect::ask(ask, |b| screen.send(b), &reader, tmux.is_some(), quits)?;
         if color.is_none() && answers.rgb {
             app.color = ColorMode::Truecolor;
         }
@@ -156,6 +156,15 @@ pub fn run(
     } else {
         ExitCode::SUCCESS
     })
+}
+
+/// Whether an input is a key that quits (in the view, as at startup).
+fn quits(input: &Input) -> bool {
+    let Input::Event(ratatui::crossterm::event::Event::Key(k)) = input else {
+        return false;
+    };
+    keys::Key::from_event(k).and_then(|k| keys::action(k, keys::Mode::View))
+        == Some(keys::Action::Quit)
 }
 
 /// A cell's size in pixels from the window size ioctl, where the terminal
@@ -214,6 +223,10 @@ fn event_loop<W: Write>(
         if let Input::Event(ev) = input {
             app.handle_event(&ev);
         }
+    }
+    // Quit typed before the first frame: none is drawn.
+    if app.quit {
+        return Ok(());
     }
     loop {
         dirty |= app.poll()?;

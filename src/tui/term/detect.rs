@@ -99,12 +99,14 @@ impl Answers {
 }
 
 /// Sends the queries with `send` and collects the answers from `reader`
-/// until DA1's (or [`WAIT`]); keys typed meanwhile are kept for later.
+/// until DA1's (or [`WAIT`], or an input `quits` says ends the program);
+/// keys typed meanwhile are kept for later.
 pub fn ask(
     ask: Ask,
     mut send: impl FnMut(&[u8]) -> std::io::Result<()>,
     reader: &Reader,
     tmux: bool,
+    quits: impl Fn(&Input) -> bool,
 ) -> std::io::Result<(Answers, Vec<Input>)> {
     let mut answers = Answers::default();
     let mut kept = Vec::new();
@@ -124,7 +126,13 @@ pub fn ask(
                     end = end.min(Instant::now() + TMUX_GRACE);
                 }
             }
-            Ok(input) => kept.push(input),
+            Ok(input) => {
+                let quit = quits(&input);
+                kept.push(input);
+                if quit {
+                    break;
+                }
+            }
             Err(RecvTimeoutError::Timeout | RecvTimeoutError::Disconnected) => break,
         }
     }
