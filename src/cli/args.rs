@@ -9,6 +9,7 @@ use crate::render::{Feature, Features, PlanPolicy, SceneRequest, Worst};
 use crate::scene::Builder;
 use crate::tui::color::ColorMode;
 use crate::tui::graphics::symbols::Symbols;
+use crate::tui::graphics::GraphicsArg;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -379,6 +380,13 @@ pub struct TuiArgs {
     /// octants (2x4, Unicode 16; fonts are newer).
     #[arg(long, value_enum, default_value = "half")]
     pub symbols: Symbols,
+    /// Pixel graphics for the viewport: ask the terminal (auto, within a
+    /// second; block symbols when it has no protocol, or inside tmux
+    /// without allow-passthrough), a protocol, or block symbols only. A
+    /// protocol named here is used even where the terminal does not claim
+    /// it (the status line says so).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub graphics: GraphicsArg,
     /// A converged image of the scene (OpenEXR .exr or Radiance .hdr, e.g.
     /// from `rayterm render --spp 1024 -o ref.exr`, best at a whole multiple
     /// of the view's size): the true error is shown beside the estimate

@@ -67,6 +67,7 @@ pub fn main() -> ExitCode {
             &a.scene.request(),
             a.color,
             a.symbols,
+            a.graphics,
             a.reference.as_deref(),
         ),
         Command::Stability(a) => stability::run(a),

@@ -15,6 +15,7 @@ use super::camera::CameraControl;
 use super::color::ColorMode;
 use super::export;
 use super::graphics::symbols::Symbols;
+use super::graphics::PixelMode;
 use super::inspector::Inspector;
 use super::jobs::Jobs;
 use super::keys::{self, Action, Key, Mode};
@@ -104,8 +105,10 @@ pub struct App {
     pub builder: Builder,
     pub camera: CameraControl,
     pub color: ColorMode,
-    /// The block symbols the viewport is drawn with.
+    /// The block symbols the viewport is drawn with, unless a pixel
+    /// protocol shows it.
     pub symbols: Symbols,
+    pub pixels: Option<PixelMode>,
     pub link: RenderLink,
     /// The viewport's size in pixels, from the layout.
     pub view_size: (u32, u32),
@@ -195,6 +198,7 @@ impl App {
             camera: CameraControl::new(home),
             color,
             symbols: Symbols::Half,
+            pixels: None,
             link: RenderLink::new(worker),
             view_size: (0, 0),
             inspector: Inspector::default(),

@@ -178,7 +178,7 @@ fn nearest16(c: [i32; 3]) -> u8 {
 /// proportion to where the pixel lies between them, so that a patch of
 /// pixels averages to about its colour. Colours in the palette come out
 /// exactly.
-fn dither(
+pub(crate) fn dither(
     c: [u8; 3],
     x: u32,
     y: u32,

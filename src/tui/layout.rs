@@ -36,7 +36,8 @@ pub struct Layout {
     /// Whether feature reasons get lines of their own.
     pub wrap_features: bool,
     pub render: Rect,
-    /// Pixels per cell of the image, across and down.
+    /// Pixels per cell of the image, across and down: the symbols' grid,
+    /// or with a pixel protocol the cell's size (within the budget).
     pub grid: (u32, u32),
     pub status: Rect,
     pub hints: Rect,
@@ -46,7 +47,6 @@ impl Layout {
     pub fn compute(area: Rect, app: &App) -> Layout {
         let mut l = Layout {
             area,
-            grid: app.symbols.grid(),
             ..Layout::default()
         };
         if area.width < MIN_SIZE.0 || area.height < MIN_SIZE.1 {
@@ -70,6 +70,10 @@ impl Layout {
         .areas(left);
         let titled = Block::new().borders(Borders::TOP);
         l.image = titled.inner(l.view);
+        l.grid = match &app.pixels {
+            Some(m) => m.grid(l.image.width, l.image.height),
+            None => app.symbols.grid(),
+        };
         l.debug_text = titled.inner(l.debug);
         // Reasons get lines of their own when that leaves the render panel
         // room for its chart.

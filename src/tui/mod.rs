@@ -45,7 +45,11 @@ use ratatui::Terminal;
 use crate::render::{SceneRequest, Session};
 use app::App;
 use color::ColorMode;
+use graphics::bands::{Bands, Picture};
+use graphics::encoder::Encoder;
 use graphics::symbols::Symbols;
+use graphics::{GraphicsArg, PixelMode};
+use term::detect::{self, Ask};
 use term::input::{Input, Reader, Reply};
 use term::output::{Output, Shown};
 use term::screen::Screen;
@@ -64,6 +68,7 @@ pub fn run(
     req: &SceneRequest,
     color: Option<ColorMode>,
     symbols: Symbols,
+    graphics: GraphicsArg,
     reference: Option<&Path>,
 ) -> Result<ExitCode> {
     if !io::stdout().is_terminal() {
@@ -81,13 +86,6 @@ pub fn run(
     let mut app = App::new(session, warnings, color.unwrap_or(detected), reference)?;
     app.export_size = req.size;
     app.symbols = symbols;
-    if let (None, Some(hint)) = (color, hint) {
-        let said = match app.status.as_str() {
-            "" => hint.to_string(),
-            s => format!("{s} · {hint}"),
-        };
-        app.say(said);
-    }
     // SIGTERM, SIGHUP and an outside SIGINT quit like `q`: the loop sees the
     // flag and the guard below restores the terminal.
     crate::interrupt::flag();
@@ -97,9 +95,54 @@ pub fn run(
         let mut terminal = Screen::new(io::stdout(), None)
             .and_then(Terminal::new)
             .context("cannot set up the terminal")?;
+        // What the terminal can do, asked before the first frame.
+        let tmux = detect::tmux_passthrough();
+        let ask = Ask {
+            graphics: graphics != GraphicsArg::Symbols,
+            colour: color.is_none() && detected != ColorMode::Truecolor,
+            passthrough: tmux == Some(true),
+        };
+        let screen = terminal.backend_mut();
+        let (answers, kept) = detect::ask(ask, |b| screen.send(b), &reader, tmux.is_some(), quits)?;
+        if color.is_none() && answers.rgb {
+            app.color = ColorMode::Truecolor;
+        }
+        let size = terminal.size()?;
+        let (pixels, said) = detect::choose(
+            graphics,
+            &answers,
+            cell_from_ioctl(),
+            (size.width, size.height),
+            |v| std::env::var(v).ok(),
+            tmux,
+        );
+        app.pixels = pixels;
+        let mut said = vec![app.status.clone(), said];
+        if color.is_none() && app.color != ColorMode::Truecolor {
+            said.extend(hint.map(String::from));
+        }
+        said.retain(|s| !s.is_empty());
+        app.say(said.join(" · "));
         let mut out = Output::default();
         out.start(terminal.backend_mut(), Instant::now())?;
-        let result = event_loop(&mut terminal, &mut app, &reader, &mut out);
+        let mut images = match app.pixels {
+            Some(_) => Some(Images::new()?),
+            None => None,
+        };
+        let result = event_loop(
+            &mut terminal,
+            &mut app,
+            &reader,
+            &mut out,
+            images.as_mut(),
+            kept,
+        );
+        if let (Some(mode), Some(images)) = (&app.pixels, &mut images) {
+            // Images still queued stay unsent, and those on screen go at
+            // once, whatever the link's room: kitty's outlive the screen.
+            out.drop_pieces();
+            let _ = terminal.backend_mut().send(&images.bands.leave(mode));
+        }
         leave(terminal.backend_mut(), &reader, &mut out);
         result
     });
@@ -113,6 +156,26 @@ pub fn run(
     } else {
         ExitCode::SUCCESS
     })
+}
+
+/// Whether an input is a key that quits (in the view, as at startup).
+fn quits(input: &Input) -> bool {
+    let Input::Event(ratatui::crossterm::event::Event::Key(k)) = input else {
+        return false;
+    };
+    keys::Key::from_event(k).and_then(|k| keys::action(k, keys::Mode::View))
+        == Some(keys::Action::Quit)
+}
+
+/// A cell's size in pixels from the window size ioctl, where the terminal
+/// fills it in.
+fn cell_from_ioctl() -> Option<(u32, u32)> {
+    let w = ratatui::crossterm::terminal::window_size().ok()?;
+    let cell = (
+        w.width as u32 / w.columns.max(1) as u32,
+        w.height as u32 / w.rows.max(1) as u32,
+    );
+    (cell.0 > 0 && cell.1 > 0).then_some(cell)
 }
 
 /// Where keys come from: standard input when it is the terminal, else the
@@ -148,10 +211,23 @@ fn event_loop<W: Write>(
     app: &mut App,
     reader: &Reader,
     out: &mut Output,
+    mut images: Option<&mut Images>,
+    kept: Vec<Input>,
 ) -> Result<()> {
     let mut dirty = true;
     let mut last_draw = Instant::now() - FRAME;
     let mut size = terminal.size()?;
+    // The picture waits to be sent as images.
+    let mut picture_due = false;
+    for input in kept {
+        if let Input::Event(ev) = input {
+            app.handle_event(&ev);
+        }
+    }
+    // Quit typed before the first frame: none is drawn.
+    if app.quit {
+        return Ok(());
+    }
     loop {
         dirty |= app.poll()?;
         let now_size = terminal.size()?;
@@ -159,14 +235,20 @@ fn event_loop<W: Write>(
         dirty |= app.note_output(out.figures());
         if dirty && last_draw.elapsed() >= FRAME {
             draw(terminal, app)?;
-            out.drawn(terminal.backend(), shown(app));
+            match app.pixels {
+                Some(_) => picture_due = true,
+                None => out.drawn(terminal.backend(), shown(app)),
+            }
             last_draw = Instant::now();
             dirty = false;
+        }
+        if let (Some(mode), Some(images)) = (app.pixels, images.as_mut()) {
+            images.step(terminal.backend_mut(), app, out, &mode, &mut picture_due);
         }
         out.pump(terminal.backend_mut(), Instant::now())?;
         let wait = if dirty {
             FRAME.saturating_sub(last_draw.elapsed())
-        } else if app.idle() && !out.waiting() {
+        } else if app.idle() && !out.waiting() && !images.as_ref().is_some_and(|i| i.busy()) {
             POLL_IDLE
         } else {
             POLL_BUSY
@@ -194,6 +276,90 @@ fn event_loop<W: Write>(
         }
         if app.quit || crate::interrupt::requested() {
             return Ok(());
+        }
+    }
+}
+
+/// The viewport's picture as images: which bands are on screen, and the
+/// encoder making the next ones.
+struct Images {
+    bands: Bands,
+    encoder: Encoder,
+    /// What the picture being encoded shows.
+    encoding: Option<Shown>,
+}
+
+impl Images {
+    fn new() -> Result<Images> {
+        Ok(Images {
+            bands: Bands::default(),
+            encoder: Encoder::spawn().context("cannot start the image encoder")?,
+            encoding: None,
+        })
+    }
+
+    fn busy(&self) -> bool {
+        self.encoder.busy()
+    }
+
+    /// Notes text written over images, queues encoded bands that are still
+    /// right, and plans the newest picture once the last one is written
+    /// (never more than one queued).
+    fn step<W: Write>(
+        &mut self,
+        screen: &mut Screen<W>,
+        app: &App,
+        out: &mut Output,
+        mode: &PixelMode,
+        due: &mut bool,
+    ) {
+        let area = app.layout.image;
+        // Text written over sixel or iTerm2 images erased them there.
+        let (rows, cleared) = screen.take_touched();
+        if cleared {
+            self.bands.forget();
+        }
+        self.bands.overwritten(mode, &rows);
+        *due |= cleared || rows.iter().any(|&r| r);
+        if rows.iter().any(|&r| r) {
+            out.queue_first(self.bands.uncover(mode, !out.pieces_written(), |row| {
+                screen.row_has_text(row, area)
+            }));
+        }
+        if let Some(pieces) = self.encoder.done() {
+            let (pieces, dropped) = self
+                .bands
+                .accept(pieces, |row| screen.row_has_text(row, area));
+            out.queue(pieces);
+            if let Some(shown) = self.encoding.take() {
+                out.drawn(screen, shown);
+            }
+            *due |= dropped;
+        }
+        if !*due || self.encoder.busy() || !out.pieces_written() {
+            return;
+        }
+        *due = false;
+        let shown = shown(app);
+        let Some(pic) = widgets::picture(app) else {
+            out.drawn(screen, shown);
+            return;
+        };
+        let picture = Picture {
+            px: &pic.px,
+            w: pic.w,
+            h: pic.h,
+            area,
+        };
+        let (now, plan) = self
+            .bands
+            .plan(mode, &picture, |row| screen.row_has_text(row, area));
+        out.queue(now);
+        if plan.is_empty() {
+            out.drawn(screen, shown);
+        } else {
+            self.encoding = Some(shown);
+            self.encoder.start(plan);
         }
     }
 }

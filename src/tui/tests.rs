@@ -529,3 +529,91 @@ fn the_render_panel_says_when_the_view_reached_the_screen() {
     assert!(b.contains("view shown in"), "{b}");
     assert!(b.contains("frames/s"), "{b}");
 }
+
+#[test]
+fn kitty_and_sixel_frames_decode_to_the_viewport_picture() {
+    use super::graphics::bands::{Bands, Picture};
+    use super::graphics::{kitty, sixel, PixelMode, Protocol};
+    for protocol in [Protocol::Kitty, Protocol::Sixel] {
+        let mut app = app("cornell", &[]);
+        let mode = PixelMode {
+            protocol,
+            cell: (6, 12),
+            colours: 256,
+            passthrough: false,
+        };
+        app.pixels = Some(mode);
+        let mut t = terminal(100, 30);
+        settle(&mut t, &mut app);
+        let area = app.layout.image;
+        // The view is rendered at the cells' pixel size.
+        assert_eq!(
+            app.view_size,
+            (6 * area.width as u32, 12 * area.height as u32)
+        );
+        // The cells under the picture stay blank for the images.
+        let b = t.backend().buffer();
+        assert!((area.y..area.y + area.height)
+            .all(|y| (area.x..area.x + area.width).all(|x| b[(x, y)].symbol() == " ")));
+        // A pixel selected: its mark is part of the picture sent.
+        app.select(40, 30, 0);
+        let pic = super::widgets::picture(&app).unwrap();
+        assert_eq!(pic.px[(30 * pic.w + 42) as usize], [255, 0, 255]);
+        let pieces = Bands::default().update(
+            &mode,
+            &Picture {
+                px: &pic.px,
+                w: pic.w,
+                h: pic.h,
+                area,
+            },
+            |_| false,
+        );
+        let mut got: Vec<[u8; 3]> = Vec::new();
+        for p in &pieces {
+            match protocol {
+                Protocol::Kitty => got.extend(kitty::decode(p).remove(0).3),
+                _ => {
+                    let (w, _, px) = sixel::decode(p).unwrap();
+                    assert_eq!(w, pic.w as usize);
+                    got.extend(px.into_iter().map(|c| c.expect("every pixel set")));
+                }
+            }
+        }
+        assert_eq!(got.len(), pic.px.len());
+        match protocol {
+            // Kitty sends RGB: exactly the picture.
+            Protocol::Kitty => assert!(got == pic.px),
+            // Sixel: palette colours, dithered: close on average over 4x4
+            // blocks, and within the palette's reach per pixel.
+            _ => {
+                let w = pic.w as usize;
+                let mut worst_block = 0f64;
+                for by in 0..pic.h as usize / 4 {
+                    for bx in 0..w / 4 {
+                        let mean = |img: &[[u8; 3]], c: usize| {
+                            (0..16)
+                                .map(|k| img[(by * 4 + k / 4) * w + bx * 4 + k % 4][c] as f64)
+                                .sum::<f64>()
+                                / 16.0
+                        };
+                        for c in 0..3 {
+                            worst_block = worst_block.max((mean(&got, c) - mean(&pic.px, c)).abs());
+                        }
+                    }
+                }
+                let mean_err = got
+                    .iter()
+                    .zip(&pic.px)
+                    .map(|(a, b)| (0..3).map(|c| a[c].abs_diff(b[c]) as f64).sum::<f64>() / 3.0)
+                    .sum::<f64>()
+                    / got.len() as f64;
+                eprintln!(
+                    "sixel: mean error {mean_err:.2}, worst 4x4 block {worst_block:.2} levels"
+                );
+                assert!(mean_err < 3.0, "{mean_err}");
+                assert!(worst_block < 12.0, "{worst_block}");
+            }
+        }
+    }
+}

@@ -27,6 +27,8 @@ pub enum Reply {
     CellSize(u16, u16),
     /// `CSI 4 ; height ; width t`: the text area's size in pixels.
     WindowPixels(u16, u16),
+    /// `CSI ? 1 ; 0 ; n S` (XTSMGRAPHICS): sixel colour registers.
+    ColourRegisters(u16),
     /// `APC G ... ST`: a kitty graphics reply, without the `G`.
     Kitty(String),
     /// `DCS ... ST`: capability (XTGETTCAP) and setting (DECRQSS) replies.
@@ -226,6 +228,10 @@ fn parse_csi(b: &[u8]) -> Step {
     let num = |i: usize| nums.get(i).copied().flatten();
     let input = match (private, final_byte) {
         (Some(b'<'), b'M' | b'm') => mouse(num(0), num(1), num(2), final_byte == b'M'),
+        (Some(b'?'), b'S') => match (num(0), num(1), num(2)) {
+            (Some(1), Some(0), Some(n)) => Some(Input::Reply(Reply::ColourRegisters(n))),
+            _ => None,
+        },
         (Some(b'?'), b'c') => Some(Input::Reply(Reply::DeviceAttributes(
             nums.iter().flatten().copied().collect(),
         ))),
@@ -408,6 +414,10 @@ mod tests {
                 Input::Reply(Reply::DeviceAttributes(vec![62, 4, 22])),
                 Input::Reply(Reply::CellSize(16, 8)),
             ]
+        );
+        assert_eq!(
+            keys(b"\x1b[?1;0;16S\x1b[?1;3;0S"),
+            vec![Input::Reply(Reply::ColourRegisters(16))]
         );
         let got = keys(b"\x1b_Gi=31;OK\x1b\\\x1bP1+r524742=\x1b\\\x1b[<0;10;5M");
         assert_eq!(got[0], Input::Reply(Reply::Kitty("i=31;OK".into())));

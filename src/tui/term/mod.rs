@@ -3,6 +3,7 @@
 //! changed; `output`, which writes it as fast as the link absorbs, paced by
 //! `pace`) and what it can do (`terminfo`).
 
+pub mod detect;
 pub mod input;
 pub mod output;
 pub mod pace;

@@ -36,9 +36,14 @@ pub struct Figures {
 #[derive(Default)]
 pub struct Output {
     pub pacer: Pacer,
-    /// Draws not yet on screen in full: the screen's sweep count when
-    /// drawn, and what they showed.
-    drawn: VecDeque<(u64, Shown)>,
+    /// Draws not yet on screen in full: the screen's sweep count and the
+    /// pieces queued when drawn, and what they showed.
+    drawn: VecDeque<(u64, u64, Shown)>,
+    /// Pieces of output written after the cells (images), each followed by
+    /// a request; how many were queued and written so far.
+    pieces: VecDeque<Vec<u8>>,
+    queued: u64,
+    sent_pieces: u64,
     /// Pictures written in full, waiting for the terminal's answer: the
     /// bytes written by then.
     landing: VecDeque<(u64, Shown)>,
@@ -55,7 +60,32 @@ impl Output {
 
     /// A frame showing `shown` was drawn into the screen.
     pub fn drawn<W: Write>(&mut self, screen: &Screen<W>, shown: Shown) {
-        self.drawn.push_back((screen.swept(), shown));
+        self.drawn.push_back((screen.swept(), self.queued, shown));
+    }
+
+    /// Queues pieces (images) to follow the cells.
+    pub fn queue(&mut self, pieces: Vec<Vec<u8>>) {
+        self.queued += pieces.len() as u64;
+        self.pieces.extend(pieces);
+    }
+
+    /// Queues pieces to go before any other.
+    pub fn queue_first(&mut self, pieces: Vec<Vec<u8>>) {
+        self.queued += pieces.len() as u64;
+        for p in pieces.into_iter().rev() {
+            self.pieces.push_front(p);
+        }
+    }
+
+    /// Drops the pieces not yet written (leaving: the images they hold
+    /// would outlive the TUI).
+    pub fn drop_pieces(&mut self) {
+        self.pieces.clear();
+    }
+
+    /// Whether every queued piece has been written.
+    pub fn pieces_written(&self) -> bool {
+        self.pieces.is_empty()
     }
 
     /// The terminal answered a request.
@@ -81,11 +111,26 @@ impl Output {
             }
             self.pacer.sent(sent, now);
         }
-        // A draw is written in full once every cell has been swept since,
-        // or nothing differs any more.
+        // Then the pieces, once the cells are written.
+        while !screen.pending() && self.pacer.room() > 0 {
+            let Some(piece) = self.pieces.pop_front() else {
+                break;
+            };
+            screen.send(&piece)?;
+            let mut sent = piece.len();
+            if self.pacer.paced() {
+                screen.send(PROBE)?;
+                sent += PROBE.len();
+            }
+            self.pacer.sent(sent, now);
+            self.sent_pieces += 1;
+        }
+        // A draw is written in full once every cell has been swept since
+        // (or nothing differs any more) and its pieces are written.
         let mut covered = None;
-        while let Some(&(at, shown)) = self.drawn.front() {
-            if screen.pending() && screen.swept() < at + screen.cells() as u64 {
+        while let Some(&(at, pieces, shown)) = self.drawn.front() {
+            let cells = !screen.pending() || screen.swept() >= at + screen.cells() as u64;
+            if !cells || self.sent_pieces < pieces {
                 break;
             }
             self.drawn.pop_front();

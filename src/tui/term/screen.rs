@@ -11,9 +11,17 @@ use std::io::{self, Write};
 
 use ratatui::backend::{Backend, ClearType, WindowSize};
 use ratatui::buffer::Cell;
-use ratatui::layout::{Position, Size};
+use ratatui::layout::{Position, Rect, Size};
 use ratatui::style::{Color, Modifier};
 use unicode_width::UnicodeWidthStr;
+
+/// The most of a terminal the TUI uses (from the top left): a window the
+/// ioctl says is larger (up to 65535 x 65535 cells) would need gigabytes
+/// of cells; this is an 8K display in a 6 x 12 px font.
+pub const MAX_SIZE: Size = Size {
+    width: 1280,
+    height: 360,
+};
 
 pub struct Screen<W: Write> {
     out: W,
@@ -33,6 +41,10 @@ pub struct Screen<W: Write> {
     cursor: Position,
     /// Bytes written since the start.
     written: u64,
+    /// Rows where cells were written, and whether the screen was cleared,
+    /// since last asked (images under them are gone).
+    touched: Vec<bool>,
+    cleared: bool,
 }
 
 impl<W: Write> Screen<W> {
@@ -52,6 +64,8 @@ impl<W: Write> Screen<W> {
             cursor_visible: true,
             cursor: Position::ORIGIN,
             written: 0,
+            touched: Vec::new(),
+            cleared: false,
         };
         s.clear_all()?;
         Ok(s)
@@ -83,6 +97,27 @@ impl<W: Write> Screen<W> {
             .map(|row| row.iter().map(Cell::symbol).collect::<String>())
             .collect::<Vec<_>>()
             .join("\n")
+    }
+
+    /// Whether any cell of row `y` within `area` shows something: text, or
+    /// a background colour.
+    pub fn row_has_text(&self, y: u16, area: Rect) -> bool {
+        let w = self.width as usize;
+        (area.x..area.x + area.width).any(|x| {
+            self.wanted
+                .get(y as usize * w + x as usize)
+                .is_some_and(|c| c.symbol() != " " || c.bg != Color::Reset)
+        })
+    }
+
+    /// The rows where cells were written since the last call, and whether
+    /// the screen was cleared.
+    pub fn take_touched(&mut self) -> (Vec<bool>, bool) {
+        let rows = vec![false; self.touched.len()];
+        (
+            std::mem::replace(&mut self.touched, rows),
+            std::mem::take(&mut self.cleared),
+        )
     }
 
     /// Cells on the screen.
@@ -157,6 +192,9 @@ impl<W: Write> Screen<W> {
             pen.at = (x as usize + width < w && !unsure_width(cell.symbol()))
                 .then(|| (x + width as u16, y));
         }
+        if let Some(t) = self.touched.get_mut(i / w) {
+            *t = true;
+        }
         self.shown[i] = Some(cell.clone());
         if covered == 1 {
             self.shown[i + 1] = Some(self.wanted[i + 1].clone());
@@ -173,6 +211,8 @@ impl<W: Write> Screen<W> {
         self.wanted = vec![Cell::default(); n];
         self.shown = vec![Some(Cell::default()); n];
         self.sweep = 0;
+        self.touched = vec![false; size.height as usize];
+        self.cleared = true;
         self.control.extend_from_slice(b"\x1b[0m\x1b[H\x1b[2J");
         Ok(())
     }
@@ -372,7 +412,10 @@ impl<W: Write> Backend for Screen<W> {
             Some(s) => Ok(s),
             None => {
                 let (width, height) = ratatui::crossterm::terminal::size()?;
-                Ok(Size { width, height })
+                Ok(Size {
+                    width: width.min(MAX_SIZE.width),
+                    height: height.min(MAX_SIZE.height),
+                })
             }
         }
     }

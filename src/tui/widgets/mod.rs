@@ -5,13 +5,13 @@ mod bars;
 mod debug;
 pub mod panels;
 mod rays;
-mod viewport;
+pub mod viewport;
 
 use ratatui::Frame;
 
 use super::app::App;
 
-pub use viewport::paint_view;
+pub use viewport::{paint_view, picture};
 
 pub fn draw(f: &mut Frame, app: &App) {
     let l = &app.layout;

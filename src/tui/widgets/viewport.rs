@@ -17,29 +17,22 @@ use crate::tui::worker::Snapshot;
 /// Colour of the marks around the selected pixel.
 const MARK: [u8; 3] = [255, 0, 255];
 
-pub fn draw(f: &mut Frame, area: Rect, app: &App) {
-    let inner = app.layout.image;
-    let mut title = format!(
-        " {} · {}x{} px · {} · {}",
-        app.session.scene.name,
-        app.view_size.0,
-        app.view_size.1,
-        app.symbols.name(),
-        app.color.name()
-    );
-    if app.inspector.select_mode {
-        title += " · SELECT";
-    }
-    let Some(frame) = app.link.frame.as_deref() else {
-        f.render_widget(Block::new().borders(Borders::TOP).title(title), area);
-        f.render_widget(
-            Paragraph::new("rendering the first pass...").style(Style::new().fg(Color::DarkGray)),
-            inner,
-        );
-        return;
-    };
+/// The viewport's picture: the newest pass in sRGB with the BVH overlay,
+/// the selected pixel's rays and its mark when they are for this view, and
+/// what the overlay says for the title. The block symbols and the pixel
+/// protocols show the same picture.
+pub struct ViewPicture {
+    pub px: Vec<[u8; 3]>,
+    pub w: u32,
+    pub h: u32,
+    pub note: Option<String>,
+}
+
+pub fn picture(app: &App) -> Option<ViewPicture> {
+    let frame = app.link.frame.as_deref()?;
     let (w, h) = (frame.width, frame.height);
     let mut img = frame.image.clone();
+    let mut note = None;
     // Overlays and marks follow the current camera and size, so they wait
     // for a pass of that view.
     let current = app.link.current_frame().is_some() && (w, h) == app.view_size;
@@ -48,10 +41,10 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App) {
             match &o.layer {
                 Ok((layer, summary)) if (layer.width, layer.height) == (w, h) => {
                     layer.over(&mut img);
-                    title += &format!(" · {summary}");
+                    note = Some(summary.to_string());
                 }
                 Ok(_) => {}
-                Err(e) => title += &format!(" · {e}"),
+                Err(e) => note = Some(e.to_string()),
             }
         }
         if app.show_rays {
@@ -63,13 +56,51 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App) {
             }
         }
     }
-    title.push(' ');
-    f.render_widget(Block::new().borders(Borders::TOP).title(title), area);
     let mut px: Vec<[u8; 3]> = img.iter().map(|c| color::srgb(*c)).collect();
     if let (true, Some(s)) = (current, app.inspector.selected) {
         mark(&mut px, w, h, s.x, s.y);
     }
-    symbols::paint(f.buffer_mut(), inner, &px, (w, h), app.symbols, app.color);
+    Some(ViewPicture { px, w, h, note })
+}
+
+pub fn draw(f: &mut Frame, area: Rect, app: &App) {
+    let inner = app.layout.image;
+    let shown = match &app.pixels {
+        Some(m) => m.protocol.name().to_string(),
+        None => format!("{} · {}", app.symbols.name(), app.color.name()),
+    };
+    let mut title = format!(
+        " {} · {}x{} px · {shown}",
+        app.session.scene.name, app.view_size.0, app.view_size.1,
+    );
+    if app.inspector.select_mode {
+        title += " · SELECT";
+    }
+    let Some(pic) = picture(app) else {
+        f.render_widget(Block::new().borders(Borders::TOP).title(title), area);
+        f.render_widget(
+            Paragraph::new("rendering the first pass...").style(Style::new().fg(Color::DarkGray)),
+            inner,
+        );
+        return;
+    };
+    if let Some(note) = &pic.note {
+        title += &format!(" · {note}");
+    }
+    title.push(' ');
+    f.render_widget(Block::new().borders(Borders::TOP).title(title), area);
+    // With a pixel protocol the cells stay blank: the event loop sends the
+    // picture as images over them.
+    if app.pixels.is_none() {
+        symbols::paint(
+            f.buffer_mut(),
+            inner,
+            &pic.px,
+            (pic.w, pic.h),
+            app.symbols,
+            app.color,
+        );
+    }
 }
 
 /// Paints a snapshot as the viewport does, without overlays (for the benchmark).

@@ -1,0 +1,344 @@
+//! What the terminal can do, asked at startup: the kitty graphics protocol
+//! (a query image, `a=q`), sixel (DA1 lists 4) and its colour registers
+//! (XTSMGRAPHICS), a cell's size in pixels (`CSI 16t`, else the window
+//! size ioctl), and 24-bit colour (XTGETTCAP `RGB`/`Tc`). DA1 goes last:
+//! every terminal answers it, so its answer ends the wait, which is short
+//! when nothing answers at all.
+
+use std::sync::mpsc::RecvTimeoutError;
+use std::time::{Duration, Instant};
+
+use crate::tui::graphics::{passthrough, GraphicsArg, PixelMode, Protocol};
+
+use super::input::{Input, Reader, Reply};
+
+/// The longest wait for the answers.
+pub const WAIT: Duration = Duration::from_millis(1000);
+/// Inside tmux, answers passed through from the outer terminal may come
+/// after tmux's own answer to DA1.
+const TMUX_GRACE: Duration = Duration::from_millis(150);
+
+/// A cell's width and height in pixels believed from an answer.
+const CELL_PX: std::ops::RangeInclusive<u32> = 2..=256;
+
+const KITTY_QUERY: &[u8] = b"\x1b_Gi=31,s=1,v=1,a=q,t=d,f=24;AAAA\x1b\\";
+const CELL_SIZE: &[u8] = b"\x1b[16t";
+const WINDOW_PIXELS: &[u8] = b"\x1b[14t";
+const REGISTERS: &[u8] = b"\x1b[?1;1;0S";
+/// XTGETTCAP for `RGB` and `Tc`, hex-encoded.
+const TRUECOLOR: &[u8] = b"\x1bP+q524742;5463\x1b\\";
+const DA1: &[u8] = b"\x1b[c";
+
+/// What to ask.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Ask {
+    pub graphics: bool,
+    pub colour: bool,
+    /// Inside tmux with passthrough: the graphics queries go through it.
+    pub passthrough: bool,
+}
+
+impl Ask {
+    pub fn any(&self) -> bool {
+        self.graphics || self.colour
+    }
+
+    /// The queries, DA1 last.
+    pub fn queries(&self) -> Vec<u8> {
+        let mut q = Vec::new();
+        if self.graphics {
+            for query in [KITTY_QUERY, CELL_SIZE, WINDOW_PIXELS, REGISTERS] {
+                if self.passthrough {
+                    q.extend(passthrough(query));
+                }
+                q.extend_from_slice(query);
+            }
+        }
+        if self.colour {
+            q.extend_from_slice(TRUECOLOR);
+        }
+        q.extend_from_slice(DA1);
+        q
+    }
+}
+
+/// The terminal's answers.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Answers {
+    /// DA1 came: the terminal answers queries.
+    pub answered: bool,
+    pub kitty: bool,
+    pub sixel: bool,
+    pub registers: Option<usize>,
+    /// A cell's size (width, height) in pixels, and the text area's.
+    pub cell: Option<(u32, u32)>,
+    pub window: Option<(u32, u32)>,
+    pub rgb: bool,
+}
+
+impl Answers {
+    /// Takes one answer; true when it was DA1's (the last).
+    pub fn take(&mut self, reply: &Reply) -> bool {
+        match reply {
+            Reply::DeviceAttributes(attrs) => {
+                self.answered = true;
+                self.sixel |= attrs.iter().skip(1).any(|&a| a == 4);
+                return true;
+            }
+            Reply::Kitty(text) => self.kitty |= text.starts_with("i=31;OK"),
+            Reply::CellSize(h, w) if *h > 0 && *w > 0 => self.cell = Some((*w as u32, *h as u32)),
+            Reply::WindowPixels(h, w) if *h > 0 && *w > 0 => {
+                self.window = Some((*w as u32, *h as u32))
+            }
+            Reply::ColourRegisters(n) if *n > 0 => self.registers = Some(*n as usize),
+            Reply::Dcs(text) => self.rgb |= text.starts_with("1+r"),
+            _ => {}
+        }
+        false
+    }
+}
+
+/// Sends the queries with `send` and collects the answers from `reader`
+/// until DA1's (or [`WAIT`], or an input `quits` says ends the program);
+/// keys typed meanwhile are kept for later.
+pub fn ask(
+    ask: Ask,
+    mut send: impl FnMut(&[u8]) -> std::io::Result<()>,
+    reader: &Reader,
+    tmux: bool,
+    quits: impl Fn(&Input) -> bool,
+) -> std::io::Result<(Answers, Vec<Input>)> {
+    let mut answers = Answers::default();
+    let mut kept = Vec::new();
+    if !ask.any() {
+        return Ok((answers, kept));
+    }
+    send(&ask.queries())?;
+    let mut end = Instant::now() + WAIT;
+    loop {
+        let left = end.saturating_duration_since(Instant::now());
+        match reader.rx.recv_timeout(left) {
+            Ok(Input::Reply(r)) => {
+                if answers.take(&r) {
+                    if !tmux {
+                        break;
+                    }
+                    end = end.min(Instant::now() + TMUX_GRACE);
+                }
+            }
+            Ok(input) => {
+                let quit = quits(&input);
+                kept.push(input);
+                if quit {
+                    break;
+                }
+            }
+            Err(RecvTimeoutError::Timeout | RecvTimeoutError::Disconnected) => break,
+        }
+    }
+    Ok((answers, kept))
+}
+
+/// The pixel protocol `arg` and the answers lead to, and what to say about
+/// it. `cell_ioctl` is a cell's size from the window size ioctl; `env`
+/// reads the environment; `tmux_passthrough` is `Some(on)` inside tmux.
+pub fn choose(
+    arg: GraphicsArg,
+    answers: &Answers,
+    cell_ioctl: Option<(u32, u32)>,
+    cols_rows: (u16, u16),
+    env: impl Fn(&str) -> Option<String>,
+    tmux_passthrough: Option<bool>,
+) -> (Option<PixelMode>, String) {
+    let iterm = ["TERM_PROGRAM", "LC_TERMINAL"]
+        .iter()
+        .any(|v| env(v).is_some_and(|t| t == "iTerm.app" || t == "iTerm2" || t == "WezTerm"));
+    let protocol = match arg {
+        GraphicsArg::Symbols => return (None, String::new()),
+        GraphicsArg::Kitty => Protocol::Kitty,
+        GraphicsArg::Sixel => Protocol::Sixel,
+        GraphicsArg::Iterm2 => Protocol::Iterm2,
+        GraphicsArg::Auto if answers.kitty => Protocol::Kitty,
+        GraphicsArg::Auto if answers.sixel => Protocol::Sixel,
+        GraphicsArg::Auto if iterm => Protocol::Iterm2,
+        GraphicsArg::Auto => {
+            let why = match tmux_passthrough {
+                Some(false) => {
+                    "inside tmux without allow-passthrough (tmux set -g allow-passthrough on)"
+                }
+                _ if !answers.answered => "the terminal answered no query",
+                _ => "the terminal has no kitty graphics, sixel or iTerm2 images",
+            };
+            return (None, format!("block symbols: {why}"));
+        }
+    };
+    // Sixel through tmux needs nothing when tmux draws sixel itself (its
+    // DA1 lists 4); everything else needs passthrough.
+    let native = protocol == Protocol::Sixel && answers.sixel;
+    let passthrough = tmux_passthrough.is_some() && !native;
+    if tmux_passthrough == Some(false) && !native {
+        return (
+            None,
+            format!(
+                "block symbols: {} needs tmux's allow-passthrough (tmux set -g allow-passthrough on)",
+                protocol.name()
+            ),
+        );
+    }
+    let from_window = answers
+        .window
+        .map(|(w, h)| (w / cols_rows.0.max(1) as u32, h / cols_rows.1.max(1) as u32));
+    // A size no font has is garbage (it would make images of gigapixels).
+    let sane = |&(w, h): &(u32, u32)| CELL_PX.contains(&w) && CELL_PX.contains(&h);
+    let measured = answers
+        .cell
+        .filter(sane)
+        .or(cell_ioctl.filter(sane))
+        .or(from_window.filter(sane));
+    let cell = measured.unwrap_or((8, 16));
+    let colours = answers.registers.unwrap_or(256).min(256);
+    let mut said = format!("{}, cells {}x{} px", protocol.name(), cell.0, cell.1);
+    if measured.is_none() {
+        said += " (assumed: the terminal did not say)";
+    }
+    let claimed = match protocol {
+        Protocol::Kitty => answers.kitty,
+        Protocol::Sixel => answers.sixel,
+        Protocol::Iterm2 => iterm,
+    };
+    if answers.answered && !claimed {
+        said += " (as asked: the terminal does not claim it)";
+    }
+    if protocol == Protocol::Sixel {
+        said += &format!(", {colours} colours");
+    }
+    if passthrough {
+        said += ", through tmux";
+    }
+    (
+        Some(PixelMode {
+            protocol,
+            cell,
+            colours,
+            passthrough,
+        }),
+        said,
+    )
+}
+
+/// Inside tmux: whether `allow-passthrough` is on.
+pub fn tmux_passthrough() -> Option<bool> {
+    std::env::var_os("TMUX")?;
+    let out = std::process::Command::new("tmux")
+        .args(["show-options", "-Apv", "allow-passthrough"])
+        .stderr(std::process::Stdio::null())
+        .output()
+        .ok()?;
+    let v = String::from_utf8_lossy(&out.stdout);
+    Some(v.lines().any(|l| matches!(l.trim(), "on" | "all")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tui::term::input::Parser;
+
+    fn answers(bytes: &[u8]) -> Answers {
+        let mut a = Answers::default();
+        for i in Parser::default().feed(bytes) {
+            if let Input::Reply(r) = i {
+                a.take(&r);
+            }
+        }
+        a
+    }
+
+    fn none(_: &str) -> Option<String> {
+        None
+    }
+
+    #[test]
+    fn kitty_sixel_and_nothing_are_told_apart() {
+        // kitty: the query image is accepted, cells 9x18.
+        let a = answers(b"\x1b_Gi=31;OK\x1b\\\x1b[6;18;9t\x1bP1+r524742=38\x1b\\\x1b[?62;22c");
+        assert!(a.answered && a.kitty && a.rgb && !a.sixel);
+        let (m, said) = choose(GraphicsArg::Auto, &a, None, (80, 24), none, None);
+        let m = m.unwrap();
+        assert_eq!((m.protocol, m.cell), (Protocol::Kitty, (9, 18)));
+        assert!(said.contains("kitty"), "{said}");
+        // xterm -ti vt340: DA1 lists 4, 16 registers, no cell size answer
+        // but the ioctl knows.
+        let a = answers(b"\x1b_Gi=31;EINVAL\x1b\\\x1b[?1;0;16S\x1b[?63;1;2;4;6;9;15;22c");
+        let (m, _) = choose(GraphicsArg::Auto, &a, Some((6, 13)), (80, 24), none, None);
+        let m = m.unwrap();
+        assert_eq!(
+            (m.protocol, m.cell, m.colours),
+            (Protocol::Sixel, (6, 13), 16)
+        );
+        // A plain terminal.
+        let a = answers(b"\x1b[?1;2c");
+        let (m, said) = choose(GraphicsArg::Auto, &a, None, (80, 24), none, None);
+        assert!(m.is_none() && said.contains("no kitty"), "{said}");
+        // No answer at all.
+        let (m, said) = choose(
+            GraphicsArg::Auto,
+            &Answers::default(),
+            None,
+            (80, 24),
+            none,
+            None,
+        );
+        assert!(m.is_none() && said.contains("answered no query"), "{said}");
+    }
+
+    #[test]
+    fn tmux_needs_passthrough_unless_it_draws_sixel_itself() {
+        let kitty = answers(b"\x1b_Gi=31;OK\x1b\\\x1b[?62c");
+        let (m, said) = choose(GraphicsArg::Auto, &kitty, None, (80, 24), none, Some(false));
+        assert!(m.is_none() && said.contains("allow-passthrough"), "{said}");
+        let (m, _) = choose(GraphicsArg::Auto, &kitty, None, (80, 24), none, Some(true));
+        assert!(m.unwrap().passthrough);
+        let sixel = answers(b"\x1b[?62;4c");
+        let (m, _) = choose(GraphicsArg::Auto, &sixel, None, (80, 24), none, Some(false));
+        assert!(!m.unwrap().passthrough);
+        // Forced, with a cell size from the window's pixels.
+        let a = answers(b"\x1b[4;480;800t\x1b[?62c");
+        let (m, said) = choose(GraphicsArg::Iterm2, &a, None, (100, 30), none, None);
+        assert_eq!(m.unwrap().cell, (8, 16));
+        assert!(!said.contains("assumed"), "{said}");
+        let (m, said) = choose(
+            GraphicsArg::Kitty,
+            &Answers::default(),
+            None,
+            (100, 30),
+            none,
+            None,
+        );
+        assert_eq!(m.unwrap().cell, (8, 16));
+        assert!(said.contains("assumed"), "{said}");
+        // Garbage sizes are not believed: the next source is.
+        let a = answers(b"\x1b[6;65535;65535t\x1b[4;480;800t\x1b[?62c");
+        let (m, said) = choose(GraphicsArg::Sixel, &a, Some((0, 7)), (100, 30), none, None);
+        assert_eq!(m.unwrap().cell, (8, 16));
+        assert!(!said.contains("assumed"), "{said}");
+        let a = answers(b"\x1b[6;1;9000t\x1b[?62c");
+        let (m, said) = choose(GraphicsArg::Kitty, &a, None, (100, 30), none, None);
+        assert_eq!(m.unwrap().cell, (8, 16));
+        assert!(said.contains("assumed"), "{said}");
+        // Sixel asked of a terminal whose DA1 lacks it: used, and said so.
+        let (m, said) = choose(GraphicsArg::Sixel, &a, None, (100, 30), none, None);
+        assert_eq!(m.unwrap().protocol, Protocol::Sixel);
+        assert!(said.contains("does not claim it"), "{said}");
+        // iTerm2 known from the environment.
+        let env = |v: &str| (v == "LC_TERMINAL").then(|| "iTerm2".to_string());
+        let (m, _) = choose(
+            GraphicsArg::Auto,
+            &answers(b"\x1b[?62c"),
+            None,
+            (80, 24),
+            env,
+            None,
+        );
+        assert_eq!(m.unwrap().protocol, Protocol::Iterm2);
+    }
+}
