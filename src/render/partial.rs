@@ -545,6 +545,10 @@ pub fn plan(paths: &[PathBuf]) -> Result<Plan> {
     parts.sort_by_key(|(_, part)| part.range.start);
     for pair in parts.windows(2) {
         let ((p, a), (q, b)) = (&pair[0], &pair[1]);
+        let same = |x: &Path| std::fs::canonicalize(x).ok();
+        if same(p).is_some() && same(p) == same(q) {
+            bail!("{} is given twice", name(p));
+        }
         if a.range.end > b.range.start {
             bail!(
                 "{} (samples {:?}) and {} (samples {:?}) overlap",
