@@ -35,7 +35,7 @@ pub struct BenchArgs {
 
 #[derive(Subcommand, Debug)]
 pub enum BenchCommand {
-    /// The shared ray workload primary+shadow (../shared/bench/WORKLOAD.md)
+    /// The shared ray workload primary+shadow+diffuse (../shared/bench/WORKLOAD.md)
     /// on one mesh: prints its JSON line, comparable with the Embree harness.
     Rays(RaysArgs),
     /// Build and trace teapot:N from ~1k to ~4M triangles; fit the growth.

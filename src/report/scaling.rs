@@ -124,7 +124,7 @@ pub fn run(o: &ScalingOptions, threads: usize) -> Result<ScalingReport> {
         for _ in 0..3 {
             p.push(workload::trace_primary(&w, &mut frame, |r| {
                 b.intersect::<false>(r, &mut TraversalStats::default())
-                    .map(|h| h.t)
+                    .map(|h| (h.t, h.prim))
             }));
             s.push(workload::trace_shadow(&w, &mut frame, |r| {
                 b.occluded::<false>(r, &mut TraversalStats::default())

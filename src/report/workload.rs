@@ -1,7 +1,9 @@
-//! The shared ray workload `primary+shadow` (version 1): one closest-hit ray
-//! per pixel from the auto camera, then one any-hit ray from the light to
-//! every primary hit. It is specified exactly so that rayterm and other
-//! tracers (the Embree harness) trace the same rays and agree on a checksum.
+//! The shared ray workload `primary+shadow+diffuse` (version 2): one
+//! closest-hit ray per pixel from the auto camera, one any-hit ray from the
+//! light to every primary hit, and one incoherent closest-hit ray from every
+//! primary hit, cosine-distributed about the hit triangle's normal. It is
+//! specified exactly (in f64, to the bit) so that rayterm and other tracers
+//! (the Embree harness) trace the same rays and agree on a checksum.
 
 use std::time::Instant;
 
@@ -30,6 +32,9 @@ pub struct Workload {
     eye: Vec3,
     light: DVec3,
     light_f: Vec3,
+    /// Half the bounding box's diagonal: diffuse origins are lifted off
+    /// the surface by 1e-4 of it.
+    radius: f64,
 }
 
 impl Workload {
@@ -49,6 +54,7 @@ impl Workload {
             eye: eye.as_vec3(),
             light,
             light_f: light.as_vec3(),
+            radius: r,
         }
     }
 
@@ -66,6 +72,53 @@ impl Workload {
         let p = self.eye.as_dvec3() + t as f64 * primary.dir.as_dvec3();
         Ray::segment(self.light_f, (p - self.light).as_vec3(), SHADOW_TMAX)
     }
+
+    /// The diffuse ray from the hit at `t` along the primary ray of pixel
+    /// index `pixel` on triangle `tri`: every step in f64 as written in the
+    /// specification (no fused operations, left to right), rounded to f32
+    /// at the end.
+    pub fn diffuse(&self, primary: &Ray, t: f32, tri: [Vec3; 3], pixel: u32) -> Ray {
+        let d = primary.dir.as_dvec3();
+        let p = self.eye.as_dvec3() + t as f64 * d;
+        let [v0, v1, v2] = tri.map(|v| v.as_dvec3());
+        let (a, b) = (v1 - v0, v2 - v0);
+        let c = DVec3::new(
+            a.y * b.z - a.z * b.y,
+            a.z * b.x - a.x * b.z,
+            a.x * b.y - a.y * b.x,
+        );
+        let dot = |a: DVec3, b: DVec3| (a.x * b.x + a.y * b.y) + a.z * b.z;
+        let len = dot(c, c).sqrt();
+        let mut n = DVec3::new(c.x / len, c.y / len, c.z / len);
+        if dot(n, d) > 0.0 {
+            n = -n;
+        }
+        let lift = 1e-4 * self.radius;
+        let origin = p + n * lift;
+        let unit = |v: u32| (pcg(v) >> 8) as f64 * (1.0 / (1u64 << 24) as f64);
+        let (u1, u2) = (
+            unit(pixel.wrapping_mul(2)),
+            unit(pixel.wrapping_mul(2).wrapping_add(1)),
+        );
+        let phi = std::f64::consts::TAU * u1;
+        let s = u2.sqrt();
+        let local = DVec3::new(s * phi.cos(), s * phi.sin(), (1.0 - u2).sqrt());
+        // Duff et al. 2017; copysign keeps -0 apart from +0.
+        let sign = 1f64.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        let t1 = DVec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+        let t2 = DVec3::new(b, sign + n.y * n.y * a, -n.y);
+        let dir = (local.x * t1 + local.y * t2) + local.z * n;
+        Ray::new(origin.as_vec3(), dir.as_vec3())
+    }
+}
+
+/// The PCG hash of Jarzynski and Olano (2020), as the workload defines it.
+fn pcg(v: u32) -> u32 {
+    let s = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+    let w = ((s >> ((s >> 28) + 4)) ^ s).wrapping_mul(277_803_737);
+    (w >> 22) ^ w
 }
 
 /// `hits`, `occluded` and `sum_t`: summed per row, then over rows in order,
@@ -75,18 +128,24 @@ pub struct Checksum {
     pub hits: u64,
     pub occluded: u64,
     pub sum_t: f64,
+    pub diffuse_hits: u64,
+    pub diffuse_sum_t: f64,
 }
 
-/// Per-pixel hit distances (negative for a miss) and per-row sums.
+/// Per-pixel hit distances (negative for a miss) and triangles, and per-row
+/// sums.
 pub struct Frame {
     t: Vec<f32>,
+    tri: Vec<u32>,
     rows: Vec<Checksum>,
 }
 
 impl Frame {
     pub fn new(w: &Workload) -> Self {
+        let n = w.width as usize * w.height as usize;
         Frame {
-            t: vec![-1.0; w.width as usize * w.height as usize],
+            t: vec![-1.0; n],
+            tri: vec![0; n],
             rows: vec![Checksum::default(); w.height as usize],
         }
     }
@@ -96,39 +155,45 @@ impl Frame {
             hits: a.hits + r.hits,
             occluded: a.occluded + r.occluded,
             sum_t: a.sum_t + r.sum_t,
+            diffuse_hits: a.diffuse_hits + r.diffuse_hits,
+            diffuse_sum_t: a.diffuse_sum_t + r.diffuse_sum_t,
         })
     }
 }
 
-/// Traces every primary ray with `closest` (returning the hit distance) on
-/// the current rayon pool; fills `frame` and returns the elapsed seconds.
-/// Ray generation is inside the timed loop, as in the harness.
+/// Traces every primary ray with `closest` (returning the hit distance and
+/// triangle) on the current rayon pool; fills `frame` and returns the
+/// elapsed seconds. Ray generation is inside the timed loop, as in the
+/// harness.
 pub fn trace_primary(
     w: &Workload,
     frame: &mut Frame,
-    closest: impl Fn(&Ray) -> Option<f32> + Sync,
+    closest: impl Fn(&Ray) -> Option<(f32, u32)> + Sync,
 ) -> f64 {
     let width = w.width as usize;
     let start = Instant::now();
     frame
         .t
         .par_chunks_mut(width * ROW_CHUNK)
+        .zip(frame.tri.par_chunks_mut(width * ROW_CHUNK))
         .zip(frame.rows.par_chunks_mut(ROW_CHUNK))
         .enumerate()
-        .for_each(|(chunk, (ts, rows))| {
+        .for_each(|(chunk, ((ts, tris), rows))| {
             // As the harness does: a row's rays first, then the row traced,
             // so the camera math does not sit in front of every ray.
             let mut rays = Vec::with_capacity(width);
-            for (r, (trow, sums)) in ts.chunks_mut(width).zip(rows).enumerate() {
+            let rows_of = ts.chunks_mut(width).zip(tris.chunks_mut(width));
+            for (r, ((trow, tri_row), sums)) in rows_of.zip(rows).enumerate() {
                 let y = (chunk * ROW_CHUNK + r) as u32;
                 rays.clear();
                 rays.extend((0..w.width).map(|x| w.primary(x, y)));
                 let (mut hits, mut sum_t) = (0, 0.0);
-                for (t, ray) in trow.iter_mut().zip(&rays) {
+                for ((t, tri), ray) in trow.iter_mut().zip(tri_row).zip(&rays) {
                     *t = match closest(ray) {
-                        Some(d) => {
+                        Some((d, k)) => {
                             hits += 1;
                             sum_t += d as f64;
+                            *tri = k;
                             d
                         }
                         None => -1.0,
@@ -172,6 +237,55 @@ pub fn trace_shadow(
     start.elapsed().as_secs_f64()
 }
 
+/// The diffuse rays of every row (one per primary hit, in pixel order),
+/// made before they are timed, as in the harness.
+pub fn diffuse_rays(w: &Workload, frame: &Frame, geom: &Geometry) -> Vec<Vec<Ray>> {
+    let width = w.width as usize;
+    (0..w.height as usize)
+        .into_par_iter()
+        .map(|y| {
+            let row = y * width..(y + 1) * width;
+            frame.t[row.clone()]
+                .iter()
+                .zip(&frame.tri[row])
+                .enumerate()
+                .filter(|(_, (t, _))| **t >= 0.0)
+                .map(|(x, (&t, &tri))| {
+                    let p = w.primary(x as u32, y as u32);
+                    let pixel = (y * width + x) as u32;
+                    w.diffuse(&p, t, geom.triangle(tri as usize), pixel)
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Traces the diffuse rays of every row with `closest`; returns the
+/// elapsed seconds.
+pub fn trace_diffuse(
+    frame: &mut Frame,
+    rays: &[Vec<Ray>],
+    closest: impl Fn(&Ray) -> Option<(f32, u32)> + Sync,
+) -> f64 {
+    let start = Instant::now();
+    frame
+        .rows
+        .par_chunks_mut(ROW_CHUNK)
+        .zip(rays.par_chunks(ROW_CHUNK))
+        .for_each(|(sums, rows)| {
+            for (s, row) in sums.iter_mut().zip(rows) {
+                let (mut hits, mut sum_t) = (0, 0.0);
+                for t in row.iter().filter_map(&closest) {
+                    hits += 1;
+                    sum_t += t.0 as f64;
+                }
+                s.diffuse_hits = hits;
+                s.diffuse_sum_t = sum_t;
+            }
+        });
+    start.elapsed().as_secs_f64()
+}
+
 /// Options of `rayterm bench rays`.
 #[derive(Clone, Debug)]
 pub struct RaysOptions {
@@ -199,6 +313,10 @@ pub struct RaysReport {
     pub shadow_rays: u64,
     pub occluded: u64,
     pub shadow_mrays_s: f64,
+    pub diffuse_rays: u64,
+    pub diffuse_hits: u64,
+    pub diffuse_sum_t: f64,
+    pub diffuse_mrays_s: f64,
     pub engine: &'static str,
     pub builder: String,
     pub workload: &'static str,
@@ -207,6 +325,7 @@ pub struct RaysReport {
     pub reps: usize,
     pub primary_ms: f64,
     pub shadow_ms: f64,
+    pub diffuse_ms: f64,
 }
 
 /// Runs the workload `o.reps` times (a fresh build each time) on the current
@@ -216,14 +335,17 @@ pub fn run(mesh: &str, geom: &Geometry, o: &RaysOptions) -> RaysReport {
     let w = Workload::auto(&geom.bounds(), o.width, o.height);
     let reps = o.reps.max(1);
     let mut frame = Frame::new(&w);
-    let (mut build, mut prim, mut shad) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut build, mut prim, mut shad, mut diff) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut sum: Option<Checksum> = None;
     for _ in 0..reps {
         let start = Instant::now();
         let bvh = bvh::build(geom, o.builder);
         build.push(start.elapsed().as_secs_f64());
-        prim.push(trace_primary(&w, &mut frame, |r| closest_t(&bvh, r)));
+        prim.push(trace_primary(&w, &mut frame, |r| closest(&bvh, r)));
         shad.push(trace_shadow(&w, &mut frame, |r| occluded(&bvh, r)));
+        let rays = diffuse_rays(&w, &frame, geom);
+        diff.push(trace_diffuse(&mut frame, &rays, |r| closest(&bvh, r)));
         let c = frame.checksum();
         if sum.is_some_and(|s| s != c) {
             eprintln!("warning: the checksum differs between repetitions");
@@ -232,6 +354,7 @@ pub fn run(mesh: &str, geom: &Geometry, o: &RaysOptions) -> RaysReport {
     }
     let c = sum.unwrap_or_default();
     let (b, p, s) = (median(&mut build), median(&mut prim), median(&mut shad));
+    let d = median(&mut diff);
     let primary_rays = o.width as u64 * o.height as u64;
     RaysReport {
         mesh: mesh.to_string(),
@@ -247,21 +370,26 @@ pub fn run(mesh: &str, geom: &Geometry, o: &RaysOptions) -> RaysReport {
         shadow_rays: c.hits,
         occluded: c.occluded,
         shadow_mrays_s: c.hits as f64 / s.max(1e-12) / 1e6,
+        diffuse_rays: c.hits,
+        diffuse_hits: c.diffuse_hits,
+        diffuse_sum_t: c.diffuse_sum_t,
+        diffuse_mrays_s: c.hits as f64 / d.max(1e-12) / 1e6,
         engine: "rayterm",
         builder: o.builder.to_string(),
-        workload: "primary+shadow",
-        workload_version: 1,
+        workload: "primary+shadow+diffuse",
+        workload_version: 2,
         camera: "auto",
         reps,
         primary_ms: p * 1e3,
         shadow_ms: s * 1e3,
+        diffuse_ms: d * 1e3,
     }
 }
 
 #[inline]
-fn closest_t(bvh: &Bvh, r: &Ray) -> Option<f32> {
+fn closest(bvh: &Bvh, r: &Ray) -> Option<(f32, u32)> {
     bvh.intersect::<false>(r, &mut TraversalStats::default())
-        .map(|h| h.t)
+        .map(|h| (h.t, h.prim))
 }
 
 #[inline]
