@@ -104,10 +104,54 @@ pub const FIXED_ONE: f64 = 18_446_744_073_709_551_616.0;
 /// The largest sample magnitude summed (2^41, about 2.2e12).
 pub const FIXED_MAX: f32 = 2_199_023_255_552.0;
 
-/// A sample channel in fixed point.
+/// A sample channel in fixed point, and that value as f64 (exact: it has
+/// at most 24 significant bits). The same as
+/// `(x.clamp(-FIXED_MAX, FIXED_MAX) as f64 * FIXED_ONE) as i128`, without
+/// the slow general i128 conversions: the product is the f32's 24-bit
+/// significand shifted.
 #[inline]
-fn fixed(x: f32) -> i128 {
-    (x.clamp(-FIXED_MAX, FIXED_MAX) as f64 * FIXED_ONE) as i128
+fn fixed(x: f32) -> (i128, f64) {
+    let x = x.clamp(-FIXED_MAX, FIXED_MAX);
+    let bits = x.to_bits();
+    let exp = ((bits >> 23) & 0xff) as i32;
+    // NaN, zero and subnormals (below 2^-64 once scaled) truncate to 0.
+    if exp == 0 || exp == 0xff {
+        return (0, 0.0);
+    }
+    let m = ((bits & 0x7f_ffff) | 0x80_0000) as i128;
+    // x = m 2^(exp - 150), so x 2^64 = m 2^(exp - 86).
+    let shift = exp - 86;
+    let (q, value) = if shift >= 0 {
+        (m << shift, x.abs() as f64)
+    } else {
+        let t = m.checked_shr((-shift) as u32).unwrap_or(0);
+        (t, t as f64 / FIXED_ONE)
+    };
+    // A negative sample that truncates to 0 is +0, as the cast gives.
+    if x < 0.0 && q != 0 {
+        (-q, -value)
+    } else {
+        (q, value)
+    }
+}
+
+/// `s as f64`, correctly rounded like the cast, in a few integer steps:
+/// the top 64 bits with a sticky bit for the rest, converted and scaled.
+#[inline]
+fn to_f64(s: i128) -> f64 {
+    let u = s.unsigned_abs();
+    let v = if u >> 64 == 0 {
+        u as u64 as f64
+    } else {
+        let shift = 64 - u.leading_zeros();
+        let top = (u >> shift) as u64 | ((u & ((1u128 << shift) - 1)) != 0) as u64;
+        top as f64 * f64::from_bits(((1023 + shift) as u64) << 52)
+    };
+    if s < 0 {
+        -v
+    } else {
+        v
+    }
 }
 
 /// Merges counts, means and M2 of two sets of values (Chan et al.).
@@ -133,10 +177,10 @@ impl PixelStats {
         let lum_old = self.mean.dot(LUMA.as_dvec3());
         self.n += 1;
         for (s, q) in self.sum.iter_mut().zip(q) {
-            *s += q;
+            *s += q.0;
         }
         self.mean = self.mean_of_sum();
-        let c = DVec3::from_array(q.map(|v| v as f64 / FIXED_ONE));
+        let c = DVec3::from_array(q.map(|v| v.1));
         let lum = c.dot(LUMA.as_dvec3());
         self.m2 += (lum - lum_old) * (lum - self.mean.dot(LUMA.as_dvec3()));
         if let Some(s) = stratum {
@@ -150,7 +194,7 @@ impl PixelStats {
             return DVec3::ZERO;
         }
         let n = self.n as f64;
-        DVec3::from_array(self.sum.map(|s| s as f64 / FIXED_ONE / n))
+        DVec3::from_array(self.sum.map(|s| to_f64(s) / FIXED_ONE / n))
     }
 
     fn add_stratified(&mut self, block: u32, lum: f64, stratum: u32) {
@@ -589,6 +633,45 @@ impl Film {
 mod tests {
     use super::*;
     use crate::geometry::sampling::{pixel_stratum, Rng};
+
+    #[test]
+    fn fixed_point_conversions_are_the_casts_bit_for_bit() {
+        // A xorshift sequence of bit patterns: every exponent, both signs,
+        // NaN, infinities and subnormals among them.
+        let mut z = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            z ^= z << 13;
+            z ^= z >> 7;
+            z ^= z << 17;
+            z
+        };
+        let specials = [
+            0.0,
+            -0.0,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::MIN_POSITIVE,
+        ];
+        let xs = (0..200_000)
+            .map(|_| f32::from_bits(next() as u32))
+            .chain(specials);
+        for x in xs {
+            let q = (x.clamp(-FIXED_MAX, FIXED_MAX) as f64 * FIXED_ONE) as i128;
+            let (fq, fv) = fixed(x);
+            assert_eq!(fq, q, "{x:e}");
+            assert_eq!(fv.to_bits(), (q as f64 / FIXED_ONE).to_bits(), "{x:e}");
+        }
+        for _ in 0..200_000 {
+            // Sums of every size, with long runs of equal bits near the
+            // rounding position.
+            let wide = ((next() as i128) << 64 | next() as i128) >> (next() % 128);
+            let tie = wide & !0x7ff | 0x400;
+            for s in [wide, -wide, tie, -tie, wide >> 11 << 11] {
+                assert_eq!(to_f64(s).to_bits(), (s as f64).to_bits(), "{s}");
+            }
+        }
+    }
 
     #[test]
     fn welford_matches_two_pass() {
