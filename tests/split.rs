@@ -296,73 +296,36 @@ fn a_checkpoint_resumes_into_the_uninterrupted_render() {
     };
     let first = timed(&["--checkpoint", "t.exr"]);
     assert_eq!(timed(&["--resume", "t.exr"]), first);
-    // Another render's checkpoint, or one past the requested samples.
-    let err = refused(
-        &d,
-        &[
-            "render",
-            "cornell-area",
-            "--size",
-            "40x28",
-            "--seed",
-            "3",
-            "--resume",
-            "c.exr",
-            "-o",
+    // Another render's checkpoint, one past the requested samples, one
+    // that starts elsewhere, and a checkpoint that is the output.
+    for (args, out, says) in [
+        (
+            &["--size", "40x28", "--seed", "3", "--resume", "c.exr"][..],
             "x.png",
-        ],
-        "x.png",
-    );
-    assert!(err.contains("differ in seed"), "{err}");
-    let err = refused(
-        &d,
-        &[
-            "render",
-            "cornell-area",
-            "--size",
-            "40x28",
-            "--spp",
-            "4",
-            "--resume",
-            "c.exr",
-            "-o",
+            "differ in seed",
+        ),
+        (
+            &["--size", "40x28", "--spp", "4", "--resume", "c.exr"],
             "x.png",
-        ],
-        "x.png",
-    );
-    assert!(err.contains("more than the 4 asked for"), "{err}");
-    let err = refused(
-        &d,
-        &[
-            "render",
-            "cornell-area",
-            "--size",
-            "40x28",
-            "--samples",
-            "3..9",
-            "--resume",
-            "c.exr",
-            "-o",
+            "more than the 4 asked for",
+        ),
+        (
+            &["--size", "40x28", "--samples", "3..9", "--resume", "c.exr"],
             "x.exr",
-        ],
-        "x.exr",
-    );
-    assert!(err.contains("starts at sample 3"), "{err}");
-    let err = refused(
-        &d,
-        &[
-            "render",
-            "cornell-area",
-            "--spp",
-            "4",
-            "--checkpoint",
+            "starts at sample 3",
+        ),
+        (
+            &["--spp", "4", "--checkpoint", "same.png"],
             "same.png",
-            "-o",
-            "same.png",
-        ],
-        "same.png",
-    );
-    assert!(err.contains("is the output"), "{err}");
+            "is the output",
+        ),
+    ] {
+        let mut all = vec!["render", "cornell-area"];
+        all.extend(args);
+        all.extend(["-o", out]);
+        let err = refused(&d, &all, out);
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
     std::fs::remove_dir_all(d).unwrap();
 }
 
