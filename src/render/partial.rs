@@ -1,12 +1,14 @@
 //! Partial films: a film over a range of sample indices, stored as
-//! OpenEXR (the mean as R, G, B for any viewer; the exact colour sums, the
-//! sample count and the error statistics as u32 channels, f64s and i128s
-//! split into words) with attributes saying which scene, size, seed,
-//! rayterm version and samples it holds. The parts of a split render
-//! (`render --part K/N`, `--samples A..B`) and checkpoints are partial
-//! films; [`merge`] turns parts back into the film one render would have
-//! made: the same mean to the bit (colours are summed exactly), the error
-//! statistics merged by Chan et al. in range order.
+//! uncompressed OpenEXR (the mean as R, G, B for any viewer; each word of
+//! the exact colour sums, the sample count and the error statistics as a
+//! u32 channel, or as one number in `rayterm.constants` where every pixel
+//! has the same) with attributes saying which scene, size, seed, rayterm
+//! version and samples it holds, and a CRC-32 of the whole file. The parts
+//! of a split render (`render --part K/N`, `--samples A..B`) and
+//! checkpoints are partial films; [`merge`] turns parts back into the film
+//! one render would have made: the same mean to the bit (colours are
+//! summed exactly), the error statistics merged by Chan et al. in range
+//! order.
 
 use std::collections::HashMap;
 use std::ops::Range;
@@ -17,13 +19,13 @@ use anyhow::{bail, Context, Result};
 use super::film::{Film, Piece, PixelStats, FIXED_MAX, FIXED_ONE};
 use super::Session;
 use crate::geometry::sampling::PIXEL_STRATA;
-use crate::raster::openexr::{self, Channels, Samples};
+use crate::raster::flat_exr::{self, Kind, Layout, Scanlines};
 use crate::scene::BloomSettings;
 
 /// The most samples per pixel any render takes, and the end of every range.
 pub const MAX_SPP: u32 = 1 << 20;
 
-const KIND: &str = "rayterm partial film 1";
+const KIND: &str = "rayterm partial film 2";
 
 /// The widest and tallest film rayterm renders.
 const MAX_SIDE: u32 = 16384;
@@ -89,16 +91,25 @@ impl Part {
         }
     }
 
-    /// The partial film as OpenEXR bytes.
-    pub fn encode(&self) -> Result<Vec<u8>> {
-        encode(&self.film, &self.meta)
-    }
-
     /// Reads a partial film, refusing anything that is not one rayterm
     /// wrote whole: every error names the file.
     pub fn read(path: &Path) -> Result<Part> {
-        let c = openexr::read_channels(path, &admit(path))?;
-        decode(c).with_context(|| format!("{}: not a usable partial film", path.display()))
+        let source = Source::open(path)?;
+        let header = source.header.clone();
+        let mut sources = [source];
+        let (pixels, bad) = gather(&mut sources, &|| false)?;
+        let [source] = sources;
+        source.finish()?;
+        Ok(Part::of(header, pixels, bad))
+    }
+
+    /// The part a header and its pixels make.
+    fn of(header: Header, pixels: Vec<PixelStats>, bad: u64) -> Part {
+        let Header { meta, range, size } = header;
+        let mut film = Film::new(0, 0);
+        (film.width, film.height, film.pixels) = (size.0, size.1, pixels);
+        (film.start, film.spp, film.bad_count) = (range.start, range.len() as u32, bad);
+        Part { film, meta }
     }
 }
 
@@ -114,8 +125,8 @@ pub struct Header {
 impl Header {
     /// Reads a partial film's header, naming the file in every error.
     pub fn read(path: &Path) -> Result<Header> {
-        let (w, h, attributes) = openexr::read_header(path, &admit(path))?;
-        header_of(w, h, &attributes)
+        let image = Scanlines::open(path, &admit(path))?;
+        header_of(&image.layout)
             .with_context(|| format!("{}: not a usable partial film", path.display()))
     }
 
@@ -172,37 +183,169 @@ fn admit(path: &Path) -> impl Fn(u32, u32, usize) -> Result<()> + '_ {
     }
 }
 
+/// A pixel's statistics as words, named by [`FIELDS`].
+type Words = [u32; FIELDS.len()];
+
+/// The channel (or constant) names of a pixel's words: the counts, each
+/// f64's low and high word, each colour sum's four words from the low.
+const FIELDS: [&str; 35] = [
+    "n",
+    "blocks",
+    "open",
+    "head.block",
+    "head.n",
+    "tail.block",
+    "tail.n",
+    "m2.lo",
+    "m2.hi",
+    "block_mean.lo",
+    "block_mean.hi",
+    "block_m2.lo",
+    "block_m2.hi",
+    "checker.lo",
+    "checker.hi",
+    "head.sum.lo",
+    "head.sum.hi",
+    "head.diff.lo",
+    "head.diff.hi",
+    "tail.sum.lo",
+    "tail.sum.hi",
+    "tail.diff.lo",
+    "tail.diff.hi",
+    "sum.R.0",
+    "sum.R.1",
+    "sum.R.2",
+    "sum.R.3",
+    "sum.G.0",
+    "sum.G.1",
+    "sum.G.2",
+    "sum.G.3",
+    "sum.B.0",
+    "sum.B.1",
+    "sum.B.2",
+    "sum.B.3",
+];
+
+/// Where the f64s and the sums start among a pixel's words.
+const DOUBLES: usize = 7;
+const SUMS: usize = 23;
+
+fn words(p: &PixelStats) -> Words {
+    let mut w = [0; FIELDS.len()];
+    w[..DOUBLES].copy_from_slice(&[
+        p.n,
+        p.blocks,
+        p.open,
+        p.head.block,
+        p.head.n,
+        p.tail.block,
+        p.tail.n,
+    ]);
+    let doubles = [
+        p.m2,
+        p.block_mean,
+        p.block_m2,
+        p.checker,
+        p.head.sum,
+        p.head.diff,
+        p.tail.sum,
+        p.tail.diff,
+    ];
+    for (k, x) in doubles.into_iter().enumerate() {
+        let b = x.to_bits();
+        w[DOUBLES + 2 * k..][..2].copy_from_slice(&[b as u32, (b >> 32) as u32]);
+    }
+    for (c, s) in p.sum.into_iter().enumerate() {
+        for k in 0..4 {
+            w[SUMS + 4 * c + k] = (s >> (32 * k)) as u32;
+        }
+    }
+    w
+}
+
+/// The pixel [`words`] gave `w`, its mean left to compute.
+fn from_words(w: &Words) -> PixelStats {
+    let double = |k: usize| {
+        let j = DOUBLES + 2 * k;
+        f64::from_bits(w[j] as u64 | (w[j + 1] as u64) << 32)
+    };
+    let sum = |c: usize| {
+        let half = |k: usize| w[SUMS + 4 * c + k] as u64 | (w[SUMS + 4 * c + k + 1] as u64) << 32;
+        ((half(2) as u128) << 64 | half(0) as u128) as i128
+    };
+    PixelStats {
+        sum: [sum(0), sum(1), sum(2)],
+        n: w[0],
+        blocks: w[1],
+        open: w[2],
+        head: Piece {
+            block: w[3],
+            n: w[4],
+            sum: double(4),
+            diff: double(5),
+        },
+        tail: Piece {
+            block: w[5],
+            n: w[6],
+            sum: double(6),
+            diff: double(7),
+        },
+        m2: double(0),
+        block_mean: double(1),
+        block_m2: double(2),
+        checker: double(3),
+        ..PixelStats::default()
+    }
+}
+
+/// A channel of a partial film: the mean for viewers, or a word.
+#[derive(Clone, Copy)]
+enum Column {
+    Mean(usize),
+    Word(usize),
+}
+
+/// The attribute holding the whole file's CRC-32, written as eight hex
+/// digits over these zeros. OpenEXR keeps no checksum of its own, and a
+/// damaged word of a sum is often a plausible one: without it, a flipped
+/// bit would merge into a wrong image.
+const CHECKSUM: &str = "rayterm.checksum";
+const UNSEALED: &str = "00000000";
+
 /// `film` and `meta` as a partial film's OpenEXR bytes.
 pub fn encode(f: &Film, meta: &Meta) -> Result<Vec<u8>> {
     if f.adaptive.is_some() {
         bail!("an adaptive film cannot be stored as a partial film");
     }
-    let px = &f.pixels;
-    let mut ch: HashMap<String, Samples> = HashMap::new();
-    let mean = |c: usize| Samples::F32(px.iter().map(|p| p.mean[c] as f32).collect());
-    for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
-        ch.insert(name.into(), mean(c));
-    }
-    let mut u32s = |name: String, get: &dyn Fn(&PixelStats) -> u32| {
-        ch.insert(name, Samples::U32(px.iter().map(get).collect()));
+    let Some(first) = f.pixels.first().map(words) else {
+        bail!("a film with no pixels cannot be stored");
     };
-    for (name, get) in WORDS {
-        u32s(name.to_string(), &get);
-    }
-    for (name, get) in F64S {
-        u32s(format!("{name}.lo"), &|p| get(p).to_bits() as u32);
-        u32s(format!("{name}.hi"), &|p| (get(p).to_bits() >> 32) as u32);
-    }
-    for (c, cname) in ["R", "G", "B"].into_iter().enumerate() {
-        for w in 0..4 {
-            u32s(format!("sum.{cname}.{w}"), &|p| {
-                (p.sum[c] >> (32 * w)) as u32
-            });
+    // Words every pixel shares are stored once, as attributes: most of a
+    // uniform film's counts, and the empty pieces of aligned ranges.
+    let mut varies = [false; FIELDS.len()];
+    for p in &f.pixels {
+        for (v, (a, b)) in varies.iter_mut().zip(words(p).iter().zip(&first)) {
+            *v |= a != b;
         }
     }
+    let mut columns: Vec<(&str, Column)> = vec![
+        ("R", Column::Mean(0)),
+        ("G", Column::Mean(1)),
+        ("B", Column::Mean(2)),
+    ];
+    columns.extend(
+        (0..FIELDS.len())
+            .filter(|&k| varies[k])
+            .map(|k| (FIELDS[k], Column::Word(k))),
+    );
+    columns.sort_by_key(|(name, _)| *name);
+    let constants: Vec<String> = (0..FIELDS.len())
+        .filter(|&k| !varies[k])
+        .map(|k| format!("{}={}", FIELDS[k], first[k]))
+        .collect();
     let m = meta;
     let r = f.start..f.start + f.spp;
-    let mut attributes: HashMap<String, String> = [
+    let mut attributes: Vec<(String, String)> = [
         ("film", KIND.to_string()),
         ("version", m.version.clone()),
         ("scene", m.scene.clone()),
@@ -220,108 +363,77 @@ pub fn encode(f: &Film, meta: &Meta) -> Result<Vec<u8>> {
                 Some(b) => format!("{} {} {} {}", b.threshold, b.sigma, b.radius, b.strength),
             },
         ),
+        ("constants", constants.join(" ")),
+        ("checksum", UNSEALED.into()),
     ]
     .into_iter()
     .map(|(k, v)| (format!("rayterm.{k}"), v))
     .collect();
     if let Some(t) = m.total {
-        attributes.insert("rayterm.total".into(), t.to_string());
+        attributes.push(("rayterm.total".into(), t.to_string()));
     }
-    let mut c = Channels {
+    attributes.sort();
+    let layout = Layout {
         width: f.width,
         height: f.height,
-        channels: ch,
-        attributes,
+        channels: columns
+            .iter()
+            .map(|&(name, c)| {
+                let kind = match c {
+                    Column::Mean(_) => Kind::F32,
+                    Column::Word(_) => Kind::U32,
+                };
+                (name.to_string(), kind)
+            })
+            .collect(),
+        attributes: attributes.into_iter().map(|(k, v)| (k, v, 0..0)).collect(),
     };
-    let sum = format!("{:08x}", checksum(&c));
-    c.attributes.insert(CHECKSUM.into(), sum);
-    openexr::encode_channels(&c)
+    let w = f.width as usize;
+    let mut row_words = vec![[0; FIELDS.len()]; w];
+    let mut bytes = flat_exr::encode(&layout, |y, out| {
+        let px = &f.pixels[y as usize * w..][..w];
+        for (r, p) in row_words.iter_mut().zip(px) {
+            *r = words(p);
+        }
+        for &(_, c) in &columns {
+            match c {
+                Column::Mean(c) => {
+                    out.extend(px.iter().flat_map(|p| (p.mean[c] as f32).to_le_bytes()))
+                }
+                Column::Word(k) => out.extend(row_words.iter().flat_map(|r| r[k].to_le_bytes())),
+            }
+        }
+    })?;
+    let (written, _) = flat_exr::header(&bytes)?;
+    let at = sealed_at(&written)?;
+    let crc = format!("{:08x}", crc32fast::hash(&bytes));
+    bytes[at].copy_from_slice(crc.as_bytes());
+    Ok(bytes)
 }
 
-/// The attribute holding [`checksum`].
-const CHECKSUM: &str = "rayterm.checksum";
-
-/// CRC-32 of every channel's samples and every other attribute, as the
-/// file stores them, in name order. OpenEXR keeps no checksum of its own,
-/// and a damaged word of a sum is often a plausible one: without this, a
-/// flipped bit would merge into a wrong image.
-fn checksum(c: &Channels) -> u32 {
-    let mut h = crc32fast::Hasher::new();
-    h.update(&c.width.to_le_bytes());
-    h.update(&c.height.to_le_bytes());
-    let mut names: Vec<&String> = c.channels.keys().collect();
-    names.sort();
-    let mut buf = Vec::new();
-    for name in names {
-        h.update(name.as_bytes());
-        h.update(&[0]);
-        buf.clear();
-        match &c.channels[name] {
-            Samples::F32(v) => buf.extend(v.iter().flat_map(|x| x.to_bits().to_le_bytes())),
-            Samples::U32(v) => buf.extend(v.iter().flat_map(|x| x.to_le_bytes())),
-        }
-        h.update(&buf);
+/// Where the checksum's eight digits lie in a file of layout `l`.
+fn sealed_at(l: &Layout) -> Result<Range<usize>> {
+    match l.attributes.iter().find(|(k, _, _)| k == CHECKSUM) {
+        Some((_, v, at)) if v.len() == UNSEALED.len() => Ok(at.clone()),
+        _ => bail!("no {CHECKSUM} attribute of eight hex digits"),
     }
-    let mut attrs: Vec<(&String, &String)> = c
+}
+
+/// The header of a partial film of layout `l`.
+fn header_of(l: &Layout) -> Result<Header> {
+    let attrs: HashMap<&str, &str> = l
         .attributes
         .iter()
-        .filter(|(k, _)| *k != CHECKSUM)
+        .map(|(k, v, _)| (k.as_str(), v.as_str()))
         .collect();
-    attrs.sort();
-    for (k, v) in attrs {
-        for s in [k, v] {
-            h.update(openexr::stored_text(s).as_bytes());
-            h.update(&[0]);
-        }
-    }
-    h.finalize()
-}
-
-/// The one-word fields of a pixel.
-type Word = (&'static str, fn(&PixelStats) -> u32);
-const WORDS: [Word; 7] = [
-    ("n", |p| p.n),
-    ("blocks", |p| p.blocks),
-    ("open", |p| p.open),
-    ("head.block", |p| p.head.block),
-    ("head.n", |p| p.head.n),
-    ("tail.block", |p| p.tail.block),
-    ("tail.n", |p| p.tail.n),
-];
-
-/// The f64 fields of a pixel, stored as two words.
-type Double = (&'static str, fn(&PixelStats) -> f64);
-const F64S: [Double; 8] = [
-    ("m2", |p| p.m2),
-    ("block_mean", |p| p.block_mean),
-    ("block_m2", |p| p.block_m2),
-    ("checker", |p| p.checker),
-    ("head.sum", |p| p.head.sum),
-    ("head.diff", |p| p.head.diff),
-    ("tail.sum", |p| p.tail.sum),
-    ("tail.diff", |p| p.tail.diff),
-];
-
-/// Refuses attributes that are not a partial film's.
-fn check_kind(a: &HashMap<String, String>) -> Result<()> {
-    if a.get("rayterm.film").map(String::as_str) != Some(KIND) {
+    if attrs.get("rayterm.film") != Some(&KIND) {
         bail!("no rayterm.film attribute saying \"{KIND}\"");
     }
-    if !a.contains_key(CHECKSUM) {
-        bail!("no {CHECKSUM} attribute");
-    }
-    Ok(())
-}
-
-/// The header of a `w` x `h` partial film with attributes `a`.
-fn header_of(w: u32, h: u32, attrs: &HashMap<String, String>) -> Result<Header> {
-    check_kind(attrs)?;
-    if w == 0 || h == 0 {
-        bail!("the film has no pixels ({w}x{h})");
-    }
-    let attr = |k: &str| -> Result<&String> {
+    let (w, h) = (l.width, l.height);
+    let attr = |k: &str| -> Result<&str> {
         attrs
-            .get(&format!("rayterm.{k}"))
+            .get(format!("rayterm.{k}").as_str())
+            .copied()
             .ok_or_else(|| anyhow::anyhow!("no rayterm.{k} attribute"))
     };
     fn num<T: std::str::FromStr>(k: &str, v: &str) -> Result<T> {
@@ -343,7 +455,7 @@ fn header_of(w: u32, h: u32, attrs: &HashMap<String, String>) -> Result<Header> 
     if attrs.contains_key("rayterm.total") && total.is_none() {
         bail!("rayterm.total is not a sample count from the range's end to {MAX_SPP}");
     }
-    let bloom = match attr("bloom")?.as_str() {
+    let bloom = match attr("bloom")? {
         "off" => None,
         b => {
             let v: Vec<&str> = b.split(' ').collect();
@@ -367,11 +479,11 @@ fn header_of(w: u32, h: u32, attrs: &HashMap<String, String>) -> Result<Header> 
     };
     let seconds: f64 = num("seconds", attr("seconds")?)?;
     let meta = Meta {
-        scene: attr("scene")?.clone(),
+        scene: attr("scene")?.to_string(),
         hash: u64::from_str_radix(attr("hash")?, 16)
             .map_err(|_| anyhow::anyhow!("rayterm.hash is not hexadecimal"))?,
         seed: num("seed", attr("seed")?)?,
-        version: attr("version")?.clone(),
+        version: attr("version")?.to_string(),
         total,
         bloom,
         exact: num("exact", attr("exact")?)?,
@@ -390,100 +502,170 @@ fn header_of(w: u32, h: u32, attrs: &HashMap<String, String>) -> Result<Header> 
     })
 }
 
-fn decode(mut c: Channels) -> Result<Part> {
-    check_kind(&c.attributes)?;
-    let stored = &c.attributes[CHECKSUM];
-    if u32::from_str_radix(stored, 16).ok() != Some(checksum(&c)) {
-        bail!("its data do not match their checksum: the file is damaged");
-    }
-    let Header {
-        meta,
-        range: Range { start, end },
-        ..
-    } = header_of(c.width, c.height, &c.attributes)?;
-    let (w, h) = (c.width, c.height);
-    let count = w as usize * h as usize;
-    let mut word = |name: &str| -> Result<Vec<u32>> {
-        match c.channels.remove(name) {
-            Some(Samples::U32(v)) if v.len() == count => Ok(v),
-            Some(_) => bail!("channel {name} is not {count} u32 samples"),
-            None => bail!("no channel {name}"),
-        }
-    };
-    type Put = fn(&mut PixelStats, u32);
-    let words: [(&str, Put); 7] = [
-        ("n", |p, v| p.n = v),
-        ("blocks", |p, v| p.blocks = v),
-        ("open", |p, v| p.open = v),
-        ("head.block", |p, v| p.head.block = v),
-        ("head.n", |p, v| p.head.n = v),
-        ("tail.block", |p, v| p.tail.block = v),
-        ("tail.n", |p, v| p.tail.n = v),
-    ];
-    type Field = fn(&mut PixelStats) -> &mut f64;
-    let doubles: [(&str, Field); 8] = [
-        ("m2", |p| &mut p.m2),
-        ("block_mean", |p| &mut p.block_mean),
-        ("block_m2", |p| &mut p.block_m2),
-        ("checker", |p| &mut p.checker),
-        ("head.sum", |p| &mut p.head.sum),
-        ("head.diff", |p| &mut p.head.diff),
-        ("tail.sum", |p| &mut p.tail.sum),
-        ("tail.diff", |p| &mut p.tail.diff),
-    ];
-    // The columns in the order the pixels are built from: the words, each
-    // f64's low and high word, each colour sum's four words from the low.
-    let mut names: Vec<String> = words.iter().map(|(n, _)| n.to_string()).collect();
-    for (name, _) in &doubles {
-        names.extend([format!("{name}.lo"), format!("{name}.hi")]);
-    }
-    for cname in ["R", "G", "B"] {
-        names.extend((0..4).map(|wd| format!("sum.{cname}.{wd}")));
-    }
-    let columns = names
-        .iter()
-        .map(|n| word(n))
-        .collect::<Result<Vec<Vec<u32>>>>()?;
-    // One pass over the pixels, each written once: reading the columns
-    // side by side streams them, where a pass per column would not.
-    let (first_double, first_sum) = (words.len(), words.len() + 2 * doubles.len());
-    let pixels: Vec<PixelStats> = (0..count)
-        .map(|i| {
-            let at = |k: usize| columns[k][i];
-            let mut p = PixelStats::default();
-            for (k, (_, put)) in words.iter().enumerate() {
-                put(&mut p, at(k));
-            }
-            for (k, (_, field)) in doubles.iter().enumerate() {
-                let j = first_double + 2 * k;
-                *field(&mut p) = f64::from_bits(at(j) as u64 | (at(j + 1) as u64) << 32);
-            }
-            for (c, sum) in p.sum.iter_mut().enumerate() {
-                let j = first_sum + 4 * c;
-                let bits = (0..4).fold(0u128, |s, wd| s | (at(j + wd) as u128) << (32 * wd));
-                *sum = bits as i128;
-            }
-            p
-        })
-        .collect();
-    drop(columns);
-    let mut pixels = pixels;
-    let spp = end - start;
-    let mut bad = 0u64;
-    for (i, p) in pixels.iter_mut().enumerate() {
-        check_pixel(p, spp, start, end)
-            .with_context(|| format!("pixel ({}, {})", i % w as usize, i / w as usize))?;
-        p.mean = p.mean_of_sum();
-        bad += (spp - p.n) as u64;
-    }
-    let mut film = Film::new(0, 0);
-    (film.width, film.height, film.pixels) = (w, h, pixels);
-    (film.start, film.spp, film.bad_count) = (start, spp, bad);
-    Ok(Part { film, meta })
+/// A partial film being read: its header, where each of a pixel's words
+/// comes from, and the checksum of what has been read so far.
+struct Source {
+    image: Scanlines,
+    header: Header,
+    /// The words every pixel shares, the others left zero.
+    shared: Words,
+    /// The other words: which, and their channel's byte offset in a chunk.
+    columns: Vec<(usize, usize)>,
+    stored: Option<u32>,
+    crc: crc32fast::Hasher,
 }
 
-/// Refuses statistics no render of `spp` samples from `start` leaves.
-fn check_pixel(p: &PixelStats, spp: u32, start: u32, end: u32) -> Result<()> {
+impl Source {
+    /// Opens the partial film at `path`, checking its header and that it
+    /// says where every word of a pixel is. Errors name the file.
+    fn open(path: &Path) -> Result<Source> {
+        let image = Scanlines::open(path, &admit(path))?;
+        Source::of(image).with_context(|| format!("{}: not a usable partial film", path.display()))
+    }
+
+    fn of(mut image: Scanlines) -> Result<Source> {
+        let l = &image.layout;
+        let header = header_of(l)?;
+        let at = sealed_at(l)?;
+        let stored =
+            u32::from_str_radix(&String::from_utf8_lossy(&image.head[at.clone()]), 16).ok();
+        let field = |name: &str| FIELDS.iter().position(|f| *f == name);
+        let mut shared = [0; FIELDS.len()];
+        let mut given = [false; FIELDS.len()];
+        let mut give = |name: &str| -> Result<usize> {
+            match field(name) {
+                Some(k) if !given[k] => {
+                    given[k] = true;
+                    Ok(k)
+                }
+                Some(_) => bail!("{name} is given twice"),
+                None => bail!("{name} is no word of a pixel"),
+            }
+        };
+        let row = 4 * l.width as usize;
+        let mut columns = Vec::new();
+        for (c, (name, kind)) in l.channels.iter().enumerate() {
+            match (name.as_str(), kind) {
+                ("R" | "G" | "B", Kind::F32) => {}
+                (_, Kind::U32) => columns.push((give(name)?, 8 + c * row)),
+                _ => bail!("channel {name} is not of the type a partial film stores"),
+            }
+        }
+        let constants = l.attribute("rayterm.constants").unwrap_or_default();
+        for c in constants.split(' ').filter(|c| !c.is_empty()) {
+            let (name, v) = c
+                .split_once('=')
+                .ok_or_else(|| anyhow::anyhow!("rayterm.constants has {c:?}, not NAME=VALUE"))?;
+            shared[give(name)?] = v
+                .parse()
+                .map_err(|_| anyhow::anyhow!("rayterm.constants gives {name} as {v:?}"))?;
+        }
+        if let Some(k) = given.iter().position(|g| !g) {
+            bail!("no channel or constant holds {}", FIELDS[k]);
+        }
+        image.head[at].copy_from_slice(UNSEALED.as_bytes());
+        let mut crc = crc32fast::Hasher::new();
+        crc.update(&image.head);
+        Ok(Source {
+            image,
+            header,
+            shared,
+            columns,
+            stored,
+            crc,
+        })
+    }
+
+    /// Reads scanlines `rows` into `buf` and merges each pixel, checked,
+    /// into `pixels` (those rows of the film); returns the samples
+    /// dropped as not finite.
+    fn merge_into(
+        &mut self,
+        rows: Range<u32>,
+        buf: &mut Vec<u8>,
+        pixels: &mut [PixelStats],
+    ) -> Result<u64> {
+        self.image.read(rows.clone(), buf)?;
+        self.crc.update(buf);
+        let Range { start, end } = self.header.range;
+        let spp = end - start;
+        let w = self.header.size.0 as usize;
+        let mut bad = 0u64;
+        let mut row = vec![self.shared; w];
+        for ((y, chunk), px) in rows
+            .zip(buf.chunks_exact(self.image.chunk()))
+            .zip(pixels.chunks_exact_mut(w))
+        {
+            // Column by column into the row's words, then pixel by pixel:
+            // each pixel's words are read long after they were written.
+            for &(k, at) in &self.columns {
+                let samples = chunk[at..at + 4 * w].chunks_exact(4);
+                for (words, b) in row.iter_mut().zip(samples) {
+                    words[k] = u32::from_le_bytes(b.try_into().unwrap());
+                }
+            }
+            for (x, (p, words)) in px.iter_mut().zip(&row).enumerate() {
+                let q = from_words(words);
+                if !plausible(&q, spp, start, end) {
+                    bail!(
+                        "{}: pixel ({x}, {y}) holds statistics no render of samples {start}..{end} leaves",
+                        self.image.path().display()
+                    );
+                }
+                bad += (spp - q.n) as u64;
+                p.merge_stats(&q);
+            }
+        }
+        Ok(bad)
+    }
+
+    /// Refuses the film if what was read does not match its checksum.
+    fn finish(self) -> Result<()> {
+        if self.stored != Some(self.crc.finalize()) {
+            bail!(
+                "{}: its data do not match their checksum: the file is damaged",
+                self.image.path().display()
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Merges the partial films `sources`, of one size and in range order,
+/// into one film, a band of scanlines at a time (the band's pixels stay in
+/// cache while every part adds to them); returns its pixels and the
+/// samples dropped as not finite.
+fn gather(sources: &mut [Source], cancel: &dyn Fn() -> bool) -> Result<(Vec<PixelStats>, u64)> {
+    let Some(first) = sources.first() else {
+        bail!("no parts to merge");
+    };
+    let (w, h) = first.header.size;
+    let mut pixels = vec![PixelStats::default(); w as usize * h as usize];
+    let band =
+        (BAND_BYTES / (w as usize * std::mem::size_of::<PixelStats>())).clamp(1, h as usize) as u32;
+    let mut buf = Vec::new();
+    let mut bad = 0;
+    for y in (0..h).step_by(band as usize) {
+        if cancel() {
+            return Err(crate::interrupt::Interrupted.into());
+        }
+        let rows = y..(y + band).min(h);
+        let px = &mut pixels[rows.start as usize * w as usize..rows.end as usize * w as usize];
+        for s in sources.iter_mut() {
+            bad += s.merge_into(rows.clone(), &mut buf, px)?;
+        }
+        for p in px {
+            p.mean = p.mean_of_sum();
+        }
+    }
+    Ok((pixels, bad))
+}
+
+/// The film pixels a band holds: what stays in a core's cache.
+const BAND_BYTES: usize = 1 << 21;
+
+/// Whether a render of `spp` samples from `start` can leave `p`.
+fn plausible(p: &PixelStats, spp: u32, start: u32, end: u32) -> bool {
     let most = p.n as i128 * (FIXED_MAX as f64 * FIXED_ONE) as i128;
     let finite = [p.m2, p.block_mean, p.block_m2, p.checker]
         .iter()
@@ -491,7 +673,7 @@ fn check_pixel(p: &PixelStats, spp: u32, start: u32, end: u32) -> Result<()> {
         .all(|x| x.is_finite());
     let blocks = (start / PIXEL_STRATA)..end.div_ceil(PIXEL_STRATA);
     let piece = |q: &Piece| q.n == 0 || (q.n < PIXEL_STRATA && blocks.contains(&q.block));
-    let ok = p.n <= spp
+    p.n <= spp
         && p.sum.iter().all(|s| s.abs() <= most)
         && finite
         && p.m2 >= 0.0
@@ -500,11 +682,7 @@ fn check_pixel(p: &PixelStats, spp: u32, start: u32, end: u32) -> Result<()> {
         && p.blocks as u64 * PIXEL_STRATA as u64 <= p.n as u64
         && p.open <= p.n.saturating_mul(PIXEL_STRATA)
         && piece(&p.head)
-        && piece(&p.tail);
-    if !ok {
-        bail!("statistics no render of samples {start}..{end} leaves");
-    }
-    Ok(())
+        && piece(&p.tail)
 }
 
 /// The parts of one render, checked from their headers and put in range
@@ -579,30 +757,30 @@ pub fn plan(paths: &[PathBuf]) -> Result<Plan> {
     })
 }
 
-/// Reads the planned parts in range order and merges them, holding one
-/// part at a time beside the sum so far.
+/// Reads the planned parts and merges them in range order.
 pub fn merge(plan: &Plan, cancel: &dyn Fn() -> bool) -> Result<Part> {
-    let mut merged: Option<Part> = None;
+    let mut sources = Vec::with_capacity(plan.parts.len());
     for (path, header) in &plan.parts {
-        if cancel() {
-            return Err(crate::interrupt::Interrupted.into());
-        }
-        let part = Part::read(path)?;
-        if part.header() != *header {
+        let s = Source::open(path)?;
+        if s.header != *header {
             bail!("{}: changed while being merged", path.display());
         }
-        match &mut merged {
-            None => merged = Some(part),
-            Some(m) => {
-                m.film.merge(&part.film);
-                m.meta.rays += part.meta.rays;
-                m.meta.seconds += part.meta.seconds;
-            }
-        }
+        sources.push(s);
     }
-    let mut merged = merged.ok_or_else(|| anyhow::anyhow!("no parts to merge"))?;
-    merged.meta.total = Some(plan.total);
-    Ok(merged)
+    let (pixels, bad) = gather(&mut sources, cancel)?;
+    let mut meta = sources[0].header.meta.clone();
+    meta.rays = sources.iter().map(|s| s.header.meta.rays).sum();
+    meta.seconds = sources.iter().map(|s| s.header.meta.seconds).sum();
+    meta.total = Some(plan.total);
+    let range = sources[0].header.range.start..sources[sources.len() - 1].header.range.end;
+    let spp = sources.iter().map(|s| s.header.range.len() as u32).sum();
+    let size = sources[0].header.size;
+    for s in sources {
+        s.finish()?;
+    }
+    let mut part = Part::of(Header { meta, range, size }, pixels, bad);
+    part.film.spp = spp;
+    Ok(part)
 }
 
 /// `0..16 and 48..64`.
@@ -615,5 +793,29 @@ pub fn ranges_text(r: &[Range<u32>]) -> String {
         [] => String::new(),
         [one] => one.clone(),
         [init @ .., last] => format!("{} and {last}", init.join(", ")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_field_of_a_pixel_survives_its_words() {
+        let mut r = crate::geometry::sampling::Rng::for_sample(1, 2, 3);
+        for _ in 0..1000 {
+            let w: Vec<u32> = (0..FIELDS.len()).map(|_| r.next_u32()).collect();
+            let w: Words = w.try_into().unwrap();
+            let p = from_words(&w);
+            assert_eq!(words(&p), w);
+            // The names say what the words hold.
+            let at = |name: &str| w[FIELDS.iter().position(|f| *f == name).unwrap()];
+            assert_eq!(at("n"), p.n);
+            assert_eq!(at("tail.block"), p.tail.block);
+            assert_eq!(at("sum.G.2"), (p.sum[1] >> 64) as u32);
+            assert_eq!(at("sum.B.0"), p.sum[2] as u32);
+            assert_eq!(at("checker.lo"), p.checker.to_bits() as u32);
+            assert_eq!(at("head.diff.hi"), (p.head.diff.to_bits() >> 32) as u32);
+        }
     }
 }
