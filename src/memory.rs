@@ -32,6 +32,29 @@ pub fn available() -> u64 {
         .map_or(FALLBACK, |kib| kib.saturating_mul(1024))
 }
 
+/// `n` copies of `v`, in memory the kernel may back with 2 MiB pages where
+/// it is large: a film of millions of pixels then faults in a few hundred
+/// pages rather than a hundred thousand.
+pub fn filled<T: Clone>(n: usize, v: T) -> Vec<T> {
+    let mut out = Vec::with_capacity(n);
+    #[cfg(target_os = "linux")]
+    {
+        const HUGE: usize = 2 << 20;
+        let at = out.as_mut_ptr() as usize;
+        let (start, end) = (
+            at.next_multiple_of(HUGE),
+            (at + n * std::mem::size_of::<T>()) & !(HUGE - 1),
+        );
+        if end > start {
+            // Only advice: where the kernel declines, small pages serve.
+            // SAFETY: the range lies within `out`'s allocation.
+            unsafe { libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_HUGEPAGE) };
+        }
+    }
+    out.resize(n, v);
+    out
+}
+
 /// Refuses `needed` bytes for `what` when more than the memory available
 /// (or than `cap`, a documented limit of its own, when given).
 pub fn check(what: &str, needed: u64, cap: Option<(u64, &str)>) -> Result<()> {

@@ -439,7 +439,7 @@ impl Film {
         Self {
             width,
             height,
-            pixels: vec![PixelStats::default(); width as usize * height as usize],
+            pixels: crate::memory::filled(width as usize * height as usize, PixelStats::default()),
             spp: 0,
             start: 0,
             adaptive: None,
