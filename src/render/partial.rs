@@ -507,12 +507,13 @@ fn header_of(l: &Layout) -> Result<Header> {
 struct Source {
     image: Scanlines,
     header: Header,
-    /// The words every pixel shares, the others left zero.
-    shared: Words,
     /// The other words: which, and their channel's byte offset in a chunk.
     columns: Vec<(usize, usize)>,
     stored: Option<u32>,
     crc: crc32fast::Hasher,
+    /// A scanline's pixels as words: the shared ones set once, the
+    /// columns' overwritten line by line.
+    row: Vec<Words>,
 }
 
 impl Source {
@@ -566,13 +567,14 @@ impl Source {
         image.head[at].copy_from_slice(UNSEALED.as_bytes());
         let mut crc = crc32fast::Hasher::new();
         crc.update(&image.head);
+        let row = vec![shared; header.size.0 as usize];
         Ok(Source {
             image,
             header,
-            shared,
             columns,
             stored,
             crc,
+            row,
         })
     }
 
@@ -591,7 +593,6 @@ impl Source {
         let spp = end - start;
         let w = self.header.size.0 as usize;
         let mut bad = 0u64;
-        let mut row = vec![self.shared; w];
         for ((y, chunk), px) in rows
             .zip(buf.chunks_exact(self.image.chunk()))
             .zip(pixels.chunks_exact_mut(w))
@@ -600,11 +601,11 @@ impl Source {
             // each pixel's words are read long after they were written.
             for &(k, at) in &self.columns {
                 let samples = chunk[at..at + 4 * w].chunks_exact(4);
-                for (words, b) in row.iter_mut().zip(samples) {
+                for (words, b) in self.row.iter_mut().zip(samples) {
                     words[k] = u32::from_le_bytes(b.try_into().unwrap());
                 }
             }
-            for (x, (p, words)) in px.iter_mut().zip(&row).enumerate() {
+            for (x, (p, words)) in px.iter_mut().zip(&self.row).enumerate() {
                 let q = from_words(words);
                 if !plausible(&q, spp, start, end) {
                     bail!(
