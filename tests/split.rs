@@ -208,6 +208,28 @@ fn parts_of_other_renders_overlaps_and_gaps_are_refused() {
 }
 
 #[test]
+fn words_every_pixel_shares_are_stored_once() {
+    let d = dir("shared");
+    // One sample a pixel: the counts, the statistics of more samples and
+    // the colour sums' top words are the same in every pixel.
+    render(&d, &["--samples", "3..4"], "one.exr");
+    render(&d, &["--samples", "0..16"], "block.exr");
+    let per_pixel = |f: &str| bytes(&d, f).len() as f64 / (40.0 * 28.0);
+    assert!(per_pixel("one.exr") < 80.0, "{}", per_pixel("one.exr"));
+    assert!(per_pixel("block.exr") < 152.0, "{}", per_pixel("block.exr"));
+    let text = String::from_utf8_lossy(&bytes(&d, "one.exr")).into_owned();
+    for shared in ["n=1 ", "blocks=0 ", "m2.lo=0 ", "tail.n=0 "] {
+        assert!(text.contains(shared), "{shared}");
+    }
+    render(&d, &["--samples", "0..3"], "a.exr");
+    render(&d, &["--samples", "4..16"], "b.exr");
+    render(&d, &["--spp", "16"], "whole.png");
+    ok(&d, &["merge", "b.exr", "one.exr", "a.exr", "-o", "m.png"]);
+    assert!(bytes(&d, "m.png") == bytes(&d, "whole.png"));
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
 fn damaged_parts_are_refused_naming_the_file() {
     let d = dir("damaged");
     render(&d, &["--samples", "0..4"], "a.exr");
@@ -239,6 +261,19 @@ fn damaged_parts_are_refused_naming_the_file() {
         args.extend(["--spp", "12", "--resume", bad, "-o", "r.png"]);
         let err = refused(&d, &args, "r.png");
         assert!(err.contains(bad), "{bad}: {err}");
+    }
+    // An attribute changed in place, the file's structure kept: the count
+    // every pixel shares, the seed.
+    for (from, to) in [("n=4 ", "n=3 "), ("rayterm.seed", "rayterm.sees")] {
+        let at = whole
+            .windows(from.len())
+            .position(|w| w == from.as_bytes())
+            .unwrap_or_else(|| panic!("{from:?} is not in the file"));
+        let mut edited = whole.clone();
+        edited[at..at + to.len()].copy_from_slice(to.as_bytes());
+        std::fs::write(d.join("edited.exr"), &edited).unwrap();
+        let err = refused(&d, &["merge", "a.exr", "edited.exr", "-o", "m.png"], "m.png");
+        assert!(err.contains("edited.exr"), "{to}: {err}");
     }
     // One flipped bit anywhere, in a sum, a count, a mean or an attribute.
     for i in 1..24 {
