@@ -272,7 +272,11 @@ fn damaged_parts_are_refused_naming_the_file() {
         let mut edited = whole.clone();
         edited[at..at + to.len()].copy_from_slice(to.as_bytes());
         std::fs::write(d.join("edited.exr"), &edited).unwrap();
-        let err = refused(&d, &["merge", "a.exr", "edited.exr", "-o", "m.png"], "m.png");
+        let err = refused(
+            &d,
+            &["merge", "a.exr", "edited.exr", "-o", "m.png"],
+            "m.png",
+        );
         assert!(err.contains("edited.exr"), "{to}: {err}");
     }
     // One flipped bit anywhere, in a sum, a count, a mean or an attribute.

@@ -511,9 +511,8 @@ struct Source {
     columns: Vec<(usize, usize)>,
     stored: Option<u32>,
     crc: crc32fast::Hasher,
-    /// A scanline's pixels as words: the shared ones set once, the
-    /// columns' overwritten line by line.
-    row: Vec<Words>,
+    /// The words every pixel shares, the others left zero.
+    shared: Words,
 }
 
 impl Source {
@@ -567,24 +566,24 @@ impl Source {
         image.head[at].copy_from_slice(UNSEALED.as_bytes());
         let mut crc = crc32fast::Hasher::new();
         crc.update(&image.head);
-        let row = vec![shared; header.size.0 as usize];
         Ok(Source {
             image,
             header,
             columns,
             stored,
             crc,
-            row,
+            shared,
         })
     }
 
     /// Reads scanlines `rows` into `buf` and merges each pixel, checked,
-    /// into `pixels` (those rows of the film); returns the samples
-    /// dropped as not finite.
+    /// into `pixels` (those rows of the film), a scanline at a time through
+    /// `row`; returns the samples dropped as not finite.
     fn merge_into(
         &mut self,
         rows: Range<u32>,
         buf: &mut Vec<u8>,
+        row: &mut [Words],
         pixels: &mut [PixelStats],
     ) -> Result<u64> {
         self.image.read(rows.clone(), buf)?;
@@ -593,6 +592,8 @@ impl Source {
         let spp = end - start;
         let w = self.header.size.0 as usize;
         let mut bad = 0u64;
+        // The columns overwrite the same words in every scanline.
+        row.fill(self.shared);
         for ((y, chunk), px) in rows
             .zip(buf.chunks_exact(self.image.chunk()))
             .zip(pixels.chunks_exact_mut(w))
@@ -601,11 +602,11 @@ impl Source {
             // each pixel's words are read long after they were written.
             for &(k, at) in &self.columns {
                 let samples = chunk[at..at + 4 * w].chunks_exact(4);
-                for (words, b) in self.row.iter_mut().zip(samples) {
+                for (words, b) in row.iter_mut().zip(samples) {
                     words[k] = u32::from_le_bytes(b.try_into().unwrap());
                 }
             }
-            for (x, (p, words)) in px.iter_mut().zip(&self.row).enumerate() {
+            for (x, (p, words)) in px.iter_mut().zip(&*row).enumerate() {
                 let q = from_words(words);
                 if !plausible(&q, spp, start, end) {
                     bail!(
@@ -645,6 +646,7 @@ fn gather(sources: &mut [Source], cancel: &dyn Fn() -> bool) -> Result<(Vec<Pixe
     let band =
         (BAND_BYTES / (w as usize * std::mem::size_of::<PixelStats>())).clamp(1, h as usize) as u32;
     let mut buf = Vec::new();
+    let mut row = vec![[0; FIELDS.len()]; w as usize];
     let mut bad = 0;
     for y in (0..h).step_by(band as usize) {
         if cancel() {
@@ -653,7 +655,7 @@ fn gather(sources: &mut [Source], cancel: &dyn Fn() -> bool) -> Result<(Vec<Pixe
         let rows = y..(y + band).min(h);
         let px = &mut pixels[rows.start as usize * w as usize..rows.end as usize * w as usize];
         for s in sources.iter_mut() {
-            bad += s.merge_into(rows.clone(), &mut buf, px)?;
+            bad += s.merge_into(rows.clone(), &mut buf, &mut row, px)?;
         }
         for p in px {
             p.mean = p.mean_of_sum();
@@ -663,7 +665,7 @@ fn gather(sources: &mut [Source], cancel: &dyn Fn() -> bool) -> Result<(Vec<Pixe
 }
 
 /// The film pixels a band holds: what stays in a core's cache.
-const BAND_BYTES: usize = 1 << 21;
+const BAND_BYTES: usize = 4 << 20;
 
 /// Whether a render of `spp` samples from `start` can leave `p`.
 fn plausible(p: &PixelStats, spp: u32, start: u32, end: u32) -> bool {
