@@ -193,6 +193,7 @@ mod tests {
                    o=(0.0000000001234567890123, 1, 2)"
                 .into(),
             fold: None,
+            ray: None,
         };
         let rows = wrap(&line, 24);
         assert!(rows.len() > 3, "{rows:?}");
