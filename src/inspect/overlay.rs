@@ -389,6 +389,15 @@ impl Drawing<'_, '_> {
                 None => kinds.push((n.kind, 1)),
             }
         }
+        // The camera ray runs along the line of sight: a square where it
+        // ends shows it.
+        let root = &tree.root;
+        let c = if by_colour {
+            root.contribution
+        } else {
+            kind_color(root.kind)
+        };
+        self.dot(end_of(root, self.reach), c);
         if by_colour {
             let total: usize = kinds.iter().map(|k| k.1).sum();
             self.say(
@@ -779,7 +788,6 @@ impl Drawing<'_, '_> {
         };
         let n = r.node;
         let end = end_of(n, self.reach);
-        self.seg(n.origin, end, miss.color);
         match &miss.face {
             Some(face) => {
                 let uv = miss.uv.unwrap_or_default();
@@ -790,13 +798,15 @@ impl Drawing<'_, '_> {
                         uv.x, uv.y
                     ),
                 );
-                // The face's name where the ray leaves the picture.
+                // The face's name beside where the ray leaves the picture.
                 let frame = &self.tracer.frame;
                 if let Some((_, q)) = frame.project_clip(n.origin, end, 1e-6) {
                     let scale = (self.layer.height as i32 / 320).max(1);
                     let (tw, th) = (text_width(face, scale), GLYPH * scale);
+                    let gap = 4 * self.dot_radius() + 4;
                     let x = (q.0 as i32 - tw / 2).clamp(0, (self.layer.width as i32 - tw).max(0));
-                    let y = (q.1 as i32 - th - 4).clamp(0, (self.layer.height as i32 - th).max(0));
+                    let above = q.1 as i32 - th - gap;
+                    let y = if above >= 0 { above } else { q.1 as i32 + gap };
                     self.layer
                         .rect(x - 2, y - 2, x + tw + 1, y + th + 1, Some(Vec3::ZERO));
                     self.layer.text(x, y, face, Some(MARK), scale);
@@ -807,6 +817,8 @@ impl Drawing<'_, '_> {
                 "the ray in the background colour (no environment map)",
             ),
         }
+        self.seg(n.origin, end, miss.color);
+        self.dot(end, miss.color);
     }
 
     fn glossy(&mut self, tree: &PixelTree) {
