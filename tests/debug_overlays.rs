@@ -345,7 +345,7 @@ fn bloom_view_marks_the_bright_pixels_and_the_glow_around_them() {
     assert!((far.x - far.z).abs() < 1e-6, "{far:?}");
     let text = overlay_text(&legend);
     assert!(
-        text.contains("1 pixels over the threshold (luminance > 1)"),
+        text.contains("cyan: 1 pixel over the threshold (luminance > 1)"),
         "{text}"
     );
     assert!(text.contains("kernel 25x25"), "{text}");

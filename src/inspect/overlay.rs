@@ -17,7 +17,7 @@ use crate::geometry::sampling::PIXEL_GRID;
 use crate::geometry::Ray;
 use crate::raster::canvas::{text_width, Canvas, GLYPH};
 use crate::render::integrator::mirror;
-use crate::render::overlay::{draw_box, draw_segment, Layer, Legend};
+use crate::render::overlay::{clip_to_rect, draw_box, draw_segment, Layer, Legend};
 use crate::render::recorder::{LightSample, RayKind};
 use crate::render::Tracer;
 use crate::scene::Scene;
@@ -515,10 +515,15 @@ impl Drawing<'_, '_> {
             }
             None => {
                 self.seg(ray.origin, end, OFF_PATH);
+                let what = if r.shadow.is_some() {
+                    "nothing blocks the shadow ray"
+                } else {
+                    "the ray hits nothing"
+                };
                 self.say(
                     Some(OFF_PATH),
                     format!(
-                        "the ray hits nothing; {} {} entered",
+                        "{what} (red); {} {} entered",
                         off.len(),
                         plural(off.len(), "box")
                     ),
@@ -800,7 +805,11 @@ impl Drawing<'_, '_> {
                 );
                 // The face's name beside where the ray leaves the picture.
                 let frame = &self.tracer.frame;
-                if let Some((_, q)) = frame.project_clip(n.origin, end, 1e-6) {
+                let (w, h) = (self.layer.width as f64, self.layer.height as f64);
+                let shown = frame
+                    .project_clip(n.origin, end, 1e-6)
+                    .and_then(|(p, q)| clip_to_rect(p, q, w, h));
+                if let Some((_, q)) = shown {
                     let scale = (self.layer.height as i32 / 320).max(1);
                     let (tw, th) = (text_width(face, scale), GLYPH * scale);
                     let gap = 4 * self.dot_radius() + 4;

@@ -213,7 +213,7 @@ pub fn bloom_view(
             *px = px.lerp(GLOW, t.sqrt());
         }
     }
-    let mut bright = 0;
+    let mut bright = 0u32;
     for (px, b) in image.iter_mut().zip(&g.bright) {
         if *b != Vec3::ZERO {
             *px = BRIGHT;
@@ -224,13 +224,14 @@ pub fn bloom_view(
         (
             Some(BRIGHT),
             format!(
-                "cyan: {bright} pixels over the threshold (luminance > {})",
+                "cyan: {} over the threshold (luminance > {})",
+                crate::words::count(bright, "pixel", "pixels"),
                 s.threshold
             ),
         ),
         (
             Some(GLOW),
-            format!("orange: the glow they spread, at most +{most:.3} luminance"),
+            format!("orange: their glow, up to +{most:.3} luminance"),
         ),
         (None, kernel),
     ];

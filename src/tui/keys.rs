@@ -106,7 +106,8 @@ pub enum Action {
     /// Move the debug cursor by pages.
     Page(i8),
     Worst(Worst),
-    Rays,
+    /// Cycle the selected pixel's overlay.
+    PixelOverlay,
     Overlay,
     /// Step the BVH overlay level.
     Level(i8),
@@ -286,9 +287,9 @@ pub const ROWS: &[Row] = &[
     },
     Row {
         mode: Mode::Any,
-        keys: &[(K::Char('o'), A::Rays)],
-        help: "draw the selected pixel's rays into the view",
-        hint: Some("rays"),
+        keys: &[(K::Char('o'), A::PixelOverlay)],
+        help: "pixel overlay: rays, rays in colour, lights, traversal, normals, texture, environment, glossy, samples, off",
+        hint: Some("overlay"),
     },
     Row {
         mode: Mode::Any,

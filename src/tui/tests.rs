@@ -207,8 +207,24 @@ fn rays_are_drawn_into_the_view() {
     settle(&mut t, &mut app);
     let before = count(&t);
     app.handle_key(Key::Char('o'));
-    settle(&mut t, &mut app);
+    settle_pixel(&mut t, &mut app);
     assert!(count(&t) > before + 3, "{before} -> {}", count(&t));
+}
+
+/// Settles, then waits for the worker's pixel overlay and draws again.
+fn settle_pixel(t: &mut Terminal<TestBackend>, app: &mut App) -> String {
+    settle(t, app);
+    let end = std::time::Instant::now() + WAIT;
+    while app.link.current_pixel().is_none() {
+        assert!(
+            std::time::Instant::now() < end,
+            "no pixel overlay within {WAIT:?}"
+        );
+        app.poll().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    super::draw(t, app).unwrap();
+    text(t)
 }
 
 #[test]
