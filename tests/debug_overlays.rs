@@ -113,6 +113,36 @@ fn traversal_boxes_are_the_walk_green_on_the_path_to_the_hit_red_elsewhere() {
 }
 
 #[test]
+fn the_logged_walk_is_the_traversal_to_the_count() {
+    use rayterm::bvh::TraversalStats;
+    let s = session("mirrors");
+    let t = tracer(&s, 48, 36);
+    for y in 0..36 {
+        for x in 0..48 {
+            let ray = t.frame.ray(x as f64 + 0.5, y as f64 + 0.5);
+            let mut st = TraversalStats::default();
+            let hit = s.bvh.intersect::<true>(&ray, &mut st);
+            let log = s.bvh.walk_log(&ray, false);
+            assert_eq!((log.stats, log.found), (st, hit.map(|h| h.prim)));
+            // Every wide node and leaf maps to a distinct binary node.
+            assert!(log.visited.len() as u32 <= st.nodes_visited + st.leaves);
+            assert!(log
+                .visited
+                .iter()
+                .all(|&n| (n as usize) < s.bvh.nodes.len()));
+            // Any-hit walks of the same ray, shortened to its hit.
+            if let Some(h) = hit {
+                let short = rayterm::geometry::Ray::segment(ray.origin, ray.dir, h.t * 0.5);
+                let mut st = TraversalStats::default();
+                let blocked = s.bvh.occluded::<true>(&short, &mut st);
+                let log = s.bvh.walk_log(&short, true);
+                assert_eq!((log.stats, log.found), (st, blocked));
+            }
+        }
+    }
+}
+
+#[test]
 fn traversal_of_a_shadow_ray_and_of_a_ray_that_misses() {
     let s = session("cornell");
     let t = tracer(&s, 64, 64);
@@ -349,7 +379,7 @@ fn bloom_view_marks_the_bright_pixels_and_the_glow_around_them() {
         "{text}"
     );
     assert!(text.contains("kernel 25x25"), "{text}");
-    let (_, legend) = bloom_view(&vec![Vec3::splat(0.2); 16], 4, 4, &s);
+    let (_, legend) = bloom_view(&[Vec3::splat(0.2); 16], 4, 4, &s);
     assert!(overlay_text(&legend).contains("no pixel is over the threshold"));
     let _ = GLOW;
 }

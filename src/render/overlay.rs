@@ -131,7 +131,12 @@ pub fn legend_line(legend: &Legend) -> String {
 }
 
 /// Clips segment `p`–`q` to `[0, w] x [0, h]` (Liang–Barsky).
-pub fn clip_to_rect(p: (f64, f64), q: (f64, f64), w: f64, h: f64) -> Option<((f64, f64), (f64, f64))> {
+pub fn clip_to_rect(
+    p: (f64, f64),
+    q: (f64, f64),
+    w: f64,
+    h: f64,
+) -> Option<((f64, f64), (f64, f64))> {
     if ![p.0, p.1, q.0, q.1].iter().all(|v| v.is_finite()) {
         return None;
     }

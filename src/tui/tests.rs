@@ -211,6 +211,48 @@ fn rays_are_drawn_into_the_view() {
     assert!(count(&t) > before + 3, "{before} -> {}", count(&t));
 }
 
+#[test]
+fn pixel_overlays_cycle_and_show_the_ray_at_the_debug_cursor() {
+    use crate::inspect::overlay::{PixelView, VIEWS};
+    let mut app = app("cornell", &[]);
+    let mut t = terminal(220, 40);
+    settle(&mut t, &mut app);
+    let (w, h) = app.view_size;
+    // A pixel with a shadow ray: ray 1 of its tree.
+    let found = (0..h).rev().step_by(2).any(|y| {
+        app.select(w / 3, y, 0);
+        app.inspector.lines().iter().any(|l| l.ray == Some(1))
+    });
+    assert!(found, "no pixel with a shadow ray");
+    for v in &VIEWS[..4] {
+        app.handle_key(Key::Char('o'));
+        assert_eq!(app.pixel_view, Some(*v));
+    }
+    assert_eq!(app.pixel_view, Some(PixelView::Traversal));
+    // Above the first ray line the camera ray's walk is shown.
+    assert_eq!(app.inspector.cursor_ray(), None);
+    let s = settle_pixel(&mut t, &mut app);
+    assert!(s.contains("ray 0: camera ray"), "{s}");
+    while app.inspector.cursor_ray() != Some(1) {
+        let before = app.inspector.cursor;
+        app.handle_key(Key::Char(']'));
+        assert!(app.inspector.cursor > before, "no line of ray 1");
+    }
+    assert_eq!(app.pixel_request().unwrap().ray, Some(1));
+    let s = settle_pixel(&mut t, &mut app);
+    assert!(s.contains("ray 1: shadow ray"), "{s}");
+    assert_eq!(app.link.current_pixel().unwrap().request.ray, Some(1));
+    // The whole-tree views take no ray; after the last view, off.
+    for _ in 4..VIEWS.len() {
+        app.handle_key(Key::Char('o'));
+    }
+    assert_eq!(app.pixel_view, Some(PixelView::Samples));
+    assert_eq!(app.pixel_request().unwrap().ray, None);
+    app.handle_key(Key::Char('o'));
+    assert_eq!(app.pixel_view, None);
+    assert_eq!(app.pixel_request(), None);
+}
+
 /// Settles, then waits for the worker's pixel overlay and draws again.
 fn settle_pixel(t: &mut Terminal<TestBackend>, app: &mut App) -> String {
     settle(t, app);
