@@ -260,6 +260,35 @@ fn environment_ray_is_drawn_in_the_colour_the_tree_found_and_its_face_named() {
 }
 
 #[test]
+fn texture_outlines_the_texels_the_lookup_reads_and_nothing_without_uv() {
+    let s = session("cube-textured");
+    let t = tracer(&s, 160, 120);
+    let tree = find(&t, |tr| {
+        tr.root.hit.as_ref().is_some_and(|h| h.texel.is_some())
+    });
+    let o = draw(&t, &tree, PixelView::Texture, None, 1).unwrap();
+    let legend = overlay_text(&o.legend);
+    assert!(legend.contains("four texels bilinear"), "{legend}");
+    assert!(count(&o.layer, overlay::MARK) > 20, "no outline");
+    // The zoom shows the texture's own texel colours.
+    let tex = &s.scene.textures[0];
+    assert!(tex.texels.iter().any(|c| count(&o.layer, *c) > 4));
+    // Cornell has no texture coordinates: nothing drawn, and why.
+    let c = session("cornell");
+    let t = tracer(&c, 32, 32);
+    let o = draw(
+        &t,
+        &inspect_pixel(&t, 16, 16, 0),
+        PixelView::Texture,
+        None,
+        1,
+    )
+    .unwrap();
+    assert!(o.layer.is_blank());
+    assert!(overlay_text(&o.legend).contains("no texture coordinates"));
+}
+
+#[test]
 fn glossy_rays_are_drawn_in_their_contributions_with_the_lobe_axis() {
     let s = session("mirrors");
     let t = tracer(&s, 160, 120);

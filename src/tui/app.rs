@@ -679,8 +679,15 @@ impl App {
                 true
             }
             Msg::Pixel(p) => {
-                if let Err(e) = &p.layer {
-                    self.say(format!("pixel overlay: {e}"));
+                // The title may cut the legend short: the status line has
+                // the whole width.
+                let name = pixel_view_name(p.request.view);
+                match &p.layer {
+                    Err(e) => self.say(format!("pixel overlay: {e}")),
+                    Ok((_, legend)) if p.generation == self.link.generation() => {
+                        self.say(format!("{name}: {legend}"))
+                    }
+                    Ok(_) => {}
                 }
                 self.link.pixel = Some(p);
                 true
