@@ -303,11 +303,18 @@ fn glossy_rays_are_drawn_in_their_contributions_with_the_lobe_axis() {
         .collect();
     let shown = lobe
         .iter()
-        .filter(|c| count(&o.layer, c.contribution) > 0)
+        .filter(|c| count(&o.layer, c.contribution * o.exposure) > 0)
         .count();
+    // The exposure brings the brightest to full strength, and only brightens.
+    let most = lobe
+        .iter()
+        .map(|c| c.contribution.max_element())
+        .fold(0.0, f32::max);
+    assert!(o.exposure >= 1.0);
+    assert!(o.exposure == 1.0 || (most * o.exposure - 1.0).abs() < 1e-5);
     // Rays may hide one another where they cross; most must show.
     assert!(shown * 2 >= lobe.len(), "{shown} of {}", lobe.len());
-    assert!(count(&o.layer, overlay::MARK) > 0, "no lobe axis");
+    assert!(count(&o.layer, overlay::LOBE_AXIS) > 0, "no lobe axis");
     let legend = overlay_text(&o.legend);
     let n = lobe.len();
     let rays = if n == 1 { "ray" } else { "rays" };
@@ -353,7 +360,12 @@ fn rays_in_colour_use_the_contributions_and_lights_show_their_samples() {
     let by_kind = draw(&t, &tree, PixelView::Rays, None, 1).unwrap();
     assert!(count(&by_kind.layer, overlay::kind_color(RayKind::Camera)) > 0);
     assert!(count(&by_colour.layer, overlay::kind_color(RayKind::Camera)) == 0);
-    assert!(count(&by_colour.layer, tree.root.contribution) > 0);
+    assert!(
+        count(
+            &by_colour.layer,
+            tree.root.contribution * by_colour.exposure
+        ) > 0
+    );
 }
 
 #[test]

@@ -114,6 +114,10 @@ pub struct Overlay {
     pub legend: Legend,
     /// Where the legend goes to stay clear of the pixel and the zooms.
     pub legend_bottom: bool,
+    /// The views of colours rays add draw them times this, so that the
+    /// brightest shows at full strength (1 when it already does, or for
+    /// other views); the legend says so.
+    pub exposure: f32,
 }
 
 /// Shadow ray colours, as the original renderer drew them.
@@ -127,8 +131,10 @@ pub const TRIANGLE: Vec3 = Vec3::new(1.0, 1.0, 0.0);
 /// Normals: the vertex normals and the interpolated one.
 pub const VERTEX_NORMAL: Vec3 = Vec3::new(1.0, 0.0, 0.0);
 pub const INTERPOLATED: Vec3 = Vec3::new(0.0, 1.0, 0.0);
-/// The glossy lobe's axis, texel outlines and the sample zoom's frame.
+/// Texel outlines, the sample zoom's frame and the face's name.
 pub const MARK: Vec3 = Vec3::ONE;
+/// The glossy lobe's axis.
+pub const LOBE_AXIS: Vec3 = Vec3::new(1.0, 0.0, 1.0);
 const GRID: Vec3 = Vec3::splat(0.25);
 
 /// The colour of a ray of `kind` in the `rays` view.
@@ -138,6 +144,15 @@ pub fn kind_color(k: RayKind) -> Vec3 {
         RayKind::Reflection => Vec3::new(0.0, 1.0, 1.0),
         RayKind::Glossy => Vec3::new(0.3, 0.5, 1.0),
         RayKind::Transmission => Vec3::new(0.0, 1.0, 0.0),
+    }
+}
+
+fn kind_color_name(k: RayKind) -> &'static str {
+    match k {
+        RayKind::Camera => "yellow",
+        RayKind::Reflection => "cyan",
+        RayKind::Glossy => "blue",
+        RayKind::Transmission => "green",
     }
 }
 
@@ -253,6 +268,7 @@ pub fn draw(
         layer: Canvas::new(tracer.width, tracer.height, None),
         legend: Vec::new(),
         reach: ray_reach(tracer.scene),
+        exposure: 1.0,
     };
     let rays = tree_rays(tree);
     if let Some(i) = ray {
@@ -299,6 +315,7 @@ pub fn draw(
         layer: d.layer,
         legend: d.legend,
         legend_bottom: 2 * tree.y < tracer.height,
+        exposure: d.exposure,
     })
 }
 
@@ -307,9 +324,30 @@ struct Drawing<'t, 'a> {
     layer: Layer,
     legend: Legend,
     reach: f32,
+    /// The factor ray colours are drawn with (see [`Overlay::exposure`]).
+    exposure: f32,
 }
 
 impl Drawing<'_, '_> {
+    /// Sets the exposure so the brightest of `colours` shows at full
+    /// strength, and says so in the legend.
+    fn expose<'c>(&mut self, colours: impl Iterator<Item = &'c Vec3>) {
+        let most = colours
+            .map(|c| c.max_element())
+            .filter(|m| m.is_finite())
+            .fold(0.0f32, f32::max);
+        if most > 0.0 && most < 1.0 {
+            self.exposure = 1.0 / most;
+            self.say(
+                None,
+                format!(
+                    "colours x{:.3} so the brightest shows at full strength",
+                    self.exposure
+                ),
+            );
+        }
+    }
+
     fn seg(&mut self, a: Vec3, b: Vec3, c: Vec3) {
         draw_segment(&mut self.layer, &self.tracer.frame, a, b, Some(c));
     }
@@ -364,19 +402,38 @@ impl Drawing<'_, '_> {
 
     fn shadow_legend(&mut self, (clear, blocked): (usize, usize)) {
         if clear > 0 {
-            self.say(Some(CLEAR), format!("{clear} shadow rays clear"));
+            self.say(
+                Some(CLEAR),
+                format!(
+                    "white: {}",
+                    crate::words::count(clear as u64, "shadow ray clear", "shadow rays clear")
+                ),
+            );
         }
         if blocked > 0 {
-            self.say(Some(BLOCKED), format!("{blocked} shadow rays blocked"));
+            self.say(
+                Some(BLOCKED),
+                format!(
+                    "red: {}",
+                    crate::words::count(
+                        blocked as u64,
+                        "shadow ray blocked",
+                        "shadow rays blocked"
+                    )
+                ),
+            );
         }
     }
 
     fn rays(&mut self, tree: &PixelTree, by_colour: bool) {
         let mut shadows = (0, 0);
         let mut kinds: Vec<(RayKind, usize)> = Vec::new();
+        if by_colour {
+            self.expose(nodes(tree).iter().map(|n| &n.contribution));
+        }
         for n in nodes(tree) {
             let c = if by_colour {
-                n.contribution
+                n.contribution * self.exposure
             } else {
                 kind_color(n.kind)
             };
@@ -393,7 +450,7 @@ impl Drawing<'_, '_> {
         // ends shows it.
         let root = &tree.root;
         let c = if by_colour {
-            root.contribution
+            root.contribution * self.exposure
         } else {
             kind_color(root.kind)
         };
@@ -410,7 +467,12 @@ impl Drawing<'_, '_> {
             for (k, count) in kinds {
                 self.say(
                     Some(kind_color(k)),
-                    format!("{count} {} {}", kind_name(k), plural(count, "ray")),
+                    format!(
+                        "{}: {count} {} {}",
+                        kind_color_name(k),
+                        kind_name(k),
+                        plural(count, "ray")
+                    ),
                 );
             }
         }
@@ -448,7 +510,7 @@ impl Drawing<'_, '_> {
         self.say(
             None,
             format!(
-                "{points} {} on {}, each square in the light's colour there",
+                "squares: {points} {} on {}, each in the light's colour there",
                 plural(points, "point"),
                 kinds.join(", ")
             ),
@@ -498,7 +560,7 @@ impl Drawing<'_, '_> {
                 self.say(
                     Some(ON_PATH),
                     format!(
-                        "{} {} on the path to triangle {t}",
+                        "green: {} {} on the path to triangle {t}",
                         on.len(),
                         plural(on.len(), "box")
                     ),
@@ -506,12 +568,15 @@ impl Drawing<'_, '_> {
                 self.say(
                     Some(OFF_PATH),
                     format!(
-                        "{} {} entered off that path",
+                        "red: {} {} entered off that path",
                         off.len(),
                         plural(off.len(), "box")
                     ),
                 );
-                self.say(Some(TRIANGLE), format!("triangle {t}, the hit"));
+                self.say(
+                    Some(TRIANGLE),
+                    format!("yellow: triangle {t}, the hit; white: the ray"),
+                );
             }
             None => {
                 self.seg(ray.origin, end, OFF_PATH);
@@ -832,7 +897,13 @@ impl Drawing<'_, '_> {
 
     fn glossy(&mut self, tree: &PixelTree) {
         let mut rays = 0;
-        for n in nodes(tree) {
+        let all = nodes(tree);
+        self.expose(
+            all.iter()
+                .filter(|n| n.kind == RayKind::Glossy)
+                .map(|n| &n.contribution),
+        );
+        for n in all {
             let lobe: Vec<&RayNode> = n
                 .children
                 .iter()
@@ -843,7 +914,7 @@ impl Drawing<'_, '_> {
             };
             for c in &lobe {
                 let end = end_of(c, self.reach);
-                self.seg(c.origin, end, c.contribution);
+                self.seg(c.origin, end, c.contribution * self.exposure);
             }
             rays += lobe.len();
             let axis = mirror(n.dir, h.shading_normal, h.geometric_normal);
@@ -852,11 +923,11 @@ impl Drawing<'_, '_> {
                 .map(|c| end_of(c, self.reach).distance(c.origin))
                 .fold(f32::INFINITY, f32::min)
                 .min(self.reach);
-            self.seg(h.point, h.point + axis * len, MARK);
+            self.seg(h.point, h.point + axis * len, LOBE_AXIS);
             self.say(
-                Some(MARK),
+                Some(LOBE_AXIS),
                 format!(
-                    "lobe axis (mirror direction) at {} (Phong exponent {})",
+                    "magenta: the lobe axis (mirror direction) at {} (Phong exponent {})",
                     h.mesh, h.ns
                 ),
             );
@@ -954,7 +1025,7 @@ impl Drawing<'_, '_> {
         self.say(
             Some(GRID),
             if stratified {
-                "the 4x4 strata: each run of 16 samples visits each once"
+                "grey lines: the 4x4 strata; each run of 16 samples visits each once"
             } else if self.tracer.plan.supersampling {
                 "uniform random positions (stratification off)"
             } else {
@@ -963,7 +1034,10 @@ impl Drawing<'_, '_> {
         );
         self.say(
             Some(mean),
-            format!("their mean ({:.3}, {:.3}, {:.3})", mean.x, mean.y, mean.z),
+            format!(
+                "their mean ({:.3}, {:.3}, {:.3}); white frame: the pixel and its zoom",
+                mean.x, mean.y, mean.z
+            ),
         );
     }
 }
