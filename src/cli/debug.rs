@@ -42,13 +42,18 @@ impl FromStr for DebugSpec {
         if s == "bloom" {
             return Ok(DebugSpec::Bloom);
         }
+        let example = if s.starts_with("samples") {
+            "samples:400,300"
+        } else {
+            "ray:400,300"
+        };
         let pixel = |p: &str| {
             let (x, y) = p
                 .split_once(',')
-                .ok_or_else(|| format!("'{s}': the pixel must be X,Y, as in ray:400,300"))?;
+                .ok_or_else(|| format!("'{s}': the pixel must be X,Y, as in {example}"))?;
             let coord = |c: &str, what: &str| {
                 c.trim().parse::<u32>().map_err(|_| {
-                    format!("'{s}': {what} must be a whole number from 0, as in ray:400,300")
+                    format!("'{s}': {what} must be a whole number from 0, as in {example}")
                 })
             };
             Ok::<_, String>((coord(x, "x")?, coord(y, "y")?))
@@ -212,4 +217,44 @@ fn bvh(s: &Session, view: DebugView, out: &Output) -> Result<ExitCode> {
         out.path.display()
     );
     Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn specs_read_back_as_written() {
+        for s in [
+            "bvh-leaves",
+            "bvh-level:2",
+            "bloom",
+            "ray:3,4:rays",
+            "ray:3,4:traversal:2",
+            "ray:0,7:environment",
+            "samples:5,6",
+        ] {
+            let spec: DebugSpec = s.parse().unwrap();
+            assert_eq!(spec.to_string(), s);
+        }
+        assert_eq!(
+            "ray:3,4".parse(),
+            Ok(DebugSpec::Pixel {
+                x: 3,
+                y: 4,
+                view: PixelView::Rays,
+                ray: None
+            })
+        );
+        assert_eq!(
+            "ray:1,2:color".parse::<DebugSpec>().unwrap().to_string(),
+            "ray:1,2:colour"
+        );
+        assert_eq!(
+            "ray:1,2:samples".parse::<DebugSpec>().unwrap().to_string(),
+            "samples:1,2"
+        );
+        let e = "samples:1,x".parse::<DebugSpec>().unwrap_err();
+        assert!(e.contains("as in samples:400,300"), "{e}");
+    }
 }
