@@ -521,3 +521,37 @@ fn cli_refuses_bad_specs_and_leaves_no_file() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn the_text_numbers_the_rays_as_the_overlays_do() {
+    use rayterm::inspect::{lines, LineKind};
+    let s = session("cornell-area");
+    let t = tracer(&s, 48, 48);
+    let tree = find(&t, |tr| tree_rays(tr).len() > 8);
+    let rays = tree_rays(&tree);
+    let open = lines(&tree, &|_| true);
+    let numbered: Vec<(usize, LineKind)> = open
+        .iter()
+        .filter_map(|l| l.ray.map(|r| (r, l.kind)))
+        .collect();
+    assert_eq!(
+        numbered.iter().map(|n| n.0).collect::<Vec<_>>(),
+        (0..rays.len()).collect::<Vec<_>>()
+    );
+    for (i, kind) in numbered {
+        let shadow = rays[i].shadow.is_some();
+        assert_eq!(
+            shadow,
+            matches!(kind, LineKind::Occluded | LineKind::Visible),
+            "ray {i}"
+        );
+    }
+    // Folded, the samples' lines go but the numbers after them stay.
+    let folded = lines(&tree, &|_| false);
+    let after: Vec<_> = folded.iter().filter(|l| l.ray.is_some()).collect();
+    assert!(after.len() < rays.len());
+    for l in after {
+        let same = open.iter().find(|o| o.ray == l.ray).unwrap();
+        assert_eq!(same.text, l.text);
+    }
+}
