@@ -51,6 +51,8 @@ pub enum Overlay {
     HeatNodes,
     /// Each pixel coloured by the triangle tests of its camera ray.
     HeatTests,
+    /// What bloom does: the pixels over its threshold and their glow.
+    Bloom,
 }
 
 impl Overlay {
@@ -60,7 +62,8 @@ impl Overlay {
             Overlay::Level => Overlay::Leaves,
             Overlay::Leaves => Overlay::HeatNodes,
             Overlay::HeatNodes => Overlay::HeatTests,
-            Overlay::HeatTests => Overlay::Off,
+            Overlay::HeatTests => Overlay::Bloom,
+            Overlay::Bloom => Overlay::Off,
         }
     }
 }
@@ -73,10 +76,11 @@ pub struct BvhOverlay {
 }
 
 impl BvhOverlay {
-    /// The debug view the worker draws for it.
+    /// The debug view the worker draws for it (bloom's is drawn into
+    /// each pass instead).
     pub fn view(&self) -> Option<DebugView> {
         match self.mode {
-            Overlay::Off => None,
+            Overlay::Off | Overlay::Bloom => None,
             Overlay::Level => Some(DebugView::Level(self.level)),
             Overlay::Leaves => Some(DebugView::Leaves),
             Overlay::HeatNodes => Some(DebugView::Heat(HeatMeasure::NodesVisited)),
@@ -91,6 +95,7 @@ impl BvhOverlay {
             Overlay::Leaves => "leaf boxes".into(),
             Overlay::HeatNodes => "heat map of nodes visited".into(),
             Overlay::HeatTests => "heat map of triangle tests".into(),
+            Overlay::Bloom => "bloom: the pixels over its threshold and their glow".into(),
         }
     }
 }
@@ -543,7 +548,9 @@ impl App {
 
     fn overlay_changed(&mut self) {
         self.link.set_overlay(self.overlay.view());
-        self.say(format!("BVH overlay: {}", self.overlay.name()));
+        self.link
+            .set_bloom_view(self.overlay.mode == Overlay::Bloom);
+        self.say(format!("view overlay: {}", self.overlay.name()));
     }
 
     /// The decision the Features panel shows for `f`.

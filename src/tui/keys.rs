@@ -294,8 +294,8 @@ pub const ROWS: &[Row] = &[
     Row {
         mode: Mode::Any,
         keys: &[(K::Char('g'), A::Overlay)],
-        help: "BVH overlay: off, level k, leaves, heat map (nodes, triangle tests)",
-        hint: Some("bvh view"),
+        help: "view overlay: off, BVH level k, leaves, heat map (nodes, triangle tests), bloom",
+        hint: Some("view overlay"),
     },
     Row {
         mode: Mode::Any,

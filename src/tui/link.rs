@@ -69,6 +69,11 @@ impl RenderLink {
         self.worker.send(Cmd::Overlay(view));
     }
 
+    /// Draws the bloom view into every pass from now on, or stops.
+    pub fn set_bloom_view(&mut self, on: bool) {
+        self.worker.send(Cmd::BloomView(on));
+    }
+
     /// Keeps the selected pixel's overlay `p` drawn (none: no overlay);
     /// asks the worker only when it changed.
     pub fn set_pixel(&mut self, p: Option<PixelRequest>) {

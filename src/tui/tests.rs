@@ -253,6 +253,38 @@ fn pixel_overlays_cycle_and_show_the_ray_at_the_debug_cursor() {
     assert_eq!(app.pixel_request(), None);
 }
 
+#[test]
+fn the_bloom_view_is_the_last_view_overlay() {
+    use super::app::Overlay;
+    let mut app = app("cornell", &[]);
+    let mut t = terminal(200, 40);
+    settle(&mut t, &mut app);
+    for _ in 0..5 {
+        app.handle_key(Key::Char('g'));
+    }
+    assert_eq!(app.overlay.mode, Overlay::Bloom);
+    // The worker draws it into the next pass it sends.
+    let end = std::time::Instant::now() + WAIT;
+    while app
+        .link
+        .current_frame()
+        .is_none_or(|f| f.bloom_view.is_none())
+    {
+        assert!(
+            std::time::Instant::now() < end,
+            "no bloom view within {WAIT:?}"
+        );
+        app.poll().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    super::draw(&mut t, &mut app).unwrap();
+    let s = text(&t);
+    assert!(s.contains("over the threshold (luminance > 1)"), "{s}");
+    assert!(s.contains("kernel 25x25"), "{s}");
+    app.handle_key(Key::Char('g'));
+    assert_eq!(app.overlay.mode, Overlay::Off);
+}
+
 /// Settles, then waits for the worker's pixel overlay and draws again.
 fn settle_pixel(t: &mut Terminal<TestBackend>, app: &mut App) -> String {
     settle(t, app);

@@ -62,6 +62,8 @@ pub enum Cmd {
     Overlay(Option<DebugView>),
     /// Keep the selected pixel's overlay drawn (none: no overlay).
     Pixel(Option<PixelRequest>),
+    /// Draw bloom's view into every pass (`Snapshot::bloom_view`), or stop.
+    BloomView(bool),
     Quit,
 }
 
@@ -188,6 +190,9 @@ pub struct Snapshot {
     pub image: Vec<Vec3>,
     /// The mean before bloom, when bloom ran.
     pub pre_bloom: Option<Vec<Vec3>>,
+    /// With the bloom view on: the pass's mean as `debug_view::bloom_view`
+    /// draws it, and its legend in one line.
+    pub bloom_view: Option<(Vec<Vec3>, String)>,
     /// A quarter-resolution preview, not yet a sample of the film.
     pub coarse: bool,
     pub spp: u32,
@@ -251,6 +256,7 @@ pub struct Worker {
     /// The pixel overlay to draw, and the generation it was last drawn for.
     pixel: Option<PixelRequest>,
     pixel_drawn: Option<(u64, PixelRequest)>,
+    bloom_view: bool,
 }
 
 impl Worker {
@@ -283,6 +289,7 @@ impl Worker {
             overlay_drawn: None,
             pixel: None,
             pixel_drawn: None,
+            bloom_view: false,
         }
     }
 
@@ -325,6 +332,12 @@ impl Worker {
             Cmd::Pixel(p) => {
                 self.pixel = p;
                 self.pixel_drawn = None;
+                None
+            }
+            Cmd::BloomView(on) => {
+                self.bloom_view = on;
+                // The film is the same: shown again, with or without it.
+                self.resend = self.film.film.spp > 0;
                 None
             }
             Cmd::Quit => None,
@@ -509,6 +522,14 @@ impl Worker {
     /// `true_error` that image's error against the reference.
     fn snapshot(&self, view: &View, mean: Vec<Vec3>, true_error: Option<f64>) -> Snapshot {
         let film = &self.film.film;
+        let bloom_view = self.bloom_view.then(|| {
+            let s = &self.scene.settings.bloom;
+            let (image, mut legend) = debug_view::bloom_view(&mean, view.width, view.height, s);
+            if !view.plan.bloom {
+                legend.push((None, "bloom is off in this plan".into()));
+            }
+            (image, legend_line(&legend))
+        });
         let shown = post::display(
             mean,
             view.width,
@@ -522,6 +543,7 @@ impl Worker {
             height: view.height,
             image: shown.image,
             pre_bloom: shown.before_bloom,
+            bloom_view,
             coarse: false,
             spp: film.spp,
             spp_mean: film.spp_range().1,
@@ -572,6 +594,7 @@ impl Worker {
             height: view.height,
             image: shown.image,
             pre_bloom: shown.before_bloom,
+            bloom_view: None,
             coarse: true,
             spp: 0,
             spp_mean: 0.0,

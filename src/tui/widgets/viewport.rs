@@ -8,7 +8,7 @@ use ratatui::style::{Color, Style};
 use ratatui::widgets::{Block, Borders, Paragraph};
 use ratatui::Frame;
 
-use crate::tui::app::App;
+use crate::tui::app::{App, Overlay};
 use crate::tui::color::{self, ColorMode};
 use crate::tui::graphics::symbols::{self, Symbols};
 use crate::tui::worker::Snapshot;
@@ -30,8 +30,15 @@ pub struct ViewPicture {
 pub fn picture(app: &App) -> Option<ViewPicture> {
     let frame = app.link.frame.as_deref()?;
     let (w, h) = (frame.width, frame.height);
-    let mut img = frame.image.clone();
     let mut note = None;
+    // The bloom view replaces the picture: it shows the pass itself.
+    let mut img = match &frame.bloom_view {
+        Some((view, legend)) if app.overlay.mode == Overlay::Bloom => {
+            note = Some(legend.clone());
+            view.clone()
+        }
+        _ => frame.image.clone(),
+    };
     // Overlays and marks follow the current camera and size, so they wait
     // for a pass of that view.
     let current = app.link.current_frame().is_some() && (w, h) == app.view_size;
