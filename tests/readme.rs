@@ -65,6 +65,31 @@ const COMMANDS: &[(&str, How)] = &[
         "rayterm render teapot:32 --debug bvh-heat:tests -o tests.png",
         Run,
     ),
+    (
+        "rayterm render cornell --debug ray:400,500:traversal -o traversal.png",
+        Run,
+    ),
+    (
+        "rayterm render cornell --debug ray:400,500:traversal:1 -o shadow.png",
+        Run,
+    ),
+    (
+        "rayterm render mirrors --size 640x480 --debug ray:320,330:normals -o normals.png",
+        Run,
+    ),
+    (
+        "rayterm render cube-textured --size 480x360 --debug ray:240,150:texture -o texel.png",
+        Run,
+    ),
+    (
+        "rayterm render env --size 640x360 --debug ray:330,190:environment -o env.png",
+        Run,
+    ),
+    (
+        "rayterm render cornell-area --size 400x400 --spp 16 --debug samples:200,330 -o samples.png",
+        Run,
+    ),
+    ("rayterm render cornell --debug bloom -o bloom.png", Run),
     ("rayterm inspect cornell --pixel 400,300", Run),
     ("rayterm inspect cornell --pixel 400,300 --json", Run),
     ("rayterm inspect cornell-area --pixel 150,600 --expand", Run),

@@ -10,7 +10,7 @@ mod wide;
 pub use build::{build, build_full_sweep};
 pub use node::Node;
 pub use stats::{BuildStats, TraversalStats};
-pub use traverse::Hit;
+pub use traverse::{Hit, WalkLog};
 
 /// A BVH over the triangles of a scene.
 ///

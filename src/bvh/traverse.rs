@@ -208,7 +208,122 @@ impl Kernels for Avx {
     }
 }
 
+/// What a walk reports when `STATS` is on: the counts of
+/// [`TraversalStats`], or the nodes themselves ([`WalkLog`]).
+trait Tally {
+    /// Wide node `at` was visited; `hit` of its child boxes were hit.
+    fn node(&mut self, at: u32, hit: u32, missed: u32);
+    /// The leaf reference `r` was visited.
+    fn leaf(&mut self, r: u32);
+    fn tests(&mut self, n: u32);
+}
+
+impl Tally for TraversalStats {
+    #[inline(always)]
+    fn node(&mut self, _at: u32, hit: u32, missed: u32) {
+        self.nodes_visited += 1;
+        self.boxes_hit += hit;
+        self.boxes_missed += missed;
+    }
+
+    #[inline(always)]
+    fn leaf(&mut self, _r: u32) {
+        self.leaves += 1;
+    }
+
+    #[inline(always)]
+    fn tests(&mut self, n: u32) {
+        self.triangle_tests += n;
+    }
+}
+
+/// One walk of one ray, as the debug views draw it: the binary nodes whose
+/// boxes it visited, in order, and what it found.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct WalkLog {
+    pub stats: TraversalStats,
+    /// Binary node indices (`Bvh::nodes`), each once, in visiting order.
+    pub visited: Vec<u32>,
+    /// The scene triangle found: the closest hit, or any blocker.
+    pub found: Option<u32>,
+    /// Wide node indices and leaf references (with the `LEAF` bit).
+    walked: Vec<u32>,
+}
+
+impl Tally for WalkLog {
+    fn node(&mut self, at: u32, hit: u32, missed: u32) {
+        self.stats.node(at, hit, missed);
+        self.walked.push(at);
+    }
+
+    fn leaf(&mut self, r: u32) {
+        self.stats.leaf(r);
+        self.walked.push(r);
+    }
+
+    fn tests(&mut self, n: u32) {
+        self.stats.tests(n);
+    }
+}
+
 impl Bvh {
+    /// The walk `intersect` (or, with `any`, `occluded`) makes for `ray`,
+    /// logged node by node: the same code, counting into a log.
+    pub fn walk_log(&self, ray: &Ray, any: bool) -> WalkLog {
+        let mut log = WalkLog::default();
+        if any {
+            let mut found = None;
+            self.traverse::<true, true>(ray, &mut log, |h, idx| {
+                found = Some(self.prim[idx[h.mask.trailing_zeros() as usize] as usize]);
+                0.0
+            });
+            log.found = found;
+        } else {
+            let mut best: Option<Hit> = None;
+            self.traverse::<false, true>(ray, &mut log, self.keep_closest(&mut best));
+            log.found = best.map(|h| h.prim);
+        }
+        let w = &self.wide;
+        let mut seen = std::collections::HashSet::new();
+        log.visited = log
+            .walked
+            .iter()
+            .map(|&r| match r & LEAF {
+                0 => w.node_of[r as usize],
+                _ => w.leaf_of[leaf_packets(r).start],
+            })
+            .filter(|&n| n != u32::MAX && seen.insert(n))
+            .collect();
+        log
+    }
+
+    /// Binary nodes from the root down to the leaf holding scene triangle
+    /// `prim` (empty when no leaf holds it).
+    pub fn path_to(&self, prim: u32) -> Vec<u32> {
+        let Some(slot) = self.prim.iter().position(|&p| p == prim) else {
+            return Vec::new();
+        };
+        let slot = slot as u32;
+        let mut parent = vec![u32::MAX; self.nodes.len()];
+        let mut leaf = None;
+        for (i, n) in self.nodes.iter().enumerate() {
+            if n.is_leaf() {
+                if (n.first..n.first + n.count).contains(&slot) {
+                    leaf = Some(i as u32);
+                }
+            } else {
+                parent[n.first as usize] = i as u32;
+                parent[n.first as usize + 1] = i as u32;
+            }
+        }
+        let mut path: Vec<u32> = std::iter::successors(leaf, |&n| {
+            Some(parent[n as usize]).filter(|&p| p != u32::MAX)
+        })
+        .collect();
+        path.reverse();
+        path
+    }
+
     /// Nearest hit in `(0, ray.tmax]`.
     #[inline]
     pub fn intersect<const STATS: bool>(&self, ray: &Ray, st: &mut TraversalStats) -> Option<Hit> {
@@ -259,7 +374,7 @@ impl Bvh {
     fn traverse<const ANY: bool, const STATS: bool>(
         &self,
         ray: &Ray,
-        st: &mut TraversalStats,
+        st: &mut impl Tally,
         on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
     ) {
         if self.wide.nodes.is_empty() {
@@ -282,7 +397,7 @@ impl Bvh {
     fn traverse_avx<const ANY: bool, const STATS: bool>(
         &self,
         ray: &Ray,
-        st: &mut TraversalStats,
+        st: &mut impl Tally,
         on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
     ) {
         self.traverse_with::<ANY, STATS, _>(ray, st, on_hit, &Avx(()));
@@ -292,7 +407,7 @@ impl Bvh {
     fn traverse_with<const ANY: bool, const STATS: bool, K: Kernels>(
         &self,
         ray: &Ray,
-        st: &mut TraversalStats,
+        st: &mut impl Tally,
         on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
         k: &K,
     ) {
@@ -311,7 +426,7 @@ impl Bvh {
     fn walk_deep<const ANY: bool, const STATS: bool, K: Kernels>(
         &self,
         ray: &Ray,
-        st: &mut TraversalStats,
+        st: &mut impl Tally,
         on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
         k: &K,
     ) {
@@ -324,7 +439,7 @@ impl Bvh {
     fn walk<const ANY: bool, const STATS: bool, K: Kernels>(
         &self,
         ray: &Ray,
-        st: &mut TraversalStats,
+        st: &mut impl Tally,
         stack: &mut [MaybeUninit<(u32, f32)>],
         mut on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
         k: &K,
@@ -345,9 +460,7 @@ impl Bvh {
                 let (mask, tnear) = k.boxes(&boxes, node, tmax);
                 if STATS {
                     let slots = node.b[0].iter().filter(|x| x.is_finite()).count() as u32;
-                    st.nodes_visited += 1;
-                    st.boxes_hit += mask.count_ones();
-                    st.boxes_missed += slots - mask.count_ones();
+                    st.node(cur, mask.count_ones(), slots - mask.count_ones());
                 }
                 if mask != 0 {
                     if mask & (mask - 1) == 0 {
@@ -385,11 +498,11 @@ impl Bvh {
                 }
             } else {
                 if STATS {
-                    st.leaves += 1;
+                    st.leaf(cur);
                 }
                 for p in &w.packets[leaf_packets(cur)] {
                     if STATS {
-                        st.triangle_tests += p.lanes();
+                        st.tests(p.lanes());
                     }
                     let shear = shear.get_or_insert_with(setup);
                     // Any-hit traversal needs no barycentrics.

@@ -66,6 +66,11 @@ pub(crate) struct Wide {
     pub stack: usize,
     /// Whether this CPU can test eight boxes at once (AVX).
     pub avx: bool,
+    /// The binary node whose box each wide node is, and the binary leaf of
+    /// each packet (`u32::MAX` for the empty packet): what a logged walk
+    /// reports in the binary tree's terms.
+    pub node_of: Vec<u32>,
+    pub leaf_of: Vec<u32>,
 }
 
 impl Wide {
@@ -78,26 +83,31 @@ impl Wide {
             packets: Vec::with_capacity(tris.len() / 3 + 2),
             stack: 0,
             avx: avx_available(),
+            node_of: Vec::with_capacity(bin.len() / 2 + 1),
+            leaf_of: Vec::with_capacity(tris.len() / 3 + 2),
         };
         w.packets.push(Packet {
             p: [[[f32::NAN; PACKET]; 3]; 3],
             idx: [u32::MAX; PACKET],
         });
+        w.leaf_of.push(u32::MAX);
         if let Some(root) = bin.first() {
             // The root is always an interior wide node, even over one leaf.
             let depth = if root.is_leaf() {
-                w.node(bin, tris, &[0]).1
+                w.node(bin, tris, 0, &[0]).1
             } else {
-                w.gather(bin, tris, root.first as usize).1
+                w.gather(bin, tris, 0).1
             };
             w.stack = depth * (WIDTH - 1);
         }
         w
     }
 
-    /// Wide node over the binary children at `c` and `c + 1`, opened up to
-    /// eight; returns its index and the depth of its subtree in wide nodes.
-    fn gather(&mut self, bin: &[Node], tris: &[[[f32; 3]; 3]], c: usize) -> (u32, usize) {
+    /// Wide node over the children of interior binary node `at` (at `c`
+    /// and `c + 1`), opened up to eight; returns its index and the depth of
+    /// its subtree in wide nodes.
+    fn gather(&mut self, bin: &[Node], tris: &[[[f32; 3]; 3]], at: usize) -> (u32, usize) {
+        let c = bin[at].first as usize;
         let mut kids = [0; WIDTH];
         kids[..2].copy_from_slice(&[c, c + 1]);
         let mut len = 2;
@@ -114,11 +124,18 @@ impl Wide {
             kids[len] = g + 1;
             len += 1;
         }
-        self.node(bin, tris, &kids[..len])
+        self.node(bin, tris, at, &kids[..len])
     }
 
-    fn node(&mut self, bin: &[Node], tris: &[[[f32; 3]; 3]], kids: &[usize]) -> (u32, usize) {
+    fn node(
+        &mut self,
+        bin: &[Node],
+        tris: &[[[f32; 3]; 3]],
+        owner: usize,
+        kids: &[usize],
+    ) -> (u32, usize) {
         let at = self.nodes.len();
+        self.node_of.push(owner as u32);
         let mut below = 0;
         let (inf, ninf) = (f32::INFINITY, f32::NEG_INFINITY);
         self.nodes.push(Node8 {
@@ -135,9 +152,9 @@ impl Wide {
         for (lane, &k) in kids.iter().enumerate() {
             let n = &bin[k];
             let r = if n.is_leaf() {
-                self.leaf(tris, n.first as usize, n.count as usize)
+                self.leaf(tris, k, n.first as usize, n.count as usize)
             } else {
-                let (r, need) = self.gather(bin, tris, n.first as usize);
+                let (r, need) = self.gather(bin, tris, k);
                 below = below.max(need);
                 r
             };
@@ -151,7 +168,7 @@ impl Wide {
         (at as u32, 1 + below)
     }
 
-    fn leaf(&mut self, tris: &[[[f32; 3]; 3]], first: usize, count: usize) -> u32 {
+    fn leaf(&mut self, tris: &[[[f32; 3]; 3]], owner: usize, first: usize, count: usize) -> u32 {
         let at = self.packets.len();
         for start in (first..first + count).step_by(PACKET) {
             let mut p = Packet {
@@ -167,6 +184,7 @@ impl Wide {
                 p.idx[lane] = i as u32;
             }
             self.packets.push(p);
+            self.leaf_of.push(owner as u32);
         }
         let n = self.packets.len() - at;
         debug_assert!((1..=1 << PACKET_BITS).contains(&n));
@@ -174,7 +192,10 @@ impl Wide {
     }
 
     pub fn memory_bytes(&self) -> usize {
-        std::mem::size_of_val(&self.nodes[..]) + std::mem::size_of_val(&self.packets[..])
+        std::mem::size_of_val(&self.nodes[..])
+            + std::mem::size_of_val(&self.packets[..])
+            + std::mem::size_of_val(&self.node_of[..])
+            + std::mem::size_of_val(&self.leaf_of[..])
     }
 }
 

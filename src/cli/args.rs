@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
-use crate::render::debug_view::DebugView;
+use super::debug::DebugSpec;
 use crate::render::{Feature, Features, PlanPolicy, SceneRequest, Worst};
 use crate::scene::Builder;
 use crate::tui::color::ColorMode;
@@ -233,10 +233,15 @@ pub struct RenderArgs {
     /// Print the scene plan (stage, on/off, reason) before rendering.
     #[arg(long)]
     pub explain: bool,
-    /// Write a BVH debug view instead: bvh-level:K (boxes of level K over the
-    /// image), bvh-leaves, bvh-heat (nodes visited per pixel) or bvh-heat:tests.
-    #[arg(long, value_name = "VIEW", conflicts_with_all = ["spp", "time", "target_error"])]
-    pub debug: Option<DebugView>,
+    /// Write a debug view instead: bvh-level:K (boxes of level K over the
+    /// image), bvh-leaves, bvh-heat (nodes visited per pixel) or
+    /// bvh-heat:tests; bloom (the pixels over the threshold and their glow);
+    /// ray:X,Y[:VIEW[:N]] (pixel X,Y's rays, or VIEW: colour, lights,
+    /// traversal, normals, texture, environment, glossy, samples; N picks
+    /// the ray of traversal, normals, texture and environment); samples:X,Y
+    /// (a zoom of the pixel's samples).
+    #[arg(long, value_name = "VIEW", conflicts_with_all = ["time", "target_error"])]
+    pub debug: Option<DebugSpec>,
     /// Render only sample indices A to B-1 of every pixel and write a
     /// partial film (-o part.exr) for `rayterm merge`.
     #[arg(long, value_name = "A..B", value_parser = parse_samples,

@@ -74,8 +74,8 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     if a.explain {
         eprintln!("plan for {}:\n{}", s.scene.name, s.plan.explain());
     }
-    if let Some(view) = a.debug {
-        return super::debug::run(&s, view, &out);
+    if let Some(spec) = a.debug {
+        return super::debug::run(&s, spec, a.spp, &out);
     }
     // A note only where the user asked for more than the one exact pass.
     if s.plan.deterministic && stop.is_some_and(|st| st != Stop::spp(1)) && !split {

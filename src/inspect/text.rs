@@ -30,6 +30,9 @@ pub struct TreeLine {
     pub text: String,
     /// Set on a foldable list's summary line: its id and whether it is open.
     pub fold: Option<(usize, bool)>,
+    /// Set on a ray's line and a shadow ray's: its number in
+    /// [`super::overlay::tree_rays`], for the overlays of one ray.
+    pub ray: Option<usize>,
 }
 
 /// `x` to `digits` significant digits: fixed from 1e-3 to 1e5, scientific
@@ -69,6 +72,7 @@ fn bvh(s: &TraversalStats) -> String {
 struct Out<'a> {
     lines: Vec<TreeLine>,
     next_fold: usize,
+    next_ray: usize,
     expanded: &'a dyn Fn(usize) -> bool,
 }
 
@@ -79,7 +83,16 @@ impl Out<'_> {
             kind,
             text,
             fold: None,
+            ray: None,
         });
+    }
+
+    /// Numbers the last line as the next ray.
+    fn number_ray(&mut self) {
+        if let Some(l) = self.lines.last_mut() {
+            l.ray = Some(self.next_ray);
+        }
+        self.next_ray += 1;
     }
 }
 
@@ -88,6 +101,7 @@ pub fn lines(tree: &PixelTree, expanded: &dyn Fn(usize) -> bool) -> Vec<TreeLine
     let mut out = Out {
         lines: Vec::new(),
         next_fold: 0,
+        next_ray: 0,
         expanded,
     };
     out.push(
@@ -131,6 +145,7 @@ fn ray(out: &mut Out, n: &RayNode, d: usize) {
             v(n.weight)
         ),
     );
+    out.number_ray();
     out.push(d + 1, LineKind::Detail, bvh(&n.bvh));
     if let Some(h) = &n.hit {
         out.push(
@@ -284,14 +299,20 @@ fn light(out: &mut Out, l: &LightNode, d: usize) {
                 v(mean_colour)
             ),
             fold: Some((id, open)),
+            ray: None,
         });
         if !open {
+            // The folded shadow rays keep their numbers.
+            out.next_ray += l.samples.iter().filter(|s| s.shadow_ray.is_some()).count();
             return;
         }
     }
     for s in &l.samples {
         let (kind, text) = sample_line(s);
         out.push(d + 1, kind, text);
+        if s.shadow_ray.is_some() {
+            out.number_ray();
+        }
     }
 }
 

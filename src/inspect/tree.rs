@@ -1,6 +1,6 @@
 //! Building the ray tree of one sample of one pixel from the integrator's hooks.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::bvh::{Bvh, Hit, TraversalStats};
@@ -50,6 +50,11 @@ pub struct PixelTree {
     pub y: u32,
     pub sample: u32,
     pub seed: u64,
+    /// Where in the pixel the camera ray passes (0..1 on each axis).
+    pub offset: Vec2,
+    /// The sample's sub-pixel stratum (`i + 4 j` of a 4x4 grid) when
+    /// pixel samples are jittered.
+    pub stratum: Option<u32>,
     /// The sample's value: exactly what the renderer adds to the film.
     pub color: Vec3,
     /// When bloom runs: the pixel's value in the image it belongs to,
@@ -65,6 +70,8 @@ pub struct PixelTree {
 pub struct TreeRecorder {
     stack: Vec<RayNode>,
     done: Option<RayNode>,
+    offset: Vec2,
+    stratum: Option<u32>,
 }
 
 impl TreeRecorder {
@@ -96,6 +103,11 @@ impl Recorder for TreeRecorder {
             l.bvh += st;
         }
         h
+    }
+
+    fn pixel_sample(&mut self, offset: Vec2, stratum: Option<u32>) {
+        self.offset = offset;
+        self.stratum = stratum;
     }
 
     fn begin_ray(&mut self, kind: RayKind, ray: &Ray, weight: Vec3) {
@@ -169,6 +181,7 @@ impl Recorder for TreeRecorder {
 pub fn inspect_pixel(tracer: &Tracer, x: u32, y: u32, k: u32) -> PixelTree {
     let mut rec = TreeRecorder::default();
     let color = tracer.sample(x, y, k, &mut rec);
+    let (offset, stratum) = (rec.offset, rec.stratum);
     let root = rec.into_root().expect("every sample traces a camera ray");
     PixelTree {
         scene: tracer.scene.name.clone(),
@@ -178,6 +191,8 @@ pub fn inspect_pixel(tracer: &Tracer, x: u32, y: u32, k: u32) -> PixelTree {
         y,
         sample: k,
         seed: tracer.seed,
+        offset,
+        stratum,
         color,
         pixel_before_bloom: None,
         pixel_after_bloom: None,

@@ -31,6 +31,19 @@ pub struct Tracer<'a> {
     pub max_depth: u32,
 }
 
+/// The mirror direction of `dir` about the shading normal `n`, or about the
+/// geometric normal `ng` where `n` would send it into the surface: the
+/// reflection ray, and the axis of the glossy lobe.
+pub fn mirror(dir: Vec3, n: Vec3, ng: Vec3) -> Vec3 {
+    let d = dir.normalize();
+    let r = d - 2.0 * d.dot(n) * n;
+    if r.dot(ng) <= 0.0 {
+        d - 2.0 * d.dot(ng) * ng
+    } else {
+        r
+    }
+}
+
 /// A monomorphised `Tracer::trace`.
 type TraceFn<'a, R> = fn(&Tracer<'a>, &Ray, u32, RayKind, Vec3, &mut Rng, &mut R) -> Vec3;
 
@@ -79,13 +92,15 @@ impl<'a> Tracer<'a> {
     pub fn sample<R: Recorder>(&self, x: u32, y: u32, k: u32, rec: &mut R) -> Vec3 {
         let pixel = y as u64 * self.width as u64 + x as u64;
         let mut rng = Rng::for_sample(pixel, k as u64, self.seed);
-        let off = if let Some(stratum) = self.stratum(x, y, k) {
+        let stratum = self.stratum(x, y, k);
+        let off = if let Some(stratum) = stratum {
             jittered(stratum, PIXEL_GRID, rng.next_vec2())
         } else if self.plan.supersampling {
             rng.next_vec2()
         } else {
             Vec2::splat(0.5)
         };
+        rec.pixel_sample(off, stratum);
         let ray = self
             .frame
             .ray(x as f64 + off.x as f64, y as f64 + off.y as f64);
@@ -377,12 +392,7 @@ impl<'a> Tracer<'a> {
         rng: &mut Rng,
         rec: &mut R,
     ) -> Vec3 {
-        let d = ray.dir.normalize();
-        let mut r = d - 2.0 * d.dot(s.n) * s.n;
-        if r.dot(s.ng) <= 0.0 {
-            // The interpolated normal sent the mirror ray into the surface: use the true one.
-            r = d - 2.0 * d.dot(s.ng) * s.ng;
-        }
+        let r = mirror(ray.dir, s.n, s.ng);
         let ks = s.mat.ks;
         if self.plan.glossy && s.mat.glossy() {
             let n = self.scene.settings.glossy_samples.max(1);

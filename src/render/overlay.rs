@@ -11,6 +11,10 @@ use crate::scene::camera::CameraFrame;
 /// A transparent layer drawn over an image.
 pub type Layer = Canvas<Option<Vec3>>;
 
+/// A debug view's legend: per line, a colour swatch (none for plain text)
+/// and what it means.
+pub type Legend = Vec<(Option<Vec3>, String)>;
+
 /// Distance in front of the eye where segments are cut. Tiny, because the
 /// projection runs in f64 and the 2D clip handles the huge coordinates of
 /// points just in front of the eye.
@@ -88,8 +92,51 @@ pub fn legend(c: &mut Layer, max: u32) {
     label("0", bottom + 2);
 }
 
+/// Writes the legend in the top left corner of `layer` (bottom left with
+/// `bottom`): a swatch and a line of text per entry, on black.
+pub fn draw_legend(layer: &mut Layer, legend: &Legend, bottom: bool) {
+    let scale = (layer.height as i32 / 400).max(1);
+    let line = (GLYPH + 4) * scale;
+    let pad = 4 * scale;
+    let top = if bottom {
+        layer.height as i32 - pad - legend.len() as i32 * line
+    } else {
+        pad
+    };
+    for (i, (swatch, text)) in legend.iter().enumerate() {
+        let y = top + i as i32 * line;
+        let x = pad;
+        let tx = x + (GLYPH + 4) * scale;
+        layer.rect(
+            x - 2,
+            y - 2,
+            tx + text_width(text, scale) + 2,
+            y + GLYPH * scale + 1,
+            Some(Vec3::ZERO),
+        );
+        if let Some(c) = swatch {
+            layer.rect(x, y, x + GLYPH * scale - 1, y + GLYPH * scale - 1, Some(*c));
+        }
+        layer.text(tx, y, text, Some(Vec3::ONE), scale);
+    }
+}
+
+/// The legend as one line, for the TUI's title.
+pub fn legend_line(legend: &Legend) -> String {
+    legend
+        .iter()
+        .map(|(_, t)| t.as_str())
+        .collect::<Vec<_>>()
+        .join(" · ")
+}
+
 /// Clips segment `p`–`q` to `[0, w] x [0, h]` (Liang–Barsky).
-fn clip_to_rect(p: (f64, f64), q: (f64, f64), w: f64, h: f64) -> Option<((f64, f64), (f64, f64))> {
+pub fn clip_to_rect(
+    p: (f64, f64),
+    q: (f64, f64),
+    w: f64,
+    h: f64,
+) -> Option<((f64, f64), (f64, f64))> {
     if ![p.0, p.1, q.0, q.1].iter().all(|v| v.is_finite()) {
         return None;
     }

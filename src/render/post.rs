@@ -54,6 +54,24 @@ pub fn display_with(
 /// blurred with a separable Gaussian and added back with `strength`.
 /// Returns whether anything was over the threshold (nothing changes otherwise).
 pub fn bloom(img: &mut [Vec3], width: usize, height: usize, s: &BloomSettings) -> bool {
+    let Some(g) = glow(img, width, height, s) else {
+        return false;
+    };
+    for (c, g) in img.iter_mut().zip(g.glow) {
+        *c += g;
+    }
+    true
+}
+
+/// What bloom does to an image: the pixels over the threshold (their
+/// colour, zero elsewhere) and the glow it adds (strength applied).
+pub struct Glow {
+    pub bright: Vec<Vec3>,
+    pub glow: Vec<Vec3>,
+}
+
+/// Bloom's parts for `img`, or `None` when nothing is over the threshold.
+pub fn glow(img: &[Vec3], width: usize, height: usize, s: &BloomSettings) -> Option<Glow> {
     let bright: Vec<Vec3> = img
         .iter()
         .map(|c| {
@@ -65,7 +83,7 @@ pub fn bloom(img: &mut [Vec3], width: usize, height: usize, s: &BloomSettings) -
         })
         .collect();
     if bright.iter().all(|c| *c == Vec3::ZERO) {
-        return false;
+        return None;
     }
     let r = s.radius as i64;
     let kernel: Vec<f32> = (-r..=r)
@@ -89,11 +107,11 @@ pub fn bloom(img: &mut [Vec3], width: usize, height: usize, s: &BloomSettings) -
         }
         out
     };
-    let glow = blur(&blur(&bright, 1, 0), 0, 1);
-    for (c, g) in img.iter_mut().zip(glow) {
-        *c += g * s.strength;
-    }
-    true
+    let glow = blur(&blur(&bright, 1, 0), 0, 1)
+        .into_iter()
+        .map(|g| g * s.strength)
+        .collect();
+    Some(Glow { bright, glow })
 }
 
 /// Linear value to 8-bit sRGB, clamped.

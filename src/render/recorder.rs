@@ -81,6 +81,10 @@ pub trait Recorder {
         bvh.occluded::<false>(ray, &mut TraversalStats::default())
     }
 
+    /// Where in its pixel the sample's camera ray passes (0..1 on each
+    /// axis), and its sub-pixel stratum when samples are jittered.
+    #[inline(always)]
+    fn pixel_sample(&mut self, _offset: Vec2, _stratum: Option<u32>) {}
     /// A ray starts; `weight` is its factor in the pixel's colour.
     #[inline(always)]
     fn begin_ray(&mut self, _kind: RayKind, _ray: &Ray, _weight: Vec3) {}

@@ -23,8 +23,9 @@ use super::layout::Layout;
 use super::link::RenderLink;
 use super::popup::{self, Popup};
 use super::term::output::Figures;
-use super::worker::{self, Msg, Reference, Snapshot, Truth, View, Worker};
+use super::worker::{self, Msg, PixelRequest, Reference, Snapshot, Truth, View, Worker};
 use crate::bvh::debug::HeatMeasure;
+use crate::inspect::overlay::{PixelView, VIEWS};
 use crate::render::debug_view::DebugView;
 use crate::render::{Decision, Feature, Features, Plan, Session, Worst};
 use crate::report::converge::load_reference;
@@ -50,6 +51,8 @@ pub enum Overlay {
     HeatNodes,
     /// Each pixel coloured by the triangle tests of its camera ray.
     HeatTests,
+    /// What bloom does: the pixels over its threshold and their glow.
+    Bloom,
 }
 
 impl Overlay {
@@ -59,7 +62,8 @@ impl Overlay {
             Overlay::Level => Overlay::Leaves,
             Overlay::Leaves => Overlay::HeatNodes,
             Overlay::HeatNodes => Overlay::HeatTests,
-            Overlay::HeatTests => Overlay::Off,
+            Overlay::HeatTests => Overlay::Bloom,
+            Overlay::Bloom => Overlay::Off,
         }
     }
 }
@@ -72,10 +76,11 @@ pub struct BvhOverlay {
 }
 
 impl BvhOverlay {
-    /// The debug view the worker draws for it.
+    /// The debug view the worker draws for it (bloom's is drawn into
+    /// each pass instead).
     pub fn view(&self) -> Option<DebugView> {
         match self.mode {
-            Overlay::Off => None,
+            Overlay::Off | Overlay::Bloom => None,
             Overlay::Level => Some(DebugView::Level(self.level)),
             Overlay::Leaves => Some(DebugView::Leaves),
             Overlay::HeatNodes => Some(DebugView::Heat(HeatMeasure::NodesVisited)),
@@ -90,6 +95,7 @@ impl BvhOverlay {
             Overlay::Leaves => "leaf boxes".into(),
             Overlay::HeatNodes => "heat map of nodes visited".into(),
             Overlay::HeatTests => "heat map of triangle tests".into(),
+            Overlay::Bloom => "bloom: the pixels over its threshold and their glow".into(),
         }
     }
 }
@@ -113,8 +119,8 @@ pub struct App {
     /// The viewport's size in pixels, from the layout.
     pub view_size: (u32, u32),
     pub inspector: Inspector,
-    /// Draw the selected pixel's rays into the view.
-    pub show_rays: bool,
+    /// The selected pixel's overlay drawn into the view (`o` cycles them).
+    pub pixel_view: Option<PixelView>,
     pub overlay: BvhOverlay,
     /// The newest message for the status line, and when it was said; it
     /// gives way to the state line after [`MESSAGE_LIFE`].
@@ -144,8 +150,6 @@ pub struct App {
     /// The view size for which the status line last said how to make the
     /// reference exact.
     resample_noted: Option<(u32, u32)>,
-    /// Length drawn for rays that miss everything: twice the scene's diagonal.
-    pub reach: f32,
     /// What loading the scene warned about.
     pub warnings: Vec<String>,
 }
@@ -191,7 +195,6 @@ impl App {
             None => String::new(),
         };
         Ok(App {
-            reach: 2.0 * scene.bounds().extent().length(),
             builder: scene.settings.builder,
             features: plan.features,
             plan,
@@ -202,7 +205,7 @@ impl App {
             link: RenderLink::new(worker),
             view_size: (0, 0),
             inspector: Inspector::default(),
-            show_rays: false,
+            pixel_view: None,
             overlay: BvhOverlay {
                 mode: Overlay::Off,
                 level: 0,
@@ -295,6 +298,7 @@ impl App {
             self.inspector.width = l.debug_text.width as usize;
         }
         self.refresh_inspector();
+        self.link.set_pixel(self.pixel_request());
         if let Some(p) = &mut self.popup {
             let width = l.main.width.saturating_sub(6);
             p.set_width(width as usize);
@@ -318,6 +322,25 @@ impl App {
             width: self.view_size.0,
             height: self.view_size.1,
         });
+    }
+
+    /// The pixel overlay to keep drawn: the view chosen with `o`, of the
+    /// selected pixel, for the one-ray views of the ray at the debug cursor.
+    pub fn pixel_request(&self) -> Option<PixelRequest> {
+        let view = self.pixel_view?;
+        let s = self.inspector.selected?;
+        Some(PixelRequest {
+            x: s.x,
+            y: s.y,
+            sample: s.sample,
+            view,
+            ray: if view.one_ray() {
+                self.inspector.cursor_ray()
+            } else {
+                None
+            },
+            spp: self.session.scene.settings.spp,
+        })
     }
 
     /// Replays the selected pixel's tree through the plan and camera the
@@ -455,14 +478,26 @@ impl App {
                 self.inspector.move_cursor(n as i64 * page);
             }
             Action::Worst(w) => self.jump_to_worst(w),
-            Action::Rays => {
-                self.show_rays = !self.show_rays;
-                self.say(match (self.show_rays, self.inspector.selected) {
-                    (false, _) => "rays off",
-                    (true, Some(_)) => {
-                        "rays of the selected pixel: shadow rays red when occluded, white when clear"
+            Action::PixelOverlay => {
+                let i = self
+                    .pixel_view
+                    .and_then(|v| VIEWS.iter().position(|&o| o == v));
+                self.pixel_view = match i {
+                    None => Some(VIEWS[0]),
+                    Some(i) => VIEWS.get(i + 1).copied(),
+                };
+                let name = match self.pixel_view {
+                    None => "off",
+                    Some(v) => pixel_view_name(v),
+                };
+                self.say(match (self.pixel_view, self.inspector.selected) {
+                    (Some(_), None) => {
+                        format!("pixel overlay: {name}: select a pixel (v, or click) to see it")
                     }
-                    (true, None) => "rays on: select a pixel (v, or click) to see its rays",
+                    (Some(v), Some(_)) if v.one_ray() => format!(
+                        "pixel overlay: {name}, of the ray at the debug cursor ([ and ] move it)"
+                    ),
+                    _ => format!("pixel overlay: {name}"),
                 });
             }
             Action::Overlay => {
@@ -513,7 +548,9 @@ impl App {
 
     fn overlay_changed(&mut self) {
         self.link.set_overlay(self.overlay.view());
-        self.say(format!("BVH overlay: {}", self.overlay.name()));
+        self.link
+            .set_bloom_view(self.overlay.mode == Overlay::Bloom);
+        self.say(format!("view overlay: {}", self.overlay.name()));
     }
 
     /// The decision the Features panel shows for `f`.
@@ -648,6 +685,20 @@ impl App {
                 self.link.overlay = Some(o);
                 true
             }
+            Msg::Pixel(p) => {
+                // The title may cut the legend short: the status line has
+                // the whole width.
+                let name = pixel_view_name(p.request.view);
+                match &p.layer {
+                    Err(e) => self.say(format!("pixel overlay: {e}")),
+                    Ok((_, legend)) if p.generation == self.link.generation() => {
+                        self.say(format!("{name}: {legend}"))
+                    }
+                    Ok(_) => {}
+                }
+                self.link.pixel = Some(p);
+                true
+            }
         }
     }
 
@@ -723,5 +774,20 @@ impl App {
     /// Whether nothing more will change on screen without input.
     pub fn idle(&self) -> bool {
         self.current_frame().is_some_and(|f| f.done) && !self.jobs.busy()
+    }
+}
+
+/// How the status line names a pixel overlay.
+fn pixel_view_name(v: PixelView) -> &'static str {
+    match v {
+        PixelView::Rays => "rays by kind",
+        PixelView::Colour => "rays in the colour they add",
+        PixelView::Lights => "points sampled on lights",
+        PixelView::Traversal => "BVH traversal",
+        PixelView::Normals => "normals",
+        PixelView::Texture => "texel footprint",
+        PixelView::Environment => "environment lookup",
+        PixelView::Glossy => "glossy rays and lobe",
+        PixelView::Samples => "zoom of the pixel's samples",
     }
 }

@@ -114,6 +114,13 @@ impl Inspector {
         }
     }
 
+    /// The ray of the line at the debug cursor, or of the nearest line
+    /// above it that is a ray's (none above the first ray).
+    pub fn cursor_ray(&self) -> Option<usize> {
+        let end = (self.cursor + 1).min(self.lines.len());
+        self.lines[..end].iter().rev().find_map(|l| l.ray)
+    }
+
     pub fn move_cursor(&mut self, n: i64) {
         let last = self.lines.len().saturating_sub(1) as i64;
         self.cursor = (self.cursor as i64 + n).clamp(0, last) as usize;
@@ -193,6 +200,7 @@ mod tests {
                    o=(0.0000000001234567890123, 1, 2)"
                 .into(),
             fold: None,
+            ray: None,
         };
         let rows = wrap(&line, 24);
         assert!(rows.len() > 3, "{rows:?}");

@@ -106,7 +106,8 @@ pub enum Action {
     /// Move the debug cursor by pages.
     Page(i8),
     Worst(Worst),
-    Rays,
+    /// Cycle the selected pixel's overlay.
+    PixelOverlay,
     Overlay,
     /// Step the BVH overlay level.
     Level(i8),
@@ -286,15 +287,15 @@ pub const ROWS: &[Row] = &[
     },
     Row {
         mode: Mode::Any,
-        keys: &[(K::Char('o'), A::Rays)],
-        help: "draw the selected pixel's rays into the view",
-        hint: Some("rays"),
+        keys: &[(K::Char('o'), A::PixelOverlay)],
+        help: "pixel overlay: rays, rays in colour, lights, traversal, normals, texture, environment, glossy, samples, off",
+        hint: Some("overlay"),
     },
     Row {
         mode: Mode::Any,
         keys: &[(K::Char('g'), A::Overlay)],
-        help: "BVH overlay: off, level k, leaves, heat map (nodes, triangle tests)",
-        hint: Some("bvh view"),
+        help: "view overlay: off, BVH level k, leaves, heat map (nodes, triangle tests), bloom",
+        hint: Some("view overlay"),
     },
     Row {
         mode: Mode::Any,

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Result};
 
-use super::worker::{self, Cmd, Msg, OverlayFrame, Snapshot, View};
+use super::worker::{self, Cmd, Msg, OverlayFrame, PixelFrame, PixelRequest, Snapshot, View};
 use crate::render::debug_view::DebugView;
 use crate::scene::Builder;
 
@@ -20,6 +20,9 @@ pub struct RenderLink {
     pub frame: Option<Box<Snapshot>>,
     /// The newest BVH overlay.
     pub overlay: Option<Box<OverlayFrame>>,
+    /// The newest pixel overlay, and the last one asked for.
+    pub pixel: Option<Box<PixelFrame>>,
+    asked_pixel: Option<PixelRequest>,
     /// Generation and time of the last pass that asked for a redraw.
     shown: (u64, Instant),
     /// A BVH rebuild is under way.
@@ -34,6 +37,8 @@ impl RenderLink {
             started: Instant::now(),
             frame: None,
             overlay: None,
+            pixel: None,
+            asked_pixel: None,
             shown: (0, Instant::now()),
             rebuilding: false,
         }
@@ -62,6 +67,28 @@ impl RenderLink {
     pub fn set_overlay(&mut self, view: Option<DebugView>) {
         self.overlay = None;
         self.worker.send(Cmd::Overlay(view));
+    }
+
+    /// Draws the bloom view into every pass from now on, or stops.
+    pub fn set_bloom_view(&mut self, on: bool) {
+        self.worker.send(Cmd::BloomView(on));
+    }
+
+    /// Keeps the selected pixel's overlay `p` drawn (none: no overlay);
+    /// asks the worker only when it changed.
+    pub fn set_pixel(&mut self, p: Option<PixelRequest>) {
+        if self.asked_pixel != p {
+            self.asked_pixel = p;
+            self.worker.send(Cmd::Pixel(p));
+        }
+    }
+
+    /// The pixel overlay when it is the one asked for, drawn for the
+    /// current view.
+    pub fn current_pixel(&self) -> Option<&PixelFrame> {
+        self.pixel
+            .as_deref()
+            .filter(|p| p.generation == self.generation && Some(p.request) == self.asked_pixel)
     }
 
     /// The newest pass when it shows the current view.

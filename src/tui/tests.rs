@@ -207,8 +207,98 @@ fn rays_are_drawn_into_the_view() {
     settle(&mut t, &mut app);
     let before = count(&t);
     app.handle_key(Key::Char('o'));
-    settle(&mut t, &mut app);
+    settle_pixel(&mut t, &mut app);
     assert!(count(&t) > before + 3, "{before} -> {}", count(&t));
+}
+
+#[test]
+fn pixel_overlays_cycle_and_show_the_ray_at_the_debug_cursor() {
+    use crate::inspect::overlay::{PixelView, VIEWS};
+    let mut app = app("cornell", &[]);
+    let mut t = terminal(220, 40);
+    settle(&mut t, &mut app);
+    let (w, h) = app.view_size;
+    // A pixel with a shadow ray: ray 1 of its tree.
+    let found = (0..h).rev().step_by(2).any(|y| {
+        app.select(w / 3, y, 0);
+        app.inspector.lines().iter().any(|l| l.ray == Some(1))
+    });
+    assert!(found, "no pixel with a shadow ray");
+    for v in &VIEWS[..4] {
+        app.handle_key(Key::Char('o'));
+        assert_eq!(app.pixel_view, Some(*v));
+    }
+    assert_eq!(app.pixel_view, Some(PixelView::Traversal));
+    // Above the first ray line the camera ray's walk is shown.
+    assert_eq!(app.inspector.cursor_ray(), None);
+    let s = settle_pixel(&mut t, &mut app);
+    assert!(s.contains("ray 0: camera ray"), "{s}");
+    while app.inspector.cursor_ray() != Some(1) {
+        let before = app.inspector.cursor;
+        app.handle_key(Key::Char(']'));
+        assert!(app.inspector.cursor > before, "no line of ray 1");
+    }
+    assert_eq!(app.pixel_request().unwrap().ray, Some(1));
+    let s = settle_pixel(&mut t, &mut app);
+    assert!(s.contains("ray 1: shadow ray"), "{s}");
+    assert_eq!(app.link.current_pixel().unwrap().request.ray, Some(1));
+    // The whole-tree views take no ray; after the last view, off.
+    for _ in 4..VIEWS.len() {
+        app.handle_key(Key::Char('o'));
+    }
+    assert_eq!(app.pixel_view, Some(PixelView::Samples));
+    assert_eq!(app.pixel_request().unwrap().ray, None);
+    app.handle_key(Key::Char('o'));
+    assert_eq!(app.pixel_view, None);
+    assert_eq!(app.pixel_request(), None);
+}
+
+#[test]
+fn the_bloom_view_is_the_last_view_overlay() {
+    use super::app::Overlay;
+    let mut app = app("cornell", &[]);
+    let mut t = terminal(200, 40);
+    settle(&mut t, &mut app);
+    for _ in 0..5 {
+        app.handle_key(Key::Char('g'));
+    }
+    assert_eq!(app.overlay.mode, Overlay::Bloom);
+    // The worker draws it into the next pass it sends.
+    let end = std::time::Instant::now() + WAIT;
+    while app
+        .link
+        .current_frame()
+        .is_none_or(|f| f.bloom_view.is_none())
+    {
+        assert!(
+            std::time::Instant::now() < end,
+            "no bloom view within {WAIT:?}"
+        );
+        app.poll().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    super::draw(&mut t, &mut app).unwrap();
+    let s = text(&t);
+    assert!(s.contains("over the threshold (luminance > 1)"), "{s}");
+    assert!(s.contains("kernel 25x25"), "{s}");
+    app.handle_key(Key::Char('g'));
+    assert_eq!(app.overlay.mode, Overlay::Off);
+}
+
+/// Settles, then waits for the worker's pixel overlay and draws again.
+fn settle_pixel(t: &mut Terminal<TestBackend>, app: &mut App) -> String {
+    settle(t, app);
+    let end = std::time::Instant::now() + WAIT;
+    while app.link.current_pixel().is_none() {
+        assert!(
+            std::time::Instant::now() < end,
+            "no pixel overlay within {WAIT:?}"
+        );
+        app.poll().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    super::draw(t, app).unwrap();
+    text(t)
 }
 
 #[test]

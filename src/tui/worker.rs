@@ -16,10 +16,12 @@ use anyhow::{Context, Result};
 use glam::Vec3;
 
 use crate::bvh::{self, Bvh};
+use crate::inspect::inspect_pixel;
+use crate::inspect::overlay::{self, PixelView};
 use crate::raster::metrics::rel_mse_on;
 use crate::raster::resample::resample;
 use crate::render::debug_view::{self, DebugView};
-use crate::render::overlay::Layer;
+use crate::render::overlay::{legend_line, Layer};
 use crate::render::recorder::WorkCounter;
 use crate::render::{post, Plan, Progressive, Stop, Tracer, WorstPixels};
 use crate::scene::{Builder, Camera, Scene};
@@ -58,6 +60,10 @@ pub enum Cmd {
     Builder(u64, Builder),
     /// Keep this BVH view drawn over every view (none: no overlay).
     Overlay(Option<DebugView>),
+    /// Keep the selected pixel's overlay drawn (none: no overlay).
+    Pixel(Option<PixelRequest>),
+    /// Draw bloom's view into every pass (`Snapshot::bloom_view`), or stop.
+    BloomView(bool),
     Quit,
 }
 
@@ -66,6 +72,28 @@ pub enum Msg {
     /// The BVH was rebuilt.
     Bvh(Arc<Bvh>),
     Overlay(Box<OverlayFrame>),
+    Pixel(Box<PixelFrame>),
+}
+
+/// The selected pixel's overlay: which pixel and sample, which view, the
+/// ray of the one-ray views (none: the view's default) and the samples the
+/// zoom shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelRequest {
+    pub x: u32,
+    pub y: u32,
+    pub sample: u32,
+    pub view: PixelView,
+    pub ray: Option<usize>,
+    pub spp: u32,
+}
+
+/// A pixel overlay drawn for one view of the scene.
+pub struct PixelFrame {
+    pub generation: u64,
+    pub request: PixelRequest,
+    /// The layer and its legend in one line, or why it cannot be drawn.
+    pub layer: Result<(Layer, String), String>,
 }
 
 /// A BVH view drawn for one view of the scene.
@@ -162,6 +190,9 @@ pub struct Snapshot {
     pub image: Vec<Vec3>,
     /// The mean before bloom, when bloom ran.
     pub pre_bloom: Option<Vec<Vec3>>,
+    /// With the bloom view on: the pass's mean as `debug_view::bloom_view`
+    /// draws it, and its legend in one line.
+    pub bloom_view: Option<(Vec<Vec3>, String)>,
     /// A quarter-resolution preview, not yet a sample of the film.
     pub coarse: bool,
     pub spp: u32,
@@ -222,6 +253,10 @@ pub struct Worker {
     /// The BVH view to draw, and the generation it was last drawn for.
     overlay: Option<DebugView>,
     overlay_drawn: Option<(u64, DebugView)>,
+    /// The pixel overlay to draw, and the generation it was last drawn for.
+    pixel: Option<PixelRequest>,
+    pixel_drawn: Option<(u64, PixelRequest)>,
+    bloom_view: bool,
 }
 
 impl Worker {
@@ -252,6 +287,9 @@ impl Worker {
             resend: false,
             overlay: None,
             overlay_drawn: None,
+            pixel: None,
+            pixel_drawn: None,
+            bloom_view: false,
         }
     }
 
@@ -289,6 +327,17 @@ impl Worker {
             Cmd::Overlay(o) => {
                 self.overlay = o;
                 self.overlay_drawn = None;
+                None
+            }
+            Cmd::Pixel(p) => {
+                self.pixel = p;
+                self.pixel_drawn = None;
+                None
+            }
+            Cmd::BloomView(on) => {
+                self.bloom_view = on;
+                // The film is the same: shown again, with or without it.
+                self.resend = self.film.film.spp > 0;
                 None
             }
             Cmd::Quit => None,
@@ -347,9 +396,16 @@ impl Worker {
         (self.overlay_drawn != Some((self.generation, o))).then_some(o)
     }
 
+    /// Whether the pixel overlay asked for is not yet drawn for this view.
+    fn pixel_due(&self) -> Option<PixelRequest> {
+        let p = self.pixel?;
+        (self.pixel_drawn != Some((self.generation, p))).then_some(p)
+    }
+
     /// Whether more work would change what is shown.
     pub fn idle(&self) -> bool {
-        if self.resend || self.overlay_due().is_some() && self.view.is_some() {
+        let due = self.overlay_due().is_some() || self.pixel_due().is_some();
+        if self.resend || due && self.view.is_some() {
             return false;
         }
         match &self.view {
@@ -392,6 +448,23 @@ impl Worker {
             return Some(Msg::Overlay(Box::new(OverlayFrame {
                 generation: self.generation,
                 view: o,
+                layer,
+            })));
+        }
+        if let Some(p) = self.pixel_due() {
+            self.pixel_drawn = Some((self.generation, p));
+            let t = self.tracer(&view, view.size());
+            let layer = if p.x < view.width && p.y < view.height {
+                let tree = inspect_pixel(&t, p.x, p.y, p.sample);
+                overlay::draw(&t, &tree, p.view, p.ray, p.spp)
+                    .map(|o| (o.layer, legend_line(&o.legend)))
+                    .map_err(|e| format!("{e:#}"))
+            } else {
+                Err("the selected pixel is outside the view".into())
+            };
+            return Some(Msg::Pixel(Box::new(PixelFrame {
+                generation: self.generation,
+                request: p,
                 layer,
             })));
         }
@@ -449,6 +522,14 @@ impl Worker {
     /// `true_error` that image's error against the reference.
     fn snapshot(&self, view: &View, mean: Vec<Vec3>, true_error: Option<f64>) -> Snapshot {
         let film = &self.film.film;
+        let bloom_view = self.bloom_view.then(|| {
+            let s = &self.scene.settings.bloom;
+            let (image, mut legend) = debug_view::bloom_view(&mean, view.width, view.height, s);
+            if !view.plan.bloom {
+                legend.push((None, "bloom is off in this plan".into()));
+            }
+            (image, legend_line(&legend))
+        });
         let shown = post::display(
             mean,
             view.width,
@@ -462,6 +543,7 @@ impl Worker {
             height: view.height,
             image: shown.image,
             pre_bloom: shown.before_bloom,
+            bloom_view,
             coarse: false,
             spp: film.spp,
             spp_mean: film.spp_range().1,
@@ -512,6 +594,7 @@ impl Worker {
             height: view.height,
             image: shown.image,
             pre_bloom: shown.before_bloom,
+            bloom_view: None,
             coarse: true,
             spp: 0,
             spp_mean: 0.0,

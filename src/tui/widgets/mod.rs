@@ -4,7 +4,6 @@
 mod bars;
 mod debug;
 pub mod panels;
-mod rays;
 pub mod viewport;
 
 use ratatui::Frame;

@@ -1,5 +1,6 @@
-//! The viewport: the newest pass in block symbols, with the BVH overlay the
-//! worker drew for this view, the selected pixel's rays and its mark.
+//! The viewport: the newest pass in block symbols, with the BVH overlay and
+//! the selected pixel's overlay the worker drew for this view, and the
+//! pixel's mark.
 
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
@@ -7,9 +8,7 @@ use ratatui::style::{Color, Style};
 use ratatui::widgets::{Block, Borders, Paragraph};
 use ratatui::Frame;
 
-use super::rays;
-use crate::raster::canvas::Canvas;
-use crate::tui::app::App;
+use crate::tui::app::{App, Overlay};
 use crate::tui::color::{self, ColorMode};
 use crate::tui::graphics::symbols::{self, Symbols};
 use crate::tui::worker::Snapshot;
@@ -18,8 +17,8 @@ use crate::tui::worker::Snapshot;
 const MARK: [u8; 3] = [255, 0, 255];
 
 /// The viewport's picture: the newest pass in sRGB with the BVH overlay,
-/// the selected pixel's rays and its mark when they are for this view, and
-/// what the overlay says for the title. The block symbols and the pixel
+/// the selected pixel's overlay and its mark when they are for this view,
+/// and what the overlays say (their legends) for the title. The block symbols and the pixel
 /// protocols show the same picture.
 pub struct ViewPicture {
     pub px: Vec<[u8; 3]>,
@@ -31,8 +30,15 @@ pub struct ViewPicture {
 pub fn picture(app: &App) -> Option<ViewPicture> {
     let frame = app.link.frame.as_deref()?;
     let (w, h) = (frame.width, frame.height);
-    let mut img = frame.image.clone();
     let mut note = None;
+    // The bloom view replaces the picture: it shows the pass itself.
+    let mut img = match &frame.bloom_view {
+        Some((view, legend)) if app.overlay.mode == Overlay::Bloom => {
+            note = Some(legend.clone());
+            view.clone()
+        }
+        _ => frame.image.clone(),
+    };
     // Overlays and marks follow the current camera and size, so they wait
     // for a pass of that view.
     let current = app.link.current_frame().is_some() && (w, h) == app.view_size;
@@ -47,12 +53,17 @@ pub fn picture(app: &App) -> Option<ViewPicture> {
                 Err(e) => note = Some(e.to_string()),
             }
         }
-        if app.show_rays {
-            if let Some(tree) = app.inspector.tree() {
-                let mut layer = Canvas::new(w, h, None);
-                let frame = app.camera.camera.frame(w, h);
-                rays::draw(&mut layer, &frame, tree, app.reach);
-                layer.over(&mut img);
+        if let Some(p) = app.link.current_pixel() {
+            match &p.layer {
+                Ok((layer, legend)) if (layer.width, layer.height) == (w, h) => {
+                    layer.over(&mut img);
+                    note = Some(match note {
+                        Some(n) => format!("{n} · {legend}"),
+                        None => legend.clone(),
+                    });
+                }
+                Ok(_) => {}
+                Err(e) => note = Some(e.clone()),
             }
         }
     }
