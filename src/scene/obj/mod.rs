@@ -217,16 +217,31 @@ impl ObjFile {
 
     /// The pieces' first error in file order, where the triangles counted
     /// from the top first do not fit in memory counting as one; the
-    /// warnings up to there go into `warnings`. `None` when the pieces
-    /// stopped for lack of memory before such a line.
+    /// warnings up to there go into `warnings`. `None` (and no warnings)
+    /// when the pieces stopped for lack of memory before such a line.
     fn settle(
         path: &Path,
         mut read: Vec<Piece>,
         warnings: &mut Vec<String>,
         available: u64,
     ) -> Result<Option<Vec<Piece>>> {
+        let mut found = Vec::new();
+        let settled = Self::first_error(path, &mut read, &mut found, available);
+        if !matches!(settled, Ok(false)) {
+            warnings.extend(found);
+        }
+        Ok(settled?.then_some(read))
+    }
+
+    /// [`ObjFile::settle`]: whether the pieces read to their end.
+    fn first_error(
+        path: &Path,
+        read: &mut [Piece],
+        warnings: &mut Vec<String>,
+        available: u64,
+    ) -> Result<bool> {
         let mut triangles = 0u64;
-        for p in &mut read {
+        for p in read {
             for face in &p.faces.faces {
                 triangles += face.len as u64 - 2;
                 let needed = triangles.saturating_mul(memory::BYTES_PER_TRIANGLE);
@@ -252,10 +267,10 @@ impl ObjFile {
                 return Err(e);
             }
             if p.full {
-                return Ok(None);
+                return Ok(false);
             }
         }
-        Ok(Some(read))
+        Ok(true)
     }
 
     /// Applies a statement that changes the group.
