@@ -10,6 +10,7 @@
 //! `build_full_sweep` sweeps every node: the reference its cost is
 //! measured against.
 
+use std::mem::MaybeUninit;
 use std::time::Instant;
 
 use glam::{Vec3A, Vec4};
@@ -172,20 +173,12 @@ pub fn build_full_sweep(geom: &Geometry) -> Bvh {
 fn build_with(geom: &Geometry, method: Method) -> Bvh {
     let start_time = Instant::now();
     let n = geom.indices.len();
-    // Vertices fetched once through the index buffer, in scene order; the
-    // leaves' copy is gathered from here.
-    let scene_tris: Vec<[[f32; 3]; 3]> = geom
-        .indices
-        .par_iter()
+    let vertices = |i: usize| geom.indices[i].map(|v| geom.positions[v as usize]);
+    let mut refs: Vec<PrimRef> = (0..n)
+        .into_par_iter()
         .with_min_len(4096)
-        .map(|ix| ix.map(|v| geom.positions[v as usize].to_array()))
-        .collect();
-    let mut refs: Vec<PrimRef> = scene_tris
-        .par_iter()
-        .enumerate()
-        .with_min_len(4096)
-        .map(|(i, t)| {
-            let [a, b, c] = t.map(Vec3A::from_array);
+        .map(|i| {
+            let [a, b, c] = vertices(i).map(Vec3A::from);
             if a.is_finite() && b.is_finite() && c.is_finite() {
                 PrimRef::new(a.min(b).min(c), a.max(b).max(c), i as u32)
             } else {
@@ -198,11 +191,13 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
         })
         .collect();
     // A binary tree over n triangles has at most 2n - 1 nodes. Each subtree
-    // gets its own part of this array, so subtrees build in parallel without
-    // locks; `compact` then removes the unused slots.
-    let mut scratch = vec![Node::default(); (2 * n).saturating_sub(1)];
+    // gets its own part of this room, so subtrees build in parallel without
+    // locks; `compact` then copies the nodes out. The room is left
+    // uninitialised: most of it is never written, and so never takes memory.
+    let mut scratch: Vec<Node> = Vec::with_capacity((2 * n).saturating_sub(1));
+    let room = &mut scratch.spare_capacity_mut()[..(2 * n).saturating_sub(1)];
     let mut depth = 0;
-    if let Some((root, rest)) = scratch.split_first_mut() {
+    if let Some((root, rest)) = room.split_first_mut() {
         let (bounds, cbounds) = Box3::of(&refs);
         let task = Task {
             refs: &mut refs,
@@ -213,16 +208,15 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
         };
         depth = subtree(method, task, root, rest, 1, &mut Box::new(Bins::new()));
     }
-    let nodes = compact(&scratch);
+    let nodes = compact(room);
     drop(scratch);
     let prim: Vec<u32> = refs.iter().map(|r| r.index()).collect();
-    let tris: Vec<[[f32; 3]; 3]> = prim
-        .par_iter()
-        .with_min_len(4096)
-        .map(|&i| scene_tris[i as usize])
-        .collect();
-    drop(scene_tris);
-    let wide = wide::Wide::collapse(&nodes, &tris);
+    drop(refs);
+    // The packets are the one copy of the triangles the BVH keeps, gathered
+    // from the scene in leaf order.
+    let wide = wide::Wide::collapse(&nodes, n, |i| {
+        vertices(prim[i] as usize).map(|p| p.to_array())
+    });
     let build_ms = start_time.elapsed().as_secs_f64() * 1e3;
     let stats = stats(&nodes, n, depth, build_ms);
     let reach = nodes.first().map_or(0.0, |r| {
@@ -233,7 +227,6 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
     });
     Bvh {
         nodes,
-        tris,
         prim,
         stats,
         wide,
@@ -244,27 +237,100 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
 /// Builds the subtree of `t` into `me` (its root) and `desc` (room for its
 /// descendants, which start at index `base`); returns the subtree's depth.
 /// `bins` is scratch space for the binned SAH.
+///
+/// Each side of a split gets room for as many nodes as it could need, so
+/// the two build in parallel; small subtrees are built on one thread
+/// ([`packed`]) at the front of their room, so that the room they leave
+/// unused is never touched (and never takes memory).
 fn subtree(
     method: Method,
-    mut t: Task,
-    me: &mut Node,
-    desc: &mut [Node],
+    t: Task,
+    me: &mut MaybeUninit<Node>,
+    desc: &mut [MaybeUninit<Node>],
     base: usize,
     bins: &mut Bins,
 ) -> usize {
+    if t.refs.len() <= PARALLEL_SUBTREE {
+        return packed(method, t, me, desc, base, bins).0;
+    }
+    let (left, right) = match open(method, t, me, base, bins) {
+        Ok(sides) => sides,
+        Err(depth) => return depth,
+    };
+    let m = left.refs.len();
+    let (pair, rest) = desc.split_at_mut(2);
+    let (l, r) = pair.split_at_mut(1);
+    let (ldesc, rdesc) = rest.split_at_mut(2 * m - 2);
+    let (lbase, rbase) = (base + 2, base + 2 + 2 * m - 2);
+    let mut other = Box::new(Bins::new());
+    let (a, b) = rayon::join(
+        || subtree(method, left, &mut l[0], ldesc, lbase, bins),
+        || subtree(method, right, &mut r[0], rdesc, rbase, &mut other),
+    );
+    a.max(b)
+}
+
+/// [`subtree`] on one thread, with the nodes in depth-first order from the
+/// front of `desc` (siblings adjacent, the left child's subtree first);
+/// returns the depth and the nodes of `desc` used.
+fn packed(
+    method: Method,
+    t: Task,
+    me: &mut MaybeUninit<Node>,
+    desc: &mut [MaybeUninit<Node>],
+    base: usize,
+    bins: &mut Bins,
+) -> (usize, usize) {
+    let (left, right) = match open(method, t, me, base, bins) {
+        Ok(sides) => sides,
+        Err(depth) => return (depth, 0),
+    };
+    let (pair, rest) = desc.split_at_mut(2);
+    let (l, r) = pair.split_at_mut(1);
+    let (da, ua) = packed(method, left, &mut l[0], rest, base + 2, bins);
+    let (db, ub) = packed(
+        method,
+        right,
+        &mut r[0],
+        &mut rest[ua..],
+        base + 2 + ua,
+        bins,
+    );
+    (da.max(db), 2 + ua + ub)
+}
+
+/// Makes `me` the node of `t`: a leaf (`Err` with its depth), or an
+/// interior node whose children will be at `base` and `base + 1`, with
+/// the tasks of its two sides.
+fn open<'a>(
+    method: Method,
+    mut t: Task<'a>,
+    me: &mut MaybeUninit<Node>,
+    base: usize,
+    bins: &mut Bins,
+) -> Result<(Task<'a>, Task<'a>), usize> {
     let n = t.refs.len();
-    me.min = t.bounds.min.to_array();
-    me.max = t.bounds.max.to_array();
+    let (min, max) = (t.bounds.min.to_array(), t.bounds.max.to_array());
     let cut = match method {
         Method::Binned if t.depth <= SAH_DEPTH => split_sah(&mut t, bins),
         Method::Sweep if t.depth <= SAH_DEPTH => split_full(&mut t),
         _ => split_median(&mut t),
     };
     let Some(cut) = cut else {
-        me.first = t.first as u32;
-        me.count = n as u32;
-        return t.depth;
+        me.write(Node {
+            min,
+            first: t.first as u32,
+            max,
+            count: n as u32,
+        });
+        return Err(t.depth);
     };
+    me.write(Node {
+        min,
+        first: base as u32,
+        max,
+        count: 0,
+    });
     let m = cut.at;
     let (a, b) = t.refs.split_at_mut(m);
     let side = |refs, first, s: Side| Task {
@@ -274,26 +340,7 @@ fn subtree(
         cbounds: s.cbounds,
         depth: t.depth + 1,
     };
-    let left = side(a, t.first, cut.left);
-    let right = side(b, t.first + m, cut.right);
-    me.first = base as u32;
-    me.count = 0;
-    let (pair, rest) = desc.split_at_mut(2);
-    let (l, r) = pair.split_at_mut(1);
-    let (ldesc, rdesc) = rest.split_at_mut(2 * m - 2);
-    let (lbase, rbase) = (base + 2, base + 2 + 2 * m - 2);
-    if n > PARALLEL_SUBTREE {
-        let mut other = Box::new(Bins::new());
-        let (a, b) = rayon::join(
-            || subtree(method, left, &mut l[0], ldesc, lbase, bins),
-            || subtree(method, right, &mut r[0], rdesc, rbase, &mut other),
-        );
-        a.max(b)
-    } else {
-        let a = subtree(method, left, &mut l[0], ldesc, lbase, bins);
-        let b = subtree(method, right, &mut r[0], rdesc, rbase, bins);
-        a.max(b)
-    }
+    Ok((side(a, t.first, cut.left), side(b, t.first + m, cut.right)))
 }
 
 /// A split node: the left half is `refs[..at]` (partitioned in place).
@@ -743,25 +790,29 @@ fn split_median(t: &mut Task) -> Option<Cut> {
 }
 
 /// The tree without unused slots, in depth-first order, siblings adjacent.
-fn compact(scratch: &[Node]) -> Vec<Node> {
+fn compact(scratch: &[MaybeUninit<Node>]) -> Vec<Node> {
     let mut out = Vec::with_capacity(scratch.len());
     if scratch.is_empty() {
         return out;
     }
-    out.push(scratch[0]);
+    // SAFETY: the root and the children of every node read here were
+    // written by `open` (a node is written before its children are made,
+    // and an interior node's `first` names its two children).
+    let node = |i: usize| unsafe { scratch[i].assume_init() };
+    out.push(node(0));
     // (index in `out`, index in `scratch`) of interior nodes whose children
     // are still to be copied.
     let mut stack = vec![(0usize, 0usize)];
     while let Some((o, s)) = stack.pop() {
-        let n = scratch[s];
+        let n = node(s);
         if n.is_leaf() {
             continue;
         }
         let c = n.first as usize;
         let at = out.len();
         out[o].first = at as u32;
-        out.push(scratch[c]);
-        out.push(scratch[c + 1]);
+        out.push(node(c));
+        out.push(node(c + 1));
         stack.push((at + 1, c + 1));
         stack.push((at, c));
     }

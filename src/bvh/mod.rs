@@ -15,12 +15,12 @@ pub use traverse::{Hit, WalkLog};
 /// A BVH over the triangles of a scene.
 ///
 /// The builders make the binary tree `nodes` (what the statistics and debug
-/// views describe), with triangles copied in leaf order (`tris`); `prim`
-/// maps each back to its index in the scene's geometry. Traversal walks a
-/// wide tree collapsed from it, with the same boxes and leaves.
+/// views describe) over the triangles in leaf order; `prim` maps each back
+/// to its index in the scene's geometry. Traversal walks a wide tree
+/// collapsed from it, with the same boxes and leaves, whose packets hold
+/// the only copy of the triangles ([`Bvh::triangle`]).
 pub struct Bvh {
     pub nodes: Vec<Node>,
-    pub tris: Vec<[[f32; 3]; 3]>,
     pub prim: Vec<u32>,
     pub stats: BuildStats,
     wide: wide::Wide,
@@ -37,16 +37,29 @@ impl Bvh {
         build::sah_cost(&self.nodes, build::LEAF_BLOCK).2
     }
 
+    /// Triangles, as many as the scene has.
+    pub fn triangle_count(&self) -> usize {
+        self.prim.len()
+    }
+
+    /// The triangle at leaf-order position `i`, as traversal tests it.
+    #[inline]
+    pub fn triangle(&self, i: usize) -> [[f32; 3]; 3] {
+        self.wide.triangle(i)
+    }
+
     /// Collapses the traversal tree again from `nodes`, after they were
     /// edited (the stability tests break a box on purpose).
     pub fn recollapse(&mut self) {
-        self.wide = wide::Wide::collapse(&self.nodes, &self.tris);
+        let tris: Vec<_> = (0..self.triangle_count())
+            .map(|i| self.triangle(i))
+            .collect();
+        self.wide = wide::Wide::collapse(&self.nodes, tris.len(), |i| tris[i]);
     }
 
-    /// Bytes held by the tree and its leaf-order triangle copies.
+    /// Bytes held by the tree and its triangle packets.
     pub fn memory_bytes(&self) -> usize {
         std::mem::size_of_val(&self.nodes[..])
-            + std::mem::size_of_val(&self.tris[..])
             + std::mem::size_of_val(&self.prim[..])
             + self.wide.memory_bytes()
     }

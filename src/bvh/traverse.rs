@@ -541,7 +541,8 @@ impl Bvh {
         let shear = RayShear::within(ray.origin, ray.dir, self.reach);
         let mut tmax = ray.tmax;
         let mut best = None;
-        for (i, t) in self.tris.iter().enumerate() {
+        for i in 0..self.triangle_count() {
+            let t = self.triangle(i);
             if let Some(h) = intersect(&shear, &t[0], &t[1], &t[2], tmax) {
                 let hit = Hit {
                     t: h.t,
@@ -561,9 +562,11 @@ impl Bvh {
     /// Any hit by testing every triangle.
     pub fn occluded_brute(&self, ray: &Ray) -> Option<u32> {
         let shear = RayShear::within(ray.origin, ray.dir, self.reach);
-        self.tris
-            .iter()
-            .position(|t| intersect(&shear, &t[0], &t[1], &t[2], ray.tmax).is_some())
+        (0..self.triangle_count())
+            .find(|&i| {
+                let t = self.triangle(i);
+                intersect(&shear, &t[0], &t[1], &t[2], ray.tmax).is_some()
+            })
             .map(|i| self.prim[i])
     }
 }

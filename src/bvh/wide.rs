@@ -57,6 +57,9 @@ pub(crate) fn leaf_packets(r: u32) -> std::ops::Range<usize> {
     first..first + (r & ((1 << PACKET_BITS) - 1)) as usize + 1
 }
 
+/// The triangle at a leaf-order position.
+type Tris<'a> = dyn Fn(usize) -> [[f32; 3]; 3] + 'a;
+
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Wide {
     pub nodes: Vec<Node8>,
@@ -71,21 +74,26 @@ pub(crate) struct Wide {
     /// reports in the binary tree's terms.
     pub node_of: Vec<u32>,
     pub leaf_of: Vec<u32>,
+    /// Where each triangle (in leaf order) lies: `packet << PACKET_BITS | lane`.
+    pub slot: Vec<u32>,
 }
 
 impl Wide {
-    /// Collapses the binary tree `bin` (leaves over `tris` in leaf order):
-    /// each wide node takes the binary node's children and keeps opening the
-    /// largest interior one until it has eight.
-    pub fn collapse(bin: &[Node], tris: &[[[f32; 3]; 3]]) -> Wide {
+    /// Collapses the binary tree `bin` (leaves over `count` triangles in
+    /// leaf order, `tri(i)` the `i`-th): each wide node takes the binary
+    /// node's children and keeps opening the largest interior one until it
+    /// has eight.
+    pub fn collapse(bin: &[Node], count: usize, tri: impl Fn(usize) -> [[f32; 3]; 3]) -> Wide {
         let mut w = Wide {
             nodes: Vec::with_capacity(bin.len() / 2 + 1),
-            packets: Vec::with_capacity(tris.len() / 3 + 2),
+            packets: Vec::with_capacity(count / 3 + 2),
             stack: 0,
             avx: avx_available(),
             node_of: Vec::with_capacity(bin.len() / 2 + 1),
-            leaf_of: Vec::with_capacity(tris.len() / 3 + 2),
+            leaf_of: Vec::with_capacity(count / 3 + 2),
+            slot: vec![0; count],
         };
+        let tris: &Tris = &tri;
         w.packets.push(Packet {
             p: [[[f32::NAN; PACKET]; 3]; 3],
             idx: [u32::MAX; PACKET],
@@ -106,7 +114,7 @@ impl Wide {
     /// Wide node over the children of interior binary node `at` (at `c`
     /// and `c + 1`), opened up to eight; returns its index and the depth of
     /// its subtree in wide nodes.
-    fn gather(&mut self, bin: &[Node], tris: &[[[f32; 3]; 3]], at: usize) -> (u32, usize) {
+    fn gather(&mut self, bin: &[Node], tris: &Tris, at: usize) -> (u32, usize) {
         let c = bin[at].first as usize;
         let mut kids = [0; WIDTH];
         kids[..2].copy_from_slice(&[c, c + 1]);
@@ -127,13 +135,7 @@ impl Wide {
         self.node(bin, tris, at, &kids[..len])
     }
 
-    fn node(
-        &mut self,
-        bin: &[Node],
-        tris: &[[[f32; 3]; 3]],
-        owner: usize,
-        kids: &[usize],
-    ) -> (u32, usize) {
+    fn node(&mut self, bin: &[Node], tris: &Tris, owner: usize, kids: &[usize]) -> (u32, usize) {
         let at = self.nodes.len();
         self.node_of.push(owner as u32);
         let mut below = 0;
@@ -168,20 +170,22 @@ impl Wide {
         (at as u32, 1 + below)
     }
 
-    fn leaf(&mut self, tris: &[[[f32; 3]; 3]], owner: usize, first: usize, count: usize) -> u32 {
+    fn leaf(&mut self, tris: &Tris, owner: usize, first: usize, count: usize) -> u32 {
         let at = self.packets.len();
         for start in (first..first + count).step_by(PACKET) {
             let mut p = Packet {
                 p: [[[f32::NAN; PACKET]; 3]; 3],
                 idx: [u32::MAX; PACKET],
             };
+            let packet = (self.packets.len() as u32) << PACKET_BITS;
             for (lane, i) in (start..(start + PACKET).min(first + count)).enumerate() {
-                for (pv, tv) in p.p.iter_mut().zip(&tris[i]) {
+                for (pv, tv) in p.p.iter_mut().zip(&tris(i)) {
                     for (pa, &x) in pv.iter_mut().zip(tv) {
                         pa[lane] = x;
                     }
                 }
                 p.idx[lane] = i as u32;
+                self.slot[i] = packet | lane as u32;
             }
             self.packets.push(p);
             self.leaf_of.push(owner as u32);
@@ -191,11 +195,21 @@ impl Wide {
         LEAF | (at as u32) << PACKET_BITS | (n as u32 - 1)
     }
 
+    /// The triangle at leaf-order position `i`.
+    #[inline]
+    pub fn triangle(&self, i: usize) -> [[f32; 3]; 3] {
+        let s = self.slot[i];
+        let p = &self.packets[(s >> PACKET_BITS) as usize];
+        let lane = (s & ((1 << PACKET_BITS) - 1)) as usize;
+        p.p.map(|v| v.map(|axis| axis[lane]))
+    }
+
     pub fn memory_bytes(&self) -> usize {
         std::mem::size_of_val(&self.nodes[..])
             + std::mem::size_of_val(&self.packets[..])
             + std::mem::size_of_val(&self.node_of[..])
             + std::mem::size_of_val(&self.leaf_of[..])
+            + std::mem::size_of_val(&self.slot[..])
     }
 }
 

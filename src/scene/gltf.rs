@@ -527,7 +527,7 @@ impl Reader<'_> {
         };
         self.triangles += indices.len() as u64;
         triangles_fit(self.triangles, self.available).map_err(|e| anyhow!("{here}: {e}"))?;
-        let placed = place_positions(&positions, xf, |i, p, q, why| {
+        let placed = place_positions(positions, xf, |i, p, q, why| {
             anyhow!(
                 "{here}: position {i} {} lands at {} once placed, which {why}",
                 show3(p),

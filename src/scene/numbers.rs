@@ -75,6 +75,16 @@ impl Absurd {
         }
     }
 
+    /// Both counts, `self` first (from earlier in the file).
+    pub fn then(mut self, later: Absurd) -> Absurd {
+        match self.first {
+            None => self.first = later.first,
+            Some(_) => self.more += later.first.is_some() as usize,
+        }
+        self.more += later.more;
+        self
+    }
+
     /// The warning, if any value was absurd.
     pub fn warning(self, path: &Path) -> Option<String> {
         let (line, shown) = self.first?;

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use glam::{Affine3A, DAffine3, DVec3, Vec2, Vec3};
+use rayon::prelude::*;
 
 use super::frame::Frame;
 use super::source::{Kind, Source};
@@ -53,22 +54,28 @@ pub struct Placed {
     pub material: u32,
 }
 
-/// `points` placed by `xf` in f64; a point that lands beyond the range of
-/// f32 is an error made by `err(index, point, placed, why)`.
+/// `points` placed by `xf` in f64, in place; the first point that lands
+/// beyond the range of f32 is an error made by `err(index, point, placed,
+/// why)`.
 pub fn place_positions(
-    points: &[DVec3],
+    mut points: Vec<DVec3>,
     xf: &DAffine3,
     err: impl Fn(usize, DVec3, DVec3, &str) -> anyhow::Error,
 ) -> Result<Vec<DVec3>> {
-    let mut out = Vec::with_capacity(points.len());
-    for (i, &p) in points.iter().enumerate() {
-        let q = xf.transform_point3(p);
-        if let Some(why) = q.to_array().into_iter().find_map(super::numbers::unusable) {
-            return Err(err(i, p, q, why));
-        }
-        out.push(q);
+    let unusable = |q: DVec3| q.to_array().into_iter().find_map(super::numbers::unusable);
+    let bad = points
+        .par_iter()
+        .with_min_len(1 << 12)
+        .position_first(|&p| unusable(xf.transform_point3(p)).is_some());
+    if let Some(i) = bad {
+        let (p, q) = (points[i], xf.transform_point3(points[i]));
+        return Err(err(i, p, q, unusable(q).unwrap_or_default()));
     }
-    Ok(out)
+    points
+        .par_iter_mut()
+        .with_min_len(1 << 12)
+        .for_each(|p| *p = xf.transform_point3(*p));
+    Ok(points)
 }
 
 /// Normals turned by `xf` (its inverse transpose) and made unit length.
@@ -165,7 +172,12 @@ impl Parts {
 
     /// Adds a placed mesh, mapped through the scene's frame and rounded to f32.
     pub fn add_placed(&mut self, m: Placed, frame: &Frame) {
-        let positions = m.positions.iter().map(|&p| frame.point(p)).collect();
+        let positions = m
+            .positions
+            .par_iter()
+            .with_min_len(1 << 12)
+            .map(|&p| frame.point(p))
+            .collect();
         self.push(
             m.name,
             positions,
@@ -200,7 +212,11 @@ impl Parts {
             None if !g.colors.is_empty() => g.colors.extend(std::iter::repeat_n(Vec3::ONE, n)),
             None => {}
         }
-        g.positions.extend(positions);
+        if g.positions.is_empty() {
+            g.positions = positions;
+        } else {
+            g.positions.extend(positions);
+        }
         match normals {
             Some(v) => g.normals.extend(v),
             None => g.normals.extend(std::iter::repeat_n(Vec3::ZERO, n)),
@@ -209,21 +225,26 @@ impl Parts {
             Some(v) => g.uvs.extend(v),
             None => g.uvs.extend(std::iter::repeat_n(Vec2::ZERO, n)),
         }
-        let mut degenerate = 0;
-        for tri in indices {
-            let t = tri.map(|i| i + base);
-            let [a, b, c] = t.map(|i| g.positions[i as usize]);
-            // Exactly zero, in f64: in f32 the products (let alone a
-            // squared length) underflow for slivers and tiny triangles.
-            let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
-            if (b - a).cross(c - a) == DVec3::ZERO {
-                degenerate += 1;
-                continue;
-            }
-            g.indices.push(t);
-            g.tri_material.push(material);
-            g.tri_mesh.push(mesh_id);
+        let positions = &g.positions;
+        let kept: Vec<[u32; 3]> = indices
+            .par_iter()
+            .with_min_len(1 << 12)
+            .map(|tri| tri.map(|i| i + base))
+            .filter(|t| {
+                // Exactly zero, in f64: in f32 the products (let alone a
+                // squared length) underflow for slivers and tiny triangles.
+                let [a, b, c] = t.map(|i| positions[i as usize].as_dvec3());
+                (b - a).cross(c - a) != DVec3::ZERO
+            })
+            .collect();
+        let degenerate = indices.len() - kept.len();
+        if g.indices.is_empty() {
+            g.indices = kept;
+        } else {
+            g.indices.extend(kept);
         }
+        g.tri_material.resize(g.indices.len(), material);
+        g.tri_mesh.resize(g.indices.len(), mesh_id);
         if degenerate > 0 {
             self.warnings.push(format!(
                 "{name}: skipped {degenerate} degenerate (zero-area) triangle{}",

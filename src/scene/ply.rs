@@ -133,7 +133,7 @@ pub struct PlyMesh {
 impl PlyMesh {
     /// The mesh placed by `xf` in f64.
     pub fn placed(self, path: &Path, xf: &DAffine3, material: u32) -> Result<Placed> {
-        let positions = place_positions(&self.positions, xf, |i, p, q, why| {
+        let positions = place_positions(self.positions, xf, |i, p, q, why| {
             anyhow!(
                 "{}: vertex {i}: {} lands at {} once placed, which {why}",
                 path.display(),
@@ -585,12 +585,18 @@ fn body_from<R: Values>(
         .iter()
         .find(|e| e.name == "vertex")
         .map_or(0, |e| e.count as usize);
+    let face_count = h
+        .elements
+        .iter()
+        .find(|e| e.name == "face")
+        .map_or(0, |e| e.count as usize);
     let mut m = PlyMesh {
         positions: Vec::with_capacity(vertex_count),
         normals: None,
         uvs: None,
         colors: None,
-        indices: Vec::new(),
+        // One triangle a face at least: within the memory checked above.
+        indices: Vec::with_capacity(face_count),
         texture: h.texture.clone(),
     };
     let mut normals = Vec::new();

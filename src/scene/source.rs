@@ -237,6 +237,14 @@ fn unprintable(c: char) -> bool {
     c.is_control() && c != '\n' && c != '\t'
 }
 
+/// Whether a byte of UTF-8 text may be a carriage return or another
+/// [`unprintable`] character, or begin one (U+0080 to U+009F start with
+/// 0xC2): a quick test over the bytes before the exact one over characters.
+#[inline(always)]
+fn suspect(b: u8) -> bool {
+    (b < 0x20 && b != b'\n' && b != b'\t') || b == 0x7f || b == 0xc2
+}
+
 /// `s` with control characters (tab and newline too) replaced by U+FFFD,
 /// for strings decoded from escapes in scene files (names, paths).
 pub fn printable(s: &str) -> String {
@@ -249,9 +257,14 @@ pub fn printable(s: &str) -> String {
 /// line endings turned into LF (so files from any system read alike),
 /// other control characters than tab turned into U+FFFD (names and
 /// messages echo the file), and invalid UTF-8 reported with its line.
-pub fn text(path: &Path, bytes: Vec<u8>) -> Result<String> {
-    let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
-    let s = std::str::from_utf8(body).map_err(|e| {
+pub fn text(path: &Path, mut bytes: Vec<u8>) -> Result<String> {
+    if bytes.starts_with(b"\xEF\xBB\xBF") {
+        bytes.drain(..3);
+    }
+    // Checked in place: a big mesh is read without a copy.
+    let s = String::from_utf8(bytes).map_err(|e| {
+        let body = e.as_bytes();
+        let e = e.utf8_error();
         let before = &body[..e.valid_up_to()];
         let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
         let column = before.len()
@@ -266,10 +279,17 @@ pub fn text(path: &Path, bytes: Vec<u8>) -> Result<String> {
             body[e.valid_up_to()]
         )
     })?;
+    if !s
+        .as_bytes()
+        .chunks(64)
+        .any(|c| c.iter().fold(false, |a, &b| a | suspect(b)))
+    {
+        return Ok(s);
+    }
     let mut s = if s.contains('\r') {
         s.replace("\r\n", "\n").replace('\r', "\n")
     } else {
-        s.to_string()
+        s
     };
     if s.contains(unprintable) {
         s = s

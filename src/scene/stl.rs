@@ -64,7 +64,7 @@ impl Solid {
     }
 
     fn placed(self, xf: &DAffine3, path: &Path, material: u32) -> Result<Placed> {
-        let positions = place_positions(&self.welder.positions, xf, |_, p, q, why| {
+        let positions = place_positions(self.welder.positions, xf, |_, p, q, why| {
             anyhow!(
                 "{}: vertex {} lands at {} once placed, which {why}",
                 path.display(),

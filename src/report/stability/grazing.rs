@@ -82,7 +82,7 @@ pub fn slanted(rng: &mut Rng, n: usize) -> Vec<[Vec3; 3]> {
 
 /// Nodes from the root to the leaf holding each triangle (in leaf order).
 pub fn ancestors(b: &Bvh) -> Vec<Vec<u32>> {
-    let mut out = vec![Vec::new(); b.tris.len()];
+    let mut out = vec![Vec::new(); b.triangle_count()];
     if b.nodes.is_empty() {
         return out;
     }
@@ -165,7 +165,8 @@ pub fn check_rays(b: &Bvh, anc: &[Vec<u32>], rays: &[Ray]) -> Grazing {
             let shear = RayShear::new(ray.origin, ray.dir);
             let inv = ray.inv_dir();
             let mut any_real = false;
-            for (i, t) in b.tris.iter().enumerate() {
+            for (i, above) in (0..b.triangle_count()).zip(anc) {
+                let t = &b.triangle(i);
                 let Some(h) = intersect(&shear, &t[0], &t[1], &t[2], ray.tmax) else {
                     continue;
                 };
@@ -176,7 +177,7 @@ pub fn check_rays(b: &Bvh, anc: &[Vec<u32>], rays: &[Ray]) -> Grazing {
                 let (exact, real) = judge(t, ray, h.t);
                 any_real |= real;
                 let slack = (exact.max(h.t as f64) * (1.0 + 1e-6)) as f32;
-                for &n in &anc[i] {
+                for &n in above {
                     let bx = b.nodes[n as usize].bounds();
                     if real && bx.hit(ray.origin, inv, slack).is_none() {
                         g.box_misses += 1;
@@ -185,7 +186,8 @@ pub fn check_rays(b: &Bvh, anc: &[Vec<u32>], rays: &[Ray]) -> Grazing {
                     }
                 }
             }
-            let judged = |h: &crate::bvh::Hit| judge(&b.tris[leaf_of[h.prim as usize]], ray, h.t);
+            let judged =
+                |h: &crate::bvh::Hit| judge(&b.triangle(leaf_of[h.prim as usize]), ray, h.t);
             let same = match (&fast, &slow) {
                 (None, None) => true,
                 (Some(f), Some(s)) if f.t == s.t => true,

@@ -10,19 +10,24 @@
 //! are ignored with one warning per file. Materials come from the `mtllib`
 //! files ([`super::mtl`]); a missing MTL or texture is a warning.
 
-use std::borrow::Cow;
-use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+mod piece;
 
-use anyhow::{anyhow, bail, Context, Result};
+use std::collections::HashMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicU64;
+
+use anyhow::{bail, Context, Result};
 use glam::{DAffine3, DVec3, Vec2};
+use rayon::prelude::*;
 
 use super::frame::Frame;
 use super::mtl::{self, MtlMaterial};
-use super::numbers::{self, show, show3, Absurd};
+use super::numbers::{self, show3, Absurd};
 use super::source::{resolve, Kind, ReadError, Source};
 use super::Material;
 use crate::memory;
+use piece::{Budget, Out, Piece, Switch};
 
 pub use super::numbers::ABSURD;
 pub use super::parts::{MeshData, Parts, Placed, Placement};
@@ -30,11 +35,20 @@ pub use super::parts::{MeshData, Parts, Placed, Placement};
 /// An absent UV or normal index.
 const NONE: u32 = u32::MAX;
 
-/// One polygon: its line and its corners in [`ObjFile::corners`].
+/// One polygon: its line and where its corners start in its piece's
+/// [`Faces::corners`].
 struct Face {
-    line: usize,
-    start: usize,
-    len: usize,
+    line: u32,
+    start: u32,
+    len: u32,
+}
+
+/// The faces of one piece of the file, and their corners.
+#[derive(Default)]
+struct Faces {
+    /// Position, UV and normal indices (0-based; [`NONE`] when absent).
+    corners: Vec<[u32; 3]>,
+    faces: Vec<Face>,
 }
 
 /// Faces that share an object name and a material.
@@ -42,7 +56,8 @@ struct Group {
     name: String,
     /// The `usemtl` name and its line.
     material: Option<(String, usize)>,
-    faces: Vec<Face>,
+    /// Its faces in file order: runs of faces of one piece.
+    runs: Vec<(usize, Range<usize>)>,
 }
 
 /// An OBJ file as read: every index checked, nothing placed yet.
@@ -53,95 +68,18 @@ pub struct ObjFile {
     position_lines: Vec<u32>,
     normals: Vec<DVec3>,
     uvs: Vec<Vec2>,
-    /// Position, UV and normal indices (0-based; [`NONE`] when absent).
-    corners: Vec<[u32; 3]>,
+    /// The faces of each piece the file was read in.
+    pieces: Vec<Faces>,
     groups: Vec<Group>,
     /// `mtllib` arguments as written, with their lines.
     libraries: Vec<(String, usize)>,
 }
 
-/// One index of a face corner, resolved against the `count` defined so far.
-fn index(word: &str, count: usize, what: &str) -> Result<u32, String> {
-    let k: i64 = word
-        .parse()
-        .map_err(|_| format!("'{word}' is not a valid {what} index"))?;
-    let i = match k {
-        0 => return Err(format!("{what} index 0 (indices start at 1)")),
-        k if k > 0 => k - 1,
-        k => count as i64 + k,
-    };
-    if i < 0 {
-        return Err(format!(
-            "relative {what} index {k} reaches before the first {what} \
-             (only {count} defined so far)"
-        ));
-    }
-    u32::try_from(i)
-        .ok()
-        .filter(|&i| i != NONE)
-        .ok_or_else(|| format!("{what} index {k} is out of range ({count} defined so far)"))
-}
-
-/// The numbers of a `v`, `vt` or `vn` statement (up to a trailing
-/// comment), without allocating: the first seven, and how many there were.
-struct Numbers {
-    values: [f64; 7],
-    total: usize,
-}
-
-impl std::ops::Deref for Numbers {
-    type Target = [f64];
-    fn deref(&self) -> &[f64] {
-        &self.values[..self.total.min(7)]
-    }
-}
-
-fn numbers(rest: &str, line: usize, absurd: &mut Absurd) -> Result<Numbers, String> {
-    let mut n = Numbers {
-        values: [0.0; 7],
-        total: 0,
-    };
-    for w in rest.split_whitespace().take_while(|w| !w.starts_with('#')) {
-        let x = numbers::parse(w)?;
-        absurd.check(line, x, || w.to_string());
-        if let Some(slot) = n.values.get_mut(n.total) {
-            *slot = x;
-        }
-        n.total += 1;
-    }
-    Ok(n)
-}
-
-/// Statements ignored by design, silently.
-const SILENT: &[&str] = &["s", "l", "p"];
-
-/// Lines of `text` with `\` continuations joined, numbered from 1 by
-/// their first line.
-fn logical_lines(text: &str) -> impl Iterator<Item = (usize, Cow<'_, str>)> + '_ {
-    let mut lines = text.lines().enumerate();
-    std::iter::from_fn(move || {
-        let (i, first) = lines.next()?;
-        if !first.trim_end().ends_with('\\') {
-            return Some((i + 1, Cow::Borrowed(first)));
-        }
-        let mut line = first.to_string();
-        while line.trim_end().ends_with('\\') {
-            let cut = line.trim_end().len() - 1;
-            line.truncate(cut);
-            match lines.next() {
-                Some((_, next)) => {
-                    line.push(' ');
-                    line.push_str(next);
-                }
-                None => break,
-            }
-        }
-        Some((i + 1, Cow::Owned(line)))
-    })
-}
-
 impl ObjFile {
     /// Parses OBJ text; non-fatal findings are appended to `warnings`.
+    ///
+    /// A big file is read in pieces, in parallel ([`piece`]); the result,
+    /// errors and warnings included, is the one of a reading from the top.
     pub fn parse(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<ObjFile> {
         Self::parse_within(path, text, warnings, memory::available())
     }
@@ -154,159 +92,107 @@ impl ObjFile {
         warnings: &mut Vec<String>,
         available: u64,
     ) -> Result<ObjFile> {
+        Self::parse_in(path, text, warnings, available, piece::PIECE)
+    }
+
+    /// [`ObjFile::parse_within`] in pieces of about `size` bytes.
+    fn parse_in(
+        path: &Path,
+        text: &str,
+        warnings: &mut Vec<String>,
+        available: u64,
+        size: usize,
+    ) -> Result<ObjFile> {
+        match Self::read(path, piece::cut(text, size), warnings, available)? {
+            Some(f) => Ok(f),
+            // The pieces together ran out of memory: in one piece, the
+            // reading stops where the triangles by then do not fit.
+            None => Self::read(path, vec![text], warnings, available)?
+                .with_context(|| format!("{}: out of memory for triangles", path.display())),
+        }
+    }
+
+    /// Reads the pieces of a file in parallel and stitches them; `None`
+    /// when they stopped for lack of memory before any line where the
+    /// triangles from the top would not fit.
+    fn read(
+        path: &Path,
+        pieces: Vec<&str>,
+        warnings: &mut Vec<String>,
+        available: u64,
+    ) -> Result<Option<ObjFile>> {
+        let census: Vec<(usize, [usize; 3])> =
+            pieces.par_iter().map(|t| piece::census(t)).collect();
+        let total = census
+            .iter()
+            .fold([0; 3], |a, (_, c)| [0, 1, 2].map(|k| a[k] + c[k]));
         let mut f = ObjFile {
             path: path.to_path_buf(),
-            positions: Vec::new(),
-            position_lines: Vec::new(),
-            normals: Vec::new(),
-            uvs: Vec::new(),
-            corners: Vec::new(),
+            positions: vec![DVec3::ZERO; total[0]],
+            position_lines: vec![0; total[0]],
+            normals: vec![DVec3::ZERO; total[2]],
+            uvs: vec![Vec2::ZERO; total[1]],
+            pieces: Vec::new(),
             groups: Vec::new(),
             libraries: Vec::new(),
         };
-        let mut current = Group {
-            name: String::new(),
-            material: None,
-            faces: Vec::new(),
+        // Each piece's place: its first line and counts before it, and its
+        // part of the vertices, UVs and normals.
+        let mut jobs = Vec::with_capacity(pieces.len());
+        let (mut line, mut before) = (0, [0; 3]);
+        let mut positions = &mut f.positions[..];
+        let mut position_lines = &mut f.position_lines[..];
+        let mut uvs = &mut f.uvs[..];
+        let mut normals = &mut f.normals[..];
+        for (text, (lines, counts)) in pieces.iter().zip(&census) {
+            let out = Out {
+                positions: split(&mut positions, counts[0]),
+                position_lines: split(&mut position_lines, counts[0]),
+                uvs: split(&mut uvs, counts[1]),
+                normals: split(&mut normals, counts[2]),
+            };
+            jobs.push((*text, line, before, out));
+            line += lines;
+            before = [0, 1, 2].map(|k| before[k] + counts[k]);
+        }
+        let budget = Budget {
+            available,
+            triangles: AtomicU64::new(0),
+        };
+        let read: Vec<Piece> = jobs
+            .into_par_iter()
+            .map(|(text, line, before, out)| piece::read(path, text, line, before, out, &budget))
+            .collect();
+        let Some(read) = Self::settle(path, read, warnings, available)? else {
+            return Ok(None);
         };
         let mut absurd = Absurd::default();
         let mut ignored: Vec<(String, usize, usize)> = Vec::new();
-        // A polygon of a million corners is a few megabytes of text and a
-        // million triangles: the count is checked as it grows.
-        let mut triangles = 0u64;
-        for (n, line) in logical_lines(text) {
-            let at = |msg: String| anyhow!("{}:{n}: {msg}", path.display());
-            let line = line.trim();
-            if line.is_empty() || line.starts_with('#') {
-                continue;
+        let mut current = Group {
+            name: String::new(),
+            material: None,
+            runs: Vec::new(),
+        };
+        for (k, p) in read.into_iter().enumerate() {
+            let mut from = 0;
+            for (at, switch) in p.switches {
+                if at > from {
+                    current.runs.push((k, from..at));
+                }
+                from = at;
+                f.switch(&mut current, switch);
             }
-            let (key, rest) = line
-                .split_once(char::is_whitespace)
-                .map_or((line, ""), |(k, r)| (k, r.trim()));
-            match key {
-                "v" => {
-                    let v = numbers(rest, n, &mut absurd).map_err(at)?;
-                    let p = match *v {
-                        [x, y, z] | [x, y, z, _, _, _] => DVec3::new(x, y, z),
-                        [x, y, z, w] => {
-                            if w == 0.0 {
-                                bail!(at("vertex with w = 0".into()));
-                            }
-                            let p = DVec3::new(x, y, z) / w;
-                            if let Some(why) = p.to_array().into_iter().find_map(numbers::unusable)
-                            {
-                                bail!(at(format!(
-                                    "w = {} divides the vertex to {}, which {why}",
-                                    show(w),
-                                    show3(p)
-                                )));
-                            }
-                            absurd.check(n, p.abs().max_element(), || {
-                                format!("{} (x, y, z divided by w)", show(p.abs().max_element()))
-                            });
-                            p
-                        }
-                        _ => bail!(at(format!(
-                            "a vertex takes 3 coordinates (x y z), optionally with w or an \
-                             RGB colour; found {} numbers",
-                            v.total
-                        ))),
-                    };
-                    f.positions.push(p);
-                    f.position_lines.push(n as u32);
+            if p.faces.faces.len() > from {
+                current.runs.push((k, from..p.faces.faces.len()));
+            }
+            f.pieces.push(p.faces);
+            f.libraries.extend(p.libraries);
+            absurd = absurd.then(p.absurd);
+            for (w, line, count) in p.ignored {
+                match ignored.iter_mut().find(|(x, _, _)| *x == w) {
+                    Some(e) => e.2 += count,
+                    None => ignored.push((w, line, count)),
                 }
-                "vt" => {
-                    let v = numbers(rest, n, &mut absurd).map_err(at)?;
-                    let uv = match *v {
-                        [u] => Vec2::new(u as f32, 0.0),
-                        [u, v] | [u, v, _] => Vec2::new(u as f32, v as f32),
-                        _ => bail!(at(format!(
-                            "a texture coordinate takes 1 to 3 numbers (u [v [w]]), found {}",
-                            v.total
-                        ))),
-                    };
-                    f.uvs.push(uv);
-                }
-                "vn" => {
-                    let v = numbers(rest, n, &mut absurd).map_err(at)?;
-                    match *v {
-                        [x, y, z] => f.normals.push(DVec3::new(x, y, z)),
-                        _ => bail!(at(format!(
-                            "a normal takes 3 numbers (x y z), found {}",
-                            v.total
-                        ))),
-                    }
-                }
-                "f" => {
-                    let start = f.corners.len();
-                    for word in rest.split_whitespace().take_while(|w| !w.starts_with('#')) {
-                        let corner = f.corner(word).map_err(at)?;
-                        f.corners.push(corner);
-                    }
-                    let len = f.corners.len() - start;
-                    if len < 3 {
-                        bail!(at(format!("a face needs at least 3 vertices, found {len}")));
-                    }
-                    triangles += len as u64 - 2;
-                    if triangles * memory::BYTES_PER_TRIANGLE > available {
-                        bail!(at(format!(
-                            "{triangles} triangles by this line would need {} of memory; \
-                             {} is available",
-                            memory::bytes(triangles * memory::BYTES_PER_TRIANGLE),
-                            memory::bytes(available)
-                        )));
-                    }
-                    current.faces.push(Face {
-                        line: n,
-                        start,
-                        len,
-                    });
-                }
-                "o" | "g" => {
-                    let next = Group {
-                        name: rest.to_string(),
-                        material: current.material.clone(),
-                        faces: Vec::new(),
-                    };
-                    f.finish(std::mem::replace(&mut current, next));
-                }
-                "usemtl" => {
-                    if rest.is_empty() {
-                        warnings.push(format!(
-                            "{}:{n}: usemtl without a material name: ignored",
-                            path.display()
-                        ));
-                        continue;
-                    }
-                    if current.material.as_ref().is_some_and(|(m, _)| m == rest) {
-                        continue;
-                    }
-                    let next = Group {
-                        name: current.name.clone(),
-                        material: Some((rest.to_string(), n)),
-                        faces: Vec::new(),
-                    };
-                    if current.faces.is_empty() {
-                        current = next;
-                    } else {
-                        f.finish(std::mem::replace(&mut current, next));
-                    }
-                }
-                "mtllib" => {
-                    if rest.is_empty() {
-                        warnings.push(format!(
-                            "{}:{n}: mtllib without a file name: ignored",
-                            path.display()
-                        ));
-                    } else {
-                        f.libraries.push((rest.to_string(), n));
-                    }
-                }
-                k if SILENT.contains(&k) => {}
-                other => match ignored.iter_mut().find(|(w, _, _)| w == other) {
-                    Some(e) => e.2 += 1,
-                    None => ignored.push((other.to_string(), n, 1)),
-                },
             }
         }
         f.finish(current);
@@ -326,35 +212,111 @@ impl ObjFile {
                 list.join(", ")
             ));
         }
-        Ok(f)
+        Ok(Some(f))
     }
 
-    /// One face corner, `v`, `v/vt`, `v//vn` or `v/vt/vn`.
-    fn corner(&self, word: &str) -> Result<[u32; 3], String> {
-        let mut parts = word.split('/');
-        let v = parts.next().unwrap_or("");
-        let vt = parts.next().unwrap_or("");
-        let vn = parts.next().unwrap_or("");
-        if parts.next().is_some() || v.is_empty() {
-            return Err(format!(
-                "'{word}' is not a face vertex (v, v/vt, v//vn or v/vt/vn)"
-            ));
+    /// The pieces' first error in file order, where the triangles counted
+    /// from the top first do not fit in memory counting as one; the
+    /// warnings up to there go into `warnings`. `None` (and no warnings)
+    /// when the pieces stopped for lack of memory before such a line.
+    fn settle(
+        path: &Path,
+        mut read: Vec<Piece>,
+        warnings: &mut Vec<String>,
+        available: u64,
+    ) -> Result<Option<Vec<Piece>>> {
+        let mut found = Vec::new();
+        let settled = Self::first_error(path, &mut read, &mut found, available);
+        if !matches!(settled, Ok(false)) {
+            warnings.extend(found);
         }
-        let optional = |w: &str, count, what| match w {
-            "" => Ok(NONE),
-            w => index(w, count, what),
-        };
-        Ok([
-            index(v, self.positions.len(), "vertex")?,
-            optional(vt, self.uvs.len(), "texture coordinate")?,
-            optional(vn, self.normals.len(), "normal")?,
-        ])
+        Ok(settled?.then_some(read))
+    }
+
+    /// [`ObjFile::settle`]: whether the pieces read to their end.
+    fn first_error(
+        path: &Path,
+        read: &mut [Piece],
+        warnings: &mut Vec<String>,
+        available: u64,
+    ) -> Result<bool> {
+        let mut triangles = 0u64;
+        for p in read {
+            for face in &p.faces.faces {
+                triangles += face.len as u64 - 2;
+                let needed = triangles.saturating_mul(memory::BYTES_PER_TRIANGLE);
+                if needed > available {
+                    let line = face.line as usize;
+                    warnings.extend(
+                        p.warnings
+                            .drain(..)
+                            .filter(|(n, _)| *n < line)
+                            .map(|(_, w)| w),
+                    );
+                    bail!(
+                        "{}:{line}: {triangles} triangles by this line would need {} of \
+                         memory; {} is available",
+                        path.display(),
+                        memory::bytes(needed),
+                        memory::bytes(available)
+                    );
+                }
+            }
+            warnings.extend(p.warnings.drain(..).map(|(_, w)| w));
+            if let Some(e) = p.error.take() {
+                return Err(e);
+            }
+            if p.full {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    }
+
+    /// Applies a statement that changes the group.
+    fn switch(&mut self, current: &mut Group, switch: Switch) {
+        match switch {
+            Switch::Object(name) => {
+                let next = Group {
+                    name,
+                    material: current.material.clone(),
+                    runs: Vec::new(),
+                };
+                self.finish(std::mem::replace(current, next));
+            }
+            Switch::Material(name, line) => {
+                if current.material.as_ref().is_some_and(|(m, _)| *m == name) {
+                    return;
+                }
+                let next = Group {
+                    name: current.name.clone(),
+                    material: Some((name, line)),
+                    runs: Vec::new(),
+                };
+                if current.runs.is_empty() {
+                    *current = next;
+                } else {
+                    self.finish(std::mem::replace(current, next));
+                }
+            }
+        }
     }
 
     fn finish(&mut self, g: Group) {
-        if !g.faces.is_empty() {
+        if !g.runs.is_empty() {
             self.groups.push(g);
         }
+    }
+
+    /// The faces of `g` in file order, each with its line and corners.
+    fn faces<'a>(&'a self, g: &'a Group) -> impl Iterator<Item = (usize, &'a [[u32; 3]])> + 'a {
+        g.runs.iter().flat_map(move |(k, run)| {
+            let p = &self.pieces[*k];
+            p.faces[run.clone()].iter().map(move |f| {
+                let start = f.start as usize;
+                (f.line as usize, &p.corners[start..start + f.len as usize])
+            })
+        })
     }
 
     /// Every index of every face refers to something the file defines
@@ -362,14 +324,13 @@ impl ObjFile {
     fn check_indices(&self) -> Result<()> {
         let counts = [self.positions.len(), self.uvs.len(), self.normals.len()];
         let names = ["vertex", "texture coordinate", "normal"];
-        for face in self.groups.iter().flat_map(|g| &g.faces) {
-            for c in &self.corners[face.start..face.start + face.len] {
+        for (line, corners) in self.groups.iter().flat_map(|g| self.faces(g)) {
+            for c in corners {
                 for k in 0..3 {
                     if c[k] != NONE && c[k] as usize >= counts[k] {
                         bail!(
-                            "{}:{}: the face refers to {} {} but the file defines {}",
+                            "{}:{line}: the face refers to {} {} but the file defines {}",
                             self.path.display(),
-                            face.line,
                             names[k],
                             c[k] as u64 + 1,
                             counts[k]
@@ -405,8 +366,7 @@ impl ObjFile {
             let mut other: HashMap<[u32; 3], u32> = HashMap::new();
             let mut corners: Vec<[u32; 3]> = Vec::new();
             let mut indices = Vec::new();
-            for face in &g.faces {
-                let c = &self.corners[face.start..face.start + face.len];
+            for (_, c) in self.faces(g) {
                 let mut id = |corner: [u32; 3]| {
                     let slot = &mut first[corner[0] as usize];
                     if *slot == NONE {
@@ -433,27 +393,34 @@ impl ObjFile {
             for c in &corners {
                 first[c[0] as usize] = NONE;
             }
-            let mut positions = Vec::with_capacity(corners.len());
-            for c in &corners {
-                let p = xf.transform_point3(self.positions[c[0] as usize]);
-                if let Some(why) = p.to_array().into_iter().find_map(numbers::unusable) {
-                    let q = self.positions[c[0] as usize];
-                    bail!(
-                        "{}:{}: vertex {} lands at {} once placed, which {why}",
-                        self.path.display(),
-                        self.position_lines[c[0] as usize],
-                        show3(q),
-                        show3(p)
-                    );
-                }
-                positions.push(p);
+            let placed: Vec<DVec3> = corners
+                .par_iter()
+                .with_min_len(1 << 12)
+                .map(|c| xf.transform_point3(self.positions[c[0] as usize]))
+                .collect();
+            let unusable = |p: &DVec3| p.to_array().into_iter().find_map(numbers::unusable);
+            let bad = placed
+                .par_iter()
+                .with_min_len(1 << 12)
+                .position_first(|p| unusable(p).is_some());
+            if let Some(i) = bad {
+                let (q, p) = (self.positions[corners[i][0] as usize], placed[i]);
+                bail!(
+                    "{}:{}: vertex {} lands at {} once placed, which {}",
+                    self.path.display(),
+                    self.position_lines[corners[i][0] as usize],
+                    show3(q),
+                    show3(p),
+                    unusable(&p).unwrap_or_default()
+                );
             }
+            let positions = placed;
             let has = |k: usize| corners.iter().filter(|c| c[k] != NONE).count();
             let (with_uv, with_normal) = (has(1), has(2));
             if (with_uv > 0 && with_uv < corners.len())
                 || (with_normal > 0 && with_normal < corners.len())
             {
-                partial.push(g.faces[0].line);
+                partial.extend(self.faces(g).next().map(|(line, _)| line));
             }
             let uvs = (with_uv == corners.len())
                 .then(|| corners.iter().map(|c| self.uvs[c[1] as usize]).collect());
@@ -492,6 +459,13 @@ impl ObjFile {
         }
         Ok(meshes)
     }
+}
+
+/// The first `n` items of `rest`, which keeps the others.
+fn split<'a, T>(rest: &mut &'a mut [T], n: usize) -> &'a mut [T] {
+    let (first, others) = std::mem::take(rest).split_at_mut(n);
+    *rest = others;
+    first
 }
 
 /// A material library's materials, with the file they came from.
@@ -871,6 +845,50 @@ mod tests {
         .unwrap();
         assert_eq!(p.geometry.indices.len(), 1);
         assert!(p.warnings.iter().any(|w| w.contains("1 degenerate")));
+    }
+
+    /// A file read in pieces of any size reads as when read whole: the
+    /// same meshes, materials, warnings and first error.
+    #[test]
+    fn pieces_read_as_the_whole_file() {
+        let read = |text: &str, size: usize, available: u64| {
+            let mut w = Vec::new();
+            let f = ObjFile::parse_in(Path::new("m.obj"), text, &mut w, available, size);
+            let placed = f.and_then(|f| {
+                let material = |m: Option<&(String, usize)>| {
+                    m.map_or(0, |(name, line)| name.len() as u32 * 1000 + *line as u32)
+                };
+                let placed = f.place(&DAffine3::IDENTITY, material, &mut w)?;
+                Ok(format!("{placed:?} {:?}", f.libraries))
+            });
+            match placed {
+                Ok(p) => format!("Ok({p}) {w:?}"),
+                Err(e) => format!("Err({e:#}) {w:?}"),
+            }
+        };
+        let good = "mtllib a.mtl\n# c\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0 2\nvt 0 0\nvt 1 0\n\
+                    vt 0 1\nvn 0 0 1\nusemtl r\nf 1/1/1 2/2/1 3/3/1\nvp 1\ng x\nf -4 -3 -2\n\
+                    usemtl r\nf 2 4 \\\n 3\n\nusemtl\nusemtl gg\nv 2 0 0\nv 1e30 2 0\n\
+                    f -1 -2 -3 1\no y\nusemtl r\nvp 2\nmtllib\nf 1 2 3\nf 3 2 -2\n";
+        let whole = read(good, usize::MAX, u64::MAX);
+        assert!(whole.starts_with("Ok("), "{whole}");
+        for size in [1, 5, 17, 40, 100] {
+            assert_eq!(read(good, size, u64::MAX), whole, "pieces of {size}");
+        }
+        let tri = memory::BYTES_PER_TRIANGLE;
+        for (text, available) in [
+            (format!("{good}f 1 2 9\n"), u64::MAX),
+            (format!("{good}v 1 2\nf 1 2 3\n"), u64::MAX),
+            (format!("f -1 1 2\n{good}"), u64::MAX),
+            (format!("{good}{good}"), 9 * tri),
+            (good.replace("vp 2", "vp 2\nf 1 2 3 4 5 6 7 8 9"), 12 * tri),
+        ] {
+            let whole = read(&text, usize::MAX, available);
+            assert!(whole.starts_with("Err("), "{whole}");
+            for size in [1, 5, 17, 40, 100] {
+                assert_eq!(read(&text, size, available), whole, "pieces of {size}");
+            }
+        }
     }
 
     #[test]
