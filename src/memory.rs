@@ -32,27 +32,42 @@ pub fn available() -> u64 {
         .map_or(FALLBACK, |kib| kib.saturating_mul(1024))
 }
 
-/// `n` copies of `v`, in memory the kernel may back with 2 MiB pages where
-/// it is large: a film of millions of pixels then faults in a few hundred
-/// pages rather than a hundred thousand.
-pub fn filled<T: Clone>(n: usize, v: T) -> Vec<T> {
-    let mut out = Vec::with_capacity(n);
+/// `n` values whose bytes are all zero, in fresh memory the kernel may
+/// back with 2 MiB pages: its zeroed pages are the values, so nothing is
+/// written until used, and a film of millions of pixels faults in a few
+/// hundred pages rather than a hundred thousand.
+///
+/// # Safety
+/// All-zero bytes must be a valid `T`.
+pub unsafe fn zeroed<T>(n: usize) -> Vec<T> {
+    assert!(
+        std::mem::size_of::<T>() > 0,
+        "zero-sized values need no memory"
+    );
+    let Ok(layout) = std::alloc::Layout::array::<T>(n) else {
+        panic!("{n} values cannot be held in memory");
+    };
+    if n == 0 {
+        return Vec::new();
+    }
+    let ptr = std::alloc::alloc_zeroed(layout);
+    if ptr.is_null() {
+        std::alloc::handle_alloc_error(layout);
+    }
     #[cfg(target_os = "linux")]
     {
         const HUGE: usize = 2 << 20;
-        let at = out.as_mut_ptr() as usize;
+        let at = ptr as usize;
         let (start, end) = (
             at.next_multiple_of(HUGE),
-            (at + n * std::mem::size_of::<T>()) & !(HUGE - 1),
+            (at + layout.size()) & !(HUGE - 1),
         );
         if end > start {
             // Only advice: where the kernel declines, small pages serve.
-            // SAFETY: the range lies within `out`'s allocation.
-            unsafe { libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_HUGEPAGE) };
+            libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_HUGEPAGE);
         }
     }
-    out.resize(n, v);
-    out
+    Vec::from_raw_parts(ptr as *mut T, n, n)
 }
 
 /// Refuses `needed` bytes for `what` when more than the memory available

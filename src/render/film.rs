@@ -172,6 +172,14 @@ fn chan(a: (u32, f64, f64), b: (u32, f64, f64)) -> (u32, f64, f64) {
 }
 
 impl PixelStats {
+    /// `n` pixels with no samples, without writing them: see
+    /// [`crate::memory::zeroed`].
+    pub fn zeroed(n: usize) -> Vec<PixelStats> {
+        // SAFETY: every field is an integer or a float (of which 0.0 is
+        // all zero bits), so all-zero bytes are the default pixel.
+        unsafe { crate::memory::zeroed(n) }
+    }
+
     /// Adds sample `k` with colour `c`, drawn in sub-pixel `stratum` when
     /// pixel samples are jittered.
     #[inline]
@@ -439,7 +447,7 @@ impl Film {
         Self {
             width,
             height,
-            pixels: crate::memory::filled(width as usize * height as usize, PixelStats::default()),
+            pixels: PixelStats::zeroed(width as usize * height as usize),
             spp: 0,
             start: 0,
             adaptive: None,
@@ -691,6 +699,15 @@ mod tests {
         // Luminance of a grey is the grey (weights sum to 1 up to f32 rounding).
         assert!((p.variance() - v).abs() < 1e-6, "{} vs {v}", p.variance());
         assert!((p.mean_variance().unwrap() - v / 5.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn zeroed_pixels_are_default_pixels() {
+        let px = PixelStats::zeroed(100_000);
+        assert_eq!(px.len(), 100_000);
+        let d = format!("{:?}", PixelStats::default());
+        assert!(px.iter().all(|p| format!("{p:?}") == d));
+        assert!(PixelStats::zeroed(0).is_empty());
     }
 
     #[test]

@@ -642,7 +642,7 @@ fn gather(sources: &mut [Source], cancel: &dyn Fn() -> bool) -> Result<(Vec<Pixe
         bail!("no parts to merge");
     };
     let (w, h) = first.header.size;
-    let mut pixels = crate::memory::filled(w as usize * h as usize, PixelStats::default());
+    let mut pixels = PixelStats::zeroed(w as usize * h as usize);
     let band =
         (BAND_BYTES / (w as usize * std::mem::size_of::<PixelStats>())).clamp(1, h as usize) as u32;
     let mut buf = Vec::new();
