@@ -41,6 +41,17 @@ fn near(layer: &Layer, (x, y): (f64, f64), r: i64, c: Vec3) -> bool {
 }
 
 /// The first pixel on a grid whose sample-0 tree satisfies `want`.
+/// The legend of `view` over a pixel of cornell, which has no vertex
+/// normals, no environment, no texture coordinates and no glossy surface:
+/// the view must draw nothing.
+fn blank_on_cornell(view: PixelView) -> String {
+    let c = session("cornell");
+    let t = tracer(&c, 64, 64);
+    let o = draw(&t, &inspect_pixel(&t, 32, 40, 0), view, None, 1).unwrap();
+    assert!(o.layer.is_blank(), "{view:?}");
+    overlay_text(&o.legend)
+}
+
 fn find(t: &Tracer, want: impl Fn(&PixelTree) -> bool) -> PixelTree {
     for y in (0..t.height).step_by(3) {
         for x in (0..t.width).step_by(3) {
@@ -228,12 +239,7 @@ fn normals_are_drawn_where_the_tree_puts_them_and_not_on_flat_meshes() {
     }
     assert!(red >= 2, "{red} vertex normals seen");
     // Cornell's boxes are flat-shaded: nothing drawn, and the legend says why.
-    let c = session("cornell");
-    let t = tracer(&c, 64, 64);
-    let tree = inspect_pixel(&t, 32, 40, 0);
-    let o = draw(&t, &tree, PixelView::Normals, None, 1).unwrap();
-    assert!(o.layer.is_blank());
-    assert!(overlay_text(&o.legend).contains("flat-shaded"));
+    assert!(blank_on_cornell(PixelView::Normals).contains("flat-shaded"));
 }
 
 #[test]
@@ -252,11 +258,7 @@ fn environment_ray_is_drawn_in_the_colour_the_tree_found_and_its_face_named() {
     // The face's name is written on the picture, in white.
     assert!(count(&o.layer, overlay::MARK) > 0);
     // Cornell is closed: no ray misses, nothing drawn.
-    let c = session("cornell");
-    let t = tracer(&c, 32, 32);
-    let tree = inspect_pixel(&t, 16, 16, 0);
-    let o = draw(&t, &tree, PixelView::Environment, None, 1).unwrap();
-    assert!(o.layer.is_blank());
+    blank_on_cornell(PixelView::Environment);
 }
 
 #[test]
@@ -274,18 +276,7 @@ fn texture_outlines_the_texels_the_lookup_reads_and_nothing_without_uv() {
     let tex = &s.scene.textures[0];
     assert!(tex.texels.iter().any(|c| count(&o.layer, *c) > 4));
     // Cornell has no texture coordinates: nothing drawn, and why.
-    let c = session("cornell");
-    let t = tracer(&c, 32, 32);
-    let o = draw(
-        &t,
-        &inspect_pixel(&t, 16, 16, 0),
-        PixelView::Texture,
-        None,
-        1,
-    )
-    .unwrap();
-    assert!(o.layer.is_blank());
-    assert!(overlay_text(&o.legend).contains("no texture coordinates"));
+    assert!(blank_on_cornell(PixelView::Texture).contains("no texture coordinates"));
 }
 
 #[test]
@@ -320,17 +311,7 @@ fn glossy_rays_are_drawn_in_their_contributions_with_the_lobe_axis() {
     let rays = if n == 1 { "ray" } else { "rays" };
     assert!(legend.contains(&format!("{n} glossy {rays},")), "{legend}");
     // Cornell has no glossy surface.
-    let c = session("cornell");
-    let t = tracer(&c, 32, 32);
-    let o = draw(
-        &t,
-        &inspect_pixel(&t, 16, 16, 0),
-        PixelView::Glossy,
-        None,
-        1,
-    )
-    .unwrap();
-    assert!(o.layer.is_blank());
+    blank_on_cornell(PixelView::Glossy);
 }
 
 #[test]
