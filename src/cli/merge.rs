@@ -41,14 +41,8 @@ pub fn run(a: MergeArgs) -> Result<ExitCode> {
         return Ok(ExitCode::from(interrupt::exit_code()));
     }
     let merged = merged?;
-    let (film, meta) = (&merged.film, &merged.meta);
-    let bytes = image_bytes(
-        out.format,
-        film,
-        film.width,
-        film.height,
-        meta.bloom.as_ref(),
-    )?;
+    let (meta, (width, height)) = (&merged.meta, merged.size);
+    let bytes = image_bytes(out.format, merged.image, width, height, meta.bloom.as_ref())?;
     if cancel() {
         eprintln!("interrupted: nothing written");
         return Ok(ExitCode::from(interrupt::exit_code()));
@@ -64,7 +58,7 @@ pub fn run(a: MergeArgs) -> Result<ExitCode> {
     );
     let mut line = summary(
         &head,
-        film,
+        &merged.report,
         false,
         meta.rays,
         meta.seconds * 1e3,

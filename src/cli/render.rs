@@ -8,6 +8,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{bail, Result};
+use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::args::{RenderArgs, MAX_SPP};
@@ -15,7 +16,7 @@ use super::open_scene;
 use crate::interrupt;
 use crate::raster::{png, Format, Output};
 use crate::render::partial::{self, Meta, Part};
-use crate::render::{post, Ended, Film, Progressive, Session, Stop};
+use crate::render::{post, Ended, Film, Progressive, Report, Session, Stop};
 use crate::scene::BloomSettings;
 use crate::words;
 
@@ -165,7 +166,13 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     let bytes = if split {
         partial::encode(film, &meta)?
     } else {
-        image_bytes(out.format, film, s.width, s.height, meta.bloom.as_ref())?
+        image_bytes(
+            out.format,
+            film.image(),
+            s.width,
+            s.height,
+            meta.bloom.as_ref(),
+        )?
     };
     out.write(&bytes)?;
     let render_ms = outcome.seconds * 1e3;
@@ -197,7 +204,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         "{}",
         summary(
             &head,
-            film,
+            &film.report(),
             split,
             outcome.rays,
             render_ms,
@@ -217,17 +224,15 @@ const CHECKPOINT_SECONDS: f64 = 5.0;
 /// compare against), the post-processed picture for .png.
 pub fn image_bytes(
     format: Format,
-    film: &Film,
+    image: Vec<Vec3>,
     width: u32,
     height: u32,
     bloom: Option<&BloomSettings>,
 ) -> Result<Vec<u8>> {
     match format {
-        Format::Hdr | Format::Exr | Format::Csv => {
-            format.encode_linear(width, height, &film.image())
-        }
+        Format::Hdr | Format::Exr | Format::Csv => format.encode_linear(width, height, &image),
         Format::Png => {
-            let shown = post::display_with(film.image(), width, height, bloom);
+            let shown = post::display_with(image, width, height, bloom);
             png::encode(&post::to_rgb8(&shown.image, width, height))
         }
     }
@@ -238,7 +243,7 @@ pub fn image_bytes(
 #[allow(clippy::too_many_arguments)]
 pub fn summary(
     head: &str,
-    film: &Film,
+    film: &Report,
     split: bool,
     rays: u64,
     render_ms: f64,
@@ -249,15 +254,11 @@ pub fn summary(
     let err = if exact {
         "error exact".to_string()
     } else {
-        error_text(film)
+        error_text(film.relative_error)
     };
     let samples = if split {
-        format!(
-            "{} spp (samples {}..{})",
-            film.spp,
-            film.start,
-            film.start + film.spp
-        )
+        let r = &film.samples;
+        format!("{} spp (samples {}..{})", r.len(), r.start, r.end)
     } else {
         spp_text(film)
     };
@@ -400,9 +401,9 @@ fn percent(e: f64) -> String {
 }
 
 /// `64 spp`, or `32 / 75.4 / 880 spp (min / mean / max, adaptive)`.
-fn spp_text(film: &Film) -> String {
-    match film.spp_range() {
-        (min, mean, max) if film.adaptive.is_some() => {
+fn spp_text(film: &Report) -> String {
+    match film.spp {
+        (min, mean, max) if film.adaptive => {
             format!("{min} / {mean:.1} / {max} spp (min / mean / max, adaptive)")
         }
         (n, ..) => format!("{n} spp"),
@@ -410,8 +411,8 @@ fn spp_text(film: &Film) -> String {
 }
 
 /// The estimated error, or that it is not known yet.
-fn error_text(film: &Film) -> String {
-    match film.relative_error() {
+fn error_text(relative_error: Option<f64>) -> String {
+    match relative_error {
         Some(e) => format!("error {:.3}%", e * 100.0),
         None => "error unknown until 2 spp".into(),
     }
@@ -428,7 +429,7 @@ fn progress(film: &Film, stop: &Stop, elapsed: f64) -> String {
     let mut left = stop
         .seconds
         .map_or(f64::INFINITY, |t| (t - elapsed).max(0.0));
-    let mut text = error_text(film);
+    let mut text = error_text(film.relative_error());
     let err = film.relative_error().filter(|&e| e > 0.0);
     if let (Some(target), Some(err)) = (stop.error, err) {
         let need = (spp * (err / target).powi(2)).min(cap);

@@ -27,6 +27,8 @@
 //! within 0.79 to 1.10 from 2 to 256 spp on `cornell-area`, `mirrors` and
 //! area lights over a box, jittered and independent.
 
+use std::ops::Range;
+
 use glam::{DVec3, Vec3};
 
 use crate::geometry::sampling::{PIXEL_GRID, PIXEL_STRATA};
@@ -368,6 +370,13 @@ impl PixelStats {
         Some((n * within + g / (strata - 1.0) * between) / (n * n))
     }
 
+    /// The estimated variance of the mean luminance over `lum^2 + REL_EPS`:
+    /// this pixel's term of [`Film::estimated_rel_mse`].
+    pub fn rel_variance(&self) -> Option<f64> {
+        let lum = self.mean.dot(LUMA.as_dvec3());
+        Some(self.mean_variance()? / (lum * lum + REL_EPS))
+    }
+
     /// Standard error of the mean luminance (0 below two samples).
     pub fn std_error(&self) -> f64 {
         self.mean_variance().unwrap_or(0.0).sqrt()
@@ -556,8 +565,7 @@ impl Film {
         }
         let mut sum = 0.0;
         for p in &self.pixels {
-            let lum = p.mean.dot(LUMA.as_dvec3());
-            sum += p.mean_variance()? / (lum * lum + REL_EPS);
+            sum += p.rel_variance()?;
         }
         Some(sum / self.pixels.len() as f64)
     }
@@ -569,12 +577,37 @@ impl Film {
         self.estimated_rel_mse().map(f64::sqrt)
     }
 
+    /// What a render's closing line says of this film.
+    pub fn report(&self) -> Report {
+        Report {
+            spp: self.spp_range(),
+            adaptive: self.adaptive.is_some(),
+            samples: self.start..self.start + self.spp,
+            relative_error: self.relative_error(),
+            bad_count: self.bad_count,
+        }
+    }
+
     /// Whether the estimate is firm enough to stop on
     /// (`--target-error`): every pixel's rests on its samples alone
     /// ([`PixelStats::estimate_is_design_based`]: 16 samples).
     pub fn error_is_meaningful(&self) -> bool {
         !self.pixels.is_empty() && self.pixels.iter().all(PixelStats::estimate_is_design_based)
     }
+}
+
+/// What a render's or merge's closing line says of its film, which a merge
+/// measures band by band without holding the film.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Report {
+    /// The fewest, mean and most samples per pixel.
+    pub spp: (u32, f64, u32),
+    pub adaptive: bool,
+    /// The sample indices every pixel of a uniform film holds.
+    pub samples: Range<u32>,
+    /// [`Film::relative_error`].
+    pub relative_error: Option<f64>,
+    pub bad_count: u64,
 }
 
 /// What makes a pixel the worst of a film.

@@ -16,7 +16,7 @@ pub mod recorder;
 pub mod session;
 
 pub use features::{Feature, Features};
-pub use film::{Film, Worst, WorstPixels};
+pub use film::{Film, Report, Worst, WorstPixels};
 pub use integrator::Tracer;
 pub use plan::{Decision, Plan, PlanPolicy};
 pub use progressive::{Ended, Outcome, PassStats, Progressive, Stop, MIN_SPP};

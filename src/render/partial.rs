@@ -16,7 +16,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 
-use super::film::{Film, Piece, PixelStats, FIXED_MAX, FIXED_ONE};
+use glam::Vec3;
+
+use super::film::{Film, Piece, PixelStats, Report, FIXED_MAX, FIXED_ONE};
 use super::Session;
 use crate::geometry::sampling::PIXEL_STRATA;
 use crate::raster::flat_exr::{self, Kind, Layout, Scanlines};
@@ -97,7 +99,10 @@ impl Part {
         let source = Source::open(path)?;
         let header = source.header.clone();
         let mut sources = [source];
-        let (pixels, bad) = gather(&mut sources, &|| false)?;
+        let mut pixels = Vec::new();
+        let bad = gather(&mut sources, &|| false, |band| {
+            pixels.extend_from_slice(band)
+        })?;
         let [source] = sources;
         source.finish()?;
         Ok(Part::of(header, pixels, bad))
@@ -577,13 +582,12 @@ impl Source {
     }
 
     /// Reads scanlines `rows` into `buf` and merges each pixel, checked,
-    /// into `pixels` (those rows of the film), a scanline at a time through
-    /// `row`; returns the samples dropped as not finite.
+    /// into `pixels` (those rows of the film); returns the samples dropped
+    /// as not finite.
     fn merge_into(
         &mut self,
         rows: Range<u32>,
         buf: &mut Vec<u8>,
-        row: &mut [Words],
         pixels: &mut [PixelStats],
     ) -> Result<u64> {
         self.image.read(rows.clone(), buf)?;
@@ -592,22 +596,26 @@ impl Source {
         let spp = end - start;
         let w = self.header.size.0 as usize;
         let mut bad = 0u64;
-        // The columns overwrite the same words in every scanline.
-        row.fill(self.shared);
+        let mut columns = Vec::with_capacity(self.columns.len());
         for ((y, chunk), px) in rows
             .zip(buf.chunks_exact(self.image.chunk()))
             .zip(pixels.chunks_exact_mut(w))
         {
-            // Column by column into the row's words, then pixel by pixel:
-            // each pixel's words are read long after they were written.
-            for &(k, at) in &self.columns {
-                let samples = chunk[at..at + 4 * w].chunks_exact(4);
-                for (words, b) in row.iter_mut().zip(samples) {
-                    words[k] = u32::from_le_bytes(b.try_into().unwrap());
+            columns.clear();
+            columns.extend(
+                self.columns
+                    .iter()
+                    .map(|&(k, at)| (k, &chunk[at..at + 4 * w])),
+            );
+            // The shared words, and each channel's word of this pixel over
+            // them: every channel is read in order, a word a pixel.
+            let mut words = self.shared;
+            for (x, p) in px.iter_mut().enumerate() {
+                for (k, column) in &columns {
+                    let b = &column[4 * x..4 * x + 4];
+                    words[*k] = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
                 }
-            }
-            for (x, (p, words)) in px.iter_mut().zip(&*row).enumerate() {
-                let q = from_words(words);
+                let q = from_words(&words);
                 if !plausible(&q, spp, start, end) {
                     bail!(
                         "{}: pixel ({x}, {y}) holds statistics no render of samples {start}..{end} leaves",
@@ -633,35 +641,40 @@ impl Source {
     }
 }
 
-/// Merges the partial films `sources`, of one size and in range order,
-/// into one film, a band of scanlines at a time (the band's pixels stay in
-/// cache while every part adds to them); returns its pixels and the
-/// samples dropped as not finite.
-fn gather(sources: &mut [Source], cancel: &dyn Fn() -> bool) -> Result<(Vec<PixelStats>, u64)> {
+/// Merges the partial films `sources`, of one size and in range order, a
+/// band of scanlines at a time in one buffer (the band's pixels stay in
+/// cache while every part adds to them), and hands each band's merged
+/// pixels, top to bottom, to `done`; returns the samples dropped as not
+/// finite.
+fn gather(
+    sources: &mut [Source],
+    cancel: &dyn Fn() -> bool,
+    mut done: impl FnMut(&[PixelStats]),
+) -> Result<u64> {
     let Some(first) = sources.first() else {
         bail!("no parts to merge");
     };
-    let (w, h) = first.header.size;
-    let mut pixels = PixelStats::zeroed(w as usize * h as usize);
-    let band =
-        (BAND_BYTES / (w as usize * std::mem::size_of::<PixelStats>())).clamp(1, h as usize) as u32;
+    let (w, h) = (first.header.size.0 as usize, first.header.size.1);
+    let band = (BAND_BYTES / (w * std::mem::size_of::<PixelStats>())).clamp(1, h as usize) as u32;
+    let mut pixels = vec![PixelStats::default(); band as usize * w];
     let mut buf = Vec::new();
-    let mut row = vec![[0; FIELDS.len()]; w as usize];
     let mut bad = 0;
     for y in (0..h).step_by(band as usize) {
         if cancel() {
             return Err(crate::interrupt::Interrupted.into());
         }
         let rows = y..(y + band).min(h);
-        let px = &mut pixels[rows.start as usize * w as usize..rows.end as usize * w as usize];
+        let px = &mut pixels[..rows.len() * w];
+        px.fill(PixelStats::default());
         for s in sources.iter_mut() {
-            bad += s.merge_into(rows.clone(), &mut buf, &mut row, px)?;
+            bad += s.merge_into(rows.clone(), &mut buf, px)?;
         }
-        for p in px {
+        for p in px.iter_mut() {
             p.mean = p.mean_of_sum();
         }
+        done(px);
     }
-    Ok((pixels, bad))
+    Ok(bad)
 }
 
 /// The film pixels a band holds: what stays in a core's cache.
@@ -760,8 +773,19 @@ pub fn plan(paths: &[PathBuf]) -> Result<Plan> {
     })
 }
 
+/// A merged render: what its image file and closing line need. A merge
+/// measures them band by band and never holds the merged statistics whole
+/// (176 bytes a pixel, against 12 for the image).
+pub struct Merged {
+    pub meta: Meta,
+    pub size: (u32, u32),
+    /// The linear mean image, row-major.
+    pub image: Vec<Vec3>,
+    pub report: Report,
+}
+
 /// Reads the planned parts and merges them in range order.
-pub fn merge(plan: &Plan, cancel: &dyn Fn() -> bool) -> Result<Part> {
+pub fn merge(plan: &Plan, cancel: &dyn Fn() -> bool) -> Result<Merged> {
     let mut sources = Vec::with_capacity(plan.parts.len());
     for (path, header) in &plan.parts {
         let s = Source::open(path)?;
@@ -770,20 +794,41 @@ pub fn merge(plan: &Plan, cancel: &dyn Fn() -> bool) -> Result<Part> {
         }
         sources.push(s);
     }
-    let (pixels, bad) = gather(&mut sources, cancel)?;
+    let size = sources[0].header.size;
+    let mut image = Vec::with_capacity(size.0 as usize * size.1 as usize);
+    // The film's estimate, summed in its order: the same figure to the bit.
+    let mut rel_mse = Some(0.0);
+    let bad = gather(&mut sources, cancel, |band| {
+        image.extend(band.iter().map(|p| p.mean.as_vec3()));
+        for p in band {
+            rel_mse = rel_mse.zip(p.rel_variance()).map(|(s, v)| s + v);
+        }
+    })?;
     let mut meta = sources[0].header.meta.clone();
     meta.rays = sources.iter().map(|s| s.header.meta.rays).sum();
     meta.seconds = sources.iter().map(|s| s.header.meta.seconds).sum();
     meta.total = Some(plan.total);
     let range = sources[0].header.range.start..sources[sources.len() - 1].header.range.end;
     let spp = sources.iter().map(|s| s.header.range.len() as u32).sum();
-    let size = sources[0].header.size;
     for s in sources {
         s.finish()?;
     }
-    let mut part = Part::of(Header { meta, range, size }, pixels, bad);
-    part.film.spp = spp;
-    Ok(part)
+    let pixels = image.len().max(1) as f64;
+    let report = Report {
+        spp: (spp, spp as f64, spp),
+        adaptive: false,
+        samples: range.start..range.start + spp,
+        relative_error: rel_mse
+            .filter(|_| !image.is_empty())
+            .map(|s| (s / pixels).sqrt()),
+        bad_count: bad,
+    };
+    Ok(Merged {
+        meta,
+        size,
+        image,
+        report,
+    })
 }
 
 /// `0..16 and 48..64`.
