@@ -274,6 +274,7 @@ impl PixelStats {
     /// the colour sums exactly, the rest as the sequential sums up to
     /// rounding. The `mean` fields are neither read nor updated: set this
     /// pixel's to [`PixelStats::mean_of_sum`] after the last part.
+    #[inline]
     pub fn merge_stats(&mut self, b: &PixelStats) {
         if b.n == 0 {
             return;
