@@ -95,10 +95,13 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
             .spp
             .filter(|_| stop.seconds.is_none() && stop.error.is_none()),
     };
-    let mut meta = Meta::of(&s, total);
-    let mut p = match &a.resume {
-        Some(path) => resumed(path, &s, &meta, range.as_ref().map(|r| &r.0), &stop)?,
-        None => {
+    // What a partial film says of its render, made only where one is read
+    // or written: its content hash is a pass over all the scene's data.
+    let mut meta =
+        (split || checkpoint.is_some() || a.resume.is_some()).then(|| Meta::of(&s, total));
+    let mut p = match (&a.resume, &meta) {
+        (Some(path), Some(meta)) => resumed(path, &s, meta, range.as_ref().map(|r| &r.0), &stop)?,
+        _ => {
             let mut p = Progressive::new(s.width, s.height);
             p.film.start = range.as_ref().map_or(0, |r| r.0.start);
             p
@@ -127,10 +130,10 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         }
         work.0 += pass.rays;
         work.1 += pass.ms / 1e3;
-        if let Some(c) = &checkpoint {
+        if let (Some(c), Some(meta)) = (&checkpoint, &mut meta) {
             if last_checkpoint.elapsed().as_secs_f64() >= CHECKPOINT_SECONDS && failed.is_none() {
                 (meta.rays, meta.seconds) = work;
-                failed = write_part(c, film, &meta).err();
+                failed = write_part(c, film, meta).err();
                 last_checkpoint = Instant::now();
             }
         }
@@ -139,12 +142,14 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         bar.abandon();
         return Err(e);
     }
-    (meta.rays, meta.seconds) = (p.rays, p.seconds);
+    if let Some(meta) = &mut meta {
+        (meta.rays, meta.seconds) = (p.rays, p.seconds);
+    }
     if outcome.ended == Ended::Cancelled {
         bar.abandon();
-        match &checkpoint {
-            Some(c) => {
-                write_part(c, &p.film, &meta)?;
+        match (&checkpoint, &meta) {
+            (Some(c), Some(meta)) => {
+                write_part(c, &p.film, meta)?;
                 let f = &p.film;
                 eprintln!(
                     "interrupted: {} holds samples {}..{}; continue with --resume {}",
@@ -154,25 +159,24 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
                     c.path.display()
                 );
             }
-            None => eprintln!("interrupted: nothing written"),
+            _ => eprintln!("interrupted: nothing written"),
         }
         return Ok(ExitCode::from(interrupt::exit_code()));
     }
     bar.finish_and_clear();
-    if let Some(c) = &checkpoint {
-        write_part(c, &p.film, &meta)?;
+    if let (Some(c), Some(meta)) = (&checkpoint, &meta) {
+        write_part(c, &p.film, meta)?;
     }
     let film = &p.film;
-    let bytes = if split {
-        partial::encode(film, &meta)?
-    } else {
-        image_bytes(
+    let bytes = match &meta {
+        Some(meta) if split => partial::encode(film, meta)?,
+        _ => image_bytes(
             out.format,
             film.image(),
             s.width,
             s.height,
-            meta.bloom.as_ref(),
-        )?
+            s.plan.bloom.then_some(s.scene.settings.bloom).as_ref(),
+        )?,
     };
     out.write(&bytes)?;
     let render_ms = outcome.seconds * 1e3;

@@ -25,6 +25,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 
 pub use camera::Camera;
 pub use light::Light;
@@ -56,11 +57,23 @@ impl Geometry {
         self.indices[i].map(|v| self.positions[v as usize])
     }
 
+    /// The box of the triangles' corners, on every core: min and max are
+    /// exact, so the order they are taken in changes nothing but the sign
+    /// of a zero, made + by adding 0.
     pub fn bounds(&self) -> Aabb {
-        self.indices
-            .iter()
-            .flatten()
-            .fold(Aabb::EMPTY, |b, &v| b.grow(self.positions[v as usize]))
+        let b = self
+            .indices
+            .par_iter()
+            .with_min_len(1 << 14)
+            .fold(
+                || Aabb::EMPTY,
+                |b, t| t.iter().fold(b, |b, &v| b.grow(self.positions[v as usize])),
+            )
+            .reduce(|| Aabb::EMPTY, Aabb::union);
+        Aabb {
+            min: b.min + 0.0,
+            max: b.max + 0.0,
+        }
     }
 
     pub fn triangle_count(&self) -> usize {

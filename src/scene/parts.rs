@@ -103,14 +103,35 @@ pub fn triangles_fit(triangles: u64, available: u64) -> Result<(), String> {
 
 /// Bounds of the vertices the triangles of `meshes` use (min > max when none).
 pub fn bounds<'a>(meshes: impl IntoIterator<Item = &'a Placed>) -> (DVec3, DVec3) {
-    let mut b = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    for m in meshes {
-        for &i in m.indices.iter().flatten() {
-            let p = m.positions[i as usize];
-            b = (b.0.min(p), b.1.max(p));
-        }
+    let empty = || (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let join = |a: (DVec3, DVec3), b: (DVec3, DVec3)| (a.0.min(b.0), a.1.max(b.1));
+    // On every core: min and max are exact in any order, but for the sign
+    // of a zero, made + by adding 0.
+    let (lo, hi) = meshes.into_iter().fold(empty(), |b, m| {
+        let of_mesh = m
+            .indices
+            .par_iter()
+            .with_min_len(1 << 14)
+            .fold(empty, |b, t| {
+                t.iter().fold(b, |b, &i| {
+                    let p = m.positions[i as usize];
+                    join(b, (p, p))
+                })
+            })
+            .reduce(empty, join);
+        join(b, of_mesh)
+    });
+    (lo + 0.0, hi + 0.0)
+}
+
+/// `v` grown to `len` with `x`: when it is empty and `x` is 0, as the
+/// kernel's zeroed pages, without writing them.
+fn grow(v: &mut Vec<u32>, len: usize, x: u32) {
+    if v.is_empty() && x == 0 {
+        *v = vec![0; len];
+    } else {
+        v.resize(len, x);
     }
-    b
 }
 
 /// Accumulates meshes, materials and textures into one scene.
@@ -165,7 +186,7 @@ impl Parts {
             positions.collect(),
             [normals, None],
             m.uvs.map(<[Vec2]>::to_vec),
-            m.indices,
+            m.indices.to_vec(),
             m.material,
         );
     }
@@ -183,7 +204,7 @@ impl Parts {
             positions,
             [m.normals, m.colors],
             m.uvs,
-            &m.indices,
+            m.indices,
             m.material,
         );
     }
@@ -195,7 +216,7 @@ impl Parts {
         positions: Vec<Vec3>,
         [normals, colors]: [Option<Vec<Vec3>>; 2],
         uvs: Option<Vec<Vec2>>,
-        indices: &[[u32; 3]],
+        mut kept: Vec<[u32; 3]>,
         material: u32,
     ) {
         let g = &mut self.geometry;
@@ -226,25 +247,31 @@ impl Parts {
             None => g.uvs.extend(std::iter::repeat_n(Vec2::ZERO, n)),
         }
         let positions = &g.positions;
-        let kept: Vec<[u32; 3]> = indices
-            .par_iter()
+        // Exactly zero, in f64: in f32 the products (let alone a squared
+        // length) underflow for slivers and tiny triangles.
+        let flat = |t: &[u32; 3]| {
+            let [a, b, c] = t.map(|i| positions[i as usize].as_dvec3());
+            (b - a).cross(c - a) == DVec3::ZERO
+        };
+        // In place, and counted first: most meshes have none to drop.
+        let degenerate: usize = kept
+            .par_iter_mut()
             .with_min_len(1 << 12)
-            .map(|tri| tri.map(|i| i + base))
-            .filter(|t| {
-                // Exactly zero, in f64: in f32 the products (let alone a
-                // squared length) underflow for slivers and tiny triangles.
-                let [a, b, c] = t.map(|i| positions[i as usize].as_dvec3());
-                (b - a).cross(c - a) != DVec3::ZERO
+            .map(|t| {
+                *t = t.map(|i| i + base);
+                flat(t) as usize
             })
-            .collect();
-        let degenerate = indices.len() - kept.len();
+            .sum();
+        if degenerate > 0 {
+            kept.retain(|t| !flat(t));
+        }
         if g.indices.is_empty() {
             g.indices = kept;
         } else {
             g.indices.extend(kept);
         }
-        g.tri_material.resize(g.indices.len(), material);
-        g.tri_mesh.resize(g.indices.len(), mesh_id);
+        grow(&mut g.tri_material, g.indices.len(), material);
+        grow(&mut g.tri_mesh, g.indices.len(), mesh_id);
         if degenerate > 0 {
             self.warnings.push(format!(
                 "{name}: skipped {degenerate} degenerate (zero-area) triangle{}",

@@ -11,6 +11,8 @@
 //! checked against the file's size before anything is allocated, and every
 //! index against the vertex count.
 
+mod bulk;
+
 use std::path::Path;
 
 use anyhow::{anyhow, bail, Result};
@@ -369,28 +371,19 @@ trait Values {
     fn place(&self, path: &Path) -> String;
     /// What follows the last element, if anything.
     fn rest(&mut self) -> Option<String>;
+    /// The bytes left to read and whether they are big-endian, where
+    /// elements of fixed-size records can be read in bulk (binary files).
+    fn bulk(&self) -> Option<(&[u8], bool)> {
+        None
+    }
+    /// Steps over `n` bytes read in bulk.
+    fn skip(&mut self, _n: usize) {}
 }
 
 struct Binary<'a> {
     bytes: &'a [u8],
     pos: usize,
     big: bool,
-}
-
-impl Binary<'_> {
-    #[inline]
-    fn take<const N: usize>(&mut self) -> Result<[u8; N], String> {
-        let b = self
-            .bytes
-            .get(self.pos..self.pos + N)
-            .ok_or("the file ends here (truncated)")?;
-        self.pos += N;
-        let mut a: [u8; N] = b.try_into().map_err(|_| "the file ends here (truncated)")?;
-        if self.big {
-            a.reverse();
-        }
-        Ok(a)
-    }
 }
 
 impl Values for Binary<'_> {
@@ -402,16 +395,12 @@ impl Values for Binary<'_> {
     }
     #[inline]
     fn float(&mut self, t: Scalar) -> Result<f64, String> {
-        Ok(match t {
-            Scalar::I8 => i8::from_le_bytes(self.take()?) as f64,
-            Scalar::U8 => u8::from_le_bytes(self.take()?) as f64,
-            Scalar::I16 => i16::from_le_bytes(self.take()?) as f64,
-            Scalar::U16 => u16::from_le_bytes(self.take()?) as f64,
-            Scalar::I32 => i32::from_le_bytes(self.take()?) as f64,
-            Scalar::U32 => u32::from_le_bytes(self.take()?) as f64,
-            Scalar::F32 => f32::from_le_bytes(self.take()?) as f64,
-            Scalar::F64 => f64::from_le_bytes(self.take()?),
-        })
+        let b = self
+            .bytes
+            .get(self.pos..self.pos + t.size())
+            .ok_or("the file ends here (truncated)")?;
+        self.pos += t.size();
+        Ok(bulk::scalar(b, t, self.big))
     }
     #[inline]
     fn int(&mut self, t: Scalar) -> Result<i64, String> {
@@ -424,6 +413,12 @@ impl Values for Binary<'_> {
     fn rest(&mut self) -> Option<String> {
         let left = self.bytes.len() - self.pos.min(self.bytes.len());
         (left > 0).then(|| format!("{left} bytes"))
+    }
+    fn bulk(&self) -> Option<(&[u8], bool)> {
+        Some((self.bytes.get(self.pos..)?, self.big))
+    }
+    fn skip(&mut self, n: usize) {
+        self.pos += n;
     }
 }
 
@@ -631,6 +626,23 @@ fn body_from<R: Values>(
             if n_color == 3 {
                 colors.reserve_exact(vertex_count);
             }
+        }
+        let in_bulk = r.bulk().and_then(|(body, big)| match e.name.as_str() {
+            "vertex" => bulk::vertices(e, body, big, color_full),
+            "face" => bulk::triangles(e, body, big, vertex_count),
+            _ => None,
+        });
+        if let Some((read, len)) = in_bulk {
+            r.skip(len);
+            match read {
+                bulk::Read::Vertices(v) => {
+                    m.positions = v.positions;
+                    (normals, uvs, colors) = (v.normals, v.uvs, v.colors);
+                }
+                bulk::Read::Triangles(t) if m.indices.is_empty() => m.indices = t,
+                bulk::Read::Triangles(t) => m.indices.extend(t),
+            }
+            continue;
         }
         for i in 0..e.count {
             let fail = |r: &R, prop: Option<&str>, msg: String| {
@@ -946,6 +958,143 @@ mod tests {
             e,
             "p.ply:8: element face: property vertex_indices must be a list"
         );
+    }
+
+    /// The binary reader without its bulk reading: every value one at a
+    /// time.
+    struct ByValue<'a>(Binary<'a>);
+
+    impl Values for ByValue<'_> {
+        fn begin(&mut self) -> Result<(), String> {
+            self.0.begin()
+        }
+        fn end(&mut self) -> Result<(), String> {
+            self.0.end()
+        }
+        fn float(&mut self, t: Scalar) -> Result<f64, String> {
+            self.0.float(t)
+        }
+        fn int(&mut self, t: Scalar) -> Result<i64, String> {
+            self.0.int(t)
+        }
+        fn place(&self, path: &Path) -> String {
+            self.0.place(path)
+        }
+        fn rest(&mut self) -> Option<String> {
+            self.0.rest()
+        }
+    }
+
+    /// A binary file of every kind of vertex attribute, in many types:
+    /// `z[i]` is vertex i's z, `faces` its faces.
+    fn every_attribute(big: bool, z: [f64; 4], faces: &[&[i32]]) -> Vec<u8> {
+        let mut b = format!(
+            "ply\nformat binary_{}_endian 1.0\nelement vertex 4\nproperty double x\n\
+             property float y\nproperty double z\nproperty int confidence\n\
+             property float nx\nproperty float ny\nproperty float nz\nproperty float u\n\
+             property float v\nproperty ushort red\nproperty ushort green\n\
+             property ushort blue\nelement face {}\n\
+             property list uchar int vertex_indices\nend_header\n",
+            if big { "big" } else { "little" },
+            faces.len()
+        )
+        .into_bytes();
+        macro_rules! put {
+            ($x:expr) => {
+                b.extend(if big {
+                    $x.to_be_bytes()
+                } else {
+                    $x.to_le_bytes()
+                })
+            };
+        }
+        for (i, z) in z.into_iter().enumerate() {
+            let f = i as f32;
+            put!(f as f64 * 0.5);
+            put!(1.0 - f);
+            put!(z);
+            put!(-7i32);
+            put!(0.6f32);
+            put!(0.0f32);
+            put!(-0.8f32);
+            put!(f / 3.0);
+            put!(1.0 - f / 7.0);
+            put!(1000u16 * i as u16);
+            put!(65535u16);
+            put!(3u16);
+        }
+        for face in faces {
+            b.push(face.len() as u8);
+            for &i in *face {
+                put!(i);
+            }
+        }
+        b
+    }
+
+    /// The mesh (or error) and warnings of a binary file read in bulk where
+    /// it can be, and read value by value, as text to compare.
+    fn both_ways(bytes: &[u8]) -> [String; 2] {
+        let path = Path::new("p.ply");
+        let mut w = Vec::new();
+        let h = header(path, bytes, &mut w).unwrap();
+        let Format::Binary { big } = h.format else {
+            panic!("not binary");
+        };
+        let r = Binary {
+            bytes,
+            pos: h.body,
+            big,
+        };
+        let show = |m: Result<PlyMesh>, w: Vec<String>| match m {
+            Ok(m) => format!(
+                "{:?} {:?} {:?} {:?} {:?} {w:?}",
+                m.positions, m.normals, m.uvs, m.colors, m.indices
+            ),
+            Err(e) => format!("{e:#}"),
+        };
+        let (mut w1, mut w2) = (w.clone(), w);
+        let bulk = body_from(path, &h, &mut Binary { ..r }, &mut w1, u64::MAX);
+        let by_value = body_from(path, &h, &mut ByValue(r), &mut w2, u64::MAX);
+        [show(bulk, w1), show(by_value, w2)]
+    }
+
+    #[test]
+    fn bulk_reading_reads_what_value_by_value_reading_reads() {
+        let z = [0.25, -1.5, 3.0, 0.0];
+        let tris: &[&[i32]] = &[&[0, 1, 2], &[0, 2, 3], &[3, 1, 0]];
+        for big in [false, true] {
+            let file = every_attribute(big, z, tris);
+            let h = header(Path::new("p.ply"), &file, &mut Vec::new()).unwrap();
+            let body = &file[h.body..];
+            // The bulk reading takes this file whole...
+            let v = bulk::vertices(&h.elements[0], body, big, 65535.0);
+            let (_, len) = v.expect("the vertices are read in bulk");
+            assert!(bulk::triangles(&h.elements[1], &body[len..], big, 4).is_some());
+            let [a, b] = both_ways(&file);
+            assert_eq!(a, b);
+            assert!(a.contains("[[0, 1, 2], [0, 2, 3], [3, 1, 0]]"), "{a}");
+            // ...and leaves to the value-by-value reading what it does not
+            // take as it stands, which reads it the same.
+            let cases: [(_, &[&[i32]]); 7] = [
+                (z, &[&[0, 1, 2], &[0, 1, 2, 3]]),
+                (z, &[&[0, 1, 2], &[0, 9, 2]]),
+                (z, &[&[0, 1, 2], &[0, -1, 2]]),
+                (z, &[&[0, 1]]),
+                ([0.0, f64::NAN, 0.0, 0.0], tris),
+                ([0.0, 1e30, 0.0, -1e31], tris),
+                ([0.0, 1e39, 0.0, 0.0], tris),
+            ];
+            for (z, faces) in cases {
+                let [a, b] = both_ways(&every_attribute(big, z, faces));
+                assert_eq!(a, b, "{z:?} {faces:?}");
+            }
+            let mut cut = every_attribute(big, z, tris);
+            cut.truncate(cut.len() - 2);
+            let [a, b] = both_ways(&cut);
+            assert_eq!(a, b);
+            assert!(a.contains("the file ends here (truncated)"), "{a}");
+        }
     }
 
     #[test]
