@@ -236,8 +236,11 @@ pub fn image_bytes(
     match format {
         Format::Hdr | Format::Exr | Format::Csv => format.encode_linear(width, height, &image),
         Format::Png => {
-            let shown = post::display_with(image, width, height, bloom);
-            png::encode(&post::to_rgb8(&shown.image, width, height))
+            let mut image = image;
+            if let Some(b) = bloom {
+                post::bloom(&mut image, width as usize, height as usize, b);
+            }
+            png::encode(&post::to_rgb8(&image, width, height))
         }
     }
 }

@@ -30,7 +30,7 @@ pub fn display(
 
 /// [`display`] with bloom's settings when it runs (what a merge of partial
 /// films knows instead of the plan).
-pub fn display_with(
+fn display_with(
     mean: Vec<Vec3>,
     width: u32,
     height: u32,
