@@ -410,6 +410,8 @@ pub struct Allocation {
 /// How far a pixel's weight looks: the neighbours within this many pixels
 /// (its own samples excluded).
 const WEIGHT_RADIUS: i64 = 1;
+/// The least weight, as a fraction of the mean.
+const WEIGHT_FLOOR: f64 = 0.1;
 
 impl Allocation {
     /// The weights from `pixels` (a `width`-wide film whose pixels have
@@ -421,7 +423,8 @@ impl Allocation {
     /// its mean free of the decision. The sample variance has 15 degrees of
     /// freedom a block where the design-based estimate has one, and it
     /// measured best (docs/adaptive.md). A pixel with no estimable
-    /// neighbour gets the highest weight.
+    /// neighbour gets the highest weight, and none less than
+    /// [`WEIGHT_FLOOR`] of the mean.
     pub fn weigh(pixels: &[PixelStats], width: u32) -> Vec<f32> {
         let w = width.max(1) as i64;
         let h = pixels.len() as i64 / w;
@@ -453,7 +456,15 @@ impl Allocation {
             })
             .collect();
         let top = weight.iter().flatten().copied().fold(0.0, f64::max);
-        weight.iter().map(|v| v.unwrap_or(top) as f32).collect()
+        let mean = weight.iter().map(|v| v.unwrap_or(top)).sum::<f64>() / weight.len() as f64;
+        // A floor, so that pixels whose neighbours' first blocks all missed
+        // a rare path still gain samples; all equal on a film with no
+        // variance at all.
+        let floor = if mean > 0.0 { WEIGHT_FLOOR * mean } else { 1.0 };
+        weight
+            .iter()
+            .map(|v| v.unwrap_or(top).max(floor) as f32)
+            .collect()
     }
 }
 

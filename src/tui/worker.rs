@@ -33,7 +33,7 @@ const COARSE_ABOVE_MS: f64 = 20.0;
 const COARSE: u32 = 4;
 /// Accumulation stops here; the image no longer visibly changes.
 pub const MAX_SPP: u32 = 1024;
-/// A pixel counts as converged in the Render panel below this predicted
+/// A pixel counts as converged in the Render panel below this estimated
 /// relative error (the default target of `rayterm converge`).
 pub const CONVERGED_BELOW: f64 = 0.01;
 
@@ -346,9 +346,8 @@ impl Worker {
 
     fn restart(&mut self) {
         let (w, h) = self.view.as_ref().map_or((0, 0), View::size);
-        // Uniform passes: adaptive ones do not yet reach an error sooner
-        // (docs/adaptive.md), and spend half the first 32 spp on decisions.
-        self.film = Progressive::new(w, h);
+        // Adaptive after the first block of strata (docs/adaptive.md).
+        self.film = Progressive::new_adaptive(w, h);
         self.film.rows_done = Some(self.progress.rows_done.clone());
         // A pass is slow when the last one was, or when it is the first
         // without the BVH (brute force is orders of magnitude slower).
