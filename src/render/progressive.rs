@@ -174,7 +174,7 @@ impl Progressive {
         let step = self.samples_per_pass.max(PIXEL_STRATA / 2) as f64;
         let mut mean = f.spp_range().1;
         loop {
-            mean += step;
+            mean = (mean + step).min(cap as f64);
             let counts = share(&a.weight, mean, cap)?;
             let give: Vec<u32> = counts
                 .iter()
@@ -183,6 +183,9 @@ impl Progressive {
                 .collect();
             if give.iter().any(|&n| n > 0) {
                 return Some(Give::Each(give));
+            }
+            if mean >= cap as f64 {
+                return None;
             }
         }
     }
@@ -268,9 +271,9 @@ impl Progressive {
         {
             return Some(Ended::Error);
         }
-        // An adaptive film with no pixel left to sample: all are at the spp
-        // cap.
-        if f.adaptive.is_some() && f.spp >= MIN_SPP && self.give(stop).is_none() {
+        // An adaptive film with nothing to share by: its weights are made
+        // by its own passes (every pixel at the cap ended it above).
+        if f.spp >= MIN_SPP && f.adaptive.as_ref().is_some_and(|a| a.weight.is_empty()) {
             return Some(Ended::Spp);
         }
         None
@@ -331,8 +334,8 @@ impl Progressive {
 /// Each pixel's sample count for a film of at least `mean` samples per
 /// pixel that minimises its relMSE: counts in proportion to the weights (a
 /// pixel's squared error is its weight² over its count), rounded up to
-/// whole blocks, none below [`MIN_SPP`] or above `cap`; `None` when the cap
-/// leaves no room for that mean.
+/// whole blocks, none below [`MIN_SPP`] or above `cap` (so all at `cap`
+/// for a `mean` of `cap`); `None` without weights.
 fn share(weight: &[f32], mean: f64, cap: u32) -> Option<Vec<u32>> {
     let lo = MIN_SPP.min(cap) as f64;
     // Whole blocks of strata: a block cut short keeps part of the variance
@@ -341,12 +344,12 @@ fn share(weight: &[f32], mean: f64, cap: u32) -> Option<Vec<u32>> {
     let block = PIXEL_STRATA as f64;
     let count = |c: f64, w: f32| ((c * w as f64 / block).ceil() * block).clamp(lo, cap as f64);
     let mean_at = |c: f64| weight.iter().map(|&w| count(c, w)).sum::<f64>() / weight.len() as f64;
-    if weight.is_empty() || mean_at(f64::MAX) < mean {
+    if weight.is_empty() {
         return None;
     }
     // The scale whose counts have the mean, by bisection on its exponent.
     let (mut a, mut b) = (-64.0f64, 64.0f64);
-    for _ in 0..60 {
+    for _ in 0..40 {
         let m = 0.5 * (a + b);
         if mean_at(m.exp2()) < mean {
             a = m;
@@ -554,6 +557,30 @@ mod tests {
         let o = p.run(&t, &Stop::seconds(1e-12), &|| false, |_, _| {});
         assert_eq!((o.ended, o.passes, p.film.spp), (Ended::Time, 1, 1));
         assert!(p.film.pixels.iter().all(|px| px.n == 1));
+    }
+
+    /// Under a cap that is no whole number of blocks, adaptive passes go on
+    /// until every pixel has the cap, and the counts' mean grows by at
+    /// least the step each pass.
+    #[test]
+    fn adaptive_passes_fill_up_to_the_cap() {
+        let s = session(&[]);
+        let t = s.tracer();
+        let mut p = Progressive::new_adaptive(12, 8);
+        p.samples_per_pass = 16;
+        let stop = Stop {
+            spp: Some(40),
+            seconds: Some(1e9),
+            error: None,
+        };
+        let mut means = Vec::new();
+        let o = p.run(&t, &stop, &|| false, |f, _| means.push(f.spp_range().1));
+        assert_eq!(o.ended, Ended::Spp);
+        assert_eq!(p.film.spp_range(), (40, 40.0, 40));
+        assert!(
+            means.windows(2).all(|m| m[1] >= (m[0] + 16.0).min(40.0)),
+            "{means:?}"
+        );
     }
 
     #[test]
