@@ -8,7 +8,7 @@ use std::str::FromStr;
 use anyhow::{bail, Result};
 use glam::Vec3;
 
-use super::film::{Film, LUMA, REL_EPS};
+use super::film::{Film, LUMA};
 use super::overlay::{self, Layer, Legend};
 use super::{post, Progressive, Tracer};
 use crate::bvh::debug::HeatMeasure;
@@ -240,15 +240,9 @@ pub fn error_view(film: &Film) -> (Vec<Vec3>, Legend) {
     let image: Vec<Vec3> = film
         .pixels
         .iter()
-        .map(|p| {
-            let lum = p.mean.dot(LUMA.as_dvec3());
-            match p.mean_variance() {
-                Some(v) => {
-                    let e = (v / (lum * lum + REL_EPS)).sqrt().max(lo);
-                    scale_color((e / lo).log10() / (hi / lo).log10())
-                }
-                None => UNKNOWN,
-            }
+        .map(|p| match p.relative_error() {
+            Some(e) => scale_color((e.max(lo) / lo).log10() / (hi / lo).log10()),
+            None => UNKNOWN,
         })
         .collect();
     let mut legend = vec![
@@ -373,7 +367,9 @@ mod tests {
         let (img, legend) = error_view(&f);
         assert_eq!(img[0], scale_color(0.0));
         assert_eq!(img[2], UNKNOWN);
-        let e = f.pixels[1].std_error() / 1.01f64.sqrt();
+        let e = f.pixels[1].relative_error().unwrap();
+        let want = 0.1 * (64.0f64 / 63.0).sqrt() / 8.0 / 1.01f64.sqrt();
+        assert!((e - want).abs() < 1e-6, "{e} against {want}");
         let t = (e / 1e-3).log10() / 2.0;
         assert_eq!(img[1], scale_color(t));
         assert!(overlay::legend_line(&legend).contains("grey unknown"));

@@ -368,6 +368,14 @@ impl PixelStats {
         Some((n * within + g / (strata - 1.0) * between) / (n * n))
     }
 
+    /// The estimated relative error of the mean: its standard error over
+    /// `√(lum² + ε)`, as the film's relMSE counts it; `None` below two
+    /// samples.
+    pub fn relative_error(&self) -> Option<f64> {
+        let lum = self.mean.dot(LUMA.as_dvec3());
+        Some((self.mean_variance()? / (lum * lum + REL_EPS)).sqrt())
+    }
+
     /// Standard error of the mean luminance (0 below two samples).
     pub fn std_error(&self) -> f64 {
         self.mean_variance().unwrap_or(0.0).sqrt()
@@ -536,15 +544,6 @@ impl Film {
         }
     }
 
-    /// Pixel `i`'s relative error predicted from its weight and sample count
-    /// (`None` on a uniform film or before the weights are known): what
-    /// the allocation expects, never read by the image.
-    pub fn predicted_error(&self, i: usize) -> Option<f64> {
-        let a = self.adaptive.as_ref()?;
-        let w = *a.weight.get(i)? as f64;
-        Some(w / (a.spp[i].max(1) as f64).sqrt())
-    }
-
     /// The fraction of an adaptive film's pixels whose own estimated
     /// relative error is below `target` (`None` on a uniform film).
     pub fn converged(&self, target: f64) -> Option<f64> {
@@ -553,14 +552,11 @@ impl Film {
         let below = self
             .pixels
             .iter()
-            .filter(|p| {
-                let lum = p.mean.dot(LUMA.as_dvec3());
-                p.mean_variance()
-                    .is_some_and(|v| v / (lum * lum + REL_EPS) < target * target)
-            })
+            .filter(|p| p.relative_error().is_some_and(|e| e < target))
             .count();
         Some(below as f64 / n as f64)
     }
+
     /// Adds sample `sample` (drawn in sub-pixel `stratum` when jittered),
     /// or records it as bad when not finite.
     pub fn add(&mut self, x: u32, y: u32, sample: u32, stratum: Option<u32>, c: Vec3) {
