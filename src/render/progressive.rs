@@ -347,9 +347,10 @@ fn share(weight: &[f32], mean: f64, cap: u32) -> Option<Vec<u32>> {
     if weight.is_empty() {
         return None;
     }
-    // The scale whose counts have the mean, by bisection on its exponent.
+    // The scale whose counts have the mean, by bisection on its exponent:
+    // 24 steps find it to within 1e-5, finer than a block's rounding.
     let (mut a, mut b) = (-64.0f64, 64.0f64);
-    for _ in 0..40 {
+    for _ in 0..24 {
         let m = 0.5 * (a + b);
         if mean_at(m.exp2()) < mean {
             a = m;
