@@ -81,7 +81,7 @@ fn the_adaptive_image_converges_to_the_quadrature() {
 
 /// Over six seeds the film's estimate of its relative error against the
 /// error measured from the quadrature: within 0.75 to 1.33 at mean budgets
-/// of 48, 96 and 192 spp (adaptive from 32).
+/// of 48, 96 and 192 spp (adaptive from 16).
 #[test]
 fn the_estimate_of_adaptive_images_is_calibrated() {
     let (w, h) = (12, 12);

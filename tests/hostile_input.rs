@@ -1090,7 +1090,8 @@ fn extreme_arguments_are_bounded_or_refused_before_loading() {
         "{}",
         r.stdout
     );
-    // An adaptive target is judged once every pixel has its first 32.
+    // An adaptive target (the default) is judged once every pixel has its
+    // first 16.
     let r = run(&[
         "render",
         "cornell-area",
@@ -1098,11 +1099,10 @@ fn extreme_arguments_are_bounded_or_refused_before_loading() {
         "8x8",
         "--target-error",
         "0.9",
-        "--adaptive",
         "-o",
         "t.png",
     ]);
-    assert!(r.ok() && r.stdout.contains("32 / "), "{}", r.stdout);
+    assert!(r.ok() && r.stdout.contains(", 16 spp,"), "{}", r.stdout);
     // Sample counts beyond the renderer's cap, and targets beyond any render,
     // are refused before the scene loads.
     for (args, why) in [

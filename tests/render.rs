@@ -230,9 +230,9 @@ fn cli_renders_a_png_and_prints_a_summary() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// `--target-error --adaptive`: the summary gives the fewest, mean and most
-/// samples per pixel; uniform (the default) gives one count; both reach the
-/// target.
+/// `--target-error`: adaptive by default, the summary gives the fewest,
+/// mean and most samples per pixel; `--uniform` gives one count; both reach
+/// the target.
 #[test]
 fn cli_target_error_adaptive_and_uniform() {
     let dir = std::env::temp_dir().join(format!("rayterm-cli-target-{}", std::process::id()));
@@ -258,7 +258,7 @@ fn cli_target_error_adaptive_and_uniform() {
         let e = s.split("error ").nth(1).unwrap();
         e[..e.find('%').unwrap()].parse().unwrap()
     };
-    let adaptive = run(&["--adaptive"]);
+    let adaptive = run(&[]);
     assert!(
         adaptive.contains(" spp (min / mean / max, adaptive)") && error(&adaptive) < 2.0,
         "{adaptive}"
@@ -274,10 +274,10 @@ fn cli_target_error_adaptive_and_uniform() {
         .filter_map(|w| w.parse().ok())
         .collect();
     assert!(
-        spp[0] == 32.0 && spp[1] > spp[0] && spp[2] > spp[1],
+        spp[0] == 16.0 && spp[1] > spp[0] && spp[2] > spp[1],
         "{adaptive}"
     );
-    let uniform = run(&[]);
+    let uniform = run(&["--uniform"]);
     assert!(
         !uniform.contains("adaptive") && error(&uniform) < 2.0,
         "{uniform}"

@@ -195,7 +195,6 @@ fn parts_of_other_renders_overlaps_and_gaps_are_refused() {
             "not a whole number from 0 to",
         ),
         (&["--spp", "4", "--part", "5/8"], "has none"),
-        (&["--part", "1/4", "--adaptive"], "cannot be used with"),
     ] {
         let mut all = vec!["render"];
         all.extend(SCENE);

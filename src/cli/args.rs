@@ -222,11 +222,11 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 4096,
           value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub max_spp: u32,
-    /// With --time or --target-error, after 32 spp give samples to the
-    /// pixels with the highest estimated error (docs/adaptive.md); every
-    /// pixel gets the same samples otherwise.
+    /// Give every pixel the same samples with --time or --target-error too,
+    /// where a sampled scene is otherwise rendered adaptively: after 16 spp,
+    /// samples go where the error is (docs/adaptive.md).
     #[arg(long)]
-    pub adaptive: bool,
+    pub uniform: bool,
     /// Worker threads (default: all cores; at most 4x the cores).
     #[arg(long, value_parser = parse_threads)]
     pub threads: Option<u32>,
@@ -245,23 +245,24 @@ pub struct RenderArgs {
     /// Render only sample indices A to B-1 of every pixel and write a
     /// partial film (-o part.exr) for `rayterm merge`.
     #[arg(long, value_name = "A..B", value_parser = parse_samples,
-          conflicts_with_all = ["spp", "time", "target_error", "adaptive", "debug"])]
+          conflicts_with_all = ["spp", "time", "target_error", "debug"])]
     pub samples: Option<std::ops::Range<u32>>,
     /// Render part K of N equal sample ranges of --spp (default: the
     /// scene's) and write a partial film (-o part.exr) for `rayterm merge`.
-    /// Parts are uniform: not with --adaptive.
+    /// Parts are uniform.
     #[arg(long, value_name = "K/N", value_parser = parse_part,
-          conflicts_with_all = ["samples", "time", "target_error", "adaptive", "debug"])]
+          conflicts_with_all = ["samples", "time", "target_error", "debug"])]
     pub part: Option<(u32, u32)>,
     /// Write the film so far to this partial film (.exr) every few seconds,
     /// at the end, and when stopped by Ctrl-C or SIGTERM, atomically. An
     /// existing FILE is only continued (--resume FILE), never replaced.
-    #[arg(long, value_name = "FILE.exr", conflicts_with_all = ["adaptive", "debug"])]
+    /// Partial films are uniform: the render is too.
+    #[arg(long, value_name = "FILE.exr", conflicts_with = "debug")]
     pub checkpoint: Option<PathBuf>,
     /// Continue from a checkpoint (or a part) of this same render: its
     /// samples are kept, and rendering goes on to the requested spp, time
-    /// or error.
-    #[arg(long, value_name = "FILE.exr", conflicts_with_all = ["adaptive", "debug"])]
+    /// or error, uniformly.
+    #[arg(long, value_name = "FILE.exr", conflicts_with = "debug")]
     pub resume: Option<PathBuf>,
 }
 

@@ -113,7 +113,12 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         seconds: stop.seconds.map(|t| (t - seconds_before).max(0.0)),
         ..stop
     };
-    p.adaptive = a.adaptive && (stop.seconds.is_some() || stop.error.is_some());
+    // Adaptive where a time or an error ends the render, except into
+    // partial films, which are uniform.
+    p.adaptive = !a.uniform
+        && (stop.seconds.is_some() || stop.error.is_some())
+        && checkpoint.is_none()
+        && a.resume.is_none();
     p.whole_passes = checkpoint.is_some();
     let interrupted = interrupt::flag();
     let tracer = s.tracer();
@@ -407,10 +412,11 @@ fn percent(e: f64) -> String {
     }
 }
 
-/// `64 spp`, or `32 / 75.4 / 880 spp (min / mean / max, adaptive)`.
+/// `64 spp`, or `16 / 75.4 / 880 spp (min / mean / max, adaptive)` where
+/// pixels differ.
 fn spp_text(film: &Report) -> String {
     match film.spp {
-        (min, mean, max) if film.adaptive => {
+        (min, mean, max) if film.adaptive && min < max => {
             format!("{min} / {mean:.1} / {max} spp (min / mean / max, adaptive)")
         }
         (n, ..) => format!("{n} spp"),

@@ -8,7 +8,7 @@ use std::str::FromStr;
 use anyhow::{bail, Result};
 use glam::Vec3;
 
-use super::film::LUMA;
+use super::film::{Film, LUMA};
 use super::overlay::{self, Layer, Legend};
 use super::{post, Progressive, Tracer};
 use crate::bvh::debug::HeatMeasure;
@@ -174,6 +174,97 @@ pub const BRIGHT: Vec3 = Vec3::new(0.0, 1.0, 1.0);
 /// The glow bloom spreads, at its brightest, in the bloom view.
 pub const GLOW: Vec3 = Vec3::new(1.0, 0.45, 0.0);
 
+/// A view of the film the TUI draws from each pass in place of the
+/// picture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FilmView {
+    /// [`bloom_view`].
+    Bloom,
+    /// [`spp_view`].
+    Spp,
+    /// [`error_view`].
+    Error,
+}
+
+/// Steps of the colour scale of the film maps.
+const SCALE_STEPS: u32 = 1000;
+
+/// A colour of the heat scale at `t` in [0, 1].
+fn scale_color(t: f64) -> Vec3 {
+    heat_color(
+        (t.clamp(0.0, 1.0) * SCALE_STEPS as f64).round() as u32,
+        SCALE_STEPS,
+    )
+}
+
+/// Each pixel's samples, on a log scale from the fewest (dark blue) to the
+/// most (yellow), and the legend with the fewest, mean and most.
+pub fn spp_view(film: &Film) -> (Vec<Vec3>, Legend) {
+    let (min, mean, max) = film.spp_range();
+    let span = (max.max(1) as f64 / min.max(1) as f64).log2();
+    let image = (0..film.pixels.len())
+        .map(|i| {
+            let n = film.pixel_spp(i).max(1) as f64;
+            scale_color(if span > 0.0 {
+                (n / min.max(1) as f64).log2() / span
+            } else {
+                0.0
+            })
+        })
+        .collect();
+    let legend = if min == max {
+        vec![(None, format!("samples per pixel: every pixel {min}"))]
+    } else {
+        vec![
+            (
+                Some(scale_color(0.0)),
+                format!("samples per pixel: dark blue {min}"),
+            ),
+            (Some(scale_color(1.0)), format!("yellow {max} (log scale)")),
+            (None, format!("mean {mean:.1}")),
+        ]
+    };
+    (image, legend)
+}
+
+/// The smallest and largest estimated relative errors the error map
+/// tells apart (0.1 % and 10 %).
+const ERROR_SCALE: (f64, f64) = (1e-3, 1e-1);
+
+/// Each pixel's estimated relative error (its standard error over
+/// `√(lum² + 0.01)`, as the film's estimate counts it) on a log scale from
+/// 0.1 % or less (dark blue) to 10 % or more (yellow), grey where unknown
+/// (below two samples); and the legend.
+pub fn error_view(film: &Film) -> (Vec<Vec3>, Legend) {
+    let (lo, hi) = ERROR_SCALE;
+    let image: Vec<Vec3> = film
+        .pixels
+        .iter()
+        .map(|p| match p.relative_error() {
+            Some(e) => scale_color((e.max(lo) / lo).log10() / (hi / lo).log10()),
+            None => UNKNOWN,
+        })
+        .collect();
+    let mut legend = vec![
+        (
+            Some(scale_color(0.0)),
+            "estimated relative error per pixel: dark blue 0.1 % or less".into(),
+        ),
+        (Some(scale_color(0.5)), "teal 1 %".into()),
+        (
+            Some(scale_color(1.0)),
+            "yellow 10 % or more (log scale)".into(),
+        ),
+    ];
+    if film.pixels.iter().any(|p| p.n < 2) {
+        legend.push((Some(UNKNOWN), "grey unknown (below 2 samples)".into()));
+    }
+    (image, legend)
+}
+
+/// Pixels of the error map whose error is unknown.
+const UNKNOWN: Vec3 = Vec3::splat(0.2);
+
 /// What bloom does to `before` (an image before bloom): the pixels over the
 /// threshold in cyan and the glow they spread in orange (brighter where it
 /// adds more), over the image dimmed; and the legend with the threshold and
@@ -247,6 +338,41 @@ mod tests {
         let mut req = SceneRequest::new("cornell");
         req.size = Some((w, h));
         Session::open(&req).unwrap().0
+    }
+
+    /// The maps colour by the film's own counts and errors: the fewest and
+    /// most samples at the ends of the scale, 1 % error at its middle.
+    #[test]
+    fn the_film_maps_show_counts_and_errors() {
+        let mut f = Film::new_adaptive(3, 1);
+        // Pixel 0: 16 equal samples (no error); 1: 64 alternating 0.9 and
+        // 1.1 (error 0.1 / √64 over √1.01); 2: one sample.
+        for k in 0..16 {
+            f.add(0, 0, k, None, Vec3::ONE);
+        }
+        for k in 0..64 {
+            let v = if k % 2 == 0 { 0.9 } else { 1.1 };
+            f.add(1, 0, k, None, Vec3::splat(v));
+        }
+        f.add(2, 0, 0, None, Vec3::ONE);
+        let (img, legend) = spp_view(&f);
+        assert_eq!(img[1], scale_color(1.0));
+        assert_eq!(img[2], scale_color(0.0));
+        assert!(img[0] != img[1] && img[0] != img[2]);
+        let text = overlay::legend_line(&legend);
+        assert!(
+            text.contains("dark blue 1") && text.contains("yellow 64"),
+            "{text}"
+        );
+        let (img, legend) = error_view(&f);
+        assert_eq!(img[0], scale_color(0.0));
+        assert_eq!(img[2], UNKNOWN);
+        let e = f.pixels[1].relative_error().unwrap();
+        let want = 0.1 * (64.0f64 / 63.0).sqrt() / 8.0 / 1.01f64.sqrt();
+        assert!((e - want).abs() < 1e-6, "{e} against {want}");
+        let t = (e / 1e-3).log10() / 2.0;
+        assert_eq!(img[1], scale_color(t));
+        assert!(overlay::legend_line(&legend).contains("grey unknown"));
     }
 
     #[test]

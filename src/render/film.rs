@@ -378,6 +378,13 @@ impl PixelStats {
         Some(self.mean_variance()? / (lum * lum + REL_EPS))
     }
 
+    /// The estimated relative error of the mean: its standard error over
+    /// `√(lum² + ε)`, as the film's relMSE counts it; `None` below two
+    /// samples.
+    pub fn relative_error(&self) -> Option<f64> {
+        self.rel_variance().map(f64::sqrt)
+    }
+
     /// Standard error of the mean luminance (0 below two samples).
     pub fn std_error(&self) -> f64 {
         self.mean_variance().unwrap_or(0.0).sqrt()
@@ -401,29 +408,80 @@ pub struct BadSample {
     pub sample: u32,
 }
 
-/// Blocks of [`PIXEL_STRATA`] samples of an adaptive film that decide
-/// where samples go: block `j` of a pixel decides when
-/// `j % DECIDE_EVERY == DECIDE_AT`, and every other block makes the image.
-pub const DECIDE_EVERY: u32 = 8;
-const DECIDE_AT: u32 = 1;
-
-/// Where an adaptive film's samples went. Every choice of how many samples
-/// a pixel gets is made from its decision blocks alone, which never enter
-/// its image or its error estimate: given those choices the image blocks
-/// are independent draws, so the image is unbiased and its estimate as
-/// calibrated as a uniform film's (docs/adaptive.md).
+/// Where an adaptive film's samples go. Every pixel first gets the same
+/// [`PIXEL_STRATA`] samples (one block of strata); from then on a pixel's
+/// share follows its weight, a prediction made from its neighbours' first
+/// blocks and never from its own samples: given the weights, each pixel's
+/// samples are independent draws in a number fixed without them, so its
+/// mean is unbiased and its error estimate as calibrated as a uniform
+/// film's (docs/adaptive.md).
 #[derive(Clone, Debug)]
 pub struct Allocation {
     /// Samples attempted per pixel: the index of each pixel's next sample.
     pub spp: Vec<u32>,
-    /// Statistics of each pixel's decision blocks.
-    pub decide: Vec<PixelStats>,
+    /// Each pixel's predicted relative standard deviation of one sample;
+    /// empty until every pixel has its first block.
+    pub weight: Vec<f32>,
 }
 
+/// How far a pixel's weight looks: the neighbours within this many pixels
+/// (its own samples excluded).
+const WEIGHT_RADIUS: i64 = 1;
+/// The least weight, as a fraction of the mean.
+const WEIGHT_FLOOR: f64 = 0.1;
+
 impl Allocation {
-    /// Whether sample `k` of a pixel belongs to a decision block.
-    pub fn decides(k: u32) -> bool {
-        (k / PIXEL_STRATA) % DECIDE_EVERY == DECIDE_AT
+    /// The weights from `pixels` (a `width`-wide film whose pixels have
+    /// their first block and nothing more): pixel `i`'s is the root mean
+    /// square of its neighbours' relative standard deviations of one
+    /// sample, `s / √(lum² + ε)` with `s²` the sample variance. Variance is
+    /// smooth across an image, so eight neighbours' blocks give a firmer
+    /// prediction than a pixel's one block, and leaving the pixel out keeps
+    /// its mean free of the decision. The sample variance has 15 degrees of
+    /// freedom a block where the design-based estimate has one, and it
+    /// measured best (docs/adaptive.md). A pixel with no estimable
+    /// neighbour gets the highest weight, and none less than
+    /// [`WEIGHT_FLOOR`] of the mean.
+    pub fn weigh(pixels: &[PixelStats], width: u32) -> Vec<f32> {
+        let w = width.max(1) as i64;
+        let h = pixels.len() as i64 / w;
+        let rel: Vec<Option<f64>> = pixels
+            .iter()
+            .map(|p| {
+                let lum = p.mean.dot(LUMA.as_dvec3());
+                let v = p.variance() / (lum * lum + REL_EPS);
+                (p.n >= 2 && v.is_finite()).then_some(v)
+            })
+            .collect();
+        let r = WEIGHT_RADIUS;
+        let weight: Vec<Option<f64>> = (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                let (mut sum, mut n) = (0.0, 0u32);
+                for ny in (y - r).max(0)..=(y + r).min(h - 1) {
+                    for nx in (x - r).max(0)..=(x + r).min(w - 1) {
+                        if (nx, ny) == (x, y) {
+                            continue;
+                        }
+                        if let Some(v) = rel[(ny * w + nx) as usize] {
+                            sum += v;
+                            n += 1;
+                        }
+                    }
+                }
+                (n > 0).then(|| (sum / n as f64).sqrt())
+            })
+            .collect();
+        let top = weight.iter().flatten().copied().fold(0.0, f64::max);
+        let mean = weight.iter().map(|v| v.unwrap_or(top)).sum::<f64>() / weight.len() as f64;
+        // A floor, so that pixels whose neighbours' first blocks all missed
+        // a rare path still gain samples; all equal on a film with no
+        // variance at all.
+        let floor = if mean > 0.0 { WEIGHT_FLOOR * mean } else { 1.0 };
+        weight
+            .iter()
+            .map(|v| v.unwrap_or(top).max(floor) as f32)
+            .collect()
     }
 }
 
@@ -431,8 +489,7 @@ impl Allocation {
 pub struct Film {
     pub width: u32,
     pub height: u32,
-    /// The image's statistics: all samples of a uniform film, the image
-    /// blocks of an adaptive one.
+    /// Each pixel's statistics.
     pub pixels: Vec<PixelStats>,
     /// Samples per pixel attempted so far on a uniform film (the next
     /// pass's first index is `start + spp`), the fewest any pixel has on an
@@ -441,17 +498,17 @@ pub struct Film {
     /// The first sample index of a uniform film: 0, except for a part of a
     /// split render (`render --samples A..B`), which starts at A.
     pub start: u32,
-    /// Per-pixel counts and decision statistics of an adaptive film.
+    /// Per-pixel counts and weights of an adaptive film.
     pub adaptive: Option<Allocation>,
     pub bad_count: u64,
     pub bad: Vec<BadSample>,
 }
 
 impl Film {
-    /// Memory a render needs per pixel: the statistics (twice, with an
-    /// adaptive film's count), and the linear, bloomed and displayed copies
-    /// of the image made from them.
-    pub const BYTES_PER_PIXEL: u64 = 2 * std::mem::size_of::<PixelStats>() as u64 + 4 + 3 * 12 + 3;
+    /// Memory a render needs per pixel: the statistics (with an adaptive
+    /// film's count and weight), and the linear, bloomed and displayed
+    /// copies of the image made from them.
+    pub const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelStats>() as u64 + 8 + 3 * 12 + 3;
 
     pub fn new(width: u32, height: u32) -> Self {
         Self {
@@ -472,7 +529,7 @@ impl Film {
         Self {
             adaptive: Some(Allocation {
                 spp: vec![0; n],
-                decide: vec![PixelStats::default(); n],
+                weight: Vec::new(),
             }),
             ..Self::new(width, height)
         }
@@ -496,30 +553,15 @@ impl Film {
         }
     }
 
-    /// Pixel `i`'s relative error predicted from its decision blocks alone
-    /// (`None` on a uniform film, or before the pixel has two finite
-    /// decision samples and an image sample). Only decides where samples go: the variance of
-    /// one sample is the geometric mean of the decision blocks' design-based
-    /// figure (its within-strata part has few degrees of freedom) and their
-    /// sample variance (an upper bound), over the image blocks' count.
-    pub fn predicted_error(&self, i: usize) -> Option<f64> {
-        let d = &self.adaptive.as_ref()?.decide[i];
-        let n = self.pixels[i].n;
-        if d.n < 2 || n == 0 {
-            return None;
-        }
-        let per_sample = (d.mean_variance()? * d.n as f64 * d.variance()).sqrt();
-        let lum = d.mean.dot(LUMA.as_dvec3());
-        Some((per_sample / n as f64 / (lum * lum + REL_EPS)).sqrt())
-    }
-
-    /// The fraction of an adaptive film's pixels whose predicted error is
-    /// below `target` (`None` on a uniform film).
+    /// The fraction of an adaptive film's pixels whose own estimated
+    /// relative error is below `target` (`None` on a uniform film).
     pub fn converged(&self, target: f64) -> Option<f64> {
         self.adaptive.as_ref()?;
         let n = self.pixels.len().max(1);
-        let below = (0..self.pixels.len())
-            .filter(|&i| self.predicted_error(i).is_some_and(|e| e < target))
+        let below = self
+            .pixels
+            .iter()
+            .filter(|p| p.relative_error().is_some_and(|e| e < target))
             .count();
         Some(below as f64 / n as f64)
     }
@@ -532,10 +574,7 @@ impl Film {
             a.spp[i] = a.spp[i].max(sample + 1);
         }
         if c.is_finite() {
-            match &mut self.adaptive {
-                Some(a) if Allocation::decides(sample) => a.decide[i].add(sample, c, stratum),
-                _ => self.pixels[i].add(sample, c, stratum),
-            }
+            self.pixels[i].add(sample, c, stratum);
         } else {
             self.record_bad(BadSample { x, y, sample });
         }

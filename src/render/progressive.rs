@@ -4,13 +4,13 @@
 //! TUI's worker and the tests all drive films through [`Progressive`].
 //!
 //! A uniform pass gives every pixel the same sample indices. An adaptive
-//! one ([`Progressive::adaptive`]), once every pixel has [`MIN_SPP`], gives a
-//! block of strata to each pixel whose error, predicted from its decision
-//! blocks ([`Film::predicted_error`]), is above the target and whose gain
-//! from more samples is in the higher half of those still above it; each
-//! pixel's next sample index is its own count. Either way results depend only on (pixel, sample index,
-//! seed), never on threads: rows run in parallel, and what a pass gives a
-//! pixel is decided before it starts.
+//! one ([`Progressive::adaptive`]), once every pixel has [`MIN_SPP`], raises
+//! the mean spp and shares the samples in proportion to each pixel's
+//! weight, predicted once from its neighbours' first blocks
+//! ([`Allocation::weigh`]); each pixel's next sample index is its own
+//! count. Either way results depend only on (pixel, sample index, seed),
+//! never on threads: rows run in parallel, and what a pass gives a pixel is
+//! decided before it starts.
 
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;
@@ -23,8 +23,9 @@ use super::film::{Allocation, BadSample, Film, PixelStats};
 use crate::geometry::sampling::PIXEL_STRATA;
 
 /// Samples every pixel of an adaptive film gets before any decision: one
-/// image block and one decision block of strata.
-pub const MIN_SPP: u32 = 2 * PIXEL_STRATA;
+/// block of strata, which also makes every pixel's error estimate rest on
+/// its samples alone.
+pub const MIN_SPP: u32 = PIXEL_STRATA;
 use super::recorder::{RayCounter, Recorder, WorkCounter};
 use super::{Plan, Tracer};
 
@@ -168,20 +169,25 @@ impl Progressive {
                 a.spp.iter().map(|&n| upto.saturating_sub(n)).collect(),
             ));
         }
-        let block = PIXEL_STRATA.min(cap);
-        // Pixels predicted below the target rest, unless the film as a whole
-        // is not there yet (the one use of the image's own estimate, as a
-        // uniform render's stop: see docs/adaptive.md).
-        let targets = [stop.error.unwrap_or(0.0), 0.0];
-        for target in targets {
-            if let Some(g) = give_blocks(f, a, target, block, cap) {
-                return Some(g);
+        // Each pass raises the mean by at least half a block, shared in
+        // proportion to the weights.
+        let step = self.samples_per_pass.max(PIXEL_STRATA / 2) as f64;
+        let mut mean = f.spp_range().1;
+        loop {
+            mean = (mean + step).min(cap as f64);
+            let counts = share(&a.weight, mean, cap)?;
+            let give: Vec<u32> = counts
+                .iter()
+                .zip(&a.spp)
+                .map(|(&want, &has)| want.saturating_sub(has))
+                .collect();
+            if give.iter().any(|&n| n > 0) {
+                return Some(Give::Each(give));
             }
-            if stop.error.is_none() || f.relative_error().is_some_and(|r| r < target) {
-                break;
+            if mean >= cap as f64 {
+                return None;
             }
         }
-        None
     }
 
     /// Runs one pass of up to `samples_per_pass` samples (never past the
@@ -265,14 +271,10 @@ impl Progressive {
         {
             return Some(Ended::Error);
         }
-        // An adaptive film with no pixel left to sample: all are below the
-        // target error or at the spp cap.
-        if f.adaptive.is_some() && f.spp >= MIN_SPP && self.give(stop).is_none() {
-            return Some(if stop.error.is_some() {
-                Ended::Error
-            } else {
-                Ended::Spp
-            });
+        // An adaptive film with nothing to share by: its weights are made
+        // by its own passes (every pixel at the cap ended it above).
+        if f.spp >= MIN_SPP && f.adaptive.as_ref().is_some_and(|a| a.weight.is_empty()) {
+            return Some(Ended::Spp);
         }
         None
     }
@@ -329,42 +331,41 @@ impl Progressive {
     }
 }
 
-/// One block to each pixel under the spp cap whose error predicted from its
-/// decision blocks is above `target` and whose gain from more samples is in
-/// the higher half of those; `None` when no pixel is.
-fn give_blocks(f: &Film, a: &Allocation, target: f64, block: u32, cap: u32) -> Option<Give> {
-    // A pixel's squared error falls by about e² b / n for b more of its n
-    // image samples: giving blocks by e / √n minimises the film's relMSE for
-    // the samples spent (e alone would equalise the pixels' errors, which
-    // leaves the film's no lower than uniform sampling).
-    let gains: Vec<f64> = (0..a.spp.len())
-        .map(|i| match f.predicted_error(i) {
-            _ if a.spp[i].saturating_add(block) > cap => -1.0,
-            // Non-finite samples left nothing to decide on.
-            None => f64::INFINITY,
-            Some(e) if e > target => e / (f.pixels[i].n.max(1) as f64).sqrt(),
-            Some(_) => -1.0,
-        })
-        .collect();
-    let mut open: Vec<f64> = gains.iter().copied().filter(|&g| g >= 0.0).collect();
-    if open.is_empty() {
+/// Each pixel's sample count for a film of at least `mean` samples per
+/// pixel that minimises its relMSE: counts in proportion to the weights (a
+/// pixel's squared error is its weight² over its count), rounded up to
+/// whole blocks, none below [`MIN_SPP`] or above `cap` (so all at `cap`
+/// for a `mean` of `cap`); `None` without weights.
+fn share(weight: &[f32], mean: f64, cap: u32) -> Option<Vec<u32>> {
+    let lo = MIN_SPP.min(cap) as f64;
+    // Whole blocks of strata: a block cut short keeps part of the variance
+    // between strata that a whole one cancels (measured, whole blocks reach
+    // an error with about a tenth fewer samples).
+    let block = PIXEL_STRATA as f64;
+    let count = |c: f64, w: f32| ((c * w as f64 / block).ceil() * block).clamp(lo, cap as f64);
+    let mean_at = |c: f64| weight.iter().map(|&w| count(c, w)).sum::<f64>() / weight.len() as f64;
+    if weight.is_empty() {
         return None;
     }
-    let mid = open.len() / 2;
-    let median = *open.select_nth_unstable_by(mid, f64::total_cmp).1;
-    Some(Give::Each(
-        gains
-            .iter()
-            .map(|&g| if g >= median { block } else { 0 })
-            .collect(),
-    ))
+    // The scale whose counts have the mean, by bisection on its exponent:
+    // 24 steps find it to within 1e-5, finer than a block's rounding.
+    let (mut a, mut b) = (-64.0f64, 64.0f64);
+    for _ in 0..24 {
+        let m = 0.5 * (a + b);
+        if mean_at(m.exp2()) < mean {
+            a = m;
+        } else {
+            b = m;
+        }
+    }
+    let c = b.exp2();
+    Some(weight.iter().map(|&w| count(c, w) as u32).collect())
 }
 
-/// One row of a film, with the adaptive parts when there are any.
+/// One row of a film, with its sample counts when adaptive.
 struct Row<'a> {
     y: usize,
     pixels: &'a mut [PixelStats],
-    decide: Option<&'a mut [PixelStats]>,
     spp: Option<&'a mut [u32]>,
 }
 
@@ -390,20 +391,17 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             .map(|(y, pixels)| Row {
                 y,
                 pixels,
-                decide: None,
                 spp: None,
             })
             .collect(),
         Some(a) => film
             .pixels
             .chunks_mut(w)
-            .zip(a.decide.chunks_mut(w))
             .zip(a.spp.chunks_mut(w))
             .enumerate()
-            .map(|(y, ((pixels, decide), spp))| Row {
+            .map(|(y, (pixels, spp))| Row {
                 y,
                 pixels,
-                decide: Some(decide),
                 spp: Some(spp),
             })
             .collect(),
@@ -438,11 +436,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                         });
                         continue;
                     }
-                    let stratum = tracer.stratum(xu, y, k);
-                    match &mut row.decide {
-                        Some(d) if Allocation::decides(k) => d[x].add(k, c, stratum),
-                        _ => row.pixels[x].add(k, c, stratum),
-                    }
+                    row.pixels[x].add(k, c, tracer.stratum(xu, y, k));
                 }
                 if let Some(s) = &mut row.spp {
                     s[x] = k0 + n;
@@ -462,8 +456,15 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             }
         }
     }
-    match (&film.adaptive, give) {
-        (Some(a), _) => film.spp = a.spp.iter().copied().min().unwrap_or(0),
+    match (&mut film.adaptive, give) {
+        (Some(a), _) => {
+            film.spp = a.spp.iter().copied().min().unwrap_or(0);
+            // Weighed once, when every pixel has its first block and no
+            // pixel anything more: no later sample ever moves a weight.
+            if a.weight.is_empty() && film.spp >= MIN_SPP {
+                a.weight = Allocation::weigh(&film.pixels, film.width);
+            }
+        }
         // A pass cut between rows leaves `spp` at what every pixel has.
         (None, Give::All(n)) if !cut => film.spp += n,
         _ => {}
@@ -557,6 +558,30 @@ mod tests {
         let o = p.run(&t, &Stop::seconds(1e-12), &|| false, |_, _| {});
         assert_eq!((o.ended, o.passes, p.film.spp), (Ended::Time, 1, 1));
         assert!(p.film.pixels.iter().all(|px| px.n == 1));
+    }
+
+    /// Under a cap that is no whole number of blocks, adaptive passes go on
+    /// until every pixel has the cap, and the counts' mean grows by at
+    /// least the step each pass.
+    #[test]
+    fn adaptive_passes_fill_up_to_the_cap() {
+        let s = session(&[]);
+        let t = s.tracer();
+        let mut p = Progressive::new_adaptive(12, 8);
+        p.samples_per_pass = 16;
+        let stop = Stop {
+            spp: Some(40),
+            seconds: Some(1e9),
+            error: None,
+        };
+        let mut means = Vec::new();
+        let o = p.run(&t, &stop, &|| false, |f, _| means.push(f.spp_range().1));
+        assert_eq!(o.ended, Ended::Spp);
+        assert_eq!(p.film.spp_range(), (40, 40.0, 40));
+        assert!(
+            means.windows(2).all(|m| m[1] >= (m[0] + 16.0).min(40.0)),
+            "{means:?}"
+        );
     }
 
     #[test]

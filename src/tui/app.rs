@@ -26,7 +26,7 @@ use super::term::output::Figures;
 use super::worker::{self, Msg, PixelRequest, Reference, Snapshot, Truth, View, Worker};
 use crate::bvh::debug::HeatMeasure;
 use crate::inspect::overlay::{PixelView, VIEWS};
-use crate::render::debug_view::DebugView;
+use crate::render::debug_view::{DebugView, FilmView};
 use crate::render::{Decision, Feature, Features, Plan, Session, Worst};
 use crate::report::converge::load_reference;
 use crate::scene::Builder;
@@ -53,6 +53,10 @@ pub enum Overlay {
     HeatTests,
     /// What bloom does: the pixels over its threshold and their glow.
     Bloom,
+    /// Samples per pixel.
+    Spp,
+    /// Estimated relative error per pixel.
+    Error,
 }
 
 impl Overlay {
@@ -63,7 +67,9 @@ impl Overlay {
             Overlay::Leaves => Overlay::HeatNodes,
             Overlay::HeatNodes => Overlay::HeatTests,
             Overlay::HeatTests => Overlay::Bloom,
-            Overlay::Bloom => Overlay::Off,
+            Overlay::Bloom => Overlay::Spp,
+            Overlay::Spp => Overlay::Error,
+            Overlay::Error => Overlay::Off,
         }
     }
 }
@@ -80,7 +86,7 @@ impl BvhOverlay {
     /// each pass instead).
     pub fn view(&self) -> Option<DebugView> {
         match self.mode {
-            Overlay::Off | Overlay::Bloom => None,
+            Overlay::Off | Overlay::Bloom | Overlay::Spp | Overlay::Error => None,
             Overlay::Level => Some(DebugView::Level(self.level)),
             Overlay::Leaves => Some(DebugView::Leaves),
             Overlay::HeatNodes => Some(DebugView::Heat(HeatMeasure::NodesVisited)),
@@ -96,6 +102,19 @@ impl BvhOverlay {
             Overlay::HeatNodes => "heat map of nodes visited".into(),
             Overlay::HeatTests => "heat map of triangle tests".into(),
             Overlay::Bloom => "bloom: the pixels over its threshold and their glow".into(),
+            Overlay::Spp => "samples per pixel".into(),
+            Overlay::Error => "estimated relative error per pixel".into(),
+        }
+    }
+
+    /// The view of the film the worker draws into each pass for it, in
+    /// place of the picture.
+    pub fn film_view(&self) -> Option<FilmView> {
+        match self.mode {
+            Overlay::Bloom => Some(FilmView::Bloom),
+            Overlay::Spp => Some(FilmView::Spp),
+            Overlay::Error => Some(FilmView::Error),
+            _ => None,
         }
     }
 }
@@ -548,8 +567,7 @@ impl App {
 
     fn overlay_changed(&mut self) {
         self.link.set_overlay(self.overlay.view());
-        self.link
-            .set_bloom_view(self.overlay.mode == Overlay::Bloom);
+        self.link.set_film_view(self.overlay.film_view());
         self.say(format!("view overlay: {}", self.overlay.name()));
     }
 

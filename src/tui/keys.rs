@@ -294,7 +294,7 @@ pub const ROWS: &[Row] = &[
     Row {
         mode: Mode::Any,
         keys: &[(K::Char('g'), A::Overlay)],
-        help: "view overlay: off, BVH level k, leaves, heat map (nodes, triangle tests), bloom",
+        help: "view overlay: off, BVH level k, leaves, heat map (nodes, tests), bloom, spp, error per pixel",
         hint: Some("view overlay"),
     },
     Row {

@@ -9,6 +9,7 @@ use anyhow::{bail, Result};
 
 use super::worker::{self, Cmd, Msg, OverlayFrame, PixelFrame, PixelRequest, Snapshot, View};
 use crate::render::debug_view::DebugView;
+use crate::render::debug_view::FilmView;
 use crate::scene::Builder;
 
 pub struct RenderLink {
@@ -69,9 +70,9 @@ impl RenderLink {
         self.worker.send(Cmd::Overlay(view));
     }
 
-    /// Draws the bloom view into every pass from now on, or stops.
-    pub fn set_bloom_view(&mut self, on: bool) {
-        self.worker.send(Cmd::BloomView(on));
+    /// Draws a view of the film into every pass from now on, or stops.
+    pub fn set_film_view(&mut self, v: Option<FilmView>) {
+        self.worker.send(Cmd::FilmView(v));
     }
 
     /// Keeps the selected pixel's overlay `p` drawn (none: no overlay);

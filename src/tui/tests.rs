@@ -253,8 +253,29 @@ fn pixel_overlays_cycle_and_show_the_ray_at_the_debug_cursor() {
     assert_eq!(app.pixel_request(), None);
 }
 
+/// Waits for the worker to send a pass with the app's film view drawn in,
+/// draws, and gives the screen's text.
+fn settle_film_view(t: &mut Terminal<TestBackend>, app: &mut App) -> String {
+    let end = std::time::Instant::now() + WAIT;
+    let want = app.overlay.film_view();
+    while app
+        .link
+        .current_frame()
+        .is_none_or(|f| f.film_view.as_ref().map(|v| v.0) != want)
+    {
+        assert!(
+            std::time::Instant::now() < end,
+            "no film view within {WAIT:?}"
+        );
+        app.poll().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    super::draw(t, app).unwrap();
+    text(t)
+}
+
 #[test]
-fn the_bloom_view_is_the_last_view_overlay() {
+fn bloom_samples_and_error_are_the_last_view_overlays() {
     use super::app::Overlay;
     let mut app = app("cornell", &[]);
     let mut t = terminal(200, 40);
@@ -263,24 +284,18 @@ fn the_bloom_view_is_the_last_view_overlay() {
         app.handle_key(Key::Char('g'));
     }
     assert_eq!(app.overlay.mode, Overlay::Bloom);
-    // The worker draws it into the next pass it sends.
-    let end = std::time::Instant::now() + WAIT;
-    while app
-        .link
-        .current_frame()
-        .is_none_or(|f| f.bloom_view.is_none())
-    {
-        assert!(
-            std::time::Instant::now() < end,
-            "no bloom view within {WAIT:?}"
-        );
-        app.poll().unwrap();
-        std::thread::sleep(std::time::Duration::from_millis(5));
-    }
-    super::draw(&mut t, &mut app).unwrap();
-    let s = text(&t);
+    // The worker draws each into the next pass it sends.
+    let s = settle_film_view(&mut t, &mut app);
     assert!(s.contains("over the threshold (luminance > 1)"), "{s}");
     assert!(s.contains("kernel 25x25"), "{s}");
+    app.handle_key(Key::Char('g'));
+    assert_eq!(app.overlay.mode, Overlay::Spp);
+    let s = settle_film_view(&mut t, &mut app);
+    assert!(s.contains("samples per pixel"), "{s}");
+    app.handle_key(Key::Char('g'));
+    assert_eq!(app.overlay.mode, Overlay::Error);
+    let s = settle_film_view(&mut t, &mut app);
+    assert!(s.contains("estimated relative error per pixel"), "{s}");
     app.handle_key(Key::Char('g'));
     assert_eq!(app.overlay.mode, Overlay::Off);
 }

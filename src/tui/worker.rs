@@ -20,7 +20,7 @@ use crate::inspect::inspect_pixel;
 use crate::inspect::overlay::{self, PixelView};
 use crate::raster::metrics::rel_mse_on;
 use crate::raster::resample::resample;
-use crate::render::debug_view::{self, DebugView};
+use crate::render::debug_view::{self, DebugView, FilmView};
 use crate::render::overlay::{legend_line, Layer};
 use crate::render::recorder::WorkCounter;
 use crate::render::{post, Plan, Progressive, Stop, Tracer, WorstPixels};
@@ -33,7 +33,7 @@ const COARSE_ABOVE_MS: f64 = 20.0;
 const COARSE: u32 = 4;
 /// Accumulation stops here; the image no longer visibly changes.
 pub const MAX_SPP: u32 = 1024;
-/// A pixel counts as converged in the Render panel below this predicted
+/// A pixel counts as converged in the Render panel below this estimated
 /// relative error (the default target of `rayterm converge`).
 pub const CONVERGED_BELOW: f64 = 0.01;
 
@@ -62,8 +62,9 @@ pub enum Cmd {
     Overlay(Option<DebugView>),
     /// Keep the selected pixel's overlay drawn (none: no overlay).
     Pixel(Option<PixelRequest>),
-    /// Draw bloom's view into every pass (`Snapshot::bloom_view`), or stop.
-    BloomView(bool),
+    /// Draw a view of the film into every pass (`Snapshot::film_view`), or
+    /// stop.
+    FilmView(Option<FilmView>),
     Quit,
 }
 
@@ -190,9 +191,9 @@ pub struct Snapshot {
     pub image: Vec<Vec3>,
     /// The mean before bloom, when bloom ran.
     pub pre_bloom: Option<Vec<Vec3>>,
-    /// With the bloom view on: the pass's mean as `debug_view::bloom_view`
-    /// draws it, and its legend in one line.
-    pub bloom_view: Option<(Vec<Vec3>, String)>,
+    /// With a film view on: the pass as `debug_view` draws it (bloom,
+    /// samples or error per pixel), and its legend in one line.
+    pub film_view: Option<(FilmView, Vec<Vec3>, String)>,
     /// A quarter-resolution preview, not yet a sample of the film.
     pub coarse: bool,
     pub spp: u32,
@@ -256,7 +257,7 @@ pub struct Worker {
     /// The pixel overlay to draw, and the generation it was last drawn for.
     pixel: Option<PixelRequest>,
     pixel_drawn: Option<(u64, PixelRequest)>,
-    bloom_view: bool,
+    film_view: Option<FilmView>,
 }
 
 impl Worker {
@@ -289,7 +290,7 @@ impl Worker {
             overlay_drawn: None,
             pixel: None,
             pixel_drawn: None,
-            bloom_view: false,
+            film_view: None,
         }
     }
 
@@ -334,8 +335,8 @@ impl Worker {
                 self.pixel_drawn = None;
                 None
             }
-            Cmd::BloomView(on) => {
-                self.bloom_view = on;
+            Cmd::FilmView(v) => {
+                self.film_view = v;
                 // The film is the same: shown again, with or without it.
                 self.resend = self.film.film.spp > 0;
                 None
@@ -346,9 +347,8 @@ impl Worker {
 
     fn restart(&mut self) {
         let (w, h) = self.view.as_ref().map_or((0, 0), View::size);
-        // Uniform passes: adaptive ones do not yet reach an error sooner
-        // (docs/adaptive.md), and spend half the first 32 spp on decisions.
-        self.film = Progressive::new(w, h);
+        // Adaptive after the first block of strata (docs/adaptive.md).
+        self.film = Progressive::new_adaptive(w, h);
         self.film.rows_done = Some(self.progress.rows_done.clone());
         // A pass is slow when the last one was, or when it is the first
         // without the BVH (brute force is orders of magnitude slower).
@@ -522,13 +522,21 @@ impl Worker {
     /// `true_error` that image's error against the reference.
     fn snapshot(&self, view: &View, mean: Vec<Vec3>, true_error: Option<f64>) -> Snapshot {
         let film = &self.film.film;
-        let bloom_view = self.bloom_view.then(|| {
-            let s = &self.scene.settings.bloom;
-            let (image, mut legend) = debug_view::bloom_view(&mean, view.width, view.height, s);
-            if !view.plan.bloom {
-                legend.push((None, "bloom is off in this plan".into()));
-            }
-            (image, legend_line(&legend))
+        let film_view = self.film_view.map(|v| {
+            let (image, legend) = match v {
+                FilmView::Bloom => {
+                    let s = &self.scene.settings.bloom;
+                    let (image, mut legend) =
+                        debug_view::bloom_view(&mean, view.width, view.height, s);
+                    if !view.plan.bloom {
+                        legend.push((None, "bloom is off in this plan".into()));
+                    }
+                    (image, legend)
+                }
+                FilmView::Spp => debug_view::spp_view(film),
+                FilmView::Error => debug_view::error_view(film),
+            };
+            (v, image, legend_line(&legend))
         });
         let shown = post::display(
             mean,
@@ -543,7 +551,7 @@ impl Worker {
             height: view.height,
             image: shown.image,
             pre_bloom: shown.before_bloom,
-            bloom_view,
+            film_view,
             coarse: false,
             spp: film.spp,
             spp_mean: film.spp_range().1,
@@ -594,7 +602,7 @@ impl Worker {
             height: view.height,
             image: shown.image,
             pre_bloom: shown.before_bloom,
-            bloom_view: None,
+            film_view: None,
             coarse: true,
             spp: 0,
             spp_mean: 0.0,

@@ -8,7 +8,7 @@ use ratatui::style::{Color, Style};
 use ratatui::widgets::{Block, Borders, Paragraph};
 use ratatui::Frame;
 
-use crate::tui::app::{App, Overlay};
+use crate::tui::app::App;
 use crate::tui::color::{self, ColorMode};
 use crate::tui::graphics::symbols::{self, Symbols};
 use crate::tui::worker::Snapshot;
@@ -31,9 +31,10 @@ pub fn picture(app: &App) -> Option<ViewPicture> {
     let frame = app.link.frame.as_deref()?;
     let (w, h) = (frame.width, frame.height);
     let mut note = None;
-    // The bloom view replaces the picture: it shows the pass itself.
-    let mut img = match &frame.bloom_view {
-        Some((view, legend)) if app.overlay.mode == Overlay::Bloom => {
+    // A film view (bloom, samples or error per pixel) replaces the
+    // picture: it shows the pass itself.
+    let mut img = match &frame.film_view {
+        Some((v, view, legend)) if app.overlay.film_view() == Some(*v) => {
             note = Some(legend.clone());
             view.clone()
         }
