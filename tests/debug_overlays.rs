@@ -417,55 +417,45 @@ fn read_png(p: &Path) -> image::RgbImage {
     image::open(p).unwrap().to_rgb8()
 }
 
+/// Renders `scene` at `size` with `--debug spec` to `png`, which must
+/// succeed; returns what it printed and the image.
+fn debug_png(scene: &str, size: &str, spec: &str, png: &Path) -> (String, image::RgbImage) {
+    let p = png.to_str().unwrap();
+    let args = [
+        "render", scene, "--size", size, "--spp", "1", "--debug", spec, "-o", p,
+    ];
+    let out = rayterm(&args);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    (stdout, read_png(png))
+}
+
 #[test]
 fn cli_writes_the_traversal_and_normals_overlays() {
     let dir = std::env::temp_dir().join(format!("rayterm-debug-ov-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let png = dir.join("trav.png");
-    let out = rayterm(&[
-        "render",
+    let (stdout, img) = debug_png(
         "cornell",
-        "--size",
         "96x96",
-        "--spp",
-        "1",
-        "--debug",
         "ray:48,60:traversal",
-        "-o",
-        png.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        &dir.join("trav.png"),
     );
-    let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("on the path to triangle"), "{stdout}");
     assert!(stdout.contains("  0  camera ray, hits"), "{stdout}");
-    let img = read_png(&png);
     assert_eq!(img.dimensions(), (96, 96));
     let has = |c: [u8; 3]| img.pixels().filter(|p| p.0 == c).count();
     assert!(has([0, 255, 0]) > 20, "green boxes");
     assert!(has([255, 255, 0]) > 5, "the triangle's outline");
-    let png = dir.join("normals.png");
-    let out = rayterm(&[
-        "render",
+    let (_, img) = debug_png(
         "mirrors",
-        "--size",
         "160x120",
-        "--spp",
-        "1",
-        "--debug",
         "ray:80,70:normals",
-        "-o",
-        png.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        &dir.join("normals.png"),
     );
-    let img = read_png(&png);
     let red = img.pixels().filter(|p| p.0 == [255, 0, 0]).count();
     let green = img.pixels().filter(|p| p.0 == [0, 255, 0]).count();
     assert!(red > 3 && green > 3, "red {red}, green {green}");
