@@ -1091,7 +1091,7 @@ fn extreme_arguments_are_bounded_or_refused_before_loading() {
         r.stdout
     );
     // An adaptive target (the default) is judged once every pixel has its
-    // first 16.
+    // first 4, a sample in each quadrant.
     let r = run(&[
         "render",
         "cornell-area",
@@ -1102,7 +1102,7 @@ fn extreme_arguments_are_bounded_or_refused_before_loading() {
         "-o",
         "t.png",
     ]);
-    assert!(r.ok() && r.stdout.contains(", 16 spp,"), "{}", r.stdout);
+    assert!(r.ok() && r.stdout.contains(", 4 spp,"), "{}", r.stdout);
     // Sample counts beyond the renderer's cap, and targets beyond any render,
     // are refused before the scene loads.
     for (args, why) in [

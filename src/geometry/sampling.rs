@@ -65,13 +65,58 @@ pub const PIXEL_GRID: u32 = 4;
 /// (a block) visits every stratum once.
 pub const PIXEL_STRATA: u32 = PIXEL_GRID * PIXEL_GRID;
 
+/// Samples in a quarter of a block: one in each quadrant of the pixel.
+pub const QUARTER: u32 = PIXEL_STRATA / 4;
+
 /// The stratum (`i + PIXEL_GRID * j`) of sample `k` of `pixel`: each block
-/// of [`PIXEL_STRATA`] samples visits the strata once, in a random order per
-/// pixel and block, so any prefix is spread over the pixel. The integrator
-/// places samples by it and the film's error estimate reads it.
+/// of [`PIXEL_STRATA`] samples visits the strata once, and each quarter of
+/// a block (samples `4q..4q + 4`) visits the pixel's four quadrants once, in
+/// random orders per pixel and block. So any prefix is spread over the
+/// pixel, and the first four samples already stratify it 2x2, which is what
+/// lets a pixel's error be estimated from four samples (`render::film`).
+/// The integrator places samples by it and the film's error estimate reads
+/// it.
 pub fn pixel_stratum(pixel: u64, k: u32, seed: u64) -> u32 {
     let block = Rng::for_sample(pixel, (k / PIXEL_STRATA) as u64, seed ^ 0x5bd1_e995).next_u32();
-    permute(k % PIXEL_STRATA, PIXEL_STRATA, block)
+    let (quarter, slot) = ((k % PIXEL_STRATA) / QUARTER, k % QUARTER);
+    // Which quadrant this slot of the quarter visits, then which of that
+    // quadrant's four strata this quarter takes: distinct over the block.
+    let quadrant = permute4(slot, block ^ quarter.wrapping_mul(0x9e37_79b9));
+    let sub = permute4(quarter, block ^ (quadrant + 4).wrapping_mul(0x9e37_79b9));
+    let half = PIXEL_GRID / 2;
+    let i = (quadrant % 2) * half + sub % half;
+    let j = (quadrant / 2) * half + sub / half;
+    i + PIXEL_GRID * j
+}
+
+/// Element `i` of one of the 24 permutations of `0..4`, chosen by a hash
+/// of `seed`.
+fn permute4(i: u32, seed: u32) -> u32 {
+    // The finaliser of MurmurHash3: every bit of the seed moves the choice.
+    let mut h = seed;
+    h ^= h >> 16;
+    h = h.wrapping_mul(0x85eb_ca6b);
+    h ^= h >> 13;
+    h = h.wrapping_mul(0xc2b2_ae35);
+    h ^= h >> 16;
+    // The permutation's Lehmer code: its digits pick from what is left.
+    let mut code = h % 24;
+    let mut left = [0u32, 1, 2, 3];
+    let mut len = 4;
+    for _ in 0..i {
+        let d = (code % len) as usize;
+        code /= len;
+        left.copy_within(d + 1..len as usize, d);
+        len -= 1;
+    }
+    left[(code % len) as usize]
+}
+
+/// The colour of stratum `s` on a checkerboard of the pixel's quadrants:
+/// black (`true`) top-left and bottom-right.
+pub fn quadrant_is_black(s: u32) -> bool {
+    let half = PIXEL_GRID / 2;
+    ((s % PIXEL_GRID) / half + (s / PIXEL_GRID) / half).is_multiple_of(2)
 }
 
 /// Stratum `k` of an `n x n` grid, jittered with `r`, in [0, 1)^2.
@@ -182,6 +227,30 @@ mod tests {
             (0..16).map(|i| permute(i, 16, 1)).collect::<Vec<_>>(),
             (0..16).map(|i| permute(i, 16, 2)).collect::<Vec<_>>()
         );
+    }
+
+    #[test]
+    fn blocks_visit_every_stratum_and_quarters_every_quadrant() {
+        let mut orders = std::collections::HashSet::new();
+        for pixel in 0..200u64 {
+            for block in 0..3 {
+                let ks = block * PIXEL_STRATA..(block + 1) * PIXEL_STRATA;
+                let s: Vec<u32> = ks.map(|k| pixel_stratum(pixel, k, 7)).collect();
+                let mut sorted = s.clone();
+                sorted.sort_unstable();
+                assert_eq!(sorted, (0..PIXEL_STRATA).collect::<Vec<_>>(), "{s:?}");
+                for q in s.chunks(QUARTER as usize) {
+                    let mut quadrants: Vec<u32> =
+                        q.iter().map(|&t| (t % 4) / 2 + 2 * ((t / 4) / 2)).collect();
+                    quadrants.sort_unstable();
+                    assert_eq!(quadrants, [0, 1, 2, 3], "{s:?}");
+                    assert_eq!(q.iter().filter(|&&t| quadrant_is_black(t)).count(), 2);
+                }
+                orders.insert(s);
+            }
+        }
+        // Random orders: 600 blocks, hardly any alike.
+        assert!(orders.len() > 590, "{} distinct orders", orders.len());
     }
 
     #[test]

@@ -299,6 +299,8 @@ fn from_words(w: &Words) -> PixelStats {
         block_mean: double(1),
         block_m2: double(2),
         checker: double(3),
+        // Partial films keep no quarters.
+        quarters: f32::NAN,
         ..PixelStats::default()
     }
 }

@@ -6,7 +6,7 @@
 //! A uniform pass gives every pixel the same sample indices. An adaptive
 //! one ([`Progressive::adaptive`]), once every pixel has [`MIN_SPP`], raises
 //! the mean spp and shares the samples in proportion to each pixel's
-//! weight, predicted once from its neighbours' first blocks
+//! weight, predicted once from its neighbours' first quarters
 //! ([`Allocation::weigh`]); each pixel's next sample index is its own
 //! count. Either way results depend only on (pixel, sample index, seed),
 //! never on threads: rows run in parallel, and what a pass gives a pixel is
@@ -20,12 +20,12 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::film::{Allocation, BadSample, Film, PixelStats};
-use crate::geometry::sampling::PIXEL_STRATA;
+use crate::geometry::sampling::QUARTER;
 
 /// Samples every pixel of an adaptive film gets before any decision: one
-/// block of strata, which also makes every pixel's error estimate rest on
-/// its samples alone.
-pub const MIN_SPP: u32 = PIXEL_STRATA;
+/// quarter of a block, a sample in each quadrant of the pixel, which also
+/// makes every pixel's error estimate rest on its samples alone.
+pub const MIN_SPP: u32 = QUARTER;
 use super::recorder::{RayCounter, Recorder, WorkCounter};
 use super::{Plan, Tracer};
 
@@ -169,9 +169,9 @@ impl Progressive {
                 a.spp.iter().map(|&n| upto.saturating_sub(n)).collect(),
             ));
         }
-        // Each pass raises the mean by at least half a block, shared in
+        // Each pass raises the mean by at least one sample, shared in
         // proportion to the weights.
-        let step = self.samples_per_pass.max(PIXEL_STRATA / 2) as f64;
+        let step = self.samples_per_pass.max(1) as f64;
         let mut mean = f.spp_range().1;
         loop {
             mean = (mean + step).min(cap as f64);
@@ -334,14 +334,13 @@ impl Progressive {
 /// Each pixel's sample count for a film of at least `mean` samples per
 /// pixel that minimises its relMSE: counts in proportion to the weights (a
 /// pixel's squared error is its weight² over its count), rounded up to
-/// whole blocks, none below [`MIN_SPP`] or above `cap` (so all at `cap`
-/// for a `mean` of `cap`); `None` without weights.
+/// whole quarters of a block, none below [`MIN_SPP`] or above `cap` (so
+/// all at `cap` for a `mean` of `cap`); `None` without weights.
 fn share(weight: &[f32], mean: f64, cap: u32) -> Option<Vec<u32>> {
     let lo = MIN_SPP.min(cap) as f64;
-    // Whole blocks of strata: a block cut short keeps part of the variance
-    // between strata that a whole one cancels (measured, whole blocks reach
-    // an error with about a tenth fewer samples).
-    let block = PIXEL_STRATA as f64;
+    // Whole quarters: one cut short keeps part of the variance between the
+    // quadrants that a whole one cancels.
+    let block = QUARTER as f64;
     let count = |c: f64, w: f32| ((c * w as f64 / block).ceil() * block).clamp(lo, cap as f64);
     let mean_at = |c: f64| weight.iter().map(|&w| count(c, w)).sum::<f64>() / weight.len() as f64;
     if weight.is_empty() {
@@ -459,7 +458,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
     match (&mut film.adaptive, give) {
         (Some(a), _) => {
             film.spp = a.spp.iter().copied().min().unwrap_or(0);
-            // Weighed once, when every pixel has its first block and no
+            // Weighed once, when every pixel has its first quarter and no
             // pixel anything more: no later sample ever moves a weight.
             if a.weight.is_empty() && film.spp >= MIN_SPP {
                 a.weight = Allocation::weigh(&film.pixels, film.width);
@@ -560,7 +559,7 @@ mod tests {
         assert!(p.film.pixels.iter().all(|px| px.n == 1));
     }
 
-    /// Under a cap that is no whole number of blocks, adaptive passes go on
+    /// Under a cap that is no whole number of quarters, adaptive passes go on
     /// until every pixel has the cap, and the counts' mean grows by at
     /// least the step each pass.
     #[test]
@@ -570,16 +569,16 @@ mod tests {
         let mut p = Progressive::new_adaptive(12, 8);
         p.samples_per_pass = 16;
         let stop = Stop {
-            spp: Some(40),
+            spp: Some(42),
             seconds: Some(1e9),
             error: None,
         };
         let mut means = Vec::new();
         let o = p.run(&t, &stop, &|| false, |f, _| means.push(f.spp_range().1));
         assert_eq!(o.ended, Ended::Spp);
-        assert_eq!(p.film.spp_range(), (40, 40.0, 40));
+        assert_eq!(p.film.spp_range(), (42, 42.0, 42));
         assert!(
-            means.windows(2).all(|m| m[1] >= (m[0] + 16.0).min(40.0)),
+            means.windows(2).all(|m| m[1] >= (m[0] + 16.0).min(42.0)),
             "{means:?}"
         );
     }

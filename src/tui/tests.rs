@@ -278,7 +278,7 @@ fn settle_film_view(t: &mut Terminal<TestBackend>, app: &mut App) -> String {
 fn bloom_samples_and_error_are_the_last_view_overlays() {
     use super::app::Overlay;
     let mut app = app("cornell", &[]);
-    let mut t = terminal(200, 40);
+    let mut t = terminal(240, 40);
     settle(&mut t, &mut app);
     for _ in 0..5 {
         app.handle_key(Key::Char('g'));

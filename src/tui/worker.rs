@@ -347,7 +347,7 @@ impl Worker {
 
     fn restart(&mut self) {
         let (w, h) = self.view.as_ref().map_or((0, 0), View::size);
-        // Adaptive after the first block of strata (docs/adaptive.md).
+        // Adaptive after the first quarter block (docs/adaptive.md).
         self.film = Progressive::new_adaptive(w, h);
         self.film.rows_done = Some(self.progress.rows_done.clone());
         // A pass is slow when the last one was, or when it is the first
@@ -835,14 +835,15 @@ mod tests {
     fn bloom_and_bvh_toggles_keep_the_samples() {
         let s = session("cornell");
         let mut w = worker(Features::all());
-        for _ in 0..4 {
+        // Passes of one sample each, before adaptive ones begin.
+        for _ in 0..2 {
             full(&mut w);
         }
         let plain = view(&s, Features::all().without(&[Feature::Bloom, Feature::Bvh]));
         w.apply(Cmd::View(2, Box::new(plain.clone())));
         let f = next_frame(&mut w).unwrap();
-        assert_eq!((f.generation, f.spp, f.pre_bloom.is_none()), (2, 4, true));
-        assert_eq!(full(&mut w).spp, 5);
+        assert_eq!((f.generation, f.spp, f.pre_bloom.is_none()), (2, 2, true));
+        assert_eq!(full(&mut w).spp, 3);
         let shadowless = View {
             plan: s.plan_for(Features::all().without(&[
                 Feature::Bloom,
