@@ -20,7 +20,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::film::{Allocation, BadSample, Film, PixelStats};
-use crate::geometry::sampling::QUARTER;
+use crate::geometry::sampling::{PIXEL_STRATA, QUARTER};
 
 /// Samples every pixel of an adaptive film gets before any decision: one
 /// quarter of a block, a sample in each quadrant of the pixel, which also
@@ -334,14 +334,23 @@ impl Progressive {
 /// Each pixel's sample count for a film of at least `mean` samples per
 /// pixel that minimises its relMSE: counts in proportion to the weights (a
 /// pixel's squared error is its weight² over its count), rounded up to
-/// whole quarters of a block, none below [`MIN_SPP`] or above `cap` (so
-/// all at `cap` for a `mean` of `cap`); `None` without weights.
+/// whole quarters of a block below a block and to whole blocks above, none
+/// below [`MIN_SPP`] or above `cap` (so all at `cap` for a `mean` of
+/// `cap`); `None` without weights.
 fn share(weight: &[f32], mean: f64, cap: u32) -> Option<Vec<u32>> {
     let lo = MIN_SPP.min(cap) as f64;
-    // Whole quarters: one cut short keeps part of the variance between the
-    // quadrants that a whole one cancels.
-    let block = QUARTER as f64;
-    let count = |c: f64, w: f32| ((c * w as f64 / block).ceil() * block).clamp(lo, cap as f64);
+    // Whole quarters below a block, whole blocks from there: a quarter cut
+    // short keeps part of the variance between the quadrants that a whole
+    // one cancels, and a block cut short part of that between its strata.
+    let count = |c: f64, w: f32| {
+        let n = c * w as f64;
+        let unit = if n <= PIXEL_STRATA as f64 {
+            QUARTER
+        } else {
+            PIXEL_STRATA
+        } as f64;
+        ((n / unit).ceil() * unit).clamp(lo, cap as f64)
+    };
     let mean_at = |c: f64| weight.iter().map(|&w| count(c, w)).sum::<f64>() / weight.len() as f64;
     if weight.is_empty() {
         return None;
