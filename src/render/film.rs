@@ -482,9 +482,13 @@ pub struct BadSample {
 pub struct Allocation {
     /// Samples attempted per pixel: the index of each pixel's next sample.
     pub spp: Vec<u32>,
-    /// Each pixel's predicted relative standard deviation of one sample;
-    /// empty until every pixel has its first quarter.
+    /// Each pixel's predicted relative standard deviation of one sample
+    /// over the square root of its predicted rays per sample; empty until
+    /// every pixel has its first quarter.
     pub weight: Vec<f32>,
+    /// Rays each pixel's samples traced until the weights were made (then
+    /// emptied).
+    pub rays: Vec<u32>,
 }
 
 /// How far a pixel's weight looks: the neighbours within this many pixels
@@ -498,46 +502,56 @@ const WEIGHT_FLOOR: f64 = 0.4;
 
 impl Allocation {
     /// The weights from `pixels` (a `width`-wide film whose pixels have
-    /// their first quarter and nothing more): pixel `i`'s is the root mean
-    /// square of its neighbours' relative standard deviations of one
-    /// sample, `s / √(lum² + ε)` with `s²` the sample variance. Variance is
-    /// smooth across an image, so 24 neighbours' quarters give a firmer
-    /// prediction than a pixel's own four samples, and leaving the pixel
-    /// out keeps its mean free of the decision. The sample variance has 3
-    /// degrees of freedom a quarter where the design-based estimate has
-    /// one, and it measured best (docs/adaptive.md). A pixel with no estimable
-    /// neighbour gets the highest weight, and none less than
+    /// their first quarter and nothing more, which traced `rays`): pixel
+    /// `i`'s is the root mean square of its neighbours' relative standard
+    /// deviations of one sample, `s / √(lum² + ε)` with `s²` the sample
+    /// variance, over the square root of their mean rays per sample.
+    /// Counts in proportion to it minimise the film's relMSE for the rays
+    /// traced, where counts in proportion to the deviation alone would for
+    /// the samples: a glossy or mirrored pixel's samples cost several times
+    /// a diffuse one's. Variance is smooth across an image, so neighbours'
+    /// quarters give a firmer prediction than a pixel's own four samples,
+    /// and leaving the pixel out keeps its mean free of the decision. The
+    /// sample variance has 3 degrees of freedom a quarter where the
+    /// design-based estimate has one, and it measured best
+    /// (docs/adaptive.md). The neighbours are the 8 within one pixel and
+    /// the 24 within two, and the larger prediction is kept. A pixel with
+    /// no estimable neighbour gets the highest weight, and none less than
     /// [`WEIGHT_FLOOR`] of the mean.
-    pub fn weigh(pixels: &[PixelStats], width: u32) -> Vec<f32> {
+    pub fn weigh(pixels: &[PixelStats], rays: &[u32], width: u32) -> Vec<f32> {
         let w = width.max(1) as i64;
         let h = pixels.len() as i64 / w;
-        let rel: Vec<Option<f64>> = pixels
+        let rel: Vec<Option<(f64, f64)>> = pixels
             .iter()
-            .map(|p| {
+            .zip(rays)
+            .map(|(p, &r)| {
                 let lum = p.mean.dot(LUMA.as_dvec3());
                 let v = p.variance() / (lum * lum + REL_EPS);
-                (p.n >= 2 && v.is_finite()).then_some(v)
+                let per_sample = r as f64 / p.n.max(1) as f64;
+                (p.n >= 2 && v.is_finite()).then_some((v, per_sample))
             })
             .collect();
-        // The root mean square of the neighbours' within `r` pixels.
-        let rms = |i: i64, r: i64| {
+        // The neighbours' within `r` pixels: the root of their mean
+        // relative variance over their mean rays per sample (at least one).
+        let predict = |i: i64, r: i64| {
             let (x, y) = (i % w, i / w);
-            let (mut sum, mut n) = (0.0, 0u32);
+            let (mut v, mut t, mut n) = (0.0, 0.0, 0u32);
             for ny in (y - r).max(0)..=(y + r).min(h - 1) {
                 for nx in (x - r).max(0)..=(x + r).min(w - 1) {
                     if (nx, ny) == (x, y) {
                         continue;
                     }
-                    if let Some(v) = rel[(ny * w + nx) as usize] {
-                        sum += v;
+                    if let Some((a, b)) = rel[(ny * w + nx) as usize] {
+                        v += a;
+                        t += b;
                         n += 1;
                     }
                 }
             }
-            (n > 0).then(|| (sum / n as f64).sqrt())
+            (n > 0).then(|| (v / t.max(n as f64)).sqrt())
         };
         let weight: Vec<Option<f64>> = (0..w * h)
-            .map(|i| match (rms(i, 1), rms(i, WEIGHT_RADIUS)) {
+            .map(|i| match (predict(i, 1), predict(i, WEIGHT_RADIUS)) {
                 (Some(a), Some(b)) => Some(a.max(b)),
                 (a, b) => a.or(b),
             })
@@ -600,6 +614,7 @@ impl Film {
             adaptive: Some(Allocation {
                 spp: vec![0; n],
                 weight: Vec::new(),
+                rays: vec![0; n],
             }),
             ..Self::new(width, height)
         }

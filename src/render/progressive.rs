@@ -375,6 +375,8 @@ struct Row<'a> {
     y: usize,
     pixels: &'a mut [PixelStats],
     spp: Option<&'a mut [u32]>,
+    /// Rays per pixel, while an adaptive film counts them.
+    rays: Option<&'a mut [u32]>,
 }
 
 /// Adds what `give` says to the pixels of `film`, rows in parallel;
@@ -400,19 +402,28 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                 y,
                 pixels,
                 spp: None,
+                rays: None,
             })
             .collect(),
-        Some(a) => film
-            .pixels
-            .chunks_mut(w)
-            .zip(a.spp.chunks_mut(w))
-            .enumerate()
-            .map(|(y, (pixels, spp))| Row {
-                y,
-                pixels,
-                spp: Some(spp),
-            })
-            .collect(),
+        Some(a) => {
+            let rays = a
+                .rays
+                .chunks_mut(w)
+                .map(Some)
+                .chain(std::iter::repeat_with(|| None));
+            film.pixels
+                .chunks_mut(w)
+                .zip(a.spp.chunks_mut(w))
+                .zip(rays)
+                .enumerate()
+                .map(|(y, ((pixels, spp), rays))| Row {
+                    y,
+                    pixels,
+                    spp: Some(spp),
+                    rays,
+                })
+                .collect()
+        }
     };
     let results: Vec<(R, Vec<BadSample>, bool, Vec<PixelStats>)> = rows
         .into_par_iter()
@@ -434,6 +445,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                     Give::Each(g) => (row.spp.as_ref().map_or(first, |s| s[x]), g[row.y * w + x]),
                 };
                 let xu = x as u32;
+                let traced = rec.rays();
                 for k in k0..k0 + n {
                     let c: Vec3 = tracer.sample(xu, y, k, &mut rec);
                     if !c.is_finite() {
@@ -448,6 +460,9 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                 }
                 if let Some(s) = &mut row.spp {
                     s[x] = k0 + n;
+                }
+                if let Some(r) = &mut row.rays {
+                    r[x] = r[x].saturating_add((rec.rays() - traced).min(u32::MAX as u64) as u32);
                 }
             }
             if let Some(r) = rows_done {
@@ -470,7 +485,8 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             // Weighed once, when every pixel has its first quarter and no
             // pixel anything more: no later sample ever moves a weight.
             if a.weight.is_empty() && film.spp >= MIN_SPP {
-                a.weight = Allocation::weigh(&film.pixels, film.width);
+                a.weight = Allocation::weigh(&film.pixels, &a.rays, film.width);
+                a.rays = Vec::new();
             }
         }
         // A pass cut between rows leaves `spp` at what every pixel has.
