@@ -72,13 +72,6 @@ impl BoxRay {
     }
 }
 
-/// The slot of the lowest bit of a hit mask (at most `WIDTH` bits); the
-/// mask keeps the index provably in bounds.
-#[inline(always)]
-fn slot(mask: u32) -> usize {
-    (mask.trailing_zeros() & (WIDTH as u32 - 1)) as usize
-}
-
 /// Indices in `Node8::b` of the near and far planes of axis `a`.
 #[inline(always)]
 fn planes(r: &BoxRay, a: usize) -> (usize, usize) {
@@ -461,22 +454,9 @@ impl Bvh {
         let mut tmax = ray.tmax;
         let mut sp = 0;
         let mut cur = 0u32;
-        // Pushes a child and its entry distance. SAFETY (of the callers):
-        // the stack holds `Wide::stack` entries, the most the deepest path
-        // can push, each node on it at most all but one of its slots.
-        macro_rules! push {
-            ($c:expr, $d:expr) => {{
-                debug_assert!(sp < stack.len());
-                stack.get_unchecked_mut(sp).write(($c, $d));
-                sp += 1;
-            }};
-        }
         loop {
             if cur & LEAF == 0 {
-                debug_assert!((cur as usize) < w.nodes.len());
-                // SAFETY: interior references are indices of `w.nodes`, made
-                // by the collapse with the nodes themselves.
-                let node = unsafe { w.nodes.get_unchecked(cur as usize) };
+                let node = &w.nodes[cur as usize];
                 let (mask, tnear) = k.boxes(&boxes, node, tmax);
                 if STATS {
                     let slots = node.b[0].iter().filter(|x| x.is_finite()).count() as u32;
@@ -484,34 +464,34 @@ impl Bvh {
                 }
                 if mask != 0 {
                     if mask & (mask - 1) == 0 {
-                        cur = node.child[slot(mask)];
+                        cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
                     if ANY {
                         // Any hit will do: no ordering, the first lane next.
                         let mut m = mask & (mask - 1);
                         while m != 0 {
-                            // SAFETY: see `push`.
-                            unsafe { push!(node.child[slot(m)], 0.0) };
+                            stack[sp].write((node.child[m.trailing_zeros() as usize], 0.0));
+                            sp += 1;
                             m &= m - 1;
                         }
-                        cur = node.child[slot(mask)];
+                        cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
                     // Two or more hits: the nearest next, the others pushed
                     // (unsorted: sorting mispredicts more than it saves).
-                    let mut near = slot(mask);
+                    let mut near = mask.trailing_zeros() as usize;
                     let mut m = mask & (mask - 1);
                     while m != 0 {
-                        let i = slot(m);
+                        let i = m.trailing_zeros() as usize;
                         m &= m - 1;
                         let far = if tnear[i] < tnear[near] {
                             std::mem::replace(&mut near, i)
                         } else {
                             i
                         };
-                        // SAFETY: see `push`.
-                        unsafe { push!(node.child[far], tnear[far]) };
+                        stack[sp].write((node.child[far], tnear[far]));
+                        sp += 1;
                     }
                     cur = node.child[near];
                     continue;
@@ -520,10 +500,7 @@ impl Bvh {
                 if STATS {
                     st.leaf(cur);
                 }
-                let packets = leaf_packets(cur);
-                debug_assert!(packets.end <= w.packets.len());
-                // SAFETY: leaf references name packets the collapse made.
-                for p in unsafe { w.packets.get_unchecked(packets) } {
+                for p in &w.packets[leaf_packets(cur)] {
                     if STATS {
                         st.tests(p.lanes());
                     }
