@@ -122,14 +122,24 @@ pub fn run(o: &ScalingOptions, threads: usize) -> Result<ScalingReport> {
         let mut frame = Frame::new(&w);
         let (mut p, mut s) = (Vec::new(), Vec::new());
         for _ in 0..3 {
-            p.push(workload::trace_primary(&w, &mut frame, |r| {
-                b.intersect::<false>(r, &mut TraversalStats::default())
-                    .map(|h| (h.t, h.prim))
-            }));
-            s.push(workload::trace_shadow(&w, &mut frame, |r| {
-                b.occluded::<false>(r, &mut TraversalStats::default())
-                    .is_some()
-            }));
+            p.push(workload::trace_primary(
+                &w,
+                &mut frame,
+                workload::Rows::Make,
+                |r| {
+                    b.intersect::<false>(r, &mut TraversalStats::default())
+                        .map(|h| (h.t, h.prim))
+                },
+            ));
+            s.push(workload::trace_shadow(
+                &w,
+                &mut frame,
+                workload::Rows::Make,
+                |r| {
+                    b.occluded::<false>(r, &mut TraversalStats::default())
+                        .is_some()
+                },
+            ));
         }
         let (p, s) = (median(&mut p), median(&mut s));
         let primary = o.width as f64 * o.height as f64;

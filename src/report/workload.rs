@@ -161,13 +161,23 @@ impl Frame {
     }
 }
 
+/// Where a phase's rays come from: made row by row inside the timed loop
+/// (as the Embree harness does), or made before it, one `Vec` per row (as
+/// the tinybvh harness does).
+#[derive(Clone, Copy)]
+pub enum Rows<'a> {
+    Make,
+    Made(&'a [Vec<Ray>]),
+}
+
 /// Traces every primary ray with `closest` (returning the hit distance and
 /// triangle) on the current rayon pool; fills `frame` and returns the
-/// elapsed seconds. Ray generation is inside the timed loop, as in the
-/// harness.
+/// elapsed seconds. With [`Rows::Make`] ray generation is inside the timed
+/// loop, as in the Embree harness.
 pub fn trace_primary(
     w: &Workload,
     frame: &mut Frame,
+    source: Rows,
     closest: impl Fn(&Ray) -> Option<(f32, u32)> + Sync,
 ) -> f64 {
     let width = w.width as usize;
@@ -185,10 +195,16 @@ pub fn trace_primary(
             let rows_of = ts.chunks_mut(width).zip(tris.chunks_mut(width));
             for (r, ((trow, tri_row), sums)) in rows_of.zip(rows).enumerate() {
                 let y = (chunk * ROW_CHUNK + r) as u32;
-                rays.clear();
-                rays.extend((0..w.width).map(|x| w.primary(x, y)));
+                let row = match source {
+                    Rows::Made(made) => &made[y as usize][..],
+                    Rows::Make => {
+                        rays.clear();
+                        rays.extend((0..w.width).map(|x| w.primary(x, y)));
+                        &rays[..]
+                    }
+                };
                 let (mut hits, mut sum_t) = (0, 0.0);
-                for ((t, tri), ray) in trow.iter_mut().zip(tri_row).zip(&rays) {
+                for ((t, tri), ray) in trow.iter_mut().zip(tri_row).zip(row) {
                     *t = match closest(ray) {
                         Some((d, k)) => {
                             hits += 1;
@@ -211,6 +227,7 @@ pub fn trace_primary(
 pub fn trace_shadow(
     w: &Workload,
     frame: &mut Frame,
+    source: Rows,
     occluded: impl Fn(&Ray) -> bool + Sync,
 ) -> f64 {
     let width = w.width as usize;
@@ -224,17 +241,51 @@ pub fn trace_shadow(
             let mut rays = Vec::with_capacity(width);
             for (r, (trow, sums)) in ts.chunks(width).zip(rows).enumerate() {
                 let y = (chunk * ROW_CHUNK + r) as u32;
-                rays.clear();
-                rays.extend(
-                    trow.iter()
-                        .enumerate()
-                        .filter(|(_, t)| **t >= 0.0)
-                        .map(|(x, &t)| w.shadow(&w.primary(x as u32, y), t)),
-                );
-                sums.occluded = rays.iter().filter(|ray| occluded(ray)).count() as u64;
+                let row = match source {
+                    Rows::Made(made) => &made[y as usize][..],
+                    Rows::Make => {
+                        shadow_row(w, trow, y, &mut rays);
+                        &rays[..]
+                    }
+                };
+                sums.occluded = row.iter().filter(|ray| occluded(ray)).count() as u64;
             }
         });
     start.elapsed().as_secs_f64()
+}
+
+/// The shadow rays of row `y` (one per primary hit, in pixel order) into
+/// `rays`, from the row's hit distances `trow` (negative for a miss).
+fn shadow_row(w: &Workload, trow: &[f32], y: u32, rays: &mut Vec<Ray>) {
+    rays.clear();
+    rays.extend(
+        trow.iter()
+            .enumerate()
+            .filter(|(_, t)| **t >= 0.0)
+            .map(|(x, &t)| w.shadow(&w.primary(x as u32, y), t)),
+    );
+}
+
+/// The primary rays of every row, made before they are timed.
+pub fn primary_rays(w: &Workload) -> Vec<Vec<Ray>> {
+    (0..w.height)
+        .into_par_iter()
+        .map(|y| (0..w.width).map(|x| w.primary(x, y)).collect())
+        .collect()
+}
+
+/// The shadow rays of every row, made before they are timed.
+pub fn shadow_rays(w: &Workload, frame: &Frame) -> Vec<Vec<Ray>> {
+    frame
+        .t
+        .par_chunks(w.width as usize)
+        .enumerate()
+        .map(|(y, trow)| {
+            let mut rays = Vec::new();
+            shadow_row(w, trow, y as u32, &mut rays);
+            rays
+        })
+        .collect()
 }
 
 /// The diffuse rays of every row (one per primary hit, in pixel order),
@@ -294,6 +345,11 @@ pub struct RaysOptions {
     pub threads: usize,
     pub builder: Builder,
     pub reps: usize,
+    /// Make the primary and shadow rays before the timer and trace every
+    /// set once untimed before the timed pass, as the tinybvh harness
+    /// does; otherwise they are made in the timed loop, as the Embree
+    /// harness makes them.
+    pub rays_first: bool,
 }
 
 /// The JSON line of the workload, with the fields the specification and the
@@ -323,6 +379,9 @@ pub struct RaysReport {
     pub workload_version: u32,
     pub camera: &'static str,
     pub reps: usize,
+    /// `"timed"`: primary and shadow rays made in the timed loop;
+    /// `"untimed"`: made before it, each set traced once untimed first.
+    pub ray_generation: &'static str,
     pub primary_ms: f64,
     pub shadow_ms: f64,
     pub diffuse_ms: f64,
@@ -342,10 +401,23 @@ pub fn run(mesh: &str, geom: &Geometry, o: &RaysOptions) -> RaysReport {
         let start = Instant::now();
         let bvh = bvh::build(geom, o.builder);
         build.push(start.elapsed().as_secs_f64());
-        prim.push(trace_primary(&w, &mut frame, |r| closest(&bvh, r)));
-        shad.push(trace_shadow(&w, &mut frame, |r| occluded(&bvh, r)));
+        let (closest, occluded) = (|r: &Ray| closest(&bvh, r), |r: &Ray| occluded(&bvh, r));
+        if o.rays_first {
+            let rays = primary_rays(&w);
+            trace_primary(&w, &mut frame, Rows::Made(&rays), closest);
+            prim.push(trace_primary(&w, &mut frame, Rows::Made(&rays), closest));
+            let rays = shadow_rays(&w, &frame);
+            trace_shadow(&w, &mut frame, Rows::Made(&rays), occluded);
+            shad.push(trace_shadow(&w, &mut frame, Rows::Made(&rays), occluded));
+        } else {
+            prim.push(trace_primary(&w, &mut frame, Rows::Make, closest));
+            shad.push(trace_shadow(&w, &mut frame, Rows::Make, occluded));
+        }
         let rays = diffuse_rays(&w, &frame, geom);
-        diff.push(trace_diffuse(&mut frame, &rays, |r| closest(&bvh, r)));
+        if o.rays_first {
+            trace_diffuse(&mut frame, &rays, closest);
+        }
+        diff.push(trace_diffuse(&mut frame, &rays, closest));
         let c = frame.checksum();
         if sum.is_some_and(|s| s != c) {
             eprintln!("warning: the checksum differs between repetitions");
@@ -380,6 +452,7 @@ pub fn run(mesh: &str, geom: &Geometry, o: &RaysOptions) -> RaysReport {
         workload_version: 2,
         camera: "auto",
         reps,
+        ray_generation: if o.rays_first { "untimed" } else { "timed" },
         primary_ms: p * 1e3,
         shadow_ms: s * 1e3,
         diffuse_ms: d * 1e3,
