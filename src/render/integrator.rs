@@ -47,6 +47,17 @@ pub fn mirror(dir: Vec3, n: Vec3, ng: Vec3) -> Vec3 {
 /// A monomorphised `Tracer::trace`.
 type TraceFn<'a, R> = fn(&Tracer<'a>, &Ray, u32, RayKind, Vec3, &mut Rng, &mut R) -> Vec3;
 
+/// The start of one sample: where it falls in its pixel (0..1 on each
+/// axis), its sub-pixel stratum when jittered, its camera ray, and the
+/// random numbers the rest of the sample draws.
+#[derive(Clone, Debug)]
+pub struct CameraSample {
+    pub ray: Ray,
+    pub off: Vec2,
+    pub stratum: Option<u32>,
+    rng: Rng,
+}
+
 /// Shading point, as the lights and reflections need it.
 struct Surface<'m> {
     p: Vec3,
@@ -90,6 +101,15 @@ impl<'a> Tracer<'a> {
 
     /// Sample `k` of pixel `(x, y)`: the same value whoever asks, in any order.
     pub fn sample<R: Recorder>(&self, x: u32, y: u32, k: u32, rec: &mut R) -> Vec3 {
+        self.sample_from(self.camera_sample(x, y, k), rec)
+    }
+
+    /// Where sample `k` of pixel `(x, y)` starts: its place in the pixel and
+    /// its camera ray. A pass makes a run of these before tracing any, so
+    /// that the camera's f64 arithmetic of one sample overlaps that of the
+    /// next rather than waiting in front of every ray.
+    #[inline]
+    pub fn camera_sample(&self, x: u32, y: u32, k: u32) -> CameraSample {
         let pixel = y as u64 * self.width as u64 + x as u64;
         let mut rng = Rng::for_sample(pixel, k as u64, self.seed);
         let stratum = self.stratum(x, y, k);
@@ -100,10 +120,26 @@ impl<'a> Tracer<'a> {
         } else {
             Vec2::splat(0.5)
         };
-        rec.pixel_sample(off, stratum);
         let ray = self
             .frame
             .ray(x as f64 + off.x as f64, y as f64 + off.y as f64);
+        CameraSample {
+            ray,
+            off,
+            stratum,
+            rng,
+        }
+    }
+
+    /// The colour of the sample `s` starts.
+    pub fn sample_from<R: Recorder>(&self, s: CameraSample, rec: &mut R) -> Vec3 {
+        let CameraSample {
+            ray,
+            off,
+            stratum,
+            mut rng,
+        } = s;
+        rec.pixel_sample(off, stratum);
         // The stages the plan may leave out are compile-time parameters, so
         // a scene without textures or vertex normals runs code without them.
         let trace: TraceFn<'a, R> = match (self.plan.textures, self.plan.smooth_normals) {
