@@ -70,8 +70,28 @@ pub const PIXEL_STRATA: u32 = PIXEL_GRID * PIXEL_GRID;
 /// pixel and block, so any prefix is spread over the pixel. The integrator
 /// places samples by it and the film's error estimate reads it.
 pub fn pixel_stratum(pixel: u64, k: u32, seed: u64) -> u32 {
-    let block = Rng::for_sample(pixel, (k / PIXEL_STRATA) as u64, seed ^ 0x5bd1_e995).next_u32();
-    permute(k % PIXEL_STRATA, PIXEL_STRATA, block)
+    Strata::default().stratum(pixel, k, seed)
+}
+
+/// [`pixel_stratum`] for a run of samples: the order a block visits the
+/// strata in is drawn once for the block's samples, not once a sample.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Strata {
+    /// The pixel and block of `order`.
+    block: Option<(u64, u32)>,
+    order: u32,
+}
+
+impl Strata {
+    #[inline]
+    pub fn stratum(&mut self, pixel: u64, k: u32, seed: u64) -> u32 {
+        let block = k / PIXEL_STRATA;
+        if self.block != Some((pixel, block)) {
+            self.order = Rng::for_sample(pixel, block as u64, seed ^ 0x5bd1_e995).next_u32();
+            self.block = Some((pixel, block));
+        }
+        permute(k % PIXEL_STRATA, PIXEL_STRATA, self.order)
+    }
 }
 
 /// Stratum `k` of an `n x n` grid, jittered with `r`, in [0, 1)^2.

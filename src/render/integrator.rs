@@ -10,7 +10,7 @@ use super::plan::Plan;
 use super::recorder::{HitInfo, LightSample, MissInfo, RayKind, Recorder};
 use crate::bvh::{Bvh, Hit};
 use crate::geometry::offset::{geometric_normal, hit_point, offset_origin, SHADOW_EPSILON};
-use crate::geometry::sampling::{jittered, phong_lobe, pixel_stratum, Rng, PIXEL_GRID};
+use crate::geometry::sampling::{jittered, phong_lobe, Rng, Strata, PIXEL_GRID};
 use crate::geometry::Ray;
 use crate::scene::camera::CameraFrame;
 use crate::scene::texture::{cube_face_uv, FACE_NAMES};
@@ -92,11 +92,19 @@ impl<'a> Tracer<'a> {
     }
 
     /// The sub-pixel stratum of sample `k` of pixel `(x, y)` when pixel
-    /// samples are jittered ([`pixel_stratum`]), else `None`.
+    /// samples are jittered ([`crate::geometry::sampling::pixel_stratum`]),
+    /// else `None`.
     pub fn stratum(&self, x: u32, y: u32, k: u32) -> Option<u32> {
+        self.stratum_in(x, y, k, &mut Strata::default())
+    }
+
+    /// [`Tracer::stratum`], with the block's order kept in `strata` for
+    /// the next sample of the run.
+    #[inline]
+    fn stratum_in(&self, x: u32, y: u32, k: u32, strata: &mut Strata) -> Option<u32> {
         let pixel = y as u64 * self.width as u64 + x as u64;
         (self.plan.supersampling && self.scene.settings.stratify)
-            .then(|| pixel_stratum(pixel, k, self.seed))
+            .then(|| strata.stratum(pixel, k, self.seed))
     }
 
     /// Sample `k` of pixel `(x, y)`: the same value whoever asks, in any order.
@@ -108,11 +116,17 @@ impl<'a> Tracer<'a> {
     /// its camera ray. A pass makes a run of these before tracing any, so
     /// that the camera's f64 arithmetic of one sample overlaps that of the
     /// next rather than waiting in front of every ray.
-    #[inline]
     pub fn camera_sample(&self, x: u32, y: u32, k: u32) -> CameraSample {
+        self.camera_sample_in(x, y, k, &mut Strata::default())
+    }
+
+    /// [`Tracer::camera_sample`] for a run of samples, which `strata`
+    /// follows.
+    #[inline]
+    pub fn camera_sample_in(&self, x: u32, y: u32, k: u32, strata: &mut Strata) -> CameraSample {
         let pixel = y as u64 * self.width as u64 + x as u64;
         let mut rng = Rng::for_sample(pixel, k as u64, self.seed);
-        let stratum = self.stratum(x, y, k);
+        let stratum = self.stratum_in(x, y, k, strata);
         let off = if let Some(stratum) = stratum {
             jittered(stratum, PIXEL_GRID, rng.next_vec2())
         } else if self.plan.supersampling {

@@ -20,13 +20,13 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::film::{Allocation, BadSample, Film, PixelStats, Samples};
-use crate::geometry::sampling::PIXEL_STRATA;
+use super::integrator::CameraSample;
+use crate::geometry::sampling::{Strata, PIXEL_STRATA};
 
 /// Samples every pixel of an adaptive film gets before any decision: one
 /// block of strata, which also makes every pixel's error estimate rest on
 /// its samples alone.
 pub const MIN_SPP: u32 = PIXEL_STRATA;
-use super::integrator::CameraSample;
 use super::recorder::{RayCounter, Recorder, WorkCounter};
 use super::{Plan, Tracer};
 
@@ -461,10 +461,12 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                 }
             };
             let mut starts = Vec::with_capacity(CAMERA_BATCH);
+            let mut strata = Strata::default();
             for x in 0..width {
                 let (k0, n) = give_of(x);
                 for k in k0..k0 + n {
-                    starts.push((x, k, tracer.camera_sample(x as u32, y, k)));
+                    let start = tracer.camera_sample_in(x as u32, y, k, &mut strata);
+                    starts.push((x, k, start));
                     if starts.len() == CAMERA_BATCH {
                         trace(&mut starts);
                     }
