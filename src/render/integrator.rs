@@ -47,12 +47,13 @@ pub fn mirror(dir: Vec3, n: Vec3, ng: Vec3) -> Vec3 {
 /// A monomorphised `Tracer::trace`.
 type TraceFn<'a, R> = fn(&Tracer<'a>, &Ray, u32, RayKind, Vec3, &mut Rng, &mut R) -> Vec3;
 
-/// The start of one sample: where it falls in its pixel (0..1 on each
-/// axis), its sub-pixel stratum when jittered, its camera ray, and the
-/// random numbers the rest of the sample draws.
+/// Where one sample falls in its pixel `(x, y)`: its offset (0..1 on each
+/// axis) and sub-pixel stratum when jittered, and the random numbers the
+/// rest of the sample draws.
 #[derive(Clone, Debug)]
-pub struct CameraSample {
-    pub ray: Ray,
+pub struct Placed {
+    pub x: u32,
+    pub y: u32,
     pub off: Vec2,
     pub stratum: Option<u32>,
     rng: Rng,
@@ -109,21 +110,19 @@ impl<'a> Tracer<'a> {
 
     /// Sample `k` of pixel `(x, y)`: the same value whoever asks, in any order.
     pub fn sample<R: Recorder>(&self, x: u32, y: u32, k: u32, rec: &mut R) -> Vec3 {
-        self.sample_from(self.camera_sample(x, y, k), rec)
+        let placed = self.place(x, y, k, &mut Strata::default());
+        let ray = self.camera_ray(&placed);
+        self.sample_from(placed, &ray, rec)
     }
 
-    /// Where sample `k` of pixel `(x, y)` starts: its place in the pixel and
-    /// its camera ray. A pass makes a run of these before tracing any, so
-    /// that the camera's f64 arithmetic of one sample overlaps that of the
-    /// next rather than waiting in front of every ray.
-    pub fn camera_sample(&self, x: u32, y: u32, k: u32) -> CameraSample {
-        self.camera_sample_in(x, y, k, &mut Strata::default())
-    }
-
-    /// [`Tracer::camera_sample`] for a run of samples, which `strata`
-    /// follows.
+    /// Where sample `k` of pixel `(x, y)` falls, with `strata` following a
+    /// run of samples. A pass places a run of samples, makes their camera
+    /// rays in one tight loop, then traces them: the f64 divisions and
+    /// square roots of one ray overlap the next's, where behind each
+    /// sample's chain of random numbers they would wait in front of every
+    /// ray.
     #[inline]
-    pub fn camera_sample_in(&self, x: u32, y: u32, k: u32, strata: &mut Strata) -> CameraSample {
+    pub fn place(&self, x: u32, y: u32, k: u32, strata: &mut Strata) -> Placed {
         let pixel = y as u64 * self.width as u64 + x as u64;
         let mut rng = Rng::for_sample(pixel, k as u64, self.seed);
         let stratum = self.stratum_in(x, y, k, strata);
@@ -134,26 +133,26 @@ impl<'a> Tracer<'a> {
         } else {
             Vec2::splat(0.5)
         };
-        let ray = self
-            .frame
-            .ray(x as f64 + off.x as f64, y as f64 + off.y as f64);
-        CameraSample {
-            ray,
+        Placed {
+            x,
+            y,
             off,
             stratum,
             rng,
         }
     }
 
-    /// The colour of the sample `s` starts.
-    pub fn sample_from<R: Recorder>(&self, s: CameraSample, rec: &mut R) -> Vec3 {
-        let CameraSample {
-            ray,
-            off,
-            stratum,
-            mut rng,
-        } = s;
-        rec.pixel_sample(off, stratum);
+    /// The camera ray of a placed sample.
+    #[inline]
+    pub fn camera_ray(&self, s: &Placed) -> Ray {
+        self.frame
+            .ray(s.x as f64 + s.off.x as f64, s.y as f64 + s.off.y as f64)
+    }
+
+    /// The colour of the placed sample `s`, whose camera ray is `ray`.
+    pub fn sample_from<R: Recorder>(&self, s: Placed, ray: &Ray, rec: &mut R) -> Vec3 {
+        let mut rng = s.rng;
+        rec.pixel_sample(s.off, s.stratum);
         // The stages the plan may leave out are compile-time parameters, so
         // a scene without textures or vertex normals runs code without them.
         let trace: TraceFn<'a, R> = match (self.plan.textures, self.plan.smooth_normals) {
@@ -162,7 +161,7 @@ impl<'a> Tracer<'a> {
             (true, false) => Self::trace::<R, true, false>,
             (true, true) => Self::trace::<R, true, true>,
         };
-        trace(self, &ray, 0, RayKind::Camera, Vec3::ONE, &mut rng, rec)
+        trace(self, ray, 0, RayKind::Camera, Vec3::ONE, &mut rng, rec)
     }
 
     fn closest<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Option<Hit> {

@@ -20,7 +20,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::film::{Allocation, BadSample, Film, PixelStats, Samples};
-use super::integrator::CameraSample;
+use super::integrator::Placed;
 use crate::geometry::sampling::{Strata, PIXEL_STRATA};
 
 /// Samples every pixel of an adaptive film gets before any decision: one
@@ -363,9 +363,9 @@ fn share(weight: &[f32], mean: f64, cap: u32) -> Option<Vec<u32>> {
     Some(weight.iter().map(|&w| count(c, w) as u32).collect())
 }
 
-/// Camera samples made ahead of tracing them (see
-/// [`Tracer::camera_sample`]): enough to overlap their arithmetic, few
-/// enough to stay in the L1 cache.
+/// Samples placed and their camera rays made ahead of tracing them (see
+/// [`Tracer::place`]): enough to overlap their arithmetic, few enough to
+/// stay in the L1 cache.
 const CAMERA_BATCH: usize = 32;
 
 /// One row of a film, with its sample counts when adaptive.
@@ -445,34 +445,32 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             };
             let width = row.pixels.len();
             let pixels = &mut row.pixels;
-            let mut trace = |starts: &mut Vec<(usize, u32, CameraSample)>| {
-                for (x, k, start) in starts.drain(..) {
-                    let stratum = start.stratum;
-                    let c: Vec3 = tracer.sample_from(start, &mut rec);
+            let mut rays = Vec::with_capacity(CAMERA_BATCH);
+            let mut trace = |placed: &mut Vec<(u32, Placed)>| {
+                rays.clear();
+                rays.extend(placed.iter().map(|(_, p)| tracer.camera_ray(p)));
+                for ((k, p), ray) in placed.drain(..).zip(&rays) {
+                    let (x, stratum) = (p.x, p.stratum);
+                    let c: Vec3 = tracer.sample_from(p, ray, &mut rec);
                     if !c.is_finite() {
-                        bad.push(BadSample {
-                            x: x as u32,
-                            y,
-                            sample: k,
-                        });
+                        bad.push(BadSample { x, y, sample: k });
                         continue;
                     }
-                    pixels.add(x, k, c, stratum);
+                    pixels.add(x as usize, k, c, stratum);
                 }
             };
-            let mut starts = Vec::with_capacity(CAMERA_BATCH);
+            let mut placed = Vec::with_capacity(CAMERA_BATCH);
             let mut strata = Strata::default();
             for x in 0..width {
                 let (k0, n) = give_of(x);
                 for k in k0..k0 + n {
-                    let start = tracer.camera_sample_in(x as u32, y, k, &mut strata);
-                    starts.push((x, k, start));
-                    if starts.len() == CAMERA_BATCH {
-                        trace(&mut starts);
+                    placed.push((k, tracer.place(x as u32, y, k, &mut strata)));
+                    if placed.len() == CAMERA_BATCH {
+                        trace(&mut placed);
                     }
                 }
             }
-            trace(&mut starts);
+            trace(&mut placed);
             if let (Some(s), Give::Each(g)) = (&mut row.spp, give) {
                 for (x, s) in s.iter_mut().enumerate() {
                     *s += g[row.y * w + x];
