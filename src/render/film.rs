@@ -160,6 +160,19 @@ fn to_f64(s: i128) -> f64 {
     }
 }
 
+/// The mean colour of `n` samples whose fixed-point sums are `sum`.
+#[inline(always)]
+fn mean_of(sum: &[i128; 3], n: u32) -> DVec3 {
+    if n == 0 {
+        return DVec3::ZERO;
+    }
+    let n = n as f64;
+    let [r, g, b] = sum;
+    // Times 2^-64 is the division by FIXED_ONE, exactly, and cheaper.
+    let mean = |s: &i128| to_f64(*s) * (1.0 / FIXED_ONE) / n;
+    DVec3::new(mean(r), mean(g), mean(b))
+}
+
 /// Merges counts, means and M2 of two sets of values (Chan et al.).
 fn chan(a: (u32, f64, f64), b: (u32, f64, f64)) -> (u32, f64, f64) {
     match (a.0, b.0) {
@@ -203,10 +216,12 @@ impl PixelStats {
         for (s, q) in self.sum.iter_mut().zip(q) {
             *s += q.0;
         }
-        self.mean = self.mean_of_sum();
+        // The new mean from registers, not read back from the pixel.
+        let mean = mean_of(&self.sum, self.n);
+        self.mean = mean;
         let c = DVec3::from_array(q.map(|v| v.1));
         let lum = c.dot(LUMA.as_dvec3());
-        self.m2 += (lum - lum_old) * (lum - self.mean.dot(LUMA.as_dvec3()));
+        self.m2 += (lum - lum_old) * (lum - mean.dot(LUMA.as_dvec3()));
         if let Some(s) = stratum {
             self.add_stratified(k / PIXEL_STRATA, lum, s);
         }
@@ -230,14 +245,7 @@ impl PixelStats {
     /// The mean colour the exact sums give.
     #[inline]
     pub fn mean_of_sum(&self) -> DVec3 {
-        if self.n == 0 {
-            return DVec3::ZERO;
-        }
-        let n = self.n as f64;
-        let [r, g, b] = &self.sum;
-        // Times 2^-64 is the division by FIXED_ONE, exactly, and cheaper.
-        let mean = |s: &i128| to_f64(*s) * (1.0 / FIXED_ONE) / n;
-        DVec3::new(mean(r), mean(g), mean(b))
+        mean_of(&self.sum, self.n)
     }
 
     fn add_stratified(&mut self, block: u32, lum: f64, stratum: u32) {
