@@ -121,7 +121,7 @@ impl<'a> Tracer<'a> {
     /// square roots of one ray overlap the next's, where behind each
     /// sample's chain of random numbers they would wait in front of every
     /// ray.
-    #[inline]
+    #[inline(always)]
     pub fn place(&self, x: u32, y: u32, k: u32, strata: &mut Strata) -> Placed {
         let pixel = y as u64 * self.width as u64 + x as u64;
         let mut rng = Rng::for_sample(pixel, k as u64, self.seed);
