@@ -10,7 +10,7 @@ use super::plan::Plan;
 use super::recorder::{HitInfo, LightSample, MissInfo, RayKind, Recorder};
 use crate::bvh::{Bvh, Hit};
 use crate::geometry::offset::{geometric_normal, hit_point, offset_origin, SHADOW_EPSILON};
-use crate::geometry::sampling::{jittered, phong_lobe, Rng, Strata, PIXEL_GRID};
+use crate::geometry::sampling::{jittered, phong_lobe, Rng, Run, PIXEL_GRID};
 use crate::geometry::Ray;
 use crate::scene::camera::CameraFrame;
 use crate::scene::texture::{cube_face_uv, FACE_NAMES};
@@ -96,36 +96,36 @@ impl<'a> Tracer<'a> {
     /// samples are jittered ([`crate::geometry::sampling::pixel_stratum`]),
     /// else `None`.
     pub fn stratum(&self, x: u32, y: u32, k: u32) -> Option<u32> {
-        self.stratum_in(x, y, k, &mut Strata::default())
+        self.stratum_in(x, y, k, &mut Run::default())
     }
 
-    /// [`Tracer::stratum`], with the block's order kept in `strata` for
-    /// the next sample of the run.
+    /// [`Tracer::stratum`], with what a run of samples shares kept in
+    /// `run`.
     #[inline]
-    fn stratum_in(&self, x: u32, y: u32, k: u32, strata: &mut Strata) -> Option<u32> {
+    fn stratum_in(&self, x: u32, y: u32, k: u32, run: &mut Run) -> Option<u32> {
         let pixel = y as u64 * self.width as u64 + x as u64;
         (self.plan.supersampling && self.scene.settings.stratify)
-            .then(|| strata.stratum(pixel, k, self.seed))
+            .then(|| run.stratum(pixel, k, self.seed))
     }
 
     /// Sample `k` of pixel `(x, y)`: the same value whoever asks, in any order.
     pub fn sample<R: Recorder>(&self, x: u32, y: u32, k: u32, rec: &mut R) -> Vec3 {
-        let placed = self.place(x, y, k, &mut Strata::default());
+        let placed = self.place(x, y, k, &mut Run::default());
         let ray = self.camera_ray(&placed);
         self.sample_from(placed, &ray, rec)
     }
 
-    /// Where sample `k` of pixel `(x, y)` falls, with `strata` following a
-    /// run of samples. A pass places a run of samples, makes their camera
+    /// Where sample `k` of pixel `(x, y)` falls, with `run` keeping what a
+    /// run of samples shares. A pass places a run of samples, makes their camera
     /// rays in one tight loop, then traces them: the f64 divisions and
     /// square roots of one ray overlap the next's, where behind each
     /// sample's chain of random numbers they would wait in front of every
     /// ray.
     #[inline(always)]
-    pub fn place(&self, x: u32, y: u32, k: u32, strata: &mut Strata) -> Placed {
+    pub fn place(&self, x: u32, y: u32, k: u32, run: &mut Run) -> Placed {
         let pixel = y as u64 * self.width as u64 + x as u64;
-        let mut rng = Rng::for_sample(pixel, k as u64, self.seed);
-        let stratum = self.stratum_in(x, y, k, strata);
+        let mut rng = run.rng(pixel, k, self.seed);
+        let stratum = self.stratum_in(x, y, k, run);
         let off = if let Some(stratum) = stratum {
             jittered(stratum, PIXEL_GRID, rng.next_vec2())
         } else if self.plan.supersampling {

@@ -21,7 +21,7 @@ use rayon::prelude::*;
 
 use super::film::{Allocation, BadSample, Film, PixelStats, Samples};
 use super::integrator::Placed;
-use crate::geometry::sampling::{Strata, PIXEL_STRATA};
+use crate::geometry::sampling::{Run, PIXEL_STRATA};
 
 /// Samples every pixel of an adaptive film gets before any decision: one
 /// block of strata, which also makes every pixel's error estimate rest on
@@ -460,11 +460,11 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                 }
             };
             let mut placed = Vec::with_capacity(CAMERA_BATCH);
-            let mut strata = Strata::default();
+            let mut run = Run::default();
             for x in 0..width {
                 let (k0, n) = give_of(x);
                 for k in k0..k0 + n {
-                    placed.push((k, tracer.place(x as u32, y, k, &mut strata)));
+                    placed.push((k, tracer.place(x as u32, y, k, &mut run)));
                     if placed.len() == CAMERA_BATCH {
                         trace(&mut placed);
                     }
