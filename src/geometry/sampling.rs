@@ -93,7 +93,7 @@ pub const PIXEL_STRATA: u32 = PIXEL_GRID * PIXEL_GRID;
 /// pixel and block, so any prefix is spread over the pixel. The integrator
 /// places samples by it and the film's error estimate reads it.
 pub fn pixel_stratum(pixel: u64, k: u32, seed: u64) -> u32 {
-    Run::default().stratum(pixel, k, seed)
+    stratum_in_block(k, block_order(pixel, k / PIXEL_STRATA, seed))
 }
 
 /// What a run of samples of one pixel, under one seed, share: the
@@ -135,11 +135,23 @@ impl Run {
         self.at(pixel, seed);
         let block = k / PIXEL_STRATA;
         if self.block != Some(block) {
-            self.order = Rng::for_sample(pixel, block as u64, seed ^ 0x5bd1_e995).next_u32();
+            self.order = block_order(pixel, block, seed);
             self.block = Some(block);
         }
-        permute(k % PIXEL_STRATA, PIXEL_STRATA, self.order)
+        stratum_in_block(k, self.order)
     }
+}
+
+/// The random order block `block` of `pixel`'s samples visits the strata
+/// in.
+fn block_order(pixel: u64, block: u32, seed: u64) -> u32 {
+    Rng::for_sample(pixel, block as u64, seed ^ 0x5bd1_e995).next_u32()
+}
+
+/// The stratum of sample `k` in a block whose order is `order`.
+#[inline]
+fn stratum_in_block(k: u32, order: u32) -> u32 {
+    permute(k % PIXEL_STRATA, PIXEL_STRATA, order)
 }
 
 /// Stratum `k` of an `n x n` grid, jittered with `r`, in [0, 1)^2.
