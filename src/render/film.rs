@@ -602,9 +602,10 @@ fn one_sample_mean(c: Vec3) -> Vec3 {
 
 impl Film {
     /// Memory a render needs per pixel: the statistics (with an adaptive
-    /// film's count and weight), and the linear, bloomed and displayed
-    /// copies of the image made from them.
-    pub const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelStats>() as u64 + 8 + 3 * 12 + 3;
+    /// film's count and weight, or a lean film's sample they were made
+    /// from), and the linear, bloomed and displayed copies of the image
+    /// made from them.
+    pub const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelStats>() as u64 + 12 + 3 * 12 + 3;
 
     pub fn new(width: u32, height: u32) -> Self {
         let n = width as usize * height as usize;
