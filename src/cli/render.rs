@@ -150,9 +150,11 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     let ticker = || {
         while !finished.load(Ordering::Relaxed) {
             let rows = rows.load(Ordering::Relaxed) as u64;
-            let within = pass_spp as u64 * rows / s.height.max(1) as u64;
-            let at = done_spp.load(Ordering::Relaxed) as u64 + within;
-            bar.set_position(at.min(bar.length().unwrap_or(u64::MAX)));
+            let done = done_spp.load(Ordering::Relaxed) as u64;
+            // The last pass may be shorter than the others.
+            let left = bar.length().unwrap_or(u64::MAX).saturating_sub(done);
+            let within = (pass_spp as u64).min(left) * rows / s.height.max(1) as u64;
+            bar.set_position(done + within);
             std::thread::park_timeout(std::time::Duration::from_millis(100));
         }
     };
