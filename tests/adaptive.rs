@@ -62,7 +62,7 @@ fn the_adaptive_image_converges_to_the_quadrature() {
     for y in 0..h {
         for x in 0..w {
             let i = (y * w + x) as usize;
-            let var = film.pixels[i].mean_variance().unwrap();
+            let var = film.pixels()[i].mean_variance().unwrap();
             for r in [((y / 4) * 4 + x / 4) as usize, 16] {
                 regions[r].0 += lum(img[i]);
                 regions[r].1 += lum(exact[i]);
@@ -160,7 +160,7 @@ fn adaptive_sampling_spends_samples_on_the_penumbra() {
     let sess = session(&s, w, h, 11);
     let uniform = Progressive::render(&sess.tracer(), 64);
     let noise: Vec<f64> = uniform
-        .pixels
+        .pixels()
         .iter()
         .map(|p| {
             let l = p.mean.dot(LUMA.as_dvec3());

@@ -110,7 +110,7 @@ fn plan_on_and_off_agree_on_sampled_scenes() {
     let se = |r: &Rendered| {
         let v: f64 = r
             .film
-            .pixels
+            .pixels()
             .iter()
             .map(|p| p.std_error().powi(2))
             .sum::<f64>();

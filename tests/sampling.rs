@@ -34,7 +34,7 @@ fn converged_area_lights_match_quadrature_within_four_standard_errors() {
         let (w, h) = (6, 6);
         let exact = exact_image(&s, w, h);
         let r = render_lights(&s, w, h, 128, 16, true);
-        for (i, (px, e)) in r.film.pixels.iter().zip(&exact).enumerate() {
+        for (i, (px, e)) in r.film.pixels().iter().zip(&exact).enumerate() {
             let got = px.mean.dot(rayterm::render::film::LUMA.as_dvec3());
             let se = px.std_error();
             assert!(se > 0.0, "{} pixel {i}: no variance", light.kind());
@@ -63,7 +63,7 @@ fn standard_error_is_calibrated() {
     let r = render_lights(&s, w, h, 32, 1, false);
     let within = r
         .film
-        .pixels
+        .pixels()
         .iter()
         .zip(&exact)
         .filter(|(px, e)| {
@@ -114,7 +114,7 @@ fn film_with_threads(spec: &str, threads: usize) -> anyhow::Result<Vec<(u64, u64
         .build()?;
     let r = pool.install(|| render_with(&s, &bvh, &plan, 20, 16, 3, 99));
     Ok(r.film
-        .pixels
+        .pixels()
         .iter()
         .map(|p| {
             let bits = p.mean.x.to_bits()

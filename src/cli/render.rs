@@ -5,6 +5,8 @@
 use std::ops::Range;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{bail, Result};
@@ -13,6 +15,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use super::args::{RenderArgs, MAX_SPP};
 use super::open_scene;
+use crate::geometry::sampling::PIXEL_STRATA;
 use crate::interrupt;
 use crate::raster::{png, Format, Output};
 use crate::render::partial::{self, Meta, Part};
@@ -120,28 +123,68 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         && checkpoint.is_none()
         && a.resume.is_none();
     p.whole_passes = checkpoint.is_some();
+    // A render to a fixed spp adds a block of strata per pass: the same
+    // samples as passes of one (a sample depends only on its pixel, index
+    // and seed), with each pixel's statistics brought through the cache
+    // once a block rather than once a sample. An exact render's one pass
+    // stays one sample, and a checkpointed one keeps passes short, since
+    // a pass cut short is undone.
+    let fixed = stop.seconds.is_none() && stop.error.is_none();
+    if fixed && !s.plan.deterministic && checkpoint.is_none() {
+        p.samples_per_pass = PIXEL_STRATA;
+    }
     let interrupted = interrupt::flag();
     let tracer = s.tracer();
     let bar = progress_bar(&stop, s.plan.deterministic);
     let start = Instant::now();
-    let cancel = || interrupted.load(std::sync::atomic::Ordering::Relaxed);
+    let cancel = || interrupted.load(Ordering::Relaxed);
     let mut last_checkpoint = Instant::now();
     let mut work = (rays_before, seconds_before);
     let mut failed = None;
-    let outcome = p.run(&tracer, &stop, &cancel, |film, pass| {
-        bar.set_position(film.spp_range().1 as u64);
-        if stop.spp.is_none() || stop.error.is_some() {
-            bar.set_message(progress(film, &stop, start.elapsed().as_secs_f64()));
+    // The bar follows the rows of a pass as they finish.
+    let rows = Arc::new(AtomicU32::new(0));
+    p.rows_done = Some(rows.clone());
+    let done_spp = AtomicU32::new(p.film.spp);
+    let pass_spp = p.samples_per_pass;
+    let finished = AtomicBool::new(false);
+    let ticker = || {
+        while !finished.load(Ordering::Relaxed) {
+            let rows = rows.load(Ordering::Relaxed) as u64;
+            let done = done_spp.load(Ordering::Relaxed) as u64;
+            // The last pass may be shorter than the others.
+            let left = bar.length().unwrap_or(u64::MAX).saturating_sub(done);
+            let within = (pass_spp as u64).min(left) * rows / s.height.max(1) as u64;
+            bar.set_position(done + within);
+            std::thread::park_timeout(std::time::Duration::from_millis(100));
         }
-        work.0 += pass.rays;
-        work.1 += pass.ms / 1e3;
-        if let (Some(c), Some(meta)) = (&checkpoint, &mut meta) {
-            if last_checkpoint.elapsed().as_secs_f64() >= CHECKPOINT_SECONDS && failed.is_none() {
-                (meta.rays, meta.seconds) = work;
-                failed = write_part(c, film, meta).err();
-                last_checkpoint = Instant::now();
+    };
+    let outcome = std::thread::scope(|scope| {
+        let fine = fixed && pass_spp > 1;
+        let tick = fine.then(|| scope.spawn(ticker));
+        let outcome = p.run(&tracer, &stop, &cancel, |film, pass| {
+            // Rows count the next pass's from here.
+            rows.store(0, Ordering::Relaxed);
+            done_spp.store(film.spp, Ordering::Relaxed);
+            bar.set_position(film.spp_range().1 as u64);
+            if stop.spp.is_none() || stop.error.is_some() {
+                bar.set_message(progress(film, &stop, start.elapsed().as_secs_f64()));
             }
+            work.0 += pass.rays;
+            work.1 += pass.ms / 1e3;
+            if let (Some(c), Some(meta)) = (&checkpoint, &mut meta) {
+                if last_checkpoint.elapsed().as_secs_f64() >= CHECKPOINT_SECONDS && failed.is_none()
+                {
+                    (meta.rays, meta.seconds) = work;
+                    failed = write_part(c, film, meta).err();
+                    last_checkpoint = Instant::now();
+                }
+            }
+        });
+        finished.store(true, Ordering::Relaxed);
+        if let Some(t) = tick {
+            t.thread().unpark();
         }
+        outcome
     });
     if let Some(e) = failed {
         bar.abandon();

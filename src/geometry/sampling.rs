@@ -23,16 +23,7 @@ fn mix64(mut z: u64) -> u64 {
 impl Rng {
     /// The stream for one sample of one pixel.
     pub fn for_sample(pixel: u64, sample: u64, seed: u64) -> Self {
-        let a = mix64(pixel ^ mix64(seed.wrapping_add(0x9e37_79b9_7f4a_7c15)));
-        let b = mix64(sample.wrapping_add(a));
-        let mut r = Rng {
-            state: 0,
-            inc: (mix64(a ^ 0x632b_e59b_d9b4_e019) << 1) | 1,
-        };
-        r.next_u32();
-        r.state = r.state.wrapping_add(b);
-        r.next_u32();
-        r
+        PixelStreams::new(pixel, seed).sample(sample)
     }
 
     #[inline]
@@ -59,6 +50,38 @@ impl Rng {
     }
 }
 
+/// What [`Rng::for_sample`] draws from the pixel and seed alone, made once
+/// for a run of the pixel's samples.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PixelStreams {
+    key: u64,
+    inc: u64,
+}
+
+impl PixelStreams {
+    pub fn new(pixel: u64, seed: u64) -> Self {
+        let key = mix64(pixel ^ mix64(seed.wrapping_add(0x9e37_79b9_7f4a_7c15)));
+        PixelStreams {
+            key,
+            inc: (mix64(key ^ 0x632b_e59b_d9b4_e019) << 1) | 1,
+        }
+    }
+
+    /// The stream of sample `sample`.
+    #[inline]
+    pub fn sample(&self, sample: u64) -> Rng {
+        let b = mix64(sample.wrapping_add(self.key));
+        let mut r = Rng {
+            state: 0,
+            inc: self.inc,
+        };
+        r.next_u32();
+        r.state = r.state.wrapping_add(b);
+        r.next_u32();
+        r
+    }
+}
+
 /// Sub-pixel strata per side when pixel samples are jittered.
 pub const PIXEL_GRID: u32 = 4;
 /// Strata per pixel: each run of this many consecutive samples of a pixel
@@ -77,12 +100,69 @@ pub const QUARTER: u32 = PIXEL_STRATA / 4;
 /// The integrator places samples by it and the film's error estimate reads
 /// it.
 pub fn pixel_stratum(pixel: u64, k: u32, seed: u64) -> u32 {
-    let block = Rng::for_sample(pixel, (k / PIXEL_STRATA) as u64, seed ^ 0x5bd1_e995).next_u32();
+    stratum_in_block(k, block_order(pixel, k / PIXEL_STRATA, seed))
+}
+
+/// What a run of samples of one pixel, under one seed, share: the
+/// pixel's [`PixelStreams`] and the order its current block visits the
+/// strata in ([`pixel_stratum`]), drawn once for the run, not once a
+/// sample.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Run {
+    pixel: Option<u64>,
+    streams: PixelStreams,
+    /// The block of `order`.
+    block: Option<u32>,
+    order: u32,
+}
+
+impl Run {
+    #[inline]
+    fn at(&mut self, pixel: u64, seed: u64) {
+        if self.pixel != Some(pixel) {
+            *self = Run {
+                pixel: Some(pixel),
+                streams: PixelStreams::new(pixel, seed),
+                block: None,
+                order: 0,
+            };
+        }
+    }
+
+    /// [`Rng::for_sample`].
+    #[inline]
+    pub fn rng(&mut self, pixel: u64, k: u32, seed: u64) -> Rng {
+        self.at(pixel, seed);
+        self.streams.sample(k as u64)
+    }
+
+    /// [`pixel_stratum`].
+    #[inline]
+    pub fn stratum(&mut self, pixel: u64, k: u32, seed: u64) -> u32 {
+        self.at(pixel, seed);
+        let block = k / PIXEL_STRATA;
+        if self.block != Some(block) {
+            self.order = block_order(pixel, block, seed);
+            self.block = Some(block);
+        }
+        stratum_in_block(k, self.order)
+    }
+}
+
+/// The random order block `block` of `pixel`'s samples visits the strata
+/// in.
+fn block_order(pixel: u64, block: u32, seed: u64) -> u32 {
+    Rng::for_sample(pixel, block as u64, seed ^ 0x5bd1_e995).next_u32()
+}
+
+/// The stratum of sample `k` in a block whose order is `order`.
+#[inline]
+fn stratum_in_block(k: u32, order: u32) -> u32 {
     let (quarter, slot) = ((k % PIXEL_STRATA) / QUARTER, k % QUARTER);
     // Which quadrant this slot of the quarter visits, then which of that
     // quadrant's four strata this quarter takes: distinct over the block.
-    let quadrant = permute4(slot, block ^ quarter.wrapping_mul(0x9e37_79b9));
-    let sub = permute4(quarter, block ^ (quadrant + 4).wrapping_mul(0x9e37_79b9));
+    let quadrant = permute4(slot, order ^ quarter.wrapping_mul(0x9e37_79b9));
+    let sub = permute4(quarter, order ^ (quadrant + 4).wrapping_mul(0x9e37_79b9));
     let half = PIXEL_GRID / 2;
     let i = (quadrant % 2) * half + sub % half;
     let j = (quadrant / 2) * half + sub / half;

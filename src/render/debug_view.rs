@@ -202,7 +202,7 @@ fn scale_color(t: f64) -> Vec3 {
 pub fn spp_view(film: &Film) -> (Vec<Vec3>, Legend) {
     let (min, mean, max) = film.spp_range();
     let span = (max.max(1) as f64 / min.max(1) as f64).log2();
-    let image = (0..film.pixels.len())
+    let image = (0..film.pixels_len())
         .map(|i| {
             let n = film.pixel_spp(i).max(1) as f64;
             scale_color(if span > 0.0 {
@@ -238,7 +238,7 @@ const ERROR_SCALE: (f64, f64) = (1e-3, 1e-1);
 pub fn error_view(film: &Film) -> (Vec<Vec3>, Legend) {
     let (lo, hi) = ERROR_SCALE;
     let image: Vec<Vec3> = film
-        .pixels
+        .pixels()
         .iter()
         .map(|p| match p.relative_error() {
             Some(e) => scale_color((e.max(lo) / lo).log10() / (hi / lo).log10()),
@@ -256,7 +256,7 @@ pub fn error_view(film: &Film) -> (Vec<Vec3>, Legend) {
             "yellow 10 % or more (log scale)".into(),
         ),
     ];
-    if film.pixels.iter().any(|p| p.n < 2) {
+    if film.pixels().iter().any(|p| p.n < 2) {
         legend.push((Some(UNKNOWN), "grey unknown (below 2 samples)".into()));
     }
     (image, legend)
@@ -367,7 +367,7 @@ mod tests {
         let (img, legend) = error_view(&f);
         assert_eq!(img[0], scale_color(0.0));
         assert_eq!(img[2], UNKNOWN);
-        let e = f.pixels[1].relative_error().unwrap();
+        let e = f.pixels()[1].relative_error().unwrap();
         let want = 0.1 * (64.0f64 / 63.0).sqrt() / 8.0 / 1.01f64.sqrt();
         assert!((e - want).abs() < 1e-6, "{e} against {want}");
         let t = (e / 1e-3).log10() / 2.0;

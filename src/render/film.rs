@@ -42,6 +42,7 @@
 //! area lights over a box, jittered and independent.
 
 use std::ops::Range;
+use std::sync::OnceLock;
 
 use glam::{DVec3, Vec3};
 
@@ -180,6 +181,19 @@ fn to_f64(s: i128) -> f64 {
     }
 }
 
+/// The mean colour of `n` samples whose fixed-point sums are `sum`.
+#[inline(always)]
+fn mean_of(sum: &[i128; 3], n: u32) -> DVec3 {
+    if n == 0 {
+        return DVec3::ZERO;
+    }
+    let n = n as f64;
+    let [r, g, b] = sum;
+    // Times 2^-64 is the division by FIXED_ONE, exactly, and cheaper.
+    let mean = |s: &i128| to_f64(*s) * (1.0 / FIXED_ONE) / n;
+    DVec3::new(mean(r), mean(g), mean(b))
+}
+
 /// Merges counts, means and M2 of two sets of values (Chan et al.).
 fn chan(a: (u32, f64, f64), b: (u32, f64, f64)) -> (u32, f64, f64) {
     match (a.0, b.0) {
@@ -203,6 +217,16 @@ impl PixelStats {
         unsafe { crate::memory::zeroed(n) }
     }
 
+    /// A pixel of the one sample `c` (sample 0, not jittered), or of none
+    /// where `c` is not finite.
+    pub fn of_sample(c: Vec3) -> PixelStats {
+        let mut p = PixelStats::default();
+        if c.is_finite() {
+            p.add(0, c, None);
+        }
+        p
+    }
+
     /// Adds sample `k` with colour `c`, drawn in sub-pixel `stratum` when
     /// pixel samples are jittered.
     #[inline]
@@ -213,10 +237,12 @@ impl PixelStats {
         for (s, q) in self.sum.iter_mut().zip(q) {
             *s += q.0;
         }
-        self.mean = self.mean_of_sum();
+        // The new mean from registers, not read back from the pixel.
+        let mean = mean_of(&self.sum, self.n);
+        self.mean = mean;
         let c = DVec3::from_array(q.map(|v| v.1));
         let lum = c.dot(LUMA.as_dvec3());
-        self.m2 += (lum - lum_old) * (lum - self.mean.dot(LUMA.as_dvec3()));
+        self.m2 += (lum - lum_old) * (lum - mean.dot(LUMA.as_dvec3()));
         if let Some(s) = stratum {
             self.add_stratified(k / PIXEL_STRATA, lum, s);
             self.add_quartered(k, lum, s);
@@ -262,14 +288,7 @@ impl PixelStats {
     /// The mean colour the exact sums give.
     #[inline]
     pub fn mean_of_sum(&self) -> DVec3 {
-        if self.n == 0 {
-            return DVec3::ZERO;
-        }
-        let n = self.n as f64;
-        let [r, g, b] = &self.sum;
-        // Times 2^-64 is the division by FIXED_ONE, exactly, and cheaper.
-        let mean = |s: &i128| to_f64(*s) * (1.0 / FIXED_ONE) / n;
-        DVec3::new(mean(r), mean(g), mean(b))
+        mean_of(&self.sum, self.n)
     }
 
     fn add_stratified(&mut self, block: u32, lum: f64, stratum: u32) {
@@ -463,6 +482,43 @@ impl PixelStats {
     }
 }
 
+/// The pixels a pass samples into (all or a row).
+pub(crate) enum Samples<'a> {
+    Stats(&'a mut [PixelStats]),
+    /// A lean film's samples.
+    Exact(&'a mut [Vec3]),
+}
+
+impl<'a> Samples<'a> {
+    /// Rows of `width` pixels.
+    pub(crate) fn rows(self, width: usize) -> Vec<Samples<'a>> {
+        match self {
+            Samples::Stats(p) => p.chunks_mut(width).map(Samples::Stats).collect(),
+            Samples::Exact(p) => p.chunks_mut(width).map(Samples::Exact).collect(),
+        }
+    }
+
+    pub(crate) fn len(&self) -> usize {
+        match self {
+            Samples::Stats(p) => p.len(),
+            Samples::Exact(p) => p.len(),
+        }
+    }
+
+    /// Adds sample `k` of pixel `x`; a lean film's pixels take one each
+    /// (not jittered: exact renders are not).
+    #[inline]
+    pub(crate) fn add(&mut self, x: usize, k: u32, c: Vec3, stratum: Option<u32>) {
+        match self {
+            Samples::Stats(p) => p[x].add(k, c, stratum),
+            Samples::Exact(p) => {
+                debug_assert!(k == 0 && stratum.is_none() && p[x].is_nan());
+                p[x] = c;
+            }
+        }
+    }
+}
+
 /// A sample that was NaN or infinite.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct BadSample {
@@ -573,8 +629,8 @@ impl Allocation {
 pub struct Film {
     pub width: u32,
     pub height: u32,
-    /// Each pixel's statistics.
-    pub pixels: Vec<PixelStats>,
+    /// Each pixel's statistics, or an exact film's one sample each.
+    pixels: Pixels,
     /// Samples per pixel attempted so far on a uniform film (the next
     /// pass's first index is `start + spp`), the fewest any pixel has on an
     /// adaptive one.
@@ -586,25 +642,155 @@ pub struct Film {
     pub adaptive: Option<Allocation>,
     pub bad_count: u64,
     pub bad: Vec<BadSample>,
+    /// Whether a pass or a caller has had the pixels to change.
+    sampled: bool,
 }
+
+/// What a film holds of its pixels.
+#[derive(Clone, Debug)]
+enum Pixels {
+    /// Every pixel's statistics.
+    Stats(Vec<PixelStats>),
+    /// The one sample of each pixel of an exact render (NaN where it has
+    /// none), which is everything its statistics say: a lean film, 12 bytes
+    /// a pixel where statistics are 176, which a frame would otherwise
+    /// spend much of its time bringing into memory. The statistics are made
+    /// from the samples when something asks for them.
+    Exact {
+        samples: Vec<Vec3>,
+        stats: OnceLock<Vec<PixelStats>>,
+    },
+}
+
+impl Pixels {
+    fn exact_stats(samples: &[Vec3]) -> Vec<PixelStats> {
+        samples.iter().map(|&c| PixelStats::of_sample(c)).collect()
+    }
+}
+
+/// The mean a pixel of one sample `c` has: `c` as the fixed point sums
+/// hold it (the same as [`PixelStats::of_sample`]'s mean), black where `c`
+/// is not finite (never added).
+#[inline]
+fn one_sample_mean(c: Vec3) -> Vec3 {
+    if c.is_finite() {
+        Vec3::new(
+            fixed(c.x).1 as f32,
+            fixed(c.y).1 as f32,
+            fixed(c.z).1 as f32,
+        )
+    } else {
+        Vec3::ZERO
+    }
+}
+
+/// An adaptive film's per-pixel sample counts and rays traced, as a pass
+/// writes them.
+pub(crate) type Counts<'a> = (&'a mut [u32], &'a mut [u32]);
 
 impl Film {
     /// Memory a render needs per pixel: the statistics (with an adaptive
-    /// film's count and weight), and the linear, bloomed and displayed
-    /// copies of the image made from them.
-    pub const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelStats>() as u64 + 8 + 3 * 12 + 3;
+    /// film's count, weight and rays, or a lean film's sample they were
+    /// made from), and the linear, bloomed and displayed copies of the
+    /// image made from them.
+    pub const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelStats>() as u64 + 12 + 3 * 12 + 3;
 
     pub fn new(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        Self::with(width, height, Pixels::Stats(PixelStats::zeroed(n)))
+    }
+
+    /// A film of `pixels`' statistics.
+    pub fn of_stats(width: u32, height: u32, pixels: Vec<PixelStats>) -> Self {
+        assert_eq!(pixels.len(), width as usize * height as usize);
+        Self {
+            sampled: true,
+            ..Self::with(width, height, Pixels::Stats(pixels))
+        }
+    }
+
+    /// An empty lean film for the one pass of an exact render, which only
+    /// keeps each pixel's sample (see [`Film::pixels`]).
+    pub fn new_exact(width: u32, height: u32) -> Self {
+        let pixels = Pixels::Exact {
+            samples: vec![Vec3::NAN; width as usize * height as usize],
+            stats: OnceLock::new(),
+        };
+        Self::with(width, height, pixels)
+    }
+
+    fn with(width: u32, height: u32, pixels: Pixels) -> Self {
         Self {
             width,
             height,
-            pixels: PixelStats::zeroed(width as usize * height as usize),
+            pixels,
             spp: 0,
             start: 0,
             adaptive: None,
             bad_count: 0,
             bad: Vec::new(),
+            sampled: false,
         }
+    }
+
+    /// The number of pixels.
+    pub fn pixels_len(&self) -> usize {
+        match &self.pixels {
+            Pixels::Stats(p) => p.len(),
+            Pixels::Exact { samples, .. } => samples.len(),
+        }
+    }
+
+    /// Whether this is a lean film of one sample per pixel.
+    pub fn is_exact(&self) -> bool {
+        matches!(self.pixels, Pixels::Exact { .. })
+    }
+
+    /// Each pixel's statistics (made from the samples on first use for a
+    /// lean film).
+    pub fn pixels(&self) -> &[PixelStats] {
+        match &self.pixels {
+            Pixels::Stats(p) => p,
+            Pixels::Exact { samples, stats } => stats.get_or_init(|| Pixels::exact_stats(samples)),
+        }
+    }
+
+    /// Each pixel's statistics, to change: a lean film becomes a film of
+    /// statistics.
+    pub fn pixels_mut(&mut self) -> &mut [PixelStats] {
+        self.sampled = true;
+        if let Pixels::Exact { samples, stats } = &mut self.pixels {
+            let p = stats.take().unwrap_or_else(|| Pixels::exact_stats(samples));
+            self.pixels = Pixels::Stats(p);
+        }
+        match &mut self.pixels {
+            Pixels::Stats(p) => p,
+            Pixels::Exact { .. } => unreachable!("made statistics above"),
+        }
+    }
+
+    /// What a pass samples into: a lean film's samples or each pixel's
+    /// statistics, and an adaptive film's sample counts.
+    pub(crate) fn sample_into(&mut self) -> (Samples<'_>, Option<Counts<'_>>) {
+        self.sampled = true;
+        let pixels = match &mut self.pixels {
+            Pixels::Stats(p) => Samples::Stats(p),
+            Pixels::Exact { samples, stats } => {
+                // Statistics made before more samples came in are stale.
+                stats.take();
+                Samples::Exact(samples)
+            }
+        };
+        let counts = self
+            .adaptive
+            .as_mut()
+            .map(|a| (&mut a.spp[..], &mut a.rays[..]));
+        (pixels, counts)
+    }
+
+    /// Whether nothing was ever sampled into this film.
+    pub(crate) fn is_blank(&self) -> bool {
+        !self.sampled
     }
 
     /// An empty film whose pixels each keep their own sample count.
@@ -642,9 +828,9 @@ impl Film {
     /// relative error is below `target` (`None` on a uniform film).
     pub fn converged(&self, target: f64) -> Option<f64> {
         self.adaptive.as_ref()?;
-        let n = self.pixels.len().max(1);
+        let n = self.pixels().len().max(1);
         let below = self
-            .pixels
+            .pixels()
             .iter()
             .filter(|p| p.relative_error().is_some_and(|e| e < target))
             .count();
@@ -659,7 +845,7 @@ impl Film {
             a.spp[i] = a.spp[i].max(sample + 1);
         }
         if c.is_finite() {
-            self.pixels[i].add(sample, c, stratum);
+            self.pixels_mut()[i].add(sample, c, stratum);
         } else {
             self.record_bad(BadSample { x, y, sample });
         }
@@ -673,26 +859,37 @@ impl Film {
     }
 
     pub fn mean(&self, x: u32, y: u32) -> Vec3 {
-        self.pixels[(y * self.width + x) as usize].mean.as_vec3()
+        let i = (y * self.width + x) as usize;
+        match &self.pixels {
+            Pixels::Stats(p) => p[i].mean.as_vec3(),
+            Pixels::Exact { samples, .. } => one_sample_mean(samples[i]),
+        }
     }
 
     /// Linear mean image, row-major.
     pub fn image(&self) -> Vec<Vec3> {
-        self.pixels.iter().map(|p| p.mean.as_vec3()).collect()
+        match &self.pixels {
+            Pixels::Stats(p) => p.iter().map(|p| p.mean.as_vec3()).collect(),
+            Pixels::Exact { samples, .. } => samples.iter().map(|&c| one_sample_mean(c)).collect(),
+        }
     }
 
     /// The film's estimate of its relMSE: the mean over pixels of the
     /// estimated variance of the mean luminance over `lum^2 + REL_EPS`;
     /// `None` until every pixel has two samples.
     pub fn estimated_rel_mse(&self) -> Option<f64> {
-        if self.pixels.is_empty() {
+        // A lean film's pixels have one sample at most: no estimate.
+        let Pixels::Stats(pixels) = &self.pixels else {
+            return None;
+        };
+        if pixels.is_empty() {
             return None;
         }
         let mut sum = 0.0;
-        for p in &self.pixels {
+        for p in pixels {
             sum += p.rel_variance()?;
         }
-        Some(sum / self.pixels.len() as f64)
+        Some(sum / pixels.len() as f64)
     }
 
     /// The relative error shown everywhere (TUI, `--target-error`,
@@ -717,7 +914,11 @@ impl Film {
     /// (`--target-error`): every pixel's rests on its samples alone
     /// ([`PixelStats::estimate_is_design_based`]: 16 samples).
     pub fn error_is_meaningful(&self) -> bool {
-        !self.pixels.is_empty() && self.pixels.iter().all(PixelStats::estimate_is_design_based)
+        // A lean film's pixels have one sample at most.
+        let Pixels::Stats(pixels) = &self.pixels else {
+            return false;
+        };
+        !pixels.is_empty() && pixels.iter().all(PixelStats::estimate_is_design_based)
     }
 }
 
@@ -775,7 +976,7 @@ impl Film {
         let at = |i: usize| (i as u32 % self.width, i as u32 / self.width, 0);
         let lum = |p: &PixelStats| p.mean.dot(LUMA.as_dvec3());
         let top = |key: &dyn Fn(&PixelStats) -> f64| {
-            self.pixels
+            self.pixels()
                 .iter()
                 .enumerate()
                 .map(|(i, p)| (i, key(p)))
@@ -841,6 +1042,32 @@ mod tests {
             for s in [wide, -wide, tie, -tie, wide >> 11 << 11] {
                 assert_eq!(to_f64(s).to_bits(), (s as f64).to_bits(), "{s}");
             }
+        }
+    }
+
+    #[test]
+    fn a_lean_pixel_has_the_mean_of_its_statistics() {
+        let mut z = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            z ^= z << 13;
+            z ^= z >> 7;
+            z ^= z << 17;
+            f32::from_bits(z as u32)
+        };
+        let specials = [0.0, -0.0, f32::NAN, f32::INFINITY, 1e-30, 3e38, -5.0];
+        let xs: Vec<f32> = (0..30_000).map(|_| next()).chain(specials).collect();
+        for c in xs
+            .chunks(3)
+            .map(|c| Vec3::new(c[0], c[1 % c.len()], c[2 % c.len()]))
+        {
+            let p = PixelStats::of_sample(c);
+            let want = p.mean.as_vec3();
+            let got = one_sample_mean(c);
+            assert_eq!(
+                got.to_array().map(f32::to_bits),
+                want.to_array().map(f32::to_bits),
+                "{c}"
+            );
         }
     }
 

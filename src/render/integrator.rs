@@ -10,7 +10,7 @@ use super::plan::Plan;
 use super::recorder::{HitInfo, LightSample, MissInfo, RayKind, Recorder};
 use crate::bvh::{Bvh, Hit};
 use crate::geometry::offset::{geometric_normal, hit_point, offset_origin, SHADOW_EPSILON};
-use crate::geometry::sampling::{jittered, phong_lobe, pixel_stratum, Rng, PIXEL_GRID};
+use crate::geometry::sampling::{jittered, phong_lobe, Rng, Run, PIXEL_GRID};
 use crate::geometry::Ray;
 use crate::scene::camera::CameraFrame;
 use crate::scene::texture::{cube_face_uv, FACE_NAMES};
@@ -47,6 +47,18 @@ pub fn mirror(dir: Vec3, n: Vec3, ng: Vec3) -> Vec3 {
 /// A monomorphised `Tracer::trace`.
 type TraceFn<'a, R> = fn(&Tracer<'a>, &Ray, u32, RayKind, Vec3, &mut Rng, &mut R) -> Vec3;
 
+/// Where one sample falls in its pixel `(x, y)`: its offset (0..1 on each
+/// axis) and sub-pixel stratum when jittered, and the random numbers the
+/// rest of the sample draws.
+#[derive(Clone, Debug)]
+pub struct Placed {
+    pub x: u32,
+    pub y: u32,
+    pub off: Vec2,
+    pub stratum: Option<u32>,
+    rng: Rng,
+}
+
 /// Shading point, as the lights and reflections need it.
 struct Surface<'m> {
     p: Vec3,
@@ -81,18 +93,39 @@ impl<'a> Tracer<'a> {
     }
 
     /// The sub-pixel stratum of sample `k` of pixel `(x, y)` when pixel
-    /// samples are jittered ([`pixel_stratum`]), else `None`.
+    /// samples are jittered ([`crate::geometry::sampling::pixel_stratum`]),
+    /// else `None`.
     pub fn stratum(&self, x: u32, y: u32, k: u32) -> Option<u32> {
+        self.stratum_in(x, y, k, &mut Run::default())
+    }
+
+    /// [`Tracer::stratum`], with what a run of samples shares kept in
+    /// `run`.
+    #[inline]
+    fn stratum_in(&self, x: u32, y: u32, k: u32, run: &mut Run) -> Option<u32> {
         let pixel = y as u64 * self.width as u64 + x as u64;
         (self.plan.supersampling && self.scene.settings.stratify)
-            .then(|| pixel_stratum(pixel, k, self.seed))
+            .then(|| run.stratum(pixel, k, self.seed))
     }
 
     /// Sample `k` of pixel `(x, y)`: the same value whoever asks, in any order.
     pub fn sample<R: Recorder>(&self, x: u32, y: u32, k: u32, rec: &mut R) -> Vec3 {
+        let placed = self.place(x, y, k, &mut Run::default());
+        let ray = self.camera_ray(&placed);
+        self.sample_from(placed, &ray, rec)
+    }
+
+    /// Where sample `k` of pixel `(x, y)` falls, with `run` keeping what a
+    /// run of samples shares. A pass places a run of samples, makes their camera
+    /// rays in one tight loop, then traces them: the f64 divisions and
+    /// square roots of one ray overlap the next's, where behind each
+    /// sample's chain of random numbers they would wait in front of every
+    /// ray.
+    #[inline(always)]
+    pub fn place(&self, x: u32, y: u32, k: u32, run: &mut Run) -> Placed {
         let pixel = y as u64 * self.width as u64 + x as u64;
-        let mut rng = Rng::for_sample(pixel, k as u64, self.seed);
-        let stratum = self.stratum(x, y, k);
+        let mut rng = run.rng(pixel, k, self.seed);
+        let stratum = self.stratum_in(x, y, k, run);
         let off = if let Some(stratum) = stratum {
             jittered(stratum, PIXEL_GRID, rng.next_vec2())
         } else if self.plan.supersampling {
@@ -100,10 +133,26 @@ impl<'a> Tracer<'a> {
         } else {
             Vec2::splat(0.5)
         };
-        rec.pixel_sample(off, stratum);
-        let ray = self
-            .frame
-            .ray(x as f64 + off.x as f64, y as f64 + off.y as f64);
+        Placed {
+            x,
+            y,
+            off,
+            stratum,
+            rng,
+        }
+    }
+
+    /// The camera ray of a placed sample.
+    #[inline]
+    pub fn camera_ray(&self, s: &Placed) -> Ray {
+        self.frame
+            .ray(s.x as f64 + s.off.x as f64, s.y as f64 + s.off.y as f64)
+    }
+
+    /// The colour of the placed sample `s`, whose camera ray is `ray`.
+    pub fn sample_from<R: Recorder>(&self, s: Placed, ray: &Ray, rec: &mut R) -> Vec3 {
+        let mut rng = s.rng;
+        rec.pixel_sample(s.off, s.stratum);
         // The stages the plan may leave out are compile-time parameters, so
         // a scene without textures or vertex normals runs code without them.
         let trace: TraceFn<'a, R> = match (self.plan.textures, self.plan.smooth_normals) {
@@ -112,7 +161,7 @@ impl<'a> Tracer<'a> {
             (true, false) => Self::trace::<R, true, false>,
             (true, true) => Self::trace::<R, true, true>,
         };
-        trace(self, &ray, 0, RayKind::Camera, Vec3::ONE, &mut rng, rec)
+        trace(self, ray, 0, RayKind::Camera, Vec3::ONE, &mut rng, rec)
     }
 
     fn closest<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Option<Hit> {

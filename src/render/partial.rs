@@ -111,8 +111,7 @@ impl Part {
     /// The part a header and its pixels make.
     fn of(header: Header, pixels: Vec<PixelStats>, bad: u64) -> Part {
         let Header { meta, range, size } = header;
-        let mut film = Film::new(0, 0);
-        (film.width, film.height, film.pixels) = (size.0, size.1, pixels);
+        let mut film = Film::of_stats(size.0, size.1, pixels);
         (film.start, film.spp, film.bad_count) = (range.start, range.len() as u32, bad);
         Part { film, meta }
     }
@@ -324,13 +323,13 @@ pub fn encode(f: &Film, meta: &Meta) -> Result<Vec<u8>> {
     if f.adaptive.is_some() {
         bail!("an adaptive film cannot be stored as a partial film");
     }
-    let Some(first) = f.pixels.first().map(words) else {
+    let Some(first) = f.pixels().first().map(words) else {
         bail!("a film with no pixels cannot be stored");
     };
     // Words every pixel shares are stored once, as attributes: most of a
     // uniform film's counts, and the empty pieces of aligned ranges.
     let mut varies = [false; FIELDS.len()];
-    for p in &f.pixels {
+    for p in f.pixels() {
         for (v, (a, b)) in varies.iter_mut().zip(words(p).iter().zip(&first)) {
             *v |= a != b;
         }
@@ -398,7 +397,7 @@ pub fn encode(f: &Film, meta: &Meta) -> Result<Vec<u8>> {
     let w = f.width as usize;
     let mut row_words = vec![[0; FIELDS.len()]; w];
     let mut bytes = flat_exr::encode(&layout, |y, out| {
-        let px = &f.pixels[y as usize * w..][..w];
+        let px = &f.pixels()[y as usize * w..][..w];
         for (r, p) in row_words.iter_mut().zip(px) {
             *r = words(p);
         }

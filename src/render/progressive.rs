@@ -19,8 +19,9 @@ use std::time::Instant;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::film::{Allocation, BadSample, Film, PixelStats};
-use crate::geometry::sampling::{PIXEL_STRATA, QUARTER};
+use super::film::{Allocation, BadSample, Film, PixelStats, Samples};
+use super::integrator::Placed;
+use crate::geometry::sampling::{Run, PIXEL_STRATA, QUARTER};
 
 /// Samples every pixel of an adaptive film gets before any decision: one
 /// quarter of a block, a sample in each quadrant of the pixel, which also
@@ -217,7 +218,7 @@ impl Progressive {
         }
         let give = self.give(stop);
         let (samples, pixels) = match &give {
-            Some(Give::All(n)) => (*n, self.film.pixels.len() as u64),
+            Some(Give::All(n)) => (*n, self.film.pixels_len() as u64),
             Some(Give::Each(g)) => (
                 g.iter().copied().max().unwrap_or(0),
                 g.iter().filter(|&&n| n > 0).count() as u64,
@@ -370,10 +371,15 @@ fn share(weight: &[f32], mean: f64, cap: u32) -> Option<Vec<u32>> {
     Some(weight.iter().map(|&w| count(c, w) as u32).collect())
 }
 
+/// Samples placed and their camera rays made ahead of tracing them (see
+/// [`Tracer::place`]): enough to overlap their arithmetic, few enough to
+/// stay in the L1 cache.
+const CAMERA_BATCH: usize = 32;
+
 /// One row of a film, with its sample counts when adaptive.
 struct Row<'a> {
     y: usize,
-    pixels: &'a mut [PixelStats],
+    pixels: Samples<'a>,
     spp: Option<&'a mut [u32]>,
     /// Rays per pixel, while an adaptive film counts them.
     rays: Option<&'a mut [u32]>,
@@ -393,10 +399,24 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
     let whole = whole && film.adaptive.is_none();
     let w = (film.width as usize).max(1);
     let first = film.start + film.spp;
-    let rows: Vec<Row> = match &mut film.adaptive {
-        None => film
-            .pixels
-            .chunks_mut(w)
+    // The one pass of an exact render keeps each pixel's sample and no
+    // statistics; a film that gets anything more keeps statistics.
+    let lean = tracer.plan.deterministic
+        && matches!(give, Give::All(1))
+        && film.is_blank()
+        && first == 0
+        && film.adaptive.is_none()
+        && !whole;
+    if lean && !film.is_exact() {
+        *film = Film::new_exact(film.width, film.height);
+    } else if !lean && film.is_exact() {
+        film.pixels_mut();
+    }
+    let (pixels, spp) = film.sample_into();
+    let rows: Vec<Row> = match spp {
+        None => pixels
+            .rows(w)
+            .into_iter()
             .enumerate()
             .map(|(y, pixels)| Row {
                 y,
@@ -405,15 +425,16 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                 rays: None,
             })
             .collect(),
-        Some(a) => {
-            let rays = a
-                .rays
+        Some((spp, rays)) => {
+            // Rays are counted until the weights are made, then not kept.
+            let rays = rays
                 .chunks_mut(w)
                 .map(Some)
                 .chain(std::iter::repeat_with(|| None));
-            film.pixels
-                .chunks_mut(w)
-                .zip(a.spp.chunks_mut(w))
+            pixels
+                .rows(w)
+                .into_iter()
+                .zip(spp.chunks_mut(w))
                 .zip(rays)
                 .enumerate()
                 .map(|(y, ((pixels, spp), rays))| Row {
@@ -433,36 +454,52 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             if cancel() {
                 return (rec, bad, false, Vec::new());
             }
-            let before = if whole {
-                row.pixels.to_vec()
-            } else {
-                Vec::new()
+            let before = match &row.pixels {
+                Samples::Stats(p) if whole => p.to_vec(),
+                _ => Vec::new(),
             };
             let y = row.y as u32;
-            for x in 0..row.pixels.len() {
-                let (k0, n) = match give {
-                    Give::All(n) => (first, *n),
-                    Give::Each(g) => (row.spp.as_ref().map_or(first, |s| s[x]), g[row.y * w + x]),
-                };
-                let xu = x as u32;
-                let traced = rec.rays();
-                for k in k0..k0 + n {
-                    let c: Vec3 = tracer.sample(xu, y, k, &mut rec);
+            let give_of = |x: usize| match give {
+                Give::All(n) => (first, *n),
+                Give::Each(g) => (row.spp.as_ref().map_or(first, |s| s[x]), g[row.y * w + x]),
+            };
+            let width = row.pixels.len();
+            let pixels = &mut row.pixels;
+            let mut ray_counts = row.rays.as_deref_mut();
+            let mut rays = Vec::with_capacity(CAMERA_BATCH);
+            let mut trace = |placed: &mut Vec<(u32, Placed)>| {
+                rays.clear();
+                rays.extend(placed.iter().map(|(_, p)| tracer.camera_ray(p)));
+                for ((k, p), ray) in placed.drain(..).zip(&rays) {
+                    let (x, stratum) = (p.x, p.stratum);
+                    let traced = rec.rays();
+                    let c: Vec3 = tracer.sample_from(p, ray, &mut rec);
+                    if let Some(r) = ray_counts.as_deref_mut() {
+                        let n = (rec.rays() - traced).min(u32::MAX as u64) as u32;
+                        r[x as usize] = r[x as usize].saturating_add(n);
+                    }
                     if !c.is_finite() {
-                        bad.push(BadSample {
-                            x: xu,
-                            y,
-                            sample: k,
-                        });
+                        bad.push(BadSample { x, y, sample: k });
                         continue;
                     }
-                    row.pixels[x].add(k, c, tracer.stratum(xu, y, k));
+                    pixels.add(x as usize, k, c, stratum);
                 }
-                if let Some(s) = &mut row.spp {
-                    s[x] = k0 + n;
+            };
+            let mut placed = Vec::with_capacity(CAMERA_BATCH);
+            let mut run = Run::default();
+            for x in 0..width {
+                let (k0, n) = give_of(x);
+                for k in k0..k0 + n {
+                    placed.push((k, tracer.place(x as u32, y, k, &mut run)));
+                    if placed.len() == CAMERA_BATCH {
+                        trace(&mut placed);
+                    }
                 }
-                if let Some(r) = &mut row.rays {
-                    r[x] = r[x].saturating_add((rec.rays() - traced).min(u32::MAX as u64) as u32);
+            }
+            trace(&mut placed);
+            if let (Some(s), Give::Each(g)) = (&mut row.spp, give) {
+                for (x, s) in s.iter_mut().enumerate() {
+                    *s += g[row.y * w + x];
                 }
             }
             if let Some(r) = rows_done {
@@ -473,20 +510,23 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
         .collect();
     let cut = results.iter().any(|r| !r.2);
     if whole && cut {
-        for (row, r) in film.pixels.chunks_mut(w).zip(&results) {
+        for (row, r) in film.pixels_mut().chunks_mut(w).zip(&results) {
             if r.2 {
                 row.copy_from_slice(&r.3);
             }
         }
     }
-    match (&mut film.adaptive, give) {
+    match (&film.adaptive, give) {
         (Some(a), _) => {
             film.spp = a.spp.iter().copied().min().unwrap_or(0);
             // Weighed once, when every pixel has its first quarter and no
             // pixel anything more: no later sample ever moves a weight.
             if a.weight.is_empty() && film.spp >= MIN_SPP {
-                a.weight = Allocation::weigh(&film.pixels, &a.rays, film.width);
-                a.rays = Vec::new();
+                let weight = Allocation::weigh(film.pixels(), &a.rays, film.width);
+                if let Some(a) = &mut film.adaptive {
+                    a.weight = weight;
+                    a.rays = Vec::new();
+                }
             }
         }
         // A pass cut between rows leaves `spp` at what every pixel has.
@@ -567,6 +607,32 @@ mod tests {
         assert_eq!((o.ended, p.film.spp), (Ended::Exact, 1));
     }
 
+    /// The lean film of an exact render holds what a film of statistics
+    /// would, and becomes one when a pass adds more.
+    #[test]
+    fn an_exact_render_keeps_its_samples_and_nothing_is_lost() {
+        let s = session(&[Feature::Supersampling, Feature::SoftShadows]);
+        let t = s.tracer();
+        let lean = Progressive::render(&t, 1);
+        assert!(lean.is_exact());
+        // A checkpointed render keeps statistics from the start.
+        let mut full = Progressive::new(12, 8);
+        full.whole_passes = true;
+        full.run(&t, &Stop::spp(1), &|| false, |_, _| {});
+        assert!(!full.film.is_exact());
+        assert_eq!(lean.image(), full.film.image());
+        assert_eq!(lean.report(), full.film.report());
+        let stats = |f: &Film| format!("{:?}", f.pixels());
+        assert_eq!(stats(&lean), stats(&full.film));
+        assert_eq!(lean.mean(5, 3), full.film.mean(5, 3));
+        let mut more = Progressive::resume(lean);
+        more.pass(&t, &Stop::spp(2), &|| false);
+        full.pass(&t, &Stop::spp(2), &|| false);
+        assert!(!more.film.is_exact());
+        assert!(more.film.pixels().iter().all(|p| p.n == 2));
+        assert_eq!(stats(&more.film), stats(&full.film));
+    }
+
     #[test]
     fn time_and_cancel_end_a_run() {
         let s = session(&[]);
@@ -581,7 +647,7 @@ mod tests {
         let mut p = Progressive::new(12, 8);
         let o = p.run(&t, &Stop::seconds(1e-12), &|| false, |_, _| {});
         assert_eq!((o.ended, o.passes, p.film.spp), (Ended::Time, 1, 1));
-        assert!(p.film.pixels.iter().all(|px| px.n == 1));
+        assert!(p.film.pixels().iter().all(|px| px.n == 1));
     }
 
     /// Under a cap that is no whole number of quarters, adaptive passes go on
