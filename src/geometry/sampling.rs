@@ -171,6 +171,7 @@ fn stratum_in_block(k: u32, order: u32) -> u32 {
 
 /// Element `i` of one of the 24 permutations of `0..4`, chosen by a hash
 /// of `seed`.
+#[inline]
 fn permute4(i: u32, seed: u32) -> u32 {
     // The finaliser of MurmurHash3: every bit of the seed moves the choice.
     let mut h = seed;
@@ -179,18 +180,34 @@ fn permute4(i: u32, seed: u32) -> u32 {
     h ^= h >> 13;
     h = h.wrapping_mul(0xc2b2_ae35);
     h ^= h >> 16;
-    // The permutation's Lehmer code: its digits pick from what is left.
-    let mut code = h % 24;
-    let mut left = [0u32, 1, 2, 3];
-    let mut len = 4;
-    for _ in 0..i {
-        let d = (code % len) as usize;
-        code /= len;
-        left.copy_within(d + 1..len as usize, d);
-        len -= 1;
-    }
-    left[(code % len) as usize]
+    PERMUTATIONS_OF_4[(h % 24) as usize][i as usize & 3] as u32
 }
+
+/// The 24 permutations of `0..4`, permutation `c` the one whose Lehmer
+/// code is `c` (its digits, least significant first, pick from what is
+/// left).
+const PERMUTATIONS_OF_4: [[u8; 4]; 24] = {
+    let mut table = [[0u8; 4]; 24];
+    let mut c = 0;
+    while c < 24 {
+        let mut left = [0u8, 1, 2, 3];
+        let (mut code, mut len, mut i) = (c, 4, 0);
+        while i < 4 {
+            let d = code % len;
+            code /= len;
+            table[c][i] = left[d];
+            let mut j = d;
+            while j + 1 < len {
+                left[j] = left[j + 1];
+                j += 1;
+            }
+            len -= 1;
+            i += 1;
+        }
+        c += 1;
+    }
+    table
+};
 
 /// The colour of stratum `s` on a checkerboard of the pixel's quadrants:
 /// black (`true`) top-left and bottom-right.
