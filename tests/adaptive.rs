@@ -183,8 +183,8 @@ fn adaptive_sampling_spends_samples_on_the_penumbra() {
     let n = order.len();
     let noisy = avg(&order[..n / 20]);
     let flat = avg(&order[n / 2..]);
-    // Several times: weights pooled over 5x5 neighbours and a floor on them
-    // spread a narrow penumbra's share a little (measured 2.7x; 3.4x from
+    // Several times: weights pooled over 7x7 neighbours and a floor on them
+    // spread a narrow penumbra's share a little (measured 2.6x; 3.4x from
     // whole blocks over 3x3).
     assert!(
         noisy > 2.5 * mean,

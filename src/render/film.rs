@@ -542,14 +542,16 @@ pub struct Allocation {
     /// over the square root of its predicted rays per sample; empty until
     /// every pixel has its first quarter.
     pub weight: Vec<f32>,
+    /// The weights in ascending order, which a pass's share is found from.
+    pub ascending: Vec<f32>,
     /// Rays each pixel's samples traced until the weights were made (then
     /// emptied).
     pub rays: Vec<u32>,
 }
 
-/// How far a pixel's weight looks: the neighbours within this many pixels
-/// (its own samples excluded).
-const WEIGHT_RADIUS: i64 = 2;
+/// How far a pixel's two predictions look: the neighbours within one pixel,
+/// and those within this many (its own samples excluded).
+const WEIGHT_RADIUS: usize = 3;
 /// The least weight, as a fraction of the mean: a defence against
 /// neighbours' quarters that missed what a pixel holds (measured, a tenth
 /// left `cornell` at 64x64 slower to 1 % than uniform sampling; 0.4 and 0.5
@@ -559,58 +561,56 @@ const WEIGHT_FLOOR: f64 = 0.4;
 impl Allocation {
     /// The weights from `pixels` (a `width`-wide film whose pixels have
     /// their first quarter and nothing more, which traced `rays`): pixel
-    /// `i`'s is the root mean square of its neighbours' relative standard
-    /// deviations of one sample, `s / √(lum² + ε)` with `s²` the sample
-    /// variance, over the square root of their mean rays per sample.
-    /// Counts in proportion to it minimise the film's relMSE for the rays
-    /// traced, where counts in proportion to the deviation alone would for
-    /// the samples: a glossy or mirrored pixel's samples cost several times
-    /// a diffuse one's. Variance is smooth across an image, so neighbours'
-    /// quarters give a firmer prediction than a pixel's own four samples,
-    /// and leaving the pixel out keeps its mean free of the decision. The
-    /// sample variance has 3 degrees of freedom a quarter where the
-    /// design-based estimate has one, and it measured best
-    /// (docs/adaptive.md). The neighbours are the 8 within one pixel and
-    /// the 24 within two, and the larger prediction is kept. A pixel with
-    /// no estimable neighbour gets the highest weight, and none less than
-    /// [`WEIGHT_FLOOR`] of the mean.
+    /// `i`'s is the root of its neighbours' mean relative variance of one
+    /// sample, `s² / (lum² + ε)` with `s²` the sample variance, over their
+    /// mean rays per sample. Counts in proportion to it minimise the film's
+    /// relMSE for the rays traced, where counts in proportion to the
+    /// deviation alone would for the samples: a glossy or mirrored pixel's
+    /// samples cost several times a diffuse one's. Variance is smooth
+    /// across an image, so neighbours' quarters give a firmer prediction
+    /// than a pixel's own four samples, and leaving the pixel out keeps its
+    /// mean free of the decision. The sample variance has 3 degrees of
+    /// freedom a quarter where the design-based estimate has one, and it
+    /// measured best (docs/adaptive.md). The weight is the mean of two
+    /// predictions, from the 8 neighbours within one pixel (sharp noisy
+    /// features) and from the 48 within [`WEIGHT_RADIUS`] (broad soft
+    /// shadows). A pixel with no estimable neighbour gets the highest
+    /// weight, and none less than [`WEIGHT_FLOOR`] of the mean.
     pub fn weigh(pixels: &[PixelStats], rays: &[u32], width: u32) -> Vec<f32> {
-        let w = width.max(1) as i64;
-        let h = pixels.len() as i64 / w;
-        let rel: Vec<Option<(f64, f64)>> = pixels
+        let w = width.max(1) as usize;
+        // Relative variance, rays per sample and 1 for an estimable pixel;
+        // zeros for one that is not.
+        let rel: Vec<[f64; 3]> = pixels
             .iter()
             .zip(rays)
             .map(|(p, &r)| {
                 let lum = p.mean.dot(LUMA.as_dvec3());
                 let v = p.variance() / (lum * lum + REL_EPS);
                 let per_sample = r as f64 / p.n.max(1) as f64;
-                (p.n >= 2 && v.is_finite()).then_some((v, per_sample))
+                if p.n >= 2 && v.is_finite() {
+                    [v, per_sample, 1.0]
+                } else {
+                    [0.0; 3]
+                }
             })
             .collect();
-        // The neighbours' within `r` pixels: the root of their mean
-        // relative variance over their mean rays per sample (at least one).
-        let predict = |i: i64, r: i64| {
-            let (x, y) = (i % w, i / w);
-            let (mut v, mut t, mut n) = (0.0, 0.0, 0u32);
-            for ny in (y - r).max(0)..=(y + r).min(h - 1) {
-                for nx in (x - r).max(0)..=(x + r).min(w - 1) {
-                    if (nx, ny) == (x, y) {
-                        continue;
-                    }
-                    if let Some((a, b)) = rel[(ny * w + nx) as usize] {
-                        v += a;
-                        t += b;
-                        n += 1;
-                    }
-                }
-            }
-            (n > 0).then(|| (v / t.max(n as f64)).sqrt())
+        let near = box_sums(&rel, w, 1);
+        let far = box_sums(&rel, w, WEIGHT_RADIUS);
+        // The neighbours' root mean relative variance over their mean rays
+        // per sample (at least one): the window's sums less the pixel's own.
+        let predict = |sum: [f64; 3], own: [f64; 3]| {
+            let [v, t, n] = [0, 1, 2].map(|k| (sum[k] - own[k]).max(0.0));
+            (n >= 0.5).then(|| (v / t.max(n)).sqrt())
         };
-        let weight: Vec<Option<f64>> = (0..w * h)
-            .map(|i| match (predict(i, 1), predict(i, WEIGHT_RADIUS)) {
-                (Some(a), Some(b)) => Some(a.max(b)),
-                (a, b) => a.or(b),
-            })
+        let weight: Vec<Option<f64>> = rel
+            .iter()
+            .enumerate()
+            .map(
+                |(i, &own)| match (predict(near[i], own), predict(far[i], own)) {
+                    (Some(a), Some(b)) => Some(0.5 * (a + b)),
+                    (a, b) => a.or(b),
+                },
+            )
             .collect();
         let top = weight.iter().flatten().copied().fold(0.0, f64::max);
         let mean = weight.iter().map(|v| v.unwrap_or(top)).sum::<f64>() / weight.len() as f64;
@@ -623,6 +623,28 @@ impl Allocation {
             .map(|v| v.unwrap_or(top).max(floor) as f32)
             .collect()
     }
+}
+
+/// Each pixel's sums of `v` over the square of pixels within `r` of it
+/// (cut at the image's edges), by rows then columns: `2 (2r + 1)` additions
+/// a pixel rather than `(2r + 1)²`.
+fn box_sums(v: &[[f64; 3]], w: usize, r: usize) -> Vec<[f64; 3]> {
+    let h = v.len() / w;
+    let add = |a: [f64; 3], b: &[f64; 3]| [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+    let window = |i: usize, n: usize| i.saturating_sub(r)..(i + r + 1).min(n);
+    let mut rows = vec![[0.0; 3]; v.len()];
+    for (src, dst) in v.chunks(w).zip(rows.chunks_mut(w)) {
+        for (x, d) in dst.iter_mut().enumerate() {
+            *d = src[window(x, w)].iter().fold([0.0; 3], add);
+        }
+    }
+    let mut out = vec![[0.0; 3]; v.len()];
+    for y in 0..h {
+        for x in 0..w {
+            out[y * w + x] = window(y, h).map(|ny| &rows[ny * w + x]).fold([0.0; 3], add);
+        }
+    }
+    out
 }
 
 #[derive(Clone, Debug)]
@@ -800,6 +822,7 @@ impl Film {
             adaptive: Some(Allocation {
                 spp: vec![0; n],
                 weight: Vec::new(),
+                ascending: Vec::new(),
                 rays: vec![0; n],
             }),
             ..Self::new(width, height)

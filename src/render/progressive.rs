@@ -176,7 +176,7 @@ impl Progressive {
         let mut mean = f.spp_range().1;
         loop {
             mean = (mean + step).min(cap as f64);
-            let counts = share(&a.weight, mean, cap)?;
+            let counts = share(&a.weight, &a.ascending, mean, cap)?;
             let give: Vec<u32> = counts
                 .iter()
                 .zip(&a.spp)
@@ -337,8 +337,9 @@ impl Progressive {
 /// pixel's squared error is its weight² over its count), rounded up to
 /// whole quarters of a block below a block and to whole blocks above, none
 /// below [`MIN_SPP`] or above `cap` (so all at `cap` for a `mean` of
-/// `cap`); `None` without weights.
-fn share(weight: &[f32], mean: f64, cap: u32) -> Option<Vec<u32>> {
+/// `cap`); `None` without weights. `ascending` holds the same weights in
+/// ascending order.
+fn share(weight: &[f32], ascending: &[f32], mean: f64, cap: u32) -> Option<Vec<u32>> {
     let lo = MIN_SPP.min(cap) as f64;
     // Whole quarters below a block, whole blocks from there: a quarter cut
     // short keeps part of the variance between the quadrants that a whole
@@ -352,7 +353,19 @@ fn share(weight: &[f32], mean: f64, cap: u32) -> Option<Vec<u32>> {
         } as f64;
         ((n / unit).ceil() * unit).clamp(lo, cap as f64)
     };
-    let mean_at = |c: f64| weight.iter().map(|&w| count(c, w)).sum::<f64>() / weight.len() as f64;
+    // The counts' mean, one step per distinct count: a count grows with
+    // the weight, so every pixel from the lightest not yet counted up has
+    // at least that one's count.
+    let mean_at = |c: f64| {
+        let (mut total, mut below, mut i) = (0.0, 0.0, 0);
+        while let Some(&w) = ascending.get(i) {
+            let n = count(c, w);
+            total += (n - below) * (ascending.len() - i) as f64;
+            below = n;
+            i += ascending[i..].partition_point(|&w| count(c, w) <= n);
+        }
+        total / ascending.len() as f64
+    };
     if weight.is_empty() {
         return None;
     }
@@ -524,6 +537,8 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             if a.weight.is_empty() && film.spp >= MIN_SPP {
                 let weight = Allocation::weigh(film.pixels(), &a.rays, film.width);
                 if let Some(a) = &mut film.adaptive {
+                    a.ascending = weight.clone();
+                    a.ascending.sort_by(f32::total_cmp);
                     a.weight = weight;
                     a.rays = Vec::new();
                 }
@@ -672,6 +687,77 @@ mod tests {
             means.windows(2).all(|m| m[1] >= (m[0] + 16.0).min(42.0)),
             "{means:?}"
         );
+    }
+
+    /// A share reaches the mean in whole quarters and blocks, heavier
+    /// pixels never get fewer samples, and counting the mean one step per
+    /// distinct count gives what summing every pixel's count gives.
+    #[test]
+    fn a_share_reaches_the_mean_in_whole_quarters_and_blocks() {
+        let mut x = 7u32;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x as f32 / u32::MAX as f32
+        };
+        for case in 0..60 {
+            let n = 1 + case * 37 % 500;
+            // Weights spread over four orders of magnitude, some equal.
+            let weight: Vec<f32> = (0..n)
+                .map(|i| {
+                    if i % 5 == 0 {
+                        0.5
+                    } else {
+                        10f32.powf(4.0 * next() - 2.0)
+                    }
+                })
+                .collect();
+            let mut ascending = weight.clone();
+            ascending.sort_by(f32::total_cmp);
+            let cap = [5, 16, 42, 1000, u32::MAX][case as usize % 5];
+            let mean = (MIN_SPP as f64 + 300.0 * next() as f64).min(cap as f64);
+            let counts = share(&weight, &ascending, mean, cap).unwrap();
+            let avg = |c: &[u32]| c.iter().map(|&k| k as f64).sum::<f64>() / c.len() as f64;
+            assert!(
+                avg(&counts) >= mean,
+                "case {case}: {} < {mean}",
+                avg(&counts)
+            );
+            assert!(counts
+                .iter()
+                .all(|&k| (MIN_SPP.min(cap)..=cap).contains(&k)));
+            let whole = |k: u32| k == cap || (k <= 16 && k % 4 == 0) || k % 16 == 0;
+            assert!(counts.iter().all(|&k| whole(k)), "case {case}: {counts:?}");
+            // Heavier pixels never get fewer samples.
+            let mut pairs: Vec<(f32, u32)> =
+                weight.iter().copied().zip(counts.iter().copied()).collect();
+            pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+            assert!(pairs.windows(2).all(|p| p[0].1 <= p[1].1), "case {case}");
+            assert_eq!(counts, share_by_sum(&weight, mean, cap), "case {case}");
+        }
+    }
+
+    /// [`share`] as its definition says: the bisection's means summed over
+    /// every pixel.
+    fn share_by_sum(weight: &[f32], mean: f64, cap: u32) -> Vec<u32> {
+        let count = |c: f64, w: f32| {
+            let n = c * w as f64;
+            let unit = if n <= 16.0 { 4.0 } else { 16.0 };
+            ((n / unit).ceil() * unit).clamp(MIN_SPP.min(cap) as f64, cap as f64)
+        };
+        let mean_at =
+            |c: f64| weight.iter().map(|&w| count(c, w)).sum::<f64>() / weight.len() as f64;
+        let (mut a, mut b) = (-64.0f64, 64.0f64);
+        for _ in 0..24 {
+            let m = 0.5 * (a + b);
+            if mean_at(m.exp2()) < mean {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+        weight.iter().map(|&w| count(b.exp2(), w) as u32).collect()
     }
 
     #[test]
