@@ -727,7 +727,8 @@ mod tests {
             assert!(counts
                 .iter()
                 .all(|&k| (MIN_SPP.min(cap)..=cap).contains(&k)));
-            let whole = |k: u32| k == cap || (k <= 16 && k % 4 == 0) || k % 16 == 0;
+            let whole =
+                |k: u32| k == cap || (k <= 16 && k.is_multiple_of(4)) || k.is_multiple_of(16);
             assert!(counts.iter().all(|&k| whole(k)), "case {case}: {counts:?}");
             // Heavier pixels never get fewer samples.
             let mut pairs: Vec<(f32, u32)> =
