@@ -1,5 +1,6 @@
 //! `rayterm bench scaling`: how build and trace cost grow with the number of
-//! triangles, on the teapot tessellated from ~1k to ~4M triangles.
+//! triangles, on the teapot tessellated from ~1k to ~4M triangles (~16M with
+//! `--max-n 512`).
 
 use std::time::Instant;
 
