@@ -137,6 +137,7 @@ fn rays_made_first_are_the_same_rays() {
             builder: Builder::Sah,
             reps: 2,
             rays_first,
+            packets: false,
         };
         let r = workload::run("teapot:3", g, &o);
         let got = (r.hits, r.occluded, r.sum_t, r.diffuse_hits, r.diffuse_sum_t);

@@ -1,0 +1,566 @@
+//! Coherent rays in packets: up to [`PACKET_RAYS`] rays from one origin (a
+//! camera's eye, a point light) walk the wide tree together.
+//!
+//! Rays are grouped by the signs of their directions; a group is a frustum,
+//! its shared origin and, per axis, the range of its rays' reciprocal
+//! directions. One eight-box test of the frustum per node stands for the
+//! box tests of all its rays: a node it misses, every ray misses. Leaves
+//! are entered by each ray whose own box test (the single-ray test, eight
+//! rays per instruction) hits the leaf's box, and each such ray tests the
+//! leaf's triangles exactly as [`Bvh::intersect`] would. The frustum only
+//! ever lets more boxes through than the rays' own tests, so every ray
+//! tests every triangle its single walk tests, and the closest hit (ties
+//! going to the lower triangle index) is the same, bit for bit.
+//!
+//! Why the frustum test is conservative to the bit: with the origin shared,
+//! a ray's slab distance is `(b - o) * inv`, the same `b - o` for every ray;
+//! rounding is monotone, so over reciprocals in `[lo, hi]` the product lies
+//! between `(b - o) * lo` and `(b - o) * hi` as rounded. The frustum's entry
+//! distance is then at most every ray's, its exit distance at least every
+//! ray's. Rays that break this (another origin, a direction component zero,
+//! below [`PARALLEL`](crate::geometry::ray::PARALLEL) or not finite, a NaN
+//! `tmax`) take the single-ray walk.
+
+use std::mem::MaybeUninit;
+
+use glam::Vec4;
+
+#[cfg(target_arch = "x86_64")]
+use super::traverse::Avx;
+use super::traverse::{closer, Kernels, Portable, FAR_SCALE, MAX_TFAR, STACK};
+use super::wide::{leaf_packets, Node8, LEAF, WIDTH};
+use super::{Bvh, Hit, TraversalStats};
+use crate::geometry::triangle::RayShear;
+use crate::geometry::Ray;
+
+/// The most rays one packet holds: an 8x8 tile of camera rays.
+pub const PACKET_RAYS: usize = 64;
+
+/// The rays of one group, one lane each, in the layout the kernels load
+/// eight at a time: reciprocal directions and the current `tmax`.
+#[repr(C, align(32))]
+struct Lanes {
+    inv: [[f32; PACKET_RAYS]; 3],
+    tmax: [f32; PACKET_RAYS],
+}
+
+/// A group's frustum: the shared origin and, per axis, the range of the
+/// rays' reciprocal directions, all of one sign.
+#[derive(Clone, Copy)]
+struct Frustum {
+    o: [f32; 3],
+    lo: [f32; 3],
+    hi: [f32; 3],
+    neg: [bool; 3],
+}
+
+/// Indices in `Node8::b` of the near and far planes of axis `a`.
+#[inline(always)]
+fn planes(f: &Frustum, a: usize) -> (usize, usize) {
+    let n = f.neg[a] as usize;
+    (2 * a + n, 2 * a + 1 - n)
+}
+
+/// The reciprocal direction the single-ray walk uses, when the ray can
+/// join a frustum: every component finite and nonzero.
+#[inline(always)]
+fn frustum_inv(ray: &Ray) -> Option<[f32; 3]> {
+    let inv = ray.inv_dir().to_array();
+    let ok = inv.iter().all(|x| x.is_finite() && *x != 0.0)
+        && ray.origin.is_finite()
+        && !ray.tmax.is_nan();
+    ok.then_some(inv)
+}
+
+/// The frustum's eight-box test: bit `i` set when some ray of the group may
+/// hit child `i`'s box within `(0, tmax)`, and the least entry distance.
+#[inline(always)]
+fn frustum_boxes(f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+    let mut mask = 0;
+    let mut tnear = [0.0; WIDTH];
+    for half in 0..WIDTH / 4 {
+        let lanes = half * 4..half * 4 + 4;
+        let slab = |a: usize| {
+            let o = Vec4::splat(f.o[a]);
+            let (lo, hi) = (Vec4::splat(f.lo[a]), Vec4::splat(f.hi[a]));
+            let (i, j) = planes(f, a);
+            let dn = Vec4::from_slice(&n.b[i][lanes.clone()]) - o;
+            let df = Vec4::from_slice(&n.b[j][lanes.clone()]) - o;
+            ((dn * lo).min(dn * hi), (df * lo).max(df * hi))
+        };
+        let (nx, fx) = slab(0);
+        let (ny, fy) = slab(1);
+        let (nz, fz) = slab(2);
+        // NaN (a NaN bound) is passed over as in the single-ray test.
+        let tn = nz.max(ny.max(nx.max(Vec4::ZERO)));
+        let tf = fz.min(fy.min(fx.min(Vec4::splat(tmax.min(MAX_TFAR))))) * Vec4::splat(FAR_SCALE);
+        mask |= tn.cmple(tf).bitmask() << (4 * half);
+        tn.write_to_slice(&mut tnear[lanes]);
+    }
+    (mask, tnear)
+}
+
+/// The single-ray box test of child `slot` of `n` for the rays in `active`,
+/// four at a time: bit `i` set when ray `i` hits it.
+#[inline(always)]
+fn rays_box(f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+    let d = |a: usize| {
+        let (i, j) = planes(f, a);
+        (
+            Vec4::splat(n.b[i][slot] - f.o[a]),
+            Vec4::splat(n.b[j][slot] - f.o[a]),
+        )
+    };
+    let (dx, dy, dz) = (d(0), d(1), d(2));
+    let mut hit = 0;
+    for b in (0..PACKET_RAYS / 4).filter(|b| active & (0xf << (4 * b)) != 0) {
+        let r = 4 * b..4 * b + 4;
+        let inv = |a: usize| Vec4::from_slice(&l.inv[a][r.clone()]);
+        let (ix, iy, iz) = (inv(0), inv(1), inv(2));
+        let tn = (dz.0 * iz).max((dy.0 * iy).max((dx.0 * ix).max(Vec4::ZERO)));
+        let tmax = Vec4::from_slice(&l.tmax[r.clone()]).min(Vec4::splat(MAX_TFAR));
+        let tf = (dz.1 * iz).min((dy.1 * iy).min((dx.1 * ix).min(tmax))) * Vec4::splat(FAR_SCALE);
+        hit |= (tn.cmple(tf).bitmask() as u64) << (4 * b);
+    }
+    hit & active
+}
+
+/// [`frustum_boxes`] with AVX.
+///
+/// # Safety
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn frustum_boxes_avx(f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+    use std::arch::x86_64::*;
+    macro_rules! slab {
+        ($a:expr) => {{
+            let o = _mm256_set1_ps(f.o[$a]);
+            let (lo, hi) = (_mm256_set1_ps(f.lo[$a]), _mm256_set1_ps(f.hi[$a]));
+            let (i, j) = planes(f, $a);
+            let dn = _mm256_sub_ps(_mm256_load_ps(n.b[i].as_ptr()), o);
+            let df = _mm256_sub_ps(_mm256_load_ps(n.b[j].as_ptr()), o);
+            (
+                _mm256_min_ps(_mm256_mul_ps(dn, lo), _mm256_mul_ps(dn, hi)),
+                _mm256_max_ps(_mm256_mul_ps(df, lo), _mm256_mul_ps(df, hi)),
+            )
+        }};
+    }
+    let (nx, fx) = slab!(0);
+    let (ny, fy) = slab!(1);
+    let (nz, fz) = slab!(2);
+    let tn = _mm256_max_ps(
+        nz,
+        _mm256_max_ps(ny, _mm256_max_ps(nx, _mm256_setzero_ps())),
+    );
+    let tf = _mm256_mul_ps(
+        _mm256_min_ps(
+            fz,
+            _mm256_min_ps(fy, _mm256_min_ps(fx, _mm256_set1_ps(tmax.min(MAX_TFAR)))),
+        ),
+        _mm256_set1_ps(FAR_SCALE),
+    );
+    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
+    let mut tnear = [0.0; WIDTH];
+    _mm256_storeu_ps(tnear.as_mut_ptr(), tn);
+    (mask, tnear)
+}
+
+/// [`rays_box`] with AVX, eight rays at a time.
+///
+/// # Safety
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn rays_box_avx(f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+    use std::arch::x86_64::*;
+    macro_rules! d {
+        ($a:expr) => {{
+            let (i, j) = planes(f, $a);
+            (
+                _mm256_set1_ps(n.b[i][slot] - f.o[$a]),
+                _mm256_set1_ps(n.b[j][slot] - f.o[$a]),
+            )
+        }};
+    }
+    let (dx, dy, dz) = (d!(0), d!(1), d!(2));
+    let (zero, maxt, scale) = (
+        _mm256_setzero_ps(),
+        _mm256_set1_ps(MAX_TFAR),
+        _mm256_set1_ps(FAR_SCALE),
+    );
+    let mut hit = 0;
+    let mut blocks = active;
+    while blocks != 0 {
+        let b = blocks.trailing_zeros() as usize / 8;
+        blocks &= !(0xff << (8 * b));
+        let r = 8 * b;
+        // `Lanes` is 32-byte aligned and each row holds 64 f32.
+        let ix = _mm256_load_ps(l.inv[0].as_ptr().add(r));
+        let iy = _mm256_load_ps(l.inv[1].as_ptr().add(r));
+        let iz = _mm256_load_ps(l.inv[2].as_ptr().add(r));
+        let tn = _mm256_max_ps(
+            _mm256_mul_ps(dz.0, iz),
+            _mm256_max_ps(
+                _mm256_mul_ps(dy.0, iy),
+                _mm256_max_ps(_mm256_mul_ps(dx.0, ix), zero),
+            ),
+        );
+        let tmax = _mm256_min_ps(_mm256_load_ps(l.tmax.as_ptr().add(r)), maxt);
+        let tf = _mm256_mul_ps(
+            _mm256_min_ps(
+                _mm256_mul_ps(dz.1, iz),
+                _mm256_min_ps(
+                    _mm256_mul_ps(dy.1, iy),
+                    _mm256_min_ps(_mm256_mul_ps(dx.1, ix), tmax),
+                ),
+            ),
+            scale,
+        );
+        let m = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u64;
+        hit |= m << r;
+    }
+    hit & active
+}
+
+/// The kernels of a packet walk, beside those of the single-ray walk.
+trait PacketKernels: Kernels {
+    fn frustum(&self, f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]);
+    fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64;
+}
+
+impl PacketKernels for Portable {
+    #[inline(always)]
+    fn frustum(&self, f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+        frustum_boxes(f, n, tmax)
+    }
+
+    #[inline(always)]
+    fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+        rays_box(f, l, n, slot, active)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl PacketKernels for Avx {
+    #[inline(always)]
+    fn frustum(&self, f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+        // SAFETY: an `Avx` exists only where the CPU has AVX.
+        unsafe { frustum_boxes_avx(f, n, tmax) }
+    }
+
+    #[inline(always)]
+    fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+        // SAFETY: as above.
+        unsafe { rays_box_avx(f, l, n, slot, active) }
+    }
+}
+
+/// What a packet walk finds for each ray of its group.
+trait Found {
+    /// Any hit will do: the walk drops a ray at its first hit.
+    const ANY: bool;
+    /// Ray `lane` (of the group) hit triangle `prim` at `t`, `(u, v)`.
+    fn hit(&mut self, lane: usize, hit: Hit);
+}
+
+/// Closest hits, kept as [`Bvh::intersect`] keeps them.
+struct Closest<'a>(&'a mut [Option<Hit>]);
+
+impl Found for Closest<'_> {
+    const ANY: bool = false;
+    #[inline(always)]
+    fn hit(&mut self, lane: usize, hit: Hit) {
+        let best = &mut self.0[lane];
+        if closer(&hit, best.as_ref()) {
+            *best = Some(hit);
+        }
+    }
+}
+
+/// Whether each ray is blocked.
+struct Blocked<'a>(&'a mut [bool]);
+
+impl Found for Blocked<'_> {
+    const ANY: bool = true;
+    #[inline(always)]
+    fn hit(&mut self, lane: usize, _: Hit) {
+        self.0[lane] = true;
+    }
+}
+
+impl Bvh {
+    /// The closest hit of every ray of `rays` into `hits`: exactly what
+    /// [`Bvh::intersect`] finds for each. Rays from one origin are traced
+    /// [`PACKET_RAYS`] at a time as frustums (see the module comment); the
+    /// others one by one.
+    ///
+    /// # Panics
+    /// When `hits` is not as long as `rays`.
+    pub fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one hit per ray");
+        for (r, h) in rays.chunks(PACKET_RAYS).zip(hits.chunks_mut(PACKET_RAYS)) {
+            h.fill(None);
+            self.packet(r, &mut Closest(h));
+        }
+    }
+
+    /// Whether anything lies in `(0, tmax]` of every ray of `rays`, into
+    /// `blocked`: exactly what [`Bvh::occluded`] says for each (which
+    /// triangle blocks a ray is not asked for, so the walk may find another
+    /// than the single ray's).
+    ///
+    /// # Panics
+    /// When `blocked` is not as long as `rays`.
+    pub fn occluded_packet(&self, rays: &[Ray], blocked: &mut [bool]) {
+        assert_eq!(rays.len(), blocked.len(), "one answer per ray");
+        for (r, b) in rays
+            .chunks(PACKET_RAYS)
+            .zip(blocked.chunks_mut(PACKET_RAYS))
+        {
+            b.fill(false);
+            self.packet(r, &mut Blocked(b));
+        }
+    }
+
+    /// Up to [`PACKET_RAYS`] rays: grouped by direction signs (in the order
+    /// of the rays within each group), each group walked as a frustum, the
+    /// rays that fit no frustum walked alone.
+    fn packet<F: Found>(&self, rays: &[Ray], found: &mut F) {
+        debug_assert!(rays.len() <= PACKET_RAYS);
+        if self.wide.nodes.is_empty() {
+            return;
+        }
+        let origin = rays
+            .iter()
+            .find(|r| frustum_inv(r).is_some())
+            .map(|r| r.origin);
+        // Octants 0..8 for frustum rays, 8 for the others.
+        let mut octant = [8u8; PACKET_RAYS];
+        let mut count = [0usize; 9];
+        for (i, r) in rays.iter().enumerate() {
+            if let Some(inv) = frustum_inv(r).filter(|_| Some(r.origin) == origin) {
+                octant[i] = inv
+                    .iter()
+                    .enumerate()
+                    .map(|(a, x)| ((*x < 0.0) as u8) << a)
+                    .sum();
+            }
+            count[octant[i] as usize] += 1;
+        }
+        for r in (0..rays.len()).filter(|&i| octant[i] == 8) {
+            let ray = &rays[r];
+            let mut st = TraversalStats::default();
+            if F::ANY {
+                if self.occluded::<false>(ray, &mut st).is_some() {
+                    found.hit(
+                        r,
+                        Hit {
+                            t: 0.0,
+                            u: 0.0,
+                            v: 0.0,
+                            prim: 0,
+                        },
+                    );
+                }
+            } else if let Some(h) = self.intersect::<false>(ray, &mut st) {
+                found.hit(r, h);
+            }
+        }
+        for oct in (0..8u8).filter(|&o| count[o as usize] > 0) {
+            let mut lanes = [0u8; PACKET_RAYS];
+            let mut n = 0;
+            for i in (0..rays.len()).filter(|&i| octant[i] == oct) {
+                lanes[n] = i as u8;
+                n += 1;
+            }
+            self.group(rays, &lanes[..n], found);
+        }
+    }
+
+    /// Walks one group: rays `lanes` of `rays`, one origin, one octant.
+    fn group<F: Found>(&self, rays: &[Ray], lanes: &[u8], found: &mut F) {
+        let mut l = Lanes {
+            inv: [[0.0; PACKET_RAYS]; 3],
+            tmax: [f32::NEG_INFINITY; PACKET_RAYS],
+        };
+        let first = &rays[lanes[0] as usize];
+        let mut f = Frustum {
+            o: first.origin.to_array(),
+            lo: [f32::INFINITY; 3],
+            hi: [f32::NEG_INFINITY; 3],
+            neg: [false; 3],
+        };
+        for (k, &i) in lanes.iter().enumerate() {
+            let r = &rays[i as usize];
+            let inv = frustum_inv(r).unwrap_or_default();
+            for a in 0..3 {
+                l.inv[a][k] = inv[a];
+                f.lo[a] = f.lo[a].min(inv[a]);
+                f.hi[a] = f.hi[a].max(inv[a]);
+            }
+            l.tmax[k] = r.tmax;
+        }
+        f.neg = f.hi.map(|x| x < 0.0);
+        #[cfg(target_arch = "x86_64")]
+        if self.wide.avx {
+            // SAFETY: `wide.avx` says this CPU has AVX.
+            unsafe { self.group_avx(rays, lanes, &f, &mut l, found) };
+            return;
+        }
+        self.group_with(rays, lanes, &f, &mut l, found, &Portable);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn group_avx<F: Found>(
+        &self,
+        rays: &[Ray],
+        lanes: &[u8],
+        f: &Frustum,
+        l: &mut Lanes,
+        found: &mut F,
+    ) {
+        self.group_with(rays, lanes, f, l, found, &Avx(()));
+    }
+
+    #[inline(always)]
+    fn group_with<F: Found, K: PacketKernels>(
+        &self,
+        rays: &[Ray],
+        lanes: &[u8],
+        f: &Frustum,
+        l: &mut Lanes,
+        found: &mut F,
+        k: &K,
+    ) {
+        if self.wide.stack <= STACK {
+            let mut stack = [MaybeUninit::uninit(); STACK];
+            self.walk_group(rays, lanes, f, l, found, &mut stack, k);
+        } else {
+            let mut stack = vec![MaybeUninit::uninit(); self.wide.stack];
+            self.walk_group(rays, lanes, f, l, found, &mut stack, k);
+        }
+    }
+
+    /// The walk of a group. Stack entries hold a child, where its box is
+    /// (`node << 3 | slot`, for the rays' own test at a leaf) and the
+    /// frustum's entry distance.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn walk_group<F: Found, K: PacketKernels>(
+        &self,
+        rays: &[Ray],
+        lanes: &[u8],
+        f: &Frustum,
+        l: &mut Lanes,
+        found: &mut F,
+        stack: &mut [MaybeUninit<(u32, u32, f32)>],
+        k: &K,
+    ) {
+        let w = &self.wide;
+        let n = lanes.len();
+        let mut active: u64 = if n == 64 { !0 } else { (1 << n) - 1 };
+        let mut sheared = 0u64;
+        let mut shear = [MaybeUninit::<RayShear>::uninit(); PACKET_RAYS];
+        let far = |l: &Lanes, active: u64| {
+            let mut m = f32::NEG_INFINITY;
+            for (i, t) in l.tmax.iter().enumerate() {
+                if active & (1 << i) != 0 {
+                    m = m.max(*t);
+                }
+            }
+            m
+        };
+        let mut tmax = far(l, active);
+        let mut sp = 0;
+        let (mut cur, mut at) = (0u32, 0u32);
+        loop {
+            if cur & LEAF == 0 {
+                let node = &w.nodes[cur as usize];
+                let (mask, tnear) = k.frustum(f, node, tmax);
+                if mask != 0 {
+                    let from = cur << 3;
+                    let mut near = mask.trailing_zeros() as usize;
+                    let mut m = mask & (mask - 1);
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let other = if !F::ANY && tnear[i] < tnear[near] {
+                            std::mem::replace(&mut near, i)
+                        } else {
+                            i
+                        };
+                        stack[sp].write((node.child[other], from | other as u32, tnear[other]));
+                        sp += 1;
+                    }
+                    (cur, at) = (node.child[near], from | near as u32);
+                    continue;
+                }
+            } else {
+                let node = &w.nodes[(at >> 3) as usize];
+                let mut todo = k.rays_box(f, l, node, (at & 7) as usize, active);
+                let mut changed = false;
+                for p in &w.packets[leaf_packets(cur)] {
+                    let mut m = todo;
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let ray = &rays[lanes[i] as usize];
+                        if sheared & (1 << i) == 0 {
+                            shear[i].write(RayShear::within(ray.origin, ray.dir, self.reach));
+                            sheared |= 1 << i;
+                        }
+                        // SAFETY: written above, once `sheared` has bit `i`.
+                        let s = unsafe { shear[i].assume_init_ref() };
+                        let h = if F::ANY {
+                            k.triangles::<false>(s, p, l.tmax[i])
+                        } else {
+                            k.triangles::<true>(s, p, l.tmax[i])
+                        };
+                        if h.mask == 0 {
+                            continue;
+                        }
+                        changed = true;
+                        for lane in (0..8).filter(|b| h.mask & (1 << b) != 0) {
+                            let hit = Hit {
+                                t: h.t[lane],
+                                u: h.u[lane],
+                                v: h.v[lane],
+                                prim: self.prim[p.idx[lane] as usize],
+                            };
+                            found.hit(lanes[i] as usize, hit);
+                            if F::ANY {
+                                break;
+                            }
+                            l.tmax[i] = l.tmax[i].min(hit.t);
+                        }
+                        if F::ANY {
+                            active &= !(1 << i);
+                            todo &= !(1 << i);
+                        }
+                    }
+                }
+                if changed {
+                    if active == 0 {
+                        return;
+                    }
+                    tmax = far(l, active);
+                }
+            }
+            // Pop, skipping nodes beyond every ray's closest hit.
+            loop {
+                if sp == 0 {
+                    return;
+                }
+                sp -= 1;
+                // SAFETY: every entry below `sp` was written by a push.
+                let (c, a, d) = unsafe { stack[sp].assume_init() };
+                if F::ANY || d <= tmax * FAR_SCALE {
+                    (cur, at) = (c, a);
+                    break;
+                }
+            }
+        }
+    }
+}
