@@ -328,80 +328,88 @@ impl Bvh {
     /// rays that fit no frustum walked alone.
     fn packet<F: Found>(&self, rays: &[Ray], found: &mut F) {
         debug_assert!(rays.len() <= PACKET_RAYS);
-        if self.wide.nodes.is_empty() {
+        if self.wide.nodes.is_empty() || rays.is_empty() {
             return;
         }
-        let origin = rays
-            .iter()
-            .find(|r| frustum_inv(r).is_some())
-            .map(|r| r.origin);
+        let mut inv = [[0.0; 3]; PACKET_RAYS];
         // Octants 0..8 for frustum rays, 8 for the others.
         let mut octant = [8u8; PACKET_RAYS];
-        let mut count = [0usize; 9];
+        let mut count = [0u8; 9];
+        let mut origin = None;
         for (i, r) in rays.iter().enumerate() {
-            if let Some(inv) = frustum_inv(r).filter(|_| Some(r.origin) == origin) {
-                octant[i] = inv
-                    .iter()
-                    .enumerate()
-                    .map(|(a, x)| ((*x < 0.0) as u8) << a)
-                    .sum();
+            if let Some(v) = frustum_inv(r) {
+                if *origin.get_or_insert(r.origin) == r.origin {
+                    inv[i] = v;
+                    octant[i] = (v[0] < 0.0) as u8
+                        | ((v[1] < 0.0) as u8) << 1
+                        | ((v[2] < 0.0) as u8) << 2;
+                }
             }
             count[octant[i] as usize] += 1;
         }
-        for r in (0..rays.len()).filter(|&i| octant[i] == 8) {
-            let ray = &rays[r];
+        if count[8] > 0 {
+            self.one_by_one(rays, &octant, found);
+        }
+        let mut lanes = [0u8; PACKET_RAYS];
+        for oct in (0..8u8).filter(|&o| count[o as usize] > 0) {
+            let n = count[oct as usize] as usize;
+            if n == rays.len() {
+                lanes.iter_mut().enumerate().for_each(|(i, l)| *l = i as u8);
+            } else {
+                let mut k = 0;
+                for i in (0..rays.len()).filter(|&i| octant[i] == oct) {
+                    lanes[k] = i as u8;
+                    k += 1;
+                }
+            }
+            self.group(rays, &inv, &lanes[..n], found);
+        }
+    }
+
+    /// The rays of octant 8 (no frustum), each walked alone.
+    #[cold]
+    fn one_by_one<F: Found>(&self, rays: &[Ray], octant: &[u8], found: &mut F) {
+        for (r, ray) in rays.iter().enumerate().filter(|(i, _)| octant[*i] == 8) {
             let mut st = TraversalStats::default();
             if F::ANY {
                 if self.occluded::<false>(ray, &mut st).is_some() {
-                    found.hit(
-                        r,
-                        Hit {
-                            t: 0.0,
-                            u: 0.0,
-                            v: 0.0,
-                            prim: 0,
-                        },
-                    );
+                    let none = Hit {
+                        t: 0.0,
+                        u: 0.0,
+                        v: 0.0,
+                        prim: 0,
+                    };
+                    found.hit(r, none);
                 }
             } else if let Some(h) = self.intersect::<false>(ray, &mut st) {
                 found.hit(r, h);
             }
         }
-        for oct in (0..8u8).filter(|&o| count[o as usize] > 0) {
-            let mut lanes = [0u8; PACKET_RAYS];
-            let mut n = 0;
-            for i in (0..rays.len()).filter(|&i| octant[i] == oct) {
-                lanes[n] = i as u8;
-                n += 1;
-            }
-            self.group(rays, &lanes[..n], found);
-        }
     }
 
-    /// Walks one group: rays `lanes` of `rays`, one origin, one octant.
-    fn group<F: Found>(&self, rays: &[Ray], lanes: &[u8], found: &mut F) {
+    /// Walks one group: rays `lanes` of `rays`, one origin, one octant,
+    /// with reciprocal directions `inv`.
+    fn group<F: Found>(&self, rays: &[Ray], inv: &[[f32; 3]], lanes: &[u8], found: &mut F) {
         let mut l = Lanes {
             inv: [[0.0; PACKET_RAYS]; 3],
             tmax: [f32::NEG_INFINITY; PACKET_RAYS],
         };
-        let first = &rays[lanes[0] as usize];
+        let first = lanes[0] as usize;
         let mut f = Frustum {
-            o: first.origin.to_array(),
-            lo: [f32::INFINITY; 3],
-            hi: [f32::NEG_INFINITY; 3],
-            neg: [false; 3],
+            o: rays[first].origin.to_array(),
+            lo: inv[first],
+            hi: inv[first],
+            neg: inv[first].map(|x| x < 0.0),
         };
         for (k, &i) in lanes.iter().enumerate() {
-            let r = &rays[i as usize];
-            let inv = frustum_inv(r).unwrap_or_default();
+            let v = inv[i as usize];
             for a in 0..3 {
-                l.inv[a][k] = inv[a];
-                f.lo[a] = f.lo[a].min(inv[a]);
-                f.hi[a] = f.hi[a].max(inv[a]);
+                l.inv[a][k] = v[a];
+                f.lo[a] = f.lo[a].min(v[a]);
+                f.hi[a] = f.hi[a].max(v[a]);
             }
-            l.tmax[k] = r.tmax;
+            l.tmax[k] = rays[i as usize].tmax;
         }
-        f.neg = f.hi.map(|x| x < 0.0);
         #[cfg(target_arch = "x86_64")]
         if self.wide.avx {
             // SAFETY: `wide.avx` says this CPU has AVX.
