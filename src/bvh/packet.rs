@@ -31,6 +31,7 @@ use super::traverse::{closer, Kernels, Portable, FAR_SCALE, MAX_TFAR, STACK};
 use super::wide::{leaf_packets, Node8, LEAF, WIDTH};
 use super::{Bvh, Hit, TraversalStats};
 use crate::geometry::triangle::RayShear;
+use crate::geometry::ray::PARALLEL;
 use crate::geometry::Ray;
 
 /// The most rays one packet holds: an 8x8 tile of camera rays.
@@ -59,17 +60,6 @@ struct Frustum {
 fn planes(f: &Frustum, a: usize) -> (usize, usize) {
     let n = f.neg[a] as usize;
     (2 * a + n, 2 * a + 1 - n)
-}
-
-/// The reciprocal direction the single-ray walk uses, when the ray can
-/// join a frustum: every component finite and nonzero.
-#[inline(always)]
-fn frustum_inv(ray: &Ray) -> Option<[f32; 3]> {
-    let inv = ray.inv_dir().to_array();
-    let ok = inv.iter().all(|x| x.is_finite() && *x != 0.0)
-        && ray.origin.is_finite()
-        && !ray.tmax.is_nan();
-    ok.then_some(inv)
 }
 
 /// The frustum's eight-box test: bit `i` set when some ray of the group may
@@ -327,49 +317,94 @@ impl Bvh {
     /// of the rays within each group), each group walked as a frustum, the
     /// rays that fit no frustum walked alone.
     fn packet<F: Found>(&self, rays: &[Ray], found: &mut F) {
-        debug_assert!(rays.len() <= PACKET_RAYS);
-        if self.wide.nodes.is_empty() || rays.is_empty() {
+        let n = rays.len();
+        debug_assert!(n <= PACKET_RAYS);
+        if self.wide.nodes.is_empty() || n == 0 {
             return;
         }
-        let mut inv = [[0.0; 3]; PACKET_RAYS];
-        // Octants 0..8 for frustum rays, 8 for the others.
-        let mut octant = [8u8; PACKET_RAYS];
-        let mut count = [0u8; 9];
-        let mut origin = None;
+        let mut all = Lanes {
+            inv: [[0.0; PACKET_RAYS]; 3],
+            tmax: [f32::NEG_INFINITY; PACKET_RAYS],
+        };
         for (i, r) in rays.iter().enumerate() {
-            if let Some(v) = frustum_inv(r) {
-                if *origin.get_or_insert(r.origin) == r.origin {
-                    inv[i] = v;
-                    octant[i] = (v[0] < 0.0) as u8
-                        | ((v[1] < 0.0) as u8) << 1
-                        | ((v[2] < 0.0) as u8) << 2;
-                }
+            for a in 0..3 {
+                all.inv[a][i] = r.dir[a];
             }
-            count[octant[i] as usize] += 1;
+            all.tmax[i] = r.tmax;
         }
-        if count[8] > 0 {
-            self.one_by_one(rays, &octant, found);
+        // The reciprocals as `Ray::inv_dir` makes them, four at a time;
+        // `ok`: rays with every one finite and nonzero; `neg`: per axis,
+        // rays running toward -axis.
+        let (mut ok, mut neg) = (0u64, [0u64; 3]);
+        for b in 0..n.div_ceil(4) {
+            let r = 4 * b..4 * b + 4;
+            let mut fine = glam::BVec4A::splat(true);
+            for a in 0..3 {
+                let d = Vec4::from_slice(&all.inv[a][r.clone()]);
+                let flat = d.abs().cmplt(Vec4::splat(PARALLEL));
+                let inv = Vec4::ONE / Vec4::select(flat, d * 0.0, d);
+                inv.write_to_slice(&mut all.inv[a][r.clone()]);
+                fine &= inv.abs().cmplt(Vec4::INFINITY) & inv.cmpne(Vec4::ZERO);
+                neg[a] |= (inv.cmplt(Vec4::ZERO).bitmask() as u64) << (4 * b);
+            }
+            ok |= (fine.bitmask() as u64) << (4 * b);
+        }
+        let every = if n == PACKET_RAYS { !0 } else { (1 << n) - 1 };
+        ok &= every;
+        // One origin (to the bit), finite, and a `tmax` that is a number.
+        let mut origin = None;
+        let mut m = ok;
+        while m != 0 {
+            let i = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let r = &rays[i];
+            let bits = r.origin.to_array().map(f32::to_bits);
+            let fits = r.origin.is_finite()
+                && !r.tmax.is_nan()
+                && *origin.get_or_insert(bits) == bits;
+            if !fits {
+                ok &= !(1 << i);
+            }
+        }
+        if ok != every {
+            self.one_by_one(rays, !ok & every, found);
         }
         let mut lanes = [0u8; PACKET_RAYS];
-        for oct in (0..8u8).filter(|&o| count[o as usize] > 0) {
-            let n = count[oct as usize] as usize;
-            if n == rays.len() {
-                lanes.iter_mut().enumerate().for_each(|(i, l)| *l = i as u8);
-            } else {
-                let mut k = 0;
-                for i in (0..rays.len()).filter(|&i| octant[i] == oct) {
-                    lanes[k] = i as u8;
-                    k += 1;
-                }
+        let one_sign = |m: u64| m & ok == 0 || m & ok == ok;
+        if ok == every && neg.iter().all(|&m| one_sign(m)) {
+            lanes.iter_mut().enumerate().for_each(|(i, l)| *l = i as u8);
+            self.group(rays, &mut all, &lanes[..n], found);
+            return;
+        }
+        for oct in 0..8 {
+            let pick = |a: usize| if oct & (1 << a) != 0 { neg[a] } else { !neg[a] };
+            let mut m = ok & pick(0) & pick(1) & pick(2);
+            if m == 0 {
+                continue;
             }
-            self.group(rays, &inv, &lanes[..n], found);
+            let mut l = Lanes {
+                inv: [[0.0; PACKET_RAYS]; 3],
+                tmax: [f32::NEG_INFINITY; PACKET_RAYS],
+            };
+            let mut k = 0;
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
+                for a in 0..3 {
+                    l.inv[a][k] = all.inv[a][i];
+                }
+                l.tmax[k] = all.tmax[i];
+                lanes[k] = i as u8;
+                k += 1;
+            }
+            self.group(rays, &mut l, &lanes[..k], found);
         }
     }
 
-    /// The rays of octant 8 (no frustum), each walked alone.
+    /// The rays `which` (bits), that fit no frustum, each walked alone.
     #[cold]
-    fn one_by_one<F: Found>(&self, rays: &[Ray], octant: &[u8], found: &mut F) {
-        for (r, ray) in rays.iter().enumerate().filter(|(i, _)| octant[*i] == 8) {
+    fn one_by_one<F: Found>(&self, rays: &[Ray], which: u64, found: &mut F) {
+        for (r, ray) in rays.iter().enumerate().filter(|(i, _)| which & (1 << i) != 0) {
             let mut st = TraversalStats::default();
             if F::ANY {
                 if self.occluded::<false>(ray, &mut st).is_some() {
@@ -387,36 +422,29 @@ impl Bvh {
         }
     }
 
-    /// Walks one group: rays `lanes` of `rays`, one origin, one octant,
-    /// with reciprocal directions `inv`.
-    fn group<F: Found>(&self, rays: &[Ray], inv: &[[f32; 3]], lanes: &[u8], found: &mut F) {
-        let mut l = Lanes {
-            inv: [[0.0; PACKET_RAYS]; 3],
-            tmax: [f32::NEG_INFINITY; PACKET_RAYS],
-        };
-        let first = lanes[0] as usize;
-        let mut f = Frustum {
-            o: rays[first].origin.to_array(),
-            lo: inv[first],
-            hi: inv[first],
-            neg: inv[first].map(|x| x < 0.0),
-        };
-        for (k, &i) in lanes.iter().enumerate() {
-            let v = inv[i as usize];
-            for a in 0..3 {
-                l.inv[a][k] = v[a];
-                f.lo[a] = f.lo[a].min(v[a]);
-                f.hi[a] = f.hi[a].max(v[a]);
-            }
-            l.tmax[k] = rays[i as usize].tmax;
+    /// Walks one group: rays `lanes` of `rays`, one origin, one octant, with
+    /// their reciprocal directions and `tmax` in `l`.
+    fn group<F: Found>(&self, rays: &[Ray], l: &mut Lanes, lanes: &[u8], found: &mut F) {
+        let n = lanes.len();
+        let (mut lo, mut hi) = ([0.0; 3], [0.0; 3]);
+        for a in 0..3 {
+            let v = &l.inv[a][..n];
+            lo[a] = v.iter().fold(v[0], |m, &x| m.min(x));
+            hi[a] = v.iter().fold(v[0], |m, &x| m.max(x));
         }
+        let f = Frustum {
+            o: rays[lanes[0] as usize].origin.to_array(),
+            lo,
+            hi,
+            neg: hi.map(|x| x < 0.0),
+        };
         #[cfg(target_arch = "x86_64")]
         if self.wide.avx {
             // SAFETY: `wide.avx` says this CPU has AVX.
-            unsafe { self.group_avx(rays, lanes, &f, &mut l, found) };
+            unsafe { self.group_avx(rays, lanes, &f, l, found) };
             return;
         }
-        self.group_with(rays, lanes, &f, &mut l, found, &Portable);
+        self.group_with(rays, lanes, &f, l, found, &Portable);
     }
 
     #[cfg(target_arch = "x86_64")]
