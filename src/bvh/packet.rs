@@ -30,8 +30,8 @@ use super::traverse::Avx;
 use super::traverse::{closer, Kernels, Portable, FAR_SCALE, MAX_TFAR, STACK};
 use super::wide::{leaf_packets, Node8, LEAF, WIDTH};
 use super::{Bvh, Hit, TraversalStats};
-use crate::geometry::triangle::RayShear;
 use crate::geometry::ray::PARALLEL;
+use crate::geometry::triangle::RayShear;
 use crate::geometry::Ray;
 
 /// The most rays one packet holds: an 8x8 tile of camera rays.
@@ -359,9 +359,8 @@ impl Bvh {
             m &= m - 1;
             let r = &rays[i];
             let bits = r.origin.to_array().map(f32::to_bits);
-            let fits = r.origin.is_finite()
-                && !r.tmax.is_nan()
-                && *origin.get_or_insert(bits) == bits;
+            let fits =
+                r.origin.is_finite() && !r.tmax.is_nan() && *origin.get_or_insert(bits) == bits;
             if !fits {
                 ok &= !(1 << i);
             }
@@ -404,7 +403,11 @@ impl Bvh {
     /// The rays `which` (bits), that fit no frustum, each walked alone.
     #[cold]
     fn one_by_one<F: Found>(&self, rays: &[Ray], which: u64, found: &mut F) {
-        for (r, ray) in rays.iter().enumerate().filter(|(i, _)| which & (1 << i) != 0) {
+        for (r, ray) in rays
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| which & (1 << i) != 0)
+        {
             let mut st = TraversalStats::default();
             if F::ANY {
                 if self.occluded::<false>(ray, &mut st).is_some() {
@@ -598,5 +601,274 @@ impl Bvh {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::sampling::Rng;
+    use crate::report::stability::soup;
+    use crate::scene::{self, Builder};
+    use glam::Vec3;
+
+    /// The kernels this CPU can run: the portable ones, and AVX where it
+    /// has it.
+    fn kernels() -> Vec<bool> {
+        #[allow(unused_mut)]
+        let mut v = vec![false];
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx") {
+            v.push(true);
+        }
+        v
+    }
+
+    /// Packets find exactly what single rays find, with either kernel:
+    /// the closest hit (distance, barycentrics, triangle) and whether a
+    /// ray is blocked. Returns the number of hits.
+    fn agree(b: &mut Bvh, rays: &[Ray]) -> usize {
+        let mut hits = 0;
+        for avx in kernels() {
+            b.wide.avx = avx;
+            let mut got = vec![None; rays.len()];
+            let mut blocked = vec![false; rays.len()];
+            b.intersect_packet(rays, &mut got);
+            b.occluded_packet(rays, &mut blocked);
+            let mut st = TraversalStats::default();
+            for (i, r) in rays.iter().enumerate() {
+                let want = b.intersect::<false>(r, &mut st);
+                assert_eq!(got[i].map(|h| h.t.to_bits()), want.map(|h| h.t.to_bits()));
+                assert_eq!(got[i], want, "ray {i} {r:?}, avx {avx}");
+                let any = b.occluded::<false>(r, &mut st).is_some();
+                assert_eq!(blocked[i], any, "ray {i} {r:?}, avx {avx}");
+                hits += want.is_some() as usize;
+            }
+        }
+        hits
+    }
+
+    /// Camera rays in 8x8 tiles (and in tiles cut short at the frame's
+    /// edges), and shadow rays from one light to every hit.
+    #[test]
+    fn camera_tiles_and_shadow_rays_find_what_single_rays_find() {
+        let s = scene::load("teapot:3").unwrap();
+        let (w, h) = (60, 44);
+        let frame = s.camera.frame(w, h);
+        for builder in [Builder::Sah, Builder::Median] {
+            let mut b = super::super::build(&s.geometry, builder);
+            let (mut hits, mut points) = (0, Vec::new());
+            for y0 in (0..h).step_by(8) {
+                for x0 in (0..w).step_by(8) {
+                    let rays: Vec<Ray> = (y0..(y0 + 8).min(h))
+                        .flat_map(|y| (x0..(x0 + 8).min(w)).map(move |x| (x, y)))
+                        .map(|(x, y)| frame.ray(x as f64 + 0.5, y as f64 + 0.5))
+                        .collect();
+                    hits += agree(&mut b, &rays);
+                    let mut st = TraversalStats::default();
+                    points.extend(
+                        rays.iter()
+                            .filter_map(|r| b.intersect::<false>(r, &mut st).map(|h| r.at(h.t))),
+                    );
+                }
+            }
+            assert!(hits > 200, "{hits} hits");
+            let light = Vec3::new(3.0, 9.0, 5.0);
+            let shadow: Vec<Ray> = points
+                .iter()
+                .map(|&p| Ray::segment(light, p - light, 1.0 - 1e-4))
+                .collect();
+            let mut blocked = 0;
+            for chunk in shadow.chunks(PACKET_RAYS) {
+                agree(&mut b, chunk);
+                let mut st = TraversalStats::default();
+                blocked += chunk
+                    .iter()
+                    .filter(|r| b.occluded::<false>(r, &mut st).is_some())
+                    .count();
+            }
+            assert!(blocked > 0 && blocked < shadow.len(), "{blocked}");
+        }
+    }
+
+    /// Random rays from one origin in every direction: a packet splits
+    /// into its octants, rays of one packet pointing opposite ways.
+    #[test]
+    fn random_rays_in_all_directions_find_what_single_rays_find() {
+        let s = scene::load("teapot:3").unwrap();
+        let mut b = super::super::build(&s.geometry, Builder::Sah);
+        let bounds = s.geometry.bounds();
+        let mut r = Rng::for_sample(7, 0, 22);
+        let mut hits = 0;
+        for k in 0..60 {
+            let u = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32());
+            let o = bounds.min + (bounds.max - bounds.min) * (u * 1.6 - 0.3);
+            let n = 1 + (k * 7) % PACKET_RAYS;
+            let rays: Vec<Ray> = (0..n)
+                .map(|_| {
+                    let d = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 2.0 - 1.0;
+                    let tmax = if k % 3 == 0 {
+                        r.next_f32() * 4.0
+                    } else {
+                        f32::INFINITY
+                    };
+                    Ray::segment(o, d, tmax)
+                })
+                .collect();
+            hits += agree(&mut b, &rays);
+        }
+        assert!(hits > 100, "{hits} hits");
+    }
+
+    /// Rays no frustum takes (other origins, zero, tiny, infinite and NaN
+    /// components, a NaN `tmax`) mixed into packets, axis-parallel and
+    /// grazing rays, coplanar and overlapping triangles (ties go to the
+    /// lower index), empty packets and packets longer than one.
+    #[test]
+    fn adversarial_packets_find_what_single_rays_find() {
+        let (inf, nan) = (f32::INFINITY, f32::NAN);
+        let mut tris = Vec::new();
+        for i in 0..200 {
+            let p = Vec3::new((i % 10) as f32, (i / 10 % 5) as f32, (i / 50) as f32);
+            tris.push([p, p + Vec3::X, p + Vec3::Y]);
+            // The same triangle again, and one coplanar beside it.
+            tris.push([p, p + Vec3::X, p + Vec3::Y]);
+            tris.push([p + Vec3::X, p + Vec3::Y, p + Vec3::new(1.0, 1.0, 0.0)]);
+        }
+        let mut b = super::super::build(&soup(&tris), Builder::Sah);
+        let o = Vec3::new(4.5, 2.5, 9.0);
+        let mut rays = Vec::new();
+        let mut r = Rng::for_sample(1, 2, 3);
+        for i in 0..160 {
+            let (x, y) = ((i % 13) as f32 * 0.77, (i / 13) as f32 * 0.41);
+            // Through vertices and edges of the grid now and then.
+            let target = if i % 4 == 0 {
+                Vec3::new((i % 10) as f32, (i % 5) as f32, (i % 4) as f32)
+            } else {
+                Vec3::new(x, y, r.next_f32() * 4.0)
+            };
+            rays.push(Ray::new(o, target - o));
+        }
+        let odd = [
+            Ray::new(o, Vec3::new(0.0, 0.0, -1.0)),
+            Ray::new(o, Vec3::new(-0.0, 1e-31, -1.0)),
+            Ray::new(o, Vec3::new(0.1, 0.2, -inf)),
+            Ray::new(o, Vec3::new(nan, 0.2, -1.0)),
+            Ray::segment(o, Vec3::new(0.1, 0.2, -1.0), nan),
+            Ray::segment(o, Vec3::new(0.1, 0.2, -1.0), -1.0),
+            Ray::new(Vec3::new(4.5, 2.5, nan), Vec3::new(0.1, 0.2, -1.0)),
+            Ray::new(Vec3::new(4.5, 2.5, 8.0), Vec3::new(0.1, 0.2, -1.0)),
+            Ray::new(o, Vec3::ZERO),
+            // Grazing: in the plane z = 1 of a layer, along x, and along
+            // the layer's diagonal edges.
+            Ray::new(Vec3::new(-1.0, 0.5, 1.0), Vec3::new(1.0, 0.0, 0.0)),
+            Ray::new(Vec3::new(-1.0, 2.0, 1.0), Vec3::new(1.0, -1.0, 1e-20)),
+        ];
+        for (i, ray) in odd.iter().enumerate() {
+            rays.insert(i * 13 % rays.len(), *ray);
+        }
+        // Rays running in the plane z = 1 from one origin.
+        let g = Vec3::new(-1.0, -1.0, 1.0);
+        for i in 0..40 {
+            let a = i as f32 * 0.04;
+            rays.push(Ray::new(g, Vec3::new(a.cos(), a.sin() + 1e-3, 0.0)));
+        }
+        let mut hits = agree(&mut b, &rays);
+        for chunk in rays.chunks(PACKET_RAYS) {
+            hits += agree(&mut b, chunk);
+        }
+        for n in [1, 2, 7, 63] {
+            hits += agree(&mut b, &rays[..n]);
+        }
+        agree(&mut b, &[]);
+        assert!(hits > 100, "{hits} hits");
+    }
+
+    /// The frustum's box test lets through every box a ray of the group
+    /// hits, at an entry distance no greater than the ray's, and the rays'
+    /// own test at a leaf is the single-ray test, bit for bit, with either
+    /// kernel.
+    #[test]
+    fn frustum_test_is_conservative_and_ray_tests_are_the_single_ray_test() {
+        use super::super::traverse::BoxRay;
+        let mut r = Rng::for_sample(5, 5, 5);
+        let mut f = |s: f32| (r.next_f32() * 2.0 - 1.0) * s;
+        for k in 0..3000 {
+            let mut node = Node8 {
+                b: [[0.0; WIDTH]; 6],
+                child: [0; WIDTH],
+            };
+            for lane in 0..WIDTH {
+                for a in 0..3 {
+                    let (p, q) = (f(4.0), f(4.0));
+                    node.b[2 * a][lane] = p.min(q);
+                    node.b[2 * a + 1][lane] = p.max(q);
+                }
+            }
+            let o = Vec3::new(f(6.0), f(6.0), f(6.0));
+            let sign = Vec3::new(f(1.0), f(1.0), f(1.0)).signum();
+            let n = 1 + k % PACKET_RAYS;
+            let rays: Vec<Ray> = (0..n)
+                .map(|_| {
+                    let d = (Vec3::new(f(1.0), f(1.0), f(1.0)).abs() + 1e-3) * sign;
+                    Ray::segment(o, d, if k % 2 == 0 { inf() } else { f(8.0).abs() })
+                })
+                .collect();
+            let mut l = Lanes {
+                inv: [[0.0; PACKET_RAYS]; 3],
+                tmax: [f32::NEG_INFINITY; PACKET_RAYS],
+            };
+            for (i, ray) in rays.iter().enumerate() {
+                let inv = ray.inv_dir();
+                for a in 0..3 {
+                    l.inv[a][i] = inv[a];
+                }
+                l.tmax[i] = ray.tmax;
+            }
+            let (lo, hi) = (0..3).fold(([0.0; 3], [0.0; 3]), |(mut lo, mut hi), a| {
+                lo[a] = l.inv[a][..n].iter().copied().fold(inf(), f32::min);
+                hi[a] = l.inv[a][..n].iter().copied().fold(-inf(), f32::max);
+                (lo, hi)
+            });
+            let fr = Frustum {
+                o: o.to_array(),
+                lo,
+                hi,
+                neg: hi.map(|x| x < 0.0),
+            };
+            let tmax = rays.iter().map(|r| r.tmax).fold(-inf(), f32::max);
+            let (fmask, ftn) = frustum_boxes(&fr, &node, tmax);
+            let active = if n == 64 { !0 } else { (1u64 << n) - 1 };
+            for slot in 0..WIDTH {
+                let mut want = 0u64;
+                for (i, ray) in rays.iter().enumerate() {
+                    let br = BoxRay::new(ray);
+                    let (m, tn) = super::super::traverse::hit_boxes(&br, &node, ray.tmax);
+                    if m & (1 << slot) != 0 {
+                        want |= 1 << i;
+                        assert!(
+                            fmask & (1 << slot) != 0,
+                            "frustum misses a box ray {i} hits"
+                        );
+                        assert!(ftn[slot] <= tn[slot]);
+                    }
+                }
+                assert_eq!(rays_box(&fr, &l, &node, slot, active), want);
+                #[cfg(target_arch = "x86_64")]
+                if std::is_x86_feature_detected!("avx") {
+                    // SAFETY: AVX is present.
+                    unsafe {
+                        assert_eq!(rays_box_avx(&fr, &l, &node, slot, active), want);
+                        let (m, t) = frustum_boxes_avx(&fr, &node, tmax);
+                        assert_eq!(m, fmask);
+                        assert_eq!(t.map(f32::to_bits), ftn.map(f32::to_bits));
+                    }
+                }
+            }
+        }
+    }
+
+    fn inf() -> f32 {
+        f32::INFINITY
     }
 }

@@ -61,7 +61,7 @@ pub(super) struct BoxRay {
 
 impl BoxRay {
     #[inline(always)]
-    fn new(ray: &Ray) -> Self {
+    pub(super) fn new(ray: &Ray) -> Self {
         let inv = ray.inv_dir();
 
         BoxRay {
@@ -92,7 +92,7 @@ fn lane(v: Vec3A, a: usize) -> f32 {
 /// Bit `i` set when child `i`'s box is hit within `(0, tmax)`, and the entry
 /// distances: the test of `Aabb::hit`, four boxes at a time.
 #[inline(always)]
-fn hit_boxes(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+pub(super) fn hit_boxes(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
     let mut mask = 0;
     let mut tnear = [0.0; WIDTH];
     for half in 0..WIDTH / 4 {
