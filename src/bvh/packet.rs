@@ -339,13 +339,13 @@ impl Bvh {
         for b in 0..n.div_ceil(4) {
             let r = 4 * b..4 * b + 4;
             let mut fine = glam::BVec4A::splat(true);
-            for a in 0..3 {
-                let d = Vec4::from_slice(&all.inv[a][r.clone()]);
+            for (axis, neg) in all.inv.iter_mut().zip(&mut neg) {
+                let d = Vec4::from_slice(&axis[r.clone()]);
                 let flat = d.abs().cmplt(Vec4::splat(PARALLEL));
                 let inv = Vec4::ONE / Vec4::select(flat, d * 0.0, d);
-                inv.write_to_slice(&mut all.inv[a][r.clone()]);
+                inv.write_to_slice(&mut axis[r.clone()]);
                 fine &= inv.abs().cmplt(Vec4::INFINITY) & inv.cmpne(Vec4::ZERO);
-                neg[a] |= (inv.cmplt(Vec4::ZERO).bitmask() as u64) << (4 * b);
+                *neg |= (inv.cmplt(Vec4::ZERO).bitmask() as u64) << (4 * b);
             }
             ok |= (fine.bitmask() as u64) << (4 * b);
         }
