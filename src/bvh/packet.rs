@@ -326,45 +326,46 @@ impl Bvh {
             inv: [[0.0; PACKET_RAYS]; 3],
             tmax: [f32::NEG_INFINITY; PACKET_RAYS],
         };
+        // Rays from the first ray's origin (to the bit), with a `tmax`
+        // that is a number.
+        let o = rays[0].origin.to_array().map(f32::to_bits);
+        let mut same = 0u64;
         for (i, r) in rays.iter().enumerate() {
             for a in 0..3 {
                 all.inv[a][i] = r.dir[a];
             }
             all.tmax[i] = r.tmax;
+            let fits = r.origin.to_array().map(f32::to_bits) == o && !r.tmax.is_nan();
+            same |= (fits as u64) << i;
+        }
+        if !rays[0].origin.is_finite() {
+            same = 0;
         }
         // The reciprocals as `Ray::inv_dir` makes them, four at a time;
         // `ok`: rays with every one finite and nonzero; `neg`: per axis,
-        // rays running toward -axis.
+        // rays running toward -axis; `lo`, `hi`: their range over all rays.
         let (mut ok, mut neg) = (0u64, [0u64; 3]);
+        let mut lo = [Vec4::INFINITY; 3];
+        let mut hi = [Vec4::NEG_INFINITY; 3];
         for b in 0..n.div_ceil(4) {
             let r = 4 * b..4 * b + 4;
             let mut fine = glam::BVec4A::splat(true);
-            for (axis, neg) in all.inv.iter_mut().zip(&mut neg) {
+            let real = glam::BVec4A::from_array(std::array::from_fn(|k| 4 * b + k < n));
+            for a in 0..3 {
+                let axis = &mut all.inv[a];
                 let d = Vec4::from_slice(&axis[r.clone()]);
                 let flat = d.abs().cmplt(Vec4::splat(PARALLEL));
                 let inv = Vec4::ONE / Vec4::select(flat, d * 0.0, d);
                 inv.write_to_slice(&mut axis[r.clone()]);
                 fine &= inv.abs().cmplt(Vec4::INFINITY) & inv.cmpne(Vec4::ZERO);
-                *neg |= (inv.cmplt(Vec4::ZERO).bitmask() as u64) << (4 * b);
+                neg[a] |= (inv.cmplt(Vec4::ZERO).bitmask() as u64) << (4 * b);
+                lo[a] = lo[a].min(Vec4::select(real, inv, Vec4::INFINITY));
+                hi[a] = hi[a].max(Vec4::select(real, inv, Vec4::NEG_INFINITY));
             }
             ok |= (fine.bitmask() as u64) << (4 * b);
         }
         let every = if n == PACKET_RAYS { !0 } else { (1 << n) - 1 };
-        ok &= every;
-        // One origin (to the bit), finite, and a `tmax` that is a number.
-        let mut origin = None;
-        let mut m = ok;
-        while m != 0 {
-            let i = m.trailing_zeros() as usize;
-            m &= m - 1;
-            let r = &rays[i];
-            let bits = r.origin.to_array().map(f32::to_bits);
-            let fits =
-                r.origin.is_finite() && !r.tmax.is_nan() && *origin.get_or_insert(bits) == bits;
-            if !fits {
-                ok &= !(1 << i);
-            }
-        }
+        ok &= every & same;
         if ok != every {
             self.one_by_one(rays, !ok & every, found);
         }
@@ -372,7 +373,9 @@ impl Bvh {
         let one_sign = |m: u64| m & ok == 0 || m & ok == ok;
         if ok == every && neg.iter().all(|&m| one_sign(m)) {
             lanes.iter_mut().enumerate().for_each(|(i, l)| *l = i as u8);
-            self.group(rays, &mut all, &lanes[..n], found);
+            let lo = lo.map(|v| v.min_element());
+            let hi = hi.map(|v| v.max_element());
+            self.group(rays, &mut all, &lanes[..n], (lo, hi), found);
             return;
         }
         for oct in 0..8 {
@@ -396,7 +399,12 @@ impl Bvh {
                 lanes[k] = i as u8;
                 k += 1;
             }
-            self.group(rays, &mut l, &lanes[..k], found);
+            let range = |a: usize, f: fn(f32, f32) -> f32| {
+                l.inv[a][1..k].iter().fold(l.inv[a][0], |m, &x| f(m, x))
+            };
+            let lo = [0, 1, 2].map(|a| range(a, f32::min));
+            let hi = [0, 1, 2].map(|a| range(a, f32::max));
+            self.group(rays, &mut l, &lanes[..k], (lo, hi), found);
         }
     }
 
@@ -426,15 +434,16 @@ impl Bvh {
     }
 
     /// Walks one group: rays `lanes` of `rays`, one origin, one octant, with
-    /// their reciprocal directions and `tmax` in `l`.
-    fn group<F: Found>(&self, rays: &[Ray], l: &mut Lanes, lanes: &[u8], found: &mut F) {
-        let n = lanes.len();
-        let (mut lo, mut hi) = ([0.0; 3], [0.0; 3]);
-        for a in 0..3 {
-            let v = &l.inv[a][..n];
-            lo[a] = v.iter().fold(v[0], |m, &x| m.min(x));
-            hi[a] = v.iter().fold(v[0], |m, &x| m.max(x));
-        }
+    /// their reciprocal directions and `tmax` in `l` and the range of the
+    /// reciprocals per axis in `(lo, hi)`.
+    fn group<F: Found>(
+        &self,
+        rays: &[Ray],
+        l: &mut Lanes,
+        lanes: &[u8],
+        (lo, hi): ([f32; 3], [f32; 3]),
+        found: &mut F,
+    ) {
         let f = Frustum {
             o: rays[lanes[0] as usize].origin.to_array(),
             lo,
@@ -502,16 +511,16 @@ impl Bvh {
         let mut active: u64 = if n == 64 { !0 } else { (1 << n) - 1 };
         let mut sheared = 0u64;
         let mut shear = [MaybeUninit::<RayShear>::uninit(); PACKET_RAYS];
-        let far = |l: &Lanes, active: u64| {
-            let mut m = f32::NEG_INFINITY;
-            for (i, t) in l.tmax.iter().enumerate() {
-                if active & (1 << i) != 0 {
-                    m = m.max(*t);
-                }
-            }
-            m
+        // The farthest `tmax` of the rays still walking (the others have
+        // `-inf`, as the lanes past the group's rays).
+        let far = |l: &Lanes| {
+            let m = l
+                .tmax
+                .chunks_exact(4)
+                .fold(Vec4::NEG_INFINITY, |m, t| m.max(Vec4::from_slice(t)));
+            m.max_element()
         };
-        let mut tmax = far(l, active);
+        let mut tmax = far(l);
         let mut sp = 0;
         let (mut cur, mut at) = (0u32, 0u32);
         loop {
@@ -577,6 +586,7 @@ impl Bvh {
                         if F::ANY {
                             active &= !(1 << i);
                             todo &= !(1 << i);
+                            l.tmax[i] = f32::NEG_INFINITY;
                         }
                     }
                 }
@@ -584,7 +594,7 @@ impl Bvh {
                     if active == 0 {
                         return;
                     }
-                    tmax = far(l, active);
+                    tmax = far(l);
                 }
             }
             // Pop, skipping nodes beyond every ray's closest hit.
