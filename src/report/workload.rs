@@ -5,6 +5,7 @@
 //! specified exactly (in f64, to the bit) so that rayterm and other tracers
 //! (the Embree harness) trace the same rays and agree on a checksum.
 
+use std::ops::Range;
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
@@ -62,6 +63,22 @@ impl Workload {
     #[inline]
     pub fn primary(&self, x: u32, y: u32) -> Ray {
         self.frame.ray(x as f64 + 0.5, y as f64 + 0.5)
+    }
+
+    /// The primary rays of the pixels `xs` x `ys` (rows in order) into
+    /// `rays`: the same rays as [`Workload::primary`], the column and row
+    /// terms computed once each.
+    pub fn primary_tile(&self, xs: Range<usize>, ys: Range<usize>, rays: &mut Vec<Ray>) {
+        let f = &self.frame;
+        let mut sx = [0.0; TILE];
+        for (s, x) in sx.iter_mut().zip(xs.clone()) {
+            *s = f.sx(x as f64 + 0.5);
+        }
+        let sx = &sx[..xs.len()];
+        for y in ys {
+            let sy = f.sy(y as f64 + 0.5);
+            rays.extend(sx.iter().map(|&sx| f.ray_through(sx, sy)));
+        }
     }
 
     /// The shadow ray toward the hit at `t` along `primary`: from the light,
@@ -290,11 +307,14 @@ pub fn trace_primary_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh:
             for x0 in (0..width).step_by(TILE) {
                 let xs = x0..(x0 + TILE).min(width);
                 rays.clear();
-                for y in band * TILE..band * TILE + rows.len() {
-                    rays.extend(xs.clone().map(|x| match source {
-                        Rows::Made(made) => made[y][x],
-                        Rows::Make => w.primary(x as u32, y as u32),
-                    }));
+                let ys = band * TILE..band * TILE + rows.len();
+                match source {
+                    Rows::Made(made) => {
+                        for y in ys {
+                            rays.extend_from_slice(&made[y][xs.clone()]);
+                        }
+                    }
+                    Rows::Make => w.primary_tile(xs.clone(), ys, &mut rays),
                 }
                 let hits = &mut hits[..rays.len()];
                 bvh.intersect_packet(&rays, hits);
