@@ -491,9 +491,11 @@ impl Bvh {
         }
     }
 
-    /// The walk of a group. Stack entries hold a child, where its box is
-    /// (`node << 3 | slot`, for the rays' own test at a leaf) and the
-    /// frustum's entry distance.
+    /// The walk of a group, nearest child first by the frustum's entry
+    /// distance, for any-hit rays too (unlike a single any-hit ray): a
+    /// group's blockers are found sooner, and the rays they block drop out.
+    /// Stack entries hold a child, where its box is (`node << 3 | slot`,
+    /// for the rays' own test at a leaf) and the frustum's entry distance.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn walk_group<F: Found, K: PacketKernels>(
@@ -534,7 +536,7 @@ impl Bvh {
                     while m != 0 {
                         let i = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        let other = if !F::ANY && tnear[i] < tnear[near] {
+                        let other = if tnear[i] < tnear[near] {
                             std::mem::replace(&mut near, i)
                         } else {
                             i
@@ -605,7 +607,7 @@ impl Bvh {
                 sp -= 1;
                 // SAFETY: every entry below `sp` was written by a push.
                 let (c, a, d) = unsafe { stack[sp].assume_init() };
-                if F::ANY || d <= tmax * FAR_SCALE {
+                if d <= tmax * FAR_SCALE {
                     (cur, at) = (c, a);
                     break;
                 }
