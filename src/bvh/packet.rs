@@ -794,6 +794,9 @@ mod tests {
         }
         agree(&mut b, &[]);
         assert!(hits > 100, "{hits} hits");
+        // A tree over nothing: every ray misses.
+        let mut empty = super::super::build(&soup(&[]), Builder::Sah);
+        assert_eq!(agree(&mut empty, &rays[..PACKET_RAYS]), 0);
     }
 
     /// The frustum's box test lets through every box a ray of the group
