@@ -8,9 +8,11 @@
 //! are entered by each ray whose own box test (the single-ray test, eight
 //! rays per instruction) hits the leaf's box, and each such ray tests the
 //! leaf's triangles exactly as [`Bvh::intersect`] would. The frustum only
-//! ever lets more boxes through than the rays' own tests, so every ray
-//! tests every triangle its single walk tests, and the closest hit (ties
-//! going to the lower triangle index) is the same, bit for bit.
+//! ever lets more boxes through than the rays' own tests, and a ray passes
+//! over a leaf only as its single walk would, when the leaf lies beyond the
+//! nearest hit it has: every triangle that could be a ray's closest hit is
+//! tested, and the closest hit (ties going to the lower triangle index) is
+//! the same, bit for bit, whatever the order of the walk.
 //!
 //! Why the frustum test is conservative to the bit: with the origin shared,
 //! a ray's slab distance is `(b - o) * inv`, the same `b - o` for every ray;
@@ -281,8 +283,9 @@ impl Found for Blocked<'_> {
 
 impl Bvh {
     /// The closest hit of every ray of `rays` into `hits`: exactly what
-    /// [`Bvh::intersect`] finds for each. Rays from one origin are traced
-    /// [`PACKET_RAYS`] at a time as frustums (see the module comment); the
+    /// [`Bvh::intersect`] finds for each. The rays are taken
+    /// [`PACKET_RAYS`] at a time; those that start where the first of them
+    /// starts are traced together as frustums (see the module comment), the
     /// others one by one.
     ///
     /// # Panics
