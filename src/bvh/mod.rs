@@ -3,12 +3,14 @@
 pub mod build;
 pub mod debug;
 pub mod node;
+mod packet;
 pub mod stats;
 pub mod traverse;
 mod wide;
 
 pub use build::{build, build_full_sweep};
 pub use node::Node;
+pub use packet::PACKET_RAYS;
 pub use stats::{BuildStats, TraversalStats};
 pub use traverse::{Hit, WalkLog};
 

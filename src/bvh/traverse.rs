@@ -29,26 +29,26 @@ pub struct Hit {
 /// stack holds [`Wide::stack`](super::wide::Wide) entries, the most any
 /// ray can push, whatever its coordinates: empty slots lead to an empty
 /// leaf, so the walk only goes down the tree.
-const STACK: usize = 256;
+pub(super) const STACK: usize = 256;
 
 /// Widening of the far slab distance, as in [`crate::geometry::Aabb::hit`].
-const FAR_SCALE: f32 = 1.0 + 2.0 * gamma(3);
+pub(super) const FAR_SCALE: f32 = 1.0 + 2.0 * gamma(3);
 /// Exit distances are capped below infinity so that an entry distance of
 /// infinity (a ray with no direction at all) never counts as a hit, as in
 /// `Aabb::hit`.
-const MAX_TFAR: f32 = f32::MAX / 2.0;
+pub(super) const MAX_TFAR: f32 = f32::MAX / 2.0;
 
 /// Whether `hit` replaces `best`: nearer, or as near and of a lower scene
 /// triangle index. A ray through a shared edge or vertex then picks the
 /// same triangle whatever the tree or the order of the tests.
 #[inline(always)]
-fn closer(hit: &Hit, best: Option<&Hit>) -> bool {
+pub(super) fn closer(hit: &Hit, best: Option<&Hit>) -> bool {
     best.is_none_or(|b| hit.t < b.t || (hit.t == b.t && hit.prim < b.prim))
 }
 
 /// A ray's constants for the slab tests.
 #[derive(Clone, Copy)]
-struct BoxRay {
+pub(super) struct BoxRay {
     /// Kept in registers: built as arrays, they cost a store-forwarding
     /// stall on every ray when the splats read them back.
     o: Vec3A,
@@ -61,7 +61,7 @@ struct BoxRay {
 
 impl BoxRay {
     #[inline(always)]
-    fn new(ray: &Ray) -> Self {
+    pub(super) fn new(ray: &Ray) -> Self {
         let inv = ray.inv_dir();
 
         BoxRay {
@@ -92,7 +92,7 @@ fn lane(v: Vec3A, a: usize) -> f32 {
 /// Bit `i` set when child `i`'s box is hit within `(0, tmax)`, and the entry
 /// distances: the test of `Aabb::hit`, four boxes at a time.
 #[inline(always)]
-fn hit_boxes(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+pub(super) fn hit_boxes(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
     let mut mask = 0;
     let mut tnear = [0.0; WIDTH];
     for half in 0..WIDTH / 4 {
@@ -169,13 +169,13 @@ unsafe fn hit_boxes_avx(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH])
 /// The SIMD kernels of the walk: the eight-box test and the eight-triangle
 /// test. Static dispatch with forced inlining, so the walk compiled for AVX
 /// holds the AVX kernels inline.
-trait Kernels {
+pub(super) trait Kernels {
     fn boxes(&self, r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]);
     fn triangles<const UV: bool>(&self, s: &RayShear, p: &Packet, tmax: f32) -> TriHit8;
 }
 
 /// Four lanes at a time, on any CPU.
-struct Portable;
+pub(super) struct Portable;
 
 impl Kernels for Portable {
     #[inline(always)]
@@ -191,7 +191,7 @@ impl Kernels for Portable {
 
 /// Eight lanes at a time; made only where the CPU has AVX.
 #[cfg(target_arch = "x86_64")]
-struct Avx(());
+pub(super) struct Avx(pub(super) ());
 
 #[cfg(target_arch = "x86_64")]
 impl Kernels for Avx {

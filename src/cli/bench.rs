@@ -79,6 +79,11 @@ pub struct RaysArgs {
     /// makes them).
     #[arg(long)]
     pub rays_first: bool,
+    /// Trace the primary rays in packets of 8x8 pixel tiles and the shadow
+    /// rays of each tile's hits together (one origin each: the eye, the
+    /// light); diffuse rays one by one.
+    #[arg(long)]
+    pub packets: bool,
 }
 
 #[derive(Args, Debug)]
@@ -163,6 +168,7 @@ fn rays(a: RaysArgs) -> Result<()> {
         builder: a.builder,
         reps: a.reps as usize,
         rays_first: a.rays_first,
+        packets: a.packets,
     };
     let r = pool.install(|| workload::run(&a.mesh, &s.geometry, &o));
     println!("{}", serde_json::to_string(&r)?);

@@ -7,7 +7,7 @@
 use glam::{Vec2, Vec3};
 
 use super::plan::Plan;
-use super::recorder::{HitInfo, LightSample, MissInfo, RayKind, Recorder};
+use super::recorder::{HitInfo, LightSample, MissInfo, Primed, RayKind, Recorder};
 use crate::bvh::{Bvh, Hit};
 use crate::geometry::offset::{geometric_normal, hit_point, offset_origin, SHADOW_EPSILON};
 use crate::geometry::sampling::{jittered, phong_lobe, Rng, Run, PIXEL_GRID};
@@ -162,6 +162,23 @@ impl<'a> Tracer<'a> {
             (true, true) => Self::trace::<R, true, true>,
         };
         trace(self, ray, 0, RayKind::Camera, Vec3::ONE, &mut rng, rec)
+    }
+
+    /// [`Tracer::sample_from`] with the camera ray's closest hit found
+    /// ahead (in a packet, [`Bvh::intersect_packet`]): the same shading.
+    pub fn sample_from_hit<R: Recorder>(
+        &self,
+        s: Placed,
+        ray: &Ray,
+        hit: Option<Hit>,
+        rec: &mut R,
+    ) -> Vec3 {
+        debug_assert!(self.plan.bvh, "a hit found ahead needs the BVH");
+        let mut primed = Primed {
+            rec,
+            first: Some(hit),
+        };
+        self.sample_from(s, ray, &mut primed)
     }
 
     fn closest<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Option<Hit> {

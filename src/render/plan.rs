@@ -166,6 +166,10 @@ pub struct Plan {
     pub environment: bool,
     pub bloom: bool,
     pub bvh: bool,
+    /// Camera rays, which all start at the eye, are traced in packets
+    /// ([`Bvh::intersect_packet`](crate::bvh::Bvh::intersect_packet)):
+    /// the same hits, found together, whenever the BVH is used.
+    pub packets: bool,
     /// Nothing is sampled: one pass gives the exact image.
     pub deterministic: bool,
 }
@@ -207,6 +211,7 @@ impl Plan {
             environment: on(Feature::Environment),
             bloom: on(Feature::Bloom),
             bvh: on(Feature::Bvh),
+            packets: on(Feature::Bvh),
             deterministic,
         }
     }
@@ -256,6 +261,15 @@ impl Plan {
                 (stage_name(f), d.runs(), d.reason())
             })
             .collect();
+        rows.push((
+            "camera rays in packets",
+            self.packets,
+            if self.packets {
+                "on".into()
+            } else {
+                format!("off: needs {}", Feature::Bvh.name())
+            },
+        ));
         rows.push((
             "specular term",
             self.specular,
@@ -360,6 +374,6 @@ mod tests {
         let text = Plan::new(&s, Features::all(), PlanPolicy::Prune).explain();
         let lines: Vec<&str> = text.lines().collect();
         assert!(lines[0].contains("stage") && lines[0].contains("why"));
-        assert_eq!(lines.len(), 1 + 13);
+        assert_eq!(lines.len(), 1 + 14);
     }
 }

@@ -480,13 +480,25 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             let pixels = &mut row.pixels;
             let mut ray_counts = row.rays.as_deref_mut();
             let mut rays = Vec::with_capacity(CAMERA_BATCH);
+            // Camera rays share the eye: the plan has them traced in packets
+            // where the recorder's traversal is the plain one.
+            let packets = tracer.plan.packets && R::PLAIN_TRAVERSAL;
+            let mut hits = [None; CAMERA_BATCH];
             let mut trace = |placed: &mut Vec<(u32, Placed)>| {
                 rays.clear();
                 rays.extend(placed.iter().map(|(_, p)| tracer.camera_ray(p)));
-                for ((k, p), ray) in placed.drain(..).zip(&rays) {
+                let hits = &mut hits[..rays.len()];
+                if packets {
+                    tracer.bvh.intersect_packet(&rays, hits);
+                }
+                for (((k, p), ray), hit) in placed.drain(..).zip(&rays).zip(hits.iter()) {
                     let (x, stratum) = (p.x, p.stratum);
                     let traced = rec.rays();
-                    let c: Vec3 = tracer.sample_from(p, ray, &mut rec);
+                    let c: Vec3 = if packets {
+                        tracer.sample_from_hit(p, ray, *hit, &mut rec)
+                    } else {
+                        tracer.sample_from(p, ray, &mut rec)
+                    };
                     if let Some(r) = ray_counts.as_deref_mut() {
                         let n = (rec.rays() - traced).min(u32::MAX as u64) as u32;
                         r[x as usize] = r[x as usize].saturating_add(n);

@@ -5,6 +5,7 @@
 //! specified exactly (in f64, to the bit) so that rayterm and other tracers
 //! (the Embree harness) trace the same rays and agree on a checksum.
 
+use std::ops::Range;
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
@@ -62,6 +63,22 @@ impl Workload {
     #[inline]
     pub fn primary(&self, x: u32, y: u32) -> Ray {
         self.frame.ray(x as f64 + 0.5, y as f64 + 0.5)
+    }
+
+    /// The primary rays of the pixels `xs` x `ys` (rows in order) into
+    /// `rays`: the same rays as [`Workload::primary`], the column and row
+    /// terms computed once each.
+    pub fn primary_tile(&self, xs: Range<usize>, ys: Range<usize>, rays: &mut Vec<Ray>) {
+        let f = &self.frame;
+        let mut sx = [0.0; TILE];
+        for (s, x) in sx.iter_mut().zip(xs.clone()) {
+            *s = f.sx(x as f64 + 0.5);
+        }
+        let sx = &sx[..xs.len()];
+        for y in ys {
+            let sy = f.sy(y as f64 + 0.5);
+            rays.extend(sx.iter().map(|&sx| f.ray_through(sx, sy)));
+        }
     }
 
     /// The shadow ray toward the hit at `t` along `primary`: from the light,
@@ -266,6 +283,100 @@ fn shadow_row(w: &Workload, trow: &[f32], y: u32, rays: &mut Vec<Ray>) {
     );
 }
 
+/// Pixels per side of the square tiles whose rays `--packets` traces
+/// together: 64 camera rays of a tile, or the shadow rays of its hits.
+pub const TILE: usize = 8;
+
+/// [`trace_primary`] in packets: the camera rays of each tile of
+/// [`TILE`] x [`TILE`] pixels (left to right in bands of [`TILE`] rows, the
+/// rays of a tile in pixel order) traced together by
+/// [`Bvh::intersect_packet`]. The checksum is summed per row in pixel order,
+/// as there.
+pub fn trace_primary_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh: &Bvh) -> f64 {
+    let width = w.width as usize;
+    let start = Instant::now();
+    frame
+        .t
+        .par_chunks_mut(width * TILE)
+        .zip(frame.tri.par_chunks_mut(width * TILE))
+        .zip(frame.rows.par_chunks_mut(TILE))
+        .enumerate()
+        .for_each(|(band, ((ts, tris), rows))| {
+            let mut rays = Vec::with_capacity(TILE * TILE);
+            let mut hits = [None; TILE * TILE];
+            for x0 in (0..width).step_by(TILE) {
+                let xs = x0..(x0 + TILE).min(width);
+                rays.clear();
+                let ys = band * TILE..band * TILE + rows.len();
+                match source {
+                    Rows::Made(made) => {
+                        for y in ys {
+                            rays.extend_from_slice(&made[y][xs.clone()]);
+                        }
+                    }
+                    Rows::Make => w.primary_tile(xs.clone(), ys, &mut rays),
+                }
+                let hits = &mut hits[..rays.len()];
+                bvh.intersect_packet(&rays, hits);
+                let at = (0..rows.len()).flat_map(|r| xs.clone().map(move |x| r * width + x));
+                for (i, h) in at.zip(hits.iter()) {
+                    (ts[i], tris[i]) = h.map_or((-1.0, 0), |h| (h.t, h.prim));
+                }
+            }
+            for (sums, trow) in rows.iter_mut().zip(ts.chunks(width)) {
+                let hit = trow.iter().filter(|t| **t >= 0.0);
+                sums.hits = hit.clone().count() as u64;
+                sums.sum_t = hit.map(|&t| t as f64).sum();
+            }
+        });
+    start.elapsed().as_secs_f64()
+}
+
+/// [`trace_shadow`] in packets: the shadow rays of each tile's hits (as
+/// [`trace_primary_packets`] tiles the frame, in pixel order within the
+/// tile) traced together by [`Bvh::occluded_packet`].
+pub fn trace_shadow_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh: &Bvh) -> f64 {
+    let width = w.width as usize;
+    let start = Instant::now();
+    frame
+        .t
+        .par_chunks(width * TILE)
+        .zip(frame.rows.par_chunks_mut(TILE))
+        .enumerate()
+        .for_each(|(band, (ts, rows))| {
+            let mut rays = Vec::with_capacity(TILE * TILE);
+            let mut row_of = Vec::with_capacity(TILE * TILE);
+            let mut blocked = [false; TILE * TILE];
+            // Where each row's next ray lies among its rays made first.
+            let mut next = [0; TILE];
+            for sums in rows.iter_mut() {
+                sums.occluded = 0;
+            }
+            for x0 in (0..width).step_by(TILE) {
+                let xs = x0..(x0 + TILE).min(width);
+                rays.clear();
+                row_of.clear();
+                for (r, trow) in ts.chunks(width).enumerate() {
+                    let y = band * TILE + r;
+                    for x in xs.clone().filter(|&x| trow[x] >= 0.0) {
+                        rays.push(match source {
+                            Rows::Made(made) => made[y][next[r]],
+                            Rows::Make => w.shadow(&w.primary(x as u32, y as u32), trow[x]),
+                        });
+                        next[r] += 1;
+                        row_of.push(r);
+                    }
+                }
+                let blocked = &mut blocked[..rays.len()];
+                bvh.occluded_packet(&rays, blocked);
+                for (&r, &b) in row_of.iter().zip(blocked.iter()) {
+                    rows[r].occluded += b as u64;
+                }
+            }
+        });
+    start.elapsed().as_secs_f64()
+}
+
 /// The primary rays of every row, made before they are timed.
 pub fn primary_rays(w: &Workload) -> Vec<Vec<Ray>> {
     (0..w.height)
@@ -350,6 +461,9 @@ pub struct RaysOptions {
     /// does; otherwise they are made in the timed loop, as the Embree
     /// harness makes them.
     pub rays_first: bool,
+    /// Primary and shadow rays in packets of a tile
+    /// ([`trace_primary_packets`], [`trace_shadow_packets`]).
+    pub packets: bool,
 }
 
 /// The JSON line of the workload, with the fields the specification and the
@@ -382,6 +496,11 @@ pub struct RaysReport {
     /// `"timed"`: primary and shadow rays made in the timed loop;
     /// `"untimed"`: made before it, each set traced once untimed first.
     pub ray_generation: &'static str,
+    /// How each ray set was traced: `"single"` (one ray at a time) or
+    /// `"packets of 8x8 tiles"`.
+    pub primary_traversal: &'static str,
+    pub shadow_traversal: &'static str,
+    pub diffuse_traversal: &'static str,
     pub primary_ms: f64,
     pub shadow_ms: f64,
     pub diffuse_ms: f64,
@@ -402,16 +521,27 @@ pub fn run(mesh: &str, geom: &Geometry, o: &RaysOptions) -> RaysReport {
         let bvh = bvh::build(geom, o.builder);
         build.push(start.elapsed().as_secs_f64());
         let (closest, occluded) = (|r: &Ray| closest(&bvh, r), |r: &Ray| occluded(&bvh, r));
+        let primary = |frame: &mut Frame, rows| match o.packets {
+            true => trace_primary_packets(&w, frame, rows, &bvh),
+            false => trace_primary(&w, frame, rows, closest),
+        };
         if o.rays_first {
             let rays = primary_rays(&w);
-            trace_primary(&w, &mut frame, Rows::Made(&rays), closest);
-            prim.push(trace_primary(&w, &mut frame, Rows::Made(&rays), closest));
-            let rays = shadow_rays(&w, &frame);
-            trace_shadow(&w, &mut frame, Rows::Made(&rays), occluded);
-            shad.push(trace_shadow(&w, &mut frame, Rows::Made(&rays), occluded));
+            primary(&mut frame, Rows::Made(&rays));
+            prim.push(primary(&mut frame, Rows::Made(&rays)));
         } else {
-            prim.push(trace_primary(&w, &mut frame, Rows::Make, closest));
-            shad.push(trace_shadow(&w, &mut frame, Rows::Make, occluded));
+            prim.push(primary(&mut frame, Rows::Make));
+        }
+        let shadow = |frame: &mut Frame, rows| match o.packets {
+            true => trace_shadow_packets(&w, frame, rows, &bvh),
+            false => trace_shadow(&w, frame, rows, occluded),
+        };
+        if o.rays_first {
+            let rays = shadow_rays(&w, &frame);
+            shadow(&mut frame, Rows::Made(&rays));
+            shad.push(shadow(&mut frame, Rows::Made(&rays)));
+        } else {
+            shad.push(shadow(&mut frame, Rows::Make));
         }
         let rays = diffuse_rays(&w, &frame, geom);
         if o.rays_first {
@@ -453,9 +583,21 @@ pub fn run(mesh: &str, geom: &Geometry, o: &RaysOptions) -> RaysReport {
         camera: "auto",
         reps,
         ray_generation: if o.rays_first { "untimed" } else { "timed" },
+        primary_traversal: traversal(o.packets),
+        shadow_traversal: traversal(o.packets),
+        // Diffuse rays share no origin: packets would trace them one by one.
+        diffuse_traversal: "single",
         primary_ms: p * 1e3,
         shadow_ms: s * 1e3,
         diffuse_ms: d * 1e3,
+    }
+}
+
+fn traversal(packets: bool) -> &'static str {
+    if packets {
+        "packets of 8x8 tiles"
+    } else {
+        "single"
     }
 }
 

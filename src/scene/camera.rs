@@ -118,8 +118,25 @@ impl CameraFrame {
     /// the pixel centre of `(i, j)` is `(i + 0.5, j + 0.5)`.
     #[inline]
     pub fn ray(&self, x: f64, y: f64) -> Ray {
-        let sx = (2.0 * x / self.width - 1.0) * self.h * self.aspect;
-        let sy = (1.0 - 2.0 * y / self.height) * self.h;
+        self.ray_through(self.sx(x), self.sy(y))
+    }
+
+    /// The offset along `right` of image column `x` (see [`CameraFrame::ray`]).
+    #[inline]
+    pub fn sx(&self, x: f64) -> f64 {
+        (2.0 * x / self.width - 1.0) * self.h * self.aspect
+    }
+
+    /// The offset along `up` of image row `y`.
+    #[inline]
+    pub fn sy(&self, y: f64) -> f64 {
+        (1.0 - 2.0 * y / self.height) * self.h
+    }
+
+    /// The ray at offsets `sx`, `sy` ([`CameraFrame::sx`], [`CameraFrame::sy`]):
+    /// rays of a tile of pixels share theirs per column and per row.
+    #[inline]
+    pub fn ray_through(&self, sx: f64, sy: f64) -> Ray {
         let dir = (self.fwd + sx * self.right + sy * self.upv).normalize();
         Ray::new(self.eye.as_vec3(), dir.as_vec3())
     }

@@ -1,0 +1,892 @@
+//! Coherent rays in packets: up to [`PACKET_RAYS`] rays from one origin (a
+//! camera's eye, a point light) walk the wide tree together.
+//!
+//! Rays are grouped by the signs of their directions; a group is a frustum,
+//! its shared origin and, per axis, the range of its rays' reciprocal
+//! directions. One eight-box test of the frustum per node stands for the
+//! box tests of all its rays: a node it misses, every ray misses. Leaves
+//! are entered by each ray whose own box test (the single-ray test, eight
+//! rays per instruction) hits the leaf's box, and each such ray tests the
+//! leaf's triangles exactly as [`Bvh::intersect`] would. The frustum only
+//! ever lets more boxes through than the rays' own tests, and a ray passes
+//! over a leaf only as its single walk would, when the leaf lies beyond the
+//! nearest hit it has: every triangle that could be a ray's closest hit is
+//! tested, and the closest hit (ties going to the lower triangle index) is
+//! the same, bit for bit, whatever the order of the walk.
+//!
+//! Why the frustum test is conservative to the bit: with the origin shared,
+//! a ray's slab distance is `(b - o) * inv`, the same `b - o` for every ray;
+//! rounding is monotone, so over reciprocals in `[lo, hi]` the product lies
+//! between `(b - o) * lo` and `(b - o) * hi` as rounded. The frustum's entry
+//! distance is then at most every ray's, its exit distance at least every
+//! ray's. Rays that break this (another origin, a direction component zero,
+//! below [`PARALLEL`](crate::geometry::ray::PARALLEL) or not finite, a NaN
+//! `tmax`) take the single-ray walk.
+
+use std::mem::MaybeUninit;
+
+use glam::Vec4;
+
+#[cfg(target_arch = "x86_64")]
+use super::traverse::Avx;
+use super::traverse::{closer, Kernels, Portable, FAR_SCALE, MAX_TFAR, STACK};
+use super::wide::{leaf_packets, Node8, LEAF, WIDTH};
+use super::{Bvh, Hit, TraversalStats};
+use crate::geometry::ray::PARALLEL;
+use crate::geometry::triangle::RayShear;
+use crate::geometry::Ray;
+
+/// The most rays one packet holds: an 8x8 tile of camera rays.
+pub const PACKET_RAYS: usize = 64;
+
+/// The rays of one group, one lane each, in the layout the kernels load
+/// eight at a time: reciprocal directions and the current `tmax`.
+#[repr(C, align(32))]
+struct Lanes {
+    inv: [[f32; PACKET_RAYS]; 3],
+    tmax: [f32; PACKET_RAYS],
+}
+
+/// A group's frustum: the shared origin and, per axis, the range of the
+/// rays' reciprocal directions, all of one sign.
+#[derive(Clone, Copy)]
+struct Frustum {
+    o: [f32; 3],
+    lo: [f32; 3],
+    hi: [f32; 3],
+    neg: [bool; 3],
+}
+
+/// Indices in `Node8::b` of the near and far planes of axis `a`.
+#[inline(always)]
+fn planes(f: &Frustum, a: usize) -> (usize, usize) {
+    let n = f.neg[a] as usize;
+    (2 * a + n, 2 * a + 1 - n)
+}
+
+/// The frustum's eight-box test: bit `i` set when some ray of the group may
+/// hit child `i`'s box within `(0, tmax)`, and the least entry distance.
+#[inline(always)]
+fn frustum_boxes(f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+    let mut mask = 0;
+    let mut tnear = [0.0; WIDTH];
+    for half in 0..WIDTH / 4 {
+        let lanes = half * 4..half * 4 + 4;
+        let slab = |a: usize| {
+            let o = Vec4::splat(f.o[a]);
+            let (lo, hi) = (Vec4::splat(f.lo[a]), Vec4::splat(f.hi[a]));
+            let (i, j) = planes(f, a);
+            let dn = Vec4::from_slice(&n.b[i][lanes.clone()]) - o;
+            let df = Vec4::from_slice(&n.b[j][lanes.clone()]) - o;
+            ((dn * lo).min(dn * hi), (df * lo).max(df * hi))
+        };
+        let (nx, fx) = slab(0);
+        let (ny, fy) = slab(1);
+        let (nz, fz) = slab(2);
+        // NaN (a NaN bound) is passed over as in the single-ray test.
+        let tn = nz.max(ny.max(nx.max(Vec4::ZERO)));
+        let tf = fz.min(fy.min(fx.min(Vec4::splat(tmax.min(MAX_TFAR))))) * Vec4::splat(FAR_SCALE);
+        mask |= tn.cmple(tf).bitmask() << (4 * half);
+        tn.write_to_slice(&mut tnear[lanes]);
+    }
+    (mask, tnear)
+}
+
+/// The single-ray box test of child `slot` of `n` for the rays in `active`,
+/// four at a time: bit `i` set when ray `i` hits it.
+#[inline(always)]
+fn rays_box(f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+    let d = |a: usize| {
+        let (i, j) = planes(f, a);
+        (
+            Vec4::splat(n.b[i][slot] - f.o[a]),
+            Vec4::splat(n.b[j][slot] - f.o[a]),
+        )
+    };
+    let (dx, dy, dz) = (d(0), d(1), d(2));
+    let mut hit = 0;
+    for b in (0..PACKET_RAYS / 4).filter(|b| active & (0xf << (4 * b)) != 0) {
+        let r = 4 * b..4 * b + 4;
+        let inv = |a: usize| Vec4::from_slice(&l.inv[a][r.clone()]);
+        let (ix, iy, iz) = (inv(0), inv(1), inv(2));
+        let tn = (dz.0 * iz).max((dy.0 * iy).max((dx.0 * ix).max(Vec4::ZERO)));
+        let tmax = Vec4::from_slice(&l.tmax[r.clone()]).min(Vec4::splat(MAX_TFAR));
+        let tf = (dz.1 * iz).min((dy.1 * iy).min((dx.1 * ix).min(tmax))) * Vec4::splat(FAR_SCALE);
+        hit |= (tn.cmple(tf).bitmask() as u64) << (4 * b);
+    }
+    hit & active
+}
+
+/// [`frustum_boxes`] with AVX.
+///
+/// # Safety
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn frustum_boxes_avx(f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+    use std::arch::x86_64::*;
+    macro_rules! slab {
+        ($a:expr) => {{
+            let o = _mm256_set1_ps(f.o[$a]);
+            let (lo, hi) = (_mm256_set1_ps(f.lo[$a]), _mm256_set1_ps(f.hi[$a]));
+            let (i, j) = planes(f, $a);
+            let dn = _mm256_sub_ps(_mm256_load_ps(n.b[i].as_ptr()), o);
+            let df = _mm256_sub_ps(_mm256_load_ps(n.b[j].as_ptr()), o);
+            (
+                _mm256_min_ps(_mm256_mul_ps(dn, lo), _mm256_mul_ps(dn, hi)),
+                _mm256_max_ps(_mm256_mul_ps(df, lo), _mm256_mul_ps(df, hi)),
+            )
+        }};
+    }
+    let (nx, fx) = slab!(0);
+    let (ny, fy) = slab!(1);
+    let (nz, fz) = slab!(2);
+    let tn = _mm256_max_ps(
+        nz,
+        _mm256_max_ps(ny, _mm256_max_ps(nx, _mm256_setzero_ps())),
+    );
+    let tf = _mm256_mul_ps(
+        _mm256_min_ps(
+            fz,
+            _mm256_min_ps(fy, _mm256_min_ps(fx, _mm256_set1_ps(tmax.min(MAX_TFAR)))),
+        ),
+        _mm256_set1_ps(FAR_SCALE),
+    );
+    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
+    let mut tnear = [0.0; WIDTH];
+    _mm256_storeu_ps(tnear.as_mut_ptr(), tn);
+    (mask, tnear)
+}
+
+/// [`rays_box`] with AVX, eight rays at a time.
+///
+/// # Safety
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn rays_box_avx(f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+    use std::arch::x86_64::*;
+    macro_rules! d {
+        ($a:expr) => {{
+            let (i, j) = planes(f, $a);
+            (
+                _mm256_set1_ps(n.b[i][slot] - f.o[$a]),
+                _mm256_set1_ps(n.b[j][slot] - f.o[$a]),
+            )
+        }};
+    }
+    let (dx, dy, dz) = (d!(0), d!(1), d!(2));
+    let (zero, maxt, scale) = (
+        _mm256_setzero_ps(),
+        _mm256_set1_ps(MAX_TFAR),
+        _mm256_set1_ps(FAR_SCALE),
+    );
+    let mut hit = 0;
+    let mut blocks = active;
+    while blocks != 0 {
+        let b = blocks.trailing_zeros() as usize / 8;
+        blocks &= !(0xff << (8 * b));
+        let r = 8 * b;
+        // `Lanes` is 32-byte aligned and each row holds 64 f32.
+        let ix = _mm256_load_ps(l.inv[0].as_ptr().add(r));
+        let iy = _mm256_load_ps(l.inv[1].as_ptr().add(r));
+        let iz = _mm256_load_ps(l.inv[2].as_ptr().add(r));
+        let tn = _mm256_max_ps(
+            _mm256_mul_ps(dz.0, iz),
+            _mm256_max_ps(
+                _mm256_mul_ps(dy.0, iy),
+                _mm256_max_ps(_mm256_mul_ps(dx.0, ix), zero),
+            ),
+        );
+        let tmax = _mm256_min_ps(_mm256_load_ps(l.tmax.as_ptr().add(r)), maxt);
+        let tf = _mm256_mul_ps(
+            _mm256_min_ps(
+                _mm256_mul_ps(dz.1, iz),
+                _mm256_min_ps(
+                    _mm256_mul_ps(dy.1, iy),
+                    _mm256_min_ps(_mm256_mul_ps(dx.1, ix), tmax),
+                ),
+            ),
+            scale,
+        );
+        let m = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u64;
+        hit |= m << r;
+    }
+    hit & active
+}
+
+/// The kernels of a packet walk, beside those of the single-ray walk.
+trait PacketKernels: Kernels {
+    fn frustum(&self, f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]);
+    fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64;
+}
+
+impl PacketKernels for Portable {
+    #[inline(always)]
+    fn frustum(&self, f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+        frustum_boxes(f, n, tmax)
+    }
+
+    #[inline(always)]
+    fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+        rays_box(f, l, n, slot, active)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl PacketKernels for Avx {
+    #[inline(always)]
+    fn frustum(&self, f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
+        // SAFETY: an `Avx` exists only where the CPU has AVX.
+        unsafe { frustum_boxes_avx(f, n, tmax) }
+    }
+
+    #[inline(always)]
+    fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+        // SAFETY: as above.
+        unsafe { rays_box_avx(f, l, n, slot, active) }
+    }
+}
+
+/// What a packet walk finds for each ray of its group.
+trait Found {
+    /// Any hit will do: the walk drops a ray at its first hit.
+    const ANY: bool;
+    /// Ray `lane` (of the group) hit triangle `prim` at `t`, `(u, v)`.
+    fn hit(&mut self, lane: usize, hit: Hit);
+}
+
+/// Closest hits, kept as [`Bvh::intersect`] keeps them.
+struct Closest<'a>(&'a mut [Option<Hit>]);
+
+impl Found for Closest<'_> {
+    const ANY: bool = false;
+    #[inline(always)]
+    fn hit(&mut self, lane: usize, hit: Hit) {
+        let best = &mut self.0[lane];
+        if closer(&hit, best.as_ref()) {
+            *best = Some(hit);
+        }
+    }
+}
+
+/// Whether each ray is blocked.
+struct Blocked<'a>(&'a mut [bool]);
+
+impl Found for Blocked<'_> {
+    const ANY: bool = true;
+    #[inline(always)]
+    fn hit(&mut self, lane: usize, _: Hit) {
+        self.0[lane] = true;
+    }
+}
+
+impl Bvh {
+    /// The closest hit of every ray of `rays` into `hits`: exactly what
+    /// [`Bvh::intersect`] finds for each. The rays are taken
+    /// [`PACKET_RAYS`] at a time; those that start where the first of them
+    /// starts are traced together as frustums (see the module comment), the
+    /// others one by one.
+    ///
+    /// # Panics
+    /// When `hits` is not as long as `rays`.
+    pub fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one hit per ray");
+        for (r, h) in rays.chunks(PACKET_RAYS).zip(hits.chunks_mut(PACKET_RAYS)) {
+            h.fill(None);
+            self.packet(r, &mut Closest(h));
+        }
+    }
+
+    /// Whether anything lies in `(0, tmax]` of every ray of `rays`, into
+    /// `blocked`: exactly what [`Bvh::occluded`] says for each (which
+    /// triangle blocks a ray is not asked for, so the walk may find another
+    /// than the single ray's).
+    ///
+    /// # Panics
+    /// When `blocked` is not as long as `rays`.
+    pub fn occluded_packet(&self, rays: &[Ray], blocked: &mut [bool]) {
+        assert_eq!(rays.len(), blocked.len(), "one answer per ray");
+        for (r, b) in rays
+            .chunks(PACKET_RAYS)
+            .zip(blocked.chunks_mut(PACKET_RAYS))
+        {
+            b.fill(false);
+            self.packet(r, &mut Blocked(b));
+        }
+    }
+
+    /// Up to [`PACKET_RAYS`] rays: grouped by direction signs (in the order
+    /// of the rays within each group), each group walked as a frustum, the
+    /// rays that fit no frustum walked alone.
+    fn packet<F: Found>(&self, rays: &[Ray], found: &mut F) {
+        let n = rays.len();
+        debug_assert!(n <= PACKET_RAYS);
+        if self.wide.nodes.is_empty() || n == 0 {
+            return;
+        }
+        let mut all = Lanes {
+            inv: [[0.0; PACKET_RAYS]; 3],
+            tmax: [f32::NEG_INFINITY; PACKET_RAYS],
+        };
+        // Rays from the first ray's origin (to the bit), with a `tmax`
+        // that is a number.
+        let o = rays[0].origin.to_array().map(f32::to_bits);
+        let mut same = 0u64;
+        for (i, r) in rays.iter().enumerate() {
+            for a in 0..3 {
+                all.inv[a][i] = r.dir[a];
+            }
+            all.tmax[i] = r.tmax;
+            let fits = r.origin.to_array().map(f32::to_bits) == o && !r.tmax.is_nan();
+            same |= (fits as u64) << i;
+        }
+        if !rays[0].origin.is_finite() {
+            same = 0;
+        }
+        // The reciprocals as `Ray::inv_dir` makes them, four at a time;
+        // `ok`: rays with every one finite and nonzero; `neg`: per axis,
+        // rays running toward -axis; `lo`, `hi`: their range over all rays.
+        let (mut ok, mut neg) = (0u64, [0u64; 3]);
+        let mut lo = [Vec4::INFINITY; 3];
+        let mut hi = [Vec4::NEG_INFINITY; 3];
+        for b in 0..n.div_ceil(4) {
+            let r = 4 * b..4 * b + 4;
+            let mut fine = glam::BVec4A::splat(true);
+            let real = glam::BVec4A::from_array(std::array::from_fn(|k| 4 * b + k < n));
+            for a in 0..3 {
+                let axis = &mut all.inv[a];
+                let d = Vec4::from_slice(&axis[r.clone()]);
+                let flat = d.abs().cmplt(Vec4::splat(PARALLEL));
+                let inv = Vec4::ONE / Vec4::select(flat, d * 0.0, d);
+                inv.write_to_slice(&mut axis[r.clone()]);
+                fine &= inv.abs().cmplt(Vec4::INFINITY) & inv.cmpne(Vec4::ZERO);
+                neg[a] |= (inv.cmplt(Vec4::ZERO).bitmask() as u64) << (4 * b);
+                lo[a] = lo[a].min(Vec4::select(real, inv, Vec4::INFINITY));
+                hi[a] = hi[a].max(Vec4::select(real, inv, Vec4::NEG_INFINITY));
+            }
+            ok |= (fine.bitmask() as u64) << (4 * b);
+        }
+        let every = if n == PACKET_RAYS { !0 } else { (1 << n) - 1 };
+        ok &= every & same;
+        if ok != every {
+            self.one_by_one(rays, !ok & every, found);
+        }
+        let mut lanes = [0u8; PACKET_RAYS];
+        let one_sign = |m: u64| m & ok == 0 || m & ok == ok;
+        if ok == every && neg.iter().all(|&m| one_sign(m)) {
+            lanes.iter_mut().enumerate().for_each(|(i, l)| *l = i as u8);
+            let lo = lo.map(|v| v.min_element());
+            let hi = hi.map(|v| v.max_element());
+            self.group(rays, &mut all, &lanes[..n], (lo, hi), found);
+            return;
+        }
+        for oct in 0..8 {
+            let pick = |a: usize| if oct & (1 << a) != 0 { neg[a] } else { !neg[a] };
+            let mut m = ok & pick(0) & pick(1) & pick(2);
+            if m == 0 {
+                continue;
+            }
+            let mut l = Lanes {
+                inv: [[0.0; PACKET_RAYS]; 3],
+                tmax: [f32::NEG_INFINITY; PACKET_RAYS],
+            };
+            let mut k = 0;
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
+                for a in 0..3 {
+                    l.inv[a][k] = all.inv[a][i];
+                }
+                l.tmax[k] = all.tmax[i];
+                lanes[k] = i as u8;
+                k += 1;
+            }
+            let range = |a: usize, f: fn(f32, f32) -> f32| {
+                l.inv[a][1..k].iter().fold(l.inv[a][0], |m, &x| f(m, x))
+            };
+            let lo = [0, 1, 2].map(|a| range(a, f32::min));
+            let hi = [0, 1, 2].map(|a| range(a, f32::max));
+            self.group(rays, &mut l, &lanes[..k], (lo, hi), found);
+        }
+    }
+
+    /// The rays `which` (bits), that fit no frustum, each walked alone.
+    #[cold]
+    fn one_by_one<F: Found>(&self, rays: &[Ray], which: u64, found: &mut F) {
+        for (r, ray) in rays
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| which & (1 << i) != 0)
+        {
+            let mut st = TraversalStats::default();
+            if F::ANY {
+                if self.occluded::<false>(ray, &mut st).is_some() {
+                    let none = Hit {
+                        t: 0.0,
+                        u: 0.0,
+                        v: 0.0,
+                        prim: 0,
+                    };
+                    found.hit(r, none);
+                }
+            } else if let Some(h) = self.intersect::<false>(ray, &mut st) {
+                found.hit(r, h);
+            }
+        }
+    }
+
+    /// Walks one group: rays `lanes` of `rays`, one origin, one octant, with
+    /// their reciprocal directions and `tmax` in `l` and the range of the
+    /// reciprocals per axis in `(lo, hi)`.
+    fn group<F: Found>(
+        &self,
+        rays: &[Ray],
+        l: &mut Lanes,
+        lanes: &[u8],
+        (lo, hi): ([f32; 3], [f32; 3]),
+        found: &mut F,
+    ) {
+        let f = Frustum {
+            o: rays[lanes[0] as usize].origin.to_array(),
+            lo,
+            hi,
+            neg: hi.map(|x| x < 0.0),
+        };
+        #[cfg(target_arch = "x86_64")]
+        if self.wide.avx {
+            // SAFETY: `wide.avx` says this CPU has AVX.
+            unsafe { self.group_avx(rays, lanes, &f, l, found) };
+            return;
+        }
+        self.group_with(rays, lanes, &f, l, found, &Portable);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn group_avx<F: Found>(
+        &self,
+        rays: &[Ray],
+        lanes: &[u8],
+        f: &Frustum,
+        l: &mut Lanes,
+        found: &mut F,
+    ) {
+        self.group_with(rays, lanes, f, l, found, &Avx(()));
+    }
+
+    #[inline(always)]
+    fn group_with<F: Found, K: PacketKernels>(
+        &self,
+        rays: &[Ray],
+        lanes: &[u8],
+        f: &Frustum,
+        l: &mut Lanes,
+        found: &mut F,
+        k: &K,
+    ) {
+        if self.wide.stack <= STACK {
+            let mut stack = [MaybeUninit::uninit(); STACK];
+            self.walk_group(rays, lanes, f, l, found, &mut stack, k);
+        } else {
+            let mut stack = vec![MaybeUninit::uninit(); self.wide.stack];
+            self.walk_group(rays, lanes, f, l, found, &mut stack, k);
+        }
+    }
+
+    /// The walk of a group, nearest child first by the frustum's entry
+    /// distance, for any-hit rays too (unlike a single any-hit ray): a
+    /// group's blockers are found sooner, and the rays they block drop out.
+    /// Stack entries hold a child, where its box is (`node << 3 | slot`,
+    /// for the rays' own test at a leaf) and the frustum's entry distance.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn walk_group<F: Found, K: PacketKernels>(
+        &self,
+        rays: &[Ray],
+        lanes: &[u8],
+        f: &Frustum,
+        l: &mut Lanes,
+        found: &mut F,
+        stack: &mut [MaybeUninit<(u32, u32, f32)>],
+        k: &K,
+    ) {
+        let w = &self.wide;
+        let n = lanes.len();
+        let mut active: u64 = if n == 64 { !0 } else { (1 << n) - 1 };
+        let mut sheared = 0u64;
+        let mut shear = [MaybeUninit::<RayShear>::uninit(); PACKET_RAYS];
+        // The farthest `tmax` of the rays still walking (the others have
+        // `-inf`, as the lanes past the group's rays).
+        let far = |l: &Lanes| {
+            let m = l
+                .tmax
+                .chunks_exact(4)
+                .fold(Vec4::NEG_INFINITY, |m, t| m.max(Vec4::from_slice(t)));
+            m.max_element()
+        };
+        let mut tmax = far(l);
+        let mut sp = 0;
+        let (mut cur, mut at) = (0u32, 0u32);
+        loop {
+            if cur & LEAF == 0 {
+                let node = &w.nodes[cur as usize];
+                let (mask, tnear) = k.frustum(f, node, tmax);
+                if mask != 0 {
+                    let from = cur << 3;
+                    let mut near = mask.trailing_zeros() as usize;
+                    let mut m = mask & (mask - 1);
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let other = if tnear[i] < tnear[near] {
+                            std::mem::replace(&mut near, i)
+                        } else {
+                            i
+                        };
+                        stack[sp].write((node.child[other], from | other as u32, tnear[other]));
+                        sp += 1;
+                    }
+                    (cur, at) = (node.child[near], from | near as u32);
+                    continue;
+                }
+            } else {
+                let node = &w.nodes[(at >> 3) as usize];
+                let mut todo = k.rays_box(f, l, node, (at & 7) as usize, active);
+                let mut changed = false;
+                for p in &w.packets[leaf_packets(cur)] {
+                    let mut m = todo;
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let ray = &rays[lanes[i] as usize];
+                        if sheared & (1 << i) == 0 {
+                            shear[i].write(RayShear::within(ray.origin, ray.dir, self.reach));
+                            sheared |= 1 << i;
+                        }
+                        // SAFETY: written above, once `sheared` has bit `i`.
+                        let s = unsafe { shear[i].assume_init_ref() };
+                        let h = if F::ANY {
+                            k.triangles::<false>(s, p, l.tmax[i])
+                        } else {
+                            k.triangles::<true>(s, p, l.tmax[i])
+                        };
+                        if h.mask == 0 {
+                            continue;
+                        }
+                        changed = true;
+                        for lane in (0..8).filter(|b| h.mask & (1 << b) != 0) {
+                            let hit = Hit {
+                                t: h.t[lane],
+                                u: h.u[lane],
+                                v: h.v[lane],
+                                prim: self.prim[p.idx[lane] as usize],
+                            };
+                            found.hit(lanes[i] as usize, hit);
+                            if F::ANY {
+                                break;
+                            }
+                            l.tmax[i] = l.tmax[i].min(hit.t);
+                        }
+                        if F::ANY {
+                            active &= !(1 << i);
+                            todo &= !(1 << i);
+                            l.tmax[i] = f32::NEG_INFINITY;
+                        }
+                    }
+                }
+                if changed {
+                    if active == 0 {
+                        return;
+                    }
+                    tmax = far(l);
+                }
+            }
+            // Pop, skipping nodes beyond every ray's closest hit.
+            loop {
+                if sp == 0 {
+                    return;
+                }
+                sp -= 1;
+                // SAFETY: every entry below `sp` was written by a push.
+                let (c, a, d) = unsafe { stack[sp].assume_init() };
+                if d <= tmax * FAR_SCALE {
+                    (cur, at) = (c, a);
+                    break;
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::sampling::Rng;
+    use crate::report::stability::soup;
+    use crate::scene::{self, Builder};
+    use glam::Vec3;
+
+    /// The kernels this CPU can run: the portable ones, and AVX where it
+    /// has it.
+    fn kernels() -> Vec<bool> {
+        #[allow(unused_mut)]
+        let mut v = vec![false];
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx") {
+            v.push(true);
+        }
+        v
+    }
+
+    /// Packets find exactly what single rays find, with either kernel:
+    /// the closest hit (distance, barycentrics, triangle) and whether a
+    /// ray is blocked. Returns the number of hits.
+    fn agree(b: &mut Bvh, rays: &[Ray]) -> usize {
+        let mut hits = 0;
+        for avx in kernels() {
+            b.wide.avx = avx;
+            let mut got = vec![None; rays.len()];
+            let mut blocked = vec![false; rays.len()];
+            b.intersect_packet(rays, &mut got);
+            b.occluded_packet(rays, &mut blocked);
+            let mut st = TraversalStats::default();
+            for (i, r) in rays.iter().enumerate() {
+                let want = b.intersect::<false>(r, &mut st);
+                assert_eq!(got[i].map(|h| h.t.to_bits()), want.map(|h| h.t.to_bits()));
+                assert_eq!(got[i], want, "ray {i} {r:?}, avx {avx}");
+                let any = b.occluded::<false>(r, &mut st).is_some();
+                assert_eq!(blocked[i], any, "ray {i} {r:?}, avx {avx}");
+                hits += want.is_some() as usize;
+            }
+        }
+        hits
+    }
+
+    /// Camera rays in 8x8 tiles (and in tiles cut short at the frame's
+    /// edges), and shadow rays from one light to every hit.
+    #[test]
+    fn camera_tiles_and_shadow_rays_find_what_single_rays_find() {
+        let s = scene::load("teapot:3").unwrap();
+        let (w, h) = (60, 44);
+        let frame = s.camera.frame(w, h);
+        for builder in [Builder::Sah, Builder::Median] {
+            let mut b = super::super::build(&s.geometry, builder);
+            let (mut hits, mut points) = (0, Vec::new());
+            for y0 in (0..h).step_by(8) {
+                for x0 in (0..w).step_by(8) {
+                    let rays: Vec<Ray> = (y0..(y0 + 8).min(h))
+                        .flat_map(|y| (x0..(x0 + 8).min(w)).map(move |x| (x, y)))
+                        .map(|(x, y)| frame.ray(x as f64 + 0.5, y as f64 + 0.5))
+                        .collect();
+                    hits += agree(&mut b, &rays);
+                    let mut st = TraversalStats::default();
+                    points.extend(
+                        rays.iter()
+                            .filter_map(|r| b.intersect::<false>(r, &mut st).map(|h| r.at(h.t))),
+                    );
+                }
+            }
+            assert!(hits > 200, "{hits} hits");
+            let light = Vec3::new(3.0, 9.0, 5.0);
+            let shadow: Vec<Ray> = points
+                .iter()
+                .map(|&p| Ray::segment(light, p - light, 1.0 - 1e-4))
+                .collect();
+            let mut blocked = 0;
+            for chunk in shadow.chunks(PACKET_RAYS) {
+                agree(&mut b, chunk);
+                let mut st = TraversalStats::default();
+                blocked += chunk
+                    .iter()
+                    .filter(|r| b.occluded::<false>(r, &mut st).is_some())
+                    .count();
+            }
+            assert!(blocked > 0 && blocked < shadow.len(), "{blocked}");
+        }
+    }
+
+    /// Random rays from one origin in every direction: a packet splits
+    /// into its octants, rays of one packet pointing opposite ways.
+    #[test]
+    fn random_rays_in_all_directions_find_what_single_rays_find() {
+        let s = scene::load("teapot:3").unwrap();
+        let mut b = super::super::build(&s.geometry, Builder::Sah);
+        let bounds = s.geometry.bounds();
+        let mut r = Rng::for_sample(7, 0, 22);
+        let mut hits = 0;
+        for k in 0..60 {
+            let u = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32());
+            let o = bounds.min + (bounds.max - bounds.min) * (u * 1.6 - 0.3);
+            let n = 1 + (k * 7) % PACKET_RAYS;
+            let rays: Vec<Ray> = (0..n)
+                .map(|_| {
+                    let d = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 2.0 - 1.0;
+                    let tmax = if k % 3 == 0 {
+                        r.next_f32() * 4.0
+                    } else {
+                        f32::INFINITY
+                    };
+                    Ray::segment(o, d, tmax)
+                })
+                .collect();
+            hits += agree(&mut b, &rays);
+        }
+        assert!(hits > 100, "{hits} hits");
+    }
+
+    /// Rays no frustum takes (other origins, zero, tiny, infinite and NaN
+    /// components, a NaN `tmax`) mixed into packets, axis-parallel and
+    /// grazing rays, coplanar and overlapping triangles (ties go to the
+    /// lower index), empty packets and packets longer than one.
+    #[test]
+    fn adversarial_packets_find_what_single_rays_find() {
+        let (inf, nan) = (f32::INFINITY, f32::NAN);
+        let mut tris = Vec::new();
+        for i in 0..200 {
+            let p = Vec3::new((i % 10) as f32, (i / 10 % 5) as f32, (i / 50) as f32);
+            tris.push([p, p + Vec3::X, p + Vec3::Y]);
+            // The same triangle again, and one coplanar beside it.
+            tris.push([p, p + Vec3::X, p + Vec3::Y]);
+            tris.push([p + Vec3::X, p + Vec3::Y, p + Vec3::new(1.0, 1.0, 0.0)]);
+        }
+        let mut b = super::super::build(&soup(&tris), Builder::Sah);
+        let o = Vec3::new(4.5, 2.5, 9.0);
+        let mut rays = Vec::new();
+        let mut r = Rng::for_sample(1, 2, 3);
+        for i in 0..160 {
+            let (x, y) = ((i % 13) as f32 * 0.77, (i / 13) as f32 * 0.41);
+            // Through vertices and edges of the grid now and then.
+            let target = if i % 4 == 0 {
+                Vec3::new((i % 10) as f32, (i % 5) as f32, (i % 4) as f32)
+            } else {
+                Vec3::new(x, y, r.next_f32() * 4.0)
+            };
+            rays.push(Ray::new(o, target - o));
+        }
+        let odd = [
+            Ray::new(o, Vec3::new(0.0, 0.0, -1.0)),
+            Ray::new(o, Vec3::new(-0.0, 1e-31, -1.0)),
+            Ray::new(o, Vec3::new(0.1, 0.2, -inf)),
+            Ray::new(o, Vec3::new(nan, 0.2, -1.0)),
+            Ray::segment(o, Vec3::new(0.1, 0.2, -1.0), nan),
+            Ray::segment(o, Vec3::new(0.1, 0.2, -1.0), -1.0),
+            Ray::new(Vec3::new(4.5, 2.5, nan), Vec3::new(0.1, 0.2, -1.0)),
+            Ray::new(Vec3::new(4.5, 2.5, 8.0), Vec3::new(0.1, 0.2, -1.0)),
+            Ray::new(o, Vec3::ZERO),
+            // Grazing: in the plane z = 1 of a layer, along x, and along
+            // the layer's diagonal edges.
+            Ray::new(Vec3::new(-1.0, 0.5, 1.0), Vec3::new(1.0, 0.0, 0.0)),
+            Ray::new(Vec3::new(-1.0, 2.0, 1.0), Vec3::new(1.0, -1.0, 1e-20)),
+        ];
+        for (i, ray) in odd.iter().enumerate() {
+            rays.insert(i * 13 % rays.len(), *ray);
+        }
+        // Rays running in the plane z = 1 from one origin.
+        let g = Vec3::new(-1.0, -1.0, 1.0);
+        for i in 0..40 {
+            let a = i as f32 * 0.04;
+            rays.push(Ray::new(g, Vec3::new(a.cos(), a.sin() + 1e-3, 0.0)));
+        }
+        let mut hits = agree(&mut b, &rays);
+        for chunk in rays.chunks(PACKET_RAYS) {
+            hits += agree(&mut b, chunk);
+        }
+        for n in [1, 2, 7, 63] {
+            hits += agree(&mut b, &rays[..n]);
+        }
+        agree(&mut b, &[]);
+        assert!(hits > 100, "{hits} hits");
+        // A tree over nothing: every ray misses.
+        let mut empty = super::super::build(&soup(&[]), Builder::Sah);
+        assert_eq!(agree(&mut empty, &rays[..PACKET_RAYS]), 0);
+    }
+
+    /// The frustum's box test lets through every box a ray of the group
+    /// hits, at an entry distance no greater than the ray's, and the rays'
+    /// own test at a leaf is the single-ray test, bit for bit, with either
+    /// kernel.
+    #[test]
+    fn frustum_test_is_conservative_and_ray_tests_are_the_single_ray_test() {
+        use super::super::traverse::BoxRay;
+        let mut r = Rng::for_sample(5, 5, 5);
+        let mut f = |s: f32| (r.next_f32() * 2.0 - 1.0) * s;
+        for k in 0..3000 {
+            let mut node = Node8 {
+                b: [[0.0; WIDTH]; 6],
+                child: [0; WIDTH],
+            };
+            for lane in 0..WIDTH {
+                for a in 0..3 {
+                    let (p, q) = (f(4.0), f(4.0));
+                    node.b[2 * a][lane] = p.min(q);
+                    node.b[2 * a + 1][lane] = p.max(q);
+                }
+            }
+            let o = Vec3::new(f(6.0), f(6.0), f(6.0));
+            let sign = Vec3::new(f(1.0), f(1.0), f(1.0)).signum();
+            let n = 1 + k % PACKET_RAYS;
+            let rays: Vec<Ray> = (0..n)
+                .map(|_| {
+                    let d = (Vec3::new(f(1.0), f(1.0), f(1.0)).abs() + 1e-3) * sign;
+                    Ray::segment(o, d, if k % 2 == 0 { inf() } else { f(8.0).abs() })
+                })
+                .collect();
+            let mut l = Lanes {
+                inv: [[0.0; PACKET_RAYS]; 3],
+                tmax: [f32::NEG_INFINITY; PACKET_RAYS],
+            };
+            for (i, ray) in rays.iter().enumerate() {
+                let inv = ray.inv_dir();
+                for a in 0..3 {
+                    l.inv[a][i] = inv[a];
+                }
+                l.tmax[i] = ray.tmax;
+            }
+            let (lo, hi) = (0..3).fold(([0.0; 3], [0.0; 3]), |(mut lo, mut hi), a| {
+                lo[a] = l.inv[a][..n].iter().copied().fold(inf(), f32::min);
+                hi[a] = l.inv[a][..n].iter().copied().fold(-inf(), f32::max);
+                (lo, hi)
+            });
+            let fr = Frustum {
+                o: o.to_array(),
+                lo,
+                hi,
+                neg: hi.map(|x| x < 0.0),
+            };
+            let tmax = rays.iter().map(|r| r.tmax).fold(-inf(), f32::max);
+            let (fmask, ftn) = frustum_boxes(&fr, &node, tmax);
+            let active = if n == 64 { !0 } else { (1u64 << n) - 1 };
+            for slot in 0..WIDTH {
+                let mut want = 0u64;
+                for (i, ray) in rays.iter().enumerate() {
+                    let br = BoxRay::new(ray);
+                    let (m, tn) = super::super::traverse::hit_boxes(&br, &node, ray.tmax);
+                    if m & (1 << slot) != 0 {
+                        want |= 1 << i;
+                        assert!(
+                            fmask & (1 << slot) != 0,
+                            "frustum misses a box ray {i} hits"
+                        );
+                        assert!(ftn[slot] <= tn[slot]);
+                    }
+                }
+                assert_eq!(rays_box(&fr, &l, &node, slot, active), want);
+                #[cfg(target_arch = "x86_64")]
+                if std::is_x86_feature_detected!("avx") {
+                    // SAFETY: AVX is present.
+                    unsafe {
+                        assert_eq!(rays_box_avx(&fr, &l, &node, slot, active), want);
+                        let (m, t) = frustum_boxes_avx(&fr, &node, tmax);
+                        assert_eq!(m, fmask);
+                        assert_eq!(t.map(f32::to_bits), ftn.map(f32::to_bits));
+                    }
+                }
+            }
+        }
+    }
+
+    fn inf() -> f32 {
+        f32::INFINITY
+    }
+}
