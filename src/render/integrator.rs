@@ -124,7 +124,13 @@ impl<'a> Tracer<'a> {
     #[inline(always)]
     pub fn place(&self, x: u32, y: u32, k: u32, run: &mut Run) -> Placed {
         let pixel = y as u64 * self.width as u64 + x as u64;
-        let mut rng = run.rng(pixel, k, self.seed);
+        // Nothing an exact render does draws a random number (see
+        // `Plan::deterministic`), so its samples need no seeded stream.
+        let mut rng = if self.plan.deterministic {
+            Rng::unseeded()
+        } else {
+            run.rng(pixel, k, self.seed)
+        };
         let stratum = self.stratum_in(x, y, k, run);
         let off = if let Some(stratum) = stratum {
             jittered(stratum, PIXEL_GRID, rng.next_vec2())

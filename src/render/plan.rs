@@ -166,7 +166,8 @@ pub struct Plan {
     pub environment: bool,
     pub bloom: bool,
     pub bvh: bool,
-    /// Nothing is sampled: one pass gives the exact image.
+    /// Nothing is sampled (no sample draws a random number): one pass
+    /// gives the exact image.
     pub deterministic: bool,
 }
 
