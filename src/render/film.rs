@@ -505,16 +505,26 @@ impl<'a> Samples<'a> {
         }
     }
 
-    /// Adds sample `k` of pixel `x`; a lean film's pixels take one each
-    /// (not jittered: exact renders are not).
+    /// Adds sample `k` of pixel `x`, or drops it where not finite; a lean
+    /// film's pixels take one each (not jittered: exact renders are not),
+    /// and keep a dropped one, which means none.
     #[inline]
     pub(crate) fn add(&mut self, x: usize, k: u32, c: Vec3, stratum: Option<u32>) {
         match self {
-            Samples::Stats(p) => p[x].add(k, c, stratum),
+            Samples::Stats(p) if c.is_finite() => p[x].add(k, c, stratum),
+            Samples::Stats(_) => {}
             Samples::Exact(p) => {
-                debug_assert!(k == 0 && stratum.is_none() && p[x].is_nan());
+                debug_assert!(k == 0 && stratum.is_none());
                 p[x] = c;
             }
+        }
+    }
+
+    /// Marks pixels of a lean film that a pass left out as having no
+    /// sample (its pass writes every other pixel).
+    pub(crate) fn skipped(&mut self) {
+        if let Samples::Exact(p) = self {
+            p.fill(Vec3::NAN);
         }
     }
 }
@@ -651,8 +661,8 @@ pub struct Film {
 enum Pixels {
     /// Every pixel's statistics.
     Stats(Vec<PixelStats>),
-    /// The one sample of each pixel of an exact render (NaN where it has
-    /// none), which is everything its statistics say: a lean film, 12 bytes
+    /// The one sample of each pixel of an exact render (not finite where
+    /// it has none), which is everything its statistics say: a lean film, 12 bytes
     /// a pixel where statistics are 176, which a frame would otherwise
     /// spend much of its time bringing into memory. The statistics are made
     /// from the samples when something asks for them.
@@ -709,11 +719,17 @@ impl Film {
         }
     }
 
-    /// An empty lean film for the one pass of an exact render, which only
-    /// keeps each pixel's sample (see [`Film::pixels`]).
-    pub fn new_exact(width: u32, height: u32) -> Self {
+    /// A lean film for the one pass of an exact render, which only keeps
+    /// each pixel's sample (see [`Film::pixels`]). Its samples start as
+    /// zero bytes, which fresh memory already holds, so nothing writes
+    /// them twice: the pass writes every pixel, a sample or a non-finite
+    /// value (none), and marks a row it leaves out
+    /// ([`Samples::skipped`]).
+    pub(crate) fn new_exact(width: u32, height: u32) -> Self {
+        // SAFETY: a Vec3 of zero bytes is black.
+        let samples = unsafe { crate::memory::zeroed(width as usize * height as usize) };
         let pixels = Pixels::Exact {
-            samples: vec![Vec3::NAN; width as usize * height as usize],
+            samples,
             stats: OnceLock::new(),
         };
         Self::with(width, height, pixels)
