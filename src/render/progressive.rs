@@ -19,7 +19,7 @@ use std::time::Instant;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::film::{Allocation, BadSample, Film, PixelStats, Samples};
+use super::film::{Allocation, BadSample, Film, PixelStats, Sampled, Samples};
 use super::integrator::Placed;
 use crate::geometry::sampling::{Run, PIXEL_STRATA, QUARTER};
 
@@ -468,6 +468,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             let pixels = &mut row.pixels;
             let mut ray_counts = row.rays.as_deref_mut();
             let mut rays = Vec::with_capacity(CAMERA_BATCH);
+            let mut colours = Vec::with_capacity(CAMERA_BATCH);
             let mut trace = |placed: &mut Vec<(u32, Placed)>| {
                 rays.clear();
                 rays.extend(placed.iter().map(|(_, p)| tracer.camera_ray(p)));
@@ -482,8 +483,10 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                     if !c.is_finite() {
                         bad.push(BadSample { x, y, sample: k });
                     }
-                    pixels.add(x as usize, k, c, stratum);
+                    colours.push(Sampled { x, k, c, stratum });
                 }
+                pixels.add(&colours);
+                colours.clear();
             };
             let mut placed = Vec::with_capacity(CAMERA_BATCH);
             let mut run = Run::default();
