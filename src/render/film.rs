@@ -207,6 +207,13 @@ fn mean_of(sum: &[i128; 3], n: u32) -> DVec3 {
     DVec3::new(mean(r), mean(g), mean(b))
 }
 
+/// `lum` on a black square of a checkerboard, `-lum` on a white one, the
+/// sign set without a branch on the square's colour, which is random.
+#[inline(always)]
+fn signed(lum: f64, black: bool) -> f64 {
+    f64::from_bits(lum.to_bits() ^ ((!black as u64) << 63))
+}
+
 /// Merges counts, means and M2 of two sets of values (Chan et al.).
 fn chan(a: (u32, f64, f64), b: (u32, f64, f64)) -> (u32, f64, f64) {
     match (a.0, b.0) {
@@ -298,11 +305,7 @@ impl PixelStats {
             self.quarters = f32::NAN;
             return;
         }
-        self.quarter += if quadrant_is_black(stratum) {
-            lum
-        } else {
-            -lum
-        } as f32;
+        self.quarter += signed(lum, quadrant_is_black(stratum)) as f32;
         if k % QUARTER == QUARTER - 1 {
             self.quarters += self.quarter * self.quarter;
             self.quarter = 0.0;
@@ -351,7 +354,7 @@ impl PixelStats {
         }
         piece.n += 1;
         piece.sum += lum;
-        piece.diff += if black { lum } else { -lum };
+        piece.diff += signed(lum, black);
         if piece.n == PIXEL_STRATA {
             let p = std::mem::take(piece);
             self.close_block(p);
