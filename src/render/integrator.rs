@@ -347,7 +347,9 @@ impl<'a> Tracer<'a> {
                 m.max(1) * m.max(1)
             }
         };
-        let grid = (n_samples as f32).sqrt() as u32;
+        // The grid of a parallelogram's strata, made only where drawn: a
+        // point light (most lights) needs neither it nor the average.
+        let grid = || (n_samples as f32).sqrt() as u32;
         let stratify = self.scene.settings.stratify;
         let (mut diffuse, mut specular) = (Vec3::ZERO, Vec3::ZERO);
         for k in 0..n_samples {
@@ -359,15 +361,17 @@ impl<'a> Tracer<'a> {
                     Vec2::new((k as f32 + rng.next_f32()) / n_samples as f32, 0.0)
                 }
                 Light::Parallelogram { .. } if !stratify => rng.next_vec2(),
-                Light::Parallelogram { .. } => jittered(k, grid, rng.next_vec2()),
+                Light::Parallelogram { .. } => jittered(k, grid(), rng.next_vec2()),
             };
             let (lp, lc) = light.point_at(st);
             let (d, sp) = self.light_point(s, lp, lc, rec);
             diffuse += d;
             specular += sp;
         }
-        let inv = 1.0 / n_samples as f32;
-        let (diffuse, specular) = (diffuse * inv, specular * inv);
+        if n_samples > 1 {
+            let inv = 1.0 / n_samples as f32;
+            (diffuse, specular) = (diffuse * inv, specular * inv);
+        }
         rec.end_light(diffuse, specular);
         diffuse + specular
     }
