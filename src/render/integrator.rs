@@ -44,9 +44,6 @@ pub fn mirror(dir: Vec3, n: Vec3, ng: Vec3) -> Vec3 {
     }
 }
 
-/// A monomorphised `Tracer::trace`.
-type TraceFn<'a, R> = fn(&Tracer<'a>, &Ray, u32, RayKind, Vec3, &mut Rng, &mut R) -> Vec3;
-
 /// Where one sample falls in its pixel `(x, y)`: its offset (0..1 on each
 /// axis) and sub-pixel stratum when jittered, and the random numbers the
 /// rest of the sample draws.
@@ -161,15 +158,16 @@ impl<'a> Tracer<'a> {
         rec.pixel_sample(s.off, s.stratum);
         // The stages the plan may leave out are compile-time parameters, so
         // a scene without textures or vertex normals runs code without them.
-        let trace: TraceFn<'a, R> = match (self.plan.textures, self.plan.smooth_normals) {
-            (false, false) => Self::trace::<R, false, false>,
-            (false, true) => Self::trace::<R, false, true>,
-            (true, false) => Self::trace::<R, true, false>,
-            (true, true) => Self::trace::<R, true, true>,
-        };
-        trace(self, ray, 0, RayKind::Camera, Vec3::ONE, &mut rng, rec)
+        let (kind, w, rng) = (RayKind::Camera, Vec3::ONE, &mut rng);
+        match (self.plan.textures, self.plan.smooth_normals) {
+            (false, false) => self.trace::<R, false, false>(ray, 0, kind, w, rng, rec),
+            (false, true) => self.trace::<R, false, true>(ray, 0, kind, w, rng, rec),
+            (true, false) => self.trace::<R, true, false>(ray, 0, kind, w, rng, rec),
+            (true, true) => self.trace::<R, true, true>(ray, 0, kind, w, rng, rec),
+        }
     }
 
+    #[inline]
     fn closest<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Option<Hit> {
         if self.plan.bvh {
             rec.intersect(self.bvh, ray)
@@ -188,6 +186,7 @@ impl<'a> Tracer<'a> {
     }
 
     /// Radiance along `ray`. `weight` is the ray's factor in the pixel colour.
+    #[inline]
     fn trace<R: Recorder, const TEX: bool, const SMOOTH: bool>(
         &self,
         ray: &Ray,
@@ -223,6 +222,9 @@ impl<'a> Tracer<'a> {
         color
     }
 
+    /// The colour of a hit. Kept out of line: a ray that misses (most
+    /// camera rays of a mesh) then pays for none of its set-up.
+    #[inline(never)]
     fn shade<R: Recorder, const TEX: bool, const SMOOTH: bool>(
         &self,
         ray: &Ray,
