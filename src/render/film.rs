@@ -713,10 +713,10 @@ enum Pixels {
     /// Every pixel's statistics.
     Stats(Vec<PixelStats>),
     /// The one sample of each pixel of an exact render (not finite where
-    /// it has none), which is everything its statistics say: a lean film, 12 bytes
-    /// a pixel where statistics are 176, which a frame would otherwise
-    /// spend much of its time bringing into memory. The statistics are made
-    /// from the samples when something asks for them.
+    /// it has none), which is everything its statistics say: a lean film,
+    /// 12 bytes a pixel where statistics are 176, which a frame would
+    /// otherwise spend much of its time bringing into memory. The
+    /// statistics are made from the samples when something asks for them.
     Exact {
         samples: Vec<Vec3>,
         stats: OnceLock<Vec<PixelStats>>,
