@@ -26,6 +26,12 @@ impl Rng {
         PixelStreams::new(pixel, seed).sample(sample)
     }
 
+    /// A stream for a sample that draws nothing (every sample of an exact
+    /// render): fixed, where seeding one per sample would cost a few hashes.
+    pub const fn unseeded() -> Self {
+        Rng { state: 0, inc: 1 }
+    }
+
     #[inline]
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;
@@ -100,20 +106,19 @@ pub const QUARTER: u32 = PIXEL_STRATA / 4;
 /// The integrator places samples by it and the film's error estimate reads
 /// it.
 pub fn pixel_stratum(pixel: u64, k: u32, seed: u64) -> u32 {
-    stratum_in_block(k, block_order(pixel, k / PIXEL_STRATA, seed))
+    block_strata(block_order(pixel, k / PIXEL_STRATA, seed))[(k % PIXEL_STRATA) as usize] as u32
 }
 
 /// What a run of samples of one pixel, under one seed, share: the
-/// pixel's [`PixelStreams`] and the order its current block visits the
-/// strata in ([`pixel_stratum`]), drawn once for the run, not once a
-/// sample.
+/// pixel's [`PixelStreams`] and the strata of its current block
+/// ([`pixel_stratum`]), drawn once for the run, not once a sample.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Run {
     pixel: Option<u64>,
     streams: PixelStreams,
-    /// The block of `order`.
+    /// The block of `strata`.
     block: Option<u32>,
-    order: u32,
+    strata: [u8; PIXEL_STRATA as usize],
 }
 
 impl Run {
@@ -123,8 +128,7 @@ impl Run {
             *self = Run {
                 pixel: Some(pixel),
                 streams: PixelStreams::new(pixel, seed),
-                block: None,
-                order: 0,
+                ..Run::default()
             };
         }
     }
@@ -142,10 +146,10 @@ impl Run {
         self.at(pixel, seed);
         let block = k / PIXEL_STRATA;
         if self.block != Some(block) {
-            self.order = block_order(pixel, block, seed);
+            self.strata = block_strata(block_order(pixel, block, seed));
             self.block = Some(block);
         }
-        stratum_in_block(k, self.order)
+        self.strata[(k % PIXEL_STRATA) as usize] as u32
     }
 }
 
@@ -155,24 +159,28 @@ fn block_order(pixel: u64, block: u32, seed: u64) -> u32 {
     Rng::for_sample(pixel, block as u64, seed ^ 0x5bd1_e995).next_u32()
 }
 
-/// The stratum of sample `k` in a block whose order is `order`.
-#[inline]
-fn stratum_in_block(k: u32, order: u32) -> u32 {
-    let (quarter, slot) = ((k % PIXEL_STRATA) / QUARTER, k % QUARTER);
-    // Which quadrant this slot of the quarter visits, then which of that
-    // quadrant's four strata this quarter takes: distinct over the block.
-    let quadrant = permute4(slot, order ^ quarter.wrapping_mul(0x9e37_79b9));
-    let sub = permute4(quarter, order ^ (quadrant + 4).wrapping_mul(0x9e37_79b9));
-    let half = PIXEL_GRID / 2;
-    let i = (quadrant % 2) * half + sub % half;
-    let j = (quadrant / 2) * half + sub / half;
-    i + PIXEL_GRID * j
+/// The strata a block whose order is `order` visits, sample by sample:
+/// each slot of a quarter visits a quadrant, in an order drawn per
+/// quarter, and each quarter takes one of that quadrant's four strata, in
+/// an order drawn per quadrant, so the block visits every stratum once.
+fn block_strata(order: u32) -> [u8; PIXEL_STRATA as usize] {
+    let draw = |i: u32| permutation4(order ^ i.wrapping_mul(0x9e37_79b9));
+    let quadrants: [[u8; 4]; 4] = std::array::from_fn(|quarter| draw(quarter as u32));
+    let subs: [[u8; 4]; 4] = std::array::from_fn(|quadrant| draw(quadrant as u32 + 4));
+    std::array::from_fn(|k| {
+        let (quarter, slot) = (k / QUARTER as usize, k % QUARTER as usize);
+        let quadrant = quadrants[quarter][slot] as u32;
+        let sub = subs[quadrant as usize][quarter] as u32;
+        let half = PIXEL_GRID / 2;
+        let i = (quadrant % 2) * half + sub % half;
+        let j = (quadrant / 2) * half + sub / half;
+        (i + PIXEL_GRID * j) as u8
+    })
 }
 
-/// Element `i` of one of the 24 permutations of `0..4`, chosen by a hash
-/// of `seed`.
+/// One of the 24 permutations of `0..4`, chosen by a hash of `seed`.
 #[inline]
-fn permute4(i: u32, seed: u32) -> u32 {
+fn permutation4(seed: u32) -> [u8; 4] {
     // The finaliser of MurmurHash3: every bit of the seed moves the choice.
     let mut h = seed;
     h ^= h >> 16;
@@ -180,7 +188,7 @@ fn permute4(i: u32, seed: u32) -> u32 {
     h ^= h >> 13;
     h = h.wrapping_mul(0xc2b2_ae35);
     h ^= h >> 16;
-    PERMUTATIONS_OF_4[(h % 24) as usize][i as usize & 3] as u32
+    PERMUTATIONS_OF_4[(h % 24) as usize]
 }
 
 /// The 24 permutations of `0..4`, permutation `c` the one whose Lehmer

@@ -95,6 +95,19 @@ pub struct PixelStats {
     pub quarter: f32,
 }
 
+/// A sample as a pass adds it to pixel `x` of a row: its index, colour
+/// and sub-pixel stratum when jittered.
+#[derive(Clone, Copy, Debug)]
+pub struct Sampled {
+    pub x: u32,
+    pub k: u32,
+    pub c: Vec3,
+    pub stratum: Option<u32>,
+}
+
+/// Samples [`PixelStats::add_run`] takes at a time.
+const RUN: usize = 16;
+
 /// Part of a block of strata: its index, samples, luminance sum and
 /// checkerboard difference (black minus white).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -194,6 +207,13 @@ fn mean_of(sum: &[i128; 3], n: u32) -> DVec3 {
     DVec3::new(mean(r), mean(g), mean(b))
 }
 
+/// `lum` on a black square of a checkerboard, `-lum` on a white one, the
+/// sign set without a branch on the square's colour, which is random.
+#[inline(always)]
+fn signed(lum: f64, black: bool) -> f64 {
+    f64::from_bits(lum.to_bits() ^ ((!black as u64) << 63))
+}
+
 /// Merges counts, means and M2 of two sets of values (Chan et al.).
 fn chan(a: (u32, f64, f64), b: (u32, f64, f64)) -> (u32, f64, f64) {
     match (a.0, b.0) {
@@ -231,21 +251,47 @@ impl PixelStats {
     /// pixel samples are jittered.
     #[inline]
     pub fn add(&mut self, k: u32, c: Vec3, stratum: Option<u32>) {
-        let q = [fixed(c.x), fixed(c.y), fixed(c.z)];
-        let lum_old = self.mean.dot(LUMA.as_dvec3());
-        self.n += 1;
-        for (s, q) in self.sum.iter_mut().zip(q) {
-            *s += q.0;
-        }
-        // The new mean from registers, not read back from the pixel.
-        let mean = mean_of(&self.sum, self.n);
-        self.mean = mean;
-        let c = DVec3::from_array(q.map(|v| v.1));
-        let lum = c.dot(LUMA.as_dvec3());
-        self.m2 += (lum - lum_old) * (lum - mean.dot(LUMA.as_dvec3()));
-        if let Some(s) = stratum {
-            self.add_stratified(k / PIXEL_STRATA, lum, s);
-            self.add_quartered(k, lum, s);
+        self.add_run(&[Sampled {
+            x: 0,
+            k,
+            c,
+            stratum,
+        }]);
+    }
+
+    /// Adds this pixel's finite samples `run`, in order (their `x` is not
+    /// read): what adding them one at a time gives, bit for bit. The mean
+    /// after each sample is made first, in one loop, then the running
+    /// statistics in another: the means' conversions and divisions depend
+    /// on one another only through the sums, so those of several samples
+    /// overlap where one at a time each waits for the last.
+    #[inline]
+    pub fn add_run(&mut self, run: &[Sampled]) {
+        for run in run.chunks(RUN) {
+            let mut lum = [0.0; RUN];
+            let mut lum_mean = [0.0; RUN];
+            let (mut sum, mut mean) = (self.sum, self.mean);
+            for (i, s) in run.iter().enumerate() {
+                let q = [fixed(s.c.x), fixed(s.c.y), fixed(s.c.z)];
+                for (s, q) in sum.iter_mut().zip(q) {
+                    *s += q.0;
+                }
+                mean = mean_of(&sum, self.n + i as u32 + 1);
+                lum_mean[i] = mean.dot(LUMA.as_dvec3());
+                lum[i] = DVec3::from_array(q.map(|v| v.1)).dot(LUMA.as_dvec3());
+            }
+            let mut lum_old = self.mean.dot(LUMA.as_dvec3());
+            for (i, s) in run.iter().enumerate() {
+                self.n += 1;
+                // Welford's update.
+                self.m2 += (lum[i] - lum_old) * (lum[i] - lum_mean[i]);
+                lum_old = lum_mean[i];
+                if let Some(stratum) = s.stratum {
+                    self.add_stratified(s.k / PIXEL_STRATA, lum[i], stratum);
+                    self.add_quartered(s.k, lum[i], stratum);
+                }
+            }
+            (self.sum, self.mean) = (sum, mean);
         }
     }
 
@@ -259,11 +305,7 @@ impl PixelStats {
             self.quarters = f32::NAN;
             return;
         }
-        self.quarter += if quadrant_is_black(stratum) {
-            lum
-        } else {
-            -lum
-        } as f32;
+        self.quarter += signed(lum, quadrant_is_black(stratum)) as f32;
         if k % QUARTER == QUARTER - 1 {
             self.quarters += self.quarter * self.quarter;
             self.quarter = 0.0;
@@ -312,7 +354,7 @@ impl PixelStats {
         }
         piece.n += 1;
         piece.sum += lum;
-        piece.diff += if black { lum } else { -lum };
+        piece.diff += signed(lum, black);
         if piece.n == PIXEL_STRATA {
             let p = std::mem::take(piece);
             self.close_block(p);
@@ -505,16 +547,35 @@ impl<'a> Samples<'a> {
         }
     }
 
-    /// Adds sample `k` of pixel `x`; a lean film's pixels take one each
-    /// (not jittered: exact renders are not).
+    /// Adds `samples` of this row's pixels, dropping those not finite; a
+    /// lean film's pixels take one each (not jittered: exact renders are
+    /// not), and keep a dropped one, which means none. Each pixel's run of
+    /// samples goes in at once ([`PixelStats::add_run`]).
     #[inline]
-    pub(crate) fn add(&mut self, x: usize, k: u32, c: Vec3, stratum: Option<u32>) {
+    pub(crate) fn add(&mut self, samples: &[Sampled]) {
         match self {
-            Samples::Stats(p) => p[x].add(k, c, stratum),
-            Samples::Exact(p) => {
-                debug_assert!(k == 0 && stratum.is_none() && p[x].is_nan());
-                p[x] = c;
+            Samples::Stats(p) => {
+                for run in samples.chunk_by(|a, b| a.x == b.x) {
+                    let px = &mut p[run[0].x as usize];
+                    for finite in run.split(|s| !s.c.is_finite()) {
+                        px.add_run(finite);
+                    }
+                }
             }
+            Samples::Exact(p) => {
+                for s in samples {
+                    debug_assert!(s.k == 0 && s.stratum.is_none());
+                    p[s.x as usize] = s.c;
+                }
+            }
+        }
+    }
+
+    /// Marks pixels of a lean film that a pass left out as having no
+    /// sample (its pass writes every other pixel).
+    pub(crate) fn skipped(&mut self) {
+        if let Samples::Exact(p) = self {
+            p.fill(Vec3::NAN);
         }
     }
 }
@@ -673,11 +734,11 @@ pub struct Film {
 enum Pixels {
     /// Every pixel's statistics.
     Stats(Vec<PixelStats>),
-    /// The one sample of each pixel of an exact render (NaN where it has
-    /// none), which is everything its statistics say: a lean film, 12 bytes
-    /// a pixel where statistics are 176, which a frame would otherwise
-    /// spend much of its time bringing into memory. The statistics are made
-    /// from the samples when something asks for them.
+    /// The one sample of each pixel of an exact render (not finite where
+    /// it has none), which is everything its statistics say: a lean film,
+    /// 12 bytes a pixel where statistics are 176, which a frame would
+    /// otherwise spend much of its time bringing into memory. The
+    /// statistics are made from the samples when something asks for them.
     Exact {
         samples: Vec<Vec3>,
         stats: OnceLock<Vec<PixelStats>>,
@@ -731,11 +792,17 @@ impl Film {
         }
     }
 
-    /// An empty lean film for the one pass of an exact render, which only
-    /// keeps each pixel's sample (see [`Film::pixels`]).
-    pub fn new_exact(width: u32, height: u32) -> Self {
+    /// A lean film for the one pass of an exact render, which only keeps
+    /// each pixel's sample (see [`Film::pixels`]). Its samples start as
+    /// zero bytes, which fresh memory already holds, so nothing writes
+    /// them twice: the pass writes every pixel, a sample or a non-finite
+    /// value (none), and marks a row it leaves out
+    /// ([`Samples::skipped`]).
+    pub(crate) fn new_exact(width: u32, height: u32) -> Self {
+        // SAFETY: a Vec3 of zero bytes is black.
+        let samples = unsafe { crate::memory::zeroed(width as usize * height as usize) };
         let pixels = Pixels::Exact {
-            samples: vec![Vec3::NAN; width as usize * height as usize],
+            samples,
             stats: OnceLock::new(),
         };
         Self::with(width, height, pixels)
@@ -1298,6 +1365,42 @@ mod tests {
                 ] {
                     assert!(close(a, b), "{what}: {a} vs {b}");
                 }
+            }
+        }
+    }
+
+    /// A pixel's samples added in runs of any length hold the statistics
+    /// of the same samples added one at a time, bit for bit.
+    #[test]
+    fn runs_of_samples_add_as_single_samples() {
+        let samples: Vec<Sampled> = (0..70)
+            .map(|k| {
+                let (stratum, v) = sample(11, k, 1.0, 1.0);
+                let c = Vec3::new(v as f32, 0.3 + 2.0 * v as f32, 1e-9 * k as f32);
+                Sampled {
+                    x: 0,
+                    k,
+                    c,
+                    stratum: Some(stratum),
+                }
+            })
+            .collect();
+        for skip in [None, Some(5), Some(33)] {
+            let kept: Vec<Sampled> = samples
+                .iter()
+                .filter(|s| Some(s.k) != skip)
+                .copied()
+                .collect();
+            let mut one = PixelStats::default();
+            for s in &kept {
+                one.add(s.k, s.c, s.stratum);
+            }
+            for len in [2, 3, 7, 16, 17, 40, 70] {
+                let mut runs = PixelStats::default();
+                for run in kept.chunks(len) {
+                    runs.add_run(run);
+                }
+                assert_eq!(format!("{runs:?}"), format!("{one:?}"), "{len} {skip:?}");
             }
         }
     }

@@ -44,9 +44,6 @@ pub fn mirror(dir: Vec3, n: Vec3, ng: Vec3) -> Vec3 {
     }
 }
 
-/// A monomorphised `Tracer::trace`.
-type TraceFn<'a, R> = fn(&Tracer<'a>, &Ray, u32, RayKind, Vec3, &mut Rng, &mut R) -> Vec3;
-
 /// Where one sample falls in its pixel `(x, y)`: its offset (0..1 on each
 /// axis) and sub-pixel stratum when jittered, and the random numbers the
 /// rest of the sample draws.
@@ -124,7 +121,13 @@ impl<'a> Tracer<'a> {
     #[inline(always)]
     pub fn place(&self, x: u32, y: u32, k: u32, run: &mut Run) -> Placed {
         let pixel = y as u64 * self.width as u64 + x as u64;
-        let mut rng = run.rng(pixel, k, self.seed);
+        // Nothing an exact render does draws a random number (see
+        // `Plan::deterministic`), so its samples need no seeded stream.
+        let mut rng = if self.plan.deterministic {
+            Rng::unseeded()
+        } else {
+            run.rng(pixel, k, self.seed)
+        };
         let stratum = self.stratum_in(x, y, k, run);
         let off = if let Some(stratum) = stratum {
             jittered(stratum, PIXEL_GRID, rng.next_vec2())
@@ -155,13 +158,13 @@ impl<'a> Tracer<'a> {
         rec.pixel_sample(s.off, s.stratum);
         // The stages the plan may leave out are compile-time parameters, so
         // a scene without textures or vertex normals runs code without them.
-        let trace: TraceFn<'a, R> = match (self.plan.textures, self.plan.smooth_normals) {
-            (false, false) => Self::trace::<R, false, false>,
-            (false, true) => Self::trace::<R, false, true>,
-            (true, false) => Self::trace::<R, true, false>,
-            (true, true) => Self::trace::<R, true, true>,
-        };
-        trace(self, ray, 0, RayKind::Camera, Vec3::ONE, &mut rng, rec)
+        let (kind, w, rng) = (RayKind::Camera, Vec3::ONE, &mut rng);
+        match (self.plan.textures, self.plan.smooth_normals) {
+            (false, false) => self.trace::<R, false, false>(ray, 0, kind, w, rng, rec),
+            (false, true) => self.trace::<R, false, true>(ray, 0, kind, w, rng, rec),
+            (true, false) => self.trace::<R, true, false>(ray, 0, kind, w, rng, rec),
+            (true, true) => self.trace::<R, true, true>(ray, 0, kind, w, rng, rec),
+        }
     }
 
     /// [`Tracer::sample_from`] with the camera ray's closest hit found
@@ -181,6 +184,7 @@ impl<'a> Tracer<'a> {
         self.sample_from(s, ray, &mut primed)
     }
 
+    #[inline]
     fn closest<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Option<Hit> {
         if self.plan.bvh {
             rec.intersect(self.bvh, ray)
@@ -199,6 +203,7 @@ impl<'a> Tracer<'a> {
     }
 
     /// Radiance along `ray`. `weight` is the ray's factor in the pixel colour.
+    #[inline]
     fn trace<R: Recorder, const TEX: bool, const SMOOTH: bool>(
         &self,
         ray: &Ray,
@@ -234,6 +239,9 @@ impl<'a> Tracer<'a> {
         color
     }
 
+    /// The colour of a hit. Kept out of line: a ray that misses (most
+    /// camera rays of a mesh) then pays for none of its set-up.
+    #[inline(never)]
     fn shade<R: Recorder, const TEX: bool, const SMOOTH: bool>(
         &self,
         ray: &Ray,
@@ -358,7 +366,9 @@ impl<'a> Tracer<'a> {
                 m.max(1) * m.max(1)
             }
         };
-        let grid = (n_samples as f32).sqrt() as u32;
+        // The grid of a parallelogram's strata, made only where drawn: a
+        // point light (most lights) needs neither it nor the average.
+        let grid = || (n_samples as f32).sqrt() as u32;
         let stratify = self.scene.settings.stratify;
         let (mut diffuse, mut specular) = (Vec3::ZERO, Vec3::ZERO);
         for k in 0..n_samples {
@@ -370,15 +380,17 @@ impl<'a> Tracer<'a> {
                     Vec2::new((k as f32 + rng.next_f32()) / n_samples as f32, 0.0)
                 }
                 Light::Parallelogram { .. } if !stratify => rng.next_vec2(),
-                Light::Parallelogram { .. } => jittered(k, grid, rng.next_vec2()),
+                Light::Parallelogram { .. } => jittered(k, grid(), rng.next_vec2()),
             };
             let (lp, lc) = light.point_at(st);
             let (d, sp) = self.light_point(s, lp, lc, rec);
             diffuse += d;
             specular += sp;
         }
-        let inv = 1.0 / n_samples as f32;
-        let (diffuse, specular) = (diffuse * inv, specular * inv);
+        if n_samples > 1 {
+            let inv = 1.0 / n_samples as f32;
+            (diffuse, specular) = (diffuse * inv, specular * inv);
+        }
         rec.end_light(diffuse, specular);
         diffuse + specular
     }

@@ -170,7 +170,8 @@ pub struct Plan {
     /// ([`Bvh::intersect_packet`](crate::bvh::Bvh::intersect_packet)):
     /// the same hits, found together, whenever the BVH is used.
     pub packets: bool,
-    /// Nothing is sampled: one pass gives the exact image.
+    /// Nothing is sampled (no sample draws a random number): one pass
+    /// gives the exact image.
     pub deterministic: bool,
 }
 

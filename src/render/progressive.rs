@@ -19,7 +19,7 @@ use std::time::Instant;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::film::{Allocation, BadSample, Film, PixelStats, Samples};
+use super::film::{Allocation, BadSample, Film, PixelStats, Sampled, Samples};
 use super::integrator::Placed;
 use crate::geometry::sampling::{Run, PIXEL_STRATA, QUARTER};
 
@@ -465,6 +465,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             let mut rec = R::default();
             let mut bad = Vec::new();
             if cancel() {
+                row.pixels.skipped();
                 return (rec, bad, false, Vec::new());
             }
             let before = match &row.pixels {
@@ -484,6 +485,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             // where the recorder's traversal is the plain one.
             let packets = tracer.plan.packets && R::PLAIN_TRAVERSAL;
             let mut hits = [None; CAMERA_BATCH];
+            let mut colours = Vec::with_capacity(CAMERA_BATCH);
             let mut trace = |placed: &mut Vec<(u32, Placed)>| {
                 rays.clear();
                 rays.extend(placed.iter().map(|(_, p)| tracer.camera_ray(p)));
@@ -505,10 +507,11 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                     }
                     if !c.is_finite() {
                         bad.push(BadSample { x, y, sample: k });
-                        continue;
                     }
-                    pixels.add(x as usize, k, c, stratum);
+                    colours.push(Sampled { x, k, c, stratum });
                 }
+                pixels.add(&colours);
+                colours.clear();
             };
             let mut placed = Vec::with_capacity(CAMERA_BATCH);
             let mut run = Run::default();
@@ -658,6 +661,26 @@ mod tests {
         assert!(!more.film.is_exact());
         assert!(more.film.pixels().iter().all(|p| p.n == 2));
         assert_eq!(stats(&more.film), stats(&full.film));
+    }
+
+    /// Rows a cancelled exact pass leaves out hold no sample, the others
+    /// one each.
+    #[test]
+    fn rows_an_exact_pass_leaves_out_have_no_sample() {
+        let s = session(&[Feature::Supersampling, Feature::SoftShadows]);
+        let t = s.tracer();
+        let mut p = Progressive::new(12, 8);
+        let polls = AtomicU32::new(0);
+        let cancel = || polls.fetch_add(1, Ordering::Relaxed) >= 3;
+        assert!(p.pass(&t, &Stop::spp(1), &cancel).is_none());
+        assert!(p.film.is_exact());
+        let rows: Vec<u32> = p.film.pixels().chunks(12).map(|row| row[0].n).collect();
+        for (row, &n) in p.film.pixels().chunks(12).zip(&rows) {
+            assert!(row.iter().all(|px| px.n == n), "{rows:?}");
+        }
+        let sampled = rows.iter().filter(|&&n| n == 1).count();
+        assert!(sampled > 0 && sampled < 8, "{rows:?}");
+        assert!(rows.iter().all(|&n| n <= 1), "{rows:?}");
     }
 
     #[test]
