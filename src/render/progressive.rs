@@ -353,22 +353,30 @@ fn share(weight: &[f32], ascending: &[f32], mean: f64, cap: u32) -> Option<Vec<u
         } as f64;
         ((n / unit).ceil() * unit).clamp(lo, cap as f64)
     };
-    // The counts' mean, one step per distinct count: a count grows with
-    // the weight, so every pixel from the lightest not yet counted up has
-    // at least that one's count.
-    let mean_at = |c: f64| {
-        let (mut total, mut below, mut i) = (0.0, 0.0, 0);
-        while let Some(&w) = ascending.get(i) {
-            let n = count(c, w);
-            total += (n - below) * (ascending.len() - i) as f64;
-            below = n;
-            i += ascending[i..].partition_point(|&w| count(c, w) <= n);
-        }
-        total / ascending.len() as f64
-    };
     if weight.is_empty() {
         return None;
     }
+    let n = ascending.len() as f64;
+    // The counts' mean: summed pixel by pixel, or, where there are fewer
+    // distinct counts than pixels by far (a big image), one step per
+    // distinct count: a count grows with the weight, so every pixel from the
+    // lightest not yet counted up has at least that one's count. Both sum
+    // the same whole numbers exactly.
+    let mean_at = |c: f64| {
+        let most = count(c, ascending[ascending.len() - 1]);
+        let steps = QUARTER as f64 + (most - PIXEL_STRATA as f64).max(0.0) / PIXEL_STRATA as f64;
+        if steps * n.log2() > n {
+            return weight.iter().map(|&w| count(c, w)).sum::<f64>() / n;
+        }
+        let (mut total, mut below, mut i) = (0.0, 0.0, 0);
+        while let Some(&w) = ascending.get(i) {
+            let k = count(c, w);
+            total += (k - below) * (ascending.len() - i) as f64;
+            below = k;
+            i += ascending[i..].partition_point(|&w| count(c, w) <= k);
+        }
+        total / n
+    };
     // The scale whose counts have the mean, by bisection on its exponent:
     // 24 steps find it to within 1e-5, finer than a block's rounding.
     let (mut a, mut b) = (-64.0f64, 64.0f64);
