@@ -28,6 +28,8 @@ use std::mem::MaybeUninit;
 use glam::Vec4;
 
 #[cfg(target_arch = "x86_64")]
+use super::traverse::slab_hits_avx;
+#[cfg(target_arch = "x86_64")]
 use super::traverse::Avx;
 use super::traverse::{closer, Kernels, Portable, FAR_SCALE, MAX_TFAR, STACK};
 use super::wide::{leaf_packets, Node8, LEAF, WIDTH};
@@ -141,21 +143,7 @@ unsafe fn frustum_boxes_avx(f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WI
     let (nx, fx) = slab!(0);
     let (ny, fy) = slab!(1);
     let (nz, fz) = slab!(2);
-    let tn = _mm256_max_ps(
-        nz,
-        _mm256_max_ps(ny, _mm256_max_ps(nx, _mm256_setzero_ps())),
-    );
-    let tf = _mm256_mul_ps(
-        _mm256_min_ps(
-            fz,
-            _mm256_min_ps(fy, _mm256_min_ps(fx, _mm256_set1_ps(tmax.min(MAX_TFAR)))),
-        ),
-        _mm256_set1_ps(FAR_SCALE),
-    );
-    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
-    let mut tnear = [0.0; WIDTH];
-    _mm256_storeu_ps(tnear.as_mut_ptr(), tn);
-    (mask, tnear)
+    slab_hits_avx([nx, ny, nz], [fx, fy, fz], tmax)
 }
 
 /// [`rays_box`] with AVX, eight rays at a time.

@@ -149,14 +149,34 @@ unsafe fn hit_boxes_avx(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH])
     let (nx, fx) = slab!(0);
     let (ny, fy) = slab!(1);
     let (nz, fz) = slab!(2);
+    slab_hits_avx([nx, ny, nz], [fx, fy, fz], tmax)
+}
+
+/// Eight boxes' hits from their slabs' entry (`near`) and exit (`far`)
+/// distances per axis: entered no later than left (the exit widened by
+/// [`FAR_SCALE`]) and within `[0, tmax]`; with the entry distances.
+///
+/// # Safety
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(super) unsafe fn slab_hits_avx(
+    near: [std::arch::x86_64::__m256; 3],
+    far: [std::arch::x86_64::__m256; 3],
+    tmax: f32,
+) -> (u32, [f32; WIDTH]) {
+    use std::arch::x86_64::*;
     let tn = _mm256_max_ps(
-        nz,
-        _mm256_max_ps(ny, _mm256_max_ps(nx, _mm256_setzero_ps())),
+        near[2],
+        _mm256_max_ps(near[1], _mm256_max_ps(near[0], _mm256_setzero_ps())),
     );
     let tf = _mm256_mul_ps(
         _mm256_min_ps(
-            fz,
-            _mm256_min_ps(fy, _mm256_min_ps(fx, _mm256_set1_ps(tmax.min(MAX_TFAR)))),
+            far[2],
+            _mm256_min_ps(
+                far[1],
+                _mm256_min_ps(far[0], _mm256_set1_ps(tmax.min(MAX_TFAR))),
+            ),
         ),
         _mm256_set1_ps(FAR_SCALE),
     );
