@@ -123,6 +123,9 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         && checkpoint.is_none()
         && a.resume.is_none();
     p.whole_passes = checkpoint.is_some();
+    // A render that writes an image reads nothing else from its film; a
+    // part of a split render writes the film's statistics.
+    p.image_only = !split && checkpoint.is_none();
     // A render to a fixed spp adds a block of strata per pass: the same
     // samples as passes of one (a sample depends only on its pixel, index
     // and seed), with each pixel's statistics brought through the cache

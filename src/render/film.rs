@@ -53,6 +53,10 @@ pub use crate::raster::metrics::{LUMA, REL_EPS};
 /// How many non-finite samples are listed individually.
 const MAX_LISTED: usize = 1000;
 
+/// Why a summarised film cannot give statistics or take more samples.
+const NO_STATISTICS: &str =
+    "a summarised film keeps no statistics: it is made only for renders that read none";
+
 /// One pixel's statistics: everything its error estimate needs, and
 /// everything an exact merge of films over disjoint sample ranges needs.
 /// The colour is summed exactly (fixed point, [`FIXED_ONE`]), so a film
@@ -524,11 +528,75 @@ impl PixelStats {
     }
 }
 
+/// What a film that is read only for its image and error estimate keeps
+/// of a pixel (see [`Film::summarise`]): 24 bytes where statistics are 176.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PixelSummary {
+    /// [`PixelStats::mean`], as the image takes it.
+    mean: Vec3,
+    /// [`PixelSummary::KNOWN`] and [`PixelSummary::DESIGN_BASED`].
+    flags: u32,
+    /// [`PixelStats::rel_variance`] where known.
+    rel: f64,
+}
+
+impl PixelSummary {
+    /// The pixel's relative variance is known (two samples or more).
+    const KNOWN: u32 = 1;
+    /// [`PixelStats::estimate_is_design_based`].
+    const DESIGN_BASED: u32 = 2;
+
+    fn of(p: &PixelStats) -> Self {
+        let rel = p.rel_variance();
+        let design = p.estimate_is_design_based();
+        PixelSummary {
+            mean: p.mean.as_vec3(),
+            flags: rel.is_some() as u32 * Self::KNOWN + design as u32 * Self::DESIGN_BASED,
+            rel: rel.unwrap_or(0.0),
+        }
+    }
+
+    fn rel_variance(&self) -> Option<f64> {
+        (self.flags & Self::KNOWN != 0).then_some(self.rel)
+    }
+}
+
+/// A row of a summarised film as a pass fills it: the statistics of the
+/// pixel being sampled are kept here, on the stack, and summarised when
+/// the pass moves on to the next pixel.
+pub(crate) struct SummaryRow<'a> {
+    pixels: &'a mut [PixelSummary],
+    /// The pixel being sampled (`u32::MAX` before the first).
+    x: u32,
+    open: PixelStats,
+}
+
+impl<'a> SummaryRow<'a> {
+    fn new(pixels: &'a mut [PixelSummary]) -> Self {
+        SummaryRow {
+            pixels,
+            x: u32::MAX,
+            open: PixelStats::default(),
+        }
+    }
+
+    /// Summarises the pixel being sampled.
+    fn close(&mut self) {
+        if let Some(px) = self.pixels.get_mut(self.x as usize) {
+            *px = PixelSummary::of(&self.open);
+            self.open = PixelStats::default();
+        }
+        self.x = u32::MAX;
+    }
+}
+
 /// The pixels a pass samples into (all or a row).
 pub(crate) enum Samples<'a> {
     Stats(&'a mut [PixelStats]),
     /// A lean film's samples.
     Exact(&'a mut [Vec3]),
+    /// A summarised film's pixels.
+    Summary(SummaryRow<'a>),
 }
 
 impl<'a> Samples<'a> {
@@ -537,6 +605,11 @@ impl<'a> Samples<'a> {
         match self {
             Samples::Stats(p) => p.chunks_mut(width).map(Samples::Stats).collect(),
             Samples::Exact(p) => p.chunks_mut(width).map(Samples::Exact).collect(),
+            Samples::Summary(r) => r
+                .pixels
+                .chunks_mut(width)
+                .map(|p| Samples::Summary(SummaryRow::new(p)))
+                .collect(),
         }
     }
 
@@ -544,6 +617,7 @@ impl<'a> Samples<'a> {
         match self {
             Samples::Stats(p) => p.len(),
             Samples::Exact(p) => p.len(),
+            Samples::Summary(r) => r.pixels.len(),
         }
     }
 
@@ -568,6 +642,24 @@ impl<'a> Samples<'a> {
                     p[s.x as usize] = s.c;
                 }
             }
+            Samples::Summary(row) => {
+                for run in samples.chunk_by(|a, b| a.x == b.x) {
+                    if run[0].x != row.x {
+                        row.close();
+                        row.x = run[0].x;
+                    }
+                    for finite in run.split(|s| !s.c.is_finite()) {
+                        row.open.add_run(finite);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Ends a row's pass: a summarised film's last pixel is summarised.
+    pub(crate) fn finish(&mut self) {
+        if let Samples::Summary(row) = self {
+            row.close();
         }
     }
 
@@ -743,6 +835,11 @@ enum Pixels {
         samples: Vec<Vec3>,
         stats: OnceLock<Vec<PixelStats>>,
     },
+    /// Each pixel's mean and error term, all a render that writes an image
+    /// reads of its film: made by a pass that gives a blank film all its
+    /// samples, each pixel's statistics kept on the stack while it is
+    /// sampled (see [`Film::summarise`]).
+    Summary(Vec<PixelSummary>),
 }
 
 impl Pixels {
@@ -822,12 +919,33 @@ impl Film {
         }
     }
 
+    /// Makes this blank film a summarised one, which keeps of each pixel
+    /// only its mean and its term of the error estimate, 24 bytes a pixel
+    /// where statistics are 176: for a render whose one pass gives every
+    /// pixel all its samples, and whose film is then read for nothing but
+    /// [`Film::image`], [`Film::mean`] and [`Film::report`] (a render to an
+    /// image file). Its statistics are never made; asking for them
+    /// ([`Film::pixels`]) or for another pass is a bug and panics.
+    pub(crate) fn summarise(&mut self) {
+        assert!(self.is_blank(), "only a blank film is summarised");
+        let n = self.width as usize * self.height as usize;
+        // SAFETY: a summary of zero bytes is that of a pixel with no
+        // sample, which a pass writes over.
+        self.pixels = Pixels::Summary(unsafe { crate::memory::zeroed(n) });
+    }
+
     /// The number of pixels.
     pub fn pixels_len(&self) -> usize {
         match &self.pixels {
             Pixels::Stats(p) => p.len(),
             Pixels::Exact { samples, .. } => samples.len(),
+            Pixels::Summary(p) => p.len(),
         }
+    }
+
+    /// Whether this film keeps only each pixel's mean and error term.
+    pub fn is_summary(&self) -> bool {
+        matches!(self.pixels, Pixels::Summary(_))
     }
 
     /// Whether this is a lean film of one sample per pixel.
@@ -836,11 +954,12 @@ impl Film {
     }
 
     /// Each pixel's statistics (made from the samples on first use for a
-    /// lean film).
+    /// lean film; a summarised film has none, see [`Film::summarise`]).
     pub fn pixels(&self) -> &[PixelStats] {
         match &self.pixels {
             Pixels::Stats(p) => p,
             Pixels::Exact { samples, stats } => stats.get_or_init(|| Pixels::exact_stats(samples)),
+            Pixels::Summary(_) => panic!("{NO_STATISTICS}"),
         }
     }
 
@@ -855,6 +974,7 @@ impl Film {
         match &mut self.pixels {
             Pixels::Stats(p) => p,
             Pixels::Exact { .. } => unreachable!("made statistics above"),
+            Pixels::Summary(_) => panic!("{NO_STATISTICS}"),
         }
     }
 
@@ -868,6 +988,11 @@ impl Film {
                 // Statistics made before more samples came in are stale.
                 stats.take();
                 Samples::Exact(samples)
+            }
+            Pixels::Summary(p) => {
+                // A summary holds all of a pixel's samples or none.
+                assert!(self.spp == 0, "{NO_STATISTICS}");
+                Samples::Summary(SummaryRow::new(p))
             }
         };
         let counts = self
@@ -953,6 +1078,7 @@ impl Film {
         match &self.pixels {
             Pixels::Stats(p) => p[i].mean.as_vec3(),
             Pixels::Exact { samples, .. } => one_sample_mean(samples[i]),
+            Pixels::Summary(p) => p[i].mean,
         }
     }
 
@@ -961,6 +1087,7 @@ impl Film {
         match &self.pixels {
             Pixels::Stats(p) => p.iter().map(|p| p.mean.as_vec3()).collect(),
             Pixels::Exact { samples, .. } => samples.iter().map(|&c| one_sample_mean(c)).collect(),
+            Pixels::Summary(p) => p.iter().map(|p| p.mean).collect(),
         }
     }
 
@@ -968,18 +1095,24 @@ impl Film {
     /// estimated variance of the mean luminance over `lum^2 + REL_EPS`;
     /// `None` until every pixel has two samples.
     pub fn estimated_rel_mse(&self) -> Option<f64> {
-        // A lean film's pixels have one sample at most: no estimate.
-        let Pixels::Stats(pixels) = &self.pixels else {
-            return None;
-        };
-        if pixels.is_empty() {
-            return None;
+        // The terms summed in pixel order, from statistics or summaries
+        // alike; a lean film's pixels have one sample at most: no estimate.
+        fn mean_of(terms: impl ExactSizeIterator<Item = Option<f64>>) -> Option<f64> {
+            let n = terms.len();
+            if n == 0 {
+                return None;
+            }
+            let mut sum = 0.0;
+            for t in terms {
+                sum += t?;
+            }
+            Some(sum / n as f64)
         }
-        let mut sum = 0.0;
-        for p in pixels {
-            sum += p.rel_variance()?;
+        match &self.pixels {
+            Pixels::Stats(p) => mean_of(p.iter().map(PixelStats::rel_variance)),
+            Pixels::Summary(p) => mean_of(p.iter().map(PixelSummary::rel_variance)),
+            Pixels::Exact { .. } => None,
         }
-        Some(sum / pixels.len() as f64)
     }
 
     /// The relative error shown everywhere (TUI, `--target-error`,
@@ -1004,11 +1137,14 @@ impl Film {
     /// (`--target-error`): every pixel's rests on its samples alone
     /// ([`PixelStats::estimate_is_design_based`]: 16 samples).
     pub fn error_is_meaningful(&self) -> bool {
-        // A lean film's pixels have one sample at most.
-        let Pixels::Stats(pixels) = &self.pixels else {
-            return false;
-        };
-        !pixels.is_empty() && pixels.iter().all(PixelStats::estimate_is_design_based)
+        match &self.pixels {
+            Pixels::Stats(p) => !p.is_empty() && p.iter().all(PixelStats::estimate_is_design_based),
+            Pixels::Summary(p) => {
+                !p.is_empty() && p.iter().all(|p| p.flags & PixelSummary::DESIGN_BASED != 0)
+            }
+            // A lean film's pixels have one sample at most.
+            Pixels::Exact { .. } => false,
+        }
     }
 }
 
@@ -1403,6 +1539,120 @@ mod tests {
                 assert_eq!(format!("{runs:?}"), format!("{one:?}"), "{len} {skip:?}");
             }
         }
+    }
+
+    /// A summarised film holds the image and error estimate a film of
+    /// statistics holds for the same samples, bit for bit, whatever the
+    /// batches they come in, with samples dropped and pixels left empty.
+    #[test]
+    fn a_summarised_film_has_the_image_and_error_of_its_statistics() {
+        for empty in [false, true] {
+            summarised_like_statistics(empty);
+        }
+        // A pixel with one sample leaves the error unknown, and a film
+        // whose pixels all rest on whole blocks is meaningful.
+        for n in [1, 16] {
+            let mut films = [Film::new(2, 1), Film::new(2, 1)];
+            films[1].summarise();
+            for f in &mut films {
+                let mut pixels = f.sample_into().0;
+                let row: Vec<Sampled> = (0..2)
+                    .flat_map(|x| {
+                        (0..n).map(move |k| {
+                            let (stratum, v) = sample(x as u64, k, 1.0, 1.0);
+                            Sampled {
+                                x,
+                                k,
+                                c: Vec3::splat(v as f32),
+                                stratum: Some(stratum),
+                            }
+                        })
+                    })
+                    .collect();
+                pixels.add(&row);
+                pixels.finish();
+            }
+            assert_eq!(films[1].relative_error(), films[0].relative_error());
+            assert_eq!(films[1].relative_error().is_some(), n > 1);
+            assert_eq!(films[1].error_is_meaningful(), n == 16);
+            assert_eq!(films[0].error_is_meaningful(), n == 16);
+        }
+    }
+
+    /// See [`a_summarised_film_has_the_image_and_error_of_its_statistics`];
+    /// with `empty`, pixel 1 of row 0 has only non-finite samples.
+    fn summarised_like_statistics(empty: bool) {
+        let (w, h, spp) = (5usize, 3usize, 19u32);
+        let mut samples = Vec::new();
+        for y in 0..h {
+            let mut row = Vec::new();
+            for x in 0..w as u32 {
+                let p = (y * w) as u64 + x as u64;
+                for k in 0..spp {
+                    let (stratum, v) = sample(p, k, 1.0, 0.5);
+                    // A few samples are not finite.
+                    let bad = (empty && y == 0 && x == 1) || (p * 31 + k as u64).is_multiple_of(23);
+                    let c = if bad {
+                        Vec3::NAN
+                    } else {
+                        Vec3::new(v as f32, 0.5 + v as f32, 1e-3 * k as f32)
+                    };
+                    let stratum = (x % 2 == 0).then_some(stratum);
+                    row.push(Sampled { x, k, c, stratum });
+                }
+            }
+            samples.push(row);
+        }
+        for batch in [1, 7, 32, 1000] {
+            let mut films = [Film::new(w as u32, h as u32), Film::new(w as u32, h as u32)];
+            films[1].summarise();
+            for f in &mut films {
+                for (mut pixels, row) in f.sample_into().0.rows(w).into_iter().zip(&samples) {
+                    for b in row.chunks(batch) {
+                        pixels.add(b);
+                    }
+                    pixels.finish();
+                }
+            }
+            let [stats, summary] = &films;
+            assert!(summary.is_summary() && !stats.is_summary());
+            let bits = |f: &Film| {
+                f.image()
+                    .iter()
+                    .map(|c| c.to_array().map(f32::to_bits))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(bits(summary), bits(stats), "batch {batch}");
+            assert_eq!(summary.mean(3, 2), stats.mean(3, 2));
+            let err = stats.estimated_rel_mse();
+            assert_eq!(err.is_none(), empty);
+            assert!(err.is_none_or(|e| e > 0.0));
+            assert_eq!(
+                summary.estimated_rel_mse().map(f64::to_bits),
+                err.map(f64::to_bits)
+            );
+            assert_eq!(summary.report(), stats.report());
+            assert!(!stats.error_is_meaningful());
+            assert_eq!(summary.error_is_meaningful(), stats.error_is_meaningful());
+            for (p, s) in stats.pixels().iter().zip(summary_pixels(summary)) {
+                assert_eq!(*s, PixelSummary::of(p));
+            }
+        }
+    }
+
+    fn summary_pixels(f: &Film) -> &[PixelSummary] {
+        match &f.pixels {
+            Pixels::Summary(p) => p,
+            _ => panic!("not summarised"),
+        }
+    }
+
+    #[test]
+    #[should_panic(expected = "keeps no statistics")]
+    fn a_summarised_film_gives_no_statistics() {
+        let mut f = Film::new(2, 2);
+        f.summarise();
+        f.pixels();
     }
 
     #[test]

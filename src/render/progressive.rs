@@ -118,6 +118,11 @@ pub struct Progressive {
     /// same samples, as a checkpoint must. Each row is copied before it is
     /// sampled, which needs the film's statistics twice over.
     pub whole_passes: bool,
+    /// Whether nothing but the image and the error estimate is read from
+    /// the film once the run ends (a render to an image file): a pass that
+    /// gives a blank film all the stop's samples then keeps only those
+    /// ([`Film::summarise`]), and no pass may follow it.
+    pub image_only: bool,
 }
 
 /// What a pass gives the pixels.
@@ -143,6 +148,7 @@ impl Progressive {
             rows_done: None,
             adaptive: false,
             whole_passes: false,
+            image_only: false,
         }
     }
 
@@ -230,8 +236,14 @@ impl Progressive {
         }
         let rows = self.rows_done.as_deref();
         let whole = self.whole_passes;
+        // The one pass of an image-only render holds every sample the film
+        // gets: its pixels need no statistics after it.
+        let f = &self.film;
+        let only = self.image_only
+            && f.is_blank()
+            && matches!(give, Some(Give::All(n)) if stop.spp.is_some_and(|s| n >= s));
         let rec: R = match &give {
-            Some(g) => sample_rows(tracer, &mut self.film, g, cancel, rows, whole),
+            Some(g) => sample_rows(tracer, &mut self.film, g, cancel, rows, whole, only),
             None => R::default(),
         };
         let ms = start.elapsed().as_secs_f64() * 1e3;
@@ -408,7 +420,10 @@ struct Row<'a> {
 
 /// Adds what `give` says to the pixels of `film`, rows in parallel;
 /// `cancel` is polled between rows and `rows_done` counts finished rows.
-/// With `whole`, a pass cut short leaves a uniform film as it was.
+/// With `whole`, a pass cut short leaves a uniform film as it was; with
+/// `only`, this pass is all the film gets and all that is read of it is the
+/// image and the error estimate.
+#[allow(clippy::too_many_arguments)]
 fn sample_rows<R: Recorder + Default + Send + Merge>(
     tracer: &Tracer,
     film: &mut Film,
@@ -416,6 +431,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
     cancel: &(dyn Fn() -> bool + Sync),
     rows_done: Option<&AtomicU32>,
     whole: bool,
+    only: bool,
 ) -> R {
     let whole = whole && film.adaptive.is_none();
     let w = (film.width as usize).max(1);
@@ -428,8 +444,13 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
         && first == 0
         && film.adaptive.is_none()
         && !whole;
+    // Else the statistics of a pass that is all a film gets serve only
+    // its image and error: each pixel's are summarised once it is sampled.
+    let summary = !lean && only && film.adaptive.is_none() && !whole;
     if lean && !film.is_exact() {
         *film = Film::new_exact(film.width, film.height);
+    } else if summary {
+        film.summarise();
     } else if !lean && film.is_exact() {
         film.pixels_mut();
     }
@@ -533,6 +554,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                 }
             }
             trace(&mut placed);
+            row.pixels.finish();
             if let (Some(s), Give::Each(g)) = (&mut row.spp, give) {
                 for (x, s) in s.iter_mut().enumerate() {
                     *s += g[row.y * w + x];
@@ -802,6 +824,35 @@ mod tests {
             }
         }
         weight.iter().map(|&w| count(b.exp2(), w) as u32).collect()
+    }
+
+    /// A render read only for its image summarises its film when one pass
+    /// gives it every sample, and the image, error and report are those of
+    /// the film of statistics; in more passes it keeps statistics.
+    #[test]
+    fn an_image_only_render_has_the_image_and_error_of_a_full_one() {
+        for off in [&[][..], &[Feature::Supersampling]] {
+            let s = session(off);
+            let t = s.tracer();
+            for (spp, per_pass) in [(1, 1), (3, 16), (16, 16), (16, 4), (21, 16)] {
+                let run = |image_only: bool| {
+                    let mut p = Progressive::new(12, 8);
+                    p.samples_per_pass = per_pass;
+                    p.image_only = image_only;
+                    let o = p.run(&t, &Stop::spp(spp), &|| false, |_, _| {});
+                    (p.film, o.rays)
+                };
+                let (full, rays) = run(false);
+                let (only, only_rays) = run(true);
+                let what = format!("{off:?} {spp} spp in passes of {per_pass}");
+                assert!(!full.is_summary(), "{what}");
+                assert_eq!(only.is_summary(), per_pass >= spp, "{what}");
+                assert_eq!(only.image(), full.image(), "{what}");
+                assert_eq!(only.report(), full.report(), "{what}");
+                assert_eq!(only.relative_error().is_some(), spp > 1, "{what}");
+                assert_eq!(only_rays, rays, "{what}");
+            }
+        }
     }
 
     #[test]
