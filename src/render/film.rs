@@ -1505,6 +1505,65 @@ mod tests {
         }
     }
 
+    /// The mean and Welford's M2 after each sample as their definitions
+    /// give them (the casts and one division a channel), bit for bit.
+    #[test]
+    fn means_and_m2_are_those_of_the_definitions() {
+        let mut z = 0x1234_5678_9abc_def1u64;
+        let mut next = || {
+            z ^= z << 13;
+            z ^= z >> 7;
+            z ^= z << 17;
+            z
+        };
+        for len in [1usize, 2, 3, 5, 16, 17, 40] {
+            let c: Vec<Vec3> = (0..len)
+                .map(|_| {
+                    Vec3::from_array([0; 3].map(|_| {
+                        let r = next();
+                        // Every magnitude, clamped ones among them.
+                        f32::from_bits(r as u32 & 0x7fff_ffff).min(1e13)
+                            * [1.0, -1.0][r as usize >> 63]
+                    }))
+                })
+                .map(|c| if c.is_finite() { c } else { Vec3::splat(0.25) })
+                .collect();
+            let run: Vec<Sampled> = (0..len)
+                .map(|k| Sampled {
+                    x: 0,
+                    k: k as u32,
+                    c: c[k],
+                    stratum: None,
+                })
+                .collect();
+            let mut px = PixelStats::default();
+            px.add_run(&run);
+            let (mut sum, mut m2, mut old) = ([0i128; 3], 0.0, 0.0);
+            let mut mean = DVec3::ZERO;
+            for (k, c) in c.iter().enumerate() {
+                let q = c
+                    .to_array()
+                    .map(|x| (x.clamp(-FIXED_MAX, FIXED_MAX) as f64 * FIXED_ONE) as i128);
+                for (s, q) in sum.iter_mut().zip(q) {
+                    *s += q;
+                }
+                let n = (k + 1) as f64;
+                mean = DVec3::from_array(sum.map(|s| s as f64 / FIXED_ONE / n));
+                let lum = DVec3::from_array(q.map(|q| q as f64 / FIXED_ONE)).dot(LUMA.as_dvec3());
+                let lum_mean = mean.dot(LUMA.as_dvec3());
+                m2 += (lum - old) * (lum - lum_mean);
+                old = lum_mean;
+            }
+            assert_eq!(px.sum, sum, "{len}");
+            assert_eq!(
+                px.mean.to_array().map(f64::to_bits),
+                mean.to_array().map(f64::to_bits),
+                "{len}"
+            );
+            assert_eq!(px.m2.to_bits(), m2.to_bits(), "{len}");
+        }
+    }
+
     /// A pixel's samples added in runs of any length hold the statistics
     /// of the same samples added one at a time, bit for bit.
     #[test]
