@@ -206,7 +206,7 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
             cbounds,
             depth: 1,
         };
-        depth = subtree(method, task, root, rest, 1, &mut Box::new(Bins::new()));
+        depth = subtree(method, task, root, rest, 1, &mut Binning::new());
     }
     let nodes = compact(room);
     drop(scratch);
@@ -248,7 +248,7 @@ fn subtree(
     me: &mut MaybeUninit<Node>,
     desc: &mut [MaybeUninit<Node>],
     base: usize,
-    bins: &mut Bins,
+    bins: &mut Binning,
 ) -> usize {
     if t.refs.len() <= PARALLEL_SUBTREE {
         return packed(method, t, me, desc, base, bins).0;
@@ -262,7 +262,7 @@ fn subtree(
     let (l, r) = pair.split_at_mut(1);
     let (ldesc, rdesc) = rest.split_at_mut(2 * m - 2);
     let (lbase, rbase) = (base + 2, base + 2 + 2 * m - 2);
-    let mut other = Box::new(Bins::new());
+    let mut other = Binning::new();
     let (a, b) = rayon::join(
         || subtree(method, left, &mut l[0], ldesc, lbase, bins),
         || subtree(method, right, &mut r[0], rdesc, rbase, &mut other),
@@ -279,7 +279,7 @@ fn packed(
     me: &mut MaybeUninit<Node>,
     desc: &mut [MaybeUninit<Node>],
     base: usize,
-    bins: &mut Bins,
+    bins: &mut Binning,
 ) -> (usize, usize) {
     let (left, right) = match open(method, t, me, base, bins) {
         Ok(sides) => sides,
@@ -307,7 +307,7 @@ fn open<'a>(
     mut t: Task<'a>,
     me: &mut MaybeUninit<Node>,
     base: usize,
-    bins: &mut Bins,
+    bins: &mut Binning,
 ) -> Result<(Task<'a>, Task<'a>), usize> {
     let n = t.refs.len();
     let (min, max) = (t.bounds.min.to_array(), t.bounds.max.to_array());
@@ -381,9 +381,7 @@ fn blocks(n: usize) -> f32 {
 /// Most bins per axis.
 const MAX_BINS: usize = 32;
 
-/// Per-axis bins: bounds and triangle counts. One set serves a whole
-/// subtree, cleared per node: building a fresh one per node cost more than
-/// filling it.
+/// Per-axis bins: bounds and triangle counts.
 #[derive(Clone)]
 struct Bins {
     bounds: [[Box3; MAX_BINS]; 3],
@@ -417,14 +415,55 @@ impl Bins {
         }
     }
 
-    fn merge(mut self, o: Self) -> Self {
+    /// Adds the first `b` bins of `o` to these.
+    #[inline(always)]
+    fn merge(&mut self, o: &Self, b: usize) {
         for axis in 0..3 {
-            for k in 0..MAX_BINS {
+            for k in 0..b {
                 self.bounds[axis][k] = self.bounds[axis][k].union(o.bounds[axis][k]);
                 self.count[axis][k] += o.count[axis][k];
             }
         }
-        self
+    }
+}
+
+/// Two sets of bins, filled by alternate triangles and then merged.
+/// Neighbouring triangles often fall in the same bins, and each update of
+/// a bin waits for the previous one's store; alternating sets halves that
+/// chain. One pair serves a whole subtree, cleared per node: building a
+/// fresh one per node cost more than filling it.
+#[derive(Clone)]
+struct Binning {
+    even: Bins,
+    odd: Bins,
+}
+
+impl Binning {
+    fn new() -> Box<Self> {
+        Box::new(Binning {
+            even: Bins::new(),
+            odd: Bins::new(),
+        })
+    }
+
+    /// Adds `refs` to the first `B` bins of each set.
+    #[inline(always)]
+    fn add_all<const B: usize>(&mut self, binner: &Binner<B>, refs: &[PrimRef]) {
+        let mut pairs = refs.chunks_exact(2);
+        for p in &mut pairs {
+            self.even.add(&p[0], binner.bin(p[0].c()));
+            self.odd.add(&p[1], binner.bin(p[1].c()));
+        }
+        for r in pairs.remainder() {
+            self.even.add(r, binner.bin(r.c()));
+        }
+    }
+
+    /// The sum of both sets' first `b` bins, in `even`.
+    #[inline(always)]
+    fn sum(&mut self, b: usize) -> &Bins {
+        self.even.merge(&self.odd, b);
+        &self.even
     }
 }
 
@@ -462,7 +501,7 @@ impl<const B: usize> Binner<B> {
 }
 
 /// The best SAH split of `t`, partitioned; `None` makes a leaf.
-fn split_sah(t: &mut Task, bins: &mut Bins) -> Option<Cut> {
+fn split_sah(t: &mut Task, bins: &mut Binning) -> Option<Cut> {
     match t.refs.len() {
         // One packet costs less than any split of it.
         0..=LEAF_BLOCK => None,
@@ -475,7 +514,7 @@ fn split_sah(t: &mut Task, bins: &mut Bins) -> Option<Cut> {
 }
 
 /// The best split of `t` over `B` bins per axis, partitioned.
-fn split_binned<const B: usize>(t: &mut Task, bins: &mut Bins) -> Option<Cut> {
+fn split_binned<const B: usize>(t: &mut Task, binning: &mut Binning) -> Option<Cut> {
     let n = t.refs.len();
     let ext = t.cbounds.max - t.cbounds.min;
     let binner = Binner::<B> {
@@ -486,23 +525,26 @@ fn split_binned<const B: usize>(t: &mut Task, bins: &mut Bins) -> Option<Cut> {
             Vec3A::ZERO,
         ),
     };
-    if n > PARALLEL_BINNING {
-        *bins = t
+    let bins: &Bins = if n > PARALLEL_BINNING {
+        *binning = *t
             .refs
             .par_chunks(PARALLEL_BINNING / 4)
-            .fold(Bins::new, |mut b, chunk| {
-                for r in chunk {
-                    b.add(r, binner.bin(r.c()));
-                }
+            .fold(Binning::new, |mut b, chunk| {
+                b.add_all(&binner, chunk);
                 b
             })
-            .reduce(Bins::new, Bins::merge);
+            .reduce(Binning::new, |mut a, b| {
+                a.even.merge(&b.even, B);
+                a.odd.merge(&b.odd, B);
+                a
+            });
+        binning.sum(B)
     } else {
-        bins.clear(B);
-        for r in t.refs.iter() {
-            bins.add(r, binner.bin(r.c()));
-        }
-    }
+        binning.even.clear(B);
+        binning.odd.clear(B);
+        binning.add_all(&binner, t.refs);
+        binning.sum(B)
+    };
     // Best (cost, axis, last bin of the left side). Empty bins are swept
     // like the others (a branch on them mispredicts more than it saves);
     // the strict comparison keeps the first of equal splits.
