@@ -197,8 +197,12 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
     let mut scratch: Vec<Node> = Vec::with_capacity((2 * n).saturating_sub(1));
     let room = &mut scratch.spare_capacity_mut()[..(2 * n).saturating_sub(1)];
     let mut depth = 0;
+    let mut nodes = Vec::new();
     if let Some((root, rest)) = room.split_first_mut() {
-        let (bounds, cbounds) = Box3::of(&refs);
+        let (bounds, cbounds) = refs.par_chunks(PARALLEL_SUBTREE).map(Box3::of).reduce(
+            || (Box3::EMPTY, Box3::EMPTY),
+            |(a, b), (c, d)| (a.union(c), b.union(d)),
+        );
         let task = Task {
             refs: &mut refs,
             first: 0,
@@ -206,11 +210,12 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
             cbounds,
             depth: 1,
         };
-        depth = subtree(method, task, root, rest, 1, &mut Binning::new());
+        let part;
+        (depth, part) = subtree(method, task, root, rest, 1, &mut Binning::new());
+        nodes = compact(room, &part);
     }
-    let nodes = compact(room);
     drop(scratch);
-    let prim: Vec<u32> = refs.iter().map(|r| r.index()).collect();
+    let prim: Vec<u32> = refs.par_iter().map(PrimRef::index).collect();
     drop(refs);
     // The packets are the one copy of the triangles the BVH keeps, gathered
     // from the scene in leaf order.
@@ -235,8 +240,8 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
 }
 
 /// Builds the subtree of `t` into `me` (its root) and `desc` (room for its
-/// descendants, which start at index `base`); returns the subtree's depth.
-/// `bins` is scratch space for the binned SAH.
+/// descendants, which start at index `base`); returns the subtree's depth
+/// and where its nodes lie. `bins` is scratch space for the binned SAH.
 ///
 /// Each side of a split gets room for as many nodes as it could need, so
 /// the two build in parallel; small subtrees are built on one thread
@@ -249,13 +254,14 @@ fn subtree(
     desc: &mut [MaybeUninit<Node>],
     base: usize,
     bins: &mut Binning,
-) -> usize {
+) -> (usize, Part) {
     if t.refs.len() <= PARALLEL_SUBTREE {
-        return packed(method, t, me, desc, base, bins).0;
+        let (depth, len) = packed(method, t, me, desc, base, bins);
+        return (depth, Part::Packed { at: base, len });
     }
     let (left, right) = match open(method, t, me, base, bins) {
         Ok(sides) => sides,
-        Err(depth) => return depth,
+        Err(depth) => return (depth, Part::Packed { at: base, len: 0 }),
     };
     let m = left.refs.len();
     let (pair, rest) = desc.split_at_mut(2);
@@ -263,11 +269,47 @@ fn subtree(
     let (ldesc, rdesc) = rest.split_at_mut(2 * m - 2);
     let (lbase, rbase) = (base + 2, base + 2 + 2 * m - 2);
     let mut other = Binning::new();
-    let (a, b) = rayon::join(
+    let ((da, a), (db, b)) = rayon::join(
         || subtree(method, left, &mut l[0], ldesc, lbase, bins),
         || subtree(method, right, &mut r[0], rdesc, rbase, &mut other),
     );
-    a.max(b)
+    let len = 2 + a.len() + b.len();
+    let part = Part::Split {
+        at: base,
+        len,
+        sides: Box::new([a, b]),
+    };
+    (da.max(db), part)
+}
+
+/// Where the descendants of a node lie in the builder's room, for
+/// [`compact`]: what [`packed`] built, and the splits above it that
+/// [`subtree`] made in parallel, each with room for all it could need.
+enum Part {
+    /// `len` nodes from `at`, depth-first, siblings adjacent.
+    Packed { at: usize, len: usize },
+    /// The two children at `at` and `at + 1`, their descendants elsewhere;
+    /// `len` nodes in all.
+    Split {
+        at: usize,
+        len: usize,
+        sides: Box<[Part; 2]>,
+    },
+}
+
+impl Part {
+    fn at(&self) -> usize {
+        match *self {
+            Part::Packed { at, .. } | Part::Split { at, .. } => at,
+        }
+    }
+
+    /// Nodes without the unused room.
+    fn len(&self) -> usize {
+        match *self {
+            Part::Packed { len, .. } | Part::Split { len, .. } => len,
+        }
+    }
 }
 
 /// [`subtree`] on one thread, with the nodes in depth-first order from the
@@ -831,34 +873,53 @@ fn split_median(t: &mut Task) -> Option<Cut> {
     halves(t.refs, mid)
 }
 
-/// The tree without unused slots, in depth-first order, siblings adjacent.
-fn compact(scratch: &[MaybeUninit<Node>]) -> Vec<Node> {
-    let mut out = Vec::with_capacity(scratch.len());
-    if scratch.is_empty() {
-        return out;
-    }
+/// The tree without unused room, in depth-first order, siblings adjacent:
+/// the root (at 0) and its descendants (`part`), copied on the rayon pool.
+fn compact(scratch: &[MaybeUninit<Node>], part: &Part) -> Vec<Node> {
+    let mut out = Vec::with_capacity(1 + part.len());
+    let room = &mut out.spare_capacity_mut()[..1 + part.len()];
+    let (root, desc) = room.split_at_mut(1);
+    root[0].write(moved(scratch, 0, part.at(), 1));
+    place(scratch, part, desc, 1);
+    // SAFETY: `place` wrote every node of `desc`: a part's nodes are the
+    // two children and both sides' nodes, or a packed run, `len` in all.
+    unsafe { out.set_len(1 + part.len()) };
+    out
+}
+
+/// The node at `i` of `scratch`, whose children (if it has any) are the
+/// first nodes of the part at `from`, for a tree where that part starts at
+/// `to`.
+#[inline(always)]
+fn moved(scratch: &[MaybeUninit<Node>], i: usize, from: usize, to: usize) -> Node {
     // SAFETY: the root and the children of every node read here were
     // written by `open` (a node is written before its children are made,
     // and an interior node's `first` names its two children).
-    let node = |i: usize| unsafe { scratch[i].assume_init() };
-    out.push(node(0));
-    // (index in `out`, index in `scratch`) of interior nodes whose children
-    // are still to be copied.
-    let mut stack = vec![(0usize, 0usize)];
-    while let Some((o, s)) = stack.pop() {
-        let n = node(s);
-        if n.is_leaf() {
-            continue;
-        }
-        let c = n.first as usize;
-        let at = out.len();
-        out[o].first = at as u32;
-        out.push(node(c));
-        out.push(node(c + 1));
-        stack.push((at + 1, c + 1));
-        stack.push((at, c));
+    let mut n = unsafe { scratch[i].assume_init() };
+    if !n.is_leaf() {
+        n.first = (n.first as usize - from + to) as u32;
     }
-    out
+    n
+}
+
+/// Copies the nodes of `part` to `out`, which starts at index `to`.
+fn place(scratch: &[MaybeUninit<Node>], part: &Part, out: &mut [MaybeUninit<Node>], to: usize) {
+    match part {
+        &Part::Packed { at, len } => {
+            for (k, o) in out[..len].iter_mut().enumerate() {
+                o.write(moved(scratch, at + k, at, to));
+            }
+        }
+        Part::Split { at, sides, .. } => {
+            let [a, b] = &**sides;
+            let (pair, rest) = out.split_at_mut(2);
+            let (ra, rb) = rest.split_at_mut(a.len());
+            let (ta, tb) = (to + 2, to + 2 + a.len());
+            pair[0].write(moved(scratch, *at, a.at(), ta));
+            pair[1].write(moved(scratch, at + 1, b.at(), tb));
+            rayon::join(|| place(scratch, a, ra, ta), || place(scratch, b, rb, tb));
+        }
+    }
 }
 
 fn stats(nodes: &[Node], triangles: usize, depth: usize, build_ms: f64) -> BuildStats {
