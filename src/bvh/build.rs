@@ -17,6 +17,7 @@ use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
 
 use super::{wide, BuildStats, Bvh, Node};
+use crate::memory;
 use crate::scene::{Builder, Geometry};
 
 /// Nodes with at least this many triangles use 32 bins per axis, smaller
@@ -174,7 +175,8 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
     let start_time = Instant::now();
     let n = geom.indices.len();
     let vertices = |i: usize| geom.indices[i].map(|v| geom.positions[v as usize]);
-    let mut refs: Vec<PrimRef> = (0..n)
+    let mut refs: Vec<PrimRef> = memory::room(n);
+    (0..n)
         .into_par_iter()
         .with_min_len(4096)
         .map(|i| {
@@ -189,7 +191,7 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
                 PrimRef::new(Vec3A::ZERO, Vec3A::ZERO, i as u32)
             }
         })
-        .collect();
+        .collect_into_vec(&mut refs);
     // A binary tree over n triangles has at most 2n - 1 nodes. Each subtree
     // gets its own part of this room, so subtrees build in parallel without
     // locks; `compact` then copies the nodes out. The room is left
@@ -215,7 +217,10 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
         nodes = compact(room, &part);
     }
     drop(scratch);
-    let prim: Vec<u32> = refs.par_iter().map(PrimRef::index).collect();
+    let mut prim: Vec<u32> = memory::room(n);
+    refs.par_iter()
+        .map(PrimRef::index)
+        .collect_into_vec(&mut prim);
     drop(refs);
     // The packets are the one copy of the triangles the BVH keeps, gathered
     // from the scene in leaf order.
@@ -876,7 +881,7 @@ fn split_median(t: &mut Task) -> Option<Cut> {
 /// The tree without unused room, in depth-first order, siblings adjacent:
 /// the root (at 0) and its descendants (`part`), copied on the rayon pool.
 fn compact(scratch: &[MaybeUninit<Node>], part: &Part) -> Vec<Node> {
-    let mut out = Vec::with_capacity(1 + part.len());
+    let mut out = memory::room(1 + part.len());
     let room = &mut out.spare_capacity_mut()[..1 + part.len()];
     let (root, desc) = room.split_at_mut(1);
     root[0].write(moved(scratch, 0, part.at(), 1));

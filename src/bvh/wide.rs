@@ -7,6 +7,7 @@
 use rayon::prelude::*;
 
 use super::Node;
+use crate::memory;
 
 /// Child references with this bit set are leaves:
 /// `LEAF | first_packet << PACKET_BITS | (packets - 1)`.
@@ -96,13 +97,14 @@ impl Wide {
         tri: impl Fn(usize) -> [[f32; 3]; 3] + Sync,
     ) -> Wide {
         let mut w = Wide {
-            nodes: Vec::with_capacity(bin.len() / 2 + 1),
+            nodes: memory::room(bin.len() / 2 + 1),
             packets: Vec::new(),
             stack: 0,
             avx: avx_available(),
             node_of: Vec::with_capacity(bin.len() / 2 + 1),
             leaf_of: Vec::with_capacity(count / 3 + 2),
-            slot: vec![0; count],
+            // SAFETY: zero bytes are a u32.
+            slot: unsafe { memory::zeroed(count) },
         };
         // Packet 0 holds no triangle: the empty slots' leaf.
         let mut runs: Vec<Run> = Vec::with_capacity(count / 3 + 2);
@@ -117,8 +119,8 @@ impl Wide {
             };
             w.stack = depth * (WIDTH - 1);
         }
-        w.packets = runs
-            .par_iter()
+        w.packets = memory::room(runs.len());
+        runs.par_iter()
             .with_min_len(1024)
             .map(|&(first, lanes)| {
                 let mut p = Packet {
@@ -136,7 +138,7 @@ impl Wide {
                 }
                 p
             })
-            .collect();
+            .collect_into_vec(&mut w.packets);
         w
     }
 
