@@ -216,19 +216,25 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
         (depth, part) = subtree(method, task, root, rest, 1, &mut Binning::new());
         nodes = compact(room, &part);
     }
-    drop(scratch);
-    let mut prim: Vec<u32> = memory::room(n);
-    refs.par_iter()
-        .map(PrimRef::index)
-        .collect_into_vec(&mut prim);
-    drop(refs);
+    // The wide tree's walk runs on one thread; the rest of the pool takes
+    // the leaf order, the statistics and the freeing meanwhile.
+    let tree = &nodes;
+    let (plan, (prim, mut stats)) = rayon::join(
+        || wide::Wide::plan(tree, n),
+        move || {
+            drop(scratch);
+            let mut prim: Vec<u32> = memory::room(n);
+            refs.par_iter()
+                .map(PrimRef::index)
+                .collect_into_vec(&mut prim);
+            drop(refs);
+            (prim, stats(tree, n, depth))
+        },
+    );
     // The packets are the one copy of the triangles the BVH keeps, gathered
     // from the scene in leaf order.
-    let wide = wide::Wide::collapse(&nodes, n, |i| {
-        vertices(prim[i] as usize).map(|p| p.to_array())
-    });
-    let build_ms = start_time.elapsed().as_secs_f64() * 1e3;
-    let stats = stats(&nodes, n, depth, build_ms);
+    let wide = plan.fill(|i| vertices(prim[i] as usize).map(|p| p.to_array()));
+    stats.build_ms = start_time.elapsed().as_secs_f64() * 1e3;
     let reach = nodes.first().map_or(0.0, |r| {
         r.min
             .iter()
@@ -1006,7 +1012,8 @@ fn place(scratch: &[MaybeUninit<Node>], part: &Part, out: &mut [MaybeUninit<Node
     }
 }
 
-fn stats(nodes: &[Node], triangles: usize, depth: usize, build_ms: f64) -> BuildStats {
+/// The tree's statistics; `build_ms` is left to the caller.
+fn stats(nodes: &[Node], triangles: usize, depth: usize) -> BuildStats {
     let (leaves, max_leaf, sah) = sah_cost(nodes, 1);
     BuildStats {
         builder: String::new(),
@@ -1017,7 +1024,7 @@ fn stats(nodes: &[Node], triangles: usize, depth: usize, build_ms: f64) -> Build
         max_leaf,
         mean_leaf: triangles as f64 / leaves.max(1) as f64,
         sah_cost: sah,
-        build_ms,
+        build_ms: 0.0,
     }
 }
 

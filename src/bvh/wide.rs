@@ -87,15 +87,19 @@ impl Wide {
     /// leaf order, `tri(i)` the `i`-th): each wide node takes the binary
     /// node's children and keeps opening the largest interior one until it
     /// has eight.
-    ///
-    /// The walk lays out the nodes and decides which triangles each packet
-    /// holds; the packets, where the time goes (a scattered read of every
-    /// vertex), are then filled on the rayon pool.
     pub fn collapse(
         bin: &[Node],
         count: usize,
         tri: impl Fn(usize) -> [[f32; 3]; 3] + Sync,
     ) -> Wide {
+        Wide::plan(bin, count).fill(tri)
+    }
+
+    /// The walk of [`Wide::collapse`]: lays out the nodes and decides which
+    /// triangles each packet holds, on this thread. The packets, where the
+    /// time goes (a scattered read of every vertex), are left to
+    /// [`Plan::fill`], on the rayon pool.
+    pub fn plan(bin: &[Node], count: usize) -> Plan {
         let mut w = Wide {
             nodes: memory::room(bin.len() / 2 + 1),
             packets: Vec::new(),
@@ -119,27 +123,7 @@ impl Wide {
             };
             w.stack = depth * (WIDTH - 1);
         }
-        w.packets = memory::room(runs.len());
-        runs.par_iter()
-            .with_min_len(1024)
-            .map(|&(first, lanes)| {
-                let mut p = Packet {
-                    p: [[[f32::NAN; PACKET]; 3]; 3],
-                    idx: [u32::MAX; PACKET],
-                };
-                for lane in 0..lanes as usize {
-                    let i = first as usize + lane;
-                    for (pv, tv) in p.p.iter_mut().zip(&tri(i)) {
-                        for (pa, &x) in pv.iter_mut().zip(tv) {
-                            pa[lane] = x;
-                        }
-                    }
-                    p.idx[lane] = i as u32;
-                }
-                p
-            })
-            .collect_into_vec(&mut w.packets);
-        w
+        Plan { wide: w, runs }
     }
 
     /// Wide node over the children of interior binary node `at` (at `c`
@@ -240,6 +224,42 @@ impl Wide {
             + std::mem::size_of_val(&self.node_of[..])
             + std::mem::size_of_val(&self.leaf_of[..])
             + std::mem::size_of_val(&self.slot[..])
+    }
+}
+
+/// A wide tree laid out, its packets still to be filled.
+pub(crate) struct Plan {
+    wide: Wide,
+    /// The triangles of each packet.
+    runs: Vec<Run>,
+}
+
+impl Plan {
+    /// The wide tree, with its packets filled from `tri(i)`, the triangle
+    /// at leaf-order position `i`.
+    pub fn fill(self, tri: impl Fn(usize) -> [[f32; 3]; 3] + Sync) -> Wide {
+        let Plan { wide: mut w, runs } = self;
+        w.packets = memory::room(runs.len());
+        runs.par_iter()
+            .with_min_len(1024)
+            .map(|&(first, lanes)| {
+                let mut p = Packet {
+                    p: [[[f32::NAN; PACKET]; 3]; 3],
+                    idx: [u32::MAX; PACKET],
+                };
+                for lane in 0..lanes as usize {
+                    let i = first as usize + lane;
+                    for (pv, tv) in p.p.iter_mut().zip(&tri(i)) {
+                        for (pa, &x) in pv.iter_mut().zip(tv) {
+                            pa[lane] = x;
+                        }
+                    }
+                    p.idx[lane] = i as u32;
+                }
+                p
+            })
+            .collect_into_vec(&mut w.packets);
+        w
     }
 }
 
