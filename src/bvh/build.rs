@@ -660,8 +660,8 @@ fn split_binned<const B: usize>(t: &mut Task, binning: &mut Binning) -> Option<C
     // does worse than the binned split, which is one of those tried.
     // Three groups: left of the two bins, in them, right of them.
     let refs = &mut *t.refs;
-    let lo = partition(refs, |c| binner.bin(c)[axis] < bin);
-    let hi = lo + partition(&mut refs[lo..], |c| binner.bin(c)[axis] <= bin + 1);
+    let lo = partition_by(refs, |c| binner.bin(c)[axis] < bin);
+    let hi = lo + partition_by(&mut refs[lo..], |c| binner.bin(c)[axis] <= bin + 1);
     let (c_lo, c_hi) = (centroids(&refs[..lo]), centroids(&refs[hi..]));
     let union = |r: std::ops::Range<usize>| {
         bins.bounds[axis][r]
@@ -761,71 +761,9 @@ fn partition_by(refs: &mut [PrimRef], left: impl Fn(Vec3A) -> bool) -> usize {
     i
 }
 
-/// Triangles per block when a node's triangles are partitioned or their
-/// centroids bounded on several threads: a fixed size, not one block per
-/// thread, so that the order they end in is the same on any pool.
+/// Triangles per block when a node's centroids are bounded on several
+/// threads.
 const BLOCK: usize = 1 << 14;
-
-/// [`partition_by`], on the rayon pool for large nodes: each block is
-/// partitioned in place, then the right-side triangles left among the
-/// first `count` are swapped, in order, with the left-side ones beyond.
-fn partition(refs: &mut [PrimRef], left: impl Fn(Vec3A) -> bool + Sync) -> usize {
-    if refs.len() <= PARALLEL_BINNING {
-        return partition_by(refs, left);
-    }
-    let counts: Vec<usize> = refs
-        .par_chunks_mut(BLOCK)
-        .map(|block| partition_by(block, &left))
-        .collect();
-    let count: usize = counts.iter().sum();
-    let n = refs.len();
-    let (front, back) = refs.split_at_mut(count);
-    // The misplaced runs: rights in `front`, lefts in `back`.
-    let (mut stray_right, mut stray_left) = (Vec::new(), Vec::new());
-    let (mut rest_f, mut at_f) = (front, 0);
-    let (mut rest_b, mut at_b) = (back, count);
-    for (k, &c) in counts.iter().enumerate() {
-        let (start, end) = (k * BLOCK, ((k + 1) * BLOCK).min(n));
-        let mid = start + c;
-        if mid < count {
-            let run = carve(&mut rest_f, &mut at_f, mid, end.min(count));
-            stray_right.push(run);
-        }
-        if mid > count {
-            let run = carve(&mut rest_b, &mut at_b, start.max(count), mid);
-            stray_left.push(run);
-        }
-    }
-    // Both hold as many triangles; pair them off in pieces of a block.
-    let mut pairs = Vec::new();
-    let (mut rs, mut ls) = (stray_right.into_iter(), stray_left.into_iter());
-    let (mut r, mut l) = (rs.next(), ls.next());
-    while let (Some(a), Some(b)) = (r.take(), l.take()) {
-        let m = a.len().min(b.len()).min(BLOCK);
-        let ((a0, a1), (b0, b1)) = (a.split_at_mut(m), b.split_at_mut(m));
-        pairs.push((a0, b0));
-        r = if a1.is_empty() { rs.next() } else { Some(a1) };
-        l = if b1.is_empty() { ls.next() } else { Some(b1) };
-    }
-    pairs
-        .into_par_iter()
-        .for_each(|(a, b)| a.swap_with_slice(b));
-    count
-}
-
-/// Cuts `from..to` (indices of the whole) off `rest`, which starts at
-/// index `at` and is past everything cut before.
-fn carve<'a>(
-    rest: &mut &'a mut [PrimRef],
-    at: &mut usize,
-    from: usize,
-    to: usize,
-) -> &'a mut [PrimRef] {
-    let (_, tail) = std::mem::take(rest).split_at_mut(from - *at);
-    let (run, tail) = tail.split_at_mut(to - from);
-    (*rest, *at) = (tail, to);
-    run
-}
 
 /// Bounds of the (doubled) centroids, on the rayon pool for large nodes.
 fn centroids(refs: &[PrimRef]) -> Box3 {
