@@ -73,9 +73,11 @@ fn invariants_hold_for_both_builders() {
     }
 }
 
-/// The tree as bits: boxes, links, leaf order and the triangles as
-/// traversal tests them.
-fn tree_bits(b: &Bvh) -> (Vec<[u32; 8]>, Vec<u32>, Vec<[[u32; 3]; 3]>) {
+/// A tree as bits: nodes (boxes and links), leaf order, and the triangles
+/// as traversal tests them.
+type TreeBits = (Vec<[u32; 8]>, Vec<u32>, Vec<[[u32; 3]; 3]>);
+
+fn tree_bits(b: &Bvh) -> TreeBits {
     let nodes = b
         .nodes
         .iter()
