@@ -73,6 +73,51 @@ fn invariants_hold_for_both_builders() {
     }
 }
 
+/// A tree as bits: nodes (boxes and links), leaf order, and the triangles
+/// as traversal tests them.
+type TreeBits = (Vec<[u32; 8]>, Vec<u32>, Vec<[[u32; 3]; 3]>);
+
+fn tree_bits(b: &Bvh) -> TreeBits {
+    let nodes = b
+        .nodes
+        .iter()
+        .map(|n| {
+            let [x, y, z] = n.min.map(f32::to_bits);
+            let [u, v, w] = n.max.map(f32::to_bits);
+            [x, y, z, n.first, u, v, w, n.count]
+        })
+        .collect();
+    let tris = (0..b.triangle_count())
+        .map(|i| b.triangle(i).map(|v| v.map(f32::to_bits)))
+        .collect();
+    (nodes, b.prim.clone(), tris)
+}
+
+#[test]
+fn the_tree_is_the_same_on_any_number_of_threads() {
+    // Large enough that the root's bins are filled in parallel and the
+    // subtrees, compaction and packets are spread over the pool.
+    let g = random_soup(150_000, 5);
+    for builder in [Builder::Sah, Builder::Median] {
+        let on = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| bvh::build(&g, builder))
+        };
+        let one = on(1);
+        check_invariants(&g, &one);
+        let want = tree_bits(&one);
+        for threads in [2, 3] {
+            let b = on(threads);
+            assert!(tree_bits(&b) == want, "{builder}: {threads} threads");
+            assert_eq!(b.stats.depth, one.stats.depth);
+            assert_eq!(b.stats.sah_cost, one.stats.sah_cost);
+        }
+    }
+}
+
 #[test]
 fn binned_sah_is_within_five_percent_of_a_full_sweep() {
     let scenes = ["cornell", "teapot:6", "mirrors"]

@@ -4,7 +4,10 @@
 //! eight, so one instruction tests eight boxes or eight triangles (four
 //! without AVX).
 
+use rayon::prelude::*;
+
 use super::Node;
+use crate::memory;
 
 /// Child references with this bit set are leaves:
 /// `LEAF | first_packet << PACKET_BITS | (packets - 1)`.
@@ -57,8 +60,9 @@ pub(crate) fn leaf_packets(r: u32) -> std::ops::Range<usize> {
     first..first + (r & ((1 << PACKET_BITS) - 1)) as usize + 1
 }
 
-/// The triangle at a leaf-order position.
-type Tris<'a> = dyn Fn(usize) -> [[f32; 3]; 3] + 'a;
+/// The triangles of one packet: the leaf-order position of the first, and
+/// how many.
+type Run = (u32, u32);
 
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Wide {
@@ -83,38 +87,49 @@ impl Wide {
     /// leaf order, `tri(i)` the `i`-th): each wide node takes the binary
     /// node's children and keeps opening the largest interior one until it
     /// has eight.
-    pub fn collapse(bin: &[Node], count: usize, tri: impl Fn(usize) -> [[f32; 3]; 3]) -> Wide {
+    pub fn collapse(
+        bin: &[Node],
+        count: usize,
+        tri: impl Fn(usize) -> [[f32; 3]; 3] + Sync,
+    ) -> Wide {
+        Wide::plan(bin, count).fill(tri)
+    }
+
+    /// The walk of [`Wide::collapse`]: lays out the nodes and decides which
+    /// triangles each packet holds, on this thread. The packets, where the
+    /// time goes (a scattered read of every vertex), are left to
+    /// [`Plan::fill`], on the rayon pool.
+    pub fn plan(bin: &[Node], count: usize) -> Plan {
         let mut w = Wide {
-            nodes: Vec::with_capacity(bin.len() / 2 + 1),
-            packets: Vec::with_capacity(count / 3 + 2),
+            nodes: memory::room(bin.len() / 2 + 1),
+            packets: Vec::new(),
             stack: 0,
             avx: avx_available(),
             node_of: Vec::with_capacity(bin.len() / 2 + 1),
             leaf_of: Vec::with_capacity(count / 3 + 2),
-            slot: vec![0; count],
+            // SAFETY: zero bytes are a u32.
+            slot: unsafe { memory::zeroed(count) },
         };
-        let tris: &Tris = &tri;
-        w.packets.push(Packet {
-            p: [[[f32::NAN; PACKET]; 3]; 3],
-            idx: [u32::MAX; PACKET],
-        });
+        // Packet 0 holds no triangle: the empty slots' leaf.
+        let mut runs: Vec<Run> = Vec::with_capacity(count / 3 + 2);
+        runs.push((0, 0));
         w.leaf_of.push(u32::MAX);
         if let Some(root) = bin.first() {
             // The root is always an interior wide node, even over one leaf.
             let depth = if root.is_leaf() {
-                w.node(bin, tris, 0, &[0]).1
+                w.node(bin, &mut runs, 0, &[0]).1
             } else {
-                w.gather(bin, tris, 0).1
+                w.gather(bin, &mut runs, 0).1
             };
             w.stack = depth * (WIDTH - 1);
         }
-        w
+        Plan { wide: w, runs }
     }
 
     /// Wide node over the children of interior binary node `at` (at `c`
     /// and `c + 1`), opened up to eight; returns its index and the depth of
     /// its subtree in wide nodes.
-    fn gather(&mut self, bin: &[Node], tris: &Tris, at: usize) -> (u32, usize) {
+    fn gather(&mut self, bin: &[Node], runs: &mut Vec<Run>, at: usize) -> (u32, usize) {
         let c = bin[at].first as usize;
         let mut kids = [0; WIDTH];
         kids[..2].copy_from_slice(&[c, c + 1]);
@@ -132,10 +147,16 @@ impl Wide {
             kids[len] = g + 1;
             len += 1;
         }
-        self.node(bin, tris, at, &kids[..len])
+        self.node(bin, runs, at, &kids[..len])
     }
 
-    fn node(&mut self, bin: &[Node], tris: &Tris, owner: usize, kids: &[usize]) -> (u32, usize) {
+    fn node(
+        &mut self,
+        bin: &[Node],
+        runs: &mut Vec<Run>,
+        owner: usize,
+        kids: &[usize],
+    ) -> (u32, usize) {
         let at = self.nodes.len();
         self.node_of.push(owner as u32);
         let mut below = 0;
@@ -154,9 +175,9 @@ impl Wide {
         for (lane, &k) in kids.iter().enumerate() {
             let n = &bin[k];
             let r = if n.is_leaf() {
-                self.leaf(tris, k, n.first as usize, n.count as usize)
+                self.leaf(runs, k, n.first as usize, n.count as usize)
             } else {
-                let (r, need) = self.gather(bin, tris, k);
+                let (r, need) = self.gather(bin, runs, k);
                 below = below.max(need);
                 r
             };
@@ -170,27 +191,20 @@ impl Wide {
         (at as u32, 1 + below)
     }
 
-    fn leaf(&mut self, tris: &Tris, owner: usize, first: usize, count: usize) -> u32 {
-        let at = self.packets.len();
+    /// Packets for the leaf over triangles `first..first + count`, to be
+    /// filled from `runs`.
+    fn leaf(&mut self, runs: &mut Vec<Run>, owner: usize, first: usize, count: usize) -> u32 {
+        let at = runs.len();
         for start in (first..first + count).step_by(PACKET) {
-            let mut p = Packet {
-                p: [[[f32::NAN; PACKET]; 3]; 3],
-                idx: [u32::MAX; PACKET],
-            };
-            let packet = (self.packets.len() as u32) << PACKET_BITS;
-            for (lane, i) in (start..(start + PACKET).min(first + count)).enumerate() {
-                for (pv, tv) in p.p.iter_mut().zip(&tris(i)) {
-                    for (pa, &x) in pv.iter_mut().zip(tv) {
-                        pa[lane] = x;
-                    }
-                }
-                p.idx[lane] = i as u32;
-                self.slot[i] = packet | lane as u32;
+            let lanes = PACKET.min(first + count - start);
+            let packet = (runs.len() as u32) << PACKET_BITS;
+            for (lane, s) in self.slot[start..start + lanes].iter_mut().enumerate() {
+                *s = packet | lane as u32;
             }
-            self.packets.push(p);
+            runs.push((start as u32, lanes as u32));
             self.leaf_of.push(owner as u32);
         }
-        let n = self.packets.len() - at;
+        let n = runs.len() - at;
         debug_assert!((1..=1 << PACKET_BITS).contains(&n));
         LEAF | (at as u32) << PACKET_BITS | (n as u32 - 1)
     }
@@ -210,6 +224,42 @@ impl Wide {
             + std::mem::size_of_val(&self.node_of[..])
             + std::mem::size_of_val(&self.leaf_of[..])
             + std::mem::size_of_val(&self.slot[..])
+    }
+}
+
+/// A wide tree laid out, its packets still to be filled.
+pub(crate) struct Plan {
+    wide: Wide,
+    /// The triangles of each packet.
+    runs: Vec<Run>,
+}
+
+impl Plan {
+    /// The wide tree, with its packets filled from `tri(i)`, the triangle
+    /// at leaf-order position `i`.
+    pub fn fill(self, tri: impl Fn(usize) -> [[f32; 3]; 3] + Sync) -> Wide {
+        let Plan { wide: mut w, runs } = self;
+        w.packets = memory::room(runs.len());
+        runs.par_iter()
+            .with_min_len(1024)
+            .map(|&(first, lanes)| {
+                let mut p = Packet {
+                    p: [[[f32::NAN; PACKET]; 3]; 3],
+                    idx: [u32::MAX; PACKET],
+                };
+                for lane in 0..lanes as usize {
+                    let i = first as usize + lane;
+                    for (pv, tv) in p.p.iter_mut().zip(&tri(i)) {
+                        for (pa, &x) in pv.iter_mut().zip(tv) {
+                            pa[lane] = x;
+                        }
+                    }
+                    p.idx[lane] = i as u32;
+                }
+                p
+            })
+            .collect_into_vec(&mut w.packets);
+        w
     }
 }
 

@@ -301,6 +301,10 @@ pub fn trace_primary_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh:
         .zip(frame.tri.par_chunks_mut(width * TILE))
         .zip(frame.rows.par_chunks_mut(TILE))
         .enumerate()
+        // One band per job: the mesh fills the middle bands, so halves of
+        // the frame cost unevenly and stealing whole runs of bands left a
+        // thread idle at the end.
+        .with_max_len(1)
         .for_each(|(band, ((ts, tris), rows))| {
             let mut rays = Vec::with_capacity(TILE * TILE);
             let mut hits = [None; TILE * TILE];
