@@ -5,7 +5,7 @@
 //! triangle the ray hits may be missed.
 
 use anyhow::Result;
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::{soup, Options, Row};
@@ -227,6 +227,9 @@ fn judge(tri: &[[f32; 3]; 3], ray: &Ray, t: f32) -> (f64, bool) {
     let [a, b, c] = tri.map(|v| Vec3::from(v).as_dvec3());
     let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
     let n = (b - a).cross(c - a);
+    if n == DVec3::ZERO {
+        return judge_segment([a, b, c], o, d);
+    }
     let x = n.dot(a - o) / n.dot(d);
     if !x.is_finite() {
         return (t as f64, true);
@@ -241,6 +244,37 @@ fn judge(tri: &[[f32; 3]; 3], ray: &Ray, t: f32) -> (f64, bool) {
         x,
         x > 0.0 && p.cmpge(lo - tol).all() && p.cmple(hi + tol).all(),
     )
+}
+
+/// [`judge`] for a triangle with no area (its corners on a line, or one
+/// point): the ray meets it where it meets the segment between its two
+/// farthest corners, judged by the closest approach of the two in f64.
+fn judge_segment(v: [DVec3; 3], o: DVec3, d: DVec3) -> (f64, bool) {
+    let pairs = [(v[0], v[1]), (v[1], v[2]), (v[2], v[0])];
+    let (p, q) = pairs
+        .into_iter()
+        .max_by(|x, y| {
+            (x.1 - x.0)
+                .length_squared()
+                .total_cmp(&(y.1 - y.0).length_squared())
+        })
+        .unwrap_or((v[0], v[0]));
+    // Closest points of o + x d and p + u (q - p), u in [0, 1].
+    let e = q - p;
+    let w = o - p;
+    let (dd, de, ee) = (d.dot(d), d.dot(e), e.dot(e));
+    let (dw, ew) = (d.dot(w), e.dot(w));
+    let den = dd * ee - de * de;
+    let mut u = if den > 0.0 {
+        (dd * ew - de * dw) / den
+    } else {
+        0.0
+    };
+    u = u.clamp(0.0, 1.0);
+    let x = (e * u - w).dot(d) / dd;
+    let gap = (o + d * x - (p + e * u)).length();
+    let tol = (o.abs() + (d * x).abs() + p.abs() + q.abs()).max_element() * 1e-12;
+    (x, x.is_finite() && x > 0.0 && gap <= tol)
 }
 
 /// Rays along the lattice's planes: from lattice points (on the planes) and

@@ -3,7 +3,7 @@
 //! fans that the ray crosses transversally, and interior points of
 //! triangles it does not graze. A miss on any of them is a crack.
 
-use std::collections::HashMap;
+use std::collections::BTreeMap;
 
 use glam::{DVec3, Vec3};
 
@@ -26,10 +26,11 @@ pub struct Topology {
     pub tris: Vec<[Vec3; 3]>,
     normals: Vec<DVec3>,
     /// Edge (sorted keys) to its triangles, each with whether it walks the
-    /// edge from the smaller key to the larger.
-    edges: HashMap<(Key, Key), Vec<(u32, bool)>>,
+    /// edge from the smaller key to the larger. Ordered maps: random points
+    /// are drawn edge by edge, so the order makes the battery's rays.
+    edges: BTreeMap<(Key, Key), Vec<(u32, bool)>>,
     /// Vertex to the edges that meet there.
-    vertex_edges: HashMap<Key, Vec<(Key, Key)>>,
+    vertex_edges: BTreeMap<Key, Vec<(Key, Key)>>,
 }
 
 /// Where a ray must cross the surface.
@@ -49,8 +50,8 @@ impl Topology {
                 (b - a).cross(c - a).normalize_or_zero()
             })
             .collect();
-        let mut edges: HashMap<(Key, Key), Vec<(u32, bool)>> = HashMap::new();
-        let mut vertex_edges: HashMap<Key, Vec<(Key, Key)>> = HashMap::new();
+        let mut edges: BTreeMap<(Key, Key), Vec<(u32, bool)>> = BTreeMap::new();
+        let mut vertex_edges: BTreeMap<Key, Vec<(Key, Key)>> = BTreeMap::new();
         for (i, t) in tris.iter().enumerate() {
             for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
                 let (ka, kb) = (key(a), key(b));
@@ -257,6 +258,24 @@ mod tests {
         let verts = t.targets(eye, Crossing::Vertex, 0, 0, &mut rng);
         assert_eq!(verts.len(), 4);
         assert!(verts.iter().all(|p| p.x == 0.0), "{verts:?}");
+    }
+
+    /// The same soup and seed give the same targets: the battery's rays
+    /// do not change from run to run.
+    #[test]
+    fn targets_are_the_same_every_time() {
+        let o = Vec3::new(0.4, 0.55, 0.3);
+        let draw = |kind| {
+            let mut rng = Rng::for_sample(3, 1, 4);
+            Topology::new(cube()).targets(o, kind, 3, 50, &mut rng)
+        };
+        for kind in [Crossing::Vertex, Crossing::Edge, Crossing::Surface] {
+            let first = draw(kind);
+            assert!(!first.is_empty(), "{kind:?}");
+            for _ in 0..4 {
+                assert_eq!(draw(kind), first, "{kind:?}");
+            }
+        }
     }
 
     #[test]
