@@ -192,6 +192,7 @@ impl SceneOpts {
             glossy_samples: self.glossy_samples,
             independent: self.independent,
             camera: self.camera.clone(),
+            check_film: true,
         }
     }
 }

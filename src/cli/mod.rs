@@ -18,7 +18,7 @@ use anyhow::Result;
 
 pub use args::{parse_size, Cli, Command, SceneOpts};
 
-use crate::render::Session;
+use crate::render::{SceneRequest, Session};
 use crate::scene::Scene;
 
 /// `rayterm SCENE [OPTIONS]` (anything but a command, help or version
@@ -85,7 +85,12 @@ pub fn main() -> ExitCode {
 
 /// Opens the scene the options name, with its load warnings on stderr.
 fn open_scene(opts: &SceneOpts) -> Result<Session> {
-    let (session, warnings) = Session::open(&opts.request())?;
+    open_request(&opts.request())
+}
+
+/// Opens the scene `req` names, with its load warnings on stderr.
+fn open_request(req: &SceneRequest) -> Result<Session> {
+    let (session, warnings) = Session::open(req)?;
     for w in &warnings {
         eprintln!("warning: {w}");
     }

@@ -14,12 +14,13 @@ use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::args::{RenderArgs, MAX_SPP};
-use super::open_scene;
+use super::open_request;
 use crate::geometry::sampling::PIXEL_STRATA;
 use crate::interrupt;
 use crate::raster::{png, Format, Output};
 use crate::render::partial::{self, Meta, Part};
-use crate::render::{post, Ended, Film, Progressive, Report, Session, Stop};
+use crate::render::session::check_film;
+use crate::render::{post, Ended, Film, Progressive, Report, SceneRequest, Session, Stop};
 use crate::scene::BloomSettings;
 use crate::words;
 
@@ -70,7 +71,12 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         }
         None => None,
     };
-    let s = open_scene(&a.scene)?;
+    // The film is checked against memory once it is known how much it
+    // keeps.
+    let s = open_request(&SceneRequest {
+        check_film: false,
+        ..a.scene.request()
+    })?;
     out.check_not_input(&s.inputs)?;
     if let Some(c) = &checkpoint {
         c.check_not_input(&s.inputs)?;
@@ -79,6 +85,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         eprintln!("plan for {}:\n{}", s.scene.name, s.plan.explain());
     }
     if let Some(spec) = a.debug {
+        check_film(s.width, s.height, Film::BYTES_PER_PIXEL)?;
         return super::debug::run(&s, spec, a.spp, &out);
     }
     // A note only where the user asked for more than the one exact pass.
@@ -102,10 +109,18 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     // or written: its content hash is a pass over all the scene's data.
     let mut meta =
         (split || checkpoint.is_some() || a.resume.is_some()).then(|| Meta::of(&s, total));
+    // A render that writes an image reads nothing else from its film; a
+    // part of a split render writes the film's statistics.
+    let image_only = !split && checkpoint.is_none();
     let mut p = match (&a.resume, &meta) {
         (Some(path), Some(meta)) => resumed(path, &s, meta, range.as_ref().map(|r| &r.0), &stop)?,
         _ => {
-            let mut p = Progressive::new(s.width, s.height);
+            // Most such renders keep their film summarised: made so, one too
+            // large for statistics never allocates them.
+            let mut p = Progressive::resume(match image_only {
+                true => Film::new_summary(s.width, s.height),
+                false => Film::new(s.width, s.height),
+            });
             p.film.start = range.as_ref().map_or(0, |r| r.0.start);
             p
         }
@@ -123,9 +138,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         && checkpoint.is_none()
         && a.resume.is_none();
     p.whole_passes = checkpoint.is_some();
-    // A render that writes an image reads nothing else from its film; a
-    // part of a split render writes the film's statistics.
-    p.image_only = !split && checkpoint.is_none();
+    p.image_only = image_only;
     // A render to a fixed spp adds a block of strata per pass: the same
     // samples as passes of one (a sample depends only on its pixel, index
     // and seed), with each pixel's statistics brought through the cache
@@ -141,6 +154,11 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
             Some(n) if p.image_only && n <= ONE_PASS_SPP => n.max(PIXEL_STRATA),
             _ => PIXEL_STRATA,
         };
+    }
+    // A resumed film was checked as it was read.
+    if a.resume.is_none() {
+        let bytes = p.bytes_per_pixel(s.plan.deterministic, &stop);
+        check_film(s.width, s.height, bytes)?;
     }
     let interrupted = interrupt::flag();
     let tracer = s.tracer();

@@ -864,6 +864,10 @@ fn one_sample_mean(c: Vec3) -> Vec3 {
     }
 }
 
+/// Memory per pixel of the images made from a film: the linear, bloomed
+/// and displayed copies, and the 8-bit picture.
+const IMAGES: u64 = 3 * 12 + 3;
+
 /// An adaptive film's per-pixel sample counts and rays traced, as a pass
 /// writes them.
 pub(crate) type Counts<'a> = (&'a mut [u32], &'a mut [u32]);
@@ -873,7 +877,11 @@ impl Film {
     /// film's count, weight and rays, or a lean film's sample they were
     /// made from), and the linear, bloomed and displayed copies of the
     /// image made from them.
-    pub const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelStats>() as u64 + 12 + 3 * 12 + 3;
+    pub const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelStats>() as u64 + 12 + IMAGES;
+    /// The same for a summarised film ([`Film::summarise`]).
+    pub const SUMMARY_BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelSummary>() as u64 + IMAGES;
+    /// The same for a lean film ([`Film::new_exact`]).
+    pub const EXACT_BYTES_PER_PIXEL: u64 = 12 + IMAGES;
 
     pub fn new(width: u32, height: u32) -> Self {
         let n = width as usize * height as usize;
@@ -932,6 +940,23 @@ impl Film {
         // SAFETY: a summary of zero bytes is that of a pixel with no
         // sample, which a pass writes over.
         self.pixels = Pixels::Summary(unsafe { crate::memory::zeroed(n) });
+    }
+
+    /// A blank film made summarised (see [`Film::summarise`]) for a render
+    /// that will most likely keep it so: one too large for statistics then
+    /// never allocates them. Should its first pass not give it all its
+    /// samples, the pass gives it statistics ([`Film::unsummarise`]).
+    pub fn new_summary(width: u32, height: u32) -> Self {
+        let mut film = Self::with(width, height, Pixels::Summary(Vec::new()));
+        film.summarise();
+        film
+    }
+
+    /// Gives a blank summarised film statistics.
+    pub(crate) fn unsummarise(&mut self) {
+        assert!(self.is_blank(), "only a blank film is given statistics");
+        let n = self.width as usize * self.height as usize;
+        self.pixels = Pixels::Stats(PixelStats::zeroed(n));
     }
 
     /// The number of pixels.

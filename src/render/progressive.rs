@@ -125,6 +125,27 @@ pub struct Progressive {
     pub image_only: bool,
 }
 
+/// How a pass keeps a film's pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Layout {
+    /// Each pixel's one sample ([`Film::new_exact`]).
+    Exact,
+    /// Each pixel's mean and error term ([`Film::summarise`]).
+    Summary,
+    /// Each pixel's statistics.
+    Stats,
+}
+
+impl Layout {
+    fn bytes_per_pixel(self) -> u64 {
+        match self {
+            Layout::Exact => Film::EXACT_BYTES_PER_PIXEL,
+            Layout::Summary => Film::SUMMARY_BYTES_PER_PIXEL,
+            Layout::Stats => Film::BYTES_PER_PIXEL,
+        }
+    }
+}
+
 /// What a pass gives the pixels.
 enum Give {
     /// `n` samples to every pixel, from the film's `spp`.
@@ -138,7 +159,7 @@ impl Progressive {
         Self::resume(Film::new(width, height))
     }
 
-    /// Continues a film that already has samples.
+    /// Passes into `film`, blank or with samples already.
     pub fn resume(film: Film) -> Self {
         Self {
             film,
@@ -197,6 +218,45 @@ impl Progressive {
         }
     }
 
+    /// How the pass that gives `give` keeps the film's pixels.
+    fn layout(&self, deterministic: bool, give: &Give, stop: &Stop) -> Layout {
+        let f = &self.film;
+        let plain = f.is_blank() && f.adaptive.is_none() && !self.whole_passes;
+        if !plain {
+            return Layout::Stats;
+        }
+        // The one pass of an exact render keeps each pixel's sample and no
+        // statistics; a film that gets anything more keeps statistics.
+        if deterministic && matches!(give, Give::All(1)) && f.start == 0 {
+            return Layout::Exact;
+        }
+        // Else the statistics of a pass that is all a film gets serve only
+        // its image and error: each pixel's are summarised once it is
+        // sampled.
+        match give {
+            Give::All(n) if self.image_only && stop.spp.is_some_and(|s| *n >= s) => Layout::Summary,
+            _ => Layout::Stats,
+        }
+    }
+
+    /// Bytes a pixel of this film will take once the render that `stop`
+    /// ends has made it (the film and the images made from it), before its
+    /// first pass: what a caller checks against the memory available.
+    pub fn bytes_per_pixel(&self, deterministic: bool, stop: &Stop) -> u64 {
+        let f = &self.film;
+        let adaptive = f.adaptive.is_some() || self.becomes_adaptive(deterministic);
+        match self.give(stop) {
+            Some(g) if !adaptive => self.layout(deterministic, &g, stop).bytes_per_pixel(),
+            _ => Film::BYTES_PER_PIXEL,
+        }
+    }
+
+    /// Whether the next pass makes this film an adaptive one.
+    fn becomes_adaptive(&self, deterministic: bool) -> bool {
+        let f = &self.film;
+        self.adaptive && !deterministic && f.adaptive.is_none() && f.spp == 0
+    }
+
     /// Runs one pass of up to `samples_per_pass` samples (never past the
     /// stop's spp); `None` when `cancel` stopped it between rows.
     pub fn pass(
@@ -218,9 +278,9 @@ impl Progressive {
         cancel: &(dyn Fn() -> bool + Sync),
     ) -> Option<(PassStats, R)> {
         let start = Instant::now();
-        let f = &mut self.film;
-        if self.adaptive && !tracer.plan.deterministic && f.adaptive.is_none() && f.spp == 0 {
-            *f = Film::new_adaptive(f.width, f.height);
+        if self.becomes_adaptive(tracer.plan.deterministic) {
+            let f = &self.film;
+            self.film = Film::new_adaptive(f.width, f.height);
         }
         let give = self.give(stop);
         let (samples, pixels) = match &give {
@@ -236,14 +296,11 @@ impl Progressive {
         }
         let rows = self.rows_done.as_deref();
         let whole = self.whole_passes;
-        // The one pass of an image-only render holds every sample the film
-        // gets: its pixels need no statistics after it.
-        let f = &self.film;
-        let only = self.image_only
-            && f.is_blank()
-            && matches!(give, Some(Give::All(n)) if stop.spp.is_some_and(|s| n >= s));
         let rec: R = match &give {
-            Some(g) => sample_rows(tracer, &mut self.film, g, cancel, rows, whole, only),
+            Some(g) => {
+                let layout = self.layout(tracer.plan.deterministic, g, stop);
+                sample_rows(tracer, &mut self.film, g, cancel, rows, whole, layout)
+            }
             None => R::default(),
         };
         let ms = start.elapsed().as_secs_f64() * 1e3;
@@ -420,9 +477,8 @@ struct Row<'a> {
 
 /// Adds what `give` says to the pixels of `film`, rows in parallel;
 /// `cancel` is polled between rows and `rows_done` counts finished rows.
-/// With `whole`, a pass cut short leaves a uniform film as it was; with
-/// `only`, this pass is all the film gets and all that is read of it is the
-/// image and the error estimate.
+/// With `whole`, a pass cut short leaves a uniform film as it was; the film
+/// is first made to keep its pixels as `layout` says.
 #[allow(clippy::too_many_arguments)]
 fn sample_rows<R: Recorder + Default + Send + Merge>(
     tracer: &Tracer,
@@ -431,28 +487,21 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
     cancel: &(dyn Fn() -> bool + Sync),
     rows_done: Option<&AtomicU32>,
     whole: bool,
-    only: bool,
+    layout: Layout,
 ) -> R {
     let whole = whole && film.adaptive.is_none();
     let w = (film.width as usize).max(1);
     let first = film.start + film.spp;
-    // The one pass of an exact render keeps each pixel's sample and no
-    // statistics; a film that gets anything more keeps statistics.
-    let lean = tracer.plan.deterministic
-        && matches!(give, Give::All(1))
-        && film.is_blank()
-        && first == 0
-        && film.adaptive.is_none()
-        && !whole;
-    // Else the statistics of a pass that is all a film gets serve only
-    // its image and error: each pixel's are summarised once it is sampled.
-    let summary = !lean && only && film.adaptive.is_none() && !whole;
-    if lean && !film.is_exact() {
-        *film = Film::new_exact(film.width, film.height);
-    } else if summary {
-        film.summarise();
-    } else if !lean && film.is_exact() {
-        film.pixels_mut();
+    match layout {
+        Layout::Exact if !film.is_exact() => *film = Film::new_exact(film.width, film.height),
+        Layout::Summary if !film.is_summary() => film.summarise(),
+        // A film made summarised (`Film::new_summary`) that gets more than
+        // one pass.
+        Layout::Stats if film.is_summary() => film.unsummarise(),
+        Layout::Stats if film.is_exact() => {
+            film.pixels_mut();
+        }
+        _ => {}
     }
     let (pixels, spp) = film.sample_into();
     let rows: Vec<Row> = match spp {
@@ -638,7 +687,11 @@ mod tests {
     use crate::render::Feature;
 
     fn session(off: &[Feature]) -> Session {
-        let mut req = SceneRequest::new("cornell-area");
+        session_of("cornell-area", off)
+    }
+
+    fn session_of(spec: &str, off: &[Feature]) -> Session {
+        let mut req = SceneRequest::new(spec);
         req.size = Some((12, 8));
         req.features = req.features.without(off);
         Session::open(&req).unwrap().0
@@ -835,8 +888,13 @@ mod tests {
             let s = session(off);
             let t = s.tracer();
             for (spp, per_pass) in [(1, 1), (3, 16), (16, 16), (16, 4), (21, 16)] {
+                // As `render` makes them: summarised before the first pass
+                // when read only for the image.
                 let run = |image_only: bool| {
-                    let mut p = Progressive::new(12, 8);
+                    let mut p = Progressive::resume(match image_only {
+                        true => Film::new_summary(12, 8),
+                        false => Film::new(12, 8),
+                    });
                     p.samples_per_pass = per_pass;
                     p.image_only = image_only;
                     let o = p.run(&t, &Stop::spp(spp), &|| false, |_, _| {});
@@ -853,6 +911,48 @@ mod tests {
                 assert_eq!(only_rays, rays, "{what}");
             }
         }
+    }
+
+    /// The memory a render's film will take, known before its first pass,
+    /// is that of what its passes keep: each pixel's sample, summary or
+    /// statistics.
+    #[test]
+    fn the_memory_a_film_will_take_is_known_before_its_first_pass() {
+        let kept = |f: &Film| match (f.is_exact(), f.is_summary()) {
+            (true, _) => Film::EXACT_BYTES_PER_PIXEL,
+            (_, true) => Film::SUMMARY_BYTES_PER_PIXEL,
+            _ => Film::BYTES_PER_PIXEL,
+        };
+        let error = Stop {
+            error: Some(0.5),
+            ..Stop::spp(40)
+        };
+        let mut seen = std::collections::BTreeSet::new();
+        for (spec, off) in [
+            ("cornell", &[Feature::Supersampling][..]),
+            ("cornell-area", &[]),
+        ] {
+            let s = session_of(spec, off);
+            let t = s.tracer();
+            for stop in [Stop::spp(1), Stop::spp(16), Stop::spp(40), error] {
+                for flags in 0..8 {
+                    let (image_only, adaptive, whole) =
+                        (flags & 1 != 0, flags & 2 != 0, flags & 4 != 0);
+                    let mut p = Progressive::resume(match image_only {
+                        true => Film::new_summary(12, 8),
+                        false => Film::new(12, 8),
+                    });
+                    p.samples_per_pass = 16;
+                    (p.image_only, p.adaptive, p.whole_passes) = (image_only, adaptive, whole);
+                    let bytes = p.bytes_per_pixel(t.plan.deterministic, &stop);
+                    p.run(&t, &stop, &|| false, |_, _| {});
+                    let what = format!("{spec} {stop:?} image only {image_only}, adaptive {adaptive}, whole passes {whole}");
+                    assert_eq!(bytes, kept(&p.film), "{what}");
+                    seen.insert(bytes);
+                }
+            }
+        }
+        assert_eq!(seen.len(), 3, "every layout is tried");
     }
 
     #[test]

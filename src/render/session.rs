@@ -33,6 +33,12 @@ pub struct SceneRequest {
     pub independent: bool,
     /// Which of a glTF file's cameras to look through (name or number).
     pub camera: Option<String>,
+    /// Whether opening refuses an image size whose film of statistics
+    /// would not fit in memory; off for a caller that checks the film it
+    /// makes, which may keep far less ([`Progressive::bytes_per_pixel`]).
+    ///
+    /// [`Progressive::bytes_per_pixel`]: super::Progressive::bytes_per_pixel
+    pub check_film: bool,
 }
 
 impl SceneRequest {
@@ -49,6 +55,7 @@ impl SceneRequest {
             glossy_samples: None,
             independent: false,
             camera: None,
+            check_film: true,
         }
     }
 }
@@ -86,11 +93,9 @@ impl Session {
         let (w, h) = req
             .size
             .unwrap_or((scene.settings.width, scene.settings.height));
-        crate::memory::check(
-            &format!("a {w}x{h} film"),
-            w as u64 * h as u64 * Film::BYTES_PER_PIXEL,
-            None,
-        )?;
+        if req.check_film {
+            check_film(w, h, Film::BYTES_PER_PIXEL)?;
+        }
         let (mut session, warnings) = Self::with_scene(scene, req);
         session.inputs = inputs;
         Ok((session, warnings))
@@ -151,4 +156,14 @@ impl Session {
     pub fn rebuild(&mut self, builder: Builder) {
         self.bvh = Arc::new(bvh::build(&self.scene.geometry, builder));
     }
+}
+
+/// Refuses a `w` x `h` film of `bytes_per_pixel` that would not fit in
+/// memory.
+pub fn check_film(w: u32, h: u32, bytes_per_pixel: u64) -> Result<()> {
+    crate::memory::check(
+        &format!("a {w}x{h} film"),
+        w as u64 * h as u64 * bytes_per_pixel,
+        None,
+    )
 }
