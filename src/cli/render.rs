@@ -15,7 +15,6 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use super::args::{RenderArgs, MAX_SPP};
 use super::open_request;
-use crate::geometry::sampling::PIXEL_STRATA;
 use crate::interrupt;
 use crate::raster::{png, Format, Output};
 use crate::render::partial::{self, Meta, Part};
@@ -139,21 +138,11 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         && a.resume.is_none();
     p.whole_passes = checkpoint.is_some();
     p.image_only = image_only;
-    // A render to a fixed spp adds a block of strata per pass: the same
-    // samples as passes of one (a sample depends only on its pixel, index
-    // and seed), with each pixel's statistics brought through the cache
-    // once a block rather than once a sample. One to an image file takes
-    // all its samples in one pass up to ONE_PASS_SPP, so that its film
-    // keeps no statistics (`Progressive::image_only`); beyond, a row would
-    // keep Ctrl-C waiting too long. An exact render's one pass stays one
-    // sample, and a checkpointed one keeps passes short, since a pass cut
-    // short is undone.
+    // A checkpointed render keeps passes short, since a pass cut short is
+    // undone.
     let fixed = stop.seconds.is_none() && stop.error.is_none();
-    if fixed && !s.plan.deterministic && checkpoint.is_none() {
-        p.samples_per_pass = match stop.spp {
-            Some(n) if p.image_only && n <= ONE_PASS_SPP => n.max(PIXEL_STRATA),
-            _ => PIXEL_STRATA,
-        };
+    if fixed && checkpoint.is_none() {
+        p.fixed_spp_passes(stop.spp, s.plan.deterministic);
     }
     // A resumed film was checked as it was read.
     if a.resume.is_none() {
@@ -294,9 +283,6 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     );
     Ok(ExitCode::SUCCESS)
 }
-
-/// The most samples per pixel a render to an image file takes in one pass.
-const ONE_PASS_SPP: u32 = 256;
 
 /// Seconds between checkpoints.
 const CHECKPOINT_SECONDS: f64 = 5.0;

@@ -125,6 +125,11 @@ pub struct Progressive {
     pub image_only: bool,
 }
 
+/// The most samples per pixel a render read only for its image takes in
+/// one pass (see [`Progressive::fixed_spp_passes`]): beyond, a row would
+/// keep a cancel waiting too long.
+pub const ONE_PASS_SPP: u32 = 256;
+
 /// How a pass keeps a film's pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Layout {
@@ -171,6 +176,24 @@ impl Progressive {
             whole_passes: false,
             image_only: false,
         }
+    }
+
+    /// Sizes the passes of a render to a fixed `spp` (all the samples a
+    /// pixel gets, or unbounded): a block of strata per pass, the same
+    /// samples as passes of one (a sample depends only on its pixel, index
+    /// and seed) with each pixel's statistics brought through the cache
+    /// once a block rather than once a sample. One read only for its image
+    /// ([`Progressive::image_only`]) takes all its samples in one pass up to
+    /// [`ONE_PASS_SPP`], so that its film keeps no statistics. An exact
+    /// render's one pass stays one sample.
+    pub fn fixed_spp_passes(&mut self, spp: Option<u32>, deterministic: bool) {
+        if deterministic {
+            return;
+        }
+        self.samples_per_pass = match spp {
+            Some(n) if self.image_only && n <= ONE_PASS_SPP => n.max(PIXEL_STRATA),
+            _ => PIXEL_STRATA,
+        };
     }
 
     /// An empty film whose passes are adaptive after [`MIN_SPP`].

@@ -11,7 +11,7 @@ use std::thread::JoinHandle;
 use anyhow::{bail, Context, Result};
 
 use crate::raster::output;
-use crate::render::{post, Ended, Plan, Progressive, Session, Stop};
+use crate::render::{post, Ended, Film, Plan, Progressive, Session, Stop};
 use crate::scene::Camera;
 
 /// What to export: the session's scene with its seed, seen from `camera`
@@ -37,7 +37,11 @@ pub struct Job {
     pub size: (u32, u32),
     /// Samples per pixel the image gets.
     pub target_spp: u32,
+    /// Samples per pixel of the passes done, and rows of the pass in
+    /// flight done, of passes of `pass_spp`.
     done_spp: Arc<AtomicU32>,
+    rows: Arc<AtomicU32>,
+    pass_spp: u32,
     cancel: Arc<AtomicBool>,
     result: Receiver<Result<Saved>>,
     thread: Option<JoinHandle<()>>,
@@ -74,29 +78,43 @@ impl Job {
         } else {
             r.session.scene.settings.spp.max(1)
         };
+        // Read for nothing but its image: as `rayterm render` makes one.
+        let size = r.size;
+        let mut p = Progressive::resume(Film::new_summary(size.0, size.1));
+        p.image_only = true;
+        p.fixed_spp_passes(Some(target_spp), r.plan.deterministic);
+        let rows = Arc::new(AtomicU32::new(0));
+        p.rows_done = Some(rows.clone());
+        let pass_spp = p.samples_per_pass;
         let done_spp = Arc::new(AtomicU32::new(0));
         let cancel = Arc::new(AtomicBool::new(false));
         let (tx, result) = mpsc::channel();
         let (done, stop) = (done_spp.clone(), cancel.clone());
-        let size = r.size;
         let thread = std::thread::Builder::new()
             .name("rayterm-export".into())
             .spawn(move || {
-                let _ = tx.send(render(&r, target_spp, &done, &stop));
+                let _ = tx.send(render(&r, p, target_spp, &done, &stop));
             })
             .context("cannot start the export thread")?;
         Ok(Job {
             size,
             target_spp,
             done_spp,
+            rows,
+            pass_spp,
             cancel,
             result,
             thread: Some(thread),
         })
     }
 
+    /// Samples per pixel done, counting the rows of the pass in flight.
     pub fn done_spp(&self) -> u32 {
-        self.done_spp.load(Ordering::Relaxed)
+        let done = self.done_spp.load(Ordering::Relaxed);
+        let rows = self.rows.load(Ordering::Relaxed) as u64;
+        // The last pass may be shorter than the others.
+        let pass = self.pass_spp.min(self.target_spp.saturating_sub(done)) as u64;
+        done + (pass * rows / self.size.1.max(1) as u64) as u32
     }
 
     /// The result once the export has finished.
@@ -121,13 +139,23 @@ impl Drop for Job {
     }
 }
 
-fn render(r: &Request, spp: u32, done: &AtomicU32, stop: &AtomicBool) -> Result<Saved> {
+fn render(
+    r: &Request,
+    mut p: Progressive,
+    spp: u32,
+    done: &AtomicU32,
+    stop: &AtomicBool,
+) -> Result<Saved> {
     let s = &r.session;
     let (w, h) = r.size;
     let tracer = s.tracer_for(&r.plan, &r.camera, r.size);
     let cancel = || stop.load(Ordering::Relaxed);
-    let mut p = Progressive::new(w, h);
+    let rows = p.rows_done.clone();
     let o = p.run(&tracer, &Stop::spp(spp), &cancel, |film, _| {
+        // Rows count the next pass's from here.
+        if let Some(rows) = &rows {
+            rows.store(0, Ordering::Relaxed);
+        }
         done.store(film.spp, Ordering::Relaxed)
     });
     if o.ended == Ended::Cancelled {
@@ -172,6 +200,57 @@ mod tests {
             size_for((114, 64), Some((300, 200)), (800, 800)),
             (300, 200)
         );
+    }
+
+    /// An export is the picture a film of statistics gives, at any spp:
+    /// in one summarised pass up to `ONE_PASS_SPP`, in blocks beyond.
+    #[test]
+    fn an_export_is_the_picture_of_its_samples() {
+        use crate::render::SceneRequest;
+        let (size, dir) = ((12, 8), std::env::temp_dir());
+        let session = Session::open(&SceneRequest {
+            size: Some(size),
+            ..SceneRequest::new("cornell-area")
+        })
+        .unwrap()
+        .0;
+        for spp in [1, 3, 16, 40, 300] {
+            let session = Session {
+                scene: Arc::new(crate::scene::Scene {
+                    settings: crate::scene::Settings {
+                        spp,
+                        ..session.scene.settings.clone()
+                    },
+                    ..(*session.scene).clone()
+                }),
+                ..session.clone()
+            };
+            let r = Request {
+                camera: session.camera,
+                plan: session.plan.clone(),
+                session: session.clone(),
+                size,
+                dir: dir.clone(),
+            };
+            let job = Job::start(r).unwrap();
+            let saved = loop {
+                match job.poll() {
+                    Some(s) => break s.unwrap(),
+                    None => std::thread::sleep(std::time::Duration::from_millis(5)),
+                }
+            };
+            assert_eq!((saved.spp, job.done_spp()), (spp, spp));
+            let png = image::open(&saved.path).unwrap().into_rgb8();
+            std::fs::remove_file(&saved.path).unwrap();
+            let film = Progressive::render(&session.tracer(), spp);
+            let s = &session.scene.settings;
+            let shown = post::display(film.image(), size.0, size.1, &session.plan, &s.bloom);
+            assert_eq!(
+                png,
+                post::to_rgb8(&shown.image, size.0, size.1),
+                "{spp} spp"
+            );
+        }
     }
 
     #[test]
