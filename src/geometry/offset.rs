@@ -10,6 +10,7 @@ use glam::Vec3;
 const GAMMA7: f32 = super::gamma(7);
 
 /// Point on a triangle from barycentrics, with its absolute error bound.
+#[inline]
 pub fn hit_point(p: [Vec3; 3], u: f32, v: f32) -> (Vec3, Vec3) {
     let b0 = 1.0 - u - v;
     let point = b0 * p[0] + u * p[1] + v * p[2];
@@ -21,8 +22,11 @@ pub fn hit_point(p: [Vec3; 3], u: f32, v: f32) -> (Vec3, Vec3) {
 /// cross product in f64: in f32 the cross product of a long, thin triangle
 /// can point well away from the true normal, and spawned rays are offset
 /// along it.
+#[inline]
 pub fn geometric_normal(p: [Vec3; 3]) -> Vec3 {
-    let [a, b, c] = p.map(|v| v.as_dvec3());
+    // Converted one by one: `map` over the array was a call whose result
+    // came back through memory in pieces the loads then straddled.
+    let [a, b, c] = [p[0].as_dvec3(), p[1].as_dvec3(), p[2].as_dvec3()];
     (b - a).cross(c - a).normalize_or_zero().as_vec3()
 }
 

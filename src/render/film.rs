@@ -211,6 +211,14 @@ fn mean_of(sum: &[i128; 3], n: u32) -> DVec3 {
     DVec3::new(mean(r), mean(g), mean(b))
 }
 
+/// Whether the samples of `run` all have the same colour, bit for bit.
+#[inline]
+fn is_one_colour(run: &[Sampled]) -> bool {
+    let bits = |s: &Sampled| s.c.to_array().map(f32::to_bits);
+    run.first()
+        .is_some_and(|a| run.iter().all(|s| bits(s) == bits(a)))
+}
+
 /// `lum` on a black square of a checkerboard, `-lum` on a white one, the
 /// sign set without a branch on the square's colour, which is random.
 #[inline(always)]
@@ -271,18 +279,35 @@ impl PixelStats {
     /// overlap where one at a time each waits for the last.
     #[inline]
     pub fn add_run(&mut self, run: &[Sampled]) {
+        let one_colour = self.n == 0 && self.sum == [0; 3] && is_one_colour(run);
         for run in run.chunks(RUN) {
             let mut lum = [0.0; RUN];
             let mut lum_mean = [0.0; RUN];
             let (mut sum, mut mean) = (self.sum, self.mean);
-            for (i, s) in run.iter().enumerate() {
-                let q = [fixed(s.c.x), fixed(s.c.y), fixed(s.c.z)];
-                for (s, q) in sum.iter_mut().zip(q) {
-                    *s += q.0;
+            if one_colour {
+                // A fresh pixel's samples of one colour (a background's):
+                // the sum after `i` of them is `i` times one sample's, a
+                // value of at most 29 significant bits, so each mean is
+                // exactly the sample's fixed-point value and its luminance
+                // the sample's. The same values without the conversions and
+                // divisions of every sample.
+                let q = [fixed(run[0].c.x), fixed(run[0].c.y), fixed(run[0].c.z)];
+                let n = self.n + run.len() as u32;
+                sum = q.map(|q| q.0 * n as i128);
+                mean = mean_of(&sum, n);
+                let l = DVec3::from_array(q.map(|v| v.1)).dot(LUMA.as_dvec3());
+                lum = [l; RUN];
+                lum_mean = [l; RUN];
+            } else {
+                for (i, s) in run.iter().enumerate() {
+                    let q = [fixed(s.c.x), fixed(s.c.y), fixed(s.c.z)];
+                    for (s, q) in sum.iter_mut().zip(q) {
+                        *s += q.0;
+                    }
+                    mean = mean_of(&sum, self.n + i as u32 + 1);
+                    lum_mean[i] = mean.dot(LUMA.as_dvec3());
+                    lum[i] = DVec3::from_array(q.map(|v| v.1)).dot(LUMA.as_dvec3());
                 }
-                mean = mean_of(&sum, self.n + i as u32 + 1);
-                lum_mean[i] = mean.dot(LUMA.as_dvec3());
-                lum[i] = DVec3::from_array(q.map(|v| v.1)).dot(LUMA.as_dvec3());
             }
             let mut lum_old = self.mean.dot(LUMA.as_dvec3());
             for (i, s) in run.iter().enumerate() {
@@ -1563,30 +1588,36 @@ mod tests {
                 .collect();
             let mut px = PixelStats::default();
             px.add_run(&run);
-            let (mut sum, mut m2, mut old) = ([0i128; 3], 0.0, 0.0);
-            let mut mean = DVec3::ZERO;
-            for (k, c) in c.iter().enumerate() {
-                let q = c
-                    .to_array()
-                    .map(|x| (x.clamp(-FIXED_MAX, FIXED_MAX) as f64 * FIXED_ONE) as i128);
-                for (s, q) in sum.iter_mut().zip(q) {
-                    *s += q;
-                }
-                let n = (k + 1) as f64;
-                mean = DVec3::from_array(sum.map(|s| s as f64 / FIXED_ONE / n));
-                let lum = DVec3::from_array(q.map(|q| q as f64 / FIXED_ONE)).dot(LUMA.as_dvec3());
-                let lum_mean = mean.dot(LUMA.as_dvec3());
-                m2 += (lum - old) * (lum - lum_mean);
-                old = lum_mean;
-            }
-            assert_eq!(px.sum, sum, "{len}");
-            assert_eq!(
-                px.mean.to_array().map(f64::to_bits),
-                mean.to_array().map(f64::to_bits),
-                "{len}"
-            );
-            assert_eq!(px.m2.to_bits(), m2.to_bits(), "{len}");
+            assert_as_defined(&px, &c, &format!("{len}"));
         }
+    }
+
+    /// Asserts that `px` has the sums, mean and M2 the definitions (the
+    /// casts and one division a channel) give for samples `c`, bit for bit.
+    fn assert_as_defined(px: &PixelStats, c: &[Vec3], what: &str) {
+        let (mut sum, mut m2, mut old) = ([0i128; 3], 0.0, 0.0);
+        let mut mean = DVec3::ZERO;
+        for (k, c) in c.iter().enumerate() {
+            let q = c
+                .to_array()
+                .map(|x| (x.clamp(-FIXED_MAX, FIXED_MAX) as f64 * FIXED_ONE) as i128);
+            for (s, q) in sum.iter_mut().zip(q) {
+                *s += q;
+            }
+            let n = (k + 1) as f64;
+            mean = DVec3::from_array(sum.map(|s| s as f64 / FIXED_ONE / n));
+            let lum = DVec3::from_array(q.map(|q| q as f64 / FIXED_ONE)).dot(LUMA.as_dvec3());
+            let lum_mean = mean.dot(LUMA.as_dvec3());
+            m2 += (lum - old) * (lum - lum_mean);
+            old = lum_mean;
+        }
+        assert_eq!(px.sum, sum, "{what}");
+        assert_eq!(
+            px.mean.to_array().map(f64::to_bits),
+            mean.to_array().map(f64::to_bits),
+            "{what}"
+        );
+        assert_eq!(px.m2.to_bits(), m2.to_bits(), "{what}");
     }
 
     /// A pixel's samples added in runs of any length hold the statistics
@@ -1621,6 +1652,52 @@ mod tests {
                     runs.add_run(run);
                 }
                 assert_eq!(format!("{runs:?}"), format!("{one:?}"), "{len} {skip:?}");
+            }
+        }
+    }
+
+    /// A fresh pixel's samples of one colour, added in runs, hold the
+    /// statistics of the same samples added one at a time, bit for bit:
+    /// colours of every kind (zero, negative, tiny, clamped), jittered or
+    /// not, with a sample dropped, and runs followed by other colours.
+    #[test]
+    fn runs_of_one_colour_add_as_single_samples() {
+        let colours = [
+            Vec3::new(0.1, 0.2, 0.3),
+            Vec3::ZERO,
+            Vec3::new(-0.0, 0.0, -1.5),
+            Vec3::new(-3.7e-13, 1e-30, 7.0),
+            Vec3::new(3e38, -1e13, 0.999_999_9),
+            Vec3::splat(f32::MIN_POSITIVE),
+        ];
+        for c in colours {
+            for jittered in [false, true] {
+                for skip in [None, Some(3), Some(17)] {
+                    let kept: Vec<Sampled> = (0..40)
+                        .filter(|&k| Some(k) != skip)
+                        .map(|k| Sampled {
+                            x: 0,
+                            k,
+                            // Past 32 samples the colour changes.
+                            c: if k < 32 { c } else { Vec3::splat(0.4) },
+                            stratum: jittered.then(|| sample(5, k, 1.0, 1.0).0),
+                        })
+                        .collect();
+                    let mut one = PixelStats::default();
+                    for s in &kept {
+                        one.add(s.k, s.c, s.stratum);
+                    }
+                    for len in [1, 2, 5, 16, 17, 31, 32, 40] {
+                        let mut runs = PixelStats::default();
+                        for run in kept.chunks(len) {
+                            runs.add_run(run);
+                        }
+                        let what = format!("{c} {jittered} {skip:?} {len}");
+                        assert_eq!(format!("{runs:?}"), format!("{one:?}"), "{what}");
+                        let c: Vec<Vec3> = kept.iter().map(|s| s.c).collect();
+                        assert_as_defined(&runs, &c, &what);
+                    }
+                }
             }
         }
     }

@@ -7,7 +7,7 @@
 use glam::{Vec2, Vec3};
 
 use super::plan::Plan;
-use super::recorder::{HitInfo, LightSample, MissInfo, Primed, RayKind, Recorder};
+use super::recorder::{HitInfo, LightSample, MissInfo, RayKind, Recorder};
 use crate::bvh::{Bvh, Hit};
 use crate::geometry::offset::{geometric_normal, hit_point, offset_origin, SHADOW_EPSILON};
 use crate::geometry::sampling::{jittered, phong_lobe, Rng, Run, PIXEL_GRID};
@@ -154,21 +154,13 @@ impl<'a> Tracer<'a> {
 
     /// The colour of the placed sample `s`, whose camera ray is `ray`.
     pub fn sample_from<R: Recorder>(&self, s: Placed, ray: &Ray, rec: &mut R) -> Vec3 {
-        let mut rng = s.rng;
-        rec.pixel_sample(s.off, s.stratum);
-        // The stages the plan may leave out are compile-time parameters, so
-        // a scene without textures or vertex normals runs code without them.
-        let (kind, w, rng) = (RayKind::Camera, Vec3::ONE, &mut rng);
-        match (self.plan.textures, self.plan.smooth_normals) {
-            (false, false) => self.trace::<R, false, false>(ray, 0, kind, w, rng, rec),
-            (false, true) => self.trace::<R, false, true>(ray, 0, kind, w, rng, rec),
-            (true, false) => self.trace::<R, true, false>(ray, 0, kind, w, rng, rec),
-            (true, true) => self.trace::<R, true, true>(ray, 0, kind, w, rng, rec),
-        }
+        self.camera_sample(s, ray, None, rec)
     }
 
     /// [`Tracer::sample_from`] with the camera ray's closest hit found
     /// ahead (in a packet, [`Bvh::intersect_packet`]): the same shading.
+    /// Always inlined, so that a miss costs its caller no call.
+    #[inline(always)]
     pub fn sample_from_hit<R: Recorder>(
         &self,
         s: Placed,
@@ -177,11 +169,22 @@ impl<'a> Tracer<'a> {
         rec: &mut R,
     ) -> Vec3 {
         debug_assert!(self.plan.bvh, "a hit found ahead needs the BVH");
-        let mut primed = Primed {
-            rec,
-            first: Some(hit),
-        };
-        self.sample_from(s, ray, &mut primed)
+        self.camera_sample(s, ray, Some(hit), rec)
+    }
+
+    /// A camera sample, its ray's closest hit `found` ahead or not.
+    #[inline(always)]
+    fn camera_sample<R: Recorder>(
+        &self,
+        s: Placed,
+        ray: &Ray,
+        found: Option<Option<Hit>>,
+        rec: &mut R,
+    ) -> Vec3 {
+        let mut rng = s.rng;
+        rec.pixel_sample(s.off, s.stratum);
+        let (kind, w) = (RayKind::Camera, Vec3::ONE);
+        self.trace(ray, found, 0, kind, w, &mut rng, rec)
     }
 
     #[inline]
@@ -202,11 +205,16 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    /// Radiance along `ray`. `weight` is the ray's factor in the pixel colour.
-    #[inline]
-    fn trace<R: Recorder, const TEX: bool, const SMOOTH: bool>(
+    /// Radiance along `ray`, whose closest hit is `found` when it was
+    /// found ahead. `weight` is the ray's factor in the pixel colour.
+    /// Always inlined: a camera ray whose hit was found ahead and missed
+    /// then costs its caller no call, and the traversal is left out.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn trace<R: Recorder>(
         &self,
         ray: &Ray,
+        found: Option<Option<Hit>>,
         depth: u32,
         kind: RayKind,
         weight: Vec3,
@@ -214,9 +222,13 @@ impl<'a> Tracer<'a> {
         rec: &mut R,
     ) -> Vec3 {
         rec.begin_ray(kind, ray, weight);
-        let color = match self.closest(ray, rec) {
+        let hit = match found {
+            Some(hit) => hit,
+            None => self.closest(ray, rec),
+        };
+        let color = match hit {
             None => self.miss(ray, rec),
-            Some(hit) => self.shade::<R, TEX, SMOOTH>(ray, &hit, depth, weight, rng, rec),
+            Some(hit) => self.shade(ray, &hit, depth, weight, rng, rec),
         };
         rec.end_ray(color);
         color
@@ -239,10 +251,33 @@ impl<'a> Tracer<'a> {
         color
     }
 
-    /// The colour of a hit. Kept out of line: a ray that misses (most
-    /// camera rays of a mesh) then pays for none of its set-up.
+    /// The colour of a hit. The stages the plan may leave out are
+    /// compile-time parameters, so a scene without textures or vertex
+    /// normals runs code without them.
+    #[inline(always)]
+    fn shade<R: Recorder>(
+        &self,
+        ray: &Ray,
+        hit: &Hit,
+        depth: u32,
+        weight: Vec3,
+        rng: &mut Rng,
+        rec: &mut R,
+    ) -> Vec3 {
+        let (h, d, w) = (hit, depth, weight);
+        match (self.plan.textures, self.plan.smooth_normals) {
+            (false, false) => self.shade_with::<R, false, false>(ray, h, d, w, rng, rec),
+            (false, true) => self.shade_with::<R, false, true>(ray, h, d, w, rng, rec),
+            (true, false) => self.shade_with::<R, true, false>(ray, h, d, w, rng, rec),
+            (true, true) => self.shade_with::<R, true, true>(ray, h, d, w, rng, rec),
+        }
+    }
+
+    /// [`Tracer::shade`] with the plan's stages. Kept out of line: a ray
+    /// that misses (most camera rays of a mesh) then pays for none of its
+    /// set-up.
     #[inline(never)]
-    fn shade<R: Recorder, const TEX: bool, const SMOOTH: bool>(
+    fn shade_with<R: Recorder, const TEX: bool, const SMOOTH: bool>(
         &self,
         ray: &Ray,
         hit: &Hit,
@@ -255,7 +290,8 @@ impl<'a> Tracer<'a> {
         let geo = &scene.geometry;
         let prim = hit.prim as usize;
         let idx = geo.indices[prim];
-        let verts = idx.map(|i| geo.positions[i as usize]);
+        let [i, j, k] = idx.map(|i| i as usize);
+        let verts = [geo.positions[i], geo.positions[j], geo.positions[k]];
         let (p, err) = hit_point(verts, hit.u, hit.v);
         let b = Vec3::new(1.0 - hit.u - hit.v, hit.u, hit.v);
         let mut ng = geometric_normal(verts);
@@ -328,14 +364,15 @@ impl<'a> Tracer<'a> {
             color += self.light(&s, i, light, rng, rec);
         }
         if self.plan.reflections && mat.reflective() && depth < self.max_depth {
-            color += self.reflect::<R, TEX, SMOOTH>(ray, &s, depth, weight, rng, rec);
+            color += self.reflect(ray, &s, depth, weight, rng, rec);
         }
         if mat.dissolve < 1.0 && depth < self.max_depth {
             let o = offset_origin(p, err, ng, ray.dir);
             let through = Ray::new(o, ray.dir);
             let w = 1.0 - mat.dissolve;
-            let behind = self.trace::<R, TEX, SMOOTH>(
+            let behind = self.trace(
                 &through,
+                None,
                 depth + 1,
                 RayKind::Transmission,
                 weight * w,
@@ -461,7 +498,7 @@ impl<'a> Tracer<'a> {
     }
 
     /// Mirror or glossy reflection, weighted by ks.
-    fn reflect<R: Recorder, const TEX: bool, const SMOOTH: bool>(
+    fn reflect<R: Recorder>(
         &self,
         ray: &Ray,
         s: &Surface,
@@ -488,8 +525,9 @@ impl<'a> Tracer<'a> {
                     }
                 }
                 let o = offset_origin(s.p, s.err, s.ng, dir);
-                sum += self.trace::<R, TEX, SMOOTH>(
+                sum += self.trace(
                     &Ray::new(o, dir),
+                    None,
                     depth + 1,
                     RayKind::Glossy,
                     weight * w,
@@ -500,8 +538,9 @@ impl<'a> Tracer<'a> {
             return sum * w;
         }
         let o = offset_origin(s.p, s.err, s.ng, r);
-        ks * self.trace::<R, TEX, SMOOTH>(
+        ks * self.trace(
             &Ray::new(o, r),
+            None,
             depth + 1,
             RayKind::Reflection,
             weight * ks,

@@ -485,9 +485,10 @@ fn share(weight: &[f32], ascending: &[f32], mean: f64, cap: u32) -> Option<Vec<u
 }
 
 /// Samples placed and their camera rays made ahead of tracing them (see
-/// [`Tracer::place`]): enough to overlap their arithmetic, few enough to
-/// stay in the L1 cache.
-const CAMERA_BATCH: usize = 32;
+/// [`Tracer::place`]): enough to overlap their arithmetic and fill a
+/// packet ([`crate::bvh::PACKET_RAYS`]: four pixels of 16 samples walk the
+/// tree together), few enough to stay in the L1 cache.
+const CAMERA_BATCH: usize = crate::bvh::PACKET_RAYS;
 
 /// One row of a film, with its sample counts when adaptive.
 struct Row<'a> {

@@ -70,7 +70,7 @@ pub trait Recorder {
     const ACTIVE: bool;
     /// Whether [`Recorder::intersect`] is the plain traversal, which a pass
     /// may then do ahead for a batch of camera rays in packets and hand in
-    /// ([`Primed`]).
+    /// ([`crate::render::Tracer::sample_from_hit`]).
     const PLAIN_TRAVERSAL: bool = false;
 
     /// Closest hit; the inspector's recorder counts the BVH work here.
@@ -129,76 +129,6 @@ impl Recorder for RayCounter {
     #[inline(always)]
     fn shadow_ray(&mut self) {
         self.rays += 1;
-    }
-}
-
-/// A recorder whose first closest-hit query is answered by a hit found
-/// ahead (a camera ray's, traced in a packet); everything else goes to the
-/// recorder it wraps, so the sample is shaded by the same code.
-pub struct Primed<'r, R: Recorder> {
-    pub rec: &'r mut R,
-    pub first: Option<Option<Hit>>,
-}
-
-impl<R: Recorder> Recorder for Primed<'_, R> {
-    const ACTIVE: bool = R::ACTIVE;
-
-    #[inline(always)]
-    fn intersect(&mut self, bvh: &Bvh, ray: &Ray) -> Option<Hit> {
-        match self.first.take() {
-            Some(hit) => hit,
-            None => self.rec.intersect(bvh, ray),
-        }
-    }
-
-    #[inline(always)]
-    fn occluded(&mut self, bvh: &Bvh, ray: &Ray) -> Option<u32> {
-        self.rec.occluded(bvh, ray)
-    }
-
-    #[inline(always)]
-    fn pixel_sample(&mut self, offset: Vec2, stratum: Option<u32>) {
-        self.rec.pixel_sample(offset, stratum)
-    }
-
-    #[inline(always)]
-    fn begin_ray(&mut self, kind: RayKind, ray: &Ray, weight: Vec3) {
-        self.rec.begin_ray(kind, ray, weight)
-    }
-
-    #[inline(always)]
-    fn hit(&mut self, info: HitInfo) {
-        self.rec.hit(info)
-    }
-
-    #[inline(always)]
-    fn miss(&mut self, info: MissInfo) {
-        self.rec.miss(info)
-    }
-
-    #[inline(always)]
-    fn begin_light(&mut self, index: usize, kind: &'static str) {
-        self.rec.begin_light(index, kind)
-    }
-
-    #[inline(always)]
-    fn light_sample(&mut self, s: LightSample) {
-        self.rec.light_sample(s)
-    }
-
-    #[inline(always)]
-    fn shadow_ray(&mut self) {
-        self.rec.shadow_ray()
-    }
-
-    #[inline(always)]
-    fn end_light(&mut self, diffuse: Vec3, specular: Vec3) {
-        self.rec.end_light(diffuse, specular)
-    }
-
-    #[inline(always)]
-    fn end_ray(&mut self, color: Vec3) {
-        self.rec.end_ray(color)
     }
 }
 

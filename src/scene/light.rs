@@ -38,7 +38,10 @@ impl Light {
     }
 
     /// Position and colour at parameter `s` in [0,1]^2 (segments use `s.x`).
-    #[inline]
+    /// Always inlined: returned through memory, a point light's position
+    /// was stored in an 8-byte and a 4-byte move and read back across both,
+    /// a load the store buffer cannot forward.
+    #[inline(always)]
     pub fn point_at(&self, s: Vec2) -> (Vec3, Vec3) {
         match self {
             Light::Point { position, color } => (*position, *color),
