@@ -77,6 +77,10 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         ..a.scene.request()
     })?;
     out.check_not_input(&s.inputs)?;
+    // The film resumed from is work to keep, not to write over.
+    if let Some(r) = &a.resume {
+        out.check_not_input(std::slice::from_ref(r))?;
+    }
     if let Some(c) = &checkpoint {
         c.check_not_input(&s.inputs)?;
     }
@@ -115,11 +119,16 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         (Some(path), Some(meta)) => resumed(path, &s, meta, range.as_ref().map(|r| &r.0), &stop)?,
         _ => {
             // Most such renders keep their film summarised: made so, one too
-            // large for statistics never allocates them.
-            let mut p = Progressive::resume(match image_only {
+            // large for statistics never allocates them. Statistics are
+            // checked before they are allocated, a summary below.
+            let film = match image_only {
                 true => Film::new_summary(s.width, s.height),
-                false => Film::new(s.width, s.height),
-            });
+                false => {
+                    check_film(s.width, s.height, Film::BYTES_PER_PIXEL)?;
+                    Film::new(s.width, s.height)
+                }
+            };
+            let mut p = Progressive::resume(film);
             p.film.start = range.as_ref().map_or(0, |r| r.0.start);
             p
         }
@@ -209,39 +218,38 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     if let Some(meta) = &mut meta {
         (meta.rays, meta.seconds) = (p.rays, p.seconds);
     }
+    let checkpoint = checkpoint.as_ref().zip(meta.as_ref());
     if outcome.ended == Ended::Cancelled {
         bar.abandon();
-        match (&checkpoint, &meta) {
-            (Some(c), Some(meta)) => {
-                write_part(c, &p.film, meta)?;
-                let f = &p.film;
-                eprintln!(
-                    "interrupted: {} holds samples {}..{}; continue with --resume {}",
-                    c.path.display(),
-                    f.start,
-                    f.start + f.spp,
-                    c.path.display()
-                );
-            }
-            _ => eprintln!("interrupted: nothing written"),
-        }
-        return Ok(ExitCode::from(interrupt::exit_code()));
+        return stopped(checkpoint, &p.film, true);
     }
     bar.finish_and_clear();
-    if let (Some(c), Some(meta)) = (&checkpoint, &meta) {
+    if let Some((c, meta)) = checkpoint {
         write_part(c, &p.film, meta)?;
     }
     let film = &p.film;
     let bytes = match &meta {
         Some(meta) if split => partial::encode(film, meta)?,
-        _ => image_bytes(
-            out.format,
-            film.image(),
-            s.width,
-            s.height,
-            s.plan.bloom.then_some(s.scene.settings.bloom).as_ref(),
-        )?,
+        _ => {
+            // Bloom and encoding take seconds on a large image: made on
+            // their own thread, so that a signal meanwhile ends the render
+            // at once, with nothing written.
+            let (format, image, (w, h)) = (out.format, film.image(), (s.width, s.height));
+            let bloom = s.plan.bloom.then_some(s.scene.settings.bloom);
+            let work = std::thread::spawn(move || image_bytes(format, image, w, h, bloom.as_ref()));
+            while !work.is_finished() && !interrupt::requested() {
+                std::thread::park_timeout(std::time::Duration::from_millis(20));
+            }
+            if !work.is_finished() {
+                return stopped(checkpoint, film, false);
+            }
+            work.join()
+                .map_err(|_| anyhow::anyhow!("making the image failed"))??
+        }
     };
+    if interrupt::requested() {
+        return stopped(checkpoint, film, false);
+    }
     out.write(&bytes)?;
     let render_ms = outcome.seconds * 1e3;
     // A --time or --target-error render that the --max-spp cap ended says so.
@@ -286,6 +294,28 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
 
 /// Seconds between checkpoints.
 const CHECKPOINT_SECONDS: f64 = 5.0;
+
+/// Ends a render a signal stopped: the film goes to the checkpoint, if
+/// there is one and the film holds a sample (`write`: not written yet);
+/// nothing else is written.
+fn stopped(checkpoint: Option<(&Output, &Meta)>, f: &Film, write: bool) -> Result<ExitCode> {
+    match checkpoint {
+        Some((c, meta)) if f.spp > 0 => {
+            if write {
+                write_part(c, f, meta)?;
+            }
+            eprintln!(
+                "interrupted: {} holds samples {}..{}; continue with --resume {}",
+                c.path.display(),
+                f.start,
+                f.start + f.spp,
+                c.path.display()
+            );
+        }
+        _ => eprintln!("interrupted: nothing written"),
+    }
+    Ok(ExitCode::from(interrupt::exit_code()))
+}
 
 /// The image file `render` and `merge` write from a film: the linear mean
 /// as it is for .exr and .hdr (what `converge` and the TUI's `--reference`

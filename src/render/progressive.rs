@@ -561,6 +561,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                 .collect()
         }
     };
+    let summary = layout == Layout::Summary;
     let results: Vec<(R, Vec<BadSample>, bool, Vec<PixelStats>)> = rows
         .into_par_iter()
         .map(|mut row| {
@@ -618,6 +619,12 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             let mut placed = Vec::with_capacity(CAMERA_BATCH);
             let mut run = Run::default();
             for x in 0..width {
+                // A row of a summarised film's one pass holds all its
+                // samples, up to `ONE_PASS_SPP`: too long to make a cancel
+                // wait for, and nothing is read of a film it cuts short.
+                if summary && cancel() {
+                    return (rec, bad, false, Vec::new());
+                }
                 let (k0, n) = give_of(x);
                 for k in k0..k0 + n {
                     placed.push((k, tracer.place(x as u32, y, k, &mut run)));
