@@ -195,6 +195,30 @@ fn a_signal_during_a_render_writes_nothing() {
         assert!(err.contains("interrupted: nothing written"), "{err}");
         assert!(files(&d).is_empty(), "{:?}", files(&d));
     }
+    // In one pass of 256 samples a pixel (256 light samples each), a row
+    // takes many seconds: the render stops within a pixel all the same.
+    let child = Command::new(env!("CARGO_BIN_EXE_rayterm"))
+        .args([
+            "render",
+            "cornell-area",
+            "--spp",
+            "256",
+            "--light-samples",
+            "256",
+        ])
+        .args(["--size", "1920x1080", "-o"])
+        .arg(&out)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    // SAFETY: signalling the child we started.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
+    let start = Instant::now();
+    let res = child.wait_with_output().unwrap();
+    assert!(start.elapsed() < Duration::from_secs(10));
+    assert_eq!(res.status.code(), Some(128 + libc::SIGINT));
+    assert!(files(&d).is_empty(), "{:?}", files(&d));
     fs::remove_dir_all(d).unwrap();
 }
 

@@ -338,4 +338,17 @@ fn cli_errors_name_the_problem() {
     assert!(!o.status.success());
     assert!(err.contains("bad.obj:4"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
+
+    // Options that only shape --time and --target-error renders need one.
+    for opt in [&["--uniform"][..], &["--max-spp", "8"]] {
+        let mut args = vec!["render", "cornell", "-o", "/tmp/x.png"];
+        args.extend(opt);
+        let o = rayterm(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{opt:?}: {err}");
+        assert!(
+            err.contains("--time") && err.contains("--target-error"),
+            "{err}"
+        );
+    }
 }

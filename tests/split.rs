@@ -373,6 +373,54 @@ fn a_checkpoint_resumes_into_the_uninterrupted_render() {
     std::fs::remove_dir_all(d).unwrap();
 }
 
+/// The film resumed from is never the output written over, and a signal
+/// before the first pass ends leaves no checkpoint of no samples (which
+/// could not be resumed).
+#[test]
+fn a_checkpoint_is_never_lost_or_left_empty() {
+    let d = dir("keep");
+    render(&d, &["--spp", "4", "--checkpoint", "c.exr"], "a.png");
+    let before = std::fs::read(d.join("c.exr")).unwrap();
+    let mut args = vec!["render"];
+    args.extend(SCENE);
+    args.extend(["--spp", "8", "--resume", "c.exr", "-o", "c.exr"]);
+    let err = refused(&d, &args, "never.png");
+    assert!(err.contains("c.exr is an input of this render"), "{err}");
+    assert_eq!(std::fs::read(d.join("c.exr")).unwrap(), before);
+
+    let child = Command::new(BIN)
+        .args([
+            "render",
+            "cornell-area",
+            "--size",
+            "640x480",
+            "--spp",
+            "256",
+        ])
+        .args([
+            "--light-samples",
+            "256",
+            "--checkpoint",
+            "early.exr",
+            "-o",
+            "never.png",
+        ])
+        .current_dir(&d)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Within the first pass, of 78 million shadow rays.
+    std::thread::sleep(Duration::from_millis(500));
+    // SAFETY: signalling the child this test started.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
+    let res = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert_eq!(res.status.code(), Some(128 + libc::SIGINT), "{err}");
+    assert!(err.contains("interrupted: nothing written"), "{err}");
+    assert!(!d.join("early.exr").exists());
+    std::fs::remove_dir_all(d).unwrap();
+}
+
 /// SIGTERM during a render with --checkpoint leaves a checkpoint of whole
 /// passes, and resuming it gives the render never interrupted.
 #[test]

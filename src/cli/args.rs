@@ -198,6 +198,7 @@ impl SceneOpts {
 }
 
 #[derive(Args, Debug)]
+#[command(group(clap::ArgGroup::new("budget").args(["time", "target_error"]).multiple(true)))]
 pub struct RenderArgs {
     #[command(flatten)]
     pub scene: SceneOpts,
@@ -219,14 +220,15 @@ pub struct RenderArgs {
     /// for 1 %).
     #[arg(long)]
     pub target_error: Option<f64>,
-    /// The most samples per pixel --time and --target-error may add.
-    #[arg(long, default_value_t = 4096,
+    /// The most samples per pixel --time and --target-error may add
+    /// [default: 4096].
+    #[arg(long, requires = "budget",
           value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
-    pub max_spp: u32,
+    pub max_spp: Option<u32>,
     /// Give every pixel the same samples with --time or --target-error too,
     /// where a sampled scene is otherwise rendered adaptively: after 16 spp,
     /// samples go where the error is (docs/adaptive.md).
-    #[arg(long)]
+    #[arg(long, requires = "budget")]
     pub uniform: bool,
     /// Worker threads (default: all cores; at most 4x the cores).
     #[arg(long, value_parser = parse_threads)]

@@ -292,6 +292,9 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// The most samples per pixel --time and --target-error add unless told.
+const DEFAULT_MAX_SPP: u32 = 4096;
+
 /// Seconds between checkpoints.
 const CHECKPOINT_SECONDS: f64 = 5.0;
 
@@ -466,7 +469,7 @@ fn stop(a: &RenderArgs) -> Result<Option<Stop>> {
         (Some(n), _, _) => Some(Stop::spp(n)),
         (None, None, None) => None,
         (None, seconds, error) => Some(Stop {
-            spp: Some(a.max_spp),
+            spp: Some(a.max_spp.unwrap_or(DEFAULT_MAX_SPP)),
             seconds,
             error,
         }),
