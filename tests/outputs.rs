@@ -341,3 +341,35 @@ fn absurd_budgets_are_capped_or_refused_and_empty_references_too() {
     assert!(err.contains("too short for one sample per pixel"), "{err}");
     fs::remove_dir_all(d).unwrap();
 }
+
+/// A file replaced keeps its permissions; a symbolic link named as the
+/// output becomes the file, its target untouched.
+#[test]
+fn a_replaced_output_keeps_its_permissions() {
+    use std::os::unix::fs::PermissionsExt;
+    let d = dir("modes");
+    let (kept, real, link) = (d.join("kept.png"), d.join("real.png"), d.join("link.png"));
+    fs::write(&kept, b"old").unwrap();
+    fs::set_permissions(&kept, fs::Permissions::from_mode(0o640)).unwrap();
+    fs::write(&real, b"old").unwrap();
+    std::os::unix::fs::symlink(&real, &link).unwrap();
+    for out in [&kept, &link] {
+        let o = rayterm(&[
+            "render",
+            "cornell",
+            "--size",
+            "8x8",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    assert_eq!(
+        fs::metadata(&kept).unwrap().permissions().mode() & 0o777,
+        0o640
+    );
+    assert!(fs::read(&kept).unwrap().starts_with(b"\x89PNG"));
+    assert!(fs::symlink_metadata(&link).unwrap().is_file());
+    assert_eq!(fs::read(&real).unwrap(), b"old");
+    fs::remove_dir_all(d).unwrap();
+}

@@ -49,12 +49,12 @@ pub fn run(a: MergeArgs) -> Result<ExitCode> {
     }
     out.write(&bytes)?;
     let head = format!(
-        "{}: {}, merged {} in {}, render {:.1} s in all",
+        "{}: {}, merged {} in {}, render {} in all",
         meta.scene,
         words::count(meta.triangles, "triangle", "triangles"),
         words::count(count as u64, "part", "parts"),
         words::ms(start.elapsed().as_secs_f64() * 1e3),
-        meta.seconds
+        words::ms(meta.seconds * 1e3)
     );
     let mut line = summary(
         &head,

@@ -276,14 +276,24 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         s.bvh.stats.builder,
         duration(render_ms),
     );
+    // A resumed render's rate is that of all its passes, the resumed
+    // film's and this run's (which may have had nothing left to do).
+    let (head, rays, ms) = match a.resume {
+        Some(_) => (
+            format!("{head} ({} in all)", duration(p.seconds * 1e3)),
+            p.rays,
+            p.seconds * 1e3,
+        ),
+        None => (head, outcome.rays, render_ms),
+    };
     println!(
         "{}",
         summary(
             &head,
             &film.report(),
             split,
-            outcome.rays,
-            render_ms,
+            rays,
+            ms,
             s.plan.deterministic,
             &capped,
             &a.output

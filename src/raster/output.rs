@@ -170,6 +170,10 @@ impl Output {
         let written = (|| -> std::io::Result<()> {
             let mut f = OpenOptions::new().write(true).create_new(true).open(&tmp)?;
             f.write_all(bytes)?;
+            // A file replaced keeps its permissions.
+            if let Some(m) = fs::symlink_metadata(path).ok().filter(|m| m.is_file()) {
+                f.set_permissions(m.permissions())?;
+            }
             f.sync_all()?;
             fs::rename(&tmp, path)
         })();

@@ -129,7 +129,7 @@ pub struct Header {
 impl Header {
     /// Reads a partial film's header, naming the file in every error.
     pub fn read(path: &Path) -> Result<Header> {
-        let image = Scanlines::open(path, &admit(path))?;
+        let image = scanlines(path)?;
         header_of(&image.layout)
             .with_context(|| format!("{}: not a usable partial film", path.display()))
     }
@@ -521,11 +521,23 @@ struct Source {
     shared: Words,
 }
 
+/// The scanlines of the partial film at `path`; a file that holds none at
+/// all (a finished image, say) is named as no partial film.
+fn scanlines(path: &Path) -> Result<Scanlines> {
+    Scanlines::open(path, &admit(path)).map_err(|e| match path.is_file() {
+        true => e.context(format!(
+            "{}: not a partial film (one that render --part, --samples or --checkpoint writes)",
+            path.display()
+        )),
+        false => e,
+    })
+}
+
 impl Source {
     /// Opens the partial film at `path`, checking its header and that it
     /// says where every word of a pixel is. Errors name the file.
     fn open(path: &Path) -> Result<Source> {
-        let image = Scanlines::open(path, &admit(path))?;
+        let image = scanlines(path)?;
         Source::of(image).with_context(|| format!("{}: not a usable partial film", path.display()))
     }
 
