@@ -262,8 +262,13 @@ impl Series {
         self.points.iter().map(|p| (x(p), p.rel_err())).collect()
     }
 
-    /// Slope of log(relative error) against log(time).
+    /// Slope of log(relative error) against log(time); none where a run
+    /// took less than [`MIN_TIMED`], whose time is mostly the timer's and
+    /// the scheduler's.
     pub fn slope_time(&self) -> Option<f64> {
+        if self.points.iter().any(|p| p.seconds < MIN_TIMED) {
+            return None;
+        }
         fit_log_log(&self.pairs(|p| p.seconds)).map(|f| f.0)
     }
 
@@ -804,9 +809,39 @@ impl Subject<'_> {
     }
 }
 
+/// The shortest run whose time a slope is fitted to, in seconds.
+const MIN_TIMED: f64 = 0.01;
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Runs too short to time give no slope against time, only against spp.
+    #[test]
+    fn no_slope_against_times_too_short_to_measure() {
+        let point = |spp: f64, seconds: f64| Point {
+            budget: Budget::Spp(spp as u32),
+            spp,
+            seconds,
+            rays: 0.0,
+            rmse: 0.0,
+            rel_mse: 1.0 / spp,
+            est_rel_mse: None,
+        };
+        let series = |scale: f64| Series {
+            strategy: Strategy {
+                light_samples: 1,
+                glossy_samples: 1,
+                stratify: true,
+                adaptive: false,
+            },
+            label: String::new(),
+            points: vec![point(1.0, 0.02 * scale), point(4.0, 0.08 * scale)],
+        };
+        assert!((series(1.0).slope_time().unwrap() + 0.5).abs() < 1e-9);
+        assert!(series(0.01).slope_time().is_none());
+        assert!((series(0.01).slope_spp().unwrap() + 0.5).abs() < 1e-9);
+    }
 
     fn series(errs: &[(f64, f64, f64)]) -> Series {
         Series {
