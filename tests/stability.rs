@@ -8,7 +8,8 @@ use rayterm::bvh::{self, Bvh};
 use rayterm::geometry::sampling::Rng;
 use rayterm::geometry::Ray;
 use rayterm::report::stability::scale::{
-    aimed_leaks, image_difference, interior_lost, own_surface, place, probe_render, TRANSFORMS,
+    aimed_leaks, image_difference, interior_lost, interior_lost_within, own_surface, place,
+    probe_render, shadow_edge_allowance, transform_rows, Transform, TRANSFORMS,
 };
 use rayterm::report::stability::topology::{Crossing, Topology};
 use rayterm::report::stability::watertight::{aimed_rays, random_rays, sphere, teapot};
@@ -104,6 +105,42 @@ fn lost_shadows_count_inside_shadows_only() {
     inside[3 * 8 + 3] = false;
     assert_eq!(interior_lost(&shadow, &inside, 8, 8), (16, 1));
     assert_eq!(interior_lost(&shadow, &[false; 64], 8, 8), (16, 16));
+    // Edges allowed to move by 2 pixels: the 2x2 centre is checked, a lit
+    // pixel there is still a loss, one a pixel inside the edge is not.
+    assert_eq!(interior_lost_within(&shadow, &shadow, 8, 8, 2), (4, 0));
+    assert_eq!(interior_lost_within(&shadow, &inside, 8, 8, 2), (4, 1));
+    let mut near_edge = shadow.clone();
+    near_edge[2 * 8 + 2] = false;
+    assert_eq!(interior_lost(&shadow, &near_edge, 8, 8), (16, 1));
+    assert_eq!(interior_lost_within(&shadow, &near_edge, 8, 8, 2), (4, 0));
+}
+
+#[test]
+fn far_shadow_edges_move_within_their_error_bound_at_high_resolution() {
+    // Cornell at 1e4 sizes from the origin, rendered out there: shadow-ray
+    // origins are 5 f32 steps (0.0049) above the floor, which moves the far
+    // edge of the short box's shadow by 2 pixels at 1024x1024. Counted
+    // against its 8 neighbours, 18 umbra pixels were lost; the allowance is
+    // the origins' error bound in pixels, 1 at the default size.
+    let scene = scene::load("cornell").unwrap();
+    let t = Transform::new(1.0, 1e4);
+    let moved = place(&scene, t).0;
+    assert_eq!(shadow_edge_allowance(&moved, 96, 96), 1);
+    assert_eq!(shadow_edge_allowance(&moved, 1024, 1024), 9);
+    assert_eq!(shadow_edge_allowance(&scene, 1024, 1024), 1);
+    let near = place(&scene, Transform::new(1.0, 1e3)).0;
+    assert_eq!(shadow_edge_allowance(&near, 1024, 1024), 1);
+    let o = Options {
+        width: 1024,
+        height: 1024,
+        ..Options::default()
+    };
+    let b = bvh::build(&scene.geometry, Builder::Sah);
+    let reference = probe_render(&scene, &b, o.width, o.height, o.seed);
+    let rows = transform_rows(&scene, t, &reference, &o);
+    let shadows = rows.iter().find(|r| r.case.ends_with("shadows")).unwrap();
+    assert!(shadows.pass, "{shadows:?}");
+    assert!(shadows.detail.contains("within 9 pixels"), "{shadows:?}");
 }
 
 #[test]
