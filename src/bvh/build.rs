@@ -46,11 +46,12 @@ const SWEEP: usize = 12;
 /// a 16,000-triangle mesh makes a few dozen tasks, and a thread left idle
 /// at the end waits on at most a fraction of a millisecond's work.
 const PARALLEL_SUBTREE: usize = 1024;
-/// Nodes with more triangles than this bin them, bound their centroids and
-/// sort their refined splits on several threads: near the root, where
-/// fewer nodes than threads are open, the other threads would idle.
+/// Nodes with more triangles than this bin them and bound their centroids
+/// on several threads: near the root, where fewer nodes are open than
+/// there are threads, the other threads would idle.
 const PARALLEL_BINNING: usize = 1 << 13;
-/// Triangles per task of that work.
+/// Triangles per task of that work; a refined split sorts its triangles on
+/// several threads when it has more than this.
 const PARALLEL_BLOCK: usize = PARALLEL_BINNING / 4;
 
 /// A triangle's bounds in 32 bytes: the triangle's index rides in the
