@@ -270,7 +270,9 @@ fn subtree(
     base: usize,
     bins: &mut Binning,
 ) -> (usize, Part) {
-    if t.refs.len() <= PARALLEL_SUBTREE {
+    // On one thread the whole tree is packed: its nodes fill the front of
+    // the room, and no scratch is allocated per split.
+    if t.refs.len() <= PARALLEL_SUBTREE || rayon::current_num_threads() == 1 {
         let (depth, len) = packed(method, t, me, desc, base, bins);
         return (depth, Part::Packed { at: base, len });
     }
@@ -582,7 +584,7 @@ fn split_binned<const B: usize>(t: &mut Task, binning: &mut Binning) -> Option<C
             Vec3A::ZERO,
         ),
     };
-    let bins: &Bins = if n > PARALLEL_BINNING {
+    let bins: &Bins = if n > PARALLEL_BINNING && rayon::current_num_threads() > 1 {
         *binning = *t
             .refs
             .par_chunks(PARALLEL_BLOCK)

@@ -274,17 +274,25 @@ impl<F: Tri> Runs<'_, '_, F> {
         }
     }
 
-    /// Fills the batch's packets on the pool.
+    /// Fills the batch's packets on the pool (here, in order, when the pool
+    /// has one thread: nothing to hand over, and the batches need not be
+    /// held until the walk ends).
     fn flush(&mut self) {
-        let batch = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH));
-        let (out, rest) = std::mem::take(&mut self.rest).split_at_mut(batch.len());
+        let (out, rest) = std::mem::take(&mut self.rest).split_at_mut(self.batch.len());
         self.rest = rest;
         let tri = self.tri;
-        self.scope.spawn(move |_| {
-            for (o, &run) in out.iter_mut().zip(&batch) {
+        let fill = move |out: &mut [MaybeUninit<Packet>], batch: &[Run]| {
+            for (o, &run) in out.iter_mut().zip(batch) {
                 o.write(packet(run, tri));
             }
-        });
+        };
+        if rayon::current_num_threads() == 1 {
+            fill(out, &self.batch);
+            self.batch.clear();
+        } else {
+            let batch = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH));
+            self.scope.spawn(move |_| fill(out, &batch));
+        }
     }
 }
 
