@@ -42,10 +42,17 @@ const REFINE: usize = 1024;
 /// cannot separate triangles whose centroids coincide on an axis (a cube's
 /// faces), a sweep can, and for so few it costs little more.
 const SWEEP: usize = 12;
-/// Subtrees smaller than this are built on one thread.
-const PARALLEL_SUBTREE: usize = 4096;
-/// Nodes with more triangles than this bin them on several threads.
-const PARALLEL_BINNING: usize = 1 << 16;
+/// Subtrees smaller than this are built on one thread. Small enough that
+/// a 16,000-triangle mesh makes a few dozen tasks, and a thread left idle
+/// at the end waits on at most a fraction of a millisecond's work.
+const PARALLEL_SUBTREE: usize = 1024;
+/// Nodes with more triangles than this bin them and bound their centroids
+/// on several threads: near the root, where fewer nodes are open than
+/// there are threads, the other threads would idle.
+const PARALLEL_BINNING: usize = 1 << 13;
+/// Triangles per task of that work; a refined split sorts its triangles on
+/// several threads when it has more than this.
+const PARALLEL_BLOCK: usize = PARALLEL_BINNING / 4;
 
 /// A triangle's bounds in 32 bytes: the triangle's index rides in the
 /// fourth lanes, split into two halves stored as (exact, normal) floats so
@@ -224,11 +231,13 @@ fn build_with(geom: &Geometry, method: Method) -> Bvh {
         .map(PrimRef::index)
         .collect_into_vec(&mut prim);
     drop(refs);
-    // The wide tree's walk runs on one thread, the statistics meanwhile.
-    let (plan, mut stats) = rayon::join(|| wide::Wide::plan(&nodes, n), || stats(&nodes, n, depth));
     // The packets are the one copy of the triangles the BVH keeps, gathered
-    // from the scene in leaf order.
-    let wide = plan.fill(|i| vertices(prim[i] as usize).map(|p| p.to_array()));
+    // from the scene in leaf order. The statistics are taken meanwhile.
+    let tri = |i: usize| vertices(prim[i] as usize).map(|p| p.to_array());
+    let (wide, mut stats) = rayon::join(
+        || wide::Wide::collapse(&nodes, n, tri),
+        || stats(&nodes, n, depth),
+    );
     stats.build_ms = start_time.elapsed().as_secs_f64() * 1e3;
     let reach = nodes.first().map_or(0.0, |r| {
         r.min
@@ -261,7 +270,9 @@ fn subtree(
     base: usize,
     bins: &mut Binning,
 ) -> (usize, Part) {
-    if t.refs.len() <= PARALLEL_SUBTREE {
+    // On one thread the whole tree is packed: its nodes fill the front of
+    // the room, and no scratch is allocated per split.
+    if t.refs.len() <= PARALLEL_SUBTREE || rayon::current_num_threads() == 1 {
         let (depth, len) = packed(method, t, me, desc, base, bins);
         return (depth, Part::Packed { at: base, len });
     }
@@ -573,10 +584,10 @@ fn split_binned<const B: usize>(t: &mut Task, binning: &mut Binning) -> Option<C
             Vec3A::ZERO,
         ),
     };
-    let bins: &Bins = if n > PARALLEL_BINNING {
+    let bins: &Bins = if n > PARALLEL_BINNING && rayon::current_num_threads() > 1 {
         *binning = *t
             .refs
-            .par_chunks(PARALLEL_BINNING / 4)
+            .par_chunks(PARALLEL_BLOCK)
             .fold(Binning::new, |mut b, chunk| {
                 b.add_all(&binner, chunk);
                 b
@@ -661,7 +672,7 @@ fn split_binned<const B: usize>(t: &mut Task, binning: &mut Binning) -> Option<C
     let refs = &mut *t.refs;
     let lo = partition_by(refs, |c| binner.bin(c)[axis] < bin);
     let hi = lo + partition_by(&mut refs[lo..], |c| binner.bin(c)[axis] <= bin + 1);
-    let (c_lo, c_hi) = (centroids(&refs[..lo]), centroids(&refs[hi..]));
+    let (c_lo, c_hi) = rayon::join(|| centroids(&refs[..lo]), || centroids(&refs[hi..]));
     let union = |r: std::ops::Range<usize>| {
         bins.bounds[axis][r]
             .iter()
@@ -670,18 +681,17 @@ fn split_binned<const B: usize>(t: &mut Task, binning: &mut Binning) -> Option<C
     let (b_lo, b_hi) = (union(0..bin), union((bin + 2).min(B)..B));
     let mid = &mut refs[lo..hi];
     // Sort by centroid: keys computed once, with the position to gather by.
-    let mut keys: Vec<(u64, u32)> = mid
-        .iter()
-        .enumerate()
-        .map(|(k, r)| (sort_key(r, axis), k as u32))
-        .collect();
-    if keys.len() > PARALLEL_BINNING / 4 {
-        // The keys are distinct: the order is the same either way.
+    let key = |(k, r): (usize, &PrimRef)| (sort_key(r, axis), k as u32);
+    // The keys are distinct: the order is the same either way.
+    let sorted: Vec<PrimRef> = if mid.len() > PARALLEL_BLOCK {
+        let mut keys: Vec<(u64, u32)> = mid.par_iter().enumerate().map(key).collect();
         keys.par_sort_unstable();
+        keys.par_iter().map(|&(_, k)| mid[k as usize]).collect()
     } else {
+        let mut keys: Vec<(u64, u32)> = mid.iter().enumerate().map(key).collect();
         keys.sort_unstable();
-    }
-    let sorted: Vec<PrimRef> = keys.iter().map(|&(_, k)| mid[k as usize]).collect();
+        keys.iter().map(|&(_, k)| mid[k as usize]).collect()
+    };
     mid.copy_from_slice(&sorted);
     let m = mid.len();
     let mut right = vec![0.0f32; m + 1];
@@ -760,10 +770,6 @@ fn partition_by(refs: &mut [PrimRef], left: impl Fn(Vec3A) -> bool) -> usize {
     i
 }
 
-/// Triangles per block when a node's centroids are bounded on several
-/// threads.
-const BLOCK: usize = 1 << 14;
-
 /// Bounds of the (doubled) centroids, on the rayon pool for large nodes.
 fn centroids(refs: &[PrimRef]) -> Box3 {
     let serial = |refs: &[PrimRef]| {
@@ -775,7 +781,7 @@ fn centroids(refs: &[PrimRef]) -> Box3 {
     if refs.len() <= PARALLEL_BINNING {
         return serial(refs);
     }
-    refs.par_chunks(BLOCK)
+    refs.par_chunks(PARALLEL_BLOCK)
         .map(serial)
         .reduce(|| Box3::EMPTY, Box3::union)
 }

@@ -4,6 +4,8 @@
 //! eight, so one instruction tests eight boxes or eight triangles (four
 //! without AVX).
 
+use std::mem::MaybeUninit;
+
 use rayon::prelude::*;
 
 use super::Node;
@@ -87,49 +89,61 @@ impl Wide {
     /// leaf order, `tri(i)` the `i`-th): each wide node takes the binary
     /// node's children and keeps opening the largest interior one until it
     /// has eight.
-    pub fn collapse(
-        bin: &[Node],
-        count: usize,
-        tri: impl Fn(usize) -> [[f32; 3]; 3] + Sync,
-    ) -> Wide {
-        Wide::plan(bin, count).fill(tri)
-    }
-
-    /// The walk of [`Wide::collapse`]: lays out the nodes and decides which
-    /// triangles each packet holds, on this thread. The packets, where the
-    /// time goes (a scattered read of every vertex), are left to
-    /// [`Plan::fill`], on the rayon pool.
-    pub fn plan(bin: &[Node], count: usize) -> Plan {
+    ///
+    /// The walk that lays out the nodes runs on this thread; the packets,
+    /// where the time goes (a scattered read of every vertex), are filled
+    /// on the rayon pool in batches as the walk hands them out, so other
+    /// threads fill while the walk goes on.
+    pub fn collapse(bin: &[Node], count: usize, tri: impl Tri) -> Wide {
+        let total = 1 + bin
+            .par_iter()
+            .with_min_len(4096)
+            .filter(|n| n.is_leaf())
+            .map(|n| (n.count as usize).div_ceil(PACKET))
+            .sum::<usize>();
         let mut w = Wide {
             nodes: memory::room(bin.len() / 2 + 1),
-            packets: Vec::new(),
+            packets: memory::room(total),
             stack: 0,
             avx: avx_available(),
             node_of: Vec::with_capacity(bin.len() / 2 + 1),
-            leaf_of: Vec::with_capacity(count / 3 + 2),
+            leaf_of: Vec::with_capacity(total),
             // SAFETY: zero bytes are a u32.
             slot: unsafe { memory::zeroed(count) },
         };
-        // Packet 0 holds no triangle: the empty slots' leaf.
-        let mut runs: Vec<Run> = Vec::with_capacity(count / 3 + 2);
-        runs.push((0, 0));
-        w.leaf_of.push(u32::MAX);
-        if let Some(root) = bin.first() {
-            // The root is always an interior wide node, even over one leaf.
-            let depth = if root.is_leaf() {
-                w.node(bin, &mut runs, 0, &[0]).1
-            } else {
-                w.gather(bin, &mut runs, 0).1
+        let mut packets = std::mem::take(&mut w.packets);
+        rayon::scope(|s| {
+            let mut runs = Runs {
+                scope: s,
+                tri: &tri,
+                batch: Vec::with_capacity(BATCH),
+                rest: &mut packets.spare_capacity_mut()[..total],
             };
-            w.stack = depth * (WIDTH - 1);
-        }
-        Plan { wide: w, runs }
+            // Packet 0 holds no triangle: the empty slots' leaf.
+            runs.push((0, 0));
+            w.leaf_of.push(u32::MAX);
+            if let Some(root) = bin.first() {
+                // The root is always an interior wide node, even over one leaf.
+                let depth = if root.is_leaf() {
+                    w.node(bin, &mut runs, 0, &[0]).1
+                } else {
+                    w.gather(bin, &mut runs, 0).1
+                };
+                w.stack = depth * (WIDTH - 1);
+            }
+            runs.flush();
+            assert!(runs.rest.is_empty(), "every packet is filled");
+        });
+        // SAFETY: the batches filled all `total` packets (checked above).
+        unsafe { packets.set_len(total) };
+        w.packets = packets;
+        w
     }
 
     /// Wide node over the children of interior binary node `at` (at `c`
     /// and `c + 1`), opened up to eight; returns its index and the depth of
     /// its subtree in wide nodes.
-    fn gather(&mut self, bin: &[Node], runs: &mut Vec<Run>, at: usize) -> (u32, usize) {
+    fn gather<F: Tri>(&mut self, bin: &[Node], runs: &mut Runs<F>, at: usize) -> (u32, usize) {
         let c = bin[at].first as usize;
         let mut kids = [0; WIDTH];
         kids[..2].copy_from_slice(&[c, c + 1]);
@@ -150,10 +164,10 @@ impl Wide {
         self.node(bin, runs, at, &kids[..len])
     }
 
-    fn node(
+    fn node<F: Tri>(
         &mut self,
         bin: &[Node],
-        runs: &mut Vec<Run>,
+        runs: &mut Runs<F>,
         owner: usize,
         kids: &[usize],
     ) -> (u32, usize) {
@@ -193,18 +207,24 @@ impl Wide {
 
     /// Packets for the leaf over triangles `first..first + count`, to be
     /// filled from `runs`.
-    fn leaf(&mut self, runs: &mut Vec<Run>, owner: usize, first: usize, count: usize) -> u32 {
-        let at = runs.len();
+    fn leaf<F: Tri>(
+        &mut self,
+        runs: &mut Runs<F>,
+        owner: usize,
+        first: usize,
+        count: usize,
+    ) -> u32 {
+        let at = self.leaf_of.len();
         for start in (first..first + count).step_by(PACKET) {
             let lanes = PACKET.min(first + count - start);
-            let packet = (runs.len() as u32) << PACKET_BITS;
+            let packet = (self.leaf_of.len() as u32) << PACKET_BITS;
             for (lane, s) in self.slot[start..start + lanes].iter_mut().enumerate() {
                 *s = packet | lane as u32;
             }
             runs.push((start as u32, lanes as u32));
             self.leaf_of.push(owner as u32);
         }
-        let n = runs.len() - at;
+        let n = self.leaf_of.len() - at;
         debug_assert!((1..=1 << PACKET_BITS).contains(&n));
         LEAF | (at as u32) << PACKET_BITS | (n as u32 - 1)
     }
@@ -227,40 +247,71 @@ impl Wide {
     }
 }
 
-/// A wide tree laid out, its packets still to be filled.
-pub(crate) struct Plan {
-    wide: Wide,
-    /// The triangles of each packet.
-    runs: Vec<Run>,
+/// Where the packets' triangles come from: the triangle at a leaf-order
+/// position.
+pub(crate) trait Tri: Fn(usize) -> [[f32; 3]; 3] + Sync {}
+impl<F: Fn(usize) -> [[f32; 3]; 3] + Sync> Tri for F {}
+
+/// Packets handed to the pool per batch: some hundred batches at a million
+/// triangles, a few dozen at 70,000, so that a thread that finishes early
+/// finds some left.
+const BATCH: usize = 256;
+
+/// The packets the walk has laid out and not yet handed to the pool, and
+/// the room for them and those to come.
+struct Runs<'a, 's, F> {
+    scope: &'a rayon::Scope<'s>,
+    tri: &'s F,
+    batch: Vec<Run>,
+    rest: &'s mut [MaybeUninit<Packet>],
 }
 
-impl Plan {
-    /// The wide tree, with its packets filled from `tri(i)`, the triangle
-    /// at leaf-order position `i`.
-    pub fn fill(self, tri: impl Fn(usize) -> [[f32; 3]; 3] + Sync) -> Wide {
-        let Plan { wide: mut w, runs } = self;
-        w.packets = memory::room(runs.len());
-        runs.par_iter()
-            .with_min_len(1024)
-            .map(|&(first, lanes)| {
-                let mut p = Packet {
-                    p: [[[f32::NAN; PACKET]; 3]; 3],
-                    idx: [u32::MAX; PACKET],
-                };
-                for lane in 0..lanes as usize {
-                    let i = first as usize + lane;
-                    for (pv, tv) in p.p.iter_mut().zip(&tri(i)) {
-                        for (pa, &x) in pv.iter_mut().zip(tv) {
-                            pa[lane] = x;
-                        }
-                    }
-                    p.idx[lane] = i as u32;
-                }
-                p
-            })
-            .collect_into_vec(&mut w.packets);
-        w
+impl<F: Tri> Runs<'_, '_, F> {
+    fn push(&mut self, run: Run) {
+        self.batch.push(run);
+        if self.batch.len() == BATCH {
+            self.flush();
+        }
     }
+
+    /// Fills the batch's packets on the pool (here, in order, when the pool
+    /// has one thread: nothing to hand over, and the batches need not be
+    /// held until the walk ends).
+    fn flush(&mut self) {
+        let (out, rest) = std::mem::take(&mut self.rest).split_at_mut(self.batch.len());
+        self.rest = rest;
+        let tri = self.tri;
+        let fill = move |out: &mut [MaybeUninit<Packet>], batch: &[Run]| {
+            for (o, &run) in out.iter_mut().zip(batch) {
+                o.write(packet(run, tri));
+            }
+        };
+        if rayon::current_num_threads() == 1 {
+            fill(out, &self.batch);
+            self.batch.clear();
+        } else {
+            let batch = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH));
+            self.scope.spawn(move |_| fill(out, &batch));
+        }
+    }
+}
+
+/// The packet of the triangles of `run`, `tri(i)` the `i`-th.
+fn packet((first, lanes): Run, tri: &impl Tri) -> Packet {
+    let mut p = Packet {
+        p: [[[f32::NAN; PACKET]; 3]; 3],
+        idx: [u32::MAX; PACKET],
+    };
+    for lane in 0..lanes as usize {
+        let i = first as usize + lane;
+        for (pv, tv) in p.p.iter_mut().zip(&tri(i)) {
+            for (pa, &x) in pv.iter_mut().zip(tv) {
+                pa[lane] = x;
+            }
+        }
+        p.idx[lane] = i as u32;
+    }
+    p
 }
 
 #[cfg(target_arch = "x86_64")]
