@@ -393,7 +393,7 @@ fn a_checkpoint_is_never_lost_or_left_empty() {
             "render",
             "cornell-area",
             "--size",
-            "640x480",
+            "1280x960",
             "--spp",
             "256",
         ])
@@ -409,7 +409,7 @@ fn a_checkpoint_is_never_lost_or_left_empty() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    // Within the first pass, of 78 million shadow rays.
+    // Within the first pass, of 315 million shadow rays.
     std::thread::sleep(Duration::from_millis(500));
     // SAFETY: signalling the child this test started.
     assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
