@@ -564,6 +564,11 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
     let summary = layout == Layout::Summary;
     let results: Vec<(R, Vec<BadSample>, bool, Vec<PixelStats>)> = rows
         .into_par_iter()
+        // Rows one job each: rows through the scene cost many times those
+        // of the background, and a run of rows that rayon no longer splits
+        // once a thread has begun it left the other idle for up to a tenth
+        // of a frame at the end.
+        .with_max_len(1)
         .map(|mut row| {
             let mut rec = R::default();
             let mut bad = Vec::new();
