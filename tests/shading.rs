@@ -160,3 +160,103 @@ fn reflection_depth_is_limited() {
         );
     }
 }
+
+/// A session on `scene` at 1x1 without jitter or bloom.
+fn one_pixel(scene: &rayterm::scene::Scene) -> rayterm::render::Session {
+    let req = rayterm::render::SceneRequest {
+        size: Some((1, 1)),
+        features: no_sampling(),
+        ..rayterm::render::SceneRequest::new(&scene.name)
+    };
+    rayterm::render::Session::with_scene(scene.clone(), &req).0
+}
+
+/// Every ray of a tree.
+fn count(n: &rayterm::inspect::tree::RayNode) -> usize {
+    1 + n.children.iter().map(count).sum::<usize>()
+}
+
+/// Camera between two horizontal planes, looking along them at a slant.
+fn between_planes() -> rayterm::scene::Camera {
+    rayterm::scene::Camera {
+        eye: Vec3::new(0.0, 0.5, 0.0),
+        target: Vec3::new(1.0, 0.2, 0.0),
+        up: Vec3::Y,
+        vfov: 1.0,
+    }
+}
+
+#[test]
+fn glossy_splits_stop_at_the_most_paths_a_tree_may_have() {
+    // Two glossy planes facing each other, 256 lobe samples a hit, 64
+    // bounces: split at every hit, 256^64 rays. The tree splits at the
+    // first hit only, and each of its 256 paths goes on with one sample.
+    use rayterm::render::integrator::MAX_PATHS;
+    let glossy = material(Vec3::splat(0.1), Vec3::splat(0.5), 200.0);
+    let (a, at) = quad_y(-1e4, -1e4, 1e4, 1e4, 0.0);
+    let (b, bt) = quad_y(-1e4, -1e4, 1e4, 1e4, 1.0);
+    let mut s = scene(
+        &[(a, at, glossy.clone()), (b, bt, glossy)],
+        vec![],
+        between_planes(),
+    );
+    s.settings.ambient = Vec3::ONE;
+    s.settings.max_depth = 64;
+    s.settings.glossy_samples = MAX_PATHS;
+    let session = one_pixel(&s);
+    let tree = rayterm::inspect::tree::inspect_pixel(&session.tracer(), 0, 0, 0);
+    let first = &tree.root.children;
+    assert_eq!(first.len(), MAX_PATHS as usize, "the first hit splits");
+    // The most children of any ray below `n`, `n` included.
+    fn widest(n: &rayterm::inspect::tree::RayNode) -> usize {
+        n.children
+            .iter()
+            .map(widest)
+            .fold(n.children.len(), usize::max)
+    }
+    assert!(first.iter().all(|c| widest(c) <= 1), "later hits do not");
+    let rays = count(&tree.root);
+    assert!(rays <= 1 + 64 * MAX_PATHS as usize, "{rays} rays");
+    assert!(rays > 10 * MAX_PATHS as usize, "paths go on: {rays} rays");
+}
+
+#[test]
+fn surfaces_that_reflect_and_transmit_keep_the_mean_past_the_most_paths() {
+    // A stack of half-transparent mirrors: every hit both reflects and lets
+    // light through, so the tree doubles at each of 14 bounces (but for the
+    // rays that leave the stack). Past 256 paths a hit follows one branch at
+    // random; the mean over samples is the full tree's value.
+    let mut m = material(Vec3::splat(0.2), Vec3::splat(0.6), 1e6);
+    m.dissolve = 0.5;
+    let planes: Vec<_> = (-6..=6)
+        .map(|i| {
+            let (p, t) = quad_y(-1e4, -1e4, 1e4, 1e4, i as f32);
+            (p, t, m.clone())
+        })
+        .collect();
+    let mut s = scene(&planes, vec![], between_planes());
+    s.settings.ambient = Vec3::ONE;
+    s.settings.max_depth = 14;
+    let session = one_pixel(&s);
+    let mut tracer = session.tracer();
+    let sample = |t: &rayterm::render::Tracer, k| {
+        let mut rec = rayterm::render::RayCounter::default();
+        (t.sample(0, 0, k, &mut rec).x as f64, rec.rays)
+    };
+    tracer.max_paths = u32::MAX;
+    let (exact, full) = sample(&tracer, 0);
+    assert!(full > 2000, "the full tree: {full} rays");
+    tracer.max_paths = rayterm::render::integrator::MAX_PATHS;
+    let n = 4000;
+    let got: Vec<(f64, u64)> = (0..n).map(|k| sample(&tracer, k)).collect();
+    let most = got.iter().map(|g| g.1).max().unwrap();
+    assert!(most < full, "{most} rays of {full}");
+    let mean = got.iter().map(|g| g.0).sum::<f64>() / n as f64;
+    let var = got.iter().map(|g| (g.0 - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+    let se = (var / n as f64).sqrt();
+    assert!(var > 0.0, "branches are chosen at random");
+    assert!(
+        (mean - exact).abs() < 5.0 * se + 1e-6,
+        "mean {mean} of {n} against the full tree's {exact} (standard error {se})"
+    );
+}

@@ -19,6 +19,45 @@ use crate::scene::{Environment, Light, Material, Scene};
 /// Tries to draw a glossy direction above the surface before using the mirror direction.
 const GLOSSY_TRIES: u32 = 8;
 
+/// The most paths a sample's ray tree splits into. Glossy lobes sampled
+/// `glossy_samples` times at every bounce, or surfaces that both reflect
+/// and let light through, split a tree exponentially with the depth
+/// (`glossy_samples` 256 at `max_depth` 64 asked for 256^64 rays). A split
+/// that would take the tree past this follows one branch: a glossy lobe
+/// sampled once, or reflection or transmission chosen at random in
+/// proportion to their weights and divided by the chance of choosing it.
+/// Either estimate has the same mean, so the picture is the same on
+/// average, and a sample's work grows with the depth, not exponentially.
+pub const MAX_PATHS: u32 = 256;
+
+/// A ray's place in its sample's tree: the bounces above it, and the paths
+/// the tree had split into on the way.
+#[derive(Clone, Copy, Debug)]
+struct Depth {
+    bounces: u32,
+    paths: u32,
+}
+
+impl Depth {
+    const CAMERA: Depth = Depth {
+        bounces: 0,
+        paths: 1,
+    };
+
+    /// The next bounce, on one of `split` branches.
+    fn next(self, split: u32) -> Depth {
+        Depth {
+            bounces: self.bounces + 1,
+            paths: self.paths.saturating_mul(split),
+        }
+    }
+
+    /// Whether a tree of at most `max` paths may split `n` ways here.
+    fn may_split(self, n: u32, max: u32) -> bool {
+        self.paths.saturating_mul(n) <= max
+    }
+}
+
 /// Everything needed to shade samples of one image.
 pub struct Tracer<'a> {
     pub scene: &'a Scene,
@@ -29,6 +68,8 @@ pub struct Tracer<'a> {
     pub height: u32,
     pub seed: u64,
     pub max_depth: u32,
+    /// The most paths a sample's tree splits into: [`MAX_PATHS`].
+    pub max_paths: u32,
 }
 
 /// The mirror direction of `dir` about the shading normal `n`, or about the
@@ -86,6 +127,7 @@ impl<'a> Tracer<'a> {
             height,
             seed,
             max_depth: scene.settings.max_depth,
+            max_paths: MAX_PATHS,
         }
     }
 
@@ -184,7 +226,7 @@ impl<'a> Tracer<'a> {
         let mut rng = s.rng;
         rec.pixel_sample(s.off, s.stratum);
         let (kind, w) = (RayKind::Camera, Vec3::ONE);
-        self.trace(ray, found, 0, kind, w, &mut rng, rec)
+        self.trace(ray, found, Depth::CAMERA, kind, w, &mut rng, rec)
     }
 
     #[inline]
@@ -215,7 +257,7 @@ impl<'a> Tracer<'a> {
         &self,
         ray: &Ray,
         found: Option<Option<Hit>>,
-        depth: u32,
+        depth: Depth,
         kind: RayKind,
         weight: Vec3,
         rng: &mut Rng,
@@ -259,7 +301,7 @@ impl<'a> Tracer<'a> {
         &self,
         ray: &Ray,
         hit: &Hit,
-        depth: u32,
+        depth: Depth,
         weight: Vec3,
         rng: &mut Rng,
         rec: &mut R,
@@ -281,7 +323,7 @@ impl<'a> Tracer<'a> {
         &self,
         ray: &Ray,
         hit: &Hit,
-        depth: u32,
+        depth: Depth,
         weight: Vec3,
         rng: &mut Rng,
         rec: &mut R,
@@ -363,23 +405,36 @@ impl<'a> Tracer<'a> {
         for (i, light) in scene.lights.iter().enumerate() {
             color += self.light(&s, i, light, rng, rec);
         }
-        if self.plan.reflections && mat.reflective() && depth < self.max_depth {
-            color += self.reflect(ray, &s, depth, weight, rng, rec);
+        if depth.bounces >= self.max_depth {
+            return color;
         }
-        if mat.dissolve < 1.0 && depth < self.max_depth {
+        let reflect = self.plan.reflections && mat.reflective();
+        let through = mat.dissolve < 1.0;
+        // Past `MAX_PATHS`, a surface that does both takes one, at random.
+        let (reflect, through, split, scale) =
+            if reflect && through && !depth.may_split(2, self.max_paths) {
+                let r = mat.ks.max_element() * mat.dissolve;
+                let chance = r / (r + 1.0 - mat.dissolve);
+                match rng.next_f32() < chance {
+                    true => (true, false, 1, Vec3::splat(1.0 / chance)),
+                    false => (false, true, 1, Vec3::splat(1.0 / (1.0 - chance))),
+                }
+            } else {
+                (reflect, through, 1 + (reflect && through) as u32, Vec3::ONE)
+            };
+        let next = depth.next(split);
+        if reflect {
+            color += scale * self.reflect(ray, &s, next, weight * scale, rng, rec);
+        }
+        if mat.dissolve < 1.0 {
+            color *= mat.dissolve;
+        }
+        if through {
             let o = offset_origin(p, err, ng, ray.dir);
-            let through = Ray::new(o, ray.dir);
-            let w = 1.0 - mat.dissolve;
-            let behind = self.trace(
-                &through,
-                None,
-                depth + 1,
-                RayKind::Transmission,
-                weight * w,
-                rng,
-                rec,
-            );
-            color = color * mat.dissolve + behind * w;
+            let ray = Ray::new(o, ray.dir);
+            let w = (1.0 - mat.dissolve) * scale;
+            let kind = RayKind::Transmission;
+            color += self.trace(&ray, None, next, kind, weight * w, rng, rec) * w;
         }
         color
     }
@@ -497,12 +552,13 @@ impl<'a> Tracer<'a> {
         (d, sp)
     }
 
-    /// Mirror or glossy reflection, weighted by ks.
+    /// Mirror or glossy reflection, weighted by ks; `next` is the
+    /// reflected rays' place in the tree.
     fn reflect<R: Recorder>(
         &self,
         ray: &Ray,
         s: &Surface,
-        depth: u32,
+        next: Depth,
         weight: Vec3,
         rng: &mut Rng,
         rec: &mut R,
@@ -511,6 +567,15 @@ impl<'a> Tracer<'a> {
         let ks = s.mat.ks;
         if self.plan.glossy && s.mat.glossy() {
             let n = self.scene.settings.glossy_samples.max(1);
+            let n = if next.may_split(n, self.max_paths) {
+                n
+            } else {
+                1
+            };
+            let next = Depth {
+                paths: next.paths.saturating_mul(n),
+                ..next
+            };
             let w = ks / n as f32;
             let mut sum = Vec3::ZERO;
             for _ in 0..n {
@@ -528,7 +593,7 @@ impl<'a> Tracer<'a> {
                 sum += self.trace(
                     &Ray::new(o, dir),
                     None,
-                    depth + 1,
+                    next,
                     RayKind::Glossy,
                     weight * w,
                     rng,
@@ -541,7 +606,7 @@ impl<'a> Tracer<'a> {
         ks * self.trace(
             &Ray::new(o, r),
             None,
-            depth + 1,
+            next,
             RayKind::Reflection,
             weight * ks,
             rng,

@@ -5,6 +5,7 @@
 
 use serde::Serialize;
 
+use super::integrator::MAX_PATHS;
 use super::{Feature, Features};
 use crate::scene::{Environment, Scene};
 
@@ -193,9 +194,19 @@ impl Plan {
         }
         let on = |f: Feature| decisions[f as usize].runs();
         let any_area = scene.lights.iter().any(|l| l.is_area());
+        // Surfaces that reflect and let light through split a ray tree in
+        // two at each bounce; past `MAX_PATHS` a split picks one branch at
+        // random.
+        let forks = on(Feature::Reflections)
+            && scene.settings.max_depth > MAX_PATHS.ilog2()
+            && scene
+                .materials
+                .iter()
+                .any(|m| m.reflective() && m.dissolve < 1.0);
         let deterministic = !(on(Feature::Supersampling)
             || on(Feature::Glossy)
-            || (on(Feature::SoftShadows) && any_area));
+            || (on(Feature::SoftShadows) && any_area)
+            || forks);
         Plan {
             features,
             policy,
