@@ -373,3 +373,51 @@ fn a_replaced_output_keeps_its_permissions() {
     assert_eq!(fs::read(&real).unwrap(), b"old");
     fs::remove_dir_all(d).unwrap();
 }
+
+/// One sample of this scene is thousands of glossy hits with 4096 light
+/// samples each, minutes of work: a signal stops it within the sample,
+/// and nothing is written.
+#[test]
+fn a_signal_stops_a_render_within_one_sample() {
+    let d = dir("sample");
+    fs::write(
+        d.join("planes.obj"),
+        "v -1e3 0 -1e3\nv 1e3 0 -1e3\nv 1e3 0 1e3\nv -1e3 0 1e3\n\
+         v -1e3 1 -1e3\nv 1e3 1 -1e3\nv 1e3 1 1e3\nv -1e3 1 1e3\n\
+         f 1 2 3\nf 1 3 4\nf 5 6 7\nf 5 7 8\n",
+    )
+    .unwrap();
+    fs::write(
+        d.join("s.toml"),
+        "[camera]\neye = [0.0, 0.5, 0.0]\ntarget = [1.0, 0.2, 0.0]\nfov = 40.0\n\
+         [[mesh]]\nfile = \"planes.obj\"\n\
+         material = { name = \"g\", kd = [0.1, 0.1, 0.1], ks = [0.9, 0.9, 0.9], ns = 10.0 }\n\
+         [[light]]\ntype = \"parallelogram\"\ncorner = [-0.5, 0.9, -0.5]\n\
+         edge1 = [1.0, 0.0, 0.0]\nedge2 = [0.0, 0.0, 1.0]\n\
+         colors = [[1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, 1.0, 1.0]]\n\
+         [render]\nmax_depth = 64\nglossy_samples = 256\nlight_samples = 4096\n",
+    )
+    .unwrap();
+    let out = d.join("out.png");
+    let child = Command::new(env!("CARGO_BIN_EXE_rayterm"))
+        .args(["render", "--size", "4x4", "--spp", "1", "--threads", "1"])
+        .arg(d.join("s.toml"))
+        .arg("-o")
+        .arg(&out)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    // SAFETY: signalling the child we started.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
+    let start = Instant::now();
+    let res = child.wait_with_output().unwrap();
+    assert!(
+        start.elapsed() < Duration::from_secs(5),
+        "{:?}",
+        start.elapsed()
+    );
+    assert_eq!(res.status.code(), Some(128 + libc::SIGINT));
+    assert!(!out.exists());
+    fs::remove_dir_all(d).unwrap();
+}

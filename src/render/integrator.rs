@@ -59,6 +59,7 @@ impl Depth {
 }
 
 /// Everything needed to shade samples of one image.
+#[derive(Clone)]
 pub struct Tracer<'a> {
     pub scene: &'a Scene,
     pub bvh: &'a Bvh,
@@ -70,6 +71,12 @@ pub struct Tracer<'a> {
     pub max_depth: u32,
     /// The most paths a sample's tree splits into: [`MAX_PATHS`].
     pub max_paths: u32,
+    /// Polled before a hit's reflected and transmitted rays: once it says
+    /// stop, a sample traces no more bounces. A sample's tree can hold
+    /// thousands of hits, each with thousands of light samples, so the
+    /// rows between which a pass polls could be minutes apart; a sample cut
+    /// short is never kept (see `progressive::sample_rows`).
+    pub cancel: Option<&'a (dyn Fn() -> bool + Sync)>,
 }
 
 /// The mirror direction of `dir` about the shading normal `n`, or about the
@@ -128,7 +135,14 @@ impl<'a> Tracer<'a> {
             seed,
             max_depth: scene.settings.max_depth,
             max_paths: MAX_PATHS,
+            cancel: None,
         }
+    }
+
+    /// Whether [`Tracer::cancel`] says stop.
+    #[inline]
+    fn cancelled(&self) -> bool {
+        self.cancel.is_some_and(|c| c())
     }
 
     /// The sub-pixel stratum of sample `k` of pixel `(x, y)` when pixel
@@ -405,7 +419,7 @@ impl<'a> Tracer<'a> {
         for (i, light) in scene.lights.iter().enumerate() {
             color += self.light(&s, i, light, rng, rec);
         }
-        if depth.bounces >= self.max_depth {
+        if depth.bounces >= self.max_depth || self.cancelled() {
             return color;
         }
         let reflect = self.plan.reflections && mat.reflective();
@@ -579,6 +593,9 @@ impl<'a> Tracer<'a> {
             let w = ks / n as f32;
             let mut sum = Vec3::ZERO;
             for _ in 0..n {
+                if self.cancelled() {
+                    break;
+                }
                 // Rejection keeps the lobe's shape above the surface (the
                 // estimator of the lobe renormalised to the upper hemisphere).
                 let mut dir = r;

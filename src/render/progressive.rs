@@ -514,6 +514,10 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
     layout: Layout,
 ) -> R {
     let whole = whole && film.adaptive.is_none();
+    let tracer = &Tracer {
+        cancel: Some(cancel),
+        ..tracer.clone()
+    };
     let w = (film.width as usize).max(1);
     let first = film.start + film.spp;
     match layout {
@@ -561,7 +565,6 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                 .collect()
         }
     };
-    let summary = layout == Layout::Summary;
     let results: Vec<(R, Vec<BadSample>, bool, Vec<PixelStats>)> = rows
         .into_par_iter()
         // Rows one job each: rows through the scene cost many times those
@@ -576,10 +579,12 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                 row.pixels.skipped();
                 return (rec, bad, false, Vec::new());
             }
+            // What a row cut short goes back to.
             let before = match &row.pixels {
-                Samples::Stats(p) if whole => p.to_vec(),
+                Samples::Stats(p) => p.to_vec(),
                 _ => Vec::new(),
             };
+            let rays_before = row.rays.as_deref().map(<[u32]>::to_vec);
             let y = row.y as u32;
             let give_of = |x: usize| match give {
                 Give::All(n) => (first, *n),
@@ -623,12 +628,17 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             };
             let mut placed = Vec::with_capacity(CAMERA_BATCH);
             let mut run = Run::default();
+            // A row can hold all of a one-pass render's samples (up to
+            // `ONE_PASS_SPP`), and a sample thousands of hits: too long to
+            // make a cancel wait for. `cancel` is polled between pixels (and
+            // by the tracer within a sample); a row it cuts goes back to
+            // what it was, a lean film's to no sample, and nothing is read
+            // of a summarised one.
+            let mut cut = false;
             for x in 0..width {
-                // A row of a summarised film's one pass holds all its
-                // samples, up to `ONE_PASS_SPP`: too long to make a cancel
-                // wait for, and nothing is read of a film it cuts short.
-                if summary && cancel() {
-                    return (rec, bad, false, Vec::new());
+                if cancel() {
+                    cut = true;
+                    break;
                 }
                 let (k0, n) = give_of(x);
                 for k in k0..k0 + n {
@@ -638,7 +648,19 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                     }
                 }
             }
-            trace(&mut placed);
+            if !cut {
+                trace(&mut placed);
+            }
+            if cut || cancel() {
+                match &mut row.pixels {
+                    Samples::Stats(p) => p.copy_from_slice(&before),
+                    other => other.skipped(),
+                }
+                if let (Some(r), Some(b)) = (row.rays.as_deref_mut(), &rays_before) {
+                    r.copy_from_slice(b);
+                }
+                return (rec, bad, false, Vec::new());
+            }
             row.pixels.finish();
             if let (Some(s), Give::Each(g)) = (&mut row.spp, give) {
                 for (x, s) in s.iter_mut().enumerate() {
@@ -648,7 +670,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             if let Some(r) = rows_done {
                 r.fetch_add(1, Ordering::Relaxed);
             }
-            (rec, bad, true, before)
+            (rec, bad, true, if whole { before } else { Vec::new() })
         })
         .collect();
     let cut = results.iter().any(|r| !r.2);
