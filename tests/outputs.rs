@@ -421,3 +421,51 @@ fn a_signal_stops_a_render_within_one_sample() {
     assert!(!out.exists());
     fs::remove_dir_all(d).unwrap();
 }
+
+/// Frames that memory cannot hold are refused up front by the benchmarks
+/// too (as by `render`), with what they would need; nothing aborts.
+#[test]
+fn films_too_large_for_memory_are_refused_by_every_command() {
+    let available = fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|m| {
+            let line = m
+                .lines()
+                .find(|l| l.starts_with("MemAvailable:"))?
+                .to_owned();
+            line.split_whitespace().nth(1)?.parse::<u64>().ok()
+        })
+        .map_or(u64::MAX, |kib| kib * 1024);
+    let cases: [(&[&str], u64); 2] = [
+        (
+            &[
+                "bench",
+                "--size",
+                "16384x16384",
+                "--reps",
+                "1",
+                "--scene",
+                "cornell",
+            ],
+            56 << 30,
+        ),
+        (
+            &["bench", "tui", "cornell", "--terminal", "16384x16384"],
+            150 << 30,
+        ),
+    ];
+    for (args, need) in cases {
+        if need < available {
+            eprintln!("skipping {args:?}: this machine could hold it");
+            continue;
+        }
+        let out = rayterm(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains("film would need"), "{args:?}: {err}");
+        assert!(
+            !err.contains("panicked") && !err.contains("backtrace"),
+            "{err}"
+        );
+    }
+}

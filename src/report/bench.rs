@@ -13,7 +13,9 @@ use serde::Serialize;
 use super::stats::median;
 use super::Machine;
 use crate::bvh::{self, Bvh};
-use crate::render::{Feature, Features, Plan, PlanPolicy, Progressive, RayCounter, Stop, Tracer};
+use crate::render::{
+    Feature, Features, Film, Plan, PlanPolicy, Progressive, RayCounter, Stop, Tracer,
+};
 use crate::scene::{self, Builder, Scene};
 
 /// Meshes up to this size get the full-sweep SAH reference (it is O(n log² n)).
@@ -116,6 +118,8 @@ pub fn frame_features() -> Features {
 
 /// Runs the table on the current rayon pool.
 pub fn run(o: &BenchOptions, threads: usize) -> Result<BenchReport> {
+    // Each scene's frame is a film of full statistics.
+    crate::render::session::check_film(o.width, o.height, Film::BYTES_PER_PIXEL)?;
     let mut notes = Vec::new();
     let specs: Vec<String> = if o.scenes.is_empty() {
         let mut v: Vec<String> = BUILTIN.iter().map(|s| s.to_string()).collect();

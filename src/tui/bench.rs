@@ -13,7 +13,7 @@ use super::color::ColorMode;
 use super::term::screen::Screen;
 use super::widgets::paint_view;
 use super::worker::{Cmd, Msg, View, Worker};
-use crate::render::{SceneRequest, Session};
+use crate::render::{Film, SceneRequest, Session};
 use crate::report::stats::median;
 
 /// What [`measure_pass`] measured.
@@ -62,8 +62,12 @@ pub fn measure_pass(req: &SceneRequest, cols: u16, rows: u16, passes: u32) -> Re
     if cols == 0 || rows == 0 || passes == 0 {
         bail!("measure_pass needs a non-empty terminal and at least one pass");
     }
-    let (s, _) = Session::open(req)?;
     let (width, height) = (cols as u32, rows as u32 * 2);
+    // The worker's film, and two terminals' two buffers of cells, a cell
+    // for each two pixels.
+    let cell = std::mem::size_of::<ratatui::buffer::Cell>() as u64;
+    crate::render::session::check_film(width, height, Film::BYTES_PER_PIXEL + 2 * cell)?;
+    let (s, _) = Session::open(req)?;
     let scene = s.scene.clone();
     let mut worker = Worker::new(scene.clone(), s.bvh.clone(), s.seed, None);
     worker.apply(Cmd::View(
