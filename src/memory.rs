@@ -4,9 +4,13 @@
 //! much, when it cannot fit.
 //!
 //! The budget is what the system says is available (`MemAvailable` in
-//! `/proc/meminfo`), read when the check is made; where that cannot be read
-//! a fixed [`FALLBACK`] stands in. A request needing more would end in the
-//! out-of-memory killer or an abort, never in a picture.
+//! `/proc/meminfo`), or less where the process's control group has a
+//! memory limit (a container's, a batch job's), read when the check is
+//! made; where neither can be read a fixed [`FALLBACK`] stands in. A
+//! request needing more would end in the out-of-memory killer or an abort,
+//! never in a picture.
+
+use std::path::Path;
 
 use anyhow::{bail, Result};
 
@@ -19,9 +23,10 @@ pub const BYTES_PER_TRIANGLE: u64 = 200;
 /// The budget where `/proc/meminfo` cannot be read.
 pub const FALLBACK: u64 = 16 << 30;
 
-/// Memory available for new allocations, in bytes.
+/// Memory available for new allocations, in bytes: the system's, or the
+/// room the control group's limit leaves where that is less.
 pub fn available() -> u64 {
-    std::fs::read_to_string("/proc/meminfo")
+    let system = std::fs::read_to_string("/proc/meminfo")
         .ok()
         .and_then(|s| {
             s.lines()
@@ -29,7 +34,86 @@ pub fn available() -> u64 {
                 .and_then(|v| v.trim().strip_suffix("kB"))
                 .and_then(|v| v.trim().parse::<u64>().ok())
         })
-        .map_or(FALLBACK, |kib| kib.saturating_mul(1024))
+        .map(|kib| kib.saturating_mul(1024));
+    let group = std::fs::read_to_string("/proc/self/cgroup")
+        .ok()
+        .and_then(|c| cgroup_room(&c, Path::new("/sys/fs/cgroup")));
+    match (system, group) {
+        (Some(s), Some(g)) => s.min(g),
+        (s, g) => s.or(g).unwrap_or(FALLBACK),
+    }
+}
+
+/// The room the memory limits of a control group leave: the least, over
+/// the process's group and the groups above it, of the limit less the
+/// memory in use (less what the kernel can drop at once, the inactive file
+/// cache). `cgroups` is `/proc/self/cgroup`, `root` where the hierarchies
+/// are mounted; a unified (v2) hierarchy has `memory.max`, a v1 memory
+/// controller `memory/…/memory.limit_in_bytes`. `None` where no limit is
+/// set or none can be read.
+fn cgroup_room(cgroups: &str, root: &Path) -> Option<u64> {
+    let (base, path, limit, usage, cache) = cgroups.lines().find_map(|l| {
+        let mut f = l.splitn(3, ':');
+        let (_, controllers, path) = (f.next()?, f.next()?, f.next()?);
+        let path = path.trim_start_matches('/');
+        match controllers {
+            "" => Some((
+                root.to_path_buf(),
+                path,
+                "memory.max",
+                "memory.current",
+                "inactive_file",
+            )),
+            c if c.split(',').any(|c| c == "memory") => Some((
+                root.join("memory"),
+                path,
+                "memory.limit_in_bytes",
+                "memory.usage_in_bytes",
+                "total_inactive_file",
+            )),
+            _ => None,
+        }
+    })?;
+    let number = |dir: &Path, file: &str| -> Option<u64> {
+        std::fs::read_to_string(dir.join(file))
+            .ok()?
+            .trim()
+            .parse()
+            .ok()
+    };
+    let inactive = |dir: &Path| -> u64 {
+        std::fs::read_to_string(dir.join("memory.stat"))
+            .ok()
+            .and_then(|s| {
+                s.lines().find_map(|l| {
+                    l.strip_prefix(cache)?
+                        .strip_prefix(' ')?
+                        .trim()
+                        .parse()
+                        .ok()
+                })
+            })
+            .unwrap_or(0)
+    };
+    // In a container the group's path may name one outside the mounted
+    // view, whose root is then the group itself.
+    let mut dir = base.join(path);
+    if !dir.is_dir() {
+        dir = base.clone();
+    }
+    let mut room: Option<u64> = None;
+    loop {
+        // "max" (v2) does not parse; v1 says no limit with a huge number.
+        if let (Some(limit), Some(used)) = (number(&dir, limit), number(&dir, usage)) {
+            if limit < 1 << 60 {
+                let here = limit.saturating_sub(used.saturating_sub(inactive(&dir)));
+                room = Some(room.map_or(here, |r| r.min(here)));
+            }
+        }
+        if dir == base || !dir.pop() {
+            return room;
+        }
+    }
 }
 
 /// `n` values whose bytes are all zero, in fresh memory the kernel may
@@ -174,6 +258,63 @@ mod tests {
         assert!(v.capacity() >= HUGE / 32);
         v.push(Wide([7; 96]));
         assert_eq!(v[0].0[95], 7);
+    }
+
+    /// Control groups' limits, v2 and v1, at the process's group and
+    /// above it, with the inactive file cache counted as free.
+    #[test]
+    fn control_group_limits_bound_the_room() {
+        let root = std::env::temp_dir().join(format!("rayterm-cgroup-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let write = |dir: &Path, files: &[(&str, &str)]| {
+            std::fs::create_dir_all(dir).unwrap();
+            for (name, text) in files {
+                std::fs::write(dir.join(name), text).unwrap();
+            }
+        };
+        let v2 = root.join("v2");
+        write(
+            &v2.join("job"),
+            &[("memory.max", "max\n"), ("memory.current", "5\n")],
+        );
+        write(
+            &v2.join("job/step"),
+            &[
+                ("memory.max", "1000\n"),
+                ("memory.current", "700\n"),
+                ("memory.stat", "anon 500\ninactive_file 200\n"),
+            ],
+        );
+        assert_eq!(cgroup_room("0::/job/step\n", &v2), Some(500));
+        assert_eq!(cgroup_room("0::/job\n", &v2), None, "no limit");
+        write(
+            &v2.join("job"),
+            &[("memory.max", "300\n"), ("memory.current", "250\n")],
+        );
+        assert_eq!(cgroup_room("0::/job/step\n", &v2), Some(50), "the parent's");
+        // A path outside the mounted view: the mount's root is the group.
+        write(&v2, &[("memory.max", "4096\n"), ("memory.current", "96\n")]);
+        assert_eq!(cgroup_room("0::/elsewhere\n", &v2), Some(4000));
+        let v1 = root.join("v1");
+        write(
+            &v1.join("memory/slurm/job"),
+            &[
+                ("memory.limit_in_bytes", "2048\n"),
+                ("memory.usage_in_bytes", "1000\n"),
+                ("memory.stat", "cache 10\ntotal_inactive_file 24\n"),
+            ],
+        );
+        write(
+            &v1.join("memory"),
+            &[
+                ("memory.limit_in_bytes", "9223372036854771712\n"),
+                ("memory.usage_in_bytes", "1\n"),
+            ],
+        );
+        let v1_groups = "12:pids:/slurm/job\n4:cpu,memory:/slurm/job\n0::/\n";
+        assert_eq!(cgroup_room(v1_groups, &v1), Some(1072));
+        assert_eq!(cgroup_room("3:cpu:/x\n", &v1), None, "no memory controller");
+        std::fs::remove_dir_all(root).unwrap();
     }
 
     #[test]
