@@ -477,3 +477,41 @@ fn an_exr_reference_measures_errors_of_a_hundredth_of_a_percent() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A reference holding a NaN or an infinity is refused, naming the file
+/// and the pixel: every error measured against it would be NaN.
+#[test]
+fn a_reference_that_is_not_finite_is_refused() {
+    let dir = std::env::temp_dir().join(format!("rayterm-converge-nan-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, bad) in [("nan.exr", f32::NAN), ("inf.exr", f32::INFINITY)] {
+        let file = dir.join(name);
+        let mut img = vec![Vec3::splat(0.5); 12 * 10];
+        img[3 * 12 + 7] = Vec3::new(0.5, bad, 0.5);
+        rayterm::raster::write_linear(&file, 12, 10, &img).unwrap();
+        let e = load_reference(&file).unwrap_err().to_string();
+        assert!(e.contains(name) && e.contains("pixel (7, 3)"), "{e}");
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_rayterm"))
+            .args([
+                "converge",
+                "cornell-area",
+                "--size",
+                "12x10",
+                "--spp",
+                "1,2",
+            ])
+            .args(["--seeds", "1", "--no-compare", "--reference"])
+            .arg(&file)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.contains("a reference must be finite"), "{err}");
+        assert!(
+            o.stdout.is_empty(),
+            "{}",
+            String::from_utf8_lossy(&o.stdout)
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

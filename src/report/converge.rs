@@ -543,6 +543,7 @@ impl Subject<'_> {
                 let loaded = crate::raster::read_linear(path)
                     .with_context(|| format!("cannot load the reference {}", path.display()))?;
                 let (rw, rh, img) = (loaded.width, loaded.height, loaded.pixels);
+                reference::check_finite(path, rw, &img)?;
                 if (rw, rh) != (w, h) {
                     bail!(
                         "reference {} is {rw}x{rh} but the study renders {w}x{h}: pass --size {rw}x{rh}",
