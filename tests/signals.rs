@@ -121,3 +121,28 @@ fn a_closed_terminal_ends_the_tui() {
     };
     assert!(status.code().is_some(), "{status:?}");
 }
+
+/// A terminal that says it cannot move the cursor gets a clear refusal
+/// and not one escape sequence.
+#[test]
+fn a_dumb_terminal_is_refused() {
+    let (master, slave) = pty(80, 24);
+    let rx = pty::reader(master);
+    let status = Command::new(env!("CARGO_BIN_EXE_rayterm"))
+        .args(["tui", "cornell"])
+        .env("TERM", "dumb")
+        .stdin(slave.try_clone().unwrap())
+        .stdout(slave.try_clone().unwrap())
+        .stderr(slave.try_clone().unwrap())
+        .status()
+        .unwrap();
+    drop(slave);
+    let mut out = Vec::new();
+    while let Ok(b) = rx.recv_timeout(Duration::from_millis(300)) {
+        out.extend(b);
+    }
+    let text = String::from_utf8_lossy(&out);
+    assert_eq!(status.code(), Some(1), "{text}");
+    assert!(text.contains("TERM=dumb"), "{text}");
+    assert!(!out.contains(&0x1b), "{text:?}");
+}

@@ -233,7 +233,9 @@ fn check_directory(path: &Path) -> Result<()> {
 pub fn fresh_name(dir: &Path, stem: &str) -> PathBuf {
     (1..)
         .map(|n| dir.join(format!("{stem}-{n:03}.png")))
-        .find(|p| !p.exists())
+        // Not `exists`, which follows links: a dangling link's name is
+        // taken too, and writing there would replace the link.
+        .find(|p| p.symlink_metadata().is_err())
         .expect("an unused file name exists")
 }
 
@@ -254,6 +256,16 @@ mod tests {
         let d = std::env::temp_dir().join(format!("rayterm-out-{name}-{}", std::process::id()));
         fs::create_dir_all(&d).unwrap();
         d
+    }
+
+    #[test]
+    fn fresh_names_pass_over_every_kind_of_entry() {
+        let d = dir("fresh");
+        fs::write(d.join("x-001.png"), b"").unwrap();
+        std::os::unix::fs::symlink(d.join("gone.png"), d.join("x-002.png")).unwrap();
+        fs::create_dir(d.join("x-003.png")).unwrap();
+        assert_eq!(fresh_name(&d, "x"), d.join("x-004.png"));
+        fs::remove_dir_all(d).unwrap();
     }
 
     #[test]

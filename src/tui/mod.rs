@@ -74,6 +74,14 @@ pub fn run(
     if !io::stdout().is_terminal() {
         bail!("the TUI needs an interactive terminal; `rayterm render` writes images without one");
     }
+    // A dumb terminal (Emacs' shell, some serial consoles) prints escape
+    // sequences as text.
+    if std::env::var("TERM").is_ok_and(|t| t == "dumb") {
+        bail!(
+            "the TUI needs a terminal that moves the cursor, and TERM=dumb says this one does \
+             not; `rayterm render` writes images without one"
+        );
+    }
     if io::stderr().is_terminal() {
         // Large scenes take seconds to load; say so before the screen changes.
         eprintln!("rayterm: loading {}...", req.spec);
