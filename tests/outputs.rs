@@ -51,6 +51,10 @@ fn bad_outputs_are_refused_with_the_reason() {
     );
     fails_with(&["render", "cornell", "-o", &p("x.jpg")], "unknown format");
     fails_with(&["render", "cornell", "-o", &p("noext")], "unknown format");
+    fails_with(
+        &["render", "cornell", "-o", &(p("x.png") + "/")],
+        "ends in /",
+    );
     fs::create_dir(d.join("sub.png")).unwrap();
     fails_with(
         &["render", "cornell", "-o", &p("sub.png")],

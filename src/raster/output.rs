@@ -75,6 +75,11 @@ impl Output {
     pub fn check(path: &Path, inputs: &[PathBuf], accepted: &[Format]) -> Result<Output> {
         let shown = path.display();
         let mut device = None;
+        // `x.png/` names a directory whatever is there: the file's name
+        // would read as `x.png`, and only the write would fail.
+        if path.as_os_str().as_encoded_bytes().ends_with(b"/") {
+            bail!("{shown} ends in /, which names a directory; name a file");
+        }
         match fs::metadata(path) {
             Ok(m) => {
                 let t = m.file_type();
