@@ -1052,6 +1052,45 @@ fn control_characters_and_empty_names_are_handled() {
 }
 
 #[test]
+fn paths_on_the_command_line_are_printed_without_control_characters() {
+    let d = Dir::new("hostile-paths");
+    d.write("t\u{1b}[2J.obj", TRI);
+    let r = rayterm(
+        &d.0,
+        &[
+            "render",
+            "t\u{1b}[2J.obj",
+            "--size",
+            "8x8",
+            "--spp",
+            "1",
+            "-o",
+            "e\u{1b}[2J.png",
+        ],
+    );
+    assert!(r.ok(), "{}", r.stderr);
+    assert!(
+        r.stdout.contains("t\u{fffd}[2J.obj: 1 triangle"),
+        "{}",
+        r.stdout
+    );
+    assert!(r.stdout.contains("-> e\u{fffd}[2J.png"), "{}", r.stdout);
+    let r = rayterm(
+        &d.0,
+        &["render", "t\u{1b}[2J.obj", "-o", "no\u{1b}]0;x\u{7}/e.png"],
+    );
+    assert!(!r.ok());
+    assert!(
+        r.stderr.contains("no\u{fffd}]0;x\u{fffd}/e.png"),
+        "{}",
+        r.stderr
+    );
+    for text in [&r.stdout, &r.stderr] {
+        assert!(!text.contains(['\u{1b}', '\u{7}']), "{text:?}");
+    }
+}
+
+#[test]
 fn extreme_arguments_are_bounded_or_refused_before_loading() {
     let d = Dir::new("hostile-arguments");
     let run = |args: &[&str]| {

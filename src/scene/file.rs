@@ -24,11 +24,12 @@ use super::mesh;
 use super::numbers::{self, ABSURD};
 use super::obj::{Parts, Placed};
 use super::parts::bounds;
-use super::source::{printable, resolve, Disk, Kind, Source};
+use super::source::{resolve, Disk, Kind, Source};
 use super::texture::FACE_NAMES;
 use super::{
     bezier, BloomSettings, Builder, Camera, CubeMap, Environment, Light, Material, Scene, Settings,
 };
+use crate::words::printable;
 
 /// A number that must be finite (also as f32); kept in f64 until the
 /// scene is placed. The error carries the value's position.

@@ -104,7 +104,7 @@ impl Unmapped {
 /// put the kind before either: `mesh Body`, `mesh 3`).
 fn named(name: Option<&str>, index: usize) -> String {
     match name {
-        Some(n) if !n.trim().is_empty() => super::source::printable(n),
+        Some(n) if !n.trim().is_empty() => crate::words::printable(n),
         _ => index.to_string(),
     }
 }
@@ -134,7 +134,7 @@ fn inline_uri(uri: &str) -> Option<Result<Vec<u8>, String>> {
     scheme.map(|s| {
         Err(format!(
             "{}: URIs are not read; rayterm reads files beside the glTF and data: URIs",
-            super::source::printable(s)
+            crate::words::printable(s)
         ))
     })
 }
