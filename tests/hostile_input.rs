@@ -720,11 +720,16 @@ fn mtl_statements_rayterm_cannot_use_are_errors_or_warnings() {
         ("Ks 1 2 3 4", "m.mtl:2: Ks takes 1 or 3 numbers"),
         ("Ka 0.5 0.5", "m.mtl:2: Ka takes 1 or 3 numbers"),
         ("Ns", "m.mtl:2: Ns takes one number, found 0"),
-        ("map_Kd", "m.mtl:2: map_Kd needs a file name"),
-        ("map_Kd -s 2 2 2", "m.mtl:2: map_Kd needs a file name"),
     ] {
         mtl(text);
         refused(&obj, &[want]);
+    }
+    // A texture that names no file is ignored, as a missing one is.
+    for text in ["Kd 0.25\nmap_Kd", "Kd 0.25\nmap_Kd -s 2 2 2"] {
+        mtl(text);
+        let s = warned(&obj, &["m.mtl:3: map_Kd names no file: ignored"]);
+        assert_eq!(s.materials[0].kd, glam::Vec3::splat(0.25));
+        assert!(s.textures.is_empty());
     }
     mtl("Kd 0.5");
     let s = clean(&obj);
@@ -1045,9 +1050,9 @@ fn control_characters_and_empty_names_are_handled() {
     );
     refused(&s, &["environment face posx: the file name is empty"]);
     d.write("m.mtl", "newmtl a\nmap_Kd   \n");
-    refused(
+    warned(
         &d.write("with.obj", WITH_MTL),
-        &["m.mtl:2: map_Kd needs a file name"],
+        &["m.mtl:2: map_Kd names no file: ignored"],
     );
 }
 
