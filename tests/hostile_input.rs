@@ -815,6 +815,24 @@ fn scene_file_arrays_and_settings_are_strict() {
             && all.contains("neg.toml:9:11: negative ambient"),
         "{all}"
     );
+    // A light so bright that shading overflows warns, as an MTL's does.
+    let s = d.write(
+        "bright.toml",
+        "[[mesh]]\nfile = \"tri.obj\"\n[[light]]\ntype = \"parallelogram\"\ncorner = [0, 1, 1]\n\
+         edge1 = [1, 0, 0]\nedge2 = [0, 0, 1]\ncolors = [[1, 1, 1], [1e30, 1, 1], [1, 1, 1], [1, 1, 1]]\n\
+         [[light]]\ntype = \"point\"\nposition = [0, 1, 1]\ncolor = [3e38, 1, 1]\n",
+    );
+    let s = warned(
+        &s,
+        &["bright.toml:12:9: absurd color [3e38, 1, 1]: beyond 1e18"],
+    );
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("bright.toml:8:10: absurd colors: beyond 1e18")),
+        "{:?}",
+        s.warnings
+    );
 }
 
 #[test]
