@@ -802,6 +802,7 @@ fn malformed_gltf_files_say_what_is_wrong() {
     // A later 2.x version reads; a negative light is said, not silently dark.
     let dim = edit(&|j| {
         j["asset"]["version"] = "2.1".into();
+        j["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual", "E\u{1b}[2J"]);
         j["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = (-5.0).into();
     });
     let s = load(&d.write("dim.glb", dim)).unwrap();
@@ -812,6 +813,9 @@ fn malformed_gltf_files_say_what_is_wrong() {
         "{:?}",
         s.warnings
     );
+    let all = s.warnings.join("\n");
+    assert!(all.contains("E\u{fffd}[2J (extensionsUsed)"), "{all}");
+    assert!(!all.contains('\u{1b}'), "{all:?}");
     // A byte-order mark before the JSON changes nothing.
     let (j, b) = gltf_parts(serde_json::json!({"uri": "ok.bin"}));
     d.write("ok.bin", &b);

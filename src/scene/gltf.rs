@@ -161,7 +161,9 @@ fn uri_path(base: &Path, uri: &str) -> PathBuf {
             }
         }
     }
-    resolve(base, &String::from_utf8_lossy(&out))
+    // Messages name the file: no control character reaches them.
+    let path = crate::words::printable(&String::from_utf8_lossy(&out));
+    resolve(base, &path)
 }
 
 /// The Phong material for a glTF metallic-roughness material:
@@ -841,7 +843,8 @@ pub fn load(
     };
     for ext in doc.extensions_used() {
         if ext != "KHR_lights_punctual" {
-            r.unmapped.note(ext, || "extensionsUsed".into());
+            r.unmapped
+                .note(&crate::words::printable(ext), || "extensionsUsed".into());
         }
     }
     if doc.animations().next().is_some() {

@@ -325,7 +325,9 @@ mod tests {
             assert_eq!(m[0].map_kd, None);
             assert_eq!(
                 w,
-                [format!("m.mtl:{line}: map_Kd names no file: ignored (Kd is used)")]
+                [format!(
+                    "m.mtl:{line}: map_Kd names no file: ignored (Kd is used)"
+                )]
             );
         }
         // One number is grey, as the MTL specification says.
