@@ -1,4 +1,32 @@
-//! Numbers in words as the UI and the reports print them.
+//! Numbers in words as the UI and the reports print them, and text from
+//! files and the command line made safe to print.
+
+use std::path::Path;
+
+/// `s` with control characters (tab and newline too) replaced by U+FFFD:
+/// names and values read from files, and paths given on the command line,
+/// go through this before a message holds them (an escape sequence in one
+/// would reach the terminal).
+pub fn printable(s: &str) -> String {
+    printable_but(s, "")
+}
+
+/// `s` with control characters other than those in `kept` replaced by
+/// U+FFFD.
+pub fn printable_but(s: &str, kept: &str) -> String {
+    s.chars()
+        .map(|c| match c.is_control() && !kept.contains(c) {
+            true => '\u{fffd}',
+            false => c,
+        })
+        .collect()
+}
+
+/// A path as messages and summaries print it: [`Path::display`] prints
+/// control characters as they are.
+pub fn path(p: &Path) -> String {
+    printable(&p.display().to_string())
+}
 
 /// `1 light`, `3 lights`; `plural` is the word for any count but one.
 pub fn count(n: impl Into<u64>, one: &str, plural: &str) -> String {
@@ -81,5 +109,15 @@ mod tests {
         assert_eq!(ms(1234.0), "1.23 s");
         assert_eq!(significant(0.0), "0");
         assert_eq!(significant(3.0e-6), "3.00e-6");
+    }
+
+    #[test]
+    fn control_characters_never_reach_the_terminal() {
+        assert_eq!(
+            printable("a\u{1b}]0;x\u{7}\nb\u{9b}"),
+            "a\u{fffd}]0;x\u{fffd}\u{fffd}b\u{fffd}"
+        );
+        assert_eq!(printable_but("a\tb\nc\u{1b}", "\n\t"), "a\tb\nc\u{fffd}");
+        assert_eq!(path(Path::new("e\u{1b}[2J.png")), "e\u{fffd}[2J.png");
     }
 }

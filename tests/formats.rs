@@ -731,6 +731,10 @@ fn malformed_gltf_files_say_what_is_wrong() {
     });
     let rough =
         edit(&|j| j["materials"][1]["pbrMetallicRoughness"]["roughnessFactor"] = (-1.0).into());
+    let v1 = edit(&|j| j["asset"]["version"] = "1.0".into());
+    let inf_light =
+        edit(&|j| j["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = 1e39.into());
+    let huge_scale = edit(&|j| j["nodes"][0]["scale"] = serde_json::json!([1e300, 1e300, 1e300]));
     let uri = |u: &str| {
         let (mut j, _) = gltf_parts(serde_json::json!({"uri": "x.bin"}));
         j["buffers"][0]["uri"] = u.into();
@@ -738,6 +742,9 @@ fn malformed_gltf_files_say_what_is_wrong() {
     };
     for (name, bytes, want) in [
         ("wide.glb", wide_fov, "camera SideCam: yfov 3.2 radians is not between 1 and 179 degrees"),
+        ("v1.glb", v1, "v1.glb: glTF version 1.0: only glTF 2.x is read"),
+        ("inf.glb", inf_light, "inf.glb: light 0: intensity inf, color [1, 1, 1]: beyond 32-bit floats"),
+        ("scale.glb", huge_scale, "scale.glb: node Root: scale [inf, inf, inf] is beyond 32-bit floats"),
         ("bright.glb", bright, "material Chrome: baseColorFactor 2 is outside 0 to 1"),
         ("rough.glb", rough, "material Chrome: roughnessFactor -1 is outside 0 to 1"),
         ("http.gltf", uri("http://example.com/x.bin"), "http.gltf: buffer 0: http: URIs are not read"),
@@ -767,6 +774,48 @@ fn malformed_gltf_files_say_what_is_wrong() {
     d.write("gone.bin", &short_bin);
     let e = load(&d.path("missing.gltf").to_string_lossy()).unwrap_err();
     assert!(e.contains("holds 50 bytes, the file declares"), "{e}");
+    // Bytes past the declared length are no part of the buffer; values
+    // that make no sense name the file they were read from.
+    let mut long_bin = ext_bin.clone();
+    long_bin.extend([0; 8]);
+    d.write("gone.bin", &long_bin);
+    let s = load(&d.path("missing.gltf").to_string_lossy()).unwrap();
+    let want = format!(
+        "buffer 0 holds {} bytes, the file declares {}: the first {} are read",
+        long_bin.len(),
+        ext_bin.len(),
+        ext_bin.len()
+    );
+    assert!(
+        s.warnings.iter().any(|w| w.contains(&want)),
+        "{:?}",
+        s.warnings
+    );
+    long_bin[80..82].copy_from_slice(&7u16.to_le_bytes());
+    d.write("gone.bin", &long_bin);
+    let e = load(&d.path("missing.gltf").to_string_lossy()).unwrap_err();
+    assert!(
+        e.contains("index 0 is 7, out of range (4 vertices); read from buffer 0, "),
+        "{e}"
+    );
+    assert!(e.contains("gone.bin"), "{e}");
+    // A later 2.x version reads; a negative light is said, not silently dark.
+    let dim = edit(&|j| {
+        j["asset"]["version"] = "2.1".into();
+        j["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual", "E\u{1b}[2J"]);
+        j["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = (-5.0).into();
+    });
+    let s = load(&d.write("dim.glb", dim)).unwrap();
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("dim.glb: light 0: negative intensity -5")),
+        "{:?}",
+        s.warnings
+    );
+    let all = s.warnings.join("\n");
+    assert!(all.contains("E\u{fffd}[2J (extensionsUsed)"), "{all}");
+    assert!(!all.contains('\u{1b}'), "{all:?}");
     // A byte-order mark before the JSON changes nothing.
     let (j, b) = gltf_parts(serde_json::json!({"uri": "ok.bin"}));
     d.write("ok.bin", &b);

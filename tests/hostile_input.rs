@@ -720,11 +720,16 @@ fn mtl_statements_rayterm_cannot_use_are_errors_or_warnings() {
         ("Ks 1 2 3 4", "m.mtl:2: Ks takes 1 or 3 numbers"),
         ("Ka 0.5 0.5", "m.mtl:2: Ka takes 1 or 3 numbers"),
         ("Ns", "m.mtl:2: Ns takes one number, found 0"),
-        ("map_Kd", "m.mtl:2: map_Kd needs a file name"),
-        ("map_Kd -s 2 2 2", "m.mtl:2: map_Kd needs a file name"),
     ] {
         mtl(text);
         refused(&obj, &[want]);
+    }
+    // A texture that names no file is ignored, as a missing one is.
+    for text in ["Kd 0.25\nmap_Kd", "Kd 0.25\nmap_Kd -s 2 2 2"] {
+        mtl(text);
+        let s = warned(&obj, &["m.mtl:3: map_Kd names no file: ignored"]);
+        assert_eq!(s.materials[0].kd, glam::Vec3::splat(0.25));
+        assert!(s.textures.is_empty());
     }
     mtl("Kd 0.5");
     let s = clean(&obj);
@@ -809,6 +814,24 @@ fn scene_file_arrays_and_settings_are_strict() {
         all.contains("neg.toml:7:9: negative color")
             && all.contains("neg.toml:9:11: negative ambient"),
         "{all}"
+    );
+    // A light so bright that shading overflows warns, as an MTL's does.
+    let s = d.write(
+        "bright.toml",
+        "[[mesh]]\nfile = \"tri.obj\"\n[[light]]\ntype = \"parallelogram\"\ncorner = [0, 1, 1]\n\
+         edge1 = [1, 0, 0]\nedge2 = [0, 0, 1]\ncolors = [[1, 1, 1], [1e30, 1, 1], [1, 1, 1], [1, 1, 1]]\n\
+         [[light]]\ntype = \"point\"\nposition = [0, 1, 1]\ncolor = [3e38, 1, 1]\n",
+    );
+    let s = warned(
+        &s,
+        &["bright.toml:12:9: absurd color [3e38, 1, 1]: beyond 1e18"],
+    );
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("bright.toml:8:10: absurd colors: beyond 1e18")),
+        "{:?}",
+        s.warnings
     );
 }
 
@@ -1045,10 +1068,49 @@ fn control_characters_and_empty_names_are_handled() {
     );
     refused(&s, &["environment face posx: the file name is empty"]);
     d.write("m.mtl", "newmtl a\nmap_Kd   \n");
-    refused(
+    warned(
         &d.write("with.obj", WITH_MTL),
-        &["m.mtl:2: map_Kd needs a file name"],
+        &["m.mtl:2: map_Kd names no file: ignored"],
     );
+}
+
+#[test]
+fn paths_on_the_command_line_are_printed_without_control_characters() {
+    let d = Dir::new("hostile-paths");
+    d.write("t\u{1b}[2J.obj", TRI);
+    let r = rayterm(
+        &d.0,
+        &[
+            "render",
+            "t\u{1b}[2J.obj",
+            "--size",
+            "8x8",
+            "--spp",
+            "1",
+            "-o",
+            "e\u{1b}[2J.png",
+        ],
+    );
+    assert!(r.ok(), "{}", r.stderr);
+    assert!(
+        r.stdout.contains("t\u{fffd}[2J.obj: 1 triangle"),
+        "{}",
+        r.stdout
+    );
+    assert!(r.stdout.contains("-> e\u{fffd}[2J.png"), "{}", r.stdout);
+    let r = rayterm(
+        &d.0,
+        &["render", "t\u{1b}[2J.obj", "-o", "no\u{1b}]0;x\u{7}/e.png"],
+    );
+    assert!(!r.ok());
+    assert!(
+        r.stderr.contains("no\u{fffd}]0;x\u{fffd}/e.png"),
+        "{}",
+        r.stderr
+    );
+    for text in [&r.stdout, &r.stderr] {
+        assert!(!text.contains(['\u{1b}', '\u{7}']), "{text:?}");
+    }
 }
 
 #[test]

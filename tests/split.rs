@@ -284,6 +284,46 @@ fn damaged_parts_are_refused_naming_the_file() {
         );
         assert!(err.contains("edited.exr"), "{to}: {err}");
     }
+    // A channel name turned into an escape sequence: the file is damaged,
+    // and resealed, it is no partial film; the name never reaches the
+    // terminal as it is.
+    let name = b"block_mean.lo";
+    let at = whole
+        .windows(name.len())
+        .position(|w| w == name)
+        .expect("a block_mean.lo channel");
+    let mut escaped = whole.clone();
+    escaped[at..at + 4].copy_from_slice(b"\x1b[2J");
+    std::fs::write(d.join("escaped.exr"), &escaped).unwrap();
+    let err = refused(
+        &d,
+        &["merge", "a.exr", "escaped.exr", "-o", "m.png"],
+        "m.png",
+    );
+    assert!(
+        err.contains("escaped.exr: its data do not match their checksum"),
+        "{err}"
+    );
+    let seal = b"rayterm.checksum\0string\0\x08\0\0\0";
+    let at = escaped
+        .windows(seal.len())
+        .position(|w| w == seal)
+        .expect("a checksum attribute")
+        + seal.len();
+    escaped[at..at + 8].copy_from_slice(b"00000000");
+    let crc = format!("{:08x}", crc32fast::hash(&escaped));
+    escaped[at..at + 8].copy_from_slice(crc.as_bytes());
+    std::fs::write(d.join("escaped.exr"), &escaped).unwrap();
+    let err = refused(
+        &d,
+        &["merge", "a.exr", "escaped.exr", "-o", "m.png"],
+        "m.png",
+    );
+    assert!(
+        err.contains("\u{fffd}[2Jk_mean.lo is no word of a pixel"),
+        "{err}"
+    );
+    assert!(!err.contains('\x1b'), "{err:?}");
     // One flipped bit anywhere, in a sum, a count, a mean or an attribute.
     for i in 1..24 {
         let mut one = whole.clone();

@@ -95,11 +95,11 @@ pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
     print!("{}", study.text());
     if let Some(out) = csv {
         out.write(study.csv().as_bytes())?;
-        eprintln!("wrote {}", out.path.display());
+        eprintln!("wrote {}", crate::words::path(&out.path));
     }
     if let Some(out) = plot {
         out.write(&png::encode(&converge::plot(&study))?)?;
-        eprintln!("wrote {}", out.path.display());
+        eprintln!("wrote {}", crate::words::path(&out.path));
     }
     Ok(ExitCode::SUCCESS)
 }

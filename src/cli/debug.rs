@@ -186,7 +186,7 @@ pub fn run(s: &Session, spec: DebugSpec, spp: Option<u32>, out: &Output) -> Resu
         st.nodes,
         st.depth,
         st.builder,
-        out.path.display()
+        crate::words::path(&out.path)
     );
     for (_, line) in &legend {
         println!("  {line}");
@@ -214,7 +214,7 @@ fn bvh(s: &Session, view: DebugView, out: &Output) -> Result<ExitCode> {
         st.depth,
         st.builder,
         d.summary,
-        out.path.display()
+        crate::words::path(&out.path)
     );
     Ok(ExitCode::SUCCESS)
 }

@@ -77,7 +77,7 @@ pub fn main() -> ExitCode {
         Ok(code) => code,
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("rayterm: {e:#}");
+            say("rayterm", &format!("{e:#}"));
             ExitCode::FAILURE
         }
     }
@@ -92,7 +92,7 @@ fn open_scene(opts: &SceneOpts) -> Result<Session> {
 fn open_request(req: &SceneRequest) -> Result<Session> {
     let (session, warnings) = Session::open(req)?;
     for w in &warnings {
-        eprintln!("warning: {w}");
+        say("warning", w);
     }
     Ok(session)
 }
@@ -102,9 +102,16 @@ fn open_request(req: &SceneRequest) -> Result<Session> {
 fn load_scene(spec: &str) -> Result<Scene> {
     let mut scene = crate::scene::load(spec)?;
     for w in std::mem::take(&mut scene.warnings) {
-        eprintln!("warning: {w}");
+        say("warning", &w);
     }
     Ok(scene)
+}
+
+/// `text` on stderr after `prefix`, its control characters but newline
+/// and tab made printable: errors and warnings quote paths from the command
+/// line and names from files.
+pub fn say(prefix: &str, text: &str) {
+    eprintln!("{prefix}: {}", crate::words::printable_but(text, "\n\t"));
 }
 
 /// The reader of our output went away (`rayterm inspect ... | head`): not a failure.

@@ -52,15 +52,15 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
             if same_path(c, &a.output) {
                 bail!(
                     "{} is the output; name the checkpoint another file",
-                    c.display()
+                    words::path(c)
                 );
             }
             // A checkpoint left by an interrupted render is work to keep.
             if c.is_file() && !a.resume.as_deref().is_some_and(|r| same_path(r, c)) {
                 bail!(
                     "{} already exists: continue the render it holds with --resume {}, or remove it",
-                    c.display(),
-                    c.display()
+                    words::path(c),
+                    words::path(c)
                 );
             }
             Some(
@@ -319,10 +319,10 @@ fn stopped(checkpoint: Option<(&Output, &Meta)>, f: &Film, write: bool) -> Resul
             }
             eprintln!(
                 "interrupted: {} holds samples {}..{}; continue with --resume {}",
-                c.path.display(),
+                words::path(&c.path),
                 f.start,
                 f.start + f.spp,
-                c.path.display()
+                words::path(&c.path)
             );
         }
         _ => eprintln!("interrupted: nothing written"),
@@ -384,7 +384,7 @@ pub fn summary(
         } else {
             String::new()
         },
-        output.display()
+        words::path(output)
     )
 }
 
@@ -435,18 +435,14 @@ fn resumed(
     stop: &Stop,
 ) -> Result<Progressive> {
     let part = Part::read(path)?;
-    part.header().check_same(
-        meta,
-        (s.width, s.height),
-        &path.display().to_string(),
-        "this render",
-    )?;
+    part.header()
+        .check_same(meta, (s.width, s.height), &words::path(path), "this render")?;
     let want = range.map_or(0, |r| r.start);
     let held = part.range();
     if held.start != want {
         bail!(
             "{} holds samples {}..{}; this render starts at sample {want}",
-            path.display(),
+            words::path(path),
             held.start,
             held.end
         );
@@ -454,7 +450,7 @@ fn resumed(
     if let Some(n) = stop.spp.filter(|&n| part.film.spp > n) {
         bail!(
             "{} already holds {} samples per pixel, more than the {n} asked for",
-            path.display(),
+            words::path(path),
             part.film.spp
         );
     }

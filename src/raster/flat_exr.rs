@@ -259,7 +259,7 @@ pub fn header(b: &[u8]) -> Result<(Layout, usize)> {
                 anyhow::anyhow!("a name at byte {at} is not ended within {MAX_NAME} bytes")
             })?;
         *at += len + 1;
-        Ok(rest[..len].iter().map(|&c| c as char).collect())
+        Ok(latin1(&rest[..len]))
     };
     let mut l = Layout::default();
     let (mut window, mut compression, mut channels) = (None, None, None);
@@ -283,10 +283,7 @@ pub fn header(b: &[u8]) -> Result<(Layout, usize)> {
                     |k: usize| i32::from_le_bytes(v[4 * k..4 * k + 4].try_into().unwrap()) as i64;
                 window = Some((i(0), i(1), i(2), i(3)));
             }
-            (_, "string") => {
-                l.attributes
-                    .push((name, v.iter().map(|&c| c as char).collect(), value))
-            }
+            (_, "string") => l.attributes.push((name, latin1(v), value)),
             _ => {}
         }
     }
@@ -308,10 +305,17 @@ pub fn header(b: &[u8]) -> Result<(Layout, usize)> {
     Ok((l, at))
 }
 
+/// Latin-1 text as read, control characters made printable: names and
+/// values of a damaged file reach messages, and none rayterm writes holds
+/// one.
+fn latin1(b: &[u8]) -> String {
+    crate::words::printable(&b.iter().map(|&c| c as char).collect::<String>())
+}
+
 /// A channel list: sorted, 32-bit, unsubsampled.
 fn chlist(v: &[u8]) -> Result<Vec<(String, Kind)>> {
     let mut out: Vec<(String, Kind)> = Vec::new();
-    let mut at = 0;
+    let (mut at, mut last): (usize, &[u8]) = (0, &[]);
     loop {
         let rest = v.get(at..).unwrap_or_default();
         let len = rest
@@ -321,7 +325,7 @@ fn chlist(v: &[u8]) -> Result<Vec<(String, Kind)>> {
         if len == 0 {
             return Ok(out);
         }
-        let name: String = rest[..len].iter().map(|&c| c as char).collect();
+        let name = latin1(&rest[..len]);
         let field = |k: usize| le_u32(v, at + len + 1 + 4 * k);
         let kind = match field(0)? {
             0 => Kind::U32,
@@ -331,9 +335,11 @@ fn chlist(v: &[u8]) -> Result<Vec<(String, Kind)>> {
         if (field(2)?, field(3)?) != (1, 1) {
             bail!("channel {name} is subsampled");
         }
-        if out.last().is_some_and(|(last, _)| *last >= name) {
+        // Byte by byte, as the file stores them.
+        if !out.is_empty() && last >= &rest[..len] {
             bail!("channel {name} is out of order or given twice");
         }
+        last = &rest[..len];
         out.push((name, kind));
         at += len + 1 + 16;
     }

@@ -14,7 +14,7 @@ use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 
 use glam::Vec3;
 
@@ -130,8 +130,7 @@ impl Header {
     /// Reads a partial film's header, naming the file in every error.
     pub fn read(path: &Path) -> Result<Header> {
         let image = scanlines(path)?;
-        header_of(&image.layout)
-            .with_context(|| format!("{}: not a usable partial film", path.display()))
+        header_of(&image.layout).map_err(|e| unusable(&image, e))
     }
 
     /// Refuses a part that another film cannot be merged with or continue:
@@ -420,7 +419,7 @@ pub fn encode(f: &Film, meta: &Meta) -> Result<Vec<u8>> {
 /// Where the checksum's eight digits lie in a file of layout `l`.
 fn sealed_at(l: &Layout) -> Result<Range<usize>> {
     match l.attributes.iter().find(|(k, _, _)| k == CHECKSUM) {
-        Some((_, v, at)) if v.len() == UNSEALED.len() => Ok(at.clone()),
+        Some((_, _, at)) if at.len() == UNSEALED.len() => Ok(at.clone()),
         _ => bail!("no {CHECKSUM} attribute of eight hex digits"),
     }
 }
@@ -521,6 +520,10 @@ struct Source {
     shared: Words,
 }
 
+/// A film's header, where its checksum lies, its columns and its shared
+/// words.
+type Said = (Header, Range<usize>, Vec<(usize, usize)>, Words);
+
 /// The scanlines of the partial film at `path`; a file that holds none at
 /// all (a finished image, say) is named as no partial film.
 fn scanlines(path: &Path) -> Result<Scanlines> {
@@ -538,15 +541,17 @@ impl Source {
     /// says where every word of a pixel is. Errors name the file.
     fn open(path: &Path) -> Result<Source> {
         let image = scanlines(path)?;
-        Source::of(image).with_context(|| format!("{}: not a usable partial film", path.display()))
+        match Source::read_layout(&image.layout) {
+            Ok(read) => Ok(Source::of(image, read)),
+            Err(e) => Err(unusable(&image, e)),
+        }
     }
 
-    fn of(mut image: Scanlines) -> Result<Source> {
-        let l = &image.layout;
+    /// What the layout `l` of a film says, checked before any checksum is
+    /// (see [`unusable`]).
+    fn read_layout(l: &Layout) -> Result<Said> {
         let header = header_of(l)?;
         let at = sealed_at(l)?;
-        let stored =
-            u32::from_str_radix(&String::from_utf8_lossy(&image.head[at.clone()]), 16).ok();
         let field = |name: &str| FIELDS.iter().position(|f| *f == name);
         let mut shared = [0; FIELDS.len()];
         let mut given = [false; FIELDS.len()];
@@ -581,17 +586,20 @@ impl Source {
         if let Some(k) = given.iter().position(|g| !g) {
             bail!("no channel or constant holds {}", FIELDS[k]);
         }
-        image.head[at].copy_from_slice(UNSEALED.as_bytes());
-        let mut crc = crc32fast::Hasher::new();
-        crc.update(&image.head);
-        Ok(Source {
+        Ok((header, at, columns, shared))
+    }
+
+    fn of(mut image: Scanlines, read: Said) -> Source {
+        let (header, at, columns, shared) = read;
+        let (stored, crc) = seal(&mut image.head, at);
+        Source {
             image,
             header,
             columns,
             stored,
             crc,
             shared,
-        })
+        }
     }
 
     /// Reads scanlines `rows` into `buf` and merges each pixel, checked,
@@ -645,13 +653,52 @@ impl Source {
     /// Refuses the film if what was read does not match its checksum.
     fn finish(self) -> Result<()> {
         if self.stored != Some(self.crc.finalize()) {
-            bail!(
-                "{}: its data do not match their checksum: the file is damaged",
-                self.image.path().display()
-            );
+            return Err(damaged(self.image.path()));
         }
         Ok(())
     }
+}
+
+/// The checksum `head` stores at `at`, and the checksum of `head` with it
+/// zeroed again, as it was computed.
+fn seal(head: &mut [u8], at: Range<usize>) -> (Option<u32>, crc32fast::Hasher) {
+    let stored = u32::from_str_radix(&String::from_utf8_lossy(&head[at.clone()]), 16).ok();
+    head[at].copy_from_slice(UNSEALED.as_bytes());
+    let mut crc = crc32fast::Hasher::new();
+    crc.update(head);
+    (stored, crc)
+}
+
+fn damaged(path: &Path) -> anyhow::Error {
+    anyhow::anyhow!(
+        "{}: its data do not match their checksum: the file is damaged",
+        crate::words::path(path)
+    )
+}
+
+/// The error for a film whose header makes no sense: that it is damaged
+/// where its checksum says so (a flipped bit in a name is damage, not
+/// another kind of film), or else `e`.
+fn unusable(image: &Scanlines, e: anyhow::Error) -> anyhow::Error {
+    if let Ok(at) = sealed_at(&image.layout) {
+        let (stored, mut crc) = seal(&mut image.head.clone(), at);
+        let rows = (BAND_BYTES / image.chunk()).max(1) as u32;
+        let mut buf = Vec::new();
+        for y in (0..image.layout.height).step_by(rows as usize) {
+            let band = y..(y + rows).min(image.layout.height);
+            if image.read(band, &mut buf).is_err() {
+                return damaged(image.path());
+            }
+            crc.update(&buf);
+        }
+        if stored != Some(crc.finalize()) {
+            return damaged(image.path());
+        }
+    }
+    e.context(format!(
+        "{}: not a usable partial film",
+        crate::words::path(image.path())
+    ))
 }
 
 /// Merges the partial films `sources`, of one size and in range order, a

@@ -24,11 +24,12 @@ use super::mesh;
 use super::numbers::{self, ABSURD};
 use super::obj::{Parts, Placed};
 use super::parts::bounds;
-use super::source::{printable, resolve, Disk, Kind, Source};
+use super::source::{resolve, Disk, Kind, Source};
 use super::texture::FACE_NAMES;
 use super::{
     bezier, BloomSettings, Builder, Camera, CubeMap, Environment, Light, Material, Scene, Settings,
 };
+use crate::words::printable;
 
 /// A number that must be finite (also as f32); kept in f64 until the
 /// scene is placed. The error carries the value's position.
@@ -349,19 +350,34 @@ impl Locator<'_> {
         Ok(x)
     }
 
-    /// Warns on a colour with a negative component.
+    /// Warns on a colour with a negative or absurd component.
     fn colour(&self, c: &Rgb, what: &str, warnings: &mut Vec<String>) -> Vec3 {
         let v = rgb(c);
-        if v.min_element() < 0.0 {
-            warnings.push(format!(
-                "{}: negative {what} [{}, {}, {}]: light and reflectance cannot be negative",
-                self.at(c.span()),
-                v.x,
-                v.y,
-                v.z
-            ));
-        }
+        let [x, y, z] = v.to_array().map(|c| numbers::show(c as f64));
+        let shown = format!("{what} [{x}, {y}, {z}]");
+        warnings.extend(self.odd_colours(c.span(), &shown, &[v]));
         v
+    }
+
+    /// A warning for colours `v`, `shown` at `span`, of which one has a
+    /// negative component or one beyond [`ABSURD`] (the same bound as an
+    /// MTL's colours: such a light's shading overflows to infinity, and its
+    /// samples are dropped).
+    fn odd_colours(&self, span: Range<usize>, shown: &str, v: &[Vec3]) -> Option<String> {
+        let (kind, why) = if v.iter().any(|c| c.min_element() < 0.0) {
+            (
+                "negative",
+                "light and reflectance cannot be negative".to_string(),
+            )
+        } else if v.iter().any(|c| c.abs().max_element() as f64 > ABSURD) {
+            (
+                "absurd",
+                format!("beyond {ABSURD:e} shading can overflow to infinity"),
+            )
+        } else {
+            return None;
+        };
+        Some(format!("{}: {kind} {shown}: {why}", self.at(span)))
     }
 }
 
@@ -719,7 +735,7 @@ fn light_from(
             None => Ok(()),
         }
     };
-    let mut negative = None;
+    let mut odd = None;
     let light = match l.kind {
         LightType::Point => {
             given(&[
@@ -755,12 +771,7 @@ fn light_from(
             let colors = match (&l.colors, &l.color) {
                 (Some(c), _) => {
                     let v = c.get_ref().0.map(|c| v3(c).as_vec3());
-                    if v.iter().any(|c| c.min_element() < 0.0) {
-                        negative = Some(format!(
-                            "{}: negative colors: light and reflectance cannot be negative",
-                            loc.at(c.span())
-                        ));
-                    }
+                    odd = loc.odd_colours(c.span(), "colors", &v);
                     v
                 }
                 (None, Some(c)) => [colour(Some(c), "color")?; 4],
@@ -776,7 +787,7 @@ fn light_from(
             }
         }
     };
-    warnings.extend(negative);
+    warnings.extend(odd);
     Ok(light)
 }
 

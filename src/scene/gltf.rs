@@ -104,7 +104,7 @@ impl Unmapped {
 /// put the kind before either: `mesh Body`, `mesh 3`).
 fn named(name: Option<&str>, index: usize) -> String {
     match name {
-        Some(n) if !n.trim().is_empty() => super::source::printable(n),
+        Some(n) if !n.trim().is_empty() => crate::words::printable(n),
         _ => index.to_string(),
     }
 }
@@ -134,7 +134,7 @@ fn inline_uri(uri: &str) -> Option<Result<Vec<u8>, String>> {
     scheme.map(|s| {
         Err(format!(
             "{}: URIs are not read; rayterm reads files beside the glTF and data: URIs",
-            super::source::printable(s)
+            crate::words::printable(s)
         ))
     })
 }
@@ -161,7 +161,9 @@ fn uri_path(base: &Path, uri: &str) -> PathBuf {
             }
         }
     }
-    resolve(base, &String::from_utf8_lossy(&out))
+    // Messages name the file: no control character reaches them.
+    let path = crate::words::printable(&String::from_utf8_lossy(&out));
+    resolve(base, &path)
 }
 
 /// The Phong material for a glTF metallic-roughness material:
@@ -216,6 +218,8 @@ struct Reader<'a> {
     path: &'a Path,
     src: &'a dyn Source,
     buffers: Vec<Vec<u8>>,
+    /// Where each buffer's bytes come from, for messages that quote them.
+    origins: Vec<String>,
     unmapped: Unmapped,
     /// Decoded images by index (`None` when they could not be).
     images: HashMap<usize, Option<Texture>>,
@@ -341,6 +345,17 @@ impl Reader<'_> {
         id
     }
 
+    /// `; read from buffer B, FILE`: where the values of accessor `a` come
+    /// from, when that is a file (a buffer's URI may name any file, and a
+    /// wrong one gives values that make no sense as geometry).
+    fn origin(&self, a: Option<::gltf::Accessor>) -> String {
+        let b = a.and_then(|a| a.view()).map(|v| v.buffer().index());
+        match b.and_then(|b| Some((b, self.origins.get(b)?))) {
+            Some((b, o)) if !o.is_empty() => format!("; read from buffer {b}, {o}"),
+            _ => String::new(),
+        }
+    }
+
     /// Checks what the crate's reader takes on trust (it panics or reads
     /// garbage otherwise): the accessor's type is one glTF allows for
     /// `what`, and every element it reads lies, aligned, inside its view
@@ -460,7 +475,11 @@ impl Reader<'_> {
                 .into_iter()
                 .any(|x| numbers::unusable(x).is_some())
         }) {
-            bail!("{here}: position {i} is {}, not a finite number", show3(*v));
+            bail!(
+                "{here}: position {i} is {}, not a finite number{}",
+                show3(*v),
+                self.origin(p.get(&Semantic::Positions))
+            );
         }
         let n = positions.len();
         let count_of = |what: &str, len: usize| -> Result<()> {
@@ -503,7 +522,10 @@ impl Reader<'_> {
             None => (0..n as u32).collect(),
         };
         if let Some((k, &i)) = corners.iter().enumerate().find(|(_, &i)| i as usize >= n) {
-            bail!("{here}: index {k} is {i}, out of range ({n} vertices)");
+            bail!(
+                "{here}: index {k} is {i}, out of range ({n} vertices){}",
+                self.origin(p.indices())
+            );
         }
         let indices: Vec<[u32; 3]> = match mode {
             Mode::TriangleStrip => (2..corners.len())
@@ -603,6 +625,68 @@ fn check_values(path: &Path, doc: &::gltf::Document) -> Result<()> {
     Ok(())
 }
 
+/// Refuses a node whose transform 32-bit floats cannot hold (`1e39`
+/// reads as infinity), or whose placement overflows f64 with its
+/// parents': named here, not by the NaN positions it would give.
+fn check_transform(path: &Path, node: &::gltf::Node, name: &str, world: DAffine3) -> Result<()> {
+    use ::gltf::scene::Transform;
+    let fields = match node.transform() {
+        Transform::Matrix { matrix } => vec![("matrix", matrix.concat())],
+        Transform::Decomposed {
+            translation,
+            rotation,
+            scale,
+        } => vec![
+            ("translation", translation.to_vec()),
+            ("rotation", rotation.to_vec()),
+            ("scale", scale.to_vec()),
+        ],
+    };
+    let shown = |v: &[f32]| v.iter().map(f32::to_string).collect::<Vec<_>>().join(", ");
+    if let Some((field, v)) = fields
+        .iter()
+        .find(|(_, v)| !v.iter().all(|x| x.is_finite()))
+    {
+        bail!(
+            "{}: node {name}: {field} [{}] is beyond 32-bit floats (finite only up to 3.4e38)",
+            path.display(),
+            shown(v)
+        );
+    }
+    if !world.is_finite() {
+        bail!(
+            "{}: node {name}: its transform with its parents' overflows 64-bit floats",
+            path.display()
+        );
+    }
+    Ok(())
+}
+
+/// Refuses a light whose intensity or colour 32-bit floats cannot hold
+/// (`1e39` reads as infinity), and warns of a negative one: either would
+/// otherwise light the scene with nothing, unsaid.
+fn check_lights(path: &Path, doc: &::gltf::Document, warnings: &mut Vec<String>) -> Result<()> {
+    for l in doc.lights().into_iter().flatten() {
+        let name = named(l.name(), l.index());
+        let (c, i) = (l.color(), l.intensity());
+        let shown = format!("intensity {i}, color [{}, {}, {}]", c[0], c[1], c[2]);
+        if !(Vec3::from_array(c) * i).is_finite() {
+            bail!(
+                "{}: light {name}: {shown}: beyond 32-bit floats (finite only up to 3.4e38)",
+                path.display()
+            );
+        }
+        if i < 0.0 || c.iter().any(|&x| x < 0.0) {
+            warnings.push(format!(
+                "{}: light {name}: negative {shown}: a light cannot shine less than nothing \
+                 (a negative intensity gives no light)",
+                path.display()
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Refuses a node hierarchy that is not a forest of trees below the
 /// scene's roots, as glTF requires: a node with two parents, or a root
 /// that is also a child, would be visited many times (exponentially many
@@ -664,6 +748,15 @@ pub fn load(
     let file = ::gltf::Gltf::from_slice_without_validation(body).map_err(|e| invalid(&e))?;
     drop(bytes);
     let json = file.document.into_json();
+    // glTF 1.0 is another format, which the 2.0 schema misreads.
+    let version = &json.asset.version;
+    if version.split('.').next() != Some("2") {
+        bail!(
+            "{}: glTF version {}: only glTF 2.x is read",
+            path.display(),
+            crate::words::printable(version)
+        );
+    }
     // The crate's validation indexes the POSITION accessor before
     // checking it: checked here first.
     for (m, mesh) in json.meshes.iter().enumerate() {
@@ -685,22 +778,33 @@ pub fn load(
     }
     let doc = ::gltf::Document::from_json(json).map_err(|e| invalid(&e))?;
     let mut blob = file.blob;
-    let mut buffers = Vec::new();
+    let (mut buffers, mut origins) = (Vec::new(), Vec::new());
     for b in doc.buffers() {
         let name = named(b.name(), b.index());
-        let data = match b.source() {
-            ::gltf::buffer::Source::Bin => blob.take().ok_or_else(|| {
-                anyhow!(
-                    "{}: buffer {name} is the binary chunk of a .glb, and the file has none",
-                    path.display()
-                )
-            })?,
+        // The binary chunk is padded to 4 bytes past the buffer's length.
+        let (mut data, padding, origin) = match b.source() {
+            ::gltf::buffer::Source::Bin => (
+                blob.take().ok_or_else(|| {
+                    anyhow!(
+                        "{}: buffer {name} is the binary chunk of a .glb, and the file has none",
+                        path.display()
+                    )
+                })?,
+                3,
+                String::new(),
+            ),
             ::gltf::buffer::Source::Uri(uri) => match inline_uri(uri) {
-                Some(d) => d.map_err(|e| anyhow!("{}: buffer {name}: {e}", path.display()))?,
+                Some(d) => (
+                    d.map_err(|e| anyhow!("{}: buffer {name}: {e}", path.display()))?,
+                    0,
+                    String::new(),
+                ),
                 None => {
                     let p = uri_path(path, uri);
-                    src.read(&p, Kind::Buffer)
-                        .with_context(|| format!("{}: buffer {name}", path.display()))?
+                    let data = src
+                        .read(&p, Kind::Buffer)
+                        .with_context(|| format!("{}: buffer {name}", path.display()))?;
+                    (data, 0, crate::words::path(&p))
                 }
             },
         };
@@ -712,12 +816,25 @@ pub fn load(
                 b.length()
             );
         }
+        // byteLength is the buffer's length: bytes past it are no part of it.
+        if data.len() > b.length() + padding {
+            parts.warnings.push(format!(
+                "{}: buffer {name} holds {} bytes, the file declares {}: the first {} are read",
+                path.display(),
+                data.len(),
+                b.length(),
+                b.length()
+            ));
+        }
+        data.truncate(b.length());
         buffers.push(data);
+        origins.push(origin);
     }
     let mut r = Reader {
         path,
         src,
         buffers,
+        origins,
         unmapped: Unmapped::default(),
         images: HashMap::new(),
         materials: HashMap::new(),
@@ -726,7 +843,8 @@ pub fn load(
     };
     for ext in doc.extensions_used() {
         if ext != "KHR_lights_punctual" {
-            r.unmapped.note(ext, || "extensionsUsed".into());
+            r.unmapped
+                .note(&crate::words::printable(ext), || "extensionsUsed".into());
         }
     }
     if doc.animations().next().is_some() {
@@ -752,6 +870,7 @@ pub fn load(
     // against meshes instanced many times.
     check_trees(path, &doc, &scene)?;
     check_values(path, &doc)?;
+    check_lights(path, &doc, &mut parts.warnings)?;
     let mut stack: Vec<(::gltf::Node, DAffine3)> = scene.nodes().map(|n| (n, *xf)).collect();
     stack.reverse();
     let mut brightest = 0.0f32;
@@ -759,6 +878,7 @@ pub fn load(
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         let world = parent * DAffine3::from_mat4(local);
         let node_name = named(node.name(), node.index());
+        check_transform(path, &node, &node_name, world)?;
         if let Some(mesh) = node.mesh() {
             let mesh_name = named(mesh.name(), mesh.index());
             if node.weights().is_some() || mesh.weights().is_some() {
@@ -808,7 +928,6 @@ pub fn load(
         }
         if let Some(light) = node.light() {
             let color = Vec3::from_array(light.color()) * light.intensity().max(0.0);
-            let color = if color.is_finite() { color } else { Vec3::ZERO };
             brightest = brightest.max(color.max_element());
             let position = world.transform_point3(DVec3::ZERO);
             match light.kind() {

@@ -304,6 +304,10 @@ pub fn load_reading(spec: &str, camera: Option<&str>) -> Result<(Scene, Vec<Path
             }
         },
     }
-    .map(|scene| (scene, disk.files()))
+    .map(|mut scene| {
+        // Summaries print it; a mesh's name is its file's, from the command line.
+        scene.name = crate::words::printable(&scene.name);
+        (scene, disk.files())
+    })
     .with_context(|| format!("loading scene '{spec}'"))
 }

@@ -226,8 +226,13 @@ pub fn parse(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Vec<
             "illum" => {}
             "map_Kd" => {
                 let (options, file) = texture_args(rest);
+                // As a missing texture: the material keeps its Kd.
                 if file.trim_matches('"').trim().is_empty() {
-                    bail!(at("map_Kd needs a file name".into()));
+                    warnings.push(format!(
+                        "{}:{n}: map_Kd names no file: ignored (Kd is used)",
+                        path.display()
+                    ));
+                    continue;
                 }
                 if !options.is_empty() {
                     warnings.push(format!(
@@ -297,7 +302,7 @@ mod tests {
     }
 
     #[test]
-    fn short_colours_are_errors_with_the_line() {
+    fn short_colours_are_errors_with_the_line_and_empty_textures_warn() {
         for (text, line) in [
             ("newmtl a\nKd 0.5 0.5\n", 2),
             ("newmtl a\n\nKs\n", 3),
@@ -307,11 +312,23 @@ mod tests {
             ("newmtl a\nNs\n", 2),
             ("newmtl a\nd 1 2\n", 2),
             ("newmtl\n", 1),
-            ("newmtl a\nmap_Kd -s 1 1 1\n", 2),
-            ("newmtl a\n\nmap_Kd \"\"\n", 3),
         ] {
             let e = parse_err(text);
             assert!(e.starts_with(&format!("m.mtl:{line}: ")), "{text:?}: {e}");
+        }
+        // A texture naming no file is left out, as a missing one is.
+        for (text, line) in [
+            ("newmtl a\nmap_Kd -s 1 1 1\n", 2),
+            ("newmtl a\n\nmap_Kd \"\"\n", 3),
+        ] {
+            let (m, w) = parse_ok(text);
+            assert_eq!(m[0].map_kd, None);
+            assert_eq!(
+                w,
+                [format!(
+                    "m.mtl:{line}: map_Kd names no file: ignored (Kd is used)"
+                )]
+            );
         }
         // One number is grey, as the MTL specification says.
         assert_eq!(

@@ -245,14 +245,6 @@ fn suspect(b: u8) -> bool {
     (b < 0x20 && b != b'\n' && b != b'\t') || b == 0x7f || b == 0xc2
 }
 
-/// `s` with control characters (tab and newline too) replaced by U+FFFD,
-/// for strings decoded from escapes in scene files (names, paths).
-pub fn printable(s: &str) -> String {
-    s.chars()
-        .map(|c| if c.is_control() { '\u{fffd}' } else { c })
-        .collect()
-}
-
 /// The text of a file: a UTF-8 byte-order mark removed, CRLF and lone CR
 /// line endings turned into LF (so files from any system read alike),
 /// other control characters than tab turned into U+FFFD (names and
@@ -292,10 +284,7 @@ pub fn text(path: &Path, mut bytes: Vec<u8>) -> Result<String> {
         s
     };
     if s.contains(unprintable) {
-        s = s
-            .chars()
-            .map(|c| if unprintable(c) { '\u{fffd}' } else { c })
-            .collect();
+        s = crate::words::printable_but(&s, "\n\t");
     }
     Ok(s)
 }
@@ -465,10 +454,6 @@ mod tests {
         assert_eq!(
             text(p, b"o \x1b[2J\tx\x00\n".to_vec()).unwrap(),
             "o \u{fffd}[2J\tx\u{fffd}\n"
-        );
-        assert_eq!(
-            printable("a\u{1b}]0;x\u{7}\nb"),
-            "a\u{fffd}]0;x\u{fffd}\u{fffd}b"
         );
         let e = text(p, b"ok\nok\nbad \xff here\n".to_vec()).unwrap_err();
         assert_eq!(

@@ -84,11 +84,11 @@ pub fn run(
     }
     if io::stderr().is_terminal() {
         // Large scenes take seconds to load; say so before the screen changes.
-        eprintln!("rayterm: loading {}...", req.spec);
+        crate::cli::say("rayterm", &format!("loading {}...", req.spec));
     }
     let (session, warnings) = Session::open(req)?;
     for w in &warnings {
-        eprintln!("warning: {w}");
+        crate::cli::say("warning", w);
     }
     let (detected, hint) = term::detect_colour(|v| std::env::var(v).ok());
     let mut app = App::new(session, warnings, color.unwrap_or(detected), reference)?;

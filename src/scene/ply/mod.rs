@@ -189,7 +189,7 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
         start += len + 1;
         let line = std::str::from_utf8(raw.strip_suffix(b"\r").unwrap_or(raw))
             .map_err(|_| at("the header is not text (invalid UTF-8)".into()))?;
-        let line = super::source::printable(line);
+        let line = crate::words::printable(line);
         let words: Vec<&str> = line.split_whitespace().collect();
         match words.as_slice() {
             ["ply"] if n == 1 => {}
