@@ -55,6 +55,22 @@ fn bad_outputs_are_refused_with_the_reason() {
         &["render", "cornell", "-o", &(p("x.png") + "/")],
         "ends in /",
     );
+    let part = ["render", "cornell", "--part", "1/2", "-o"];
+    let x_png = p("x.png");
+    fails_with(
+        &[&part[..], &[&x_png]].concat(),
+        "a part is a partial film: name it .exr",
+    );
+    let nope = p("nope/x.exr");
+    let out = rayterm(&[&part[..], &[&nope]].concat());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("does not exist") && !err.contains("name it"),
+        "{err}"
+    );
+    let (y, ck_png) = (p("y.png"), p("ck.png"));
+    let ck = ["render", "cornell", "-o", &y, "--checkpoint", &ck_png];
+    fails_with(&ck, "a checkpoint is a partial film");
     fs::create_dir(d.join("sub.png")).unwrap();
     fails_with(
         &["render", "cornell", "-o", &p("sub.png")],

@@ -3,7 +3,7 @@
 //! or SIGHUP. The output is checked before anything renders.
 
 use std::ops::Range;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::Arc;
@@ -37,13 +37,10 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     } else {
         Format::RENDERS
     };
-    let out = Output::check(&a.output, &scene_file, formats).map_err(|e| {
-        if split {
-            e.context("a part is a partial film: name it .exr")
-        } else {
-            e
-        }
-    })?;
+    if split {
+        partial_name(&a.output, "a part")?;
+    }
+    let out = Output::check(&a.output, &scene_file, formats)?;
     if a.debug.is_some() && out.format != Format::Png {
         bail!("--debug views are PNG images; name the output .png");
     }
@@ -63,10 +60,8 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
                     words::path(c)
                 );
             }
-            Some(
-                Output::check(c, &scene_file, &[Format::Exr])
-                    .map_err(|e| e.context("a checkpoint is a partial film: name it .exr"))?,
-            )
+            partial_name(c, "a checkpoint")?;
+            Some(Output::check(c, &scene_file, &[Format::Exr])?)
         }
         None => None,
     };
@@ -300,6 +295,18 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         )
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// Refuses a partial film (`what`) named for another image format; other
+/// faults of the path are `Output::check`'s to name.
+fn partial_name(path: &Path, what: &str) -> Result<()> {
+    match Format::of(path) {
+        Some(f) if f != Format::Exr => bail!(
+            "{}: {what} is a partial film: name it .exr",
+            words::path(path)
+        ),
+        _ => Ok(()),
+    }
 }
 
 /// The most samples per pixel --time and --target-error add unless told.

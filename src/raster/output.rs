@@ -38,7 +38,7 @@ impl Format {
         }
     }
 
-    fn of(path: &Path) -> Option<Format> {
+    pub fn of(path: &Path) -> Option<Format> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         match ext.as_str() {
             "png" => Some(Format::Png),
