@@ -352,3 +352,42 @@ fn cli_errors_name_the_problem() {
         );
     }
 }
+
+/// A light so bright that every lit sample overflows: the closing line
+/// says why the error is unknown at 4 spp, not that it needs 2.
+#[test]
+fn an_error_left_unknown_by_dropped_samples_says_so() {
+    let d = std::env::temp_dir().join(format!("rayterm-render-inf-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    std::fs::write(
+        d.join("quad.obj"),
+        "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("s.toml"),
+        "[camera]\neye = [0.0, 3.0, 0.1]\ntarget = [0.0, 0.0, 0.0]\nfov = 40.0\n\
+         [[mesh]]\nfile = \"quad.obj\"\n[[light]]\ntype = \"segment\"\n\
+         a = [-0.5, 2.0, 0.0]\nb = [0.5, 2.0, 0.0]\n\
+         color_a = [1e38, 1e38, 1e38]\ncolor_b = [1e38, 1e38, 1e38]\n",
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_rayterm"))
+        .args(["render", "--spp", "4", "--size", "8x8", "-o"])
+        .arg(d.join("s.png"))
+        .arg(d.join("s.toml"))
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.contains("error unknown: a pixel kept fewer than 2 finite samples")
+            && text.contains("NaN/Inf samples dropped"),
+        "{text}"
+    );
+    std::fs::remove_dir_all(d).unwrap();
+}

@@ -375,7 +375,7 @@ pub fn summary(
     let err = if exact {
         "error exact".to_string()
     } else {
-        error_text(film.relative_error)
+        error_text(film.relative_error, film.spp.0)
     };
     let samples = if split {
         let r = &film.samples;
@@ -528,11 +528,12 @@ fn spp_text(film: &Report) -> String {
     }
 }
 
-/// The estimated error, or that it is not known yet.
-fn error_text(relative_error: Option<f64>) -> String {
+/// The estimated error, or why it is not known after `spp` samples in
+/// the sparest pixel.
+fn error_text(relative_error: Option<f64>, spp: u32) -> String {
     match relative_error {
         Some(e) => format!("error {:.3}%", e * 100.0),
-        None => "error unknown until 2 spp".into(),
+        None => words::error_unknown(spp).into(),
     }
 }
 
@@ -547,7 +548,7 @@ fn progress(film: &Film, stop: &Stop, elapsed: f64) -> String {
     let mut left = stop
         .seconds
         .map_or(f64::INFINITY, |t| (t - elapsed).max(0.0));
-    let mut text = error_text(film.relative_error());
+    let mut text = error_text(film.relative_error(), film.spp_range().0);
     let err = film.relative_error().filter(|&e| e > 0.0);
     if let (Some(target), Some(err)) = (stop.error, err) {
         let need = (spp * (err / target).powi(2)).min(cap);

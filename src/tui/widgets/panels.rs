@@ -167,7 +167,7 @@ pub fn render(f: &mut Frame, area: Rect, app: &App) {
         Some(s) => {
             let error = match s.error {
                 _ if s.exact => "error: exact (nothing sampled)".to_string(),
-                None => "error: unknown until 2 spp".to_string(),
+                None => words::error_unknown(s.spp).replacen("error ", "error: ", 1),
                 Some(e) => format!("error {:.2}% (estimated)", e * 100.0),
             };
             let done = if s.done && !s.exact { " (done)" } else { "" };
