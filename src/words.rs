@@ -86,6 +86,17 @@ fn spaced(s: String) -> String {
     }
 }
 
+/// Why a film's error is not known yet, after `spp` samples in its
+/// sparest pixel: too few samples, or a pixel kept fewer than two finite
+/// ones (the others NaN or infinite, dropped).
+pub fn error_unknown(spp: u32) -> &'static str {
+    if spp < 2 {
+        "error unknown until 2 spp"
+    } else {
+        "error unknown: a pixel kept fewer than 2 finite samples"
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -119,16 +130,5 @@ mod tests {
         );
         assert_eq!(printable_but("a\tb\nc\u{1b}", "\n\t"), "a\tb\nc\u{fffd}");
         assert_eq!(path(Path::new("e\u{1b}[2J.png")), "e\u{fffd}[2J.png");
-    }
-}
-
-/// Why a film's error is not known yet, after `spp` samples in its
-/// sparest pixel: too few samples, or a pixel kept fewer than two finite
-/// ones (the others NaN or infinite, dropped).
-pub fn error_unknown(spp: u32) -> &'static str {
-    if spp < 2 {
-        "error unknown until 2 spp"
-    } else {
-        "error unknown: a pixel kept fewer than 2 finite samples"
     }
 }
