@@ -260,3 +260,45 @@ fn surfaces_that_reflect_and_transmit_keep_the_mean_past_the_most_paths() {
         "mean {mean} of {n} against the full tree's {exact} (standard error {se})"
     );
 }
+
+#[test]
+fn a_tree_lists_a_bounded_number_of_light_samples() {
+    // 256 glossy paths of 64 bounces, 64 samples of an area light at each
+    // hit: about a million light samples, of which a tree lists 2^18.
+    use rayterm::inspect::tree::LISTED_LIGHT_SAMPLES;
+    let glossy = material(Vec3::splat(0.1), Vec3::splat(0.5), 200.0);
+    let (a, at) = quad_y(-1e4, -1e4, 1e4, 1e4, 0.0);
+    let (b, bt) = quad_y(-1e4, -1e4, 1e4, 1e4, 1.0);
+    let light = Light::Parallelogram {
+        corner: Vec3::new(-0.1, 0.9, -0.1),
+        edge1: Vec3::new(0.2, 0.0, 0.0),
+        edge2: Vec3::new(0.0, 0.0, 0.2),
+        colors: [Vec3::ONE; 4],
+    };
+    let mut s = scene(
+        &[(a, at, glossy.clone()), (b, bt, glossy)],
+        vec![light],
+        between_planes(),
+    );
+    s.settings.max_depth = 64;
+    s.settings.glossy_samples = 256;
+    s.settings.light_samples = 64;
+    let session = one_pixel(&s);
+    let tree = rayterm::inspect::tree::inspect_pixel(&session.tracer(), 0, 0, 0);
+    fn listed(n: &rayterm::inspect::tree::RayNode) -> u64 {
+        let here: usize = n.lights.iter().map(|l| l.samples.len()).sum();
+        here as u64 + n.children.iter().map(listed).sum::<u64>()
+    }
+    assert_eq!(listed(&tree.root), LISTED_LIGHT_SAMPLES);
+    assert!(
+        tree.light_samples_not_listed > LISTED_LIGHT_SAMPLES,
+        "{}",
+        tree.light_samples_not_listed
+    );
+    let text = rayterm::inspect::to_text(&tree, false);
+    assert!(
+        text.contains("more light samples traced, not listed"),
+        "{}",
+        &text[text.len().saturating_sub(300)..]
+    );
+}

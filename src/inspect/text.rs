@@ -125,6 +125,17 @@ pub fn lines(tree: &PixelTree, expanded: &dyn Fn(usize) -> bool) -> Vec<TreeLine
         );
     }
     ray(&mut out, &tree.root, 0);
+    if tree.light_samples_not_listed > 0 {
+        out.push(
+            0,
+            LineKind::Result,
+            format!(
+                "{} more light samples traced, not listed (a tree lists at most {})",
+                tree.light_samples_not_listed,
+                super::tree::LISTED_LIGHT_SAMPLES
+            ),
+        );
+    }
     out.lines
 }
 

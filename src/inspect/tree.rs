@@ -63,7 +63,18 @@ pub struct PixelTree {
     pub pixel_after_bloom: Option<Vec3>,
     pub pixel_spp: Option<u32>,
     pub root: RayNode,
+    /// Light samples traced but not listed: a tree lists at most
+    /// [`LISTED_LIGHT_SAMPLES`] (the rest still count in their lights'
+    /// terms and BVH work).
+    #[serde(default)]
+    pub light_samples_not_listed: u64,
 }
+
+/// The most light samples one tree lists. A sample's tree holds up to
+/// [`MAX_PATHS`](crate::render::integrator::MAX_PATHS) paths of up to 65
+/// hits, each with up to 4096 samples of every light: all of them would
+/// take gigabytes, and no one reads them.
+pub const LISTED_LIGHT_SAMPLES: u64 = 1 << 18;
 
 /// Builds the tree from the hooks, with a stack of open rays.
 #[derive(Default)]
@@ -72,6 +83,9 @@ pub struct TreeRecorder {
     done: Option<RayNode>,
     offset: Vec2,
     stratum: Option<u32>,
+    /// Light samples listed, and those past [`LISTED_LIGHT_SAMPLES`].
+    listed: u64,
+    not_listed: u64,
 }
 
 impl TreeRecorder {
@@ -152,8 +166,13 @@ impl Recorder for TreeRecorder {
     }
 
     fn light_sample(&mut self, s: LightSample) {
+        if self.listed >= LISTED_LIGHT_SAMPLES {
+            self.not_listed += 1;
+            return;
+        }
         if let Some(l) = self.light() {
             l.samples.push(s);
+            self.listed += 1;
         }
     }
 
@@ -181,7 +200,7 @@ impl Recorder for TreeRecorder {
 pub fn inspect_pixel(tracer: &Tracer, x: u32, y: u32, k: u32) -> PixelTree {
     let mut rec = TreeRecorder::default();
     let color = tracer.sample(x, y, k, &mut rec);
-    let (offset, stratum) = (rec.offset, rec.stratum);
+    let (offset, stratum, not_listed) = (rec.offset, rec.stratum, rec.not_listed);
     let root = rec.into_root().expect("every sample traces a camera ray");
     PixelTree {
         scene: tracer.scene.name.clone(),
@@ -198,6 +217,7 @@ pub fn inspect_pixel(tracer: &Tracer, x: u32, y: u32, k: u32) -> PixelTree {
         pixel_after_bloom: None,
         pixel_spp: None,
         root,
+        light_samples_not_listed: not_listed,
     }
 }
 
