@@ -419,11 +419,11 @@ impl<'a> Tracer<'a> {
         for (i, light) in scene.lights.iter().enumerate() {
             color += self.light(&s, i, light, rng, rec);
         }
-        if depth.bounces >= self.max_depth || self.cancelled() {
-            return color;
-        }
         let reflect = self.plan.reflections && mat.reflective();
         let through = mat.dissolve < 1.0;
+        if !(reflect || through) || depth.bounces >= self.max_depth || self.cancelled() {
+            return color;
+        }
         // Past `MAX_PATHS`, a surface that does both takes one, at random.
         let (reflect, through, split, scale) =
             if reflect && through && !depth.may_split(2, self.max_paths) {
