@@ -1,5 +1,5 @@
 //! SIGINT, SIGTERM and SIGHUP, turned into a flag the long-running parts
-//! poll: a render stops between rows and writes nothing, the TUI restores
+//! poll: a render stops within a sample and writes nothing, the TUI restores
 //! the terminal and quits, exactly as on Ctrl-C or `q`. A second signal of
 //! the same kind while the first is being handled ends the process at once.
 
