@@ -453,9 +453,15 @@ impl Worker {
         }
         if let Some(p) = self.pixel_due() {
             self.pixel_drawn = Some((self.generation, p));
-            let t = self.tracer(&view, view.size());
+            let mut t = self.tracer(&view, view.size());
+            // One sample's tree can take seconds: a quit or a new view stops
+            // it, and a tree cut short is never shown.
+            t.cancel = Some(cancel);
             let layer = if p.x < view.width && p.y < view.height {
                 let tree = inspect_pixel(&t, p.x, p.y, p.sample);
+                if cancel() {
+                    return None;
+                }
                 overlay::draw(&t, &tree, p.view, p.ray, p.spp)
                     .map(|o| (o.layer, legend_line(&o.legend)))
                     .map_err(|e| format!("{e:#}"))
