@@ -2,8 +2,9 @@
 //! pixel or the view changes), the open folds, the cursor line and scroll.
 
 use std::collections::HashSet;
+use std::time::{Duration, Instant};
 
-use crate::inspect::{inspect_pixel, lines, PixelTree, TreeLine};
+use crate::inspect::{inspect_pixel, lines, LineKind, PixelTree, TreeLine};
 use crate::render::post::Displayed;
 use crate::render::Tracer;
 
@@ -15,13 +16,19 @@ pub struct Selected {
     pub sample: u32,
 }
 
+/// The longest the pane replays a sample for, on the interface's thread:
+/// most trees take microseconds, but a sample can hold hundreds of glossy
+/// paths with thousands of light samples at each hit.
+const TREE_WAIT: Duration = Duration::from_millis(300);
+
 #[derive(Default)]
 pub struct Inspector {
     /// Arrows move the pixel cursor instead of the camera.
     pub select_mode: bool,
     pub selected: Option<Selected>,
-    /// The tree of `selected` for a view generation.
-    tree: Option<((Selected, u64), PixelTree)>,
+    /// The tree of `selected` for a view generation; `None` where its
+    /// sample takes longer than [`TREE_WAIT`] to replay.
+    tree: Option<((Selected, u64), Option<PixelTree>)>,
     /// Open folds.
     expanded: HashSet<usize>,
     /// The tree's lines as shown, folds applied.
@@ -65,7 +72,7 @@ impl Inspector {
     }
 
     pub fn tree(&self) -> Option<&PixelTree> {
-        self.tree.as_ref().map(|t| &t.1)
+        self.tree.as_ref().and_then(|t| t.1.as_ref())
     }
 
     pub fn lines(&self) -> &[TreeLine] {
@@ -85,9 +92,16 @@ impl Inspector {
             Some(s) => {
                 let key = (s, generation);
                 if self.tree.as_ref().map(|t| t.0) != Some(key) {
-                    self.tree = Some((key, inspect_pixel(tracer, s.x, s.y, s.sample)));
+                    let start = Instant::now();
+                    let late = || start.elapsed() > TREE_WAIT;
+                    let t = Tracer {
+                        cancel: Some(&late),
+                        ..tracer.clone()
+                    };
+                    let tree = inspect_pixel(&t, s.x, s.y, s.sample);
+                    self.tree = Some((key, (!late()).then_some(tree)));
                 }
-                if let (Some((_, tree)), Some((shown, spp))) = (&mut self.tree, film) {
+                if let (Some((_, Some(tree))), Some((shown, spp))) = (&mut self.tree, film) {
                     tree.set_pixel(shown, spp);
                 }
                 self.relayout();
@@ -99,7 +113,20 @@ impl Inspector {
     fn relayout(&mut self) {
         let expanded = &self.expanded;
         self.lines = match &self.tree {
-            Some((_, t)) => lines(t, &|id| expanded.contains(&id)),
+            Some((_, Some(t))) => lines(t, &|id| expanded.contains(&id)),
+            Some(((s, _), None)) => vec![TreeLine {
+                depth: 0,
+                kind: LineKind::Result,
+                text: format!(
+                    "the ray tree of pixel ({}, {}) takes over {} ms to replay, so it is \
+                     not shown here (`rayterm inspect` prints any tree)",
+                    s.x,
+                    s.y,
+                    TREE_WAIT.as_millis()
+                ),
+                fold: None,
+                ray: None,
+            }],
             None => Vec::new(),
         };
         self.cursor = self.cursor.min(self.lines.len().saturating_sub(1));
@@ -189,7 +216,51 @@ pub fn wrap(line: &TreeLine, width: usize) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::inspect::LineKind;
+
+    /// A sample of 256 glossy paths of 64 hits with 4096 light samples at
+    /// each is not replayed on the interface's thread for long: the pane
+    /// says so within about `TREE_WAIT`.
+    #[test]
+    fn a_tree_too_slow_to_replay_is_left_out() {
+        use crate::render::{SceneRequest, Session};
+        let d = std::env::temp_dir().join(format!("rayterm-inspector-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        std::fs::write(
+            d.join("planes.obj"),
+            "v -1e3 0 -1e3\nv 1e3 0 -1e3\nv 1e3 0 1e3\nv -1e3 0 1e3\n\
+             v -1e3 1 -1e3\nv 1e3 1 -1e3\nv 1e3 1 1e3\nv -1e3 1 1e3\n\
+             f 1 2 3\nf 1 3 4\nf 5 6 7\nf 5 7 8\n",
+        )
+        .unwrap();
+        std::fs::write(
+            d.join("s.toml"),
+            "[camera]\neye = [0.0, 0.5, 0.0]\ntarget = [1.0, 0.2, 0.0]\nfov = 40.0\n\
+             [[mesh]]\nfile = \"planes.obj\"\n\
+             material = { name = \"g\", kd = [0.1, 0.1, 0.1], ks = [0.9, 0.9, 0.9], ns = 10.0 }\n\
+             [[light]]\ntype = \"parallelogram\"\ncorner = [-0.5, 0.9, -0.5]\n\
+             edge1 = [1.0, 0.0, 0.0]\nedge2 = [0.0, 0.0, 1.0]\n\
+             colors = [[1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, 1.0, 1.0]]\n\
+             [render]\nmax_depth = 64\nglossy_samples = 256\nlight_samples = 4096\n",
+        )
+        .unwrap();
+        let req = SceneRequest {
+            size: Some((4, 4)),
+            ..SceneRequest::new(d.join("s.toml").to_str().unwrap())
+        };
+        let (session, _) = Session::open(&req).unwrap();
+        let mut inspector = Inspector::default();
+        inspector.select(2, 2, 0, (4, 4));
+        let start = Instant::now();
+        inspector.refresh(&session.tracer(), 0, None);
+        assert!(start.elapsed() < TREE_WAIT * 10, "{:?}", start.elapsed());
+        assert!(inspector.tree().is_none());
+        assert!(
+            inspector.lines()[0].text.contains("takes over 300 ms"),
+            "{:?}",
+            inspector.lines()
+        );
+        std::fs::remove_dir_all(d).unwrap();
+    }
 
     #[test]
     fn long_lines_wrap_at_spaces_with_nothing_lost() {
