@@ -104,6 +104,17 @@ pub struct Placed {
     rng: Rng,
 }
 
+impl Placed {
+    /// The image position of the sample, in pixels.
+    #[inline]
+    fn position(&self) -> (f64, f64) {
+        (
+            self.x as f64 + self.off.x as f64,
+            self.y as f64 + self.off.y as f64,
+        )
+    }
+}
+
 /// Shading point, as the lights and reflections need it.
 struct Surface<'m> {
     p: Vec3,
@@ -204,8 +215,26 @@ impl<'a> Tracer<'a> {
     /// The camera ray of a placed sample.
     #[inline]
     pub fn camera_ray(&self, s: &Placed) -> Ray {
-        self.frame
-            .ray(s.x as f64 + s.off.x as f64, s.y as f64 + s.off.y as f64)
+        let (x, y) = s.position();
+        self.frame.ray(x, y)
+    }
+
+    /// The camera rays of placed samples appended to `out`: those of
+    /// [`Tracer::camera_ray`], made several at a time
+    /// ([`CameraFrame::rays`](crate::scene::camera::CameraFrame::rays)).
+    pub fn camera_rays<'p>(&self, placed: impl Iterator<Item = &'p Placed>, out: &mut Vec<Ray>) {
+        const BATCH: usize = 64;
+        let (mut x, mut y) = ([0.0; BATCH], [0.0; BATCH]);
+        let mut n = 0;
+        for s in placed {
+            (x[n], y[n]) = s.position();
+            n += 1;
+            if n == BATCH {
+                self.frame.rays(&x, &y, out);
+                n = 0;
+            }
+        }
+        self.frame.rays(&x[..n], &y[..n], out);
     }
 
     /// The colour of the placed sample `s`, whose camera ray is `ray`.

@@ -601,7 +601,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             let mut colours = Vec::with_capacity(CAMERA_BATCH);
             let mut trace = |placed: &mut Vec<(u32, Placed)>| {
                 rays.clear();
-                rays.extend(placed.iter().map(|(_, p)| tracer.camera_ray(p)));
+                tracer.camera_rays(placed.iter().map(|(_, p)| p), &mut rays);
                 let hits = &mut hits[..rays.len()];
                 if packets {
                     tracer.bvh.intersect_packet(&rays, hits);

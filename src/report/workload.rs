@@ -65,20 +65,12 @@ impl Workload {
         self.frame.ray(x as f64 + 0.5, y as f64 + 0.5)
     }
 
-    /// The primary rays of the pixels `xs` x `ys` (rows in order) into
-    /// `rays`: the same rays as [`Workload::primary`], the column and row
-    /// terms computed once each.
-    pub fn primary_tile(&self, xs: Range<usize>, ys: Range<usize>, rays: &mut Vec<Ray>) {
-        let f = &self.frame;
-        let mut sx = [0.0; TILE];
-        for (s, x) in sx.iter_mut().zip(xs.clone()) {
-            *s = f.sx(x as f64 + 0.5);
-        }
-        let sx = &sx[..xs.len()];
-        for y in ys {
-            let sy = f.sy(y as f64 + 0.5);
-            rays.extend(sx.iter().map(|&sx| f.ray_through(sx, sy)));
-        }
+    /// The offsets of the image's columns ([`CameraFrame::sx`] of their
+    /// centres): made once per pass, they save every ray a division.
+    pub fn columns(&self) -> Vec<f64> {
+        (0..self.width)
+            .map(|x| self.frame.sx(x as f64 + 0.5))
+            .collect()
     }
 
     /// The shadow ray toward the hit at `t` along `primary`: from the light,
@@ -178,6 +170,85 @@ impl Frame {
     }
 }
 
+/// What a timed loop makes its primary and shadow rays with: the same
+/// rays as [`Workload::primary`] and [`Workload::shadow`], a column's and a
+/// row's offsets computed once each and the camera math done four rays at
+/// a time ([`CameraFrame::rays_through`]).
+pub struct Maker<'a> {
+    w: &'a Workload,
+    /// [`Workload::columns`].
+    cols: &'a [f64],
+    sx: Vec<f64>,
+    sy: Vec<f64>,
+    /// The row of the last shadow ray asked for, and its offset.
+    row: Option<(usize, f64)>,
+    /// The hit distances of the shadow rays asked for.
+    t: Vec<f32>,
+    primary: Vec<Ray>,
+}
+
+impl<'a> Maker<'a> {
+    pub fn new(w: &'a Workload, cols: &'a [f64]) -> Self {
+        Maker {
+            w,
+            cols,
+            sx: Vec::new(),
+            sy: Vec::new(),
+            row: None,
+            t: Vec::new(),
+            primary: Vec::new(),
+        }
+    }
+
+    /// The primary rays of the pixels `xs` x `ys`, rows in order, appended
+    /// to `rays`.
+    pub fn primary(&mut self, xs: Range<usize>, ys: Range<usize>, rays: &mut Vec<Ray>) {
+        debug_assert!(self.t.is_empty(), "shadow rays asked for and not made");
+        self.sx.clear();
+        self.sy.clear();
+        for y in ys {
+            let sy = self.w.frame.sy(y as f64 + 0.5);
+            self.sx.extend_from_slice(&self.cols[xs.clone()]);
+            self.sy.extend(std::iter::repeat_n(sy, xs.len()));
+        }
+        self.w.frame.rays_through(&self.sx, &self.sy, rays);
+    }
+
+    /// Asks for the shadow ray toward the hit at `t` in pixel `(x, y)`;
+    /// [`Maker::shadows`] makes it.
+    #[inline]
+    pub fn ask_shadow(&mut self, x: usize, y: usize, t: f32) {
+        let sy = match self.row {
+            Some((row, sy)) if row == y => sy,
+            _ => self.w.frame.sy(y as f64 + 0.5),
+        };
+        self.row = Some((y, sy));
+        self.sx.push(self.cols[x]);
+        self.sy.push(sy);
+        self.t.push(t);
+    }
+
+    /// The shadow rays asked for since the last call, in that order,
+    /// appended to `rays`.
+    #[inline(never)]
+    pub fn shadows(&mut self, rays: &mut Vec<Ray>) {
+        self.primary.clear();
+        self.w
+            .frame
+            .rays_through(&self.sx, &self.sy, &mut self.primary);
+        let w = self.w;
+        rays.extend(
+            self.primary
+                .iter()
+                .zip(&self.t)
+                .map(|(p, &t)| w.shadow(p, t)),
+        );
+        self.sx.clear();
+        self.sy.clear();
+        self.t.clear();
+    }
+}
+
 /// Where a phase's rays come from: made row by row inside the timed loop
 /// (as the Embree harness does), or made before it, one `Vec` per row (as
 /// the tinybvh harness does).
@@ -199,6 +270,7 @@ pub fn trace_primary(
 ) -> f64 {
     let width = w.width as usize;
     let start = Instant::now();
+    let cols = w.columns();
     frame
         .t
         .par_chunks_mut(width * ROW_CHUNK)
@@ -209,6 +281,7 @@ pub fn trace_primary(
             // As the harness does: a row's rays first, then the row traced,
             // so the camera math does not sit in front of every ray.
             let mut rays = Vec::with_capacity(width);
+            let mut maker = Maker::new(w, &cols);
             let rows_of = ts.chunks_mut(width).zip(tris.chunks_mut(width));
             for (r, ((trow, tri_row), sums)) in rows_of.zip(rows).enumerate() {
                 let y = (chunk * ROW_CHUNK + r) as u32;
@@ -216,7 +289,8 @@ pub fn trace_primary(
                     Rows::Made(made) => &made[y as usize][..],
                     Rows::Make => {
                         rays.clear();
-                        rays.extend((0..w.width).map(|x| w.primary(x, y)));
+                        let y = y as usize;
+                        maker.primary(0..width, y..y + 1, &mut rays);
                         &rays[..]
                     }
                 };
@@ -249,6 +323,7 @@ pub fn trace_shadow(
 ) -> f64 {
     let width = w.width as usize;
     let start = Instant::now();
+    let cols = w.columns();
     frame
         .t
         .par_chunks(width * ROW_CHUNK)
@@ -256,12 +331,17 @@ pub fn trace_shadow(
         .enumerate()
         .for_each(|(chunk, (ts, rows))| {
             let mut rays = Vec::with_capacity(width);
+            let mut maker = Maker::new(w, &cols);
             for (r, (trow, sums)) in ts.chunks(width).zip(rows).enumerate() {
                 let y = (chunk * ROW_CHUNK + r) as u32;
                 let row = match source {
                     Rows::Made(made) => &made[y as usize][..],
                     Rows::Make => {
-                        shadow_row(w, trow, y, &mut rays);
+                        for (x, &t) in trow.iter().enumerate().filter(|(_, t)| **t >= 0.0) {
+                            maker.ask_shadow(x, y as usize, t);
+                        }
+                        rays.clear();
+                        maker.shadows(&mut rays);
                         &rays[..]
                     }
                 };
@@ -295,6 +375,7 @@ pub const TILE: usize = 8;
 pub fn trace_primary_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh: &Bvh) -> f64 {
     let width = w.width as usize;
     let start = Instant::now();
+    let cols = w.columns();
     frame
         .t
         .par_chunks_mut(width * TILE)
@@ -307,6 +388,7 @@ pub fn trace_primary_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh:
         .with_max_len(1)
         .for_each(|(band, ((ts, tris), rows))| {
             let mut rays = Vec::with_capacity(TILE * TILE);
+            let mut maker = Maker::new(w, &cols);
             let mut hits = [None; TILE * TILE];
             for x0 in (0..width).step_by(TILE) {
                 let xs = x0..(x0 + TILE).min(width);
@@ -318,7 +400,7 @@ pub fn trace_primary_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh:
                             rays.extend_from_slice(&made[y][xs.clone()]);
                         }
                     }
-                    Rows::Make => w.primary_tile(xs.clone(), ys, &mut rays),
+                    Rows::Make => maker.primary(xs.clone(), ys, &mut rays),
                 }
                 let hits = &mut hits[..rays.len()];
                 bvh.intersect_packet(&rays, hits);
@@ -342,6 +424,7 @@ pub fn trace_primary_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh:
 pub fn trace_shadow_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh: &Bvh) -> f64 {
     let width = w.width as usize;
     let start = Instant::now();
+    let cols = w.columns();
     frame
         .t
         .par_chunks(width * TILE)
@@ -349,6 +432,7 @@ pub fn trace_shadow_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh: 
         .enumerate()
         .for_each(|(band, (ts, rows))| {
             let mut rays = Vec::with_capacity(TILE * TILE);
+            let mut maker = Maker::new(w, &cols);
             let mut row_of = Vec::with_capacity(TILE * TILE);
             let mut blocked = [false; TILE * TILE];
             // Where each row's next ray lies among its rays made first.
@@ -363,14 +447,15 @@ pub fn trace_shadow_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh: 
                 for (r, trow) in ts.chunks(width).enumerate() {
                     let y = band * TILE + r;
                     for x in xs.clone().filter(|&x| trow[x] >= 0.0) {
-                        rays.push(match source {
-                            Rows::Made(made) => made[y][next[r]],
-                            Rows::Make => w.shadow(&w.primary(x as u32, y as u32), trow[x]),
-                        });
+                        match source {
+                            Rows::Made(made) => rays.push(made[y][next[r]]),
+                            Rows::Make => maker.ask_shadow(x, y, trow[x]),
+                        }
                         next[r] += 1;
                         row_of.push(r);
                     }
                 }
+                maker.shadows(&mut rays);
                 let blocked = &mut blocked[..rays.len()];
                 bvh.occluded_packet(&rays, blocked);
                 for (&r, &b) in row_of.iter().zip(blocked.iter()) {
