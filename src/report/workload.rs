@@ -19,6 +19,10 @@ use crate::scene::camera::CameraFrame;
 use crate::scene::{Builder, Geometry};
 
 /// Rows handed out together, as the harness does (interleaved chunks).
+/// Every chunk of rows, and every band of tiles, is a job of its own
+/// (`with_max_len(1)`): the mesh fills the middle rows, and a run of rows
+/// that rayon no longer splits once a thread has begun it left the other
+/// thread idle at the end.
 const ROW_CHUNK: usize = 4;
 
 /// The far end of a shadow ray, just short of the primary hit.
@@ -277,6 +281,7 @@ pub fn trace_primary(
         .zip(frame.tri.par_chunks_mut(width * ROW_CHUNK))
         .zip(frame.rows.par_chunks_mut(ROW_CHUNK))
         .enumerate()
+        .with_max_len(1)
         .for_each(|(chunk, ((ts, tris), rows))| {
             // As the harness does: a row's rays first, then the row traced,
             // so the camera math does not sit in front of every ray.
@@ -329,6 +334,7 @@ pub fn trace_shadow(
         .par_chunks(width * ROW_CHUNK)
         .zip(frame.rows.par_chunks_mut(ROW_CHUNK))
         .enumerate()
+        .with_max_len(1)
         .for_each(|(chunk, (ts, rows))| {
             let mut rays = Vec::with_capacity(width);
             let mut maker = Maker::new(w, &cols);
@@ -382,9 +388,6 @@ pub fn trace_primary_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh:
         .zip(frame.tri.par_chunks_mut(width * TILE))
         .zip(frame.rows.par_chunks_mut(TILE))
         .enumerate()
-        // One band per job: the mesh fills the middle bands, so halves of
-        // the frame cost unevenly and stealing whole runs of bands left a
-        // thread idle at the end.
         .with_max_len(1)
         .for_each(|(band, ((ts, tris), rows))| {
             let mut rays = Vec::with_capacity(TILE * TILE);
@@ -430,6 +433,7 @@ pub fn trace_shadow_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh: 
         .par_chunks(width * TILE)
         .zip(frame.rows.par_chunks_mut(TILE))
         .enumerate()
+        .with_max_len(1)
         .for_each(|(band, (ts, rows))| {
             let mut rays = Vec::with_capacity(TILE * TILE);
             let mut maker = Maker::new(w, &cols);
@@ -523,6 +527,7 @@ pub fn trace_diffuse(
         .rows
         .par_chunks_mut(ROW_CHUNK)
         .zip(rays.par_chunks(ROW_CHUNK))
+        .with_max_len(1)
         .for_each(|(sums, rows)| {
             for (s, row) in sums.iter_mut().zip(rows) {
                 let (mut hits, mut sum_t) = (0, 0.0);
