@@ -158,11 +158,11 @@ impl CameraFrame {
         self.batch::<false>(sx, sy, out)
     }
 
-    /// Four rays at a time in f64 lanes where the CPU has AVX: the same
-    /// operations in the same order, each correctly rounded, so the same
-    /// rays to the bit as one at a time, where the divisions and the square
-    /// root of each ray cost more than half its making. `POS`: `a` and `b`
-    /// are image positions, else offsets.
+    /// Four rays at a time in f64 lanes where the CPU has AVX (a ray's
+    /// divisions and square root wait on one another): the same operations
+    /// in the same order, each correctly rounded, so the same rays to the
+    /// bit as one at a time. `POS`: `a` and `b` are image positions, else
+    /// offsets.
     #[inline]
     fn batch<const POS: bool>(&self, a: &[f64], b: &[f64], out: &mut Vec<Ray>) {
         assert_eq!(a.len(), b.len());
