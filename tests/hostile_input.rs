@@ -775,7 +775,7 @@ fn scene_file_arrays_and_settings_are_strict() {
         (
             "spp.toml",
             "[render]\nspp = 0",
-            "spp.toml:4:7: render.spp must be at least 1, not 0",
+            "spp.toml:4:7: render.spp must be from 1 to 1048576, not 0",
         ),
         (
             "depth.toml",

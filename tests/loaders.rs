@@ -300,3 +300,32 @@ fn far_meshes_render_as_at_the_origin() {
     }
     assert!(relative_difference(&reference, &render(&rounded)) > 0.05);
 }
+
+/// `mtllib` with forty names on one line, longer than a file name may be:
+/// the line is split into its names (as when no file has the whole line
+/// as its name), where the system's "file name too long" stopped the load.
+#[test]
+fn a_long_mtllib_line_names_several_libraries() {
+    let d = Dir::new("long-mtllib");
+    let mut names = String::new();
+    for i in 0..40 {
+        d.write(
+            &format!("material-library-{i}.mtl"),
+            format!("newmtl m{i}\nKd 1 0 0\n"),
+        );
+        names += &format!("material-library-{i}.mtl ");
+    }
+    assert!(names.len() > 255);
+    d.write(
+        "many.obj",
+        format!("mtllib {names}\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m3\nf 1 2 3\n"),
+    );
+    let r = rayterm(
+        &d.path(""),
+        &[
+            "render", "many.obj", "--size", "8x8", "--spp", "1", "-o", "o.png",
+        ],
+    );
+    assert!(r.ok(), "{}", r.stderr);
+    assert!(!r.stderr.contains("warning"), "{}", r.stderr);
+}

@@ -391,7 +391,7 @@ fn a_checkpoint_resumes_into_the_uninterrupted_render() {
         (
             &["--size", "40x28", "--spp", "4", "--resume", "c.exr"],
             "x.png",
-            "more than the 4 asked for",
+            "more than the 4 this render takes",
         ),
         (
             &["--size", "40x28", "--samples", "3..9", "--resume", "c.exr"],

@@ -43,11 +43,17 @@ pub fn run(a: MergeArgs) -> Result<ExitCode> {
     let merged = merged?;
     let (meta, (width, height)) = (&merged.meta, merged.size);
     let bytes = image_bytes(out.format, merged.image, width, height, meta.bloom.as_ref())?;
-    if cancel() {
-        eprintln!("interrupted: nothing written");
-        return Ok(ExitCode::from(interrupt::exit_code()));
+    let written = match cancel() {
+        true => Err(interrupt::Interrupted.into()),
+        false => out.write_result(&bytes),
+    };
+    match written {
+        Err(e) if e.is::<interrupt::Interrupted>() => {
+            eprintln!("interrupted: nothing written");
+            return Ok(ExitCode::from(interrupt::exit_code()));
+        }
+        written => written?,
     }
-    out.write(&bytes)?;
     let head = format!(
         "{}: {}, merged {} in {}, render {} in all",
         meta.scene,

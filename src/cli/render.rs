@@ -245,7 +245,10 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     if interrupt::requested() {
         return stopped(checkpoint, film, false);
     }
-    out.write(&bytes)?;
+    match out.write_result(&bytes) {
+        Err(e) if e.is::<interrupt::Interrupted>() => return stopped(checkpoint, film, false),
+        written => written?,
+    }
     let render_ms = outcome.seconds * 1e3;
     // A --time or --target-error render that the --max-spp cap ended says so.
     let cap = film.spp_range().2;
@@ -255,7 +258,10 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
             percent(e)
         ),
         (Ended::Spp, None, Some(t)) if a.spp.is_none() => {
-            format!(" (stopped at the --max-spp cap of {cap} before the --time of {t} s)")
+            format!(
+                " (stopped at the --max-spp cap of {cap} before the --time of {} s)",
+                crate::scene::numbers::show(t)
+            )
         }
         _ => String::new(),
     };
@@ -456,7 +462,8 @@ fn resumed(
     }
     if let Some(n) = stop.spp.filter(|&n| part.film.spp > n) {
         bail!(
-            "{} already holds {} samples per pixel, more than the {n} asked for",
+            "{} already holds {} samples per pixel, more than the {n} this render takes \
+             (--spp, or the scene's)",
             words::path(path),
             part.film.spp
         );

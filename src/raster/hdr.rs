@@ -70,7 +70,12 @@ pub fn encode(width: u32, height: u32, img: &[Vec3]) -> Result<Vec<u8>> {
 pub fn read(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
     // The image crate's errors repeat their source in their message; one
     // line without the chain reads better.
-    let flat = |e: image::ImageError| anyhow::anyhow!("{}: {e}", path.display());
+    let flat = |e: image::ImageError| match e {
+        image::ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            anyhow::anyhow!("{}: the Radiance HDR image ends early", path.display())
+        }
+        e => anyhow::anyhow!("{}: {e}", path.display()),
+    };
     let file = super::open(path)?;
     let dec = HdrDecoder::new(BufReader::new(file)).map_err(flat)?;
     let (w, h) = dec.dimensions();
@@ -96,6 +101,29 @@ pub fn round_trip(img: &[Vec3]) -> Vec<Vec3> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An empty file, a header alone and pixels cut short say the image
+    /// ends early, naming the file (where the decoder's own words were
+    /// "failed to fill whole buffer").
+    #[test]
+    fn a_truncated_image_says_so() {
+        let d = std::env::temp_dir().join(format!("rayterm-hdr-cut-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let whole = encode(8, 8, &[Vec3::splat(0.5); 64]).unwrap();
+        // The header, its blank line and the dimensions line.
+        let blank = whole.windows(2).position(|w| w == b"\n\n").unwrap() + 2;
+        let header = blank + whole[blank..].iter().position(|&b| b == b'\n').unwrap() + 1;
+        for len in [0, header, whole.len() - 3] {
+            let p = d.join(format!("cut-{len}.hdr"));
+            std::fs::write(&p, &whole[..len]).unwrap();
+            let e = format!("{:#}", read(&p).unwrap_err());
+            assert!(
+                e.ends_with(".hdr: the Radiance HDR image ends early"),
+                "{len}: {e}"
+            );
+        }
+        std::fs::remove_dir_all(d).unwrap();
+    }
 
     #[test]
     fn rounding_is_to_nearest_within_half_a_step() {

@@ -157,6 +157,18 @@ impl Output {
     /// Writes `bytes`: atomically through a temporary file beside a regular
     /// target (removed on any failure), or in place into a device or FIFO.
     pub fn write(&self, bytes: &[u8]) -> Result<()> {
+        self.write_unless(bytes, &|| false)
+    }
+
+    /// [`Output::write`] for a command's result: a signal that arrives
+    /// while a regular file is written leaves it as it was, and the error
+    /// is [`Interrupted`](crate::interrupt::Interrupted). A device or FIFO
+    /// is written all the same: what it took cannot be taken back.
+    pub fn write_result(&self, bytes: &[u8]) -> Result<()> {
+        self.write_unless(bytes, &crate::interrupt::requested)
+    }
+
+    fn write_unless(&self, bytes: &[u8], stop: &dyn Fn() -> bool) -> Result<()> {
         let path = &self.path;
         if let Some(mut f) = self.device.as_ref() {
             return f
@@ -172,7 +184,7 @@ impl Output {
             .file_name()
             .map_or("image".into(), |n| n.to_string_lossy());
         let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-        let written = (|| -> std::io::Result<()> {
+        let written = (|| -> std::io::Result<bool> {
             let mut f = OpenOptions::new().write(true).create_new(true).open(&tmp)?;
             f.write_all(bytes)?;
             // A file replaced keeps its permissions.
@@ -180,12 +192,22 @@ impl Output {
                 f.set_permissions(m.permissions())?;
             }
             f.sync_all()?;
-            fs::rename(&tmp, path)
+            if stop() {
+                return Ok(false);
+            }
+            fs::rename(&tmp, path).map(|()| true)
         })();
-        written.map_err(|e| {
-            let _ = fs::remove_file(&tmp);
-            anyhow::anyhow!("cannot write {}: {}", path.display(), reason(&e))
-        })
+        match written {
+            Ok(true) => Ok(()),
+            Ok(false) => {
+                let _ = fs::remove_file(&tmp);
+                Err(crate::interrupt::Interrupted.into())
+            }
+            Err(e) => {
+                let _ = fs::remove_file(&tmp);
+                bail!("cannot write {}: {}", path.display(), reason(&e))
+            }
+        }
     }
 }
 
@@ -261,6 +283,27 @@ mod tests {
         let d = std::env::temp_dir().join(format!("rayterm-out-{name}-{}", std::process::id()));
         fs::create_dir_all(&d).unwrap();
         d
+    }
+
+    /// A signal that arrives while the file is written leaves the old one
+    /// and no temporary file.
+    #[test]
+    fn a_write_stopped_at_the_end_leaves_the_old_file() {
+        let d = dir("stopped");
+        let target = d.join("x.png");
+        fs::write(&target, b"old").unwrap();
+        let out = Output::check(&target, &[], &[Format::Png]).unwrap();
+        let e = out.write_unless(b"new", &|| true).unwrap_err();
+        assert!(e.is::<crate::interrupt::Interrupted>(), "{e}");
+        let names: Vec<_> = fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, ["x.png"]);
+        assert_eq!(fs::read(&target).unwrap(), b"old");
+        out.write_unless(b"new", &|| false).unwrap();
+        assert_eq!(fs::read(&target).unwrap(), b"new");
+        fs::remove_dir_all(d).unwrap();
     }
 
     #[test]

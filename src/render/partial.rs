@@ -24,8 +24,7 @@ use crate::geometry::sampling::PIXEL_STRATA;
 use crate::raster::flat_exr::{self, Kind, Layout, Scanlines};
 use crate::scene::BloomSettings;
 
-/// The most samples per pixel any render takes, and the end of every range.
-pub const MAX_SPP: u32 = 1 << 20;
+pub use crate::scene::MAX_SPP;
 
 const KIND: &str = "rayterm partial film 2";
 
@@ -748,9 +747,17 @@ fn plausible(p: &PixelStats, spp: u32, start: u32, end: u32) -> bool {
         .chain(&[p.head.sum, p.head.diff, p.tail.sum, p.tail.diff])
         .all(|x| x.is_finite());
     let blocks = (start / PIXEL_STRATA)..end.div_ceil(PIXEL_STRATA);
-    let piece = |q: &Piece| q.n == 0 || (q.n < PIXEL_STRATA && blocks.contains(&q.block));
+    // No more samples than the range holds of the piece's block, so that
+    // pieces joined across parts never exceed a block.
+    let held = |b: u32| {
+        let lo = b * PIXEL_STRATA;
+        (lo + PIXEL_STRATA).min(end).saturating_sub(lo.max(start))
+    };
+    let piece = |q: &Piece| {
+        q.n == 0 || (q.n < PIXEL_STRATA && blocks.contains(&q.block) && q.n <= held(q.block))
+    };
     p.n <= spp
-        && p.sum.iter().all(|s| s.abs() <= most)
+        && p.sum.iter().all(|s| s.unsigned_abs() <= most as u128)
         && finite
         && p.m2 >= 0.0
         && p.block_m2 >= 0.0
@@ -907,6 +914,40 @@ pub fn ranges_text(r: &[Range<u32>]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Statistics that no render of the range leaves, though each field is
+    /// in its own bounds, are refused: a sum of `i128::MIN` (whose `abs`
+    /// wraps) and a block piece of more samples than the range holds of
+    /// that block (two such pieces joined would exceed a block).
+    #[test]
+    fn forged_statistics_are_not_plausible() {
+        let honest = PixelStats {
+            n: 4,
+            head: Piece {
+                block: 0,
+                n: 4,
+                ..Piece::default()
+            },
+            ..PixelStats::default()
+        };
+        assert!(plausible(&honest, 4, 12, 16));
+        let low = PixelStats {
+            sum: [i128::MIN, 0, 0],
+            ..honest
+        };
+        assert!(!plausible(&low, 4, 12, 16));
+        let wide = PixelStats {
+            n: 4,
+            head: Piece {
+                n: 12,
+                ..honest.head
+            },
+            ..honest
+        };
+        assert!(!plausible(&wide, 4, 12, 16));
+        // The same piece is fine where the range holds 12 of the block.
+        assert!(plausible(&PixelStats { n: 12, ..wide }, 12, 4, 16));
+    }
 
     #[test]
     fn every_field_of_a_pixel_survives_its_words() {

@@ -341,11 +341,11 @@ impl Locator<'_> {
     fn range(&self, v: &Spanned<u32>, range: RangeInclusive<u32>, what: &str) -> Result<u32> {
         let x = *v.get_ref();
         if !range.contains(&x) {
-            let allowed = match (range.start(), range.end()) {
-                (lo, &u32::MAX) => format!("at least {lo}"),
-                (lo, hi) => format!("from {lo} to {hi}"),
-            };
-            bail!("{}: {what} must be {allowed}, not {x}", self.at(v.span()));
+            let (lo, hi) = range.into_inner();
+            bail!(
+                "{}: {what} must be from {lo} to {hi}, not {x}",
+                self.at(v.span())
+            );
         }
         Ok(x)
     }
@@ -889,7 +889,7 @@ fn settings_from(
         (s.width, s.height) = (w, h);
     }
     if let Some(v) = &r.spp {
-        s.spp = loc.range(v, 1..=u32::MAX, "render.spp")?;
+        s.spp = loc.range(v, 1..=super::MAX_SPP, "render.spp")?;
     }
     if let Some(v) = &r.max_depth {
         s.max_depth = loc.range(v, 0..=64, "render.max_depth")?;
@@ -1048,7 +1048,11 @@ mod tests {
         for (render, at) in [
             (
                 "spp = 0",
-                "s.toml:4:7: render.spp must be at least 1, not 0",
+                "s.toml:4:7: render.spp must be from 1 to 1048576",
+            ),
+            (
+                "spp = 1048577",
+                "s.toml:4:7: render.spp must be from 1 to 1048576",
             ),
             (
                 "max_depth = 65",

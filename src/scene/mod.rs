@@ -128,6 +128,10 @@ impl std::fmt::Display for Builder {
     }
 }
 
+/// The most samples per pixel any render takes, and the end of every
+/// range of samples.
+pub const MAX_SPP: u32 = 1 << 20;
+
 /// Render defaults a scene can set; the CLI and TUI override them.
 #[derive(Clone, Debug)]
 pub struct Settings {

@@ -144,7 +144,11 @@ impl std::error::Error for ReadError {}
 impl From<std::io::Error> for Cause {
     fn from(e: std::io::Error) -> Self {
         match e.kind() {
-            ErrorKind::NotFound | ErrorKind::NotADirectory => Cause::NotFound,
+            // No file can have such a path: a file for a directory, or a
+            // name longer than the system allows.
+            ErrorKind::NotFound | ErrorKind::NotADirectory | ErrorKind::InvalidFilename => {
+                Cause::NotFound
+            }
             ErrorKind::PermissionDenied => Cause::PermissionDenied,
             _ => Cause::Other(e),
         }

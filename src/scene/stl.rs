@@ -129,9 +129,13 @@ fn parse_within(
             }
             (Some(n), Some(size)) => bail!(
                 "{}: truncated binary STL: the header counts {n} triangles ({size} bytes), \
-                 the file has {len} bytes ({} whole triangles)",
+                 the file has {len} bytes ({})",
                 path.display(),
-                len.saturating_sub(HEADER) / TRIANGLE
+                crate::words::count(
+                    len.saturating_sub(HEADER) / TRIANGLE,
+                    "whole triangle",
+                    "whole triangles"
+                )
             ),
             _ => bail!(
                 "{}: not an STL file: {len} bytes, shorter than a binary header (84 bytes), \
@@ -368,7 +372,7 @@ mod tests {
         assert_eq!(
             e(&cut),
             "p.stl: truncated binary STL: the header counts 2 triangles (184 bytes), \
-             the file has 177 bytes (1 whole triangles)"
+             the file has 177 bytes (1 whole triangle)"
         );
         assert!(e(b"abc").contains("not an STL file"));
         let mut nan = binary_stl(&TWO, b"x");

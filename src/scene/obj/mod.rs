@@ -167,7 +167,7 @@ impl ObjFile {
             return Ok(None);
         };
         let mut absurd = Absurd::default();
-        let mut ignored: Vec<(String, usize, usize)> = Vec::new();
+        let mut ignored = piece::Ignored::default();
         let mut current = Group {
             name: String::new(),
             material: None,
@@ -188,28 +188,15 @@ impl ObjFile {
             f.pieces.push(p.faces);
             f.libraries.extend(p.libraries);
             absurd = absurd.then(p.absurd);
-            for (w, line, count) in p.ignored {
-                match ignored.iter_mut().find(|(x, _, _)| *x == w) {
-                    Some(e) => e.2 += count,
-                    None => ignored.push((w, line, count)),
-                }
-            }
+            ignored.extend(p.ignored);
         }
         f.finish(current);
         f.check_indices()?;
         warnings.extend(absurd.warning(path));
-        if !ignored.is_empty() {
-            let list: Vec<String> = ignored
-                .iter()
-                .map(|(w, line, count)| match count {
-                    1 => format!("{w} (line {line})"),
-                    c => format!("{w} (line {line} and {} more)", c - 1),
-                })
-                .collect();
+        if let Some(list) = ignored.list() {
             warnings.push(format!(
-                "{}: ignored, not supported: {}",
-                path.display(),
-                list.join(", ")
+                "{}: ignored, not supported: {list}",
+                path.display()
             ));
         }
         Ok(Some(f))
@@ -907,6 +894,32 @@ mod tests {
             "m.obj:5: 2999 triangles by this line would need 586 KiB of memory; 195 KiB is available"
         );
         assert!(ObjFile::parse_within(Path::new("m.obj"), QUAD, &mut Vec::new(), budget).is_ok());
+    }
+
+    /// Sixteen kinds are named, the rest counted; a keyword is cut to 32
+    /// characters, so neither many kinds nor a long line makes the
+    /// warning long.
+    #[test]
+    fn unsupported_statements_are_listed_within_bounds() {
+        let kinds: String = (1..=20).map(|k| format!("k{k} 1\n")).collect();
+        let long = format!("{}\0 1\n", "a".repeat(100_000));
+        let p = load(vec![("m/a.obj", format!("{kinds}{long}{long}{QUAD}"))]).unwrap();
+        let [w] = &p.warnings[..] else {
+            panic!("{:?}", p.warnings)
+        };
+        let named: String = (1..=16).map(|k| format!("k{k} (line {k}), ")).collect();
+        assert_eq!(
+            *w,
+            format!("m/a.obj: ignored, not supported: {named}6 statements of other kinds (line 17 and 5 more)")
+        );
+        let p = load(vec![("m/a.obj", format!("{long}{long}{QUAD}"))]).unwrap();
+        assert_eq!(
+            p.warnings,
+            [format!(
+                "m/a.obj: ignored, not supported: {}… (line 1 and 1 more)",
+                "a".repeat(32)
+            )]
+        );
     }
 
     #[test]

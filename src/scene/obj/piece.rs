@@ -198,6 +198,77 @@ pub enum Switch {
     Material(String, usize),
 }
 
+/// Statements of kinds rayterm does not read: the first [`Ignored::KINDS`]
+/// keywords, each with its first line and count, and the rest counted
+/// together, so that a file of a million made-up keywords, or of one
+/// keyword a gigabyte long, costs no more than its lines.
+#[derive(Default)]
+pub struct Ignored {
+    /// The keyword's first [`Ignored::LONGEST`] characters, whether it had
+    /// more, its first line and its count.
+    kinds: Vec<(String, bool, usize, usize)>,
+    /// The first line and count of the statements past those kinds.
+    others: Option<(usize, usize)>,
+}
+
+impl Ignored {
+    const KINDS: usize = 16;
+    const LONGEST: usize = 32;
+
+    pub fn add(&mut self, keyword: &str, line: usize, count: usize) {
+        match keyword.char_indices().nth(Self::LONGEST) {
+            Some((cut, _)) => self.add_kind(&keyword[..cut], true, line, count),
+            None => self.add_kind(keyword, false, line, count),
+        }
+    }
+
+    fn add_kind(&mut self, word: &str, long: bool, line: usize, count: usize) {
+        if let Some(e) = self.kinds.iter_mut().find(|k| k.0 == word && k.1 == long) {
+            e.3 += count;
+        } else if self.kinds.len() < Self::KINDS {
+            self.kinds.push((word.to_string(), long, line, count));
+        } else {
+            let o = self.others.get_or_insert((line, 0));
+            o.1 += count;
+        }
+    }
+
+    /// Adds those of a later piece of the file.
+    pub fn extend(&mut self, later: Ignored) {
+        for (word, long, line, count) in later.kinds {
+            self.add_kind(&word, long, line, count);
+        }
+        if let Some((line, count)) = later.others {
+            self.others.get_or_insert((line, 0)).1 += count;
+        }
+    }
+
+    /// `vp (line 1 and 1 more), curv (line 3)`, or `None` when nothing
+    /// was ignored.
+    pub fn list(&self) -> Option<String> {
+        let lines = |line: usize, count: usize| match count {
+            1 => format!("line {line}"),
+            c => format!("line {line} and {} more", c - 1),
+        };
+        let mut list: Vec<String> = self
+            .kinds
+            .iter()
+            .map(|(w, long, line, count)| {
+                let w = crate::words::printable(w) + if *long { "…" } else { "" };
+                format!("{w} ({})", lines(*line, *count))
+            })
+            .collect();
+        if let Some((line, count)) = self.others {
+            list.push(format!(
+                "{} of other kinds ({})",
+                crate::words::count(count as u64, "statement", "statements"),
+                lines(line, count)
+            ));
+        }
+        (!list.is_empty()).then(|| list.join(", "))
+    }
+}
+
 /// One piece as read, up to its first error.
 #[derive(Default)]
 pub struct Piece {
@@ -207,8 +278,7 @@ pub struct Piece {
     /// Warnings with their lines.
     pub warnings: Vec<(usize, String)>,
     pub absurd: Absurd,
-    /// Ignored statements: keyword, first line, count.
-    pub ignored: Vec<(String, usize, usize)>,
+    pub ignored: Ignored,
     /// The first error, where reading stopped.
     pub error: Option<anyhow::Error>,
     /// Reading stopped because the triangles of this piece, or of all the
@@ -479,10 +549,7 @@ impl Reader<'_> {
                 }
             }
             k if SILENT.contains(&k) => {}
-            other => match self.piece.ignored.iter_mut().find(|(w, _, _)| w == other) {
-                Some(e) => e.2 += 1,
-                None => self.piece.ignored.push((other.to_string(), n, 1)),
-            },
+            other => self.piece.ignored.add(other, n, 1),
         }
         Ok(())
     }

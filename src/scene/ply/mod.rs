@@ -161,6 +161,12 @@ impl PlyMesh {
 fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Header> {
     let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let skipped = bytes.len() - body.len();
+    if body.starts_with(b"ply\r") && !body.starts_with(b"ply\r\n") {
+        bail!(
+            "{}: the PLY header's lines end in a lone CR: a PLY header's lines end in LF or CRLF",
+            path.display()
+        );
+    }
     if !(body.starts_with(b"ply\n") || body.starts_with(b"ply\r\n")) {
         bail!(
             "{}: not a PLY file: it does not start with a 'ply' line",
@@ -889,6 +895,7 @@ mod tests {
             (HEAD.replace("property float z\n", ""), "p.ply: element vertex has no property z"),
             (HEAD.replace("uchar int vertex", "uchar float vertex"), "p.ply:9: vertex_indices: indices must be of an integer type"),
             ("plyx\n".into(), "p.ply: not a PLY file"),
+            (HEAD.replace('\n', "\r"), "p.ply: the PLY header's lines end in a lone CR"),
         ];
         for (text, want) in cases {
             let e = err(&text);
