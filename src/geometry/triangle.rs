@@ -261,6 +261,13 @@ pub fn intersect_wide(s: &RayShear, p: [&[f32; 3]; 3], tmax: f32) -> Option<TriH
     let delta_x = gamma64(6) * (max_xt + 2.0 * (sx.abs() * max_z));
     let delta_y = gamma64(6) * (max_yt + 2.0 * (sy.abs() * max_z));
     let delta_e = 2.0 * (gamma64(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    // Far from the origin, rounding can collapse a small triangle's sheared
+    // corners onto one line: its edge functions are then rounding alone,
+    // and their signs say nothing. A triangle whose area in the ray's view
+    // is within their error bound is edge-on to the ray, and missed.
+    if det.abs() <= 3.0 * delta_e {
+        return None;
+    }
     let max_e = u.abs().max(v.abs()).max(w.abs());
     let delta_t =
         3.0 * (gamma64(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / det.abs();
@@ -689,6 +696,34 @@ mod tests {
     }
 
     const TRI: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+
+    /// A ray from 3.6e16 away passes a triangle some 9 across by 1.3e16;
+    /// in its sheared view the triangle's corners round onto one line, and
+    /// the edge functions' signs, rounding alone, said it hit.
+    #[test]
+    fn a_triangle_collapsed_by_rounding_is_not_hit() {
+        let o = Vec3::new(3.5845402e16, -0.2, 2.5853504e16);
+        let d = Vec3::new(-7.1690804e16, 0.2, -2.5853504e16);
+        let tri = [
+            [-8.433532, -0.0, -1.6558007],
+            [-0.0, -0.0, 0.0],
+            [-4.155766, -0.0, -0.8159239],
+        ];
+        let s = RayShear::new(o, d);
+        assert!(s.wide);
+        assert_eq!(
+            intersect(&s, &tri[0], &tri[1], &tri[2], f32::INFINITY),
+            None
+        );
+        // A triangle 2e15 across where the ray crosses x = 0 is hit there.
+        let big = [
+            [0.0, -1e15, 1.19e16],
+            [0.0, 1e15, 1.19e16],
+            [0.0, 0.0, 1.39e16],
+        ];
+        let h = intersect(&s, &big[0], &big[1], &big[2], f32::INFINITY).unwrap();
+        assert!((h.t - 0.5).abs() < 1e-6, "{h:?}");
+    }
 
     #[test]
     fn hits_interior_with_barycentrics() {
