@@ -2,11 +2,14 @@
 //! poll: a render stops within a sample and writes nothing, the TUI restores
 //! the terminal and quits, exactly as on Ctrl-C or `q`. A second signal of
 //! the same kind while the first is being handled ends the process at once.
+//!
+//! For the TUI, SIGTSTP and SIGCONT too: a stop must wait until the
+//! terminal is given back, and a continued process takes it again.
 
 use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
 use std::sync::{Arc, OnceLock};
 
-use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+use signal_hook::consts::{SIGCONT, SIGHUP, SIGINT, SIGTERM, SIGTSTP};
 
 static FLAG: OnceLock<Arc<AtomicBool>> = OnceLock::new();
 /// The last signal received, for the exit status (128 + signal).
@@ -48,6 +51,72 @@ pub fn exit_code() -> u8 {
     match LAST.load(Ordering::SeqCst) {
         0 => 130,
         s => (128 + s) as u8,
+    }
+}
+
+/// The flags SIGTSTP and SIGCONT set.
+struct JobControl {
+    stop: Arc<AtomicBool>,
+    cont: Arc<AtomicBool>,
+}
+
+static JOBS: OnceLock<Option<JobControl>> = OnceLock::new();
+
+/// Catches SIGTSTP and SIGCONT (once), unless SIGTSTP is ignored: whoever
+/// started the process then asked that it never stop. Returns whether the
+/// process may stop.
+pub fn catch_stops() -> bool {
+    JOBS.get_or_init(|| {
+        // SAFETY: sigaction with a null new action only reads the current
+        // one into the zeroed struct.
+        let ignored = unsafe {
+            let mut old: libc::sigaction = std::mem::zeroed();
+            libc::sigaction(SIGTSTP, std::ptr::null(), &mut old) == 0
+                && old.sa_sigaction == libc::SIG_IGN
+        };
+        if ignored {
+            return None;
+        }
+        let stop = Arc::new(AtomicBool::new(false));
+        let cont = Arc::new(AtomicBool::new(false));
+        signal_hook::flag::register(SIGTSTP, stop.clone()).ok()?;
+        signal_hook::flag::register(SIGCONT, cont.clone()).ok()?;
+        Some(JobControl { stop, cont })
+    })
+    .is_some()
+}
+
+/// Whether a SIGTSTP came since last asked.
+pub fn stop_requested() -> bool {
+    JOBS.get()
+        .and_then(Option::as_ref)
+        .is_some_and(|j| j.stop.swap(false, Ordering::SeqCst))
+}
+
+/// Whether a SIGCONT came since last asked.
+pub fn continued() -> bool {
+    JOBS.get()
+        .and_then(Option::as_ref)
+        .is_some_and(|j| j.cont.swap(false, Ordering::SeqCst))
+}
+
+/// Stops the process as SIGTSTP's default action does, and returns once it
+/// is continued. SIGTSTP itself rather than SIGSTOP: the shell reports the
+/// job suspended as after any Ctrl-Z, and the kernel drops the stop of a
+/// process group no shell would continue (this then returns at once).
+pub fn stop() {
+    // SAFETY: the default action is in place for the one raise, and the
+    // action before it (signal-hook's handler) is put back as it was; raise
+    // delivers to this thread before it returns.
+    unsafe {
+        let mut default: libc::sigaction = std::mem::zeroed();
+        default.sa_sigaction = libc::SIG_DFL;
+        let mut handler: libc::sigaction = std::mem::zeroed();
+        if libc::sigaction(SIGTSTP, &default, &mut handler) != 0 {
+            return;
+        }
+        libc::raise(SIGTSTP);
+        libc::sigaction(SIGTSTP, &handler, std::ptr::null_mut());
     }
 }
 

@@ -1,7 +1,8 @@
 //! The TUI in a real pseudo-terminal, ended by a signal: the terminal must
 //! come back exactly as `q` leaves it (alternate screen left, cursor shown,
 //! mouse capture off, canonical mode on), and the exit status says which
-//! signal it was.
+//! signal it was. Stopped by one (SIGTSTP, Ctrl-Z), it gives the terminal
+//! back the same way first, and takes it again on SIGCONT.
 
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -145,4 +146,179 @@ fn a_dumb_terminal_is_refused() {
     assert_eq!(status.code(), Some(1), "{text}");
     assert!(text.contains("TERM=dumb"), "{text}");
     assert!(!out.contains(&0x1b), "{text:?}");
+}
+
+/// The TUI as a shell's job: its own process group (the kernel drops a
+/// stop aimed at a group no shell could continue), on a terminal played
+/// by the test that answers the cursor position and DA1 requests. Killed
+/// when dropped, stopped or not.
+struct Job {
+    child: std::process::Child,
+    master: std::fs::File,
+    slave: std::os::fd::OwnedFd,
+    out: Vec<u8>,
+    /// Output before this was scanned for requests.
+    scanned: usize,
+}
+
+impl Job {
+    fn start() -> Job {
+        use std::os::unix::process::CommandExt;
+        let (master, slave) = pty(100, 30);
+        let child = Command::new(env!("CARGO_BIN_EXE_rayterm"))
+            .args(["tui", "cornell"])
+            .env("TERM", "xterm-256color")
+            // The colour question is asked at startup, and must not be again.
+            .env_remove("COLORTERM")
+            .env_remove("TMUX")
+            .stdin(Stdio::from(slave.try_clone().unwrap()))
+            .stdout(Stdio::from(slave.try_clone().unwrap()))
+            .stderr(Stdio::from(slave.try_clone().unwrap()))
+            .process_group(0)
+            .spawn()
+            .unwrap();
+        Job {
+            child,
+            master: std::fs::File::from(master),
+            slave,
+            out: Vec::new(),
+            scanned: 0,
+        }
+    }
+
+    /// Reads and answers until `until` holds of the job (20 s at most).
+    fn until(&mut self, what: &str, until: impl Fn(&mut Job) -> bool) {
+        use std::io::{Read, Write};
+        use std::os::fd::AsRawFd;
+        let end = Instant::now() + Duration::from_secs(20);
+        while !until(self) {
+            assert!(
+                Instant::now() < end,
+                "{what}: {:?}",
+                String::from_utf8_lossy(&self.out[self.out.len().saturating_sub(600)..])
+            );
+            let mut fds = libc::pollfd {
+                fd: self.master.as_raw_fd(),
+                events: libc::POLLIN,
+                revents: 0,
+            };
+            // SAFETY: one valid pollfd for a descriptor we own.
+            if unsafe { libc::poll(&mut fds, 1, 10) } > 0 {
+                let mut buf = [0u8; 1 << 16];
+                if let Ok(n) = self.master.read(&mut buf) {
+                    self.out.extend_from_slice(&buf[..n]);
+                }
+            }
+            let from = self.scanned.saturating_sub(3);
+            for i in from..self.out.len() {
+                let rest = &self.out[i..];
+                if rest.starts_with(b"\x1b[6n") && i + 4 > self.scanned {
+                    let _ = self.master.write_all(b"\x1b[1;1R");
+                } else if rest.starts_with(b"\x1b[c") && i + 3 > self.scanned {
+                    let _ = self.master.write_all(b"\x1b[?62;22c");
+                }
+            }
+            self.scanned = self.out.len();
+        }
+    }
+
+    /// Whether the job is stopped, by SIGTSTP.
+    fn stopped(&mut self) -> bool {
+        let mut status = 0;
+        // SAFETY: waitpid on our own child, which does not wait; it reaps
+        // the child only if it ended, which fails the test.
+        let pid = unsafe {
+            libc::waitpid(
+                self.child.id() as i32,
+                &mut status,
+                libc::WUNTRACED | libc::WNOHANG,
+            )
+        };
+        assert!(
+            pid == 0 || libc::WIFSTOPPED(status),
+            "the TUI ended instead of stopping: {status:#x}"
+        );
+        pid > 0 && libc::WSTOPSIG(status) == libc::SIGTSTP
+    }
+
+    fn signal(&self, signal: i32) {
+        // SAFETY: a signal to the child we started.
+        assert_eq!(unsafe { libc::kill(self.child.id() as i32, signal) }, 0);
+    }
+
+    /// Stopped: the terminal is given back as `q` leaves it, and every
+    /// request was answered and its answer read, so that none is left in
+    /// the terminal for the shell.
+    fn suspended(&mut self, how: &str) {
+        use std::os::fd::AsRawFd;
+        self.until(&format!("{how} did not stop the TUI"), Job::stopped);
+        let settled = Instant::now() + Duration::from_millis(300);
+        self.until("reading the last output", |_| Instant::now() >= settled);
+        assert!(
+            self.out.ends_with(b"\x1b[?1049l\x1b[?25h"),
+            "{how}: the alternate screen was not left last: {:?}",
+            String::from_utf8_lossy(&self.out[self.out.len().saturating_sub(200)..])
+        );
+        let last = |seq: &[u8]| self.out.windows(seq.len()).rposition(|w| w == seq);
+        assert!(
+            last(b"\x1b[?1000l") > last(b"\x1b[?1000h"),
+            "{how}: mouse on"
+        );
+        assert!(canonical(&self.slave), "{how}: left in raw mode");
+        let mut unread: libc::c_int = 0;
+        // SAFETY: FIONREAD writes one int for a valid terminal descriptor.
+        unsafe { libc::ioctl(self.slave.as_raw_fd(), libc::FIONREAD, &mut unread) };
+        assert_eq!(unread, 0, "{how}: answers left for the shell");
+    }
+
+    /// Continued: the terminal is taken again and the screen drawn anew,
+    /// without asking the startup questions again.
+    fn continued(&mut self) {
+        let mark = self.out.len();
+        self.signal(libc::SIGCONT);
+        let after = |j: &mut Job, seq: &[u8]| j.out[mark..].windows(seq.len()).any(|w| w == seq);
+        self.until("SIGCONT did not bring the TUI back", |j| {
+            after(j, b"\x1b[?1049h") && after(j, b"\x1b[2J") && after(j, b"quit")
+        });
+        assert!(!canonical(&self.slave), "not in raw mode again");
+        assert!(after(self, b"\x1b[?1000h"), "mouse reporting not on again");
+        assert!(
+            !after(self, b"\x1b[c"),
+            "the startup questions were asked again"
+        );
+    }
+}
+
+impl Drop for Job {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Ctrl-Z and SIGTSTP suspend the TUI as a shell's job control expects,
+/// SIGCONT brings it back, and `q` still quits cleanly.
+#[test]
+fn sigtstp_and_ctrl_z_suspend_and_sigcont_resumes() {
+    use std::io::Write;
+    let mut job = Job::start();
+    job.until("the TUI never drew", |j| {
+        let has = |seq: &[u8]| j.out.windows(seq.len()).any(|w| w == seq);
+        has(b"\x1b[?1049h") && has(b"quit")
+    });
+    assert!(
+        job.out.windows(3).any(|w| w == b"\x1b[c"),
+        "no startup question"
+    );
+    job.signal(libc::SIGTSTP);
+    job.suspended("SIGTSTP");
+    job.continued();
+    job.master.write_all(b"\x1a").unwrap();
+    job.suspended("Ctrl-Z");
+    job.continued();
+    job.master.write_all(b"q").unwrap();
+    job.until("q did not quit", |j| j.child.try_wait().unwrap().is_some());
+    let status = job.child.wait().unwrap();
+    assert_eq!(status.code(), Some(0), "{status:?}");
+    assert!(canonical(&job.slave), "left in raw mode");
 }

@@ -164,6 +164,8 @@ pub struct App {
     /// When a slow pass's progress was last shown.
     progress_shown: Instant,
     pub quit: bool,
+    /// Ctrl-Z asked the event loop to give the terminal back and stop.
+    pub suspend: bool,
     /// The `--reference` image, if any.
     pub reference: Option<Arc<Reference>>,
     /// The view size for which the status line last said how to make the
@@ -242,6 +244,7 @@ impl App {
             layout: Layout::default(),
             progress_shown: Instant::now(),
             quit: false,
+            suspend: false,
             reference,
             resample_noted: None,
             warnings,
@@ -561,6 +564,7 @@ impl App {
                 }
             }
             Action::ClosePopup => self.popup = None,
+            Action::Suspend => self.suspend = true,
             Action::Quit => self.quit = true,
         }
     }

@@ -120,6 +120,8 @@ pub enum Action {
     ScrollPopup(i8),
     PagePopup(i8),
     ClosePopup,
+    /// Give the terminal back and stop, as Ctrl-Z does outside raw mode.
+    Suspend,
     Quit,
 }
 
@@ -147,6 +149,12 @@ pub const ROWS: &[Row] = &[
         keys: &[(K::Char('q'), A::Quit), (K::Ctrl('c'), A::Quit)],
         help: "quit",
         hint: Some("quit"),
+    },
+    Row {
+        mode: Mode::Any,
+        keys: &[(K::Ctrl('z'), A::Suspend)],
+        help: "suspend to the shell (fg resumes)",
+        hint: None,
     },
     Row {
         mode: Mode::View,
@@ -357,6 +365,12 @@ pub const ROWS: &[Row] = &[
         help: "quit",
         hint: None,
     },
+    Row {
+        mode: Mode::Popup,
+        keys: &[(K::Ctrl('z'), A::Suspend)],
+        help: "suspend to the shell (fg resumes)",
+        hint: None,
+    },
 ];
 
 /// What `key` does in `mode`.
@@ -478,6 +492,7 @@ mod tests {
             Some(Action::ClosePopup)
         );
         assert_eq!(action(Key::Ctrl('c'), Mode::Popup), Some(Action::Quit));
+        assert_eq!(action(Key::Ctrl('z'), Mode::Popup), Some(Action::Suspend));
         assert_eq!(action(Key::Char('w'), Mode::Popup), None);
         assert_eq!(action(Key::Char('q'), Mode::View), Some(Action::Quit));
     }

@@ -95,8 +95,10 @@ pub fn run(
     app.export_size = req.size;
     app.symbols = symbols;
     // SIGTERM, SIGHUP and an outside SIGINT quit like `q`: the loop sees the
-    // flag and the guard below restores the terminal.
+    // flag and the guard below restores the terminal. SIGTSTP suspends like
+    // Ctrl-Z.
     crate::interrupt::flag();
+    crate::interrupt::catch_stops();
     let guard = TerminalGuard::enter()?;
     let result = Keyboard::open().and_then(|keyboard| {
         let reader = Reader::spawn(keyboard.fd())?;
@@ -145,13 +147,8 @@ pub fn run(
             images.as_mut(),
             kept,
         );
-        if let (Some(mode), Some(images)) = (&app.pixels, &mut images) {
-            // Images still queued stay unsent, and those on screen go at
-            // once, whatever the link's room: kitty's outlive the screen.
-            out.drop_pieces();
-            let _ = terminal.backend_mut().send(&images.bands.leave(mode));
-        }
-        leave(terminal.backend_mut(), &reader, &mut out);
+        let pictures = app.pixels.zip(images.as_mut());
+        leave(terminal.backend_mut(), &reader, &mut out, pictures);
         result
     });
     drop(guard);
@@ -277,7 +274,8 @@ fn event_loop<W: Write>(
                 Input::Reply(Reply::CursorPosition(..)) => out.answered(Instant::now()),
                 Input::Reply(_) => {}
             }
-            if app.quit {
+            // Keys typed after Ctrl-Z wait until the TUI is back.
+            if app.quit || app.suspend {
                 break;
             }
             next = reader.rx.try_recv().ok();
@@ -285,7 +283,57 @@ fn event_loop<W: Write>(
         if app.quit || crate::interrupt::requested() {
             return Ok(());
         }
+        // Both flags are taken: one suspend answers a Ctrl-Z and a SIGTSTP.
+        if std::mem::take(&mut app.suspend) | crate::interrupt::stop_requested() {
+            if !crate::interrupt::catch_stops() {
+                app.say("no suspending: rayterm was started with SIGTSTP ignored (no job control)");
+            } else if !suspend(terminal, reader, out, app.pixels.zip(images.as_deref_mut()))? {
+                return Ok(());
+            }
+            dirty = true;
+            last_draw = Instant::now() - FRAME;
+        } else if crate::interrupt::continued() {
+            // Stopped without warning (SIGSTOP): the shell may have reset
+            // the terminal's modes and drawn over the screen.
+            take_back(terminal, out)?;
+            dirty = true;
+            last_draw = Instant::now() - FRAME;
+        }
     }
+}
+
+/// Gives the terminal back as quitting does, stops the process for the
+/// shell's job control, and takes the terminal again once continued;
+/// false when told to quit while stopped (the terminal stays the shell's).
+fn suspend<W: Write>(
+    terminal: &mut Terminal<Screen<W>>,
+    reader: &Reader,
+    out: &mut Output,
+    pictures: Option<(PixelMode, &mut Images)>,
+) -> Result<bool> {
+    leave(terminal.backend_mut(), reader, out, pictures);
+    restore();
+    crate::interrupt::stop();
+    if crate::interrupt::requested() {
+        return Ok(false);
+    }
+    take_back(terminal, out)?;
+    // The SIGCONT that ended the stop asks for nothing more.
+    crate::interrupt::continued();
+    Ok(true)
+}
+
+/// Takes the terminal again after a stop: its modes as at startup, and the
+/// whole screen drawn anew. The startup questions are not asked again: the
+/// terminal is the same, and answers unanswered before the stop are
+/// forgotten (they may have gone to the shell).
+fn take_back<W: Write>(terminal: &mut Terminal<Screen<W>>, out: &mut Output) -> Result<()> {
+    // After a SIGSTOP crossterm still takes raw mode to be on.
+    let _ = disable_raw_mode();
+    TerminalGuard::setup()?;
+    terminal.clear()?;
+    out.pacer.forget();
+    Ok(())
 }
 
 /// The viewport's picture as images: which bands are on screen, and the
@@ -384,8 +432,23 @@ fn shown(app: &App) -> Shown {
 
 /// Leaves the alternate screen behind whatever is still on its way, and
 /// waits (a second at most) for the answers still due, so that none
-/// arrives at the shell.
-fn leave<W: Write>(screen: &mut Screen<W>, reader: &Reader, out: &mut Output) {
+/// arrives at the shell. With images, those still queued stay unsent, and
+/// those on screen go at once, whatever the link's room: kitty's outlive
+/// the screen.
+fn leave<W: Write>(
+    screen: &mut Screen<W>,
+    reader: &Reader,
+    out: &mut Output,
+    images: Option<(PixelMode, &mut Images)>,
+) {
+    // Given back already: stopped, then told to quit.
+    if !ACTIVE.load(Ordering::SeqCst) {
+        return;
+    }
+    if let Some((mode, images)) = images {
+        out.drop_pieces();
+        let _ = screen.send(&images.bands.leave(&mode));
+    }
     let mut bytes = Vec::new();
     let _ = ratatui::crossterm::queue!(
         bytes,
@@ -450,17 +513,23 @@ impl TerminalGuard {
                 previous(info);
             }));
         });
+        // Made first, so that a failure below still restores what was set.
+        let guard = TerminalGuard;
+        Self::setup()?;
+        Ok(guard)
+    }
+
+    /// The TUI's terminal modes, on entering and after a stop.
+    fn setup() -> Result<()> {
         enable_raw_mode().context("cannot switch the terminal to raw mode")?;
         ACTIVE.store(true, Ordering::SeqCst);
-        let guard = TerminalGuard;
         execute!(
             io::stdout(),
             EnterAlternateScreen,
             EnableMouseCapture,
             cursor::Hide
         )
-        .context("cannot set up the terminal")?;
-        Ok(guard)
+        .context("cannot set up the terminal")
     }
 }
 

@@ -40,7 +40,7 @@ pub struct Output {
     /// pieces queued when drawn, and what they showed.
     drawn: VecDeque<(u64, u64, Shown)>,
     /// Pieces of output written after the cells (images), each followed by
-    /// a request; how many were queued and written so far.
+    /// a request; how many were queued, and written (or dropped) so far.
     pieces: VecDeque<Vec<u8>>,
     queued: u64,
     sent_pieces: u64,
@@ -78,8 +78,9 @@ impl Output {
     }
 
     /// Drops the pieces not yet written (leaving: the images they hold
-    /// would outlive the TUI).
+    /// would outlive the TUI); draws waiting for them wait no longer.
     pub fn drop_pieces(&mut self) {
+        self.sent_pieces += self.pieces.len() as u64;
         self.pieces.clear();
     }
 

@@ -137,10 +137,17 @@ impl Pacer {
                 .is_some_and(|f| now.saturating_duration_since(f) > NO_ANSWER)
         {
             self.unpaced = true;
-            self.acked += self.in_flight as u64;
-            self.in_flight = 0;
-            self.outstanding.clear();
+            self.forget();
         }
+    }
+
+    /// Takes every unanswered request as answered: after a stop, their
+    /// answers may have gone to the shell, and output must not wait for
+    /// them.
+    pub fn forget(&mut self) {
+        self.acked += self.in_flight as u64;
+        self.in_flight = 0;
+        self.outstanding.clear();
     }
 
     /// Bytes the terminal has processed (all written ones when unpaced).
