@@ -100,21 +100,28 @@ pub fn continued() -> bool {
         .is_some_and(|j| j.cont.swap(false, Ordering::SeqCst))
 }
 
-/// Stops the process as SIGTSTP's default action does, and returns once it
-/// is continued. SIGTSTP itself rather than SIGSTOP: the shell reports the
-/// job suspended as after any Ctrl-Z, and the kernel drops the stop of a
-/// process group no shell would continue (this then returns at once).
+/// Stops the process group as SIGTSTP's default action does (the terminal's
+/// Ctrl-Z stops every process of the job: `cargo run` too), and returns
+/// once this process is continued. SIGTSTP itself rather than SIGSTOP: the
+/// shell reports the job suspended as after any Ctrl-Z, and the kernel
+/// drops the stop of a process group no shell would continue (this then
+/// returns at once).
 pub fn stop() {
-    // SAFETY: the default action is in place for the one raise, and the
-    // action before it (signal-hook's handler) is put back as it was; raise
-    // delivers to this thread before it returns.
+    // SAFETY: this process ignores the signal the group is sent (an ignored
+    // signal is discarded as it is generated), then takes the default action
+    // for the one raise, which delivers to this thread before it returns;
+    // the action before (signal-hook's handler) is put back as it was.
     unsafe {
-        let mut default: libc::sigaction = std::mem::zeroed();
-        default.sa_sigaction = libc::SIG_DFL;
+        let mut ignore: libc::sigaction = std::mem::zeroed();
+        ignore.sa_sigaction = libc::SIG_IGN;
         let mut handler: libc::sigaction = std::mem::zeroed();
-        if libc::sigaction(SIGTSTP, &default, &mut handler) != 0 {
+        if libc::sigaction(SIGTSTP, &ignore, &mut handler) != 0 {
             return;
         }
+        libc::kill(0, SIGTSTP);
+        let mut default: libc::sigaction = std::mem::zeroed();
+        default.sa_sigaction = libc::SIG_DFL;
+        libc::sigaction(SIGTSTP, &default, std::ptr::null_mut());
         libc::raise(SIGTSTP);
         libc::sigaction(SIGTSTP, &handler, std::ptr::null_mut());
     }
