@@ -267,6 +267,26 @@ fn damaged_parts_are_refused_naming_the_file() {
         let err = refused(&d, &args, "r.png");
         assert!(err.contains(bad), "{bad}: {err}");
     }
+    // A header claiming more pixels than any render writes: refused for
+    // that, the file named once.
+    let mut huge = whole.clone();
+    for name in ["dataWindow\0box2i\0", "displayWindow\0box2i\0"] {
+        let at = whole
+            .windows(name.len())
+            .position(|w| w == name.as_bytes())
+            .unwrap_or_else(|| panic!("{name:?} is not in the file"))
+            + name.len()
+            + 4;
+        for (k, v) in [0i32, 0, 19999, 19999].into_iter().enumerate() {
+            huge[at + 4 * k..at + 4 * k + 4].copy_from_slice(&v.to_le_bytes());
+        }
+    }
+    std::fs::write(d.join("huge.exr"), &huge).unwrap();
+    let err = refused(&d, &["merge", "a.exr", "huge.exr", "-o", "m.png"], "m.png");
+    assert!(
+        err.contains("huge.exr: 20000x20000 pixels") && err.matches("huge.exr").count() == 1,
+        "{err}"
+    );
     // An attribute changed in place, the file's structure kept: the count
     // every pixel shares, the seed.
     for (from, to) in [("n=4 ", "n=3 "), ("rayterm.seed", "rayterm.sees")] {

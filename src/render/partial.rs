@@ -165,15 +165,21 @@ impl Header {
     }
 }
 
+/// Why [`admit`] refused a film: its own words, which name the file.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+struct NotAdmitted(String);
+
 /// Refuses, from its header, a film no rayterm render writes or this
 /// machine cannot hold.
 fn admit(path: &Path) -> impl Fn(u32, u32, usize) -> Result<()> + '_ {
     move |w, h, channels| {
         if w > MAX_SIDE || h > MAX_SIDE || channels > 64 {
-            bail!(
+            return Err(NotAdmitted(format!(
                 "{}: {w}x{h} pixels of {channels} channels is no partial film rayterm writes",
                 path.display()
-            );
+            ))
+            .into());
         }
         // The decoded channels, the film and the image made from it.
         let per_pixel = 4 * channels as u64 + Film::BYTES_PER_PIXEL;
@@ -182,6 +188,7 @@ fn admit(path: &Path) -> impl Fn(u32, u32, usize) -> Result<()> + '_ {
             w as u64 * h as u64 * per_pixel,
             None,
         )
+        .map_err(|e| NotAdmitted(format!("{e:#}")).into())
     }
 }
 
@@ -526,12 +533,14 @@ type Said = (Header, Range<usize>, Vec<(usize, usize)>, Words);
 /// The scanlines of the partial film at `path`; a file that holds none at
 /// all (a finished image, say) is named as no partial film.
 fn scanlines(path: &Path) -> Result<Scanlines> {
-    Scanlines::open(path, &admit(path)).map_err(|e| match path.is_file() {
-        true => e.context(format!(
-            "{}: not a partial film (one that render --part, --samples or --checkpoint writes)",
-            path.display()
-        )),
-        false => e,
+    Scanlines::open(path, &admit(path)).map_err(|e| {
+        match path.is_file() && !e.is::<NotAdmitted>() {
+            true => e.context(format!(
+                "{}: not a partial film (one that render --part, --samples or --checkpoint writes)",
+                path.display()
+            )),
+            false => e,
+        }
     })
 }
 
