@@ -6,8 +6,9 @@
 //! For the TUI, SIGTSTP and SIGCONT too: a stop must wait until the
 //! terminal is given back, and a continued process takes it again.
 
-use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicI32, AtomicU64, Ordering};
 use std::sync::{Arc, OnceLock};
+use std::time::{Duration, Instant};
 
 use signal_hook::consts::{SIGCONT, SIGHUP, SIGINT, SIGTERM, SIGTSTP};
 
@@ -107,6 +108,7 @@ pub fn continued() -> bool {
 /// drops the stop of a process group no shell would continue (this then
 /// returns at once).
 pub fn stop() {
+    let stopped = Instant::now();
     // SAFETY: this process ignores the signal the group is sent (an ignored
     // signal is discarded as it is generated), then takes the default action
     // for the one raise, which delivers to this thread before it returns;
@@ -125,6 +127,42 @@ pub fn stop() {
         libc::raise(SIGTSTP);
         libc::sigaction(SIGTSTP, &handler, std::ptr::null_mut());
     }
+    note_stopped(stopped.elapsed());
+}
+
+fn note_stopped(d: Duration) {
+    STOPPED_NS.fetch_add(d.as_nanos() as u64, Ordering::Relaxed);
+}
+
+/// Nanoseconds the process spent suspended by [`stop`].
+static STOPPED_NS: AtomicU64 = AtomicU64::new(0);
+
+/// A clock that stands still while the process is suspended by [`stop`]:
+/// what the TUI's figures of elapsed time read, so that a pass across a
+/// Ctrl-Z does not look long.
+#[derive(Clone, Copy, Debug)]
+pub struct Running {
+    at: Instant,
+    stopped: u64,
+}
+
+impl Running {
+    pub fn now() -> Self {
+        Running {
+            at: Instant::now(),
+            stopped: STOPPED_NS.load(Ordering::Relaxed),
+        }
+    }
+
+    /// The time since `now`, less any time suspended since.
+    pub fn elapsed(&self) -> Duration {
+        let stopped = STOPPED_NS
+            .load(Ordering::Relaxed)
+            .saturating_sub(self.stopped);
+        self.at
+            .elapsed()
+            .saturating_sub(Duration::from_nanos(stopped))
+    }
 }
 
 /// Lets a closed pipe end the process quietly (status 141), as it does
@@ -134,5 +172,22 @@ pub fn default_sigpipe() {
     // is started; nothing else depends on it being ignored.
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Time suspended after a clock started is left out of it; a clock
+    /// started after a suspension counts from then.
+    #[test]
+    fn running_time_leaves_out_time_suspended() {
+        let before = Running::now();
+        note_stopped(Duration::from_secs(3600));
+        assert_eq!(before.elapsed(), Duration::ZERO);
+        let after = Running::now();
+        std::thread::sleep(Duration::from_millis(5));
+        assert!(after.elapsed() >= Duration::from_millis(5));
     }
 }

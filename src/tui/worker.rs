@@ -10,7 +10,6 @@ use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
-use std::time::Instant;
 
 use anyhow::{Context, Result};
 use glam::Vec3;
@@ -18,6 +17,7 @@ use glam::Vec3;
 use crate::bvh::{self, Bvh};
 use crate::inspect::inspect_pixel;
 use crate::inspect::overlay::{self, PixelView};
+use crate::interrupt::Running;
 use crate::raster::metrics::rel_mse_on;
 use crate::raster::resample::resample;
 use crate::render::debug_view::{self, DebugView, FilmView};
@@ -143,7 +143,7 @@ pub struct PassProgress {
     pub rows_done: Arc<AtomicU32>,
     pub rows: AtomicU32,
     /// When the pass began; `None` between passes.
-    pub started: Mutex<Option<Instant>>,
+    pub started: Mutex<Option<Running>>,
 }
 
 impl PassProgress {
@@ -163,7 +163,7 @@ impl PassProgress {
         self.rows_done.store(0, Ordering::Relaxed);
         self.rows.store(rows, Ordering::Relaxed);
         if let Ok(mut s) = self.started.lock() {
-            *s = Some(Instant::now());
+            *s = Some(Running::now());
         }
     }
 
@@ -234,7 +234,7 @@ pub struct Worker {
     view: Option<View>,
     film: Progressive,
     coarse_pending: bool,
-    started: Instant,
+    started: Running,
     history: Vec<(f64, f64)>,
     per_ray: Option<PerRay>,
     /// Time of the last full pass and whether it used the BVH, to decide
@@ -275,7 +275,7 @@ impl Worker {
             view: None,
             film: Progressive::new(0, 0),
             coarse_pending: false,
-            started: Instant::now(),
+            started: Running::now(),
             history: Vec::new(),
             per_ray: None,
             last_full_ms: None,
@@ -356,7 +356,7 @@ impl Worker {
         self.coarse_pending = self
             .last_full_ms
             .is_none_or(|(ms, with_bvh)| ms > COARSE_ABOVE_MS || with_bvh != bvh);
-        self.started = Instant::now();
+        self.started = Running::now();
         self.history.clear();
         self.per_ray = None;
         self.true_history.clear();
