@@ -14,6 +14,13 @@
 //! tested, and the closest hit (ties going to the lower triangle index) is
 //! the same, bit for bit, whatever the order of the walk.
 //!
+//! At a leaf, the rays test its triangles one ray against eight triangles
+//! a time, or, where that makes fewer tests (many rays, few triangles:
+//! large triangles that whole tiles hit), one triangle against eight rays
+//! a time. The second needs every ray of the group sheared onto the same
+//! axes and tested in f32; each lane then computes exactly what the first
+//! computes for its ray.
+//!
 //! Why the frustum test is conservative to the bit: with the origin shared,
 //! a ray's slab distance is `(b - o) * inv`, the same `b - o` for every ray;
 //! rounding is monotone, so over reciprocals in `[lo, hi]` the product lies
@@ -25,28 +32,93 @@
 
 use std::mem::MaybeUninit;
 
-use glam::Vec4;
+use glam::{Vec3, Vec4};
 
 #[cfg(target_arch = "x86_64")]
 use super::traverse::slab_hits_avx;
 #[cfg(target_arch = "x86_64")]
 use super::traverse::Avx;
 use super::traverse::{closer, Kernels, Portable, FAR_SCALE, MAX_TFAR, STACK};
-use super::wide::{leaf_packets, Node8, LEAF, WIDTH};
+use super::wide::{leaf_packets, LeafTest, Node8, Packet, LEAF, PACKET, WIDTH};
 use super::{Bvh, Hit, TraversalStats};
 use crate::geometry::ray::PARALLEL;
-use crate::geometry::triangle::RayShear;
+#[cfg(target_arch = "x86_64")]
+use crate::geometry::triangle::lanes8_avx;
+use crate::geometry::triangle::{lanes4, RayShear, TriHit8};
 use crate::geometry::Ray;
 
 /// The most rays one packet holds: an 8x8 tile of camera rays.
 pub const PACKET_RAYS: usize = 64;
 
 /// The rays of one group, one lane each, in the layout the kernels load
-/// eight at a time: reciprocal directions and the current `tmax`.
+/// eight at a time: directions, their reciprocals and the current `tmax`.
 #[repr(C, align(32))]
 struct Lanes {
+    dir: [[f32; PACKET_RAYS]; 3],
     inv: [[f32; PACKET_RAYS]; 3],
     tmax: [f32; PACKET_RAYS],
+}
+
+impl Lanes {
+    fn new() -> Self {
+        Lanes {
+            dir: [[0.0; PACKET_RAYS]; 3],
+            inv: [[0.0; PACKET_RAYS]; 3],
+            tmax: [f32::NEG_INFINITY; PACKET_RAYS],
+        }
+    }
+}
+
+/// The shear constants ([`RayShear`]) of a group's rays, one lane each,
+/// when they are all sheared onto the same axes `k` and in f32: then a
+/// leaf's triangle can be tested against eight of them at once.
+#[repr(C, align(32))]
+struct Shears {
+    k: [usize; 3],
+    s: [[f32; PACKET_RAYS]; 3],
+}
+
+impl Shears {
+    /// The shears of the group's first `n` rays, exactly as
+    /// [`RayShear::within`] makes each, or `None` when they may differ in
+    /// their axes or need the f64 test.
+    fn of(l: &Lanes, n: usize, f: &Frustum, reach: f32) -> Option<Shears> {
+        if RayShear::needs_f64(Vec3::from_array(f.o), reach) {
+            return None;
+        }
+        // Every ray's largest component is on axis `kz` when every
+        // reciprocal on it is smaller than every other axis's: rounding a
+        // reciprocal is monotone, so `|1/a| < |1/b|` as rounded means `|a| >
+        // |b|`. (A group's rays have no component below `PARALLEL`, so
+        // `within` flushes none.)
+        let (near, far) = (Vec3::from(f.lo).abs(), Vec3::from(f.hi).abs());
+        let (least, most) = (near.min(far), near.max(far));
+        let kz = (0..3).find(|&a| (0..3).all(|b| b == a || most[a] < least[b]))?;
+        let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        let k = if f.neg[kz] {
+            [ky, kx, kz]
+        } else {
+            [kx, ky, kz]
+        };
+        let mut sh = Shears {
+            k,
+            s: [[0.0; PACKET_RAYS]; 3],
+        };
+        for b in 0..n.div_ceil(4) {
+            let r = 4 * b..4 * b + 4;
+            let dk = |a: usize| Vec4::from_slice(&l.dir[k[a]][r.clone()]);
+            let (dx, dy, dz) = (dk(0), dk(1), dk(2));
+            (dx / dz).write_to_slice(&mut sh.s[0][r.clone()]);
+            (dy / dz).write_to_slice(&mut sh.s[1][r.clone()]);
+            (Vec4::ONE / dz).write_to_slice(&mut sh.s[2][r]);
+        }
+        // Lanes past the rays (0 / 0 above) get finite constants: NaN
+        // would keep a test of eight lanes from seeing that all missed.
+        for s in &mut sh.s {
+            s[n..].fill(0.0);
+        }
+        Some(sh)
+    }
 }
 
 /// A group's frustum: the shared origin and, per axis, the range of the
@@ -207,6 +279,16 @@ unsafe fn rays_box_avx(f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u
 trait PacketKernels: Kernels {
     fn frustum(&self, f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]);
     fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64;
+    /// Triangle `j` of `p` against rays `8b..8b + 8` of the group, each
+    /// computing what [`Kernels::triangles`] computes for that ray.
+    fn rays_triangle<const UV: bool>(
+        &self,
+        t: (&Packet, usize),
+        o: &[f32; 3],
+        sh: &Shears,
+        l: &Lanes,
+        b: usize,
+    ) -> TriHit8;
 }
 
 impl PacketKernels for Portable {
@@ -218,6 +300,40 @@ impl PacketKernels for Portable {
     #[inline(always)]
     fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
         rays_box(f, l, n, slot, active)
+    }
+
+    #[inline(always)]
+    fn rays_triangle<const UV: bool>(
+        &self,
+        (p, j): (&Packet, usize),
+        o: &[f32; 3],
+        sh: &Shears,
+        l: &Lanes,
+        b: usize,
+    ) -> TriHit8 {
+        let mut h = TriHit8 {
+            mask: 0,
+            t: [f32::INFINITY; 8],
+            u: [0.0; 8],
+            v: [0.0; 8],
+        };
+        let tri = p.p.map(|v| v.map(|a| Vec4::splat(a[j])));
+        for half in 0..2 {
+            let r = 8 * b + 4 * half..8 * b + 4 * half + 4;
+            let at = 4 * half..4 * half + 4;
+            let r4 = lanes4(
+                sh.k,
+                sh.k.map(|a| Vec4::splat(o[a])),
+                sh.s.each_ref().map(|s| Vec4::from_slice(&s[r.clone()])),
+                &tri,
+                Vec4::from_slice(&l.tmax[r.clone()]),
+            );
+            h.mask |= r4.mask << (4 * half);
+            r4.t.write_to_slice(&mut h.t[at.clone()]);
+            r4.u.write_to_slice(&mut h.u[at.clone()]);
+            r4.v.write_to_slice(&mut h.v[at]);
+        }
+        h
     }
 }
 
@@ -233,6 +349,48 @@ impl PacketKernels for Avx {
     fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
         // SAFETY: as above.
         unsafe { rays_box_avx(f, l, n, slot, active) }
+    }
+
+    #[inline(always)]
+    fn rays_triangle<const UV: bool>(
+        &self,
+        (p, j): (&Packet, usize),
+        o: &[f32; 3],
+        sh: &Shears,
+        l: &Lanes,
+        b: usize,
+    ) -> TriHit8 {
+        use std::arch::x86_64::*;
+        let [kx, ky, kz] = sh.k;
+        let r = 8 * b;
+        // Macros, not closures, as in `intersect8_avx`.
+        macro_rules! ld {
+            ($s:expr) => {
+                _mm256_loadu_ps($s.as_ptr().add(r))
+            };
+        }
+        macro_rules! v {
+            ($v:expr) => {
+                [
+                    _mm256_set1_ps(p.p[$v][kx][j]),
+                    _mm256_set1_ps(p.p[$v][ky][j]),
+                    _mm256_set1_ps(p.p[$v][kz][j]),
+                ]
+            };
+        }
+        // SAFETY: as above; every row of `Shears` and `Lanes` holds 64 f32.
+        unsafe {
+            lanes8_avx::<UV, true>(
+                [v!(0), v!(1), v!(2)],
+                [
+                    _mm256_set1_ps(o[kx]),
+                    _mm256_set1_ps(o[ky]),
+                    _mm256_set1_ps(o[kz]),
+                ],
+                [ld!(sh.s[0]), ld!(sh.s[1]), ld!(sh.s[2])],
+                ld!(l.tmax),
+            )
+        }
     }
 }
 
@@ -266,6 +424,34 @@ impl Found for Blocked<'_> {
     #[inline(always)]
     fn hit(&mut self, lane: usize, _: Hit) {
         self.0[lane] = true;
+    }
+}
+
+/// Hands lane `lane` of `h`, a hit of ray `i` on triangle `prim`, to
+/// `found`; then narrows the ray's `tmax` to it or, when any hit will do,
+/// drops the ray from `left = (active, todo)`.
+#[inline(always)]
+fn take<F: Found>(
+    found: &mut F,
+    lanes: &[u8],
+    l: &mut Lanes,
+    left: &mut (u64, u64),
+    i: usize,
+    (h, lane, prim): (&TriHit8, usize, u32),
+) {
+    let hit = Hit {
+        t: h.t[lane],
+        u: h.u[lane],
+        v: h.v[lane],
+        prim,
+    };
+    found.hit(lanes[i] as usize, hit);
+    if F::ANY {
+        left.0 &= !(1 << i);
+        left.1 &= !(1 << i);
+        l.tmax[i] = f32::NEG_INFINITY;
+    } else {
+        l.tmax[i] = l.tmax[i].min(hit.t);
     }
 }
 
@@ -313,17 +499,14 @@ impl Bvh {
         if self.wide.nodes.is_empty() || n == 0 {
             return;
         }
-        let mut all = Lanes {
-            inv: [[0.0; PACKET_RAYS]; 3],
-            tmax: [f32::NEG_INFINITY; PACKET_RAYS],
-        };
+        let mut all = Lanes::new();
         // Rays from the first ray's origin (to the bit), with a `tmax`
         // that is a number.
         let o = rays[0].origin.to_array().map(f32::to_bits);
         let mut same = 0u64;
         for (i, r) in rays.iter().enumerate() {
             for a in 0..3 {
-                all.inv[a][i] = r.dir[a];
+                all.dir[a][i] = r.dir[a];
             }
             all.tmax[i] = r.tmax;
             let fits = r.origin.to_array().map(f32::to_bits) == o && !r.tmax.is_nan();
@@ -343,11 +526,10 @@ impl Bvh {
             let mut fine = glam::BVec4A::splat(true);
             let real = glam::BVec4A::from_array(std::array::from_fn(|k| 4 * b + k < n));
             for a in 0..3 {
-                let axis = &mut all.inv[a];
-                let d = Vec4::from_slice(&axis[r.clone()]);
+                let d = Vec4::from_slice(&all.dir[a][r.clone()]);
                 let flat = d.abs().cmplt(Vec4::splat(PARALLEL));
                 let inv = Vec4::ONE / Vec4::select(flat, d * 0.0, d);
-                inv.write_to_slice(&mut axis[r.clone()]);
+                inv.write_to_slice(&mut all.inv[a][r.clone()]);
                 fine &= inv.abs().cmplt(Vec4::INFINITY) & inv.cmpne(Vec4::ZERO);
                 neg[a] |= (inv.cmplt(Vec4::ZERO).bitmask() as u64) << (4 * b);
                 lo[a] = lo[a].min(Vec4::select(real, inv, Vec4::INFINITY));
@@ -375,15 +557,13 @@ impl Bvh {
             if m == 0 {
                 continue;
             }
-            let mut l = Lanes {
-                inv: [[0.0; PACKET_RAYS]; 3],
-                tmax: [f32::NEG_INFINITY; PACKET_RAYS],
-            };
+            let mut l = Lanes::new();
             let mut k = 0;
             while m != 0 {
                 let i = m.trailing_zeros() as usize;
                 m &= m - 1;
                 for a in 0..3 {
+                    l.dir[a][k] = all.dir[a][i];
                     l.inv[a][k] = all.inv[a][i];
                 }
                 l.tmax[k] = all.tmax[i];
@@ -482,6 +662,118 @@ impl Bvh {
         }
     }
 
+    /// The rays `todo` of `left = (active, todo)` against the triangles of
+    /// `leaf`, one ray against eight triangles a test, each ray's shear
+    /// made when first needed (`shear.0` has a bit for each made). Returns
+    /// whether any ray hit.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn leaf_by_ray<F: Found, K: PacketKernels>(
+        &self,
+        leaf: u32,
+        rays: &[Ray],
+        (sheared, shear): (&mut u64, &mut [MaybeUninit<RayShear>; PACKET_RAYS]),
+        l: &mut Lanes,
+        lanes: &[u8],
+        left: &mut (u64, u64),
+        found: &mut F,
+        k: &K,
+    ) -> bool {
+        let mut changed = false;
+        for p in &self.wide.packets[leaf_packets(leaf)] {
+            let mut m = left.1;
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
+                if *sheared & (1 << i) == 0 {
+                    let ray = &rays[lanes[i] as usize];
+                    shear[i].write(RayShear::within(ray.origin, ray.dir, self.reach));
+                    *sheared |= 1 << i;
+                }
+                // SAFETY: written above, once `sheared` has bit `i`.
+                let s = unsafe { shear[i].assume_init_ref() };
+                let h = if F::ANY {
+                    k.triangles::<false>(s, p, l.tmax[i])
+                } else {
+                    k.triangles::<true>(s, p, l.tmax[i])
+                };
+                changed |= h.mask != 0;
+                for lane in (0..8).filter(|b| h.mask & (1 << b) != 0) {
+                    let prim = self.prim[p.idx[lane] as usize];
+                    take(found, lanes, l, left, i, (&h, lane, prim));
+                    if F::ANY {
+                        break;
+                    }
+                }
+            }
+        }
+        changed
+    }
+
+    /// [`Bvh::leaf_by_ray`] one triangle against eight rays a test, with the
+    /// rays' shears in lanes and their shared origin `o`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn leaf_by_triangle<F: Found, K: PacketKernels>(
+        &self,
+        leaf: u32,
+        (o, sh): (&[f32; 3], &Shears),
+        l: &mut Lanes,
+        lanes: &[u8],
+        left: &mut (u64, u64),
+        found: &mut F,
+        k: &K,
+    ) -> bool {
+        let mut changed = false;
+        for p in &self.wide.packets[leaf_packets(leaf)] {
+            for j in (0..PACKET).take_while(|&j| p.idx[j] != u32::MAX) {
+                let mut blocks = left.1;
+                while blocks != 0 {
+                    let b = blocks.trailing_zeros() as usize / 8;
+                    blocks &= !(0xff << (8 * b));
+                    let h = if F::ANY {
+                        k.rays_triangle::<false>((p, j), o, sh, l, b)
+                    } else {
+                        k.rays_triangle::<true>((p, j), o, sh, l, b)
+                    };
+                    let mut m = h.mask as u64 & (left.1 >> (8 * b)) & 0xff;
+                    changed |= m != 0;
+                    let prim = self.prim[p.idx[j] as usize];
+                    while m != 0 {
+                        let lane = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        take(found, lanes, l, left, 8 * b + lane, (&h, lane, prim));
+                    }
+                }
+            }
+        }
+        changed
+    }
+
+    /// Whether the rays `todo` test the triangles of `leaf` one triangle
+    /// against eight rays at a time, rather than one ray against eight
+    /// triangles: when that takes no more tests.
+    #[inline(always)]
+    fn by_triangle(&self, leaf: u32, todo: u64) -> bool {
+        match self.wide.leaf_test {
+            #[cfg(test)]
+            LeafTest::ByRay => false,
+            #[cfg(test)]
+            LeafTest::ByTriangle => true,
+            LeafTest::Chosen => {
+                let packets = &self.wide.packets[leaf_packets(leaf)];
+                let blocks = (0..PACKET_RAYS / 8)
+                    .filter(|b| todo >> (8 * b) & 0xff != 0)
+                    .count();
+                let triangles: usize = packets
+                    .iter()
+                    .map(|p| p.idx.iter().filter(|&&i| i != u32::MAX).count())
+                    .sum();
+                triangles * blocks <= todo.count_ones() as usize * packets.len()
+            }
+        }
+    }
+
     /// The walk of a group, nearest child first by the frustum's entry
     /// distance, for any-hit rays too (unlike a single any-hit ray): a
     /// group's blockers are found sooner, and the rays they block drop out.
@@ -504,6 +796,8 @@ impl Bvh {
         let mut active: u64 = if n == 64 { !0 } else { (1 << n) - 1 };
         let mut sheared = 0u64;
         let mut shear = [MaybeUninit::<RayShear>::uninit(); PACKET_RAYS];
+        // The rays' shears in lanes, made at the first leaf that asks.
+        let (mut shears, mut asked) = (None, false);
         // The farthest `tmax` of the rays still walking (the others have
         // `-inf`, as the lanes past the group's rays).
         let far = |l: &Lanes| {
@@ -540,49 +834,27 @@ impl Bvh {
                 }
             } else {
                 let node = &w.nodes[(at >> 3) as usize];
-                let mut todo = k.rays_box(f, l, node, (at & 7) as usize, active);
-                let mut changed = false;
-                for p in &w.packets[leaf_packets(cur)] {
-                    let mut m = todo;
-                    while m != 0 {
-                        let i = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        let ray = &rays[lanes[i] as usize];
-                        if sheared & (1 << i) == 0 {
-                            shear[i].write(RayShear::within(ray.origin, ray.dir, self.reach));
-                            sheared |= 1 << i;
-                        }
-                        // SAFETY: written above, once `sheared` has bit `i`.
-                        let s = unsafe { shear[i].assume_init_ref() };
-                        let h = if F::ANY {
-                            k.triangles::<false>(s, p, l.tmax[i])
-                        } else {
-                            k.triangles::<true>(s, p, l.tmax[i])
-                        };
-                        if h.mask == 0 {
-                            continue;
-                        }
-                        changed = true;
-                        for lane in (0..8).filter(|b| h.mask & (1 << b) != 0) {
-                            let hit = Hit {
-                                t: h.t[lane],
-                                u: h.u[lane],
-                                v: h.v[lane],
-                                prim: self.prim[p.idx[lane] as usize],
-                            };
-                            found.hit(lanes[i] as usize, hit);
-                            if F::ANY {
-                                break;
-                            }
-                            l.tmax[i] = l.tmax[i].min(hit.t);
-                        }
-                        if F::ANY {
-                            active &= !(1 << i);
-                            todo &= !(1 << i);
-                            l.tmax[i] = f32::NEG_INFINITY;
-                        }
+                let todo = k.rays_box(f, l, node, (at & 7) as usize, active);
+                let sh = if todo != 0 && self.by_triangle(cur, todo) {
+                    if !asked {
+                        asked = true;
+                        shears = Shears::of(l, n, f, self.reach);
                     }
-                }
+                    shears.as_ref()
+                } else {
+                    None
+                };
+                let mut left = (active, todo);
+                let changed = match sh {
+                    Some(sh) => {
+                        self.leaf_by_triangle(cur, (&f.o, sh), l, lanes, &mut left, found, k)
+                    }
+                    None => {
+                        let shear = (&mut sheared, &mut shear);
+                        self.leaf_by_ray(cur, rays, shear, l, lanes, &mut left, found, k)
+                    }
+                };
+                active = left.0;
                 if changed {
                     if active == 0 {
                         return;
@@ -627,13 +899,16 @@ mod tests {
         v
     }
 
-    /// Packets find exactly what single rays find, with either kernel:
-    /// the closest hit (distance, barycentrics, triangle) and whether a
-    /// ray is blocked. Returns the number of hits.
+    /// Packets find exactly what single rays find, with either kernel and
+    /// either way of testing leaves: the closest hit (distance,
+    /// barycentrics, triangle) and whether a ray is blocked. Returns the
+    /// number of hits.
     fn agree(b: &mut Bvh, rays: &[Ray]) -> usize {
         let mut hits = 0;
-        for avx in kernels() {
+        let ways = [LeafTest::Chosen, LeafTest::ByRay, LeafTest::ByTriangle];
+        for (avx, way) in kernels().into_iter().flat_map(|k| ways.map(|w| (k, w))) {
             b.wide.avx = avx;
+            b.wide.leaf_test = way;
             let mut got = vec![None; rays.len()];
             let mut blocked = vec![false; rays.len()];
             b.intersect_packet(rays, &mut got);
@@ -642,9 +917,9 @@ mod tests {
             for (i, r) in rays.iter().enumerate() {
                 let want = b.intersect::<false>(r, &mut st);
                 assert_eq!(got[i].map(|h| h.t.to_bits()), want.map(|h| h.t.to_bits()));
-                assert_eq!(got[i], want, "ray {i} {r:?}, avx {avx}");
+                assert_eq!(got[i], want, "ray {i} {r:?}, avx {avx}, {way:?}");
                 let any = b.occluded::<false>(r, &mut st).is_some();
-                assert_eq!(blocked[i], any, "ray {i} {r:?}, avx {avx}");
+                assert_eq!(blocked[i], any, "ray {i} {r:?}, avx {avx}, {way:?}");
                 hits += want.is_some() as usize;
             }
         }
@@ -652,10 +927,17 @@ mod tests {
     }
 
     /// Camera rays in 8x8 tiles (and in tiles cut short at the frame's
-    /// edges), and shadow rays from one light to every hit.
+    /// edges), and shadow rays from one light to every hit: on small
+    /// triangles, and on a box of large ones that whole tiles hit.
     #[test]
     fn camera_tiles_and_shadow_rays_find_what_single_rays_find() {
-        let s = scene::load("teapot:3").unwrap();
+        for scene in ["teapot:3", "cornell"] {
+            camera_tiles_and_shadow_rays(scene);
+        }
+    }
+
+    fn camera_tiles_and_shadow_rays(scene: &str) {
+        let s = scene::load(scene).unwrap();
         let (w, h) = (60, 44);
         let frame = s.camera.frame(w, h);
         for builder in [Builder::Sah, Builder::Median] {
@@ -676,7 +958,11 @@ mod tests {
                 }
             }
             assert!(hits > 200, "{hits} hits");
-            let light = Vec3::new(3.0, 9.0, 5.0);
+            // The scene's point light, else one above the teapot.
+            let light = match s.lights.first() {
+                Some(&scene::Light::Point { position, .. }) => position,
+                _ => Vec3::new(3.0, 9.0, 5.0),
+            };
             let shadow: Vec<Ray> = points
                 .iter()
                 .map(|&p| Ray::segment(light, p - light, 1.0 - 1e-4))
@@ -790,6 +1076,39 @@ mod tests {
         assert_eq!(agree(&mut empty, &rays[..PACKET_RAYS]), 0);
     }
 
+    /// A box of large triangles some 1e13 across, seen from inside: its
+    /// rays need the f64 triangle test, which no group takes eight rays at
+    /// a time.
+    #[test]
+    fn packets_far_from_the_origin_find_what_single_rays_find() {
+        let s = 1e13;
+        let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z) * s;
+        let mut tris = Vec::new();
+        for a in 0..3 {
+            for side in [-1.0, 1.0] {
+                let p = |u: f32, v: f32| {
+                    let mut q = [0.0; 3];
+                    q[a] = side;
+                    q[(a + 1) % 3] = u;
+                    q[(a + 2) % 3] = v;
+                    c(q[0], q[1], q[2])
+                };
+                tris.push([p(-1.0, -1.0), p(1.0, -1.0), p(1.0, 1.0)]);
+                tris.push([p(-1.0, -1.0), p(1.0, 1.0), p(-1.0, 1.0)]);
+            }
+        }
+        let mut b = super::super::build(&soup(&tris), Builder::Sah);
+        let o = c(0.1, 0.2, 0.3);
+        let rays: Vec<Ray> = (0..PACKET_RAYS)
+            .map(|i| {
+                let (x, y) = ((i % 8) as f32 * 0.05, (i / 8) as f32 * 0.05);
+                Ray::new(o, Vec3::new(x - 0.2, y - 0.2, -1.0))
+            })
+            .collect();
+        // Every ray hits a wall, in each of the three ways of every kernel.
+        assert_eq!(agree(&mut b, &rays), kernels().len() * 3 * PACKET_RAYS);
+    }
+
     /// The frustum's box test lets through every box a ray of the group
     /// hits, at an entry distance no greater than the ray's, and the rays'
     /// own test at a leaf is the single-ray test, bit for bit, with either
@@ -820,10 +1139,7 @@ mod tests {
                     Ray::segment(o, d, if k % 2 == 0 { inf() } else { f(8.0).abs() })
                 })
                 .collect();
-            let mut l = Lanes {
-                inv: [[0.0; PACKET_RAYS]; 3],
-                tmax: [f32::NEG_INFINITY; PACKET_RAYS],
-            };
+            let mut l = Lanes::new();
             for (i, ray) in rays.iter().enumerate() {
                 let inv = ray.inv_dir();
                 for a in 0..3 {

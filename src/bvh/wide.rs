@@ -55,6 +55,20 @@ impl Packet {
     }
 }
 
+/// How a packet of rays tests a leaf's triangles: each ray against eight
+/// triangles at a time, or each triangle against eight rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum LeafTest {
+    /// Whichever makes fewer tests at this leaf.
+    #[default]
+    Chosen,
+    /// Tests take one way at every leaf, to compare both on the same rays.
+    #[cfg(test)]
+    ByRay,
+    #[cfg(test)]
+    ByTriangle,
+}
+
 /// Packets of a leaf reference.
 #[inline(always)]
 pub(crate) fn leaf_packets(r: u32) -> std::ops::Range<usize> {
@@ -75,6 +89,9 @@ pub(crate) struct Wide {
     pub stack: usize,
     /// Whether this CPU can test eight boxes at once (AVX).
     pub avx: bool,
+    /// How packets test a leaf's triangles (chosen per leaf, except in
+    /// tests that take each way on the same rays).
+    pub leaf_test: LeafTest,
     /// The binary node whose box each wide node is, and the binary leaf of
     /// each packet (`u32::MAX` for the empty packet): what a logged walk
     /// reports in the binary tree's terms.
@@ -106,6 +123,7 @@ impl Wide {
             packets: memory::room(total),
             stack: 0,
             avx: avx_available(),
+            leaf_test: LeafTest::Chosen,
             node_of: Vec::with_capacity(bin.len() / 2 + 1),
             leaf_of: Vec::with_capacity(total),
             // SAFETY: zero bytes are a u32.
