@@ -181,6 +181,49 @@ proptest! {
     }
 
     #[test]
+    fn packets_agree_with_single_rays(
+        tris in prop::collection::vec(triangle(), 1..24),
+        at in any::<prop::sample::Index>(),
+        o in point(),
+        spread in prop::collection::vec((0.0f32..1.0, 0.0f32..1.0), 64),
+        tmax in prop_oneof![Just(f32::INFINITY), 0.0f32..1e3],
+    ) {
+        // A packet from one origin aimed across one triangle of the soup:
+        // its vertices, edges and inside, as a tile's rays cross a wall.
+        let t = tris[at.index(tris.len())];
+        let rays: Vec<Ray> = spread
+            .iter()
+            .enumerate()
+            .map(|(k, &(a, b))| {
+                let w = match k % 8 {
+                    0 => [1.0, 0.0, 0.0],
+                    1 => [0.0, 1.0, 0.0],
+                    2 => [0.0, 0.0, 1.0],
+                    3 => [a, 1.0 - a, 0.0],
+                    _ => [a * (1.0 - b), (1.0 - a) * (1.0 - b), b],
+                };
+                let target = t[0] * w[0] + t[1] * w[1] + t[2] * w[2];
+                Ray::segment(o, target - o, if k % 3 == 0 { tmax } else { f32::INFINITY })
+            })
+            .collect();
+        let g = soup(&tris);
+        for builder in [Builder::Sah, Builder::Median] {
+            let b = bvh::build(&g, builder);
+            let mut hits = vec![None; rays.len()];
+            let mut blocked = vec![false; rays.len()];
+            b.intersect_packet(&rays, &mut hits);
+            b.occluded_packet(&rays, &mut blocked);
+            for (i, ray) in rays.iter().enumerate() {
+                let mut st = Default::default();
+                let want = b.intersect::<false>(ray, &mut st);
+                prop_assert_eq!(hits[i], want, "ray {} {:?} {}", i, ray, builder);
+                let any = b.occluded::<false>(ray, &mut st).is_some();
+                prop_assert_eq!(blocked[i], any, "ray {} {:?} {}", i, ray, builder);
+            }
+        }
+    }
+
+    #[test]
     fn grazing_rays_agree_on_the_lattice(
         d in (tiny(), tiny(), prop_oneof![Just(1.0f32), Just(-1.0f32), -1.0f32..1.0], 0usize..3),
         o in (0u8..4, 0u8..4, 0u8..4),

@@ -289,11 +289,14 @@ pub fn intersect_wide(s: &RayShear, p: [&[f32; 3]; 3], tmax: f32) -> Option<TriH
     let delta_t =
         3.0 * (gamma64(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / det.abs();
     let ahead = az.min(bz).min(cz) > delta_z;
-    // `t <= tmax` in f64 keeps `t as f32 <= tmax`: rounding is monotone.
-    if !((t > delta_t || ahead) && t <= tmax as f64) {
+    // `t <= tmax` as rounded to f32, as the f32 test checks it: a `t` just
+    // past `tmax` in f64 that rounds to it is a tie with the hit that set
+    // `tmax`, which the lower triangle index must win whichever was found
+    // first.
+    let t32 = t as f32;
+    if !((t > delta_t || ahead) && t32 <= tmax) {
         return None;
     }
-    let t32 = t as f32;
     (t32 > 0.0 && t32.is_finite()).then(|| TriHit {
         t: t32,
         u: ((v / det) as f32).clamp(0.0, 1.0),
@@ -1079,6 +1082,29 @@ mod tests {
         let q = s.cross(e1);
         let v = d.dot(q) / det;
         (det != 0.0).then(|| (e2.dot(q) / det, u.min(v).min(1.0 - u - v)))
+    }
+
+    /// A hit of the f64 test stays a hit when `tmax` is its own `t`: a
+    /// `t` past `tmax` in f64 that rounds to it ties with the hit that set
+    /// `tmax`, and the tie must go to the lower triangle index whichever
+    /// leaf was walked first.
+    #[test]
+    fn the_f64_test_keeps_a_hit_at_its_own_t() {
+        let o = Vec3::new(-749451.94, -8.488897, -6.9230987e-7);
+        let tri = [[0.0, -4.5481553, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]];
+        let mut kept = 0;
+        for k in 0..64 {
+            let w = (k as f32) / 64.0;
+            let target = Vec3::new(0.0, 1.0 - w * 0.5, w * 0.25);
+            let s = RayShear::within(o, target - o, 4.8e16);
+            assert!(s.wide);
+            if let Some(h) = intersect(&s, &tri[0], &tri[1], &tri[2], f32::INFINITY) {
+                let again = intersect(&s, &tri[0], &tri[1], &tri[2], h.t);
+                assert_eq!(again, Some(h), "ray {k}");
+                kept += 1;
+            }
+        }
+        assert!(kept > 32, "{kept} hits");
     }
 
     /// Eight rays from one origin against one triangle, each lane its own
