@@ -311,12 +311,7 @@ impl PacketKernels for Portable {
         l: &Lanes,
         b: usize,
     ) -> TriHit8 {
-        let mut h = TriHit8 {
-            mask: 0,
-            t: [f32::INFINITY; 8],
-            u: [0.0; 8],
-            v: [0.0; 8],
-        };
+        let mut h = TriHit8::NONE;
         let tri = p.p.map(|v| v.map(|a| Vec4::splat(a[j])));
         for half in 0..2 {
             let r = 8 * b + 4 * half..8 * b + 4 * half + 4;

@@ -474,17 +474,22 @@ pub struct TriHit8 {
     pub v: [f32; 8],
 }
 
-/// [`intersect`] on eight triangles, `p[vertex][axis][lane]`, as two runs of
-/// [`intersect4`]; barycentrics only with `UV`.
-#[inline(always)]
-pub fn intersect8<const UV: bool>(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f32) -> TriHit8 {
-    let s4 = RayShear4::new(s);
-    let mut h = TriHit8 {
+impl TriHit8 {
+    /// No lane hit.
+    pub const NONE: TriHit8 = TriHit8 {
         mask: 0,
         t: [f32::INFINITY; 8],
         u: [0.0; 8],
         v: [0.0; 8],
     };
+}
+
+/// [`intersect`] on eight triangles, `p[vertex][axis][lane]`, as two runs of
+/// [`intersect4`]; barycentrics only with `UV`.
+#[inline(always)]
+pub fn intersect8<const UV: bool>(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f32) -> TriHit8 {
+    let s4 = RayShear4::new(s);
+    let mut h = TriHit8::NONE;
     for half in 0..2 {
         let lanes = 4 * half..4 * half + 4;
         let q = p.map(|v| v.map(|a| Vec4::from_slice(&a[lanes.clone()])));
@@ -533,12 +538,7 @@ pub(crate) unsafe fn intersect8_avx<const UV: bool>(
     use std::arch::x86_64::*;
     if s.wide {
         let h = wide_lanes(s, p, tmax);
-        let mut out = TriHit8 {
-            mask: 0,
-            t: [f32::INFINITY; 8],
-            u: [0.0; 8],
-            v: [0.0; 8],
-        };
+        let mut out = TriHit8::NONE;
         for (lane, hit) in h.iter().enumerate() {
             if let Some(hit) = hit {
                 out.mask |= 1 << lane;
@@ -640,15 +640,9 @@ pub(crate) unsafe fn lanes8_avx<const UV: bool, const EARLY: bool>(
         or(cmp!(_CMP_GT_OQ, u, zero), cmp!(_CMP_GT_OQ, v, zero)),
         cmp!(_CMP_GT_OQ, w, zero),
     );
-    let none = TriHit8 {
-        mask: 0,
-        t: [f32::INFINITY; 8],
-        u: [0.0; 8],
-        v: [0.0; 8],
-    };
     // As in `lanes4`: every lane outside an edge.
     if EARLY && _mm256_movemask_ps(and(neg, pos)) == 0xff {
-        return none;
+        return TriHit8::NONE;
     }
     let det = add(add(u, v), w);
     let (az0, bz0, cz0) = (az, bz, cz);
@@ -665,7 +659,7 @@ pub(crate) unsafe fn lanes8_avx<const UV: bool, const EARLY: bool>(
         cmp!(_CMP_NEQ_UQ, det, zero),
     );
     if _mm256_movemask_ps(ok) == 0 {
-        return none;
+        return TriHit8::NONE;
     }
     let inv = _mm256_div_ps(set(1.0), det);
     let t = mul(t_scaled, inv);
