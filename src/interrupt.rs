@@ -1,12 +1,19 @@
 //! SIGINT, SIGTERM and SIGHUP, turned into a flag the long-running parts
 //! poll: a render stops within a sample and writes nothing, the TUI restores
-//! the terminal and quits, exactly as on Ctrl-C or `q`. A second signal of
-//! the same kind while the first is being handled ends the process at once.
+//! the terminal and quits, exactly as on Ctrl-C or `q`. A second signal
+//! while the first is being handled ends the process at once, still giving
+//! the terminal back and removing a half-written output; one that follows
+//! the first within [`REPEAT`] is taken for the same request (a wrapper
+//! such as `timeout` forwards the terminal's Ctrl-C, which reached this
+//! process too).
 //!
 //! For the TUI, SIGTSTP and SIGCONT too: a stop must wait until the
 //! terminal is given back, and a continued process takes it again.
 
-use std::sync::atomic::{AtomicBool, AtomicI32, AtomicU64, Ordering};
+use std::ffi::CString;
+use std::os::unix::ffi::OsStrExt;
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, AtomicI32, AtomicPtr, AtomicU64, Ordering};
 use std::sync::{Arc, OnceLock};
 use std::time::{Duration, Instant};
 
@@ -15,18 +22,35 @@ use signal_hook::consts::{SIGCONT, SIGHUP, SIGINT, SIGTERM, SIGTSTP};
 static FLAG: OnceLock<Arc<AtomicBool>> = OnceLock::new();
 /// The last signal received, for the exit status (128 + signal).
 static LAST: AtomicI32 = AtomicI32::new(0);
+/// When the first signal came, in nanoseconds of the monotonic clock.
+static FIRST: AtomicU64 = AtomicU64::new(0);
+/// A signal this soon after the first repeats its request.
+const REPEAT: Duration = Duration::from_millis(300);
 
 /// Installs the handlers (once) and returns the flag they set.
 pub fn flag() -> Arc<AtomicBool> {
     FLAG.get_or_init(|| {
         let flag = Arc::new(AtomicBool::new(false));
         for sig in [SIGINT, SIGTERM, SIGHUP] {
+            let asked = flag.clone();
             // Registering only fails for forbidden signals, which these are
             // not; without handlers the default action still ends the process.
-            let _ = signal_hook::flag::register_conditional_shutdown(sig, 128 + sig, flag.clone());
+            // SAFETY: the actions only read the clock, touch atomics and
+            // make the async-signal-safe calls of `exit_now`.
+            let _ = unsafe {
+                signal_hook::low_level::register(sig, move || {
+                    let now = monotonic_ns();
+                    if !asked.load(Ordering::SeqCst) {
+                        FIRST.store(now, Ordering::SeqCst);
+                    } else if now.saturating_sub(FIRST.load(Ordering::SeqCst))
+                        >= REPEAT.as_nanos() as u64
+                    {
+                        exit_now(sig);
+                    }
+                })
+            };
             let _ = signal_hook::flag::register(sig, flag.clone());
-            // SAFETY: the action only stores to an atomic, which is
-            // async-signal-safe.
+            // SAFETY: the action only stores to an atomic.
             let _ = unsafe {
                 signal_hook::low_level::register(sig, move || LAST.store(sig, Ordering::SeqCst))
             };
@@ -34,6 +58,106 @@ pub fn flag() -> Arc<AtomicBool> {
         flag
     })
     .clone()
+}
+
+/// The monotonic clock, read the async-signal-safe way.
+fn monotonic_ns() -> u64 {
+    // SAFETY: clock_gettime writes the zeroed struct it is given.
+    unsafe {
+        let mut t: libc::timespec = std::mem::zeroed();
+        libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut t);
+        t.tv_sec as u64 * 1_000_000_000 + t.tv_nsec as u64
+    }
+}
+
+/// What the TUI changed in the terminal, to undo from a signal handler.
+struct Terminal {
+    /// The terminal device, and its modes before raw mode.
+    fd: libc::c_int,
+    modes: libc::termios,
+    /// Bytes for standard output that leave the TUI's screen modes.
+    leave: Vec<u8>,
+}
+
+static TERMINAL: OnceLock<Option<Terminal>> = OnceLock::new();
+/// Whether the terminal is in the TUI's modes now.
+static HELD: AtomicBool = AtomicBool::new(false);
+
+/// Notes the terminal's modes before the TUI changes them (called before
+/// raw mode; the modes read the first time stand for every later time),
+/// and the bytes that undo its screen modes.
+pub fn hold_terminal(leave: impl FnOnce() -> Vec<u8>) {
+    TERMINAL.get_or_init(|| {
+        // The device raw mode is set on: standard input where it is a
+        // terminal, else the controlling terminal, opened here and kept
+        // open for the handler.
+        // SAFETY: isatty, open, tcgetattr and close on descriptors this
+        // process holds.
+        unsafe {
+            let fd = match libc::isatty(0) {
+                1 => 0,
+                _ => libc::open(c"/dev/tty".as_ptr(), libc::O_RDWR | libc::O_CLOEXEC),
+            };
+            if fd < 0 {
+                return None;
+            }
+            let mut modes: libc::termios = std::mem::zeroed();
+            if libc::tcgetattr(fd, &mut modes) != 0 {
+                if fd != 0 {
+                    libc::close(fd);
+                }
+                return None;
+            }
+            Some(Terminal {
+                fd,
+                modes,
+                leave: leave(),
+            })
+        }
+    });
+    HELD.store(true, Ordering::SeqCst);
+}
+
+/// The terminal is back in its own modes.
+pub fn release_terminal() {
+    HELD.store(false, Ordering::SeqCst);
+}
+
+/// The temporary file an output is being written to, if any.
+static PENDING: AtomicPtr<libc::c_char> = AtomicPtr::new(std::ptr::null_mut());
+
+/// Notes the temporary file being written (`Some`) or that it is gone
+/// (`None`), for [`exit_now`] to remove. A name once noted is never
+/// freed: the handler may be reading it on another thread (a few bytes
+/// per output written).
+pub fn writing(tmp: Option<&Path>) {
+    let name = tmp
+        .and_then(|p| CString::new(p.as_os_str().as_bytes()).ok())
+        .map_or(std::ptr::null_mut(), CString::into_raw);
+    PENDING.store(name, Ordering::SeqCst);
+}
+
+/// Ends the process on a second signal: the terminal is given back and a
+/// half-written output removed first. Only async-signal-safe calls.
+fn exit_now(sig: i32) -> ! {
+    // SAFETY: write, tcsetattr, unlink and _exit are async-signal-safe;
+    // the terminal and the file name were set before the handler could
+    // read them and are never freed.
+    unsafe {
+        if HELD.load(Ordering::SeqCst) {
+            if let Some(Some(t)) = TERMINAL.get() {
+                libc::write(1, t.leave.as_ptr().cast(), t.leave.len());
+                libc::tcsetattr(t.fd, libc::TCSANOW, &t.modes);
+            }
+        }
+        let tmp = PENDING.load(Ordering::SeqCst);
+        if !tmp.is_null() {
+            libc::unlink(tmp);
+        }
+        let note = b"\nrayterm: stopped at once by a second signal\n";
+        libc::write(2, note.as_ptr().cast(), note.len());
+        libc::_exit(128 + sig);
+    }
 }
 
 /// The error of work a signal cut short; its callers write nothing.

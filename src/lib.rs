@@ -6,6 +6,7 @@
 
 pub mod bvh;
 pub mod cli;
+pub mod console;
 pub mod geometry;
 pub mod inspect;
 pub mod interrupt;

@@ -903,6 +903,14 @@ fn images_without_pixels_or_beyond_the_budget_are_refused() {
         scene_with("tri.obj", &FACES.replace("F", "huge.png")),
     );
     refused(&s, &["huge.png", "would need 2.01 GiB"]);
+    // So large that the decoder refuses the header itself: the limit is
+    // still named.
+    d.write("vast.png", png_header((1 << 31) - 1, (1 << 31) - 1));
+    let s = d.write(
+        "texvast.toml",
+        scene_with("tri.obj", "material = { texture = \"vast.png\" }"),
+    );
+    warned(&s, &["vast.png", "more than the 1.50 GiB per texture"]);
     d.write("max.png", png_header(u32::MAX >> 1, u32::MAX >> 1));
     let s = d.write(
         "texmax.toml",
@@ -1230,4 +1238,39 @@ fn cube_faces_of_unequal_sizes_are_warned_about() {
         &d.write("mixed.toml", scene_with("tri.obj", &mixed)),
         &["mixed.toml: environment faces are not squares of one size (posx 1x1, negx 1x1, posy 2x2, "],
     );
+}
+
+/// A fault repeated throughout a file is one warning that says how often
+/// it came, not one line per repeat.
+#[test]
+fn a_repeated_fault_is_one_warning_with_its_count() {
+    let d = Dir::new("repeats");
+    let obj = d.write(
+        "r.obj",
+        format!("{}{TRI}", "mtllib nowhere.mtl\n".repeat(1000)),
+    );
+    let s = load(&obj).unwrap_or_else(|e| panic!("{e}"));
+    let about: Vec<_> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("nowhere.mtl"))
+        .collect();
+    assert_eq!(about.len(), 1, "{} warnings", s.warnings.len());
+    assert!(about[0].contains("r.obj:1: "), "{about:?}");
+    assert!(about[0].ends_with("(and 999 more like it)"), "{about:?}");
+}
+
+/// An `[environment]` table that gives nothing is said to leave the
+/// background black, rather than passed over.
+#[test]
+fn an_empty_environment_is_a_warning() {
+    let d = Dir::new("empty-env");
+    d.write("tri.obj", TRI);
+    let s = d.write("env.toml", scene_with("tri.obj", "[environment]\n"));
+    warned(&s, &["env.toml: environment: none of color", "stays black"]);
+    let s = d.write(
+        "sky.toml",
+        scene_with("tri.obj", "[environment]\nsky = true\n"),
+    );
+    clean(&s);
 }

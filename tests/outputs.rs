@@ -491,3 +491,102 @@ fn films_too_large_for_memory_are_refused_by_every_command() {
         );
     }
 }
+
+/// Standard output or error that cannot be written (a full disk behind a
+/// redirection): a clear error and a failing status, never a panic; a
+/// note that cannot be written is dropped and the work still done.
+#[test]
+fn a_stream_that_cannot_be_written_is_an_error_not_a_panic() {
+    let d = dir("full-streams");
+    let full = || {
+        fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap()
+    };
+    let run = |args: &[&str], out: fs::File, err: Stdio| {
+        Command::new(env!("CARGO_BIN_EXE_rayterm"))
+            .args(args)
+            .current_dir(&d)
+            .stdout(out)
+            .stderr(err)
+            .output()
+            .unwrap()
+    };
+    for args in [
+        &["scenes"][..],
+        &[
+            "render", "cornell", "--size", "8x8", "--spp", "1", "-o", "a.png",
+        ],
+        &["stability", "--help"],
+    ] {
+        let out = run(args, full(), Stdio::piped());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.contains("cannot write to standard output"),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    // Standard error full: the summary still reaches standard output.
+    let out = Command::new(env!("CARGO_BIN_EXE_rayterm"))
+        .args([
+            "render", "cornell", "--size", "8x8", "--spp", "1", "-o", "b.png",
+        ])
+        .current_dir(&d)
+        .stderr(full())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    assert!(String::from_utf8_lossy(&out.stdout).contains("-> b.png"));
+    assert!(d.join("b.png").is_file());
+    fs::remove_dir_all(d).unwrap();
+}
+
+/// `-o /dev/stdout`: the stream holds the image and nothing else; the
+/// summary goes to standard error.
+#[test]
+fn an_image_on_standard_output_is_not_followed_by_the_summary() {
+    let out = rayterm(&[
+        "render",
+        "cornell",
+        "--size",
+        "8x8",
+        "--spp",
+        "1",
+        "-o",
+        "/dev/stdout",
+    ]);
+    assert!(out.status.success(), "{out:?}");
+    let png = &out.stdout;
+    assert!(
+        png.starts_with(b"\x89PNG"),
+        "{:?}",
+        &png[..8.min(png.len())]
+    );
+    assert!(
+        png.ends_with(b"IEND\xaeB`\x82"),
+        "{:?}",
+        &png[png.len().saturating_sub(16)..]
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("-> /dev/stdout"));
+}
+
+/// A scene path that is not UTF-8 is refused naming it, for a command and
+/// for the TUI's shorthand alike.
+#[test]
+fn a_scene_path_that_is_not_utf8_is_named_in_the_error() {
+    use std::os::unix::ffi::OsStrExt;
+    let name = std::ffi::OsStr::from_bytes(b"caf\xe9.obj");
+    for args in [vec!["render".as_ref(), name], vec![name]] {
+        let out = Command::new(env!("CARGO_BIN_EXE_rayterm"))
+            .args(&args)
+            .stdin(Stdio::null())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains("caf\u{fffd}.obj is not UTF-8 text"), "{err}");
+    }
+}

@@ -11,7 +11,8 @@ use std::time::{Duration, Instant};
 mod pty;
 use pty::{canonical, pty};
 
-fn ended_by(signal: i32) {
+/// The TUI ended by `signal`, sent `times` times `gap` apart.
+fn ended_by(signal: i32, times: usize, gap: Duration) {
     let (master, slave) = pty(100, 30);
     assert!(canonical(&slave));
     let mut child = Command::new(env!("CARGO_BIN_EXE_rayterm"))
@@ -37,8 +38,13 @@ fn ended_by(signal: i32) {
     }
     assert!(!canonical(&slave), "the TUI did not enter raw mode");
     std::thread::sleep(Duration::from_millis(500));
-    // SAFETY: sending a signal to the child we started.
-    assert_eq!(unsafe { libc::kill(child.id() as i32, signal) }, 0);
+    for i in 0..times {
+        if i > 0 {
+            std::thread::sleep(gap);
+        }
+        // SAFETY: sending a signal to the child we started.
+        assert_eq!(unsafe { libc::kill(child.id() as i32, signal) }, 0);
+    }
     let status = loop {
         if let Some(s) = child.try_wait().unwrap() {
             break s;
@@ -61,17 +67,27 @@ fn ended_by(signal: i32) {
 
 #[test]
 fn sigterm_restores_the_terminal() {
-    ended_by(libc::SIGTERM);
+    ended_by(libc::SIGTERM, 1, Duration::ZERO);
+}
+
+/// A wrapper that forwards the terminal's signal (`timeout`), or an
+/// impatient user: the repeat is the same request, and the terminal is
+/// restored all the same.
+#[test]
+fn a_signal_repeated_at_once_restores_the_terminal() {
+    // Delivered apart, not merged into one pending signal.
+    ended_by(libc::SIGTERM, 2, Duration::from_millis(20));
+    ended_by(libc::SIGINT, 3, Duration::from_millis(5));
 }
 
 #[test]
 fn sighup_restores_the_terminal() {
-    ended_by(libc::SIGHUP);
+    ended_by(libc::SIGHUP, 1, Duration::ZERO);
 }
 
 #[test]
 fn sigint_from_outside_restores_the_terminal() {
-    ended_by(libc::SIGINT);
+    ended_by(libc::SIGINT, 1, Duration::ZERO);
 }
 
 /// The terminal closes under the TUI (the ssh connection drops, the tmux

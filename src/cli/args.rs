@@ -64,6 +64,20 @@ pub enum Command {
     Bench(super::bench::BenchArgs),
 }
 
+/// A scene argument as text: names and paths are read as UTF-8, and one
+/// that is not is refused naming it (clap's own error names no argument).
+pub fn scene_spec() -> impl clap::builder::TypedValueParser<Value = String> {
+    use clap::builder::TypedValueParser;
+    clap::builder::OsStringValueParser::new().try_map(|s| {
+        s.into_string().map_err(|s| {
+            format!(
+                "{} is not UTF-8 text; rename the file, or link to it under a UTF-8 name",
+                std::path::Path::new(&s).display()
+            )
+        })
+    })
+}
+
 /// `WxH`, e.g. `1280x720`.
 pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
@@ -142,7 +156,7 @@ pub fn parse_threads(s: &str) -> Result<u32, String> {
 pub struct SceneOpts {
     /// Built-in name (see `rayterm scenes`), a .toml scene file or a mesh file
     /// (.obj, .ply, .stl, .gltf, .glb).
-    #[arg(default_value = "cornell")]
+    #[arg(default_value = "cornell", value_parser = scene_spec())]
     pub scene: String,
     /// Image size, WIDTHxHEIGHT (default: the scene's).
     #[arg(long, value_parser = parse_size)]
@@ -407,7 +421,7 @@ pub struct TuiArgs {
 #[derive(Args, Debug)]
 pub struct StabilityArgs {
     /// Scene for the scale and offset cases.
-    #[arg(default_value = "cornell")]
+    #[arg(default_value = "cornell", value_parser = scene_spec())]
     pub scene: String,
     /// Image size of the rendered cases, WIDTHxHEIGHT.
     #[arg(long, value_parser = parse_size, default_value = "96x96")]

@@ -29,14 +29,14 @@ pub struct BenchArgs {
     #[arg(long, value_parser = parse_size, default_value = "800x800")]
     pub size: (u32, u32),
     /// Measure these scenes instead of the built-ins and the shared meshes (repeatable).
-    #[arg(long = "scene", value_name = "SCENE")]
+    #[arg(long = "scene", value_name = "SCENE", value_parser = super::args::scene_spec())]
     pub scenes: Vec<String>,
 }
 
 #[derive(Subcommand, Debug)]
 pub enum BenchCommand {
-    /// The shared ray workload primary+shadow+diffuse (../shared/bench/WORKLOAD.md)
-    /// on one mesh: prints its JSON line, comparable with the Embree harness.
+    /// The ray workload of BENCHMARKS.md (camera, shadow and diffuse rays) on
+    /// one mesh: prints one JSON line, comparable with other ray tracers on the same rays.
     Rays(RaysArgs),
     /// Build and trace teapot:N from ~1k to ~4M triangles; fit the growth.
     Scaling(ScalingArgs),
@@ -48,7 +48,7 @@ pub enum BenchCommand {
 #[derive(Args, Debug)]
 pub struct TuiBenchArgs {
     /// Built-in name, .toml scene file or mesh file (.obj, .ply, .stl, .gltf, .glb).
-    #[arg(default_value = "cornell")]
+    #[arg(default_value = "cornell", value_parser = super::args::scene_spec())]
     pub scene: String,
     /// Terminal size, COLUMNSxROWS (two pixels per cell vertically).
     #[arg(long, value_parser = parse_size, default_value = "160x48")]
@@ -61,6 +61,7 @@ pub struct TuiBenchArgs {
 #[derive(Args, Debug)]
 pub struct RaysArgs {
     /// A mesh file (or any scene: its triangles, with the workload's auto camera).
+    #[arg(value_parser = super::args::scene_spec())]
     pub mesh: String,
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, value_parser = parse_size, default_value = "1024x768")]
@@ -124,9 +125,9 @@ pub fn run(a: BenchArgs) -> Result<ExitCode> {
             };
             let r = bench::run(&o, rayon::current_num_threads())?;
             if a.json {
-                println!("{}", serde_json::to_string_pretty(&r)?);
+                crate::outln!("{}", serde_json::to_string_pretty(&r)?)?;
             } else {
-                print!("{}", bench::to_text(&r));
+                crate::out!("{}", bench::to_text(&r))?;
             }
         }
         Some(BenchCommand::Rays(r)) => rays(r)?,
@@ -136,7 +137,7 @@ pub fn run(a: BenchArgs) -> Result<ExitCode> {
             let rows = u16::try_from(rows).context("--terminal: too many rows")?;
             let req = SceneRequest::new(&t.scene);
             let stats = crate::tui::bench::measure_pass(&req, cols, rows, t.passes)?;
-            println!("{}", serde_json::to_string_pretty(&stats)?);
+            crate::outln!("{}", serde_json::to_string_pretty(&stats)?)?;
         }
         Some(BenchCommand::Scaling(s)) => {
             let o = scaling::ScalingOptions {
@@ -146,9 +147,9 @@ pub fn run(a: BenchArgs) -> Result<ExitCode> {
             };
             let r = scaling::run(&o, rayon::current_num_threads())?;
             if s.json {
-                println!("{}", serde_json::to_string_pretty(&r)?);
+                crate::outln!("{}", serde_json::to_string_pretty(&r)?)?;
             } else {
-                print!("{}", scaling::to_text(&r));
+                crate::out!("{}", scaling::to_text(&r))?;
             }
         }
     }
@@ -171,6 +172,6 @@ fn rays(a: RaysArgs) -> Result<()> {
         packets: a.packets,
     };
     let r = pool.install(|| workload::run(&a.mesh, &s.geometry, &o));
-    println!("{}", serde_json::to_string(&r)?);
+    crate::outln!("{}", serde_json::to_string(&r)?)?;
     Ok(())
 }

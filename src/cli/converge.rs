@@ -88,18 +88,24 @@ pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
     crate::interrupt::flag();
     let study = subject.study(&cfg);
     if crate::interrupt::requested() {
-        eprintln!("interrupted: nothing written");
+        crate::noteln!("interrupted: nothing written");
         return Ok(ExitCode::from(crate::interrupt::exit_code()));
     }
     let study = study?;
-    print!("{}", study.text());
+    match [&csv, &plot]
+        .iter()
+        .any(|o| o.as_ref().is_some_and(Output::is_stdout))
+    {
+        true => crate::console::note(format_args!("{}", study.text())),
+        false => crate::out!("{}", study.text())?,
+    }
     if let Some(out) = csv {
         out.write(study.csv().as_bytes())?;
-        eprintln!("wrote {}", crate::words::path(&out.path));
+        crate::noteln!("wrote {}", crate::words::path(&out.path));
     }
     if let Some(out) = plot {
         out.write(&png::encode(&converge::plot(&study))?)?;
-        eprintln!("wrote {}", crate::words::path(&out.path));
+        crate::noteln!("wrote {}", crate::words::path(&out.path));
     }
     Ok(ExitCode::SUCCESS)
 }

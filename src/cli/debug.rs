@@ -179,7 +179,7 @@ pub fn run(s: &Session, spec: DebugSpec, spp: Option<u32>, out: &Output) -> Resu
     let ms = start.elapsed().as_secs_f64() * 1e3;
     out.write(&png::encode(&post::to_rgb8(&image, w, h))?)?;
     let st = &s.bvh.stats;
-    println!(
+    crate::outln!(
         "{} {spec} at {w}x{h}: {} triangles, {} BVH nodes, depth {} ({}); {ms:.1} ms -> {}",
         s.scene.name,
         st.triangles,
@@ -187,12 +187,12 @@ pub fn run(s: &Session, spec: DebugSpec, spp: Option<u32>, out: &Output) -> Resu
         st.depth,
         st.builder,
         crate::words::path(&out.path)
-    );
+    )?;
     for (_, line) in &legend {
-        println!("  {line}");
+        crate::outln!("  {line}")?;
     }
     for r in rays {
-        println!("{r}");
+        crate::outln!("{r}")?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -204,7 +204,7 @@ fn bvh(s: &Session, view: DebugView, out: &Output) -> Result<ExitCode> {
     let ms = start.elapsed().as_secs_f64() * 1e3;
     out.write(&png::encode(&post::to_rgb8(&d.image, s.width, s.height))?)?;
     let st = &s.bvh.stats;
-    println!(
+    crate::outln!(
         "{} {view} at {}x{}: {} triangles, {} BVH nodes, depth {} ({}); {} ({ms:.1} ms) -> {}",
         s.scene.name,
         s.width,
@@ -215,7 +215,7 @@ fn bvh(s: &Session, view: DebugView, out: &Output) -> Result<ExitCode> {
         st.builder,
         d.summary,
         crate::words::path(&out.path)
-    );
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 

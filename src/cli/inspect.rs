@@ -31,11 +31,13 @@ pub fn run(a: InspectArgs) -> Result<ExitCode> {
         (None, Some(w), Some(film)) => match film.worst(w) {
             Some(found) => found,
             None if s.plan.deterministic && w == crate::render::Worst::Variance => {
-                println!("no pixel varies: nothing in this scene is sampled, the image is exact");
+                crate::outln!(
+                    "no pixel varies: nothing in this scene is sampled, the image is exact"
+                )?;
                 return Ok(ExitCode::SUCCESS);
             }
             None => {
-                println!(
+                crate::outln!(
                     "no pixel {} in {} sample{} per pixel",
                     match w {
                         crate::render::Worst::Nan => "had a NaN or infinite sample",
@@ -44,7 +46,7 @@ pub fn run(a: InspectArgs) -> Result<ExitCode> {
                     },
                     film.spp,
                     if film.spp == 1 { "" } else { "s" }
-                );
+                )?;
                 return Ok(ExitCode::SUCCESS);
             }
         },

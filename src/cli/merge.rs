@@ -30,14 +30,14 @@ pub fn run(a: MergeArgs) -> Result<ExitCode> {
             bail!("{what}: render those parts, or merge what there is with --allow-missing");
         }
         let held: u32 = plan.parts.iter().map(|(_, h)| h.range.len() as u32).sum();
-        eprintln!(
+        crate::noteln!(
             "warning: {what}: the image has {held} of {} spp",
             plan.total
         );
     }
     let merged = partial::merge(&plan, &cancel);
     if cancel() {
-        eprintln!("interrupted: nothing written");
+        crate::noteln!("interrupted: nothing written");
         return Ok(ExitCode::from(interrupt::exit_code()));
     }
     let merged = merged?;
@@ -49,7 +49,7 @@ pub fn run(a: MergeArgs) -> Result<ExitCode> {
     };
     match written {
         Err(e) if e.is::<interrupt::Interrupted>() => {
-            eprintln!("interrupted: nothing written");
+            crate::noteln!("interrupted: nothing written");
             return Ok(ExitCode::from(interrupt::exit_code()));
         }
         written => written?,
@@ -75,6 +75,9 @@ pub fn run(a: MergeArgs) -> Result<ExitCode> {
     if !plan.missing.is_empty() {
         line = line.replacen(" spp,", " spp (samples missing),", 1);
     }
-    println!("{line}");
+    match out.is_stdout() {
+        true => crate::noteln!("{line}"),
+        false => crate::outln!("{line}")?,
+    }
     Ok(ExitCode::SUCCESS)
 }

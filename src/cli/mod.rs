@@ -25,9 +25,11 @@ use crate::scene::Scene;
 /// first) means `rayterm tui SCENE [OPTIONS]`.
 fn with_default_command(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
     use clap::CommandFactory;
-    let Some(first) = args.get(1).and_then(|a| a.to_str()) else {
+    let Some(first) = args.get(1) else {
         return args;
     };
+    // An argument that is not UTF-8 names no command: a scene, for the TUI.
+    let first = first.to_str().unwrap_or_default();
     let cli = Cli::command();
     let named = cli
         .get_subcommands()
@@ -41,13 +43,26 @@ fn with_default_command(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsSt
 
 pub fn main() -> ExitCode {
     crate::interrupt::default_sigpipe();
-    let cli = Cli::parse_from(with_default_command(std::env::args_os().collect()));
+    let cli = match Cli::try_parse_from(with_default_command(std::env::args_os().collect())) {
+        Ok(cli) => cli,
+        // Help, the version, or a usage error: printed by clap, whose own
+        // exit would pass over a stream that cannot be written.
+        Err(e) => {
+            return match e.print() {
+                Ok(()) => ExitCode::from(e.exit_code() as u8),
+                Err(io) => {
+                    crate::noteln!("rayterm: cannot write to standard output: {io}");
+                    ExitCode::FAILURE
+                }
+            };
+        }
+    };
     if let Some(n) = cli.threads() {
         if let Err(e) = rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build_global()
         {
-            eprintln!("rayterm: cannot set up {n} threads: {e}");
+            crate::noteln!("rayterm: cannot set up {n} threads: {e}");
             return ExitCode::FAILURE;
         }
     }
@@ -111,7 +126,7 @@ fn load_scene(spec: &str) -> Result<Scene> {
 /// and tab made printable: errors and warnings quote paths from the command
 /// line and names from files.
 pub fn say(prefix: &str, text: &str) {
-    eprintln!("{prefix}: {}", crate::words::printable_but(text, "\n\t"));
+    crate::noteln!("{prefix}: {}", crate::words::printable_but(text, "\n\t"));
 }
 
 /// The reader of our output went away (`rayterm inspect ... | head`): not a failure.

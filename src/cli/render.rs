@@ -80,7 +80,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         c.check_not_input(&s.inputs)?;
     }
     if a.explain {
-        eprintln!("plan for {}:\n{}", s.scene.name, s.plan.explain());
+        crate::noteln!("plan for {}:\n{}", s.scene.name, s.plan.explain());
     }
     if let Some(spec) = a.debug {
         check_film(s.width, s.height, Film::BYTES_PER_PIXEL)?;
@@ -88,7 +88,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     }
     // A note only where the user asked for more than the one exact pass.
     if s.plan.deterministic && stop.is_some_and(|st| st != Stop::spp(1)) && !split {
-        eprintln!(
+        crate::noteln!(
             "note: nothing in this scene is sampled, so one pass is exact; extra passes skipped"
         );
     }
@@ -287,19 +287,20 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         ),
         None => (head, outcome.rays, render_ms),
     };
-    println!(
-        "{}",
-        summary(
-            &head,
-            &film.report(),
-            split,
-            rays,
-            ms,
-            s.plan.deterministic,
-            &capped,
-            &a.output
-        )
+    let line = summary(
+        &head,
+        &film.report(),
+        split,
+        rays,
+        ms,
+        s.plan.deterministic,
+        &capped,
+        &a.output,
     );
+    match out.is_stdout() {
+        true => crate::noteln!("{line}"),
+        false => crate::outln!("{line}")?,
+    }
     Ok(ExitCode::SUCCESS)
 }
 
@@ -330,7 +331,7 @@ fn stopped(checkpoint: Option<(&Output, &Meta)>, f: &Film, write: bool) -> Resul
             if write {
                 write_part(c, f, meta)?;
             }
-            eprintln!(
+            crate::noteln!(
                 "interrupted: {} holds samples {}..{}; continue with --resume {}",
                 words::path(&c.path),
                 f.start,
@@ -338,7 +339,7 @@ fn stopped(checkpoint: Option<(&Output, &Meta)>, f: &Film, write: bool) -> Resul
                 words::path(&c.path)
             );
         }
-        _ => eprintln!("interrupted: nothing written"),
+        _ => crate::noteln!("interrupted: nothing written"),
     }
     Ok(ExitCode::from(interrupt::exit_code()))
 }
@@ -391,7 +392,11 @@ pub fn summary(
     };
     format!(
         "{head}, {samples}, {}, {err}{capped}{} -> {}",
-        words::rays_per_s(rays as f64 / (render_ms.max(1e-9) / 1e3)),
+        // Parts that record no time (edited by hand) have no rate.
+        match render_ms > 0.0 {
+            true => words::rays_per_s(rays as f64 / (render_ms / 1e3)),
+            false => "no time recorded".to_string(),
+        },
         if film.bad_count > 0 {
             format!(", {} NaN/Inf samples dropped", film.bad_count)
         } else {

@@ -160,6 +160,23 @@ impl Output {
         self.write_unless(bytes, &|| false)
     }
 
+    /// Whether the image goes where standard output goes (`-o
+    /// /dev/stdout`): what a command would print there then goes to
+    /// standard error, so as not to follow the image into its stream.
+    pub fn is_stdout(&self) -> bool {
+        use std::os::fd::AsFd;
+        let Some(f) = &self.device else {
+            return false;
+        };
+        let Ok(out) = std::io::stdout().as_fd().try_clone_to_owned() else {
+            return false;
+        };
+        match (f.metadata(), fs::File::from(out).metadata()) {
+            (Ok(a), Ok(b)) => (a.dev(), a.ino()) == (b.dev(), b.ino()),
+            _ => false,
+        }
+    }
+
     /// [`Output::write`] for a command's result: a signal that arrives
     /// while a regular file is written leaves it as it was, and the error
     /// is [`Interrupted`](crate::interrupt::Interrupted). A device or FIFO
@@ -184,6 +201,7 @@ impl Output {
             .file_name()
             .map_or("image".into(), |n| n.to_string_lossy());
         let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+        crate::interrupt::writing(Some(&tmp));
         let written = (|| -> std::io::Result<bool> {
             let mut f = OpenOptions::new().write(true).create_new(true).open(&tmp)?;
             f.write_all(bytes)?;
@@ -197,14 +215,14 @@ impl Output {
             }
             fs::rename(&tmp, path).map(|()| true)
         })();
+        if !matches!(written, Ok(true)) {
+            let _ = fs::remove_file(&tmp);
+        }
+        crate::interrupt::writing(None);
         match written {
             Ok(true) => Ok(()),
-            Ok(false) => {
-                let _ = fs::remove_file(&tmp);
-                Err(crate::interrupt::Interrupted.into())
-            }
+            Ok(false) => Err(crate::interrupt::Interrupted.into()),
             Err(e) => {
-                let _ = fs::remove_file(&tmp);
                 bail!("cannot write {}: {}", path.display(), reason(&e))
             }
         }

@@ -881,7 +881,12 @@ pub fn merge(plan: &Plan, cancel: &dyn Fn() -> bool) -> Result<Merged> {
         }
     })?;
     let mut meta = sources[0].header.meta.clone();
-    meta.rays = sources.iter().map(|s| s.header.meta.rays).sum();
+    meta.rays = sources
+        .iter()
+        .try_fold(0u64, |n, s| n.checked_add(s.header.meta.rays))
+        .ok_or_else(|| {
+            anyhow::anyhow!("the parts' rayterm.rays add up to more than 2^64: one is damaged")
+        })?;
     meta.seconds = sources.iter().map(|s| s.header.meta.seconds).sum();
     meta.total = Some(plan.total);
     let range = sources[0].header.range.start..sources[sources.len() - 1].header.range.end;

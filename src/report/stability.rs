@@ -187,10 +187,10 @@ pub fn run_and_print(scene_spec: &str, o: &Options, json: bool) -> Result<bool> 
     let rows = run_battery(scene_spec, o)?;
     let failed = rows.iter().filter(|r| !r.pass).count();
     if json {
-        println!("{}", serde_json::to_string_pretty(&rows)?);
+        crate::outln!("{}", serde_json::to_string_pretty(&rows)?)?;
     } else {
-        print!("{}", format_table(&rows));
-        println!(
+        crate::out!("{}", format_table(&rows))?;
+        crate::outln!(
             "{} of {} cases passed in {:.2} s ({}x{}, {} rays per random case)",
             rows.len() - failed,
             rows.len(),
@@ -198,7 +198,7 @@ pub fn run_and_print(scene_spec: &str, o: &Options, json: bool) -> Result<bool> 
             o.width,
             o.height,
             o.rays
-        );
+        )?;
     }
     Ok(failed == 0)
 }

@@ -644,7 +644,7 @@ pub fn run(mesh: &str, geom: &Geometry, o: &RaysOptions) -> RaysReport {
         diff.push(trace_diffuse(&mut frame, &rays, closest));
         let c = frame.checksum();
         if sum.is_some_and(|s| s != c) {
-            eprintln!("warning: the checksum differs between repetitions");
+            crate::noteln!("warning: the checksum differs between repetitions");
         }
         sum = Some(c);
     }

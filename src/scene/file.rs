@@ -153,7 +153,7 @@ struct CameraTable {
     target: V3,
     up: Option<V3>,
     /// Vertical field of view, degrees.
-    fov: Option<Num>,
+    fov: Option<Spanned<Num>>,
 }
 
 /// `scale = 2.0` or `scale = [1, 2, 1]`.
@@ -588,7 +588,7 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
         None => Camera::auto(&bounds),
         Some(c) => match c.get_ref() {
             CameraSpec::Auto => Camera::auto(&bounds),
-            CameraSpec::Explicit(t) => camera_from(t, &frame, &loc.at(c.span()), &mut parts)?,
+            CameraSpec::Explicit(t) => camera_from(t, &frame, &loc, c.span(), &mut parts)?,
         },
     };
     let lights = f
@@ -643,7 +643,14 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
     })
 }
 
-fn camera_from(c: &CameraTable, frame: &Frame, here: &str, parts: &mut Parts) -> Result<Camera> {
+fn camera_from(
+    c: &CameraTable,
+    frame: &Frame,
+    loc: &Locator,
+    table: Range<usize>,
+    parts: &mut Parts,
+) -> Result<Camera> {
+    let here = loc.at(table);
     let (eye, target) = (v3(c.eye), v3(c.target));
     let up = c.up.map_or(DVec3::Y, v3);
     let fwd = target - eye;
@@ -654,13 +661,14 @@ fn camera_from(c: &CameraTable, frame: &Frame, here: &str, parts: &mut Parts) ->
         eye: frame.point(eye),
         target: frame.point(target),
         up: up.as_vec3(),
-        vfov: c.fov.map_or(45.0, Num::f32),
+        vfov: c.fov.as_ref().map_or(45.0, |f| f.get_ref().f32()),
     };
     if cam.eye == cam.target {
         bail!("{here}: camera: eye and target are too close to tell apart in f32");
     }
     if !(1.0..179.0).contains(&cam.vfov) {
-        bail!("{here}: camera: fov must be between 1 and 179 degrees");
+        let at = c.fov.as_ref().map_or(here.clone(), |f| loc.at(f.span()));
+        bail!("{at}: camera: fov must be between 1 and 179 degrees");
     }
     if cam.eye.abs().max(cam.target.abs()).max_element() as f64 > ABSURD {
         parts.warnings.push(format!(
@@ -832,6 +840,12 @@ fn environment_from(
             "{}: environment: give one of color, sky = true or faces",
             path.display()
         );
+    }
+    if e.color.is_none() && e.sky.is_none() && e.faces.is_none() {
+        warnings.push(format!(
+            "{}: environment: none of color, sky = true or faces given; the background stays black",
+            path.display()
+        ));
     }
     if let Some(f) = e.faces {
         let names = [f.posx, f.negx, f.posy, f.negy, f.posz, f.negz];
@@ -1022,6 +1036,19 @@ mod tests {
 
     fn load_err(text: &str) -> String {
         format!("{:#}", load_text(text).expect_err("should fail"))
+    }
+
+    /// A field of view out of range is reported at its own line, not at
+    /// the camera table's.
+    #[test]
+    fn a_bad_fov_is_reported_where_it_is() {
+        let e = load_err(&format!(
+            "{MESH}[camera]\neye = [0, 1, 2]\ntarget = [0, 0, 0]\n\nfov = 0\n"
+        ));
+        assert!(
+            e.starts_with("s.toml:7:7: camera: fov must be between 1 and 179"),
+            "{e}"
+        );
     }
 
     #[test]

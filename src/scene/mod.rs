@@ -268,6 +268,55 @@ pub fn load(spec: &str) -> Result<Scene> {
 /// As [`load`], with the camera named `camera` where the file names its
 /// cameras (glTF), and the files read.
 pub fn load_reading(spec: &str, camera: Option<&str>) -> Result<(Scene, Vec<PathBuf>)> {
+    let (mut scene, read) = load_any(spec, camera)?;
+    scene.warnings = fold_repeats(std::mem::take(&mut scene.warnings));
+    Ok((scene, read))
+}
+
+/// Each warning once, in the order first given, with how many more came
+/// alike (the same but for the line they name): a file that repeats a
+/// fault (ten thousand `mtllib` lines naming a missing file) says so in
+/// one line.
+fn fold_repeats(warnings: Vec<String>) -> Vec<String> {
+    let mut seen: std::collections::HashMap<String, usize> = Default::default();
+    let mut order: Vec<(String, usize)> = Vec::new();
+    for w in warnings {
+        match seen.entry(without_line(&w)) {
+            std::collections::hash_map::Entry::Occupied(e) => order[*e.get()].1 += 1,
+            std::collections::hash_map::Entry::Vacant(e) => {
+                e.insert(order.len());
+                order.push((w, 0));
+            }
+        }
+    }
+    order
+        .into_iter()
+        .map(|(w, more)| match more {
+            0 => w,
+            n => format!("{w} (and {n} more like it)"),
+        })
+        .collect()
+}
+
+/// `w` with the first `:LINE:` it holds (a place, `file:LINE: ...`) made
+/// `:#:`.
+fn without_line(w: &str) -> String {
+    let b = w.as_bytes();
+    let mut i = 0;
+    while let Some(at) = w[i..].find(':').map(|k| i + k) {
+        let digits = b[at + 1..]
+            .iter()
+            .take_while(|c| c.is_ascii_digit())
+            .count();
+        if digits > 0 && b.get(at + 1 + digits) == Some(&b':') {
+            return format!("{}:#{}", &w[..at], &w[at + 1 + digits..]);
+        }
+        i = at + 1;
+    }
+    w.to_string()
+}
+
+fn load_any(spec: &str, camera: Option<&str>) -> Result<(Scene, Vec<PathBuf>)> {
     if let Some(scene) = builtin::load(spec)? {
         if let Some(name) = camera {
             bail!("--camera {name}: the built-in scene {spec} has one camera, no named ones");

@@ -93,8 +93,8 @@ impl Absurd {
             n => format!(" (and {n} more)"),
         };
         Some(format!(
-            "{}:{line}: absurd value {shown}{more}: beyond {ABSURD:e} shading and shadows \
-             lose all precision",
+            "{}:{line}: absurd value {shown}{more}: beyond {ABSURD:e} nothing computed \
+             from it keeps any precision",
             path.display()
         ))
     }

@@ -81,8 +81,15 @@ pub const TEXTURE_BUDGET: u64 = 1536 << 20;
 
 /// A decoder's error as one message: its text already holds its cause,
 /// which an error chain would repeat.
-fn image_error(e: impl std::fmt::Display) -> anyhow::Error {
-    anyhow::anyhow!("{e}")
+fn image_error(e: image::ImageError) -> anyhow::Error {
+    match e {
+        // The decoder's own check of the header against the budget.
+        image::ImageError::Limits(_) => anyhow::anyhow!(
+            "the image's header asks for more than the {} per texture",
+            crate::memory::bytes(TEXTURE_BUDGET)
+        ),
+        e => anyhow::anyhow!("{e}"),
+    }
 }
 
 /// Bytes a stored texel takes.
@@ -111,7 +118,7 @@ impl Texture {
     pub fn decode(name: &str, bytes: &[u8]) -> Result<Self> {
         let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
             .with_guessed_format()
-            .map_err(image_error)?;
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
         let mut limits = image::Limits::default();
         limits.max_alloc = Some(TEXTURE_BUDGET);
         reader.limits(limits);

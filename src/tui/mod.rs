@@ -153,7 +153,7 @@ pub fn run(
     });
     drop(guard);
     if app.jobs.cancel_export() {
-        eprintln!("rayterm: an unfinished PNG export was cancelled");
+        crate::noteln!("rayterm: an unfinished PNG export was cancelled");
     }
     result?;
     Ok(if crate::interrupt::requested() {
@@ -495,6 +495,7 @@ fn restore() {
         let mut out: Stdout = io::stdout();
         let _ = disable_raw_mode();
         let _ = execute!(out, DisableMouseCapture, LeaveAlternateScreen, cursor::Show);
+        crate::interrupt::release_terminal();
     }
 }
 
@@ -521,6 +522,16 @@ impl TerminalGuard {
 
     /// The TUI's terminal modes, on entering and after a stop.
     fn setup() -> Result<()> {
+        crate::interrupt::hold_terminal(|| {
+            let mut leave = Vec::new();
+            let _ = ratatui::crossterm::queue!(
+                leave,
+                DisableMouseCapture,
+                LeaveAlternateScreen,
+                cursor::Show
+            );
+            leave
+        });
         enable_raw_mode().context("cannot switch the terminal to raw mode")?;
         ACTIVE.store(true, Ordering::SeqCst);
         execute!(

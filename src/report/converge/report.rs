@@ -97,6 +97,11 @@ impl Study {
                 main.label,
                 how(main, &r)
             ),
+            // One point has no slope: the fault is the budgets', not the reference's.
+            None if main.points.len() < 2 => format!(
+                "One budget ({:.0} spp) cannot show how fast the error falls: give two or more for a sample count for {t}.",
+                main.points.first().map_or(0.0, |p| p.spp)
+            ),
             None => format!(
                 "The scene's settings ({}) show no falling error, so no sample count for {t} can be given.{}",
                 main.label,

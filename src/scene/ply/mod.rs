@@ -66,6 +66,19 @@ impl Scalar {
         !matches!(self, Scalar::F32 | Scalar::F64)
     }
 
+    /// The values an integer type holds: what an ASCII file may write for it.
+    fn range(self) -> (i64, i64) {
+        match self {
+            Scalar::I8 => (i8::MIN.into(), i8::MAX.into()),
+            Scalar::U8 => (0, u8::MAX.into()),
+            Scalar::I16 => (i16::MIN.into(), i16::MAX.into()),
+            Scalar::U16 => (0, u16::MAX.into()),
+            Scalar::I32 => (i32::MIN.into(), i32::MAX.into()),
+            Scalar::U32 => (0, u32::MAX.into()),
+            Scalar::F32 | Scalar::F64 => (i64::MIN, i64::MAX),
+        }
+    }
+
     /// The value of full intensity for a colour of this type.
     fn full(self) -> f64 {
         match self {
@@ -472,9 +485,14 @@ impl Values for Ascii<'_> {
         let w = self.word()?;
         numbers::parse(w)
     }
-    fn int(&mut self, _: Scalar) -> Result<i64, String> {
+    fn int(&mut self, t: Scalar) -> Result<i64, String> {
         let w = self.word()?;
-        w.parse().map_err(|_| format!("'{w}' is not an integer"))
+        let x: i64 = w.parse().map_err(|_| format!("'{w}' is not an integer"))?;
+        let (lo, hi) = t.range();
+        match (lo..=hi).contains(&x) {
+            true => Ok(x),
+            false => Err(format!("{x} is out of range for its type ({lo} to {hi})")),
+        }
     }
     fn place(&self, path: &Path) -> String {
         format!("{}:{}", path.display(), self.line)
@@ -888,6 +906,7 @@ mod tests {
             (format!("{HEAD}0 0 nan\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n"), "p.ply:11: element vertex 0 (of 4), z: 'nan' is not a finite"),
             (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 1\n"), "p.ply:15: element face 0 (of 1), vertex_indices: a face needs at least 3"),
             (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 -1\n"), "p.ply:15: element face 0 (of 1), vertex_indices: vertex index -1 is out of range"),
+            (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n259 0 1 2\n"), "p.ply:15: element face 0 (of 1), vertex_indices: 259 is out of range for its type (0 to 255)"),
             (HEAD.replace("vertex 4", "vertex 4000"), "p.ply: truncated: the header declares element vertex 4000, element face 1:"),
             (HEAD.replace("float x", "float33 x"), "p.ply:5: unknown property type 'float33'"),
             (HEAD.replace("format ascii 1.0\n", ""), "p.ply: the header has no 'format' line"),
