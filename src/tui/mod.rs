@@ -449,13 +449,7 @@ fn leave<W: Write>(
         out.drop_pieces();
         let _ = screen.send(&images.bands.leave(&mode));
     }
-    let mut bytes = Vec::new();
-    let _ = ratatui::crossterm::queue!(
-        bytes,
-        DisableMouseCapture,
-        LeaveAlternateScreen,
-        cursor::Show
-    );
+    let mut bytes = leave_modes();
     if out.pacer.paced() {
         bytes.extend_from_slice(term::pace::PROBE);
     }
@@ -486,6 +480,19 @@ where
     Ok(())
 }
 
+/// The bytes that leave the TUI's screen modes: mouse capture, the
+/// alternate screen, the hidden cursor.
+fn leave_modes() -> Vec<u8> {
+    let mut bytes = Vec::new();
+    let _ = ratatui::crossterm::queue!(
+        bytes,
+        DisableMouseCapture,
+        LeaveAlternateScreen,
+        cursor::Show
+    );
+    bytes
+}
+
 /// Whether the terminal is in the TUI's state (raw mode, alternate screen).
 static ACTIVE: AtomicBool = AtomicBool::new(false);
 
@@ -494,7 +501,7 @@ fn restore() {
     if ACTIVE.swap(false, Ordering::SeqCst) {
         let mut out: Stdout = io::stdout();
         let _ = disable_raw_mode();
-        let _ = execute!(out, DisableMouseCapture, LeaveAlternateScreen, cursor::Show);
+        let _ = out.write_all(&leave_modes()).and_then(|()| out.flush());
         crate::interrupt::release_terminal();
     }
 }
@@ -522,16 +529,7 @@ impl TerminalGuard {
 
     /// The TUI's terminal modes, on entering and after a stop.
     fn setup() -> Result<()> {
-        crate::interrupt::hold_terminal(|| {
-            let mut leave = Vec::new();
-            let _ = ratatui::crossterm::queue!(
-                leave,
-                DisableMouseCapture,
-                LeaveAlternateScreen,
-                cursor::Show
-            );
-            leave
-        });
+        crate::interrupt::hold_terminal(leave_modes);
         enable_raw_mode().context("cannot switch the terminal to raw mode")?;
         ACTIVE.store(true, Ordering::SeqCst);
         execute!(
