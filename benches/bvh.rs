@@ -51,7 +51,7 @@ fn primitives(c: &mut Criterion) {
         max: Vec3::ONE,
     };
     let ray = Ray::new(Vec3::new(-1.0, 0.3, 0.4), Vec3::new(1.0, 0.1, 0.05));
-    let inv = ray.inv_dir();
+    let inv: Vec3 = ray.inv_dir().into();
     c.bench_function("box/hit", |b| {
         b.iter(|| black_box(&bx).hit(black_box(ray.origin), inv, f32::INFINITY))
     });

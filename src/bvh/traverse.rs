@@ -72,7 +72,7 @@ impl BoxRay {
 
         BoxRay {
             o: ray.origin.into(),
-            inv: inv.into(),
+            inv,
             neg: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
         }
     }
@@ -657,13 +657,15 @@ mod tests {
             let br = BoxRay::new(&ray);
             let inv = ray.inv_dir();
             let want: u32 = (0..WIDTH)
-                .filter(|&i| !boxes[i].is_empty() && boxes[i].hit(o, inv, ray.tmax).is_some())
+                .filter(|&i| {
+                    !boxes[i].is_empty() && boxes[i].hit(o, inv.into(), ray.tmax).is_some()
+                })
                 .map(|i| 1 << i)
                 .sum();
             let (mask, tnear) = hit_boxes(&br, &node, ray.tmax);
             assert_eq!(mask, want, "ray {ray:?}");
             for i in (0..WIDTH).filter(|i| want & (1 << i) != 0) {
-                assert_eq!(Some(tnear[i]), boxes[i].hit(o, inv, ray.tmax));
+                assert_eq!(Some(tnear[i]), boxes[i].hit(o, inv.into(), ray.tmax));
             }
             #[cfg(target_arch = "x86_64")]
             if std::is_x86_feature_detected!("avx") {

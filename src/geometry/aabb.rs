@@ -110,7 +110,9 @@ mod tests {
         // -0, or negligible) x component: inside the closed slab counts as
         // inside whatever the sign, outside misses, nothing is NaN.
         for dx in [0.0, -0.0, 1e-31, -1e-31, 1e-40, -1e-40] {
-            let inv = crate::geometry::Ray::new(Vec3::ZERO, Vec3::new(dx, 0.0, 1.0)).inv_dir();
+            let inv = crate::geometry::Ray::new(Vec3::ZERO, Vec3::new(dx, 0.0, 1.0))
+                .inv_dir()
+                .into();
             for x in [0.0, 1.0, 0.5, 1e-7, 1.0 - 1e-7] {
                 assert_eq!(
                     b.hit(Vec3::new(x, 0.5, -1.0), inv, f32::INFINITY),
@@ -130,11 +132,15 @@ mod tests {
             min: Vec3::new(0.0, 0.0, 2.0),
             max: Vec3::new(1.0, 1.0, 2.0),
         };
-        let inv = crate::geometry::Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.0, -0.0)).inv_dir();
+        let inv = crate::geometry::Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.0, -0.0))
+            .inv_dir()
+            .into();
         assert_eq!(flat.hit(Vec3::new(-1.0, 0.5, 2.0), inv, 5.0), Some(1.0));
         assert!(flat.hit(Vec3::new(-1.0, 0.5, 2.5), inv, 5.0).is_none());
         // Every direction component zero: inside hits at 0, outside misses.
-        let inv = crate::geometry::Ray::new(Vec3::ZERO, Vec3::ZERO).inv_dir();
+        let inv = crate::geometry::Ray::new(Vec3::ZERO, Vec3::ZERO)
+            .inv_dir()
+            .into();
         assert_eq!(b.hit(Vec3::splat(0.5), inv, f32::INFINITY), Some(0.0));
         assert!(b.hit(Vec3::splat(2.0), inv, f32::INFINITY).is_none());
     }
@@ -149,21 +155,21 @@ mod tests {
         assert!(b
             .hit(
                 Vec3::new(0.5, 0.5, 2.0),
-                crate::geometry::Ray::new(Vec3::ZERO, d).inv_dir(),
+                crate::geometry::Ray::new(Vec3::ZERO, d).inv_dir().into(),
                 10.0
             )
             .is_none());
         assert!(b
             .hit(
                 Vec3::new(0.5, 0.5, -2.0),
-                crate::geometry::Ray::new(Vec3::ZERO, d).inv_dir(),
+                crate::geometry::Ray::new(Vec3::ZERO, d).inv_dir().into(),
                 1.0
             )
             .is_none());
         assert_eq!(
             b.hit(
                 Vec3::new(0.5, 0.5, -2.0),
-                crate::geometry::Ray::new(Vec3::ZERO, d).inv_dir(),
+                crate::geometry::Ray::new(Vec3::ZERO, d).inv_dir().into(),
                 5.0
             ),
             Some(2.0)

@@ -163,7 +163,7 @@ pub fn check_rays(b: &Bvh, anc: &[Vec<u32>], rays: &[Ray]) -> Grazing {
             };
             g.nan += bad(&fast) as u64 + bad(&slow) as u64;
             let shear = RayShear::new(ray.origin, ray.dir);
-            let inv = ray.inv_dir();
+            let inv = ray.inv_dir().into();
             let mut any_real = false;
             for (i, above) in (0..b.triangle_count()).zip(anc) {
                 let t = &b.triangle(i);
