@@ -966,6 +966,37 @@ mod tests {
         }
     }
 
+    /// The shear's and the slab test's quotients, each set made in one
+    /// vector division, are the scalar divisions' bit for bit, on every
+    /// sign, on magnitudes from subnormal to huge, and on zero components.
+    #[test]
+    fn vector_divisions_give_the_scalar_quotients() {
+        let mut r = crate::geometry::sampling::Rng::for_sample(2, 7, 1);
+        let mut f = || {
+            let m = [0.0, 1e-38, 1e-30, 1.0, 3e7, 1e30][(r.next_u32() % 6) as usize];
+            (r.next_f32() * 2.0 - 1.0) * m
+        };
+        let same = |a: f32, b: f32| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+        for _ in 0..100_000 {
+            let dir = Vec3::new(f(), f(), f());
+            let s = RayShear::new(Vec3::ZERO, dir);
+            let d = crate::geometry::ray::flush(dir).to_array();
+            let want = [d[s.kx] / d[s.kz], d[s.ky] / d[s.kz], 1.0 / d[s.kz]];
+            for (got, want) in [s.sx, s.sy, s.sz].into_iter().zip(want) {
+                assert!(same(got, want), "{dir:?}: {got} against {want}");
+            }
+            let inv = crate::geometry::Ray::new(Vec3::ZERO, dir).inv_dir();
+            for a in 0..3 {
+                assert!(
+                    same(inv[a], 1.0 / d[a]),
+                    "{dir:?}: {} against {}",
+                    inv[a],
+                    1.0 / d[a]
+                );
+            }
+        }
+    }
+
     /// The f64 test finds the f32 test's hits, at the same `t` up to
     /// rounding, and its misses, on triangles the ray does not graze.
     #[test]
