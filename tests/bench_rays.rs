@@ -6,7 +6,7 @@
 
 mod common;
 
-use rayterm::bvh::{self, TraversalStats};
+use rayterm::bvh::{self, Simd, TraversalStats};
 use rayterm::geometry::triangle::{intersect, RayShear};
 use rayterm::geometry::Ray;
 use rayterm::report::workload::{self, Checksum, Frame, Workload};
@@ -122,16 +122,24 @@ fn checksum_matches_brute_force_on_a_tessellated_teapot() {
 
 /// Rays made before the timer (the tinybvh harness's way) are the rays made
 /// in the timed loop, and rays traced in packets find what single rays
-/// find: the report's checksums agree with brute force every way (the
-/// frame's 62x45 pixels leave tiles cut short at two edges), and the
-/// report says how it made and traced them.
+/// find, with every SIMD level this CPU has: the report's checksums agree
+/// with brute force every way (the frame's 62x45 pixels leave tiles cut
+/// short at two edges), and the report says how it made and traced them.
 #[test]
 fn rays_made_first_or_traced_in_packets_are_the_same_rays() {
     let s = scene::load("teapot:3").unwrap();
     let g = &s.geometry;
     let w = Workload::auto(&g.bounds(), 62, 45);
     let want = brute_force(g, &w);
-    for (rays_first, packets) in [(false, false), (true, false), (false, true), (true, true)] {
+    let ways = [(false, false), (true, false), (false, true), (true, true)];
+    let levels = Simd::available();
+    if !levels.contains(&Simd::Avx512) {
+        eprintln!("note: this CPU has no AVX-512: its kernels are not tested here");
+    }
+    for ((rays_first, packets), simd) in ways
+        .into_iter()
+        .flat_map(|w| levels.iter().map(move |&l| (w, l)))
+    {
         let o = workload::RaysOptions {
             width: 62,
             height: 45,
@@ -140,6 +148,7 @@ fn rays_made_first_or_traced_in_packets_are_the_same_rays() {
             reps: 2,
             rays_first,
             packets,
+            simd,
         };
         let r = workload::run("teapot:3", g, &o);
         let got = (r.hits, r.occluded, r.sum_t, r.diffuse_hits, r.diffuse_sum_t);
@@ -150,7 +159,11 @@ fn rays_made_first_or_traced_in_packets_are_the_same_rays() {
             want.diffuse_hits,
             want.diffuse_sum_t,
         );
-        assert_eq!(got, brute, "rays first: {rays_first}, packets: {packets}");
+        assert_eq!(
+            got, brute,
+            "rays first: {rays_first}, packets: {packets}, {simd}"
+        );
+        assert_eq!(r.simd, simd);
         let label = if rays_first { "untimed" } else { "timed" };
         assert_eq!(r.ray_generation, label);
         let traced = if packets {
@@ -325,5 +338,41 @@ fn diffuse_rays_are_the_harness_rays_bit_for_bit() {
             "pixel {pixel}"
         );
         assert_eq!(r.dir.to_array().map(f32::to_bits), dir, "pixel {pixel}");
+    }
+}
+
+/// `--simd` picks the walk the report names, and asking for more than the
+/// CPU has is an error that says what it has, with no report.
+#[test]
+fn simd_level_is_chosen_and_named() {
+    let run = |simd: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_rayterm"))
+            .args([
+                "bench", "rays", "teapot:2", "--size", "16x12", "--reps", "1",
+            ])
+            .args(["--simd", simd])
+            .output()
+            .unwrap()
+    };
+    for level in Simd::available() {
+        let o = run(level.name());
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(json["simd"], level.name());
+    }
+    if Simd::detect() < Simd::Avx512 {
+        let o = run("avx512");
+        assert_eq!(o.status.code(), Some(1));
+        assert!(o.stdout.is_empty());
+        let err = String::from_utf8_lossy(&o.stderr);
+        let most = Simd::detect();
+        assert!(
+            err.contains(&format!(
+                "this CPU has no avx512 (the widest it has is {most})"
+            )),
+            "{err}"
+        );
+    } else {
+        eprintln!("note: this CPU has AVX-512: no level above it to refuse");
     }
 }

@@ -4,6 +4,7 @@ pub mod build;
 pub mod debug;
 pub mod node;
 mod packet;
+mod simd;
 pub mod stats;
 pub mod traverse;
 mod wide;
@@ -11,6 +12,7 @@ mod wide;
 pub use build::{build, build_full_sweep};
 pub use node::Node;
 pub use packet::PACKET_RAYS;
+pub use simd::Simd;
 pub use stats::{BuildStats, TraversalStats};
 pub use traverse::{Hit, WalkLog};
 
@@ -57,6 +59,17 @@ impl Bvh {
             .map(|i| self.triangle(i))
             .collect();
         self.wide = wide::Wide::collapse(&self.nodes, tris.len(), |i| tris[i]);
+    }
+
+    /// The SIMD kernels the walks use.
+    pub fn simd(&self) -> Simd {
+        self.wide.simd
+    }
+
+    /// Walks with at most `most`'s kernels from now on: to compare them with
+    /// the widest on the same machine.
+    pub fn cap_simd(&mut self, most: Simd) {
+        self.wide.simd = self.wide.simd.min(most);
     }
 
     /// Bytes held by the tree and its triangle packets.

@@ -40,7 +40,7 @@ use super::traverse::slab_hits_avx;
 use super::traverse::Avx;
 use super::traverse::{closer, Kernels, Portable, FAR_SCALE, MAX_TFAR, STACK};
 use super::wide::{leaf_packets, LeafTest, Node8, Packet, LEAF, PACKET, WIDTH};
-use super::{Bvh, Hit, TraversalStats};
+use super::{Bvh, Hit, Simd, TraversalStats};
 use crate::geometry::ray::PARALLEL;
 #[cfg(target_arch = "x86_64")]
 use crate::geometry::triangle::lanes8_avx;
@@ -616,13 +616,30 @@ impl Bvh {
             hi,
             neg: hi.map(|x| x < 0.0),
         };
-        #[cfg(target_arch = "x86_64")]
-        if self.wide.avx {
-            // SAFETY: `wide.avx` says this CPU has AVX.
-            unsafe { self.group_avx(rays, lanes, &f, l, found) };
-            return;
+        match self.wide.simd {
+            // SAFETY: `wide.simd` is at most what this CPU has.
+            #[cfg(target_arch = "x86_64")]
+            Simd::Avx512 => unsafe { self.group_avx512(rays, lanes, &f, l, found) },
+            // SAFETY: as above.
+            #[cfg(target_arch = "x86_64")]
+            Simd::Avx => unsafe { self.group_avx(rays, lanes, &f, l, found) },
+            _ => self.group_with(rays, lanes, &f, l, found, &Portable),
         }
-        self.group_with(rays, lanes, &f, l, found, &Portable);
+    }
+
+    /// The AVX kernels compiled for AVX-512, as the single-ray walk's
+    /// `traverse_avx512` compiles them.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,bmi1,popcnt")]
+    fn group_avx512<F: Found>(
+        &self,
+        rays: &[Ray],
+        lanes: &[u8],
+        f: &Frustum,
+        l: &mut Lanes,
+        found: &mut F,
+    ) {
+        self.group_with(rays, lanes, f, l, found, &Avx(()));
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -882,14 +899,11 @@ mod tests {
     use crate::scene::{self, Builder};
     use glam::Vec3;
 
-    /// The kernels this CPU can run: the portable ones, and AVX where it
-    /// has it.
-    fn kernels() -> Vec<bool> {
-        #[allow(unused_mut)]
-        let mut v = vec![false];
-        #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx") {
-            v.push(true);
+    /// The kernels this CPU can run, saying which it cannot.
+    fn kernels() -> Vec<Simd> {
+        let v = Simd::available();
+        if !v.contains(&Simd::Avx512) {
+            eprintln!("note: this CPU has no AVX-512: its packet kernels are not tested here");
         }
         v
     }
@@ -901,8 +915,8 @@ mod tests {
     fn agree(b: &mut Bvh, rays: &[Ray]) -> usize {
         let mut hits = 0;
         let ways = [LeafTest::Chosen, LeafTest::ByRay, LeafTest::ByTriangle];
-        for (avx, way) in kernels().into_iter().flat_map(|k| ways.map(|w| (k, w))) {
-            b.wide.avx = avx;
+        for (simd, way) in kernels().into_iter().flat_map(|k| ways.map(|w| (k, w))) {
+            b.wide.simd = simd;
             b.wide.leaf_test = way;
             let mut got = vec![None; rays.len()];
             let mut blocked = vec![false; rays.len()];
@@ -912,9 +926,9 @@ mod tests {
             for (i, r) in rays.iter().enumerate() {
                 let want = b.intersect::<false>(r, &mut st);
                 assert_eq!(got[i].map(|h| h.t.to_bits()), want.map(|h| h.t.to_bits()));
-                assert_eq!(got[i], want, "ray {i} {r:?}, avx {avx}, {way:?}");
+                assert_eq!(got[i], want, "ray {i} {r:?}, {simd}, {way:?}");
                 let any = b.occluded::<false>(r, &mut st).is_some();
-                assert_eq!(blocked[i], any, "ray {i} {r:?}, avx {avx}, {way:?}");
+                assert_eq!(blocked[i], any, "ray {i} {r:?}, {simd}, {way:?}");
                 hits += want.is_some() as usize;
             }
         }

@@ -8,7 +8,7 @@ use std::mem::MaybeUninit;
 use glam::{Vec3A, Vec4};
 
 use super::wide::{leaf_packets, Node8, Packet, LEAF, PACKET, WIDTH};
-use super::{Bvh, TraversalStats};
+use super::{Bvh, Simd, TraversalStats};
 use crate::geometry::triangle::{intersect, intersect8, RayShear, TriHit8};
 use crate::geometry::{gamma, Ray};
 
@@ -406,13 +406,34 @@ impl Bvh {
         if self.wide.nodes.is_empty() {
             return;
         }
-        #[cfg(target_arch = "x86_64")]
-        if self.wide.avx {
-            // SAFETY: `wide.avx` says this CPU has AVX.
-            unsafe { self.traverse_avx::<ANY, STATS>(ray, st, on_hit) };
-            return;
+        match self.wide.simd {
+            // SAFETY: `wide.simd` is at most what this CPU has.
+            #[cfg(target_arch = "x86_64")]
+            Simd::Avx512 => unsafe { self.traverse_avx512::<ANY, STATS>(ray, st, on_hit) },
+            // SAFETY: as above.
+            #[cfg(target_arch = "x86_64")]
+            Simd::Avx => unsafe { self.traverse_avx::<ANY, STATS>(ray, st, on_hit) },
+            _ => self.traverse_with::<ANY, STATS, _>(ray, st, on_hit, &Portable),
         }
-        self.traverse_with::<ANY, STATS, _>(ray, st, on_hit, &Portable);
+    }
+
+    /// The traversal with the AVX kernels, compiled for AVX-512 (F, VL, DQ,
+    /// BW). The same tests in their EVEX forms have 32 vector registers
+    /// instead of 16 (a ray's splatted constants stay in them), compare into
+    /// mask registers and fold broadcasts into loads. They stay eight lanes
+    /// wide, as a node and a leaf packet are, and off the 512-bit registers,
+    /// whose use takes a port from every other vector instruction: sixteen
+    /// rays of a packet tested at once measured no faster (BENCHMARKS.md).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,bmi1,popcnt")]
+    #[inline]
+    fn traverse_avx512<const ANY: bool, const STATS: bool>(
+        &self,
+        ray: &Ray,
+        st: &mut impl Tally,
+        on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
+    ) {
+        self.traverse_with::<ANY, STATS, _>(ray, st, on_hit, &Avx(()));
     }
 
     /// The traversal compiled for AVX: eight boxes or eight triangles per
@@ -749,6 +770,69 @@ mod tests {
             }
         }
         assert!(hits >= 4, "{hits} hits");
+    }
+
+    /// Every SIMD level this CPU has finds exactly what the portable walk
+    /// finds, closest hits to the bit and any hits, on camera rays and on
+    /// random rays (some parallel to an axis, some short), with the stack
+    /// on the machine stack and on the heap.
+    #[test]
+    fn every_simd_level_finds_what_the_portable_walk_finds() {
+        use crate::geometry::sampling::Rng;
+        use glam::Vec3;
+        let levels = Simd::available();
+        if !levels.contains(&Simd::Avx512) {
+            eprintln!("note: this CPU has no AVX-512: its walk is not tested here");
+        }
+        let s = scene::load("teapot:4").unwrap();
+        let mut b = super::super::build(&s.geometry, Builder::Sah);
+        let frame = s.camera.frame(48, 32);
+        let mut rays: Vec<Ray> = (0..48 * 32)
+            .map(|i| frame.ray((i % 48) as f64 + 0.5, (i / 48) as f64 + 0.5))
+            .collect();
+        let bounds = s.geometry.bounds();
+        let mut r = Rng::for_sample(5, 2, 7);
+        for k in 0..4000 {
+            let mut p = || {
+                Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * (bounds.max - bounds.min)
+                    + bounds.min
+            };
+            let (o, to) = (p(), p());
+            let mut d = to - o;
+            if k % 5 == 0 {
+                d[k % 3] = 0.0;
+            }
+            let tmax = if k % 3 == 0 { 0.5 } else { f32::INFINITY };
+            rays.push(Ray::segment(o, d, tmax));
+        }
+        let mut st = TraversalStats::default();
+        b.wide.simd = Simd::Portable;
+        let want: Vec<_> = rays
+            .iter()
+            .map(|r| {
+                (
+                    b.intersect::<false>(r, &mut st),
+                    b.occluded::<false>(r, &mut st),
+                )
+            })
+            .collect();
+        let hits = want.iter().filter(|w| w.0.is_some()).count();
+        assert!(hits > 1000, "{hits} hits");
+        let stack = b.wide.stack;
+        for heap in [false, true] {
+            // A tree deeper than the machine stack holds walks on the heap.
+            b.wide.stack = if heap { STACK } else { stack };
+            for &level in &levels {
+                b.wide.simd = level;
+                for (r, (hit, any)) in rays.iter().zip(&want) {
+                    let got = b.intersect::<false>(r, &mut st);
+                    assert_eq!(got.map(|h| h.t.to_bits()), hit.map(|h| h.t.to_bits()));
+                    assert_eq!(got, *hit, "{level}, heap {heap}, {r:?}");
+                    let blocked = b.occluded::<false>(r, &mut st).is_some();
+                    assert_eq!(blocked, any.is_some(), "{level}, heap {heap}, {r:?}");
+                }
+            }
+        }
     }
 
     /// The walk with a heap stack, which trees too deep for the machine stack

@@ -8,7 +8,7 @@ use std::mem::MaybeUninit;
 
 use rayon::prelude::*;
 
-use super::Node;
+use super::{Node, Simd};
 use crate::memory;
 
 /// Child references with this bit set are leaves:
@@ -87,8 +87,8 @@ pub(crate) struct Wide {
     /// Stack entries the deepest path can need, whatever the box tests
     /// answer: each node on it pushes at most all but one of its slots.
     pub stack: usize,
-    /// Whether this CPU can test eight boxes at once (AVX).
-    pub avx: bool,
+    /// The kernels the walks use: the widest this CPU has, unless capped.
+    pub simd: Simd,
     /// How packets test a leaf's triangles (chosen per leaf, except in
     /// tests that take each way on the same rays).
     pub leaf_test: LeafTest,
@@ -122,7 +122,7 @@ impl Wide {
             nodes: memory::room(bin.len() / 2 + 1),
             packets: memory::room(total),
             stack: 0,
-            avx: avx_available(),
+            simd: Simd::detect(),
             leaf_test: LeafTest::Chosen,
             node_of: Vec::with_capacity(bin.len() / 2 + 1),
             leaf_of: Vec::with_capacity(total),
@@ -330,14 +330,4 @@ fn packet((first, lanes): Run, tri: &impl Tri) -> Packet {
         p.idx[lane] = i as u32;
     }
     p
-}
-
-#[cfg(target_arch = "x86_64")]
-fn avx_available() -> bool {
-    std::is_x86_feature_detected!("avx")
-}
-
-#[cfg(not(target_arch = "x86_64"))]
-fn avx_available() -> bool {
-    false
 }

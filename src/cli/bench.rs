@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
 use super::args::{parse_size, parse_threads};
+use crate::bvh::Simd;
 use crate::render::SceneRequest;
 use crate::report::{bench, scaling, workload};
 use crate::scene::Builder;
@@ -85,6 +86,10 @@ pub struct RaysArgs {
     /// light); diffuse rays one by one.
     #[arg(long)]
     pub packets: bool,
+    /// The SIMD kernels to walk with (default: the widest this CPU has), to
+    /// compare them on one machine.
+    #[arg(long, value_enum)]
+    pub simd: Option<Simd>,
 }
 
 #[derive(Args, Debug)]
@@ -157,6 +162,11 @@ pub fn run(a: BenchArgs) -> Result<ExitCode> {
 }
 
 fn rays(a: RaysArgs) -> Result<()> {
+    let most = Simd::detect();
+    let simd = a.simd.unwrap_or(most);
+    if simd > most {
+        anyhow::bail!("--simd {simd}: this CPU has no {simd} (the widest it has is {most})");
+    }
     let s = super::load_scene(&a.mesh)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.threads as usize)
@@ -170,6 +180,7 @@ fn rays(a: RaysArgs) -> Result<()> {
         reps: a.reps as usize,
         rays_first: a.rays_first,
         packets: a.packets,
+        simd,
     };
     let r = pool.install(|| workload::run(&a.mesh, &s.geometry, &o));
     crate::outln!("{}", serde_json::to_string(&r)?)?;

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::stats::median;
-use crate::bvh::{self, Bvh, TraversalStats};
+use crate::bvh::{self, Bvh, Simd, TraversalStats};
 use crate::geometry::{Aabb, Ray};
 use crate::scene::camera::CameraFrame;
 use crate::scene::{Builder, Geometry};
@@ -558,6 +558,8 @@ pub struct RaysOptions {
     /// Primary and shadow rays in packets of a tile
     /// ([`trace_primary_packets`], [`trace_shadow_packets`]).
     pub packets: bool,
+    /// The widest SIMD kernels the walks may use.
+    pub simd: Simd,
 }
 
 /// The JSON line of the workload, with the fields the specification and the
@@ -595,6 +597,8 @@ pub struct RaysReport {
     pub primary_traversal: &'static str,
     pub shadow_traversal: &'static str,
     pub diffuse_traversal: &'static str,
+    /// The SIMD kernels the walks used.
+    pub simd: Simd,
     pub primary_ms: f64,
     pub shadow_ms: f64,
     pub diffuse_ms: f64,
@@ -610,10 +614,13 @@ pub fn run(mesh: &str, geom: &Geometry, o: &RaysOptions) -> RaysReport {
     let (mut build, mut prim, mut shad, mut diff) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut sum: Option<Checksum> = None;
+    let mut simd = o.simd;
     for _ in 0..reps {
         let start = Instant::now();
-        let bvh = bvh::build(geom, o.builder);
+        let mut bvh = bvh::build(geom, o.builder);
         build.push(start.elapsed().as_secs_f64());
+        bvh.cap_simd(o.simd);
+        simd = bvh.simd();
         let (closest, occluded) = (|r: &Ray| closest(&bvh, r), |r: &Ray| occluded(&bvh, r));
         let primary = |frame: &mut Frame, rows| match o.packets {
             true => trace_primary_packets(&w, frame, rows, &bvh),
@@ -681,6 +688,7 @@ pub fn run(mesh: &str, geom: &Geometry, o: &RaysOptions) -> RaysReport {
         shadow_traversal: traversal(o.packets),
         // Diffuse rays share no origin: packets would trace them one by one.
         diffuse_traversal: "single",
+        simd,
         primary_ms: p * 1e3,
         shadow_ms: s * 1e3,
         diffuse_ms: d * 1e3,
