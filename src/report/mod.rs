@@ -12,10 +12,14 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use crate::bvh::Simd;
+
 /// The machine a figure was measured on.
 #[derive(Clone, Debug, Serialize)]
 pub struct Machine {
     pub cpu: String,
+    /// The SIMD kernels the walks used: the widest the CPU has.
+    pub simd: Simd,
     /// Threads the measurement used.
     pub threads: usize,
     /// Logical CPUs of the machine.
@@ -35,6 +39,7 @@ impl Machine {
             .unwrap_or_else(|| std::env::consts::ARCH.to_string());
         Machine {
             cpu,
+            simd: Simd::detect(),
             threads,
             cpus: std::thread::available_parallelism().map_or(1, |n| n.get()),
         }
@@ -45,8 +50,9 @@ impl std::fmt::Display for Machine {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{}, {} thread{} of {} CPU{}",
+            "{} ({}), {} thread{} of {} CPU{}",
             self.cpu,
+            self.simd,
             self.threads,
             if self.threads == 1 { "" } else { "s" },
             self.cpus,
