@@ -13,8 +13,8 @@ pub enum Simd {
     Portable,
     /// Eight lanes of AVX.
     Avx,
-    /// The AVX kernels compiled for AVX-512 (F, VL, DQ, BW): 32 registers,
-    /// mask registers, eight lanes.
+    /// The AVX kernels compiled for AVX-512 (F, VL, DQ, BW): 32 vector
+    /// registers, eight lanes.
     Avx512,
 }
 

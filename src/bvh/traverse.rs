@@ -419,11 +419,11 @@ impl Bvh {
 
     /// The traversal with the AVX kernels, compiled for AVX-512 (F, VL, DQ,
     /// BW). The same tests in their EVEX forms have 32 vector registers
-    /// instead of 16 (a ray's splatted constants stay in them), compare into
-    /// mask registers and fold broadcasts into loads. They stay eight lanes
-    /// wide, as a node and a leaf packet are, and off the 512-bit registers,
-    /// whose use takes a port from every other vector instruction: sixteen
-    /// rays of a packet tested at once measured no faster (BENCHMARKS.md).
+    /// instead of 16: the box test keeps a ray's splatted constants in them,
+    /// where the AVX build reloads them from the stack at every node, and
+    /// broadcasts fold into loads. They stay eight lanes wide, as a node and
+    /// a leaf packet are: sixteen rays of a packet in a 512-bit register per
+    /// box test measured no faster (BENCHMARKS.md).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,bmi1,popcnt")]
     #[inline]
