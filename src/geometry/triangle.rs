@@ -439,25 +439,35 @@ pub fn lanes4(
     let flip = det.cmplt(zero);
     let ts = Vec4::select(flip, -t_scaled, t_scaled);
     let d = Vec4::select(flip, -det, det);
-    let mut ok = !(neg & pos) & det.cmpne(zero) & !ts.cmple(zero) & !ts.cmpgt(tmax * LOOSE * d);
+    // `d > 0`: a determinant neither zero nor NaN. Padding lanes (NaN)
+    // fail here, so that a packet with no hit ends here, padding or not.
+    let mut ok = !(neg & pos) & d.cmpgt(zero) & !ts.cmple(zero) & !ts.cmpgt(tmax * LOOSE * d);
     if ok.bitmask() == 0 {
         return none;
     }
     let inv = Vec4::ONE / det;
     let t = t_scaled * inv;
     let max_zt = az.abs().max(bz.abs()).max(cz.abs());
-    let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
-    let max_yt = ay.abs().max(by.abs()).max(cy.abs());
-    let max_z = az0.abs().max(bz0.abs()).max(cz0.abs());
     let g = |n| Vec4::splat(gamma(n));
     let delta_z = g(3) * max_zt;
-    let delta_x = g(5) * (max_xt + 2.0 * (sx.abs() * max_z));
-    let delta_y = g(5) * (max_yt + 2.0 * (sy.abs() * max_z));
-    let delta_e = 2.0 * (g(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-    let max_e = u.abs().max(v.abs()).max(w.abs());
-    let delta_t = 3.0 * (g(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv.abs();
     let ahead = az.min(bz).min(cz).cmpgt(delta_z);
-    ok &= (!t.cmple(delta_t) | ahead) & t.abs().cmplt(Vec4::INFINITY) & !t.cmpgt(tmax);
+    // A lane whose vertices all lie ahead of the origin beyond the rounding
+    // of their `z` is never too near to tell: the bound on `t`'s rounding
+    // is needed only where some passing lane is not (a ray leaving a
+    // surface through its own triangle), so most hits skip it.
+    if (ok & !ahead).any() {
+        let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
+        let max_yt = ay.abs().max(by.abs()).max(cy.abs());
+        let max_z = az0.abs().max(bz0.abs()).max(cz0.abs());
+        let delta_x = g(5) * (max_xt + 2.0 * (sx.abs() * max_z));
+        let delta_y = g(5) * (max_yt + 2.0 * (sy.abs() * max_z));
+        let delta_e = 2.0 * (g(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+        let max_e = u.abs().max(v.abs()).max(w.abs());
+        let delta_t =
+            3.0 * (g(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv.abs();
+        ok &= !t.cmple(delta_t) | ahead;
+    }
+    ok &= t.abs().cmplt(Vec4::INFINITY) & !t.cmpgt(tmax);
     TriHit4 {
         mask: ok.bitmask(),
         t: Vec4::select(ok, t, Vec4::INFINITY),
@@ -659,75 +669,84 @@ pub(crate) unsafe fn lanes8_avx<const UV: bool, const EARLY: bool>(
     let beyond = cmp!(_CMP_GT_OQ, ts, mul(mul(tmax, set(LOOSE)), d));
     let ok = _mm256_andnot_ps(
         or(and(neg, pos), or(le0, beyond)),
-        cmp!(_CMP_NEQ_UQ, det, zero),
+        // Neither zero nor NaN: padding lanes fail here, as in `lanes4`.
+        cmp!(_CMP_NEQ_OQ, det, zero),
     );
     if _mm256_movemask_ps(ok) == 0 {
         return TriHit8::NONE;
     }
     let inv = _mm256_div_ps(set(1.0), det);
     let t = mul(t_scaled, inv);
-    let (au, av, aw) = (
-        _mm256_andnot_ps(sign, u),
-        _mm256_andnot_ps(sign, v),
-        _mm256_andnot_ps(sign, w),
-    );
     let (aaz, abz, acz) = (
         _mm256_andnot_ps(sign, az),
         _mm256_andnot_ps(sign, bz),
         _mm256_andnot_ps(sign, cz),
     );
-    let (aax, abx, acx) = (
-        _mm256_andnot_ps(sign, ax),
-        _mm256_andnot_ps(sign, bx),
-        _mm256_andnot_ps(sign, cx),
-    );
-    let (aay, aby, acy) = (
-        _mm256_andnot_ps(sign, ay),
-        _mm256_andnot_ps(sign, by),
-        _mm256_andnot_ps(sign, cy),
-    );
     let max_zt = max(max(aaz, abz), acz);
-    let max_xt = max(max(aax, abx), acx);
-    let max_yt = max(max(aay, aby), acy);
-    let (g2, g3, g5) = (set(gamma(2)), set(gamma(3)), set(gamma(5)));
-    let delta_z = mul(g3, max_zt);
-    let max_z = max(
-        max(_mm256_andnot_ps(sign, az0), _mm256_andnot_ps(sign, bz0)),
-        _mm256_andnot_ps(sign, cz0),
-    );
-    let two = set(2.0);
-    let shear_x = mul(two, mul(_mm256_andnot_ps(sign, sx), max_z));
-    let shear_y = mul(two, mul(_mm256_andnot_ps(sign, sy), max_z));
-    let delta_x = mul(g5, add(max_xt, shear_x));
-    let delta_y = mul(g5, add(max_yt, shear_y));
-    let delta_e = mul(
-        set(2.0),
-        add(
-            add(mul(mul(g2, max_xt), max_yt), mul(delta_y, max_xt)),
-            mul(delta_x, max_yt),
-        ),
-    );
-    let max_e = max(max(au, av), aw);
-    let delta_t = mul(
-        mul(
-            set(3.0),
-            add(
-                add(mul(mul(g3, max_e), max_zt), mul(delta_e, max_zt)),
-                mul(delta_z, max_e),
-            ),
-        ),
-        _mm256_andnot_ps(sign, inv),
-    );
-    let finite = and(
-        cmp!(_CMP_LT_OQ, _mm256_andnot_ps(sign, t), set(f32::INFINITY)),
-        cmp!(_CMP_LE_OQ, t, tmax),
-    );
+    let delta_z = mul(set(gamma(3)), max_zt);
     let ahead = cmp!(
         _CMP_GT_OQ,
         _mm256_min_ps(_mm256_min_ps(az, bz), cz),
         delta_z
     );
-    let near = _mm256_andnot_ps(ahead, cmp!(_CMP_LE_OQ, t, delta_t));
+    // A lane whose vertices all lie ahead of the origin beyond the rounding
+    // of their `z` is never too near to tell: the bound on `t`'s rounding
+    // is needed only where some passing lane is not (a ray leaving a
+    // surface through its own triangle), so most hits skip it.
+    let near = if _mm256_movemask_ps(_mm256_andnot_ps(ahead, ok)) == 0 {
+        zero
+    } else {
+        let (au, av, aw) = (
+            _mm256_andnot_ps(sign, u),
+            _mm256_andnot_ps(sign, v),
+            _mm256_andnot_ps(sign, w),
+        );
+        let (aax, abx, acx) = (
+            _mm256_andnot_ps(sign, ax),
+            _mm256_andnot_ps(sign, bx),
+            _mm256_andnot_ps(sign, cx),
+        );
+        let (aay, aby, acy) = (
+            _mm256_andnot_ps(sign, ay),
+            _mm256_andnot_ps(sign, by),
+            _mm256_andnot_ps(sign, cy),
+        );
+        let max_xt = max(max(aax, abx), acx);
+        let max_yt = max(max(aay, aby), acy);
+        let (g2, g3, g5) = (set(gamma(2)), set(gamma(3)), set(gamma(5)));
+        let max_z = max(
+            max(_mm256_andnot_ps(sign, az0), _mm256_andnot_ps(sign, bz0)),
+            _mm256_andnot_ps(sign, cz0),
+        );
+        let two = set(2.0);
+        let shear_x = mul(two, mul(_mm256_andnot_ps(sign, sx), max_z));
+        let shear_y = mul(two, mul(_mm256_andnot_ps(sign, sy), max_z));
+        let delta_x = mul(g5, add(max_xt, shear_x));
+        let delta_y = mul(g5, add(max_yt, shear_y));
+        let delta_e = mul(
+            set(2.0),
+            add(
+                add(mul(mul(g2, max_xt), max_yt), mul(delta_y, max_xt)),
+                mul(delta_x, max_yt),
+            ),
+        );
+        let max_e = max(max(au, av), aw);
+        let delta_t = mul(
+            mul(
+                set(3.0),
+                add(
+                    add(mul(mul(g3, max_e), max_zt), mul(delta_e, max_zt)),
+                    mul(delta_z, max_e),
+                ),
+            ),
+            _mm256_andnot_ps(sign, inv),
+        );
+        _mm256_andnot_ps(ahead, cmp!(_CMP_LE_OQ, t, delta_t))
+    };
+    let finite = and(
+        cmp!(_CMP_LT_OQ, _mm256_andnot_ps(sign, t), set(f32::INFINITY)),
+        cmp!(_CMP_LE_OQ, t, tmax),
+    );
     let ok = and(_mm256_andnot_ps(near, ok), finite);
     let (u, v) = if UV {
         let one = set(1.0);
