@@ -710,7 +710,7 @@ impl Bvh {
                     k.triangles::<true>(s, p, l.tmax[i])
                 };
                 changed |= h.mask != 0;
-                for lane in (0..8).filter(|b| h.mask & (1 << b) != 0) {
+                for lane in h.lanes() {
                     let prim = self.prim[p.idx[lane] as usize];
                     take(found, lanes, l, left, i, (&h, lane, prim));
                     if F::ANY {

@@ -366,7 +366,7 @@ impl Bvh {
         best: &'b mut Option<Hit>,
     ) -> impl FnMut(&TriHit8, &[u32; PACKET]) -> f32 + 'b {
         move |h, idx| {
-            for lane in (0..PACKET).filter(|l| h.mask & (1 << l) != 0) {
+            for lane in h.lanes() {
                 let hit = Hit {
                     t: h.t[lane],
                     u: h.u[lane],

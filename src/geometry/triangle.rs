@@ -495,6 +495,22 @@ impl TriHit8 {
         u: [0.0; 8],
         v: [0.0; 8],
     };
+
+    /// The lanes that hit, lowest first. One step per hit rather than a
+    /// test of all eight lanes: the eight tests' outcomes change from
+    /// packet to packet, and mispredicting them cost the closest-hit walk
+    /// about two branches a ray.
+    #[inline(always)]
+    pub fn lanes(&self) -> impl Iterator<Item = usize> {
+        let mut m = self.mask;
+        std::iter::from_fn(move || {
+            (m != 0).then(|| {
+                let lane = m.trailing_zeros() as usize;
+                m &= m - 1;
+                lane
+            })
+        })
+    }
 }
 
 /// [`intersect`] on eight triangles, `p[vertex][axis][lane]`, as two runs of
