@@ -821,7 +821,7 @@ mod tests {
         let stack = b.wide.stack;
         for heap in [false, true] {
             // A tree deeper than the machine stack holds walks on the heap.
-            b.wide.stack = if heap { STACK } else { stack };
+            b.wide.stack = if heap { STACK + 1 } else { stack };
             for &level in &levels {
                 b.wide.simd = level;
                 for (r, (hit, any)) in rays.iter().zip(&want) {
