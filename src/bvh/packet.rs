@@ -915,6 +915,7 @@ mod tests {
     fn agree(b: &mut Bvh, rays: &[Ray]) -> usize {
         let mut hits = 0;
         let ways = [LeafTest::Chosen, LeafTest::ByRay, LeafTest::ByTriangle];
+        let stack = b.wide.stack;
         for (simd, way) in kernels().into_iter().flat_map(|k| ways.map(|w| (k, w))) {
             b.wide.simd = simd;
             b.wide.leaf_test = way;
@@ -922,6 +923,14 @@ mod tests {
             let mut blocked = vec![false; rays.len()];
             b.intersect_packet(rays, &mut got);
             b.occluded_packet(rays, &mut blocked);
+            // A tree deeper than the machine stack holds walks on the heap:
+            // the same answers.
+            b.wide.stack = STACK + 1;
+            let mut heap = (vec![None; rays.len()], vec![false; rays.len()]);
+            b.intersect_packet(rays, &mut heap.0);
+            b.occluded_packet(rays, &mut heap.1);
+            b.wide.stack = stack;
+            assert_eq!(heap, (got.clone(), blocked.clone()), "{simd}, {way:?}");
             let mut st = TraversalStats::default();
             for (i, r) in rays.iter().enumerate() {
                 let want = b.intersect::<false>(r, &mut st);
