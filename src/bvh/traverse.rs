@@ -493,38 +493,34 @@ impl Bvh {
     ) {
         let w = &self.wide;
         let setup = || RayShear::within(ray.origin, ray.dir, self.reach);
-        // Closest-hit rays set up the triangle test at their first leaf:
-        // most of them (camera rays past the object) never reach one. Shadow
-        // rays nearly always do.
-        let mut shear = if ANY { Some(setup()) } else { None };
         let boxes = BoxRay::new(ray);
         let mut tmax = ray.tmax;
         let mut sp = 0;
-        let mut cur = 0u32;
-        loop {
-            if cur & LEAF == 0 {
-                let node = &w.nodes[cur as usize];
+        // Tests wide node `at`'s boxes; the child to visit next, with the
+        // others hit pushed, or `None` when no box is hit.
+        macro_rules! visit {
+            ($at:expr) => {{
+                let at: u32 = $at;
+                let node = &w.nodes[at as usize];
                 let (mask, tnear) = k.boxes(&boxes, node, tmax);
                 if STATS {
                     let slots = node.b[0].iter().filter(|x| x.is_finite()).count() as u32;
-                    st.node(cur, mask.count_ones(), slots - mask.count_ones());
+                    st.node(at, mask.count_ones(), slots - mask.count_ones());
                 }
-                if mask != 0 {
-                    if mask & (mask - 1) == 0 {
-                        cur = node.child[mask.trailing_zeros() as usize];
-                        continue;
+                if mask == 0 {
+                    None
+                } else if mask & (mask - 1) == 0 {
+                    Some(node.child[mask.trailing_zeros() as usize])
+                } else if ANY {
+                    // Any hit will do: no ordering, the first lane next.
+                    let mut m = mask & (mask - 1);
+                    while m != 0 {
+                        stack[sp].write((node.child[m.trailing_zeros() as usize], 0.0));
+                        sp += 1;
+                        m &= m - 1;
                     }
-                    if ANY {
-                        // Any hit will do: no ordering, the first lane next.
-                        let mut m = mask & (mask - 1);
-                        while m != 0 {
-                            stack[sp].write((node.child[m.trailing_zeros() as usize], 0.0));
-                            sp += 1;
-                            m &= m - 1;
-                        }
-                        cur = node.child[mask.trailing_zeros() as usize];
-                        continue;
-                    }
+                    Some(node.child[mask.trailing_zeros() as usize])
+                } else {
                     // Two or more hits: the nearest next, the others pushed
                     // (unsorted: sorting mispredicts more than it saves).
                     let mut near = mask.trailing_zeros() as usize;
@@ -540,7 +536,24 @@ impl Bvh {
                         stack[sp].write((node.child[far], tnear[far]));
                         sp += 1;
                     }
-                    cur = node.child[near];
+                    Some(node.child[near])
+                }
+            }};
+        }
+        // The root first, outside the loop: most camera rays that miss end
+        // here, before what the compiler hoists out of the loop (the
+        // triangle test's set-up, constants spilled for the leaves).
+        let Some(mut cur) = visit!(0) else {
+            return;
+        };
+        // Closest-hit rays set up the triangle test at their first leaf:
+        // most of them (camera rays past the object) never reach one. Shadow
+        // rays nearly always do.
+        let mut shear = if ANY { Some(setup()) } else { None };
+        loop {
+            if cur & LEAF == 0 {
+                if let Some(next) = visit!(cur) {
+                    cur = next;
                     continue;
                 }
             } else {
