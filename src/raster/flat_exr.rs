@@ -397,12 +397,29 @@ mod tests {
         assert!(format!("{note:?}").contains("caf"), "{note:?}");
     }
 
-    fn temp(name: &str, bytes: &[u8]) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("rayterm-flat-exr-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let p = dir.join(name);
-        std::fs::write(&p, bytes).unwrap();
-        p
+    /// One test's folder of files, removed when the test ends, passed or
+    /// failed.
+    struct Folder(PathBuf);
+
+    impl Folder {
+        fn new(test: &str) -> Self {
+            let d = std::env::temp_dir()
+                .join(format!("rayterm-flat-exr-{test}-{}", std::process::id()));
+            std::fs::create_dir_all(&d).unwrap();
+            Folder(d)
+        }
+
+        fn file(&self, name: &str, bytes: &[u8]) -> PathBuf {
+            let p = self.0.join(name);
+            std::fs::write(&p, bytes).unwrap();
+            p
+        }
+    }
+
+    impl Drop for Folder {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
     }
 
     fn any(_: u32, _: u32, _: usize) -> Result<()> {
@@ -412,7 +429,8 @@ mod tests {
     #[test]
     fn a_round_trip_gives_the_layout_and_samples() {
         let bytes = image();
-        let img = Scanlines::open(&temp("round.exr", &bytes), &any).unwrap();
+        let f = Folder::new("round");
+        let img = Scanlines::open(&f.file("round.exr", &bytes), &any).unwrap();
         let l = &img.layout;
         assert_eq!(l.channels, layout().channels);
         assert_eq!((l.width, l.height), (3, 2));
@@ -430,18 +448,19 @@ mod tests {
     #[test]
     fn damaged_headers_and_tables_are_refused_not_trusted() {
         let bytes = image();
+        let f = Folder::new("damaged");
         let (_, end) = header(&bytes).unwrap();
         // Every cut of the header fails cleanly, as does every cut file.
         for cut in 0..end {
             assert!(header(&bytes[..cut]).is_err(), "cut at {cut}");
         }
         for cut in [0, 4, end, end + 8, bytes.len() - 1] {
-            let p = temp("cut.exr", &bytes[..cut]);
+            let p = f.file("cut.exr", &bytes[..cut]);
             let err = Scanlines::open(&p, &any).err().unwrap().to_string();
             assert!(err.contains("cut.exr"), "{err}");
         }
         let refuses = |b: &[u8], rows: Range<u32>| {
-            let p = temp("bad.exr", b);
+            let p = f.file("bad.exr", b);
             let err = match Scanlines::open(&p, &any) {
                 Err(e) => e,
                 Ok(img) => img.read(rows, &mut Vec::new()).err().unwrap(),
@@ -461,7 +480,7 @@ mod tests {
         refuses(&b, 0..2);
         // A file another program would read, but not of this layout.
         refuses(&[&bytes[..], &[0]].concat(), 0..2);
-        let e = Scanlines::open(&temp("small.exr", &bytes), &|w, _, _| {
+        let e = Scanlines::open(&f.file("small.exr", &bytes), &|w, _, _| {
             anyhow::ensure!(w < 3, "too wide");
             Ok(())
         });
