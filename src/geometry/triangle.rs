@@ -499,7 +499,7 @@ impl TriHit8 {
     /// The lanes that hit, lowest first. One step per hit rather than a
     /// test of all eight lanes: the eight tests' outcomes change from
     /// packet to packet, and the closest-hit walk mispredicted about two of
-    /// them per ray that hits (BENCHMARKS.md).
+    /// them per ray that hits, as simulated (BENCHMARKS.md).
     #[inline(always)]
     pub fn lanes(&self) -> impl Iterator<Item = usize> {
         let mut m = self.mask;
