@@ -7,6 +7,8 @@
 //! a time budget, with an error or a scene, never a panic; a scene that
 //! loads holds only finite numbers and valid indices.
 
+mod campaign;
+
 use std::path::Path;
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
@@ -505,7 +507,7 @@ fn toml_line() -> impl Strategy<Value = String> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 128, max_shrink_iters: 256, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { max_shrink_iters: 256, ..campaign::config(128) })]
 
     #[test]
     fn random_obj_and_mtl_text(

@@ -11,9 +11,11 @@
 //! it does near it; TOML arrays of the wrong length are errors at their
 //! position.
 
+mod campaign;
+
 use glam::Vec3;
 use proptest::prelude::*;
-use rayterm::bvh;
+use rayterm::bvh::{self, Simd};
 use rayterm::geometry::offset::{geometric_normal, hit_point, offset_origin};
 use rayterm::geometry::triangle::{intersect, RayShear};
 use rayterm::geometry::Ray;
@@ -98,12 +100,25 @@ fn tri_and_ray() -> impl Strategy<Value = ([Vec3; 3], Ray)> {
     triangle().prop_flat_map(|t| (Just(t), ray_for(t)))
 }
 
+/// The SIMD levels this CPU runs, saying once which it lacks: their
+/// kernels go untested here.
+fn simd_levels() -> Vec<Simd> {
+    static SAID: std::sync::Once = std::sync::Once::new();
+    let levels = Simd::available();
+    SAID.call_once(|| {
+        if !levels.contains(&Simd::Avx512) {
+            eprintln!("note: this CPU has no AVX-512: its kernels are not tested here");
+        }
+    });
+    levels
+}
+
 /// Spawned rays closer than this (as a cosine) to their surface's plane are
 /// not checked for re-hits.
 const GRAZING: f32 = 1e-5;
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(256))]
+    #![proptest_config(campaign::config(256))]
 
     #[test]
     fn hits_are_finite_and_inside_the_triangle(
@@ -208,17 +223,22 @@ proptest! {
             .collect();
         let g = soup(&tris);
         for builder in [Builder::Sah, Builder::Median] {
-            let b = bvh::build(&g, builder);
-            let mut hits = vec![None; rays.len()];
-            let mut blocked = vec![false; rays.len()];
-            b.intersect_packet(&rays, &mut hits);
-            b.occluded_packet(&rays, &mut blocked);
-            for (i, ray) in rays.iter().enumerate() {
-                let mut st = Default::default();
-                let want = b.intersect::<false>(ray, &mut st);
-                prop_assert_eq!(hits[i], want, "ray {} {:?} {}", i, ray, builder);
-                let any = b.occluded::<false>(ray, &mut st).is_some();
-                prop_assert_eq!(blocked[i], any, "ray {} {:?} {}", i, ray, builder);
+            let mut b = bvh::build(&g, builder);
+            // Every SIMD level this CPU has, widest first (each cap narrows).
+            for simd in simd_levels().into_iter().rev() {
+                b.cap_simd(simd);
+                prop_assert_eq!(b.simd(), simd);
+                let mut hits = vec![None; rays.len()];
+                let mut blocked = vec![false; rays.len()];
+                b.intersect_packet(&rays, &mut hits);
+                b.occluded_packet(&rays, &mut blocked);
+                for (i, ray) in rays.iter().enumerate() {
+                    let mut st = Default::default();
+                    let want = b.intersect::<false>(ray, &mut st);
+                    prop_assert_eq!(hits[i], want, "ray {} {:?} {} {}", i, ray, builder, simd);
+                    let any = b.occluded::<false>(ray, &mut st).is_some();
+                    prop_assert_eq!(blocked[i], any, "ray {} {:?} {} {}", i, ray, builder, simd);
+                }
             }
         }
     }
@@ -299,7 +319,7 @@ fn plain(_: usize, p: Vec3) -> String {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(128))]
+    #![proptest_config(campaign::config(128))]
 
     #[test]
     fn boms_line_endings_and_continuations_change_nothing(

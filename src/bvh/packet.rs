@@ -12,7 +12,9 @@
 //! over a leaf only as its single walk would, when the leaf lies beyond the
 //! nearest hit it has: every triangle that could be a ray's closest hit is
 //! tested, and the closest hit (ties going to the lower triangle index) is
-//! the same, bit for bit, whatever the order of the walk.
+//! the same, bit for bit, whatever the order of the walk: a hit is never
+//! nearer than where its ray enters the leaf's box
+//! ([`settle`](super::traverse::settle)).
 //!
 //! At a leaf, the rays test its triangles one ray against eight triangles
 //! a time, or, where that makes fewer tests (many rays, few triangles:
@@ -38,7 +40,7 @@ use glam::{Vec3, Vec4};
 use super::traverse::slab_hits_avx;
 #[cfg(target_arch = "x86_64")]
 use super::traverse::Avx;
-use super::traverse::{closer, Kernels, Portable, FAR_SCALE, MAX_TFAR, STACK};
+use super::traverse::{closer, settle, Kernels, Portable, FAR_SCALE, MAX_TFAR, STACK};
 use super::wide::{leaf_packets, LeafTest, Node8, Packet, LEAF, PACKET, WIDTH};
 use super::{Bvh, Hit, Simd, TraversalStats};
 use crate::geometry::ray::PARALLEL;
@@ -51,12 +53,15 @@ use crate::geometry::Ray;
 pub const PACKET_RAYS: usize = 64;
 
 /// The rays of one group, one lane each, in the layout the kernels load
-/// eight at a time: directions, their reciprocals and the current `tmax`.
+/// eight at a time: directions, their reciprocals, the current `tmax`, and
+/// where each ray entered the box of the leaf being tested (what its hits
+/// there are settled to, see [`settle`]).
 #[repr(C, align(32))]
 struct Lanes {
     dir: [[f32; PACKET_RAYS]; 3],
     inv: [[f32; PACKET_RAYS]; 3],
     tmax: [f32; PACKET_RAYS],
+    entry: [f32; PACKET_RAYS],
 }
 
 impl Lanes {
@@ -65,6 +70,7 @@ impl Lanes {
             dir: [[0.0; PACKET_RAYS]; 3],
             inv: [[0.0; PACKET_RAYS]; 3],
             tmax: [f32::NEG_INFINITY; PACKET_RAYS],
+            entry: [0.0; PACKET_RAYS],
         }
     }
 }
@@ -167,9 +173,10 @@ fn frustum_boxes(f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
 }
 
 /// The single-ray box test of child `slot` of `n` for the rays in `active`,
-/// four at a time: bit `i` set when ray `i` hits it.
+/// four at a time: bit `i` set when ray `i` hits it; each ray's entry
+/// distance into `l.entry`.
 #[inline(always)]
-fn rays_box(f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+fn rays_box(f: &Frustum, l: &mut Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
     let d = |a: usize| {
         let (i, j) = planes(f, a);
         (
@@ -187,6 +194,7 @@ fn rays_box(f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 
         let tmax = Vec4::from_slice(&l.tmax[r.clone()]).min(Vec4::splat(MAX_TFAR));
         let tf = (dz.1 * iz).min((dy.1 * iy).min((dx.1 * ix).min(tmax))) * Vec4::splat(FAR_SCALE);
         hit |= (tn.cmple(tf).bitmask() as u64) << (4 * b);
+        tn.write_to_slice(&mut l.entry[r]);
     }
     hit & active
 }
@@ -224,7 +232,7 @@ unsafe fn frustum_boxes_avx(f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WI
 /// The CPU must support AVX.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn rays_box_avx(f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+unsafe fn rays_box_avx(f: &Frustum, l: &mut Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
     use std::arch::x86_64::*;
     macro_rules! d {
         ($a:expr) => {{
@@ -271,6 +279,7 @@ unsafe fn rays_box_avx(f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u
         );
         let m = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u64;
         hit |= m << r;
+        _mm256_store_ps(l.entry.as_mut_ptr().add(r), tn);
     }
     hit & active
 }
@@ -278,7 +287,7 @@ unsafe fn rays_box_avx(f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u
 /// The kernels of a packet walk, beside those of the single-ray walk.
 trait PacketKernels: Kernels {
     fn frustum(&self, f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]);
-    fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64;
+    fn rays_box(&self, f: &Frustum, l: &mut Lanes, n: &Node8, slot: usize, active: u64) -> u64;
     /// Triangle `j` of `p` against rays `8b..8b + 8` of the group, each
     /// computing what [`Kernels::triangles`] computes for that ray.
     fn rays_triangle<const UV: bool>(
@@ -298,7 +307,7 @@ impl PacketKernels for Portable {
     }
 
     #[inline(always)]
-    fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+    fn rays_box(&self, f: &Frustum, l: &mut Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
         rays_box(f, l, n, slot, active)
     }
 
@@ -341,7 +350,7 @@ impl PacketKernels for Avx {
     }
 
     #[inline(always)]
-    fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+    fn rays_box(&self, f: &Frustum, l: &mut Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
         // SAFETY: as above.
         unsafe { rays_box_avx(f, l, n, slot, active) }
     }
@@ -704,11 +713,14 @@ impl Bvh {
                 }
                 // SAFETY: written above, once `sheared` has bit `i`.
                 let s = unsafe { shear[i].assume_init_ref() };
-                let h = if F::ANY {
+                let mut h = if F::ANY {
                     k.triangles::<false>(s, p, l.tmax[i])
                 } else {
                     k.triangles::<true>(s, p, l.tmax[i])
                 };
+                if h.mask != 0 {
+                    settle(&mut h, l.entry[i], l.tmax[i]);
+                }
                 changed |= h.mask != 0;
                 for lane in h.lanes() {
                     let prim = self.prim[p.idx[lane] as usize];
@@ -743,18 +755,23 @@ impl Bvh {
                 while blocks != 0 {
                     let b = blocks.trailing_zeros() as usize / 8;
                     blocks &= !(0xff << (8 * b));
-                    let h = if F::ANY {
+                    let mut h = if F::ANY {
                         k.rays_triangle::<false>((p, j), o, sh, l, b)
                     } else {
                         k.rays_triangle::<true>((p, j), o, sh, l, b)
                     };
                     let mut m = h.mask as u64 & (left.1 >> (8 * b)) & 0xff;
-                    changed |= m != 0;
                     let prim = self.prim[p.idx[j] as usize];
                     while m != 0 {
                         let lane = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        take(found, lanes, l, left, 8 * b + lane, (&h, lane, prim));
+                        // Settled ray by ray, as `settle` settles one ray's.
+                        let i = 8 * b + lane;
+                        h.t[lane] = h.t[lane].max(l.entry[i]);
+                        if h.t[lane] <= l.tmax[i] {
+                            changed = true;
+                            take(found, lanes, l, left, i, (&h, lane, prim));
+                        }
                     }
                 }
             }
@@ -942,6 +959,49 @@ mod tests {
             }
         }
         hits
+    }
+
+    /// A ray far from a soup of large flat triangles, whose test rounds
+    /// its hit on triangle 16 to `t` = 0.99999756, before the ray enters
+    /// that triangle's box at 1.0, and hits triangle 7 at 0.99999917: the
+    /// packet reached 7's leaf first and then skipped 16's, the single ray
+    /// the reverse. Hits settled to their leaves' boxes make the order irrelevant.
+    #[test]
+    fn a_hit_rounded_before_its_box_is_found_whatever_the_order() {
+        let v = Vec3::new;
+        let mut tris = vec![[Vec3::ZERO; 3]; 17];
+        tris[1] = [v(0.0, 794912.06, 0.0), Vec3::ZERO, v(0.0, 794912.06, 0.0)];
+        tris[6] = [
+            v(5.552735, 0.0, 0.0),
+            v(-9.903025, 0.0, 0.0),
+            v(0.0, -5.733448, 0.0),
+        ];
+        tris[7] = [Vec3::ZERO, v(0.0, 0.0, 326390.38), v(-9.230016, 0.0, 0.0)];
+        tris[9] = [
+            v(0.0, 7.669358, 0.0),
+            v(0.0, -5.943702, 0.0),
+            v(0.0, 7.669358, 0.0),
+        ];
+        tris[10] = [Vec3::ZERO, v(-283069.44, 3.4950614, 0.0), Vec3::ZERO];
+        tris[16] = [v(-8.654379, 0.0, 0.0), v(0.0, 0.0, 673145.56), Vec3::ZERO];
+        let o = v(391467.97, 1.0, -575141.8);
+        // Rays at 7's corners, and one across it.
+        let t = tris[7];
+        let rays: Vec<Ray> = (0..PACKET_RAYS)
+            .map(|k| {
+                let w = match k {
+                    59 => [0.9243295, 1.0 - 0.9243295, 0.0],
+                    _ if k % 8 < 3 => [0, 1, 2].map(|i| (i == k % 8) as u8 as f32),
+                    _ if k % 8 == 3 => [0.0, 1.0, 0.0],
+                    _ => [0.0, 0.0, 1.0],
+                };
+                Ray::new(o, t[0] * w[0] + t[1] * w[1] + t[2] * w[2] - o)
+            })
+            .collect();
+        let mut b = super::super::build(&soup(&tris), Builder::Median);
+        agree(&mut b, &rays);
+        let hit = b.intersect::<false>(&rays[59], &mut TraversalStats::default());
+        assert_eq!(hit.map(|h| (h.t, h.prim)), Some((1.0, 7)));
     }
 
     /// Camera rays in 8x8 tiles (and in tiles cut short at the frame's
@@ -1181,11 +1241,13 @@ mod tests {
             let active = if n == 64 { !0 } else { (1u64 << n) - 1 };
             for slot in 0..WIDTH {
                 let mut want = 0u64;
+                let mut entry = [0.0f32; PACKET_RAYS];
                 for (i, ray) in rays.iter().enumerate() {
                     let br = BoxRay::new(ray);
                     let (m, tn) = super::super::traverse::hit_boxes(&br, &node, ray.tmax);
                     if m & (1 << slot) != 0 {
                         want |= 1 << i;
+                        entry[i] = tn[slot];
                         assert!(
                             fmask & (1 << slot) != 0,
                             "frustum misses a box ray {i} hits"
@@ -1193,12 +1255,21 @@ mod tests {
                         assert!(ftn[slot] <= tn[slot]);
                     }
                 }
-                assert_eq!(rays_box(&fr, &l, &node, slot, active), want);
+                // The rays that hit enter where their single test says.
+                let entered = |l: &Lanes| {
+                    (0..n)
+                        .filter(|i| want & (1 << i) != 0)
+                        .all(|i| l.entry[i].to_bits() == entry[i].to_bits())
+                };
+                assert_eq!(rays_box(&fr, &mut l, &node, slot, active), want);
+                assert!(entered(&l));
                 #[cfg(target_arch = "x86_64")]
                 if std::is_x86_feature_detected!("avx") {
                     // SAFETY: AVX is present.
                     unsafe {
-                        assert_eq!(rays_box_avx(&fr, &l, &node, slot, active), want);
+                        l.entry = [f32::NAN; PACKET_RAYS];
+                        assert_eq!(rays_box_avx(&fr, &mut l, &node, slot, active), want);
+                        assert!(entered(&l));
                         let (m, t) = frustum_boxes_avx(&fr, &node, tmax);
                         assert_eq!(m, fmask);
                         assert_eq!(t.map(f32::to_bits), ftn.map(f32::to_bits));
