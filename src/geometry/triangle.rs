@@ -169,12 +169,7 @@ pub fn intersect(
     let mut v = ax * cy - ay * cx;
     let mut w = bx * ay - by * ax;
     if u == 0.0 || v == 0.0 || w == 0.0 {
-        let (ax, ay, bx, by, cx, cy) = (
-            ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64,
-        );
-        u = (cx * by - cy * bx) as f32;
-        v = (ax * cy - ay * cx) as f32;
-        w = (bx * ay - by * ax) as f32;
+        [u, v, w] = edges_exact([ax, ay, bx, by, cx, cy]);
     }
     if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
         return None;
@@ -406,17 +401,7 @@ pub fn lanes4(
     let on_edge = (u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero)).bitmask();
     if on_edge != 0 {
         for i in (0..4).filter(|i| on_edge & (1 << i) != 0) {
-            let (ax, ay, bx, by, cx, cy) = (
-                ax[i] as f64,
-                ay[i] as f64,
-                bx[i] as f64,
-                by[i] as f64,
-                cx[i] as f64,
-                cy[i] as f64,
-            );
-            u[i] = (cx * by - cy * bx) as f32;
-            v[i] = (ax * cy - ay * cx) as f32;
-            w[i] = (bx * ay - by * ax) as f32;
+            [u[i], v[i], w[i]] = edges_exact([ax[i], ay[i], bx[i], by[i], cx[i], cy[i]]);
         }
     }
     let neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
@@ -540,12 +525,28 @@ pub fn intersect8<const UV: bool>(s: &RayShear, p: &[[[f32; 8]; 3]; 3], tmax: f3
 #[inline(never)]
 fn edges_f64(lanes: i32, p: [[f32; 8]; 6], mut e: [[f32; 8]; 3]) -> [[f32; 8]; 3] {
     for i in (0..8).filter(|i| lanes & (1 << i) != 0) {
-        let [ax, ay, bx, by, cx, cy] = p.map(|c| c[i] as f64);
-        e[0][i] = (cx * by - cy * bx) as f32;
-        e[1][i] = (ax * cy - ay * cx) as f32;
-        e[2][i] = (bx * ay - by * ax) as f32;
+        [e[0][i], e[1][i], e[2][i]] = edges_exact(p.map(|c| c[i]));
     }
     e
+}
+
+/// The edge functions `u`, `v`, `w` of the sheared vertices `[ax, ay, bx,
+/// by, cx, cy]` in f64, where products of f32 are exact and so is each
+/// sign, rounded to f32 keeping that sign: a value too small for f32 becomes
+/// its smallest subnormal rather than a zero, which would read as "on the
+/// edge". (A ray passing 3e-11 above a vertex of a triangle lying in the
+/// ray's plane had two edge functions round to zero, and hit the vertex.)
+#[inline]
+fn edges_exact(p: [f32; 6]) -> [f32; 3] {
+    let [ax, ay, bx, by, cx, cy] = p.map(f64::from);
+    [cx * by - cy * bx, ax * cy - ay * cx, bx * ay - by * ax].map(|e| {
+        let f = e as f32;
+        if f == 0.0 && e != 0.0 {
+            f32::from_bits(1).copysign(f)
+        } else {
+            f
+        }
+    })
 }
 
 /// [`intersect8`] with AVX: all eight lanes per instruction, computing
@@ -839,6 +840,30 @@ mod tests {
         assert!(hit(Vec3::new(0.6, 0.6, 1.0), Vec3::NEG_Z, TRI).is_none());
         assert!(hit(Vec3::new(0.25, 0.25, 1.0), Vec3::Z, TRI).is_none());
         assert!(hit(Vec3::new(-0.1, 0.5, 1.0), Vec3::NEG_Z, TRI).is_none());
+    }
+
+    /// A ray 3.3e-11 above a vertex of a triangle that lies (to within
+    /// 1e-38) in a plane holding the ray: two of its edge functions are
+    /// below f32's range, and rounded to zero they put the ray on the
+    /// vertex. Every kernel misses it, as the ray does.
+    #[test]
+    fn edge_functions_below_f32_keep_their_sign() {
+        let t = [
+            [0.0, 0.0, 0.0],
+            [8.101901, 1.0, 0.0],
+            [2.9311085, 0.36178035, 1e-38],
+        ];
+        let (o, d) = (
+            Vec3::new(-4.4815583, 1.0, 0.0),
+            Vec3::new(99225.93, 2.6193533e-7, 0.0),
+        );
+        let s = RayShear::new(o, d);
+        assert_eq!(intersect(&s, &t[0], &t[1], &t[2], f32::INFINITY), None);
+        check_lanes(o, d, &[t; 4], 0, f32::INFINITY);
+        // Below the vertex, it is a hit.
+        let up = Vec3::new(d.x, -d.y, 0.0);
+        assert!(intersect(&RayShear::new(o, up), &t[0], &t[1], &t[2], f32::INFINITY).is_some());
+        check_lanes(o, up, &[t; 4], 0, f32::INFINITY);
     }
 
     #[test]
