@@ -12,9 +12,7 @@
 //! over a leaf only as its single walk would, when the leaf lies beyond the
 //! nearest hit it has: every triangle that could be a ray's closest hit is
 //! tested, and the closest hit (ties going to the lower triangle index) is
-//! the same, bit for bit, whatever the order of the walk: a hit is never
-//! nearer than where its ray enters the leaf's box
-//! ([`settle`](super::traverse::settle)).
+//! the same, bit for bit, whatever the order of the walk.
 //!
 //! At a leaf, the rays test its triangles one ray against eight triangles
 //! a time, or, where that makes fewer tests (many rays, few triangles:
@@ -40,7 +38,7 @@ use glam::{Vec3, Vec4};
 use super::traverse::slab_hits_avx;
 #[cfg(target_arch = "x86_64")]
 use super::traverse::Avx;
-use super::traverse::{closer, settle, Kernels, Portable, FAR_SCALE, MAX_TFAR, STACK};
+use super::traverse::{closer, Kernels, Portable, FAR_SCALE, MAX_TFAR, STACK};
 use super::wide::{leaf_packets, LeafTest, Node8, Packet, LEAF, PACKET, WIDTH};
 use super::{Bvh, Hit, Simd, TraversalStats};
 use crate::geometry::ray::PARALLEL;
@@ -53,15 +51,12 @@ use crate::geometry::Ray;
 pub const PACKET_RAYS: usize = 64;
 
 /// The rays of one group, one lane each, in the layout the kernels load
-/// eight at a time: directions, their reciprocals, the current `tmax`, and
-/// where each ray entered the box of the leaf being tested (what its hits
-/// there are settled to, see [`settle`]).
+/// eight at a time: directions, their reciprocals and the current `tmax`.
 #[repr(C, align(32))]
 struct Lanes {
     dir: [[f32; PACKET_RAYS]; 3],
     inv: [[f32; PACKET_RAYS]; 3],
     tmax: [f32; PACKET_RAYS],
-    entry: [f32; PACKET_RAYS],
 }
 
 impl Lanes {
@@ -70,7 +65,6 @@ impl Lanes {
             dir: [[0.0; PACKET_RAYS]; 3],
             inv: [[0.0; PACKET_RAYS]; 3],
             tmax: [f32::NEG_INFINITY; PACKET_RAYS],
-            entry: [0.0; PACKET_RAYS],
         }
     }
 }
@@ -173,10 +167,9 @@ fn frustum_boxes(f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
 }
 
 /// The single-ray box test of child `slot` of `n` for the rays in `active`,
-/// four at a time: bit `i` set when ray `i` hits it; each ray's entry
-/// distance into `l.entry`.
+/// four at a time: bit `i` set when ray `i` hits it.
 #[inline(always)]
-fn rays_box(f: &Frustum, l: &mut Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+fn rays_box(f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
     let d = |a: usize| {
         let (i, j) = planes(f, a);
         (
@@ -194,7 +187,6 @@ fn rays_box(f: &Frustum, l: &mut Lanes, n: &Node8, slot: usize, active: u64) -> 
         let tmax = Vec4::from_slice(&l.tmax[r.clone()]).min(Vec4::splat(MAX_TFAR));
         let tf = (dz.1 * iz).min((dy.1 * iy).min((dx.1 * ix).min(tmax))) * Vec4::splat(FAR_SCALE);
         hit |= (tn.cmple(tf).bitmask() as u64) << (4 * b);
-        tn.write_to_slice(&mut l.entry[r]);
     }
     hit & active
 }
@@ -232,7 +224,7 @@ unsafe fn frustum_boxes_avx(f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WI
 /// The CPU must support AVX.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn rays_box_avx(f: &Frustum, l: &mut Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+unsafe fn rays_box_avx(f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
     use std::arch::x86_64::*;
     macro_rules! d {
         ($a:expr) => {{
@@ -279,7 +271,6 @@ unsafe fn rays_box_avx(f: &Frustum, l: &mut Lanes, n: &Node8, slot: usize, activ
         );
         let m = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u64;
         hit |= m << r;
-        _mm256_store_ps(l.entry.as_mut_ptr().add(r), tn);
     }
     hit & active
 }
@@ -287,7 +278,7 @@ unsafe fn rays_box_avx(f: &Frustum, l: &mut Lanes, n: &Node8, slot: usize, activ
 /// The kernels of a packet walk, beside those of the single-ray walk.
 trait PacketKernels: Kernels {
     fn frustum(&self, f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]);
-    fn rays_box(&self, f: &Frustum, l: &mut Lanes, n: &Node8, slot: usize, active: u64) -> u64;
+    fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64;
     /// Triangle `j` of `p` against rays `8b..8b + 8` of the group, each
     /// computing what [`Kernels::triangles`] computes for that ray.
     fn rays_triangle<const UV: bool>(
@@ -307,7 +298,7 @@ impl PacketKernels for Portable {
     }
 
     #[inline(always)]
-    fn rays_box(&self, f: &Frustum, l: &mut Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+    fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
         rays_box(f, l, n, slot, active)
     }
 
@@ -329,6 +320,7 @@ impl PacketKernels for Portable {
                 sh.k,
                 sh.k.map(|a| Vec4::splat(o[a])),
                 sh.s.each_ref().map(|s| Vec4::from_slice(&s[r.clone()])),
+                sh.k.map(|a| Vec4::from_slice(&l.inv[a][r.clone()])),
                 &tri,
                 Vec4::from_slice(&l.tmax[r.clone()]),
             );
@@ -350,7 +342,7 @@ impl PacketKernels for Avx {
     }
 
     #[inline(always)]
-    fn rays_box(&self, f: &Frustum, l: &mut Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
+    fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
         // SAFETY: as above.
         unsafe { rays_box_avx(f, l, n, slot, active) }
     }
@@ -392,6 +384,7 @@ impl PacketKernels for Avx {
                     _mm256_set1_ps(o[kz]),
                 ],
                 [ld!(sh.s[0]), ld!(sh.s[1]), ld!(sh.s[2])],
+                [ld!(l.inv[kx]), ld!(l.inv[ky]), ld!(l.inv[kz])],
                 ld!(l.tmax),
             )
         }
@@ -713,14 +706,11 @@ impl Bvh {
                 }
                 // SAFETY: written above, once `sheared` has bit `i`.
                 let s = unsafe { shear[i].assume_init_ref() };
-                let mut h = if F::ANY {
+                let h = if F::ANY {
                     k.triangles::<false>(s, p, l.tmax[i])
                 } else {
                     k.triangles::<true>(s, p, l.tmax[i])
                 };
-                if h.mask != 0 {
-                    settle(&mut h, l.entry[i], l.tmax[i]);
-                }
                 changed |= h.mask != 0;
                 for lane in h.lanes() {
                     let prim = self.prim[p.idx[lane] as usize];
@@ -755,23 +745,18 @@ impl Bvh {
                 while blocks != 0 {
                     let b = blocks.trailing_zeros() as usize / 8;
                     blocks &= !(0xff << (8 * b));
-                    let mut h = if F::ANY {
+                    let h = if F::ANY {
                         k.rays_triangle::<false>((p, j), o, sh, l, b)
                     } else {
                         k.rays_triangle::<true>((p, j), o, sh, l, b)
                     };
                     let mut m = h.mask as u64 & (left.1 >> (8 * b)) & 0xff;
+                    changed |= m != 0;
                     let prim = self.prim[p.idx[j] as usize];
                     while m != 0 {
                         let lane = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        // Settled ray by ray, as `settle` settles one ray's.
-                        let i = 8 * b + lane;
-                        h.t[lane] = h.t[lane].max(l.entry[i]);
-                        if h.t[lane] <= l.tmax[i] {
-                            changed = true;
-                            take(found, lanes, l, left, i, (&h, lane, prim));
-                        }
+                        take(found, lanes, l, left, 8 * b + lane, (&h, lane, prim));
                     }
                 }
             }
@@ -965,7 +950,8 @@ mod tests {
     /// its hit on triangle 16 to `t` = 0.99999756, before the ray enters
     /// that triangle's box at 1.0, and hits triangle 7 at 0.99999917: the
     /// packet reached 7's leaf first and then skipped 16's, the single ray
-    /// the reverse. Hits settled to their leaves' boxes make the order irrelevant.
+    /// the reverse. Hits never nearer than where the ray enters the triangle's box
+    /// (`triangle::intersect`) make the order irrelevant.
     #[test]
     fn a_hit_rounded_before_its_box_is_found_whatever_the_order() {
         let v = Vec3::new;
@@ -1241,13 +1227,11 @@ mod tests {
             let active = if n == 64 { !0 } else { (1u64 << n) - 1 };
             for slot in 0..WIDTH {
                 let mut want = 0u64;
-                let mut entry = [0.0f32; PACKET_RAYS];
                 for (i, ray) in rays.iter().enumerate() {
                     let br = BoxRay::new(ray);
                     let (m, tn) = super::super::traverse::hit_boxes(&br, &node, ray.tmax);
                     if m & (1 << slot) != 0 {
                         want |= 1 << i;
-                        entry[i] = tn[slot];
                         assert!(
                             fmask & (1 << slot) != 0,
                             "frustum misses a box ray {i} hits"
@@ -1255,21 +1239,12 @@ mod tests {
                         assert!(ftn[slot] <= tn[slot]);
                     }
                 }
-                // The rays that hit enter where their single test says.
-                let entered = |l: &Lanes| {
-                    (0..n)
-                        .filter(|i| want & (1 << i) != 0)
-                        .all(|i| l.entry[i].to_bits() == entry[i].to_bits())
-                };
-                assert_eq!(rays_box(&fr, &mut l, &node, slot, active), want);
-                assert!(entered(&l));
+                assert_eq!(rays_box(&fr, &l, &node, slot, active), want);
                 #[cfg(target_arch = "x86_64")]
                 if std::is_x86_feature_detected!("avx") {
                     // SAFETY: AVX is present.
                     unsafe {
-                        l.entry = [f32::NAN; PACKET_RAYS];
-                        assert_eq!(rays_box_avx(&fr, &mut l, &node, slot, active), want);
-                        assert!(entered(&l));
+                        assert_eq!(rays_box_avx(&fr, &l, &node, slot, active), want);
                         let (m, t) = frustum_boxes_avx(&fr, &node, tmax);
                         assert_eq!(m, fmask);
                         assert_eq!(t.map(f32::to_bits), ftn.map(f32::to_bits));

@@ -7,9 +7,9 @@ use std::mem::MaybeUninit;
 
 use glam::{Vec3A, Vec4};
 
-use super::wide::{self, leaf_packets, Node8, Packet, LEAF, PACKET, WIDTH};
+use super::wide::{leaf_packets, Node8, Packet, LEAF, PACKET, WIDTH};
 use super::{Bvh, Simd, TraversalStats};
-use crate::geometry::triangle::{intersect, intersect8, RayShear, TriHit, TriHit8};
+use crate::geometry::triangle::{intersect, intersect8, RayShear, TriHit8};
 use crate::geometry::{gamma, Ray};
 
 /// A closest hit: distance, barycentrics of vertices 1 and 2, and the
@@ -50,30 +50,6 @@ pub(super) const MAX_TFAR: f32 = f32::MAX / 2.0;
 #[inline(always)]
 pub(super) fn closer(hit: &Hit, best: Option<&Hit>) -> bool {
     best.is_none_or(|b| hit.t < b.t || (hit.t == b.t && hit.prim < b.prim))
-}
-
-/// Raises each hit of `h` to `entry`, where the ray entered the box of the
-/// leaf holding the triangles, and drops those that then lie beyond
-/// `tmax`.
-///
-/// The triangle test rounds `t` its own way: on a large triangle far from
-/// the origin it can come out a few ulps before the ray even enters the
-/// leaf's box (a hit at 0.99999756 in a flat box entered at 1.0). A walk
-/// that already holds a hit between the two then skips that leaf, and
-/// which hit is closest depended on the order the leaves were reached in:
-/// a packet's walk and a single ray's disagreed. Raised, a hit is never
-/// nearer than any box holding it (a box's entry distance is at most that
-/// of any box inside it, rounding being monotone), so a box skipped as
-/// lying beyond the closest hit holds no nearer one, whatever the order.
-#[inline(always)]
-pub(super) fn settle(h: &mut TriHit8, entry: f32, tmax: f32) {
-    for lane in h.lanes() {
-        let t = h.t[lane].max(entry);
-        h.t[lane] = t;
-        if t > tmax {
-            h.mask &= !(1 << lane);
-        }
-    }
 }
 
 /// A ray's constants for the slab tests.
@@ -534,19 +510,16 @@ impl Bvh {
                 if mask == 0 {
                     None
                 } else if mask & (mask - 1) == 0 {
-                    let i = mask.trailing_zeros() as usize;
-                    Some((node.child[i], tnear[i]))
+                    Some(node.child[mask.trailing_zeros() as usize])
                 } else if ANY {
                     // Any hit will do: no ordering, the first lane next.
                     let mut m = mask & (mask - 1);
                     while m != 0 {
-                        let i = m.trailing_zeros() as usize;
-                        stack[sp].write((node.child[i], tnear[i]));
+                        stack[sp].write((node.child[m.trailing_zeros() as usize], 0.0));
                         sp += 1;
                         m &= m - 1;
                     }
-                    let i = mask.trailing_zeros() as usize;
-                    Some((node.child[i], tnear[i]))
+                    Some(node.child[mask.trailing_zeros() as usize])
                 } else {
                     // Two or more hits: the nearest next, the others pushed
                     // (unsorted: sorting mispredicts more than it saves).
@@ -563,15 +536,14 @@ impl Bvh {
                         stack[sp].write((node.child[far], tnear[far]));
                         sp += 1;
                     }
-                    Some((node.child[near], tnear[near]))
+                    Some(node.child[near])
                 }
             }};
         }
         // The root first, outside the loop: most camera rays that miss end
         // here, before what the compiler hoists out of the loop (the
         // triangle test's set-up, constants spilled for the leaves).
-        // `entry`: where the ray enters `cur`'s box.
-        let Some((mut cur, mut entry)) = visit!(0) else {
+        let Some(mut cur) = visit!(0) else {
             return;
         };
         // Closest-hit rays set up the triangle test at their first leaf:
@@ -581,7 +553,7 @@ impl Bvh {
         loop {
             if cur & LEAF == 0 {
                 if let Some(next) = visit!(cur) {
-                    (cur, entry) = next;
+                    cur = next;
                     continue;
                 }
             } else {
@@ -594,14 +566,11 @@ impl Bvh {
                     }
                     let shear = shear.get_or_insert_with(setup);
                     // Any-hit traversal needs no barycentrics.
-                    let mut h = if ANY {
+                    let h = if ANY {
                         k.triangles::<false>(shear, p, tmax)
                     } else {
                         k.triangles::<true>(shear, p, tmax)
                     };
-                    if h.mask != 0 {
-                        settle(&mut h, entry, tmax);
-                    }
                     if h.mask != 0 {
                         tmax = on_hit(&h, &p.idx);
                         if ANY {
@@ -619,7 +588,7 @@ impl Bvh {
                 // SAFETY: every entry below `sp` was written by a push.
                 let (c, d) = unsafe { stack[sp].assume_init() };
                 if ANY || d <= tmax * FAR_SCALE {
-                    (cur, entry) = (c, d);
+                    cur = c;
                     break;
                 }
             }
@@ -633,7 +602,8 @@ impl Bvh {
         let mut tmax = ray.tmax;
         let mut best = None;
         for i in 0..self.triangle_count() {
-            if let Some(h) = self.brute_test(&shear, ray, i, tmax) {
+            let t = self.triangle(i);
+            if let Some(h) = intersect(&shear, &t[0], &t[1], &t[2], tmax) {
                 let hit = Hit {
                     t: h.t,
                     u: h.u,
@@ -653,21 +623,11 @@ impl Bvh {
     pub fn occluded_brute(&self, ray: &Ray) -> Option<u32> {
         let shear = RayShear::within(ray.origin, ray.dir, self.reach);
         (0..self.triangle_count())
-            .find(|&i| self.brute_test(&shear, ray, i, ray.tmax).is_some())
+            .find(|&i| {
+                let t = self.triangle(i);
+                intersect(&shear, &t[0], &t[1], &t[2], ray.tmax).is_some()
+            })
             .map(|i| self.prim[i])
-    }
-
-    /// Triangle `i` (leaf order) against `ray`, its hit settled to its
-    /// leaf's box as the walks settle theirs ([`settle`]).
-    fn brute_test(&self, shear: &RayShear, ray: &Ray, i: usize, tmax: f32) -> Option<TriHit> {
-        let v = self.triangle(i);
-        let h = intersect(shear, &v[0], &v[1], &v[2], tmax)?;
-        let leaf = self.wide.leaf_of[self.wide.slot[i] as usize >> wide::PACKET_BITS];
-        let entry = self.nodes[leaf as usize]
-            .bounds()
-            .entry(ray.origin, ray.inv_dir().into());
-        let t = h.t.max(entry);
-        (t <= tmax).then_some(TriHit { t, ..h })
     }
 }
 

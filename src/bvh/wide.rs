@@ -14,7 +14,7 @@ use crate::memory;
 /// Child references with this bit set are leaves:
 /// `LEAF | first_packet << PACKET_BITS | (packets - 1)`.
 pub(crate) const LEAF: u32 = 1 << 31;
-pub(crate) const PACKET_BITS: u32 = 3;
+const PACKET_BITS: u32 = 3;
 
 /// Children per node.
 pub(crate) const WIDTH: usize = 8;

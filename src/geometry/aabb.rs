@@ -82,24 +82,17 @@ impl Aabb {
     #[inline(always)]
     pub fn hit(&self, origin: Vec3, inv_dir: Vec3, tmax: f32) -> Option<f32> {
         let neg = inv_dir.cmplt(Vec3::ZERO);
+        let near = Vec3::select(neg, self.max, self.min);
         let far = Vec3::select(neg, self.min, self.max);
-        let tf = (far - origin) * inv_dir;
-        let min = |a: f32, b: f32| if a < b { a } else { b };
-        let tnear = self.entry(origin, inv_dir);
-        let tfar = min(tf.z, min(tf.y, min(tf.x, tmax))) * (1.0 + 2.0 * super::gamma(3));
-        (tnear <= tfar && tnear < f32::INFINITY).then_some(tnear)
-    }
-
-    /// Where the ray enters the box's slabs, hit or not: the `tnear` of
-    /// [`Aabb::hit`].
-    #[inline(always)]
-    pub fn entry(&self, origin: Vec3, inv_dir: Vec3) -> f32 {
-        let near = Vec3::select(inv_dir.cmplt(Vec3::ZERO), self.max, self.min);
         let tn = (near - origin) * inv_dir;
+        let tf = (far - origin) * inv_dir;
         // `if a > b { a } else { b }` keeps `b` when `a` is NaN (one maxss on
         // x86): with the running value as `b`, NaN distances are passed over.
         let max = |a: f32, b: f32| if a > b { a } else { b };
-        max(tn.z, max(tn.y, max(tn.x, 0.0)))
+        let min = |a: f32, b: f32| if a < b { a } else { b };
+        let tnear = max(tn.z, max(tn.y, max(tn.x, 0.0)));
+        let tfar = min(tf.z, min(tf.y, min(tf.x, tmax))) * (1.0 + 2.0 * super::gamma(3));
+        (tnear <= tfar && tnear < f32::INFINITY).then_some(tnear)
     }
 }
 

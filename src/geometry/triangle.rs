@@ -54,6 +54,10 @@ pub struct RayShear {
     pub sx: f32,
     pub sy: f32,
     pub sz: f32,
+    /// The reciprocal direction on the axes `kx`, `ky`, `kz` (the last is
+    /// `sz`), as [`Ray::inv_dir`](super::Ray::inv_dir) makes it: where the
+    /// ray enters a triangle's box ([`box_entry`]).
+    pub inv: [f32; 3],
     /// The ray may meet coordinates beyond [`F32_REACH`] of its origin:
     /// every test of it runs in f64.
     pub wide: bool,
@@ -79,6 +83,7 @@ impl RayShear {
         // The three quotients in one vector division: a third of the
         // divider's time, the same values.
         let q = (glam::Vec4::from((dir, 1.0)) / glam::Vec4::splat(d[kz])).to_array();
+        let inv = (Vec4::ONE / Vec4::from((dir, 1.0))).to_array();
         Self {
             origin: origin.to_array(),
             kx,
@@ -87,6 +92,7 @@ impl RayShear {
             sx: q[kx],
             sy: q[ky],
             sz: q[3],
+            inv: [inv[kx], inv[ky], inv[kz]],
             wide: Self::needs_f64(origin, reach),
         }
     }
@@ -210,7 +216,11 @@ pub fn intersect(
     let max_e = u.abs().max(v.abs()).max(w.abs());
     let delta_t =
         3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv.abs();
-    if (t <= delta_t && !ahead(az, bz, cz, delta_z)) || !t.is_finite() || t > tmax {
+    if t <= delta_t && !ahead(az, bz, cz, delta_z) {
+        return None;
+    }
+    let t = at_least(box_entry([a, b, c], s.inv), t);
+    if !t.is_finite() || t > tmax {
         return None;
     }
     Some(TriHit {
@@ -218,6 +228,51 @@ pub fn intersect(
         u: (v * inv).clamp(0.0, 1.0),
         v: (w * inv).clamp(0.0, 1.0),
     })
+}
+
+/// Where the ray enters the triangle's bounding box, as the box tests of
+/// the BVH round it ([`Aabb::hit`](super::Aabb::hit)): the larger of 0 and
+/// each axis's distance to the box's near plane, NaN (a parallel ray on
+/// that plane) passed over. `v`: the vertices less the ray's origin, on
+/// the axes `inv` is given for (`min(p) - o` is `min(p - o)`, rounding
+/// being monotone).
+///
+/// A hit is never nearer than this ([`at_least`]). The triangle test
+/// rounds `t` its own way, and on a large triangle far from the origin it
+/// came out a few ulps before the ray even entered the box (a hit at
+/// 0.99999756 in a flat box entered at 1.0). A BVH walk that already held
+/// a hit between the two then skipped every box holding that triangle, so
+/// the closest hit depended on the order the walk reached the leaves in:
+/// a packet's walk and a single ray's disagreed. A box's entry distance is
+/// at most that of any box inside it, so with hits raised to their own
+/// box's, a box skipped as lying beyond the closest hit holds no nearer
+/// one, whatever the order of the walk or the tree.
+#[inline(always)]
+fn box_entry(v: [[f32; 3]; 3], inv: [f32; 3]) -> f32 {
+    let mut tn = 0.0f32;
+    for a in 0..3 {
+        let (x, y, z) = (v[0][a], v[1][a], v[2][a]);
+        let near = if inv[a] < 0.0 {
+            x.max(y).max(z)
+        } else {
+            x.min(y).min(z)
+        };
+        let d = near * inv[a];
+        if d > tn {
+            tn = d;
+        }
+    }
+    tn
+}
+
+/// `t`, or `entry` where that is larger; a NaN `t` stays NaN.
+#[inline(always)]
+fn at_least(entry: f32, t: f32) -> f32 {
+    if entry > t {
+        entry
+    } else {
+        t
+    }
 }
 
 /// Whether every vertex lies ahead of the origin by more than its scaled
@@ -291,8 +346,13 @@ pub fn intersect_wide(s: &RayShear, p: [&[f32; 3]; 3], tmax: f32) -> Option<TriH
     // past `tmax` in f64 that rounds to it is a tie with the hit that set
     // `tmax`, which the lower triangle index must win whichever was found
     // first.
-    let t32 = t as f32;
-    if !((t > delta_t || ahead) && t32 <= tmax) {
+    if !(t > delta_t || ahead) {
+        return None;
+    }
+    // Raised to the triangle's box as the f32 box tests round it.
+    let corners = p.map(|p| [kx, ky, kz].map(|k| p[k] - s.origin[k]));
+    let t32 = at_least(box_entry(corners, s.inv), t as f32);
+    if t32 > tmax {
         return None;
     }
     (t32 > 0.0 && t32.is_finite()).then(|| TriHit {
@@ -323,6 +383,7 @@ pub struct RayShear4 {
     pub k: [usize; 3],
     pub o: [Vec4; 3],
     pub s: [Vec4; 3],
+    pub inv: [Vec4; 3],
     /// The ray itself, for [`RayShear::wide`] rays.
     pub ray: RayShear,
 }
@@ -340,6 +401,7 @@ impl RayShear4 {
                 Vec4::splat(s.origin[k[2]]),
             ],
             s: [Vec4::splat(s.sx), Vec4::splat(s.sy), Vec4::splat(s.sz)],
+            inv: s.inv.map(Vec4::splat),
         }
     }
 }
@@ -372,18 +434,19 @@ pub fn intersect4(r: &RayShear4, p: &[[Vec4; 3]; 3], tmax: f32) -> TriHit4 {
             v: get(|x| x.v, 0.0),
         };
     }
-    lanes4(r.k, r.o, r.s, p, Vec4::splat(tmax))
+    lanes4(r.k, r.o, r.s, r.inv, p, Vec4::splat(tmax))
 }
 
 /// [`intersect4`] past its f64 check, every lane with its own ray
-/// constants (`o` and `s` as in [`RayShear4`], one ray per lane or one in
-/// all), its own triangle and its own `tmax`: eight rays against one
+/// constants (`o`, `s` and `recip`, [`RayShear4`]'s `inv`, one ray per lane or
+/// one in all), its own triangle and its own `tmax`: eight rays against one
 /// triangle compute the same as one ray against eight.
 #[inline(always)]
 pub fn lanes4(
     [kx, ky, kz]: [usize; 3],
     [ox, oy, oz]: [Vec4; 3],
     [sx, sy, sz]: [Vec4; 3],
+    recip: [Vec4; 3],
     p: &[[Vec4; 3]; 3],
     tmax: Vec4,
 ) -> TriHit4 {
@@ -452,6 +515,15 @@ pub fn lanes4(
             3.0 * (g(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv.abs();
         ok &= !t.cmple(delta_t) | ahead;
     }
+    // Raised to the triangle's box ([`box_entry`]), lane by lane alike.
+    let mut entry = zero;
+    for (a, inv) in recip.into_iter().enumerate() {
+        let [x, y, z] = [0, 1, 2].map(|v| p[v][[kx, ky, kz][a]] - [ox, oy, oz][a]);
+        let near = Vec4::select(inv.cmplt(zero), x.max(y).max(z), x.min(y).min(z));
+        let d = near * inv;
+        entry = Vec4::select(d.cmpgt(entry), d, entry);
+    }
+    let t = Vec4::select(entry.cmpgt(t), entry, t);
     ok &= t.abs().cmplt(Vec4::INFINITY) & !t.cmpgt(tmax);
     TriHit4 {
         mask: ok.bitmask(),
@@ -598,6 +670,7 @@ pub(crate) unsafe fn intersect8_avx<const UV: bool>(
         [ld!(0), ld!(1), ld!(2)],
         [set(s.origin[kx]), set(s.origin[ky]), set(s.origin[kz])],
         [set(s.sx), set(s.sy), set(s.sz)],
+        [set(s.inv[0]), set(s.inv[1]), set(s.inv[2])],
         set(tmax),
     )
 }
@@ -618,6 +691,7 @@ pub(crate) unsafe fn lanes8_avx<const UV: bool, const EARLY: bool>(
     p: [[std::arch::x86_64::__m256; 3]; 3],
     [ox, oy, oz]: [std::arch::x86_64::__m256; 3],
     [sx, sy, sz]: [std::arch::x86_64::__m256; 3],
+    recip: [std::arch::x86_64::__m256; 3],
     tmax: std::arch::x86_64::__m256,
 ) -> TriHit8 {
     use std::arch::x86_64::*;
@@ -760,6 +834,20 @@ pub(crate) unsafe fn lanes8_avx<const UV: bool, const EARLY: bool>(
         );
         _mm256_andnot_ps(ahead, cmp!(_CMP_LE_OQ, t, delta_t))
     };
+    // Raised to the triangle's box ([`box_entry`]), as in `lanes4`.
+    let mut entry = zero;
+    for (a, o) in [ox, oy, oz].into_iter().enumerate() {
+        let [x, y, z] = [sub(p[0][a], o), sub(p[1][a], o), sub(p[2][a], o)];
+        let far = cmp!(_CMP_LT_OQ, recip[a], zero);
+        let near = _mm256_blendv_ps(
+            _mm256_min_ps(_mm256_min_ps(x, y), z),
+            max(max(x, y), z),
+            far,
+        );
+        // `max_ps` keeps its second operand where the first is NaN.
+        entry = max(mul(near, recip[a]), entry);
+    }
+    let t = max(entry, t);
     let finite = and(
         cmp!(_CMP_LT_OQ, _mm256_andnot_ps(sign, t), set(f32::INFINITY)),
         cmp!(_CMP_LE_OQ, t, tmax),
@@ -864,6 +952,48 @@ mod tests {
         let up = Vec3::new(d.x, -d.y, 0.0);
         assert!(intersect(&RayShear::new(o, up), &t[0], &t[1], &t[2], f32::INFINITY).is_some());
         check_lanes(o, up, &[t; 4], 0, f32::INFINITY);
+    }
+
+    /// No hit is nearer than where its ray enters the triangle's box as
+    /// the box test rounds it, on axis-aligned triangles (whose box is
+    /// flat) and far, large ones, in every kernel.
+    #[test]
+    fn hits_lie_no_nearer_than_the_triangles_box() {
+        let mut r = crate::geometry::sampling::Rng::for_sample(9, 2, 5);
+        let mut f = || r.next_f32() * 2.0 - 1.0;
+        let mut raised = 0;
+        for k in 0..4000 {
+            let scale = if k % 2 == 0 { 1.0 } else { 4e5 };
+            let mut t =
+                [[f(), f(), f()], [f(), f(), f()], [f(), f(), f()]].map(|v| v.map(|x| x * scale));
+            if k % 3 == 0 {
+                // Flat on an axis: the box has no depth there.
+                let (a, x) = (k % 3, f() * scale);
+                t.iter_mut().for_each(|v| v[a] = x);
+            }
+            let o = Vec3::new(f(), f(), f()) * scale * 3.0;
+            let target = (Vec3::from(t[0]) + Vec3::from(t[1]) + Vec3::from(t[2])) / 3.0;
+            let d = target - o + Vec3::new(f(), f(), f()) * scale * 0.1;
+            let s = RayShear::new(o, d);
+            let Some(h) = intersect(&s, &t[0], &t[1], &t[2], f32::INFINITY) else {
+                continue;
+            };
+            let bx = super::super::Aabb {
+                min: Vec3::from(t[0]).min(t[1].into()).min(t[2].into()),
+                max: Vec3::from(t[0]).max(t[1].into()).max(t[2].into()),
+            };
+            let inv = super::super::Ray::new(o, d).inv_dir().into();
+            let entry = bx
+                .hit(o, inv, f32::INFINITY)
+                .expect("the box holds the hit");
+            assert!(
+                h.t >= entry,
+                "{h:?} before the box at {entry}: {t:?} from {o} along {d}"
+            );
+            raised += (h.t == entry) as u32;
+            check_lanes(o, d, &[t; 4], 0, f32::INFINITY);
+        }
+        assert!(raised > 0, "no hit was at its box's entry");
     }
 
     #[test]
@@ -1237,13 +1367,15 @@ mod tests {
             let lane = |i: usize, x: [f32; 3]| [x[k3[0]], x[k3[1]], x[k3[2]]][i];
             let s8 = |f: fn(&RayShear) -> f32| shears.map(|s| f(&s));
             let (sx, sy, sz) = (s8(|s| s.sx), s8(|s| s.sy), s8(|s| s.sz));
+            let inv: [[f32; 8]; 3] = [0, 1, 2].map(|a| shears.map(|s| s.inv[a]));
             let tri4 = t.map(|v| v.map(Vec4::splat));
             let o4 = k3.map(|a| Vec4::splat(o[a]));
             let mut got = Vec::new();
             for half in 0..2 {
                 let r = 4 * half..4 * half + 4;
                 let v4 = |x: &[f32; 8]| Vec4::from_slice(&x[r.clone()]);
-                let h = lanes4(k3, o4, [v4(&sx), v4(&sy), v4(&sz)], &tri4, v4(&tmax));
+                let (s4, inv4) = ([v4(&sx), v4(&sy), v4(&sz)], inv.each_ref().map(v4));
+                let h = lanes4(k3, o4, s4, inv4, &tri4, v4(&tmax));
                 got.extend((0..4).map(|i| {
                     (h.mask & (1 << i) != 0).then(|| TriHit {
                         t: h.t[i],
@@ -1264,6 +1396,7 @@ mod tests {
                         t.map(|v| [0, 1, 2].map(|i| set(lane(i, v)))),
                         [0, 1, 2].map(|i| set(lane(i, o.to_array()))),
                         [ld(&sx), ld(&sy), ld(&sz)],
+                        inv.each_ref().map(ld),
                         ld(&tmax),
                     )
                 };
