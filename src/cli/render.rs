@@ -148,6 +148,8 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     if fixed && checkpoint.is_none() {
         p.fixed_spp_passes(stop.spp, s.plan.deterministic);
     }
+    // Until a time or an error, passes grow, except between checkpoints.
+    p.growing = !fixed && checkpoint.is_none();
     // A resumed film was checked as it was read.
     if a.resume.is_none() {
         let bytes = p.bytes_per_pixel(s.plan.deterministic, &stop);

@@ -106,7 +106,7 @@ pub const QUARTER: u32 = PIXEL_STRATA / 4;
 /// The integrator places samples by it and the film's error estimate reads
 /// it.
 pub fn pixel_stratum(pixel: u64, k: u32, seed: u64) -> u32 {
-    block_strata(block_order(pixel, k / PIXEL_STRATA, seed))[(k % PIXEL_STRATA) as usize] as u32
+    stratum_of(block_order(pixel, k / PIXEL_STRATA, seed), k % PIXEL_STRATA)
 }
 
 /// What a run of samples of one pixel, under one seed, share: the
@@ -116,9 +116,12 @@ pub fn pixel_stratum(pixel: u64, k: u32, seed: u64) -> u32 {
 pub struct Run {
     pixel: Option<u64>,
     streams: PixelStreams,
-    /// The block of `strata`.
+    /// The block of `order` and `strata`.
     block: Option<u32>,
-    strata: [u8; PIXEL_STRATA as usize],
+    order: u32,
+    /// The block's strata, drawn once a second of its samples asks: a pass
+    /// of one sample per pixel draws only each sample's own.
+    strata: Option<[u8; PIXEL_STRATA as usize]>,
 }
 
 impl Run {
@@ -144,12 +147,15 @@ impl Run {
     #[inline]
     pub fn stratum(&mut self, pixel: u64, k: u32, seed: u64) -> u32 {
         self.at(pixel, seed);
-        let block = k / PIXEL_STRATA;
+        let (block, i) = (k / PIXEL_STRATA, k % PIXEL_STRATA);
         if self.block != Some(block) {
-            self.strata = block_strata(block_order(pixel, block, seed));
             self.block = Some(block);
+            self.order = block_order(pixel, block, seed);
+            self.strata = None;
+            return stratum_of(self.order, i);
         }
-        self.strata[(k % PIXEL_STRATA) as usize] as u32
+        let order = self.order;
+        self.strata.get_or_insert_with(|| block_strata(order))[i as usize] as u32
     }
 }
 
@@ -164,18 +170,40 @@ fn block_order(pixel: u64, block: u32, seed: u64) -> u32 {
 /// quarter, and each quarter takes one of that quadrant's four strata, in
 /// an order drawn per quadrant, so the block visits every stratum once.
 fn block_strata(order: u32) -> [u8; PIXEL_STRATA as usize] {
-    let draw = |i: u32| permutation4(order ^ i.wrapping_mul(0x9e37_79b9));
-    let quadrants: [[u8; 4]; 4] = std::array::from_fn(|quarter| draw(quarter as u32));
-    let subs: [[u8; 4]; 4] = std::array::from_fn(|quadrant| draw(quadrant as u32 + 4));
+    let quadrants: [[u8; 4]; 4] = std::array::from_fn(|quarter| draw4(order, quarter as u32));
+    let subs: [[u8; 4]; 4] = std::array::from_fn(|quadrant| draw4(order, quadrant as u32 + 4));
     std::array::from_fn(|k| {
-        let (quarter, slot) = (k / QUARTER as usize, k % QUARTER as usize);
-        let quadrant = quadrants[quarter][slot] as u32;
-        let sub = subs[quadrant as usize][quarter] as u32;
-        let half = PIXEL_GRID / 2;
-        let i = (quadrant % 2) * half + sub % half;
-        let j = (quadrant / 2) * half + sub / half;
-        (i + PIXEL_GRID * j) as u8
+        let quarter = k / QUARTER as usize;
+        let quadrant = quadrants[quarter][k % QUARTER as usize];
+        in_quadrant(quadrant, subs[quadrant as usize][quarter]) as u8
     })
+}
+
+/// Entry `k` of [`block_strata`], drawing only the two permutations it
+/// reads.
+fn stratum_of(order: u32, k: u32) -> u32 {
+    let quarter = k / QUARTER;
+    let quadrant = draw4(order, quarter)[(k % QUARTER) as usize];
+    in_quadrant(
+        quadrant,
+        draw4(order, quadrant as u32 + 4)[quarter as usize],
+    )
+}
+
+/// Permutation `i` of a block whose order is `order`: slots `0..4` give
+/// each quarter's quadrants, `4..8` each quadrant's strata.
+#[inline]
+fn draw4(order: u32, i: u32) -> [u8; 4] {
+    permutation4(order ^ i.wrapping_mul(0x9e37_79b9))
+}
+
+/// Stratum `sub` (`0..4`) of quadrant `quadrant`, as a stratum of the pixel.
+#[inline]
+fn in_quadrant(quadrant: u8, sub: u8) -> u32 {
+    let (quadrant, sub, half) = (quadrant as u32, sub as u32, PIXEL_GRID / 2);
+    let i = (quadrant % 2) * half + sub % half;
+    let j = (quadrant / 2) * half + sub / half;
+    i + PIXEL_GRID * j
 }
 
 /// One of the 24 permutations of `0..4`, chosen by a hash of `seed`.
@@ -332,6 +360,29 @@ mod tests {
             (0..16).map(|i| permute(i, 16, 1)).collect::<Vec<_>>(),
             (0..16).map(|i| permute(i, 16, 2)).collect::<Vec<_>>()
         );
+    }
+
+    /// A run gives each sample the stratum `pixel_stratum` gives it, one
+    /// sample of a block at a time (a pass of one sample per pixel) or
+    /// several, and the whole block's table the one entry's draws make.
+    #[test]
+    fn runs_give_the_strata_pixel_stratum_gives() {
+        for order in (0..2000u32).map(|i| i.wrapping_mul(0x9e37_79b9)) {
+            let table = block_strata(order);
+            for k in 0..PIXEL_STRATA {
+                assert_eq!(stratum_of(order, k), table[k as usize] as u32);
+            }
+        }
+        for pixel in 0..50u64 {
+            let want: Vec<u32> = (0..40).map(|k| pixel_stratum(pixel, k, 9)).collect();
+            let mut run = Run::default();
+            let together: Vec<u32> = (0..40).map(|k| run.stratum(pixel, k, 9)).collect();
+            assert_eq!(together, want);
+            let alone: Vec<u32> = (0..40)
+                .map(|k| Run::default().stratum(pixel, k, 9))
+                .collect();
+            assert_eq!(alone, want);
+        }
     }
 
     #[test]

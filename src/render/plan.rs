@@ -169,7 +169,9 @@ pub struct Plan {
     pub bvh: bool,
     /// Camera rays, which all start at the eye, are traced in packets
     /// ([`Bvh::intersect_packet`](crate::bvh::Bvh::intersect_packet)):
-    /// the same hits, found together, whenever the BVH is used.
+    /// the same hits, found together, whenever the BVH is used, for a
+    /// pixel that a pass gives at least
+    /// [`PACKET_SAMPLES`](super::progressive::PACKET_SAMPLES) samples.
     pub packets: bool,
     /// Nothing is sampled (no sample draws a random number): one pass
     /// gives the exact image.
@@ -277,7 +279,10 @@ impl Plan {
             "camera rays in packets",
             self.packets,
             if self.packets {
-                "on".into()
+                format!(
+                    "on: a pixel's samples in one pass, {} or more, walk together",
+                    super::progressive::PACKET_SAMPLES
+                )
             } else {
                 format!("off: needs {}", Feature::Bvh.name())
             },

@@ -123,6 +123,18 @@ pub struct Progressive {
     /// gives a blank film all the stop's samples then keeps only those
     /// ([`Film::summarise`]), and no pass may follow it.
     pub image_only: bool,
+    /// Whether passes grow: after each pass, `samples_per_pass` becomes the
+    /// film's mean samples per pixel (so the film doubles with each pass),
+    /// at most `pass_cap`. The first passes stay short, for an early
+    /// picture; later ones give a pixel enough samples to trace them in a
+    /// packet ([`PACKET_SAMPLES`]) and spread the work each pass repeats
+    /// (the image, the error estimate, the adaptive weights) over more
+    /// samples. One sample per pixel per pass ran at half the rays per
+    /// second of a one-pass render.
+    pub growing: bool,
+    /// The most samples per pixel a growing pass gives: at most
+    /// [`MAX_PASS_SPP`], less where a caller wants passes short (the TUI).
+    pub pass_cap: u32,
 }
 
 /// The most samples per pixel a render read only for its image takes in
@@ -175,6 +187,8 @@ impl Progressive {
             adaptive: false,
             whole_passes: false,
             image_only: false,
+            growing: false,
+            pass_cap: MAX_PASS_SPP,
         }
     }
 
@@ -330,6 +344,10 @@ impl Progressive {
         let rays = rec.rays();
         self.rays += rays;
         self.seconds += ms / 1e3;
+        if self.growing {
+            let mean = self.film.spp_range().1 as u32;
+            self.samples_per_pass = mean.clamp(1, self.pass_cap.clamp(1, MAX_PASS_SPP));
+        }
         let stats = PassStats {
             samples,
             pixels,
@@ -486,9 +504,26 @@ fn share(weight: &[f32], ascending: &[f32], mean: f64, cap: u32) -> Option<Vec<u
 
 /// Samples placed and their camera rays made ahead of tracing them (see
 /// [`Tracer::place`]): enough to overlap their arithmetic and fill a
-/// packet ([`crate::bvh::PACKET_RAYS`]: four pixels of 16 samples walk the
-/// tree together), few enough to stay in the L1 cache.
+/// packet ([`crate::bvh::PACKET_RAYS`]), few enough to stay in the L1
+/// cache.
 const CAMERA_BATCH: usize = crate::bvh::PACKET_RAYS;
+
+/// A pixel's camera rays walk the tree as one packet when a batch holds at
+/// least this many of its samples (a block's worth), else one by one.
+///
+/// A packet's frustum is then one pixel wide. The rays of several pixels
+/// (a pass of one sample per pixel puts 64 pixels of a row in a batch) make
+/// a frustum wide enough to hold thousands of a dense mesh's triangles, and
+/// its walk visits every leaf that any of its rays might reach: on a mesh of
+/// 4.2 million triangles at 160x96 pixels, 130 thousand rays a second
+/// against 2.6 million one by one. Within a pixel the rays share almost
+/// every node, and 16 or more of them walk faster together than alone on
+/// every scene measured (BENCHMARKS.md).
+pub const PACKET_SAMPLES: u32 = PIXEL_STRATA;
+
+/// The most samples per pixel a growing pass gives ([`Progressive::growing`]):
+/// enough to fill a packet with one pixel's samples.
+pub const MAX_PASS_SPP: u32 = crate::bvh::PACKET_RAYS as u32;
 
 /// One row of a film, with its sample counts when adaptive.
 struct Row<'a> {
@@ -595,21 +630,36 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             let mut ray_counts = row.rays.as_deref_mut();
             let mut rays = Vec::with_capacity(CAMERA_BATCH);
             // Camera rays share the eye: the plan has them traced in packets
-            // where the recorder's traversal is the plain one.
+            // where the recorder's traversal is the plain one, a pixel's
+            // samples together (see `PACKET_SAMPLES`).
             let packets = tracer.plan.packets && R::PLAIN_TRAVERSAL;
             let mut hits = [None; CAMERA_BATCH];
+            let mut packed = [false; CAMERA_BATCH];
             let mut colours = Vec::with_capacity(CAMERA_BATCH);
             let mut trace = |placed: &mut Vec<(u32, Placed)>| {
                 rays.clear();
                 tracer.camera_rays(placed.iter().map(|(_, p)| p), &mut rays);
                 let hits = &mut hits[..rays.len()];
-                if packets {
-                    tracer.bvh.intersect_packet(&rays, hits);
+                let packed = &mut packed[..rays.len()];
+                packed.fill(false);
+                let mut a = 0;
+                while packets && a < rays.len() {
+                    let x = placed[a].1.x;
+                    let b = a + placed[a..].iter().take_while(|q| q.1.x == x).count();
+                    if b - a >= PACKET_SAMPLES as usize {
+                        tracer.bvh.intersect_packet(&rays[a..b], &mut hits[a..b]);
+                        packed[a..b].fill(true);
+                    }
+                    a = b;
                 }
-                for (((k, p), ray), hit) in placed.drain(..).zip(&rays).zip(hits.iter()) {
+                let each = placed
+                    .drain(..)
+                    .zip(&rays)
+                    .zip(hits.iter().zip(packed.iter()));
+                for (((k, p), ray), (hit, &packed)) in each {
                     let (x, stratum) = (p.x, p.stratum);
                     let traced = rec.rays();
-                    let c: Vec3 = if packets {
+                    let c: Vec3 = if packed {
                         tracer.sample_from_hit(p, ray, *hit, &mut rec)
                     } else {
                         tracer.sample_from(p, ray, &mut rec)

@@ -29,7 +29,8 @@ pub struct TuiPassStats {
     pub passes: u32,
     /// The first pass, which also counts BVH work for the panel.
     pub first_pass_ms: f64,
-    /// Render time of the later passes (one sample per pixel each).
+    /// Render time of the later passes, which grow as the worker's do
+    /// ([`Progressive::growing`](crate::render::Progressive)).
     pub pass_ms_mean: f64,
     pub pass_ms_median: f64,
     pub pass_ms_min: f64,
@@ -37,6 +38,8 @@ pub struct TuiPassStats {
     /// worst pixels and snapshot.
     pub step_ms_mean: f64,
     pub mrays_per_s: f64,
+    /// The film's mean samples per pixel after the last pass.
+    pub spp_mean: f64,
     /// Bytes written to the terminal for the first frame (every cell) and
     /// per later frame (changed cells only), in truecolor and 256 colours.
     pub first_frame_bytes: u64,
@@ -83,7 +86,7 @@ pub fn measure_pass(req: &SceneRequest, cols: u16, rows: u16, passes: u32) -> Re
     let mut term256 = counting_terminal(cols, rows)?;
     let (mut pass_ms, mut step_ms, mut frame_bytes, mut frame_bytes_256) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let mut rays = Vec::new();
+    let (mut rays, mut spp_mean) = (Vec::new(), 0.0);
     while (pass_ms.len() as u32) < passes {
         let start = Instant::now();
         let s = match worker.step(&|| false) {
@@ -98,6 +101,7 @@ pub fn measure_pass(req: &SceneRequest, cols: u16, rows: u16, passes: u32) -> Re
         pass_ms.push(s.pass_ms);
         step_ms.push(step);
         rays.push(s.mrays * s.pass_ms * 1e3);
+        spp_mean = s.spp_mean;
         for (t, mode, out) in [
             (&mut term, ColorMode::Truecolor, &mut frame_bytes),
             (&mut term256, ColorMode::Palette256, &mut frame_bytes_256),
@@ -140,6 +144,7 @@ pub fn measure_pass(req: &SceneRequest, cols: u16, rows: u16, passes: u32) -> Re
         pass_ms_min: sorted[0],
         step_ms_mean: mean(&later(&step_ms)),
         mrays_per_s: later(&rays).iter().sum::<f64>() / (later(&pass_ms).iter().sum::<f64>() * 1e3),
+        spp_mean,
         first_frame_bytes: frame_bytes[0],
         frame_bytes_mean: later_bytes(&frame_bytes),
         frame_bytes_mean_256: later_bytes(&frame_bytes_256),

@@ -22,13 +22,19 @@ use crate::raster::metrics::rel_mse_on;
 use crate::raster::resample::resample;
 use crate::render::debug_view::{self, DebugView, FilmView};
 use crate::render::overlay::{legend_line, Layer};
+use crate::render::progressive::MAX_PASS_SPP;
 use crate::render::recorder::WorkCounter;
 use crate::render::{post, Plan, Progressive, Stop, Tracer, WorstPixels};
 use crate::scene::{Builder, Camera, Scene};
 
-/// A full pass slower than this is preceded by a quarter-resolution pass
-/// when the view changes.
+/// A full pass of one sample per pixel slower than this is preceded by a
+/// quarter-resolution pass when the view changes.
 const COARSE_ABOVE_MS: f64 = 20.0;
+/// Passes grow ([`Progressive::growing`]) while one would take at most
+/// this long at the last full pass's pace: long enough to trace a pixel's
+/// samples in packets where the scene is quick, short enough to show the
+/// picture improve several times a second.
+const PASS_MS: f64 = 125.0;
 /// Coarse passes render every `COARSE`-th pixel in each direction.
 const COARSE: u32 = 4;
 /// Accumulation stops here; the image no longer visibly changes.
@@ -224,6 +230,16 @@ pub struct Snapshot {
     pub bad_samples: u64,
 }
 
+/// What the last full pass took.
+#[derive(Clone, Copy, Debug)]
+struct LastPass {
+    ms: f64,
+    /// Its time over the samples per pixel it added.
+    ms_per_spp: f64,
+    /// Whether it used the BVH.
+    bvh: bool,
+}
+
 /// The worker's state; [`Worker::step`] runs one pass. The thread in
 /// [`spawn`] and the benchmark drive the same code.
 pub struct Worker {
@@ -237,9 +253,9 @@ pub struct Worker {
     started: Running,
     history: Vec<(f64, f64)>,
     per_ray: Option<PerRay>,
-    /// Time of the last full pass and whether it used the BVH, to decide
-    /// whether coarse passes pay off.
-    last_full_ms: Option<(f64, bool)>,
+    /// The last full pass, to decide whether coarse passes pay off and how
+    /// long passes may grow.
+    last_full: Option<LastPass>,
     /// The pass in flight, shared with the app.
     pub progress: Arc<PassProgress>,
     reference: Option<Arc<Reference>>,
@@ -278,7 +294,7 @@ impl Worker {
             started: Running::now(),
             history: Vec::new(),
             per_ray: None,
-            last_full_ms: None,
+            last_full: None,
             progress: Arc::default(),
             reference,
             truth: Truth::NoReference,
@@ -321,7 +337,7 @@ impl Worker {
             Cmd::Builder(generation, builder) => {
                 self.bvh = Arc::new(bvh::build(&self.scene.geometry, builder));
                 self.generation = generation;
-                self.last_full_ms = None;
+                self.last_full = None;
                 self.restart();
                 Some(Msg::Bvh(self.bvh.clone()))
             }
@@ -354,8 +370,8 @@ impl Worker {
         // without the BVH (brute force is orders of magnitude slower).
         let bvh = self.view.as_ref().is_some_and(|v| v.plan.bvh);
         self.coarse_pending = self
-            .last_full_ms
-            .is_none_or(|(ms, with_bvh)| ms > COARSE_ABOVE_MS || with_bvh != bvh);
+            .last_full
+            .is_none_or(|l| l.ms_per_spp > COARSE_ABOVE_MS || l.bvh != bvh);
         self.started = Running::now();
         self.history.clear();
         self.per_ray = None;
@@ -487,6 +503,9 @@ impl Worker {
             view.camera.frame(view.width, view.height),
             self.seed,
         );
+        self.film.growing = true;
+        self.film.pass_cap = self.pass_cap(view.plan.bvh);
+        let before = self.film.film.spp_range().1;
         // The first pass of a view counts BVH work for the panel; later ones
         // take the fast path.
         let pass = if self.film.film.spp == 0 && view.plan.bvh {
@@ -504,7 +523,11 @@ impl Worker {
             self.progress.end();
             pass?
         };
-        self.last_full_ms = Some((pass.ms, view.plan.bvh));
+        self.last_full = Some(LastPass {
+            ms: pass.ms,
+            ms_per_spp: pass.ms / (self.film.film.spp_range().1 - before).max(1.0),
+            bvh: view.plan.bvh,
+        });
         self.last_mrays = pass.mrays_per_s();
         let elapsed = self.started.elapsed().as_secs_f64();
         if let Some(error) = self.film.film.relative_error().filter(|&e| e > 0.0) {
@@ -516,6 +539,20 @@ impl Worker {
             self.true_history.push((elapsed, e));
         }
         Some(self.snapshot(view, mean, truth))
+    }
+
+    /// The most samples per pixel the next pass may give: the most that
+    /// fit in [`PASS_MS`] at the last full pass's pace (with the BVH as
+    /// the view has it), in powers of two.
+    fn pass_cap(&self, bvh: bool) -> u32 {
+        let Some(last) = self.last_full.filter(|l| l.bvh == bvh) else {
+            return 1;
+        };
+        let mut n = 1;
+        while n < MAX_PASS_SPP && 2.0 * n as f64 * last.ms_per_spp <= PASS_MS {
+            n *= 2;
+        }
+        n
     }
 
     /// Root relMSE of `mean` against the reference, where it is compared.
@@ -562,7 +599,7 @@ impl Worker {
             spp: film.spp,
             spp_mean: film.spp_range().1,
             converged: film.converged(CONVERGED_BELOW),
-            pass_ms: self.last_full_ms.map_or(0.0, |l| l.0),
+            pass_ms: self.last_full.map_or(0.0, |l| l.ms),
             mrays: self.last_mrays,
             error: film.relative_error(),
             exact: view.plan.deterministic,
@@ -763,19 +800,46 @@ mod tests {
     }
 
     #[test]
-    fn a_coarse_preview_comes_first_then_one_sample_per_pass() {
+    fn a_coarse_preview_comes_first_then_passes_that_double_the_film() {
         let mut w = worker(Features::all());
         let s = next_frame(&mut w).unwrap();
         assert!(s.coarse && s.spp == 0);
         assert_eq!(s.image.len(), 16 * 12);
         // Each 4x4 block of the preview is one coarse pixel.
         assert_eq!(s.image[0], s.image[3 * 16 + 3]);
-        for spp in 1..=3 {
+        // One sample, then as many as the film has (the first quarter
+        // block, then adaptive passes raising the mean likewise).
+        for spp in [1, 2, 4] {
             let s = next_frame(&mut w).unwrap();
             assert!(!s.coarse);
             assert_eq!((s.spp, s.generation), (spp, 1));
         }
-        assert!(next_frame(&mut w).unwrap().per_ray.is_some());
+        let s = next_frame(&mut w).unwrap();
+        assert!(s.per_ray.is_some());
+        assert!((7.9..8.5).contains(&s.spp_mean), "{}", s.spp_mean);
+    }
+
+    /// Passes grow while one would fit in `PASS_MS` at the last pass's
+    /// pace, in powers of two, and a view of another BVH setting starts
+    /// again from one sample.
+    #[test]
+    fn passes_grow_as_far_as_the_pace_allows() {
+        let mut w = worker(Features::all());
+        let at = |w: &mut Worker, ms_per_spp: f64| {
+            w.last_full = Some(LastPass {
+                ms: 0.0,
+                ms_per_spp,
+                bvh: true,
+            });
+            (w.pass_cap(true), w.pass_cap(false))
+        };
+        assert_eq!(at(&mut w, 100.0), (1, 1));
+        assert_eq!(at(&mut w, PASS_MS / 3.0), (2, 1));
+        assert_eq!(at(&mut w, PASS_MS / 8.0), (8, 1));
+        assert_eq!(at(&mut w, 10.0), (8, 1));
+        assert_eq!(at(&mut w, 0.01), (MAX_PASS_SPP, 1));
+        w.last_full = None;
+        assert_eq!(w.pass_cap(true), 1);
     }
 
     #[test]
@@ -849,7 +913,8 @@ mod tests {
         w.apply(Cmd::View(2, Box::new(plain.clone())));
         let f = next_frame(&mut w).unwrap();
         assert_eq!((f.generation, f.spp, f.pre_bloom.is_none()), (2, 2, true));
-        assert_eq!(full(&mut w).spp, 3);
+        // The film goes on, passes growing from where they were.
+        assert_eq!(full(&mut w).spp, 4);
         let shadowless = View {
             plan: s.plan_for(Features::all().without(&[
                 Feature::Bloom,
