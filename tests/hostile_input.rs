@@ -1274,3 +1274,31 @@ fn an_empty_environment_is_a_warning() {
     );
     clean(&s);
 }
+
+#[test]
+fn ply_elements_without_properties_are_skipped_without_looping() {
+    let d = Dir::new("hostile-ply-empty");
+    let head = |format: &str| {
+        format!(
+            "ply\nformat {format} 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+             property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+             element junk 9223372036854775807\nend_header\n"
+        )
+    };
+    let mut binary = head("binary_little_endian").into_bytes();
+    for x in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+        binary.extend(x.to_le_bytes());
+    }
+    binary.push(3);
+    for i in 0i32..3 {
+        binary.extend(i.to_le_bytes());
+    }
+    let ascii = head("ascii") + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    for (name, bytes) in [("junk.ply", binary), ("junk-ascii.ply", ascii.into_bytes())] {
+        let s = warned(
+            &d.write(name, bytes),
+            &[name, "ignored, not used: element junk (9223372036854775807)"],
+        );
+        assert_eq!(s.geometry.indices.len(), 1, "{name}");
+    }
+}

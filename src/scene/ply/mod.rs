@@ -651,6 +651,11 @@ fn body_from<R: Values>(
                 colors.reserve_exact(vertex_count);
             }
         }
+        // An element without properties holds nothing, in either format:
+        // its count, however large, is no reason to loop.
+        if e.props.is_empty() {
+            continue;
+        }
         let in_bulk = r.bulk().and_then(|(body, big)| match e.name.as_str() {
             "vertex" => bulk::vertices(e, body, big, color_full),
             "face" => bulk::triangles(e, body, big, vertex_count),
