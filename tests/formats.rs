@@ -735,12 +735,25 @@ fn malformed_gltf_files_say_what_is_wrong() {
     let inf_light =
         edit(&|j| j["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = 1e39.into());
     let huge_scale = edit(&|j| j["nodes"][0]["scale"] = serde_json::json!([1e300, 1e300, 1e300]));
+    // The crate's accessors unwrap what a camera's type names and an
+    // image's source: checked first, an error where used.
+    let ortho = serde_json::json!({"xmag": 1.0, "ymag": 1.0, "zfar": 10.0, "znear": 0.1});
+    let typeless = edit(&|j| {
+        j["cameras"][0] = serde_json::json!({"type": "perspective", "orthographic": ortho})
+    });
+    let flat = edit(&|j| j["cameras"][1]["type"] = "orthographic".into());
+    let mimeless = edit(&|j| j["images"][0] = serde_json::json!({"bufferView": 3}));
+    let sourceless = edit(&|j| j["images"][0] = serde_json::json!({"name": "Nowhere"}));
     let uri = |u: &str| {
         let (mut j, _) = gltf_parts(serde_json::json!({"uri": "x.bin"}));
         j["buffers"][0]["uri"] = u.into();
         serde_json::to_vec(&j).unwrap()
     };
     for (name, bytes, want) in [
+        ("typeless.glb", typeless, "typeless.glb: node Eye: camera 0: its type is perspective and it has no perspective object"),
+        ("flat.glb", flat, "flat.glb: node Side: camera SideCam: its type is orthographic and it has no orthographic object"),
+        ("mimeless.glb", mimeless, "mimeless.glb: image 0 (of material Checker): it has a bufferView and no mimeType"),
+        ("sourceless.glb", sourceless, "sourceless.glb: image Nowhere (of material Checker): it has neither a uri nor a bufferView"),
         ("wide.glb", wide_fov, "camera SideCam: yfov 3.2 radians is not between 1 and 179 degrees"),
         ("v1.glb", v1, "v1.glb: glTF version 1.0: only glTF 2.x is read"),
         ("inf.glb", inf_light, "inf.glb: light 0: intensity inf, color [1, 1, 1]: beyond 32-bit floats"),
@@ -815,6 +828,25 @@ fn malformed_gltf_files_say_what_is_wrong() {
     );
     let all = s.warnings.join("\n");
     assert!(all.contains("E\u{fffd}[2J (extensionsUsed)"), "{all}");
+    // Cameras and images nothing uses are warned about, whatever is wrong
+    // with them.
+    let unused = edit(&|j| {
+        let camera = serde_json::json!({"type": "perspective", "orthographic": ortho});
+        j["cameras"].as_array_mut().unwrap().push(camera);
+        let image = serde_json::json!({"bufferView": 3});
+        j["images"].as_array_mut().unwrap().push(image);
+    });
+    let s = load(&d.write("unused.glb", unused)).unwrap();
+    for want in [
+        "unused.glb: camera 2: its type is perspective and it has no perspective object; not used",
+        "unused.glb: image 1: it has a bufferView and no mimeType, which glTF requires; not used",
+    ] {
+        assert!(
+            s.warnings.iter().any(|w| w.contains(want)),
+            "{want}: {:?}",
+            s.warnings
+        );
+    }
     assert!(!all.contains('\u{1b}'), "{all:?}");
     // A byte-order mark before the JSON changes nothing.
     let (j, b) = gltf_parts(serde_json::json!({"uri": "ok.bin"}));

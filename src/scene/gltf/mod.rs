@@ -12,8 +12,11 @@
 //! directional lights point lights far away). What cannot be mapped is
 //! listed once in the warnings.
 
+mod check;
+mod uri;
+
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::camera::Projection;
@@ -22,15 +25,16 @@ use ::gltf::material::AlphaMode;
 use ::gltf::mesh::Mode;
 use ::gltf::texture::WrappingMode;
 use anyhow::{anyhow, bail, Context, Result};
-use base64::Engine;
 use glam::{DAffine3, DMat4, DVec3, Vec2, Vec3};
 
 use super::numbers::{self, show3};
 use super::parts::{place_normals, place_positions, triangles_fit, Parts, Placed};
-use super::source::{resolve, Kind, Source};
+use super::source::{Kind, Source};
 use super::texture::{Texture, Wrap};
 use super::Material;
 use crate::memory;
+use check::{check_lights, check_transform, check_trees, check_values, Broken};
+use uri::{inline_uri, uri_path};
 
 /// A camera of the file, placed in f64.
 #[derive(Clone, Debug)]
@@ -109,63 +113,6 @@ fn named(name: Option<&str>, index: usize) -> String {
     }
 }
 
-/// The bytes a URI holds itself (a `data:` URI's base64 payload), or why it
-/// cannot be read; `None` for a relative reference, a file beside the glTF.
-fn inline_uri(uri: &str) -> Option<Result<Vec<u8>, String>> {
-    if uri.trim().is_empty() {
-        return Some(Err("its uri is empty".into()));
-    }
-    if let Some(rest) = uri.strip_prefix("data:") {
-        return Some(match rest.split_once(";base64,") {
-            Some((_, payload)) => base64::engine::general_purpose::STANDARD
-                .decode(payload)
-                .map_err(|e| format!("its base64 data is broken: {e}")),
-            None => Err("only base64 data URIs are read".into()),
-        });
-    }
-    // A scheme (two letters or more: `C:` is a drive) names something
-    // elsewhere, which a renderer has no business fetching.
-    let scheme = uri.split_once(':').map(|(s, _)| s).filter(|s| {
-        s.len() > 1
-            && s.starts_with(|c: char| c.is_ascii_alphabetic())
-            && s.chars()
-                .all(|c| c.is_ascii_alphanumeric() || "+.-".contains(c))
-    });
-    scheme.map(|s| {
-        Err(format!(
-            "{}: URIs are not read; rayterm reads files beside the glTF and data: URIs",
-            crate::words::printable(s)
-        ))
-    })
-}
-
-/// A relative URI as a path beside `base`, percent escapes decoded.
-fn uri_path(base: &Path, uri: &str) -> PathBuf {
-    let bytes = uri.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        let hex = |b: u8| (b as char).to_digit(16);
-        match (
-            bytes[i],
-            bytes.get(i + 1).and_then(|&b| hex(b)),
-            bytes.get(i + 2).and_then(|&b| hex(b)),
-        ) {
-            (b'%', Some(h), Some(l)) => {
-                out.push((h * 16 + l) as u8);
-                i += 3;
-            }
-            (b, _, _) => {
-                out.push(b);
-                i += 1;
-            }
-        }
-    }
-    // Messages name the file: no control character reaches them.
-    let path = crate::words::printable(&String::from_utf8_lossy(&out));
-    resolve(base, &path)
-}
-
 /// The Phong material for a glTF metallic-roughness material:
 /// `kd = base * (1 - metallic)`, `ks = mix(0.04, base, metallic)`, `ns`
 /// the Phong exponent of the same highlight width as the roughness
@@ -225,6 +172,8 @@ struct Reader<'a> {
     images: HashMap<usize, Option<Texture>>,
     /// Materials made so far: glTF index to rayterm id.
     materials: HashMap<Option<usize>, u32>,
+    /// Cameras and images the crate cannot read, until used.
+    broken: Broken,
     /// Triangles so far, against the memory available.
     triangles: u64,
     available: u64,
@@ -235,14 +184,23 @@ impl Reader<'_> {
         self.path.display().to_string()
     }
 
-    /// An image's texture, decoded once.
-    fn image(&mut self, parts: &mut Parts, image: ::gltf::Image) -> Option<Texture> {
+    /// An image's texture, decoded once; an error for one the crate cannot
+    /// read ([`Broken`]), named with the material that uses it (`user`).
+    fn image(
+        &mut self,
+        parts: &mut Parts,
+        image: ::gltf::Image,
+        user: &str,
+    ) -> Result<Option<Texture>> {
         let index = image.index();
         if let Some(t) = self.images.get(&index) {
-            return t.clone();
+            return Ok(t.clone());
         }
         let name = named(image.name(), index);
         let from = format!("{}: image {name}", self.at());
+        if let Some(why) = self.broken.images.get(&index) {
+            bail!("{from} (of {user}): {why}");
+        }
         let decoded = match image.source() {
             ::gltf::image::Source::View { view, .. } => {
                 let bytes = self
@@ -263,7 +221,7 @@ impl Reader<'_> {
                     let id = parts.texture(self.src, &p, &from);
                     let t = id.map(|i| parts.textures[i as usize].clone());
                     self.images.insert(index, t.clone());
-                    return t;
+                    return Ok(t);
                 }
             },
         };
@@ -277,20 +235,20 @@ impl Reader<'_> {
             }
         };
         self.images.insert(index, t.clone());
-        t
+        Ok(t)
     }
 
     /// The rayterm material of a primitive's material, made once.
-    fn material(&mut self, parts: &mut Parts, m: ::gltf::Material) -> u32 {
+    fn material(&mut self, parts: &mut Parts, m: ::gltf::Material) -> Result<u32> {
         let key = m.index();
         if let Some(&id) = self.materials.get(&key) {
-            return id;
+            return Ok(id);
         }
         let Some(index) = key else {
             // No material: rayterm's default, as for an OBJ without one.
             let id = parts.add_material(Material::default());
             self.materials.insert(key, id);
-            return id;
+            return Ok(id);
         };
         let name = named(m.name(), index);
         let pbr = m.pbr_metallic_roughness();
@@ -312,7 +270,7 @@ impl Reader<'_> {
                 self.unmapped.note("textures on a second UV set", here);
             }
             let sampler = info.texture().sampler();
-            if let Some(mut t) = self.image(parts, info.texture().source()) {
+            if let Some(mut t) = self.image(parts, info.texture().source(), &here())? {
                 // The texture takes the place of kd: the factor and the
                 // metallic share of kd are multiplied into its texels.
                 let tint = mat.kd;
@@ -342,7 +300,7 @@ impl Reader<'_> {
         }
         let id = parts.add_material(mat);
         self.materials.insert(key, id);
-        id
+        Ok(id)
     }
 
     /// `; read from buffer B, FILE`: where the values of accessor `a` come
@@ -558,7 +516,7 @@ impl Reader<'_> {
         })?;
         let material = match material {
             Some(m) => m,
-            None => self.material(parts, p.material()),
+            None => self.material(parts, p.material())?,
         };
         // An unnamed mesh or node is known by its index.
         let name = if mesh_name.parse::<usize>().is_ok() {
@@ -578,155 +536,6 @@ impl Reader<'_> {
             material,
         }))
     }
-}
-
-/// An error for a material factor or camera field outside the range glTF
-/// allows: such values would render as nonsense (an infinite colour, a
-/// view of nothing) rather than fail.
-fn check_values(path: &Path, doc: &::gltf::Document) -> Result<()> {
-    let unit = |v: f32| (0.0..=1.0).contains(&v);
-    for (i, m) in doc.materials().enumerate() {
-        let pbr = m.pbr_metallic_roughness();
-        let fields = [
-            ("baseColorFactor", pbr.base_color_factor().to_vec()),
-            ("metallicFactor", vec![pbr.metallic_factor()]),
-            ("roughnessFactor", vec![pbr.roughness_factor()]),
-        ];
-        for (field, v) in fields {
-            if let Some(bad) = v.iter().find(|&&x| !unit(x)) {
-                bail!(
-                    "{}: material {}: {field} {bad} is outside 0 to 1",
-                    path.display(),
-                    named(m.name(), i)
-                );
-            }
-        }
-        if let Some(bad) = m.emissive_factor().iter().find(|&&x| !unit(x)) {
-            bail!(
-                "{}: material {}: emissiveFactor {bad} is outside 0 to 1",
-                path.display(),
-                named(m.name(), i)
-            );
-        }
-    }
-    for c in doc.cameras() {
-        if let ::gltf::camera::Projection::Perspective(p) = c.projection() {
-            // The range a scene file's camera allows.
-            let y = p.yfov();
-            if !(1.0..179.0).contains(&y.to_degrees()) {
-                bail!(
-                    "{}: camera {}: yfov {y} radians is not between 1 and 179 degrees",
-                    path.display(),
-                    named(c.name(), c.index())
-                );
-            }
-        }
-    }
-    Ok(())
-}
-
-/// Refuses a node whose transform 32-bit floats cannot hold (`1e39`
-/// reads as infinity), or whose placement overflows f64 with its
-/// parents': named here, not by the NaN positions it would give.
-fn check_transform(path: &Path, node: &::gltf::Node, name: &str, world: DAffine3) -> Result<()> {
-    use ::gltf::scene::Transform;
-    let fields = match node.transform() {
-        Transform::Matrix { matrix } => vec![("matrix", matrix.concat())],
-        Transform::Decomposed {
-            translation,
-            rotation,
-            scale,
-        } => vec![
-            ("translation", translation.to_vec()),
-            ("rotation", rotation.to_vec()),
-            ("scale", scale.to_vec()),
-        ],
-    };
-    let shown = |v: &[f32]| v.iter().map(f32::to_string).collect::<Vec<_>>().join(", ");
-    if let Some((field, v)) = fields
-        .iter()
-        .find(|(_, v)| !v.iter().all(|x| x.is_finite()))
-    {
-        bail!(
-            "{}: node {name}: {field} [{}] is beyond 32-bit floats (finite only up to 3.4e38)",
-            path.display(),
-            shown(v)
-        );
-    }
-    if !world.is_finite() {
-        bail!(
-            "{}: node {name}: its transform with its parents' overflows 64-bit floats",
-            path.display()
-        );
-    }
-    Ok(())
-}
-
-/// Refuses a light whose intensity or colour 32-bit floats cannot hold
-/// (`1e39` reads as infinity), and warns of a negative one: either would
-/// otherwise light the scene with nothing, unsaid.
-fn check_lights(path: &Path, doc: &::gltf::Document, warnings: &mut Vec<String>) -> Result<()> {
-    for l in doc.lights().into_iter().flatten() {
-        let name = named(l.name(), l.index());
-        let (c, i) = (l.color(), l.intensity());
-        let shown = format!("intensity {i}, color [{}, {}, {}]", c[0], c[1], c[2]);
-        if !(Vec3::from_array(c) * i).is_finite() {
-            bail!(
-                "{}: light {name}: {shown}: beyond 32-bit floats (finite only up to 3.4e38)",
-                path.display()
-            );
-        }
-        if i < 0.0 || c.iter().any(|&x| x < 0.0) {
-            warnings.push(format!(
-                "{}: light {name}: negative {shown}: a light cannot shine less than nothing \
-                 (a negative intensity gives no light)",
-                path.display()
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// Refuses a node hierarchy that is not a forest of trees below the
-/// scene's roots, as glTF requires: a node with two parents, or a root
-/// that is also a child, would be visited many times (exponentially many
-/// in a chain of shared nodes) or forever (a cycle).
-fn check_trees(path: &Path, doc: &::gltf::Document, scene: &::gltf::Scene) -> Result<()> {
-    let mut parents = vec![0usize; doc.nodes().len()];
-    for n in doc.nodes() {
-        for c in n.children() {
-            parents[c.index()] += 1;
-        }
-    }
-    let name = |n: &::gltf::Node| named(n.name(), n.index());
-    if let Some(n) = doc.nodes().find(|n| parents[n.index()] > 1) {
-        bail!(
-            "{}: node {} is the child of {} nodes; glTF node hierarchies are trees \
-             (one parent at most)",
-            path.display(),
-            name(&n),
-            parents[n.index()]
-        );
-    }
-    let mut seen = vec![false; parents.len()];
-    for n in scene.nodes() {
-        if parents[n.index()] > 0 {
-            bail!(
-                "{}: node {} is a root of the scene and the child of another node \
-                 (a cycle in the node hierarchy?)",
-                path.display(),
-                name(&n)
-            );
-        }
-        if std::mem::replace(&mut seen[n.index()], true) {
-            bail!(
-                "{}: node {} is listed twice among the scene's nodes",
-                path.display(),
-                name(&n)
-            );
-        }
-    }
-    Ok(())
 }
 
 /// Reads a glTF file: materials and textures go into `parts`; meshes,
@@ -776,6 +585,7 @@ pub fn load(
             }
         }
     }
+    let broken = Broken::of(&json);
     let doc = ::gltf::Document::from_json(json).map_err(|e| invalid(&e))?;
     let mut blob = file.blob;
     let (mut buffers, mut origins) = (Vec::new(), Vec::new());
@@ -838,6 +648,7 @@ pub fn load(
         unmapped: Unmapped::default(),
         images: HashMap::new(),
         materials: HashMap::new(),
+        broken,
         triangles: 0,
         available: memory::available(),
     };
@@ -863,13 +674,14 @@ pub fn load(
     let Some(scene) = scene else {
         // Without scenes, nothing is placed (the spec says so).
         parts.warnings.extend(r.unmapped.warning(path));
+        parts.warnings.extend(r.broken.unused(path, doc.as_json()));
         return Ok(out);
     };
     // Depth first, with each node's world transform in f64: each node
     // once, as the hierarchy is a forest; the triangle budget guards
     // against meshes instanced many times.
     check_trees(path, &doc, &scene)?;
-    check_values(path, &doc)?;
+    check_values(path, &doc, &r.broken)?;
     check_lights(path, &doc, &mut parts.warnings)?;
     let mut stack: Vec<(::gltf::Node, DAffine3)> = scene.nodes().map(|n| (n, *xf)).collect();
     stack.reverse();
@@ -897,6 +709,13 @@ pub fn load(
             }
         }
         if let Some(cam) = node.camera() {
+            if let Some(why) = r.broken.cameras.get(&cam.index()) {
+                bail!(
+                    "{}: node {node_name}: camera {}: {why}",
+                    path.display(),
+                    named(cam.name(), cam.index())
+                );
+            }
             match cam.projection() {
                 Projection::Perspective(p) => {
                     let names = [node.name(), cam.name()]
@@ -971,5 +790,6 @@ pub fn load(
         }
     }
     parts.warnings.extend(r.unmapped.warning(path));
+    parts.warnings.extend(r.broken.unused(path, doc.as_json()));
     Ok(out)
 }
