@@ -14,6 +14,7 @@ pub mod openexr;
 pub mod output;
 pub mod png;
 pub mod resample;
+mod temporary;
 
 use std::path::Path;
 
