@@ -1297,7 +1297,10 @@ fn ply_elements_without_properties_are_skipped_without_looping() {
     for (name, bytes) in [("junk.ply", binary), ("junk-ascii.ply", ascii.into_bytes())] {
         let s = warned(
             &d.write(name, bytes),
-            &[name, "ignored, not used: element junk (9223372036854775807)"],
+            &[
+                name,
+                "ignored, not used: element junk (9223372036854775807)",
+            ],
         );
         assert_eq!(s.geometry.indices.len(), 1, "{name}");
     }

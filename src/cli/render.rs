@@ -16,6 +16,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use super::args::{RenderArgs, MAX_SPP};
 use super::open_request;
 use crate::interrupt;
+use crate::raster::claim::Claim;
 use crate::raster::{png, Format, Output};
 use crate::render::partial::{self, Meta, Part};
 use crate::render::session::check_film;
@@ -44,6 +45,10 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     if a.debug.is_some() && out.format != Format::Png {
         bail!("--debug views are PNG images; name the output .png");
     }
+    // The checkpoint is claimed for the whole render, before it is read
+    // or asked about: a second render of it is refused at once, where it
+    // would write over the first's every few seconds.
+    let mut _claim = None;
     let checkpoint = match &a.checkpoint {
         Some(c) => {
             if same_path(c, &a.output) {
@@ -51,6 +56,11 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
                     "{} is the output; name the checkpoint another file",
                     words::path(c)
                 );
+            }
+            partial_name(c, "a checkpoint")?;
+            let out = Output::check(c, &scene_file, &[Format::Exr])?;
+            if !out.in_place() {
+                _claim = Some(Claim::take(c)?);
             }
             // A checkpoint left by an interrupted render is work to keep.
             if c.is_file() && !a.resume.as_deref().is_some_and(|r| same_path(r, c)) {
@@ -60,8 +70,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
                     words::path(c)
                 );
             }
-            partial_name(c, "a checkpoint")?;
-            Some(Output::check(c, &scene_file, &[Format::Exr])?)
+            Some(out)
         }
         None => None,
     };
