@@ -12,7 +12,7 @@
 
 mod files;
 
-use files::{rayterm, within_deadline, Dir};
+use files::{rayterm, rayterm_within, within_deadline, Dir};
 use rayterm::scene::{self, Scene};
 
 const TRI: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
@@ -1304,4 +1304,139 @@ fn ply_elements_without_properties_are_skipped_without_looping() {
         );
         assert_eq!(s.geometry.indices.len(), 1, "{name}");
     }
+}
+
+/// A binary PLY of `n` vertices of `char` coordinates, all zero but the
+/// first triangle's (3 bytes each: the file is sparse), and that triangle.
+fn char_ply(d: &Dir, name: &str, n: u64) -> String {
+    use std::io::{Seek, Write};
+    let head = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {n}\nproperty char x\n\
+         property char y\nproperty char z\nelement face 1\n\
+         property list uchar int vertex_indices\nend_header\n"
+    );
+    let p = d.path(name);
+    let mut f = std::fs::File::create(&p).unwrap();
+    f.write_all(head.as_bytes()).unwrap();
+    f.write_all(&[0, 0, 0, 1, 0, 0, 0, 1, 0]).unwrap();
+    f.seek(std::io::SeekFrom::Start(head.len() as u64 + 3 * n))
+        .unwrap();
+    f.write_all(&[3]).unwrap();
+    for i in 0i32..3 {
+        f.write_all(&i.to_le_bytes()).unwrap();
+    }
+    p.to_str().unwrap().to_string()
+}
+
+/// Under an address space limit (`ulimit -v`), what a scene would need is
+/// refused with the reason before it is allocated, never an allocation
+/// abort: vertices as well as triangles, glTF instances of one large
+/// accessor each counted, the meshes of a scene file together; and a
+/// texture many materials share is held once.
+#[test]
+fn memory_is_checked_for_the_whole_scene_under_an_address_space_limit() {
+    const LIMIT: u64 = 1 << 30;
+    let d = Dir::new("hostile-memory");
+    let render = |scene: &str| {
+        let args = [
+            "render", scene, "--size", "8x8", "--spp", "1", "-o", "out.png",
+        ];
+        rayterm_within(LIMIT, &d.0, &args)
+    };
+    let refused = |scene: &str, parts: &[&str]| {
+        let r = render(scene);
+        assert_eq!(r.code, Some(1), "{scene}: {}", r.stderr);
+        for p in parts {
+            assert!(
+                r.stderr.contains(p),
+                "{scene}: '{p}' missing in: {}",
+                r.stderr
+            );
+        }
+        assert!(!d.path("out.png").exists());
+    };
+    // 30 million vertices in 90 MB: 2 GiB once read.
+    let ply = char_ply(&d, "chars.ply", 30_000_000);
+    refused(
+        &ply,
+        &[
+            "chars.ply: 1 triangles and 30000000 vertices would need 2.01 GiB of memory;",
+            "is available",
+        ],
+    );
+    // Three meshes that fit one at a time and not together.
+    for name in ["a.ply", "b.ply", "c.ply"] {
+        char_ply(&d, name, 10_000_000);
+    }
+    let toml = ["a", "b", "c"]
+        .map(|m| format!("[[mesh]]\nfile = \"{m}.ply\"\n"))
+        .concat();
+    let s = d.write("three.toml", toml);
+    refused(
+        &s,
+        &[
+            "three.toml:",
+            "mesh ",
+            ".ply: 1 triangles and 10000000 vertices would need",
+        ],
+    );
+    // 300 instances of a 100,000-vertex accessor: 30 million vertices.
+    let n = 100_000u32;
+    let mut bin = Vec::new();
+    for i in 0..n {
+        for x in [i as f32, (i % 7) as f32, 0.0] {
+            bin.extend(x.to_le_bytes());
+        }
+    }
+    for i in [0u32, 1, 2] {
+        bin.extend(i.to_le_bytes());
+    }
+    d.write("inst.bin", &bin);
+    let gltf = serde_json::json!({
+        "asset": {"version": "2.0"}, "scene": 0,
+        "scenes": [{"nodes": (0..300).collect::<Vec<_>>()}],
+        "nodes": (0..300).map(|k| serde_json::json!({"mesh": 0, "translation": [k, 0, 0]})).collect::<Vec<_>>(),
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": n, "type": "VEC3",
+             "min": [0, 0, 0], "max": [n, 6, 0]},
+            {"bufferView": 1, "componentType": 5125, "count": 3, "type": "SCALAR"}],
+        "bufferViews": [{"buffer": 0, "byteLength": 12 * n},
+                        {"buffer": 0, "byteOffset": 12 * n, "byteLength": 12}],
+        "buffers": [{"uri": "inst.bin", "byteLength": bin.len()}]
+    });
+    let g = d.write("inst.gltf", serde_json::to_vec(&gltf).unwrap());
+    refused(
+        &g,
+        &["inst.gltf: its meshes, each instance counted: 300 triangles and 30000000 vertices would need"],
+    );
+    // A 2000x2000 texture in 50 materials: 46 MiB once, not 2.3 GiB.
+    let img = image::RgbImage::from_fn(2000, 2000, |x, y| image::Rgb([x as u8, y as u8, 7]));
+    img.save(d.path("big.png")).unwrap();
+    let mut tri = Vec::new();
+    for x in [
+        0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0,
+    ] {
+        tri.extend(x.to_le_bytes());
+    }
+    d.write("tex.bin", &tri);
+    let gltf = serde_json::json!({
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": (0..50).map(|m| serde_json::json!(
+            {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": m})).collect::<Vec<_>>()}],
+        "materials": (0..50).map(|m| serde_json::json!({"pbrMetallicRoughness": {
+            "baseColorTexture": {"index": 0}, "baseColorFactor": [1.0, m as f64 / 50.0, 1.0, 1.0]}}))
+            .collect::<Vec<_>>(),
+        "textures": [{"source": 0}], "images": [{"uri": "big.png"}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+             "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36},
+                        {"buffer": 0, "byteOffset": 36, "byteLength": 24}],
+        "buffers": [{"uri": "tex.bin", "byteLength": 60}]
+    });
+    let t = d.write("tex.gltf", serde_json::to_vec(&gltf).unwrap());
+    let r = render(&t);
+    assert!(r.ok(), "{}", r.stderr);
 }

@@ -123,10 +123,14 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         (Some(path), Some(meta)) => resumed(path, &s, meta, range.as_ref().map(|r| &r.0), &stop)?,
         _ => {
             // Most such renders keep their film summarised: made so, one too
-            // large for statistics never allocates them. Statistics are
-            // checked before they are allocated, a summary below.
+            // large for statistics never allocates them. Either is checked
+            // before it is allocated (under an address space limit even
+            // untouched memory counts), a summary again below.
             let film = match image_only {
-                true => Film::new_summary(s.width, s.height),
+                true => {
+                    check_film(s.width, s.height, Film::SUMMARY_BYTES_PER_PIXEL)?;
+                    Film::new_summary(s.width, s.height)
+                }
                 false => {
                     check_film(s.width, s.height, Film::BYTES_PER_PIXEL)?;
                     Film::new(s.width, s.height)

@@ -417,6 +417,7 @@ fn patches(
     segments: u32,
     xf: &DAffine3,
     material: u32,
+    room: u64,
 ) -> Result<Placed> {
     let text = src.read_text(mesh_path, Kind::Patches)?;
     let patches = bezier::parse_bpt(&text)
@@ -432,8 +433,14 @@ fn patches(
     if vertices > u32::MAX as u64 {
         bail!("{what} is more than 32-bit indices address ({vertices} vertices); lower segments");
     }
-    memory::check(&what, triangles * memory::BYTES_PER_TRIANGLE, None)
-        .map_err(|e| anyhow!("{e}; lower segments"))?;
+    let needed = memory::mesh_bytes(vertices, triangles);
+    if needed > room {
+        bail!(
+            "{what} would need {} of memory; {} is available; lower segments",
+            memory::bytes(needed),
+            memory::bytes(room)
+        );
+    }
     let pm = bezier::tessellate(&patches, segments);
     let nxf = xf.matrix3.inverse().transpose();
     let mut positions = Vec::with_capacity(pm.positions.len());
@@ -535,10 +542,13 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
                 (None, None) => 8,
             };
             let mat = parts.add_material(material.unwrap_or_default());
-            placed.push(
-                patches(src, &mesh_path, segments, &xf, mat)
-                    .with_context(|| format!("{here}: mesh {}", m.file))?,
-            );
+            let room = parts.budget.room();
+            let p = patches(src, &mesh_path, segments, &xf, mat, room)
+                .with_context(|| format!("{here}: mesh {}", m.file))?;
+            parts
+                .budget
+                .take(p.positions.len() as u64, p.indices.len() as u64);
+            placed.push(p);
         } else {
             if let Some(s) = &m.segments {
                 parts.warnings.push(format!(

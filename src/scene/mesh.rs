@@ -51,6 +51,23 @@ pub fn load_placed(
     xf: &DAffine3,
     material: Option<&Material>,
 ) -> Result<Vec<Placed>> {
+    let placed = read_placed(format, parts, src, path, xf, material)?;
+    for m in &placed {
+        parts
+            .budget
+            .take(m.positions.len() as u64, m.indices.len() as u64);
+    }
+    Ok(placed)
+}
+
+fn read_placed(
+    format: Format,
+    parts: &mut Parts,
+    src: &dyn Source,
+    path: &Path,
+    xf: &DAffine3,
+    material: Option<&Material>,
+) -> Result<Vec<Placed>> {
     match format {
         Format::Obj => obj::load_placed(parts, src, path, xf, material),
         Format::Gltf => {
@@ -67,11 +84,13 @@ pub fn load_placed(
         Format::Stl => {
             let bytes = src.read(path, Kind::Stl)?;
             let id = parts.add_material(material.cloned().unwrap_or_default());
-            super::stl::parse(path, &bytes, xf, id, &mut parts.warnings)
+            let room = parts.budget.room();
+            super::stl::parse(path, &bytes, xf, id, &mut parts.warnings, room)
         }
         Format::Ply => {
             let bytes = src.read(path, Kind::Ply)?;
-            let ply = super::ply::parse(path, &bytes, &mut parts.warnings)?;
+            let room = parts.budget.room();
+            let ply = super::ply::parse(path, &bytes, &mut parts.warnings, room)?;
             drop(bytes);
             let material = match material {
                 Some(m) => m.clone(),

@@ -87,13 +87,18 @@ pub fn place_normals(normals: &[DVec3], xf: &DAffine3) -> Vec<Vec3> {
         .collect()
 }
 
-/// Refuses `triangles` when they would take more than `available` bytes
-/// ([`memory::BYTES_PER_TRIANGLE`] each): the message, without a place.
-pub fn triangles_fit(triangles: u64, available: u64) -> Result<(), String> {
-    let needed = triangles.saturating_mul(memory::BYTES_PER_TRIANGLE);
+/// Refuses a mesh of `vertices` and `triangles` when it would take more
+/// than `available` bytes ([`memory::mesh_bytes`]): the message, without a
+/// place.
+pub fn mesh_fits(vertices: u64, triangles: u64, available: u64) -> Result<(), String> {
+    let needed = memory::mesh_bytes(vertices, triangles);
     if needed > available {
+        let what = match vertices > triangles {
+            true => format!("{triangles} triangles and {vertices} vertices"),
+            false => format!("{triangles} triangles"),
+        };
         return Err(format!(
-            "{triangles} triangles would need {} of memory; {} is available",
+            "{what} would need {} of memory; {} is available",
             memory::bytes(needed),
             memory::bytes(available)
         ));
@@ -142,6 +147,8 @@ pub struct Parts {
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
     pub warnings: Vec<String>,
+    /// The memory the meshes still to come may take.
+    pub budget: memory::Budget,
     texture_ids: Vec<(PathBuf, Option<u32>)>,
 }
 

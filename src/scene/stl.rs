@@ -18,8 +18,7 @@ use anyhow::{anyhow, bail, Result};
 use glam::{DAffine3, DVec3};
 
 use super::numbers::{self, show3, Absurd};
-use super::parts::{place_positions, triangles_fit, Placed};
-use crate::memory;
+use super::parts::{mesh_fits, place_positions, Placed};
 
 /// Bytes of a binary triangle: normal, three vertices, attribute count.
 const TRIANGLE: u64 = 50;
@@ -85,18 +84,9 @@ impl Solid {
 }
 
 /// Reads an STL file's bytes: its meshes placed by `xf` in f64, all with
-/// `material`.
+/// `material`, refusing triangles that would need more than `available`
+/// bytes.
 pub fn parse(
-    path: &Path,
-    bytes: &[u8],
-    xf: &DAffine3,
-    material: u32,
-    warnings: &mut Vec<String>,
-) -> Result<Vec<Placed>> {
-    parse_within(path, bytes, xf, material, warnings, memory::available())
-}
-
-fn parse_within(
     path: &Path,
     bytes: &[u8],
     xf: &DAffine3,
@@ -167,7 +157,7 @@ fn ascii_start(bytes: &[u8]) -> bool {
 fn binary(path: &Path, bytes: &[u8], name: String, available: u64) -> Result<Solid> {
     let body = &bytes[HEADER as usize..];
     let n = body.len() / TRIANGLE as usize;
-    triangles_fit(n as u64, available).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    mesh_fits(0, n as u64, available).map_err(|e| anyhow!("{}: {e}", path.display()))?;
     let mut solid = Solid::new(name);
     solid.indices.reserve_exact(n);
     for (t, tri) in body.chunks_exact(TRIANGLE as usize).enumerate() {
@@ -279,7 +269,7 @@ fn ascii(
                     )));
                 }
                 triangles += v.len() as u64 - 2;
-                triangles_fit(triangles, available).map_err(at)?;
+                mesh_fits(0, triangles, available).map_err(at)?;
                 let ids: Vec<u32> = v.iter().map(|&p| solid.welder.id(p)).collect();
                 for k in 2..ids.len() {
                     solid.indices.push([ids[0], ids[k - 1], ids[k]]);
@@ -336,7 +326,14 @@ mod tests {
 
     fn read(bytes: &[u8]) -> Result<(Vec<Placed>, Vec<String>)> {
         let mut w = Vec::new();
-        let m = parse(Path::new("p.stl"), bytes, &DAffine3::IDENTITY, 0, &mut w)?;
+        let m = parse(
+            Path::new("p.stl"),
+            bytes,
+            &DAffine3::IDENTITY,
+            0,
+            &mut w,
+            u64::MAX,
+        )?;
         Ok((m, w))
     }
 
@@ -423,13 +420,13 @@ mod tests {
         let (m, w) = read(&padded).unwrap();
         assert_eq!(m[0].indices.len(), 2);
         assert!(w[0].contains("3 bytes after the 2 triangles"), "{w:?}");
-        let e = parse_within(
+        let e = parse(
             Path::new("p.stl"),
             &binary_stl(&TWO, b"x"),
             &DAffine3::IDENTITY,
             0,
             &mut Vec::new(),
-            memory::BYTES_PER_TRIANGLE,
+            crate::memory::BYTES_PER_TRIANGLE,
         )
         .err()
         .map(|e| e.to_string());

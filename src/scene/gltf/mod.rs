@@ -13,27 +13,25 @@
 //! listed once in the warnings.
 
 mod check;
+mod primitive;
 mod uri;
 
 use std::collections::HashMap;
 use std::path::Path;
 
-use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::camera::Projection;
 use ::gltf::khr_lights_punctual::Kind as LightKind;
 use ::gltf::material::AlphaMode;
-use ::gltf::mesh::Mode;
 use ::gltf::texture::WrappingMode;
 use anyhow::{anyhow, bail, Context, Result};
-use glam::{DAffine3, DMat4, DVec3, Vec2, Vec3};
+use glam::{DAffine3, DMat4, DVec3, Vec3};
 
-use super::numbers::{self, show3};
-use super::parts::{place_normals, place_positions, triangles_fit, Parts, Placed};
+use super::parts::{mesh_fits, Parts, Placed};
 use super::source::{Kind, Source};
 use super::texture::{Texture, Wrap};
 use super::Material;
-use crate::memory;
 use check::{check_lights, check_transform, check_trees, check_values, Broken};
+use primitive::{instanced, Decoded, Key};
 use uri::{inline_uri, uri_path};
 
 /// A camera of the file, placed in f64.
@@ -174,9 +172,10 @@ struct Reader<'a> {
     materials: HashMap<Option<usize>, u32>,
     /// Cameras and images the crate cannot read, until used.
     broken: Broken,
-    /// Triangles so far, against the memory available.
-    triangles: u64,
-    available: u64,
+    /// Primitives decoded, until the last primitive sharing their
+    /// accessors takes them, and how many are still to come.
+    decoded: HashMap<Key, Decoded>,
+    uses: HashMap<Key, usize>,
 }
 
 impl Reader<'_> {
@@ -272,13 +271,9 @@ impl Reader<'_> {
             let sampler = info.texture().sampler();
             if let Some(mut t) = self.image(parts, info.texture().source(), &here())? {
                 // The texture takes the place of kd: the factor and the
-                // metallic share of kd are multiplied into its texels.
-                let tint = mat.kd;
-                if tint != Vec3::ONE {
-                    for c in &mut t.texels {
-                        *c *= tint;
-                    }
-                }
+                // metallic share of kd multiply its texels, which every
+                // material of the image shares.
+                t.tint = mat.kd;
                 t.wrap = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
                 mat.texture = Some(parts.add_texture(t));
             }
@@ -301,240 +296,6 @@ impl Reader<'_> {
         let id = parts.add_material(mat);
         self.materials.insert(key, id);
         Ok(id)
-    }
-
-    /// `; read from buffer B, FILE`: where the values of accessor `a` come
-    /// from, when that is a file (a buffer's URI may name any file, and a
-    /// wrong one gives values that make no sense as geometry).
-    fn origin(&self, a: Option<::gltf::Accessor>) -> String {
-        let b = a.and_then(|a| a.view()).map(|v| v.buffer().index());
-        match b.and_then(|b| Some((b, self.origins.get(b)?))) {
-            Some((b, o)) if !o.is_empty() => format!("; read from buffer {b}, {o}"),
-            _ => String::new(),
-        }
-    }
-
-    /// Checks what the crate's reader takes on trust (it panics or reads
-    /// garbage otherwise): the accessor's type is one glTF allows for
-    /// `what`, and every element it reads lies, aligned, inside its view
-    /// and buffer.
-    fn check_accessor(
-        &self,
-        here: &str,
-        what: &str,
-        a: &::gltf::Accessor,
-        types: &[DataType],
-        dims: &[Dimensions],
-    ) -> Result<()> {
-        let name = format!("{here}: {what} (accessor {})", a.index());
-        if !types.contains(&a.data_type()) || !dims.contains(&a.dimensions()) {
-            bail!(
-                "{name} is {:?} {:?}; glTF allows {} of {}",
-                a.dimensions(),
-                a.data_type(),
-                dims.iter()
-                    .map(|d| format!("{d:?}"))
-                    .collect::<Vec<_>>()
-                    .join(" or "),
-                types
-                    .iter()
-                    .map(|t| format!("{t:?}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-        }
-        if a.sparse().is_some() {
-            bail!("{name} is sparse, which rayterm does not read");
-        }
-        let Some(view) = a.view() else {
-            bail!("{name} has no buffer view");
-        };
-        if a.count() == 0 {
-            bail!("{name} has no elements (count 0)");
-        }
-        let component = a.data_type().size() as u128;
-        let element = a.size() as u128;
-        let stride = view.stride().map_or(element, |s| s as u128);
-        if stride < element {
-            bail!("{name}: the buffer view's byteStride {stride} is smaller than one element ({element} bytes)");
-        }
-        let start = view.offset() as u128 + a.offset() as u128;
-        if !start.is_multiple_of(component) || !stride.is_multiple_of(component) {
-            bail!("{name} is not aligned to its {component}-byte components (offset {start}, stride {stride})");
-        }
-        let end_in_view = a.offset() as u128 + stride * (a.count() as u128 - 1) + element;
-        let buffer = self.buffers.get(view.buffer().index()).map_or(0, Vec::len) as u128;
-        let view_end = view.offset() as u128 + view.length() as u128;
-        if end_in_view > view.length() as u128 || view_end > buffer {
-            bail!(
-                "{name}: its {} elements end at byte {end_in_view} of a {}-byte buffer view \
-                 ending at byte {view_end} of a {buffer}-byte buffer (truncated or wrong counts?)",
-                a.count(),
-                view.length()
-            );
-        }
-        Ok(())
-    }
-
-    /// The triangles of one primitive, placed by `xf`.
-    #[allow(clippy::too_many_arguments)]
-    fn primitive(
-        &mut self,
-        parts: &mut Parts,
-        p: ::gltf::Primitive,
-        mesh_name: &str,
-        node_name: &str,
-        xf: &DAffine3,
-        material: Option<u32>,
-    ) -> Result<Option<Placed>> {
-        let here = format!(
-            "{}: mesh {mesh_name} primitive {} (node {node_name})",
-            self.at(),
-            p.index()
-        );
-        let mode = p.mode();
-        if !matches!(
-            mode,
-            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-        ) {
-            self.unmapped
-                .note("points and lines", || format!("mesh {mesh_name}"));
-            return Ok(None);
-        }
-        use ::gltf::mesh::Semantic;
-        use DataType::{F32, U16, U32, U8};
-        use Dimensions::{Scalar, Vec2 as V2, Vec3 as V3, Vec4 as V4};
-        let Some(position) = p.get(&Semantic::Positions) else {
-            bail!("{here}: no POSITION attribute");
-        };
-        self.check_accessor(&here, "POSITION", &position, &[F32], &[V3])?;
-        if let Some(a) = p.get(&Semantic::Normals) {
-            self.check_accessor(&here, "NORMAL", &a, &[F32], &[V3])?;
-        }
-        if let Some(a) = p.get(&Semantic::TexCoords(0)) {
-            self.check_accessor(&here, "TEXCOORD_0", &a, &[F32, U8, U16], &[V2])?;
-        }
-        if let Some(a) = p.get(&Semantic::Colors(0)) {
-            self.check_accessor(&here, "COLOR_0", &a, &[F32, U8, U16], &[V3, V4])?;
-        }
-        if let Some(a) = p.indices() {
-            self.check_accessor(&here, "indices", &a, &[U8, U16, U32], &[Scalar])?;
-        }
-        let buffers = &self.buffers;
-        let reader = p.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-        let Some(positions) = reader.read_positions() else {
-            bail!("{here}: POSITION cannot be read");
-        };
-        let positions: Vec<DVec3> = positions
-            .map(|v| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
-            .collect();
-        if let Some((i, v)) = positions.iter().enumerate().find(|(_, v)| {
-            v.to_array()
-                .into_iter()
-                .any(|x| numbers::unusable(x).is_some())
-        }) {
-            bail!(
-                "{here}: position {i} is {}, not a finite number{}",
-                show3(*v),
-                self.origin(p.get(&Semantic::Positions))
-            );
-        }
-        let n = positions.len();
-        let count_of = |what: &str, len: usize| -> Result<()> {
-            if len != n {
-                bail!("{here}: {what} has {len} values for {n} positions");
-            }
-            Ok(())
-        };
-        let normals: Option<Vec<DVec3>> = reader.read_normals().map(|it| {
-            it.map(|v| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
-                .collect()
-        });
-        if let Some(v) = &normals {
-            count_of("NORMAL", v.len())?;
-        }
-        // glTF puts v = 0 at the top of the image, rayterm at the bottom.
-        let uvs: Option<Vec<Vec2>> = reader
-            .read_tex_coords(0)
-            .map(|t| t.into_f32().map(|[u, v]| Vec2::new(u, 1.0 - v)).collect());
-        if let Some(v) = &uvs {
-            count_of("TEXCOORD_0", v.len())?;
-        }
-        let colors: Option<Vec<Vec3>> = reader
-            .read_colors(0)
-            .map(|c| c.into_rgb_f32().map(Vec3::from_array).collect());
-        if let Some(v) = &colors {
-            count_of("COLOR_0", v.len())?;
-        }
-        let finite = |ok: bool, what: &str| -> Result<()> {
-            if !ok {
-                bail!("{here}: {what} holds a number that is not finite");
-            }
-            Ok(())
-        };
-        finite(normals.iter().flatten().all(|v| v.is_finite()), "NORMAL")?;
-        finite(uvs.iter().flatten().all(|v| v.is_finite()), "TEXCOORD_0")?;
-        finite(colors.iter().flatten().all(|v| v.is_finite()), "COLOR_0")?;
-        let corners: Vec<u32> = match reader.read_indices() {
-            Some(ix) => ix.into_u32().collect(),
-            None => (0..n as u32).collect(),
-        };
-        if let Some((k, &i)) = corners.iter().enumerate().find(|(_, &i)| i as usize >= n) {
-            bail!(
-                "{here}: index {k} is {i}, out of range ({n} vertices){}",
-                self.origin(p.indices())
-            );
-        }
-        let indices: Vec<[u32; 3]> = match mode {
-            Mode::TriangleStrip => (2..corners.len())
-                .map(|k| {
-                    let [a, b, c] = [corners[k - 2], corners[k - 1], corners[k]];
-                    // Every other triangle of a strip turns the other way.
-                    if k % 2 == 0 {
-                        [a, b, c]
-                    } else {
-                        [b, a, c]
-                    }
-                })
-                .collect(),
-            Mode::TriangleFan => (2..corners.len())
-                .map(|k| [corners[0], corners[k - 1], corners[k]])
-                .collect(),
-            _ => corners
-                .chunks_exact(3)
-                .map(|c| [c[0], c[1], c[2]])
-                .collect(),
-        };
-        self.triangles += indices.len() as u64;
-        triangles_fit(self.triangles, self.available).map_err(|e| anyhow!("{here}: {e}"))?;
-        let placed = place_positions(positions, xf, |i, p, q, why| {
-            anyhow!(
-                "{here}: position {i} {} lands at {} once placed, which {why}",
-                show3(p),
-                show3(q)
-            )
-        })?;
-        let material = match material {
-            Some(m) => m,
-            None => self.material(parts, p.material())?,
-        };
-        // An unnamed mesh or node is known by its index.
-        let name = if mesh_name.parse::<usize>().is_ok() {
-            format!("mesh {mesh_name} (node {node_name})")
-        } else if mesh_name == node_name {
-            mesh_name.to_string()
-        } else {
-            format!("{mesh_name} (node {node_name})")
-        };
-        Ok(Some(Placed {
-            name,
-            positions: placed,
-            normals: normals.map(|n| place_normals(&n, xf)),
-            uvs,
-            colors,
-            indices,
-            material,
-        }))
     }
 }
 
@@ -649,8 +410,8 @@ pub fn load(
         images: HashMap::new(),
         materials: HashMap::new(),
         broken,
-        triangles: 0,
-        available: memory::available(),
+        decoded: HashMap::new(),
+        uses: HashMap::new(),
     };
     for ext in doc.extensions_used() {
         if ext != "KHR_lights_punctual" {
@@ -678,9 +439,13 @@ pub fn load(
         return Ok(out);
     };
     // Depth first, with each node's world transform in f64: each node
-    // once, as the hierarchy is a forest; the triangle budget guards
-    // against meshes instanced many times.
+    // once, as the hierarchy is a forest. Each instance of a mesh is a copy
+    // of it, counted before anything is read.
     check_trees(path, &doc, &scene)?;
+    let (vertices, triangles, uses) = instanced(&scene);
+    r.uses = uses;
+    mesh_fits(vertices, triangles, parts.budget.room())
+        .map_err(|e| anyhow!("{}: its meshes, each instance counted: {e}", path.display()))?;
     check_values(path, &doc, &r.broken)?;
     check_lights(path, &doc, &mut parts.warnings)?;
     let mut stack: Vec<(::gltf::Node, DAffine3)> = scene.nodes().map(|n| (n, *xf)).collect();

@@ -19,7 +19,7 @@ use anyhow::{anyhow, bail, Result};
 use glam::{DAffine3, DVec3, Vec2, Vec3};
 
 use super::numbers::{self, show3, ABSURD};
-use super::parts::{place_normals, place_positions, triangles_fit, Placed};
+use super::parts::{mesh_fits, place_normals, place_positions, Placed};
 use super::texture::srgb_to_linear;
 use crate::memory;
 
@@ -515,12 +515,9 @@ fn least_bytes(e: &Element, format: Format) -> u64 {
         .sum()
 }
 
-/// Parses a PLY file's bytes.
-pub fn parse(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<PlyMesh> {
-    parse_within(path, bytes, warnings, memory::available())
-}
-
-fn parse_within(
+/// Parses a PLY file's bytes, refusing one that would need more than
+/// `available` bytes ([`memory::mesh_bytes`]) before reading its body.
+pub fn parse(
     path: &Path,
     bytes: &[u8],
     warnings: &mut Vec<String>,
@@ -566,7 +563,7 @@ fn parse_within(
         .iter()
         .find(|e| e.name == "face")
         .map_or(0, |e| e.count);
-    triangles_fit(faces, available).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    mesh_fits(vertices.count, faces, available).map_err(|e| anyhow!("{}: {e}", path.display()))?;
     match h.format {
         Format::Binary { big } => {
             let mut r = Binary {
@@ -734,7 +731,8 @@ fn body_from<R: Values>(
                             ));
                         }
                         triangles += n as u64 - 2;
-                        triangles_fit(triangles, available).map_err(|m| fail(r, name, m))?;
+                        mesh_fits(vertex_count as u64, triangles, available)
+                            .map_err(|m| fail(r, name, m))?;
                         corners.clear();
                         for _ in 0..n {
                             let k = r.int(item).map_err(|m| fail(r, name, m))?;
@@ -841,7 +839,7 @@ mod tests {
 
     fn read(bytes: &[u8]) -> Result<(PlyMesh, Vec<String>)> {
         let mut w = Vec::new();
-        let m = parse(Path::new("p.ply"), bytes, &mut w)?;
+        let m = parse(Path::new("p.ply"), bytes, &mut w, u64::MAX)?;
         Ok((m, w))
     }
 
@@ -1131,9 +1129,9 @@ mod tests {
     #[test]
     fn face_counts_are_checked_against_memory() {
         let text = format!("{HEAD}{QUAD}");
-        let e = parse_within(Path::new("p.ply"), text.as_bytes(), &mut Vec::new(), 1)
+        let e = parse(Path::new("p.ply"), text.as_bytes(), &mut Vec::new(), 1)
             .err()
             .map(|e| e.to_string());
-        assert!(e.is_some_and(|e| e.contains("1 triangles would need")));
+        assert!(e.is_some_and(|e| e.contains("1 triangles and 4 vertices would need")));
     }
 }
