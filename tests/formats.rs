@@ -633,7 +633,11 @@ fn a_gltf_camera_is_chosen_by_name_or_number() {
     let d = Dir::new("formats-gltf-camera");
     let (json, bin) = gltf_parts(serde_json::json!({}));
     let file = d.write("scene.glb", glb(&json, &bin));
-    let with = |camera: &str| scene::load_reading(&file, Some(camera)).map(|(s, _)| s.camera);
+    let through = |camera: &str| scene::Opening {
+        camera: Some(camera.into()),
+        ..Default::default()
+    };
+    let with = |camera: &str| scene::load_reading(&file, &through(camera)).map(|(s, _)| s.camera);
     let near = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
     for name in ["Side", "SideCam", "2"] {
         let c = with(name).unwrap();
@@ -657,7 +661,10 @@ fn a_gltf_camera_is_chosen_by_name_or_number() {
     let obj = d.write("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     let toml = d.write("s.toml", "[[mesh]]\nfile = \"m.obj\"\n");
     for spec in ["cornell", obj.as_str(), toml.as_str()] {
-        let e = format!("{:#}", scene::load_reading(spec, Some("Side")).unwrap_err());
+        let e = format!(
+            "{:#}",
+            scene::load_reading(spec, &through("Side")).unwrap_err()
+        );
         assert!(e.contains("--camera Side"), "{e}");
     }
     // From the command line, the chosen camera is the one rendered.

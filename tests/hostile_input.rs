@@ -1440,3 +1440,112 @@ fn memory_is_checked_for_the_whole_scene_under_an_address_space_limit() {
     let r = render(&t);
     assert!(r.ok(), "{}", r.stderr);
 }
+
+/// A glTF of one triangle whose buffer is the file at `uri`.
+fn gltf_with_buffer(uri: &str) -> String {
+    serde_json::json!({
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [1, 1, 0]}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "buffers": [{"uri": uri, "byteLength": 36}]
+    })
+    .to_string()
+}
+
+/// Files outside a scene's folder: a glTF may not name them (unless
+/// allowed), a scene file or material library may, with a warning naming
+/// where they resolve; and no message ever quotes what such a file holds
+/// (`/etc/passwd`, `/proc/self/environ`), nor more than a few hundred
+/// characters of anything.
+#[test]
+fn files_outside_the_scene_are_refused_or_named_and_never_quoted() {
+    let d = Dir::new("hostile-outside");
+    const SECRET: &str = "hunter2";
+    let secret = d.write("secret.txt", format!("root:x:0:0:{SECRET}:/root:/bin/sh\n"));
+    let mut bin = vec![0xff; 4];
+    bin.extend(format!("{SECRET}{SECRET}{SECRET}{SECRET}{SECRET}").as_bytes());
+    d.write("secret.bin", bin);
+    d.write("scene/tri.obj", TRI);
+    let never_quoted = |what: &str, text: &str| {
+        assert!(!text.contains(SECRET), "{what}: {text}");
+        assert!(!text.contains("root:x"), "{what}: {text}");
+    };
+    // glTF URIs are relative references within the glTF's folder.
+    d.link("scene/link.bin", d.path("secret.bin"));
+    for (name, uri) in [
+        ("up.gltf", "../secret.bin".to_string()),
+        ("absolute.gltf", d.path("secret.bin").display().to_string()),
+        (
+            "file.gltf",
+            format!("file://{}", d.path("secret.bin").display()),
+        ),
+        ("link.gltf", "link.bin".to_string()),
+    ] {
+        let g = d.write(&format!("scene/{name}"), gltf_with_buffer(&uri));
+        let e = refused(
+            &g,
+            &[name, "buffer 0: its uri ", &uri, "leaves the glTF's folder"],
+        );
+        never_quoted(name, &e);
+    }
+    // Allowed, it is read, and what it holds is still not quoted.
+    let r = rayterm(
+        &d.path("scene"),
+        &["render", "up.gltf", "--allow-outside", "-o", "x.png"],
+    );
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    assert!(
+        r.stderr
+            .contains("position 0 is (not shown: its buffer lies outside the glTF's folder)"),
+        "{}",
+        r.stderr
+    );
+    never_quoted("--allow-outside", &r.stderr);
+    // Scene files and material libraries may name files outside, said.
+    for (name, file) in [
+        ("passwd.toml", secret.as_str()),
+        ("up.toml", "../secret.txt"),
+    ] {
+        let s = d.write(&format!("scene/{name}"), scene_with(file, ""));
+        let e = refused(&s, &[name, "lies outside", "not shown"]);
+        never_quoted(name, &e);
+    }
+    let s = d.write("scene/environ.toml", scene_with("/proc/self/environ", ""));
+    let e = refused(
+        &s,
+        &[
+            "environ.toml:1:1: mesh /proc/self/environ",
+            "it holds more than its size says",
+        ],
+    );
+    assert!(!e.contains("PATH="), "{e}");
+    for (name, obj, mtl) in [
+        (
+            "lib.obj",
+            "mtllib ../secret.txt\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            None,
+        ),
+        (
+            "map.obj",
+            WITH_MTL,
+            Some("newmtl a\nmap_Kd ../secret.txt\n"),
+        ),
+    ] {
+        if let Some(mtl) = mtl {
+            d.write("scene/m.mtl", mtl);
+        }
+        let s = warned(
+            &d.write(&format!("scene/{name}"), obj),
+            &["lies outside", "secret.txt"],
+        );
+        never_quoted(name, &s.warnings.join("\n"));
+    }
+    // A ten-megabyte key is not echoed whole.
+    let key = "k".repeat(10 << 20);
+    let s = d.write("scene/key.toml", format!("{key} = 1\n"));
+    let e = refused(&s, &["key.toml:1:1: unknown field `kkk"]);
+    assert!(e.len() < 2000, "{} bytes", e.len());
+}

@@ -11,7 +11,7 @@ use super::frame::Frame;
 use super::gltf::{self, FileCamera, FileLight};
 use super::obj;
 use super::parts::{Parts, Placed};
-use super::source::{resolve, Kind, Source};
+use super::source::{Kind, Source};
 use super::{Camera, Environment, Light, Material, Scene, Settings};
 
 /// The mesh formats, by extension.
@@ -27,6 +27,16 @@ pub enum Format {
 pub const EXTENSIONS: &str = ".obj, .ply, .stl, .gltf or .glb";
 
 impl Format {
+    /// What a file of this format holds, as messages name it.
+    pub fn kind(self) -> Kind {
+        match self {
+            Format::Obj => Kind::Obj,
+            Format::Ply => Kind::Ply,
+            Format::Stl => Kind::Stl,
+            Format::Gltf => Kind::Gltf,
+        }
+    }
+
     /// The format of `path` by its extension (any case).
     pub fn of(path: &Path) -> Option<Format> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
@@ -97,7 +107,7 @@ fn read_placed(
                 None => {
                     let texture = ply.texture.as_ref().and_then(|(file, line)| {
                         let from = format!("{}:{line}", path.display());
-                        parts.texture(src, &resolve(path, file), &from)
+                        parts.texture(src, path, file, &from)
                     });
                     Material {
                         name: "ply".into(),

@@ -11,7 +11,7 @@ use glam::{Affine3A, DAffine3, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::frame::Frame;
-use super::source::{Kind, Source};
+use super::source::{resolve, Kind, Outside, Source};
 use super::{Geometry, Material, MeshInfo, Texture};
 use crate::memory;
 
@@ -153,17 +153,54 @@ pub struct Parts {
 }
 
 impl Parts {
-    /// Loads a texture once per path; `None` (with a warning naming `from`,
-    /// where it was asked for) when missing, unreadable or too large.
-    pub fn texture(&mut self, src: &dyn Source, path: &Path, from: &str) -> Option<u32> {
+    /// Loads the texture `written` in the file `base` names once per path;
+    /// `None` (with a warning naming `from`, where it was asked for) when
+    /// missing, unreadable or too large. One outside `base`'s folder is
+    /// read at arm's length ([`Outside`]).
+    pub fn texture(
+        &mut self,
+        src: &dyn Source,
+        base: &Path,
+        written: &str,
+        from: &str,
+    ) -> Option<u32> {
+        self.texture_at(
+            src,
+            &resolve(base, written),
+            src.outside(base, &resolve(base, written)),
+            written,
+            from,
+        )
+    }
+
+    /// [`Parts::texture`] at `path`, resolved by the caller.
+    pub fn texture_at(
+        &mut self,
+        src: &dyn Source,
+        path: &Path,
+        outside: Option<Outside>,
+        written: &str,
+        from: &str,
+    ) -> Option<u32> {
         if let Some((_, id)) = self.texture_ids.iter().find(|(p, _)| p == path) {
             return *id;
         }
-        let name = path.display().to_string();
+        let name = crate::words::path(path);
+        if let Some(o) = &outside {
+            self.warnings.push(o.warning(from, "texture", written));
+        }
         let decoded = src
             .read(path, Kind::Image)
             .map_err(anyhow::Error::from)
-            .and_then(|bytes| Texture::decode(&name, &bytes));
+            .and_then(|bytes| {
+                Texture::decode(&name, &bytes).map_err(|e| {
+                    anyhow::anyhow!("{}", crate::words::clip_quotes(&format!("{e:#}")))
+                })
+            });
+        let decoded = match &outside {
+            Some(o) => o.quiet(Kind::Image, decoded, &mut self.warnings, usize::MAX),
+            None => decoded,
+        };
         let id = match decoded {
             Ok(t) => {
                 self.textures.push(t);
@@ -281,7 +318,8 @@ impl Parts {
         grow(&mut g.tri_mesh, g.indices.len(), mesh_id);
         if degenerate > 0 {
             self.warnings.push(format!(
-                "{name}: skipped {degenerate} degenerate (zero-area) triangle{}",
+                "{}: skipped {degenerate} degenerate (zero-area) triangle{}",
+                crate::words::quoted(&name),
                 if degenerate == 1 { "" } else { "s" }
             ));
         }

@@ -27,12 +27,12 @@ use anyhow::{anyhow, bail, Context, Result};
 use glam::{DAffine3, DMat4, DVec3, Vec3};
 
 use super::parts::{mesh_fits, Parts, Placed};
-use super::source::{Kind, Source};
+use super::source::{Kind, Outside, Source};
 use super::texture::{Texture, Wrap};
 use super::Material;
 use check::{check_lights, check_transform, check_trees, check_values, Broken};
-use primitive::{instanced, Decoded, Key};
-use uri::{inline_uri, uri_path};
+use primitive::{Decoded, Key};
+use uri::inline_uri;
 
 /// A camera of the file, placed in f64.
 #[derive(Clone, Debug)]
@@ -106,7 +106,7 @@ impl Unmapped {
 /// put the kind before either: `mesh Body`, `mesh 3`).
 fn named(name: Option<&str>, index: usize) -> String {
     match name {
-        Some(n) if !n.trim().is_empty() => crate::words::printable(n),
+        Some(n) if !n.trim().is_empty() => crate::words::quoted(n),
         _ => index.to_string(),
     }
 }
@@ -165,6 +165,9 @@ struct Reader<'a> {
     buffers: Vec<Vec<u8>>,
     /// Where each buffer's bytes come from, for messages that quote them.
     origins: Vec<String>,
+    /// The buffers outside the glTF's folder, read as allowed: messages
+    /// quote nothing they hold.
+    foreign: Vec<Option<Outside>>,
     unmapped: Unmapped,
     /// Decoded images by index (`None` when they could not be).
     images: HashMap<usize, Option<Texture>>,
@@ -206,18 +209,30 @@ impl Reader<'_> {
                     .buffers
                     .get(view.buffer().index())
                     .and_then(|b| b.get(view.offset()..view.offset().checked_add(view.length())?));
-                match bytes {
-                    Some(b) => Texture::decode(&from, b).map_err(|e| format!("{e:#}")),
-                    None => Err("its buffer view lies outside the buffer".into()),
+                match (bytes, self.foreign.get(view.buffer().index())) {
+                    (Some(b), Some(Some(o))) => Texture::decode(&from, b).map_err(|_| {
+                        format!(
+                            "not a valid image; what it holds is not shown, as its buffer lies \
+                             outside {}",
+                            crate::words::path(&o.folder)
+                        )
+                    }),
+                    (Some(b), _) => Texture::decode(&from, b)
+                        .map_err(|e| crate::words::clip_quotes(&format!("{e:#}"))),
+                    (None, _) => Err("its buffer view lies outside the buffer".into()),
                 }
             }
             ::gltf::image::Source::Uri { uri, .. } => match inline_uri(uri) {
-                Some(Ok(b)) => Texture::decode(&from, &b).map_err(|e| format!("{e:#}")),
+                Some(Ok(b)) => Texture::decode(&from, &b)
+                    .map_err(|e| crate::words::clip_quotes(&format!("{e:#}"))),
                 Some(Err(e)) => Err(e),
                 None => {
                     // Read, decoded and warned about as every texture is.
-                    let p = uri_path(self.path, uri);
-                    let id = parts.texture(self.src, &p, &from);
+                    let (p, o) = match uri::file(self.src, self.path, uri) {
+                        Ok(found) => found,
+                        Err(e) => bail!("{from} (of {user}): {e}"),
+                    };
+                    let id = parts.texture_at(self.src, &p, o, uri, &from);
                     let t = id.map(|i| parts.textures[i as usize].clone());
                     self.images.insert(index, t.clone());
                     return Ok(t);
@@ -310,8 +325,10 @@ pub fn load(
     material: Option<&Material>,
 ) -> Result<GltfScene> {
     let bytes = src.read(path, Kind::Gltf)?;
-    let invalid =
-        |e: &dyn std::fmt::Display| anyhow!("{}: not a valid glTF file: {e}", path.display());
+    let invalid = |e: &dyn std::fmt::Display| {
+        let e = crate::words::clip_quotes(&e.to_string());
+        anyhow!("{}: not a valid glTF file: {e}", path.display())
+    };
     // A .gltf is JSON text, read with or without a byte-order mark as every
     // text file is (a .glb starts with its magic number).
     let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
@@ -324,7 +341,7 @@ pub fn load(
         bail!(
             "{}: glTF version {}: only glTF 2.x is read",
             path.display(),
-            crate::words::printable(version)
+            crate::words::quoted(version)
         );
     }
     // The crate's validation indexes the POSITION accessor before
@@ -349,9 +366,10 @@ pub fn load(
     let broken = Broken::of(&json);
     let doc = ::gltf::Document::from_json(json).map_err(|e| invalid(&e))?;
     let mut blob = file.blob;
-    let (mut buffers, mut origins) = (Vec::new(), Vec::new());
+    let (mut buffers, mut origins, mut foreign) = (Vec::new(), Vec::new(), Vec::new());
     for b in doc.buffers() {
         let name = named(b.name(), b.index());
+        let mut outside = None;
         // The binary chunk is padded to 4 bytes past the buffer's length.
         let (mut data, padding, origin) = match b.source() {
             ::gltf::buffer::Source::Bin => (
@@ -371,10 +389,12 @@ pub fn load(
                     String::new(),
                 ),
                 None => {
-                    let p = uri_path(path, uri);
+                    let (p, o) = uri::file(src, path, uri)
+                        .map_err(|e| anyhow!("{}: buffer {name}: {e}", path.display()))?;
                     let data = src
                         .read(&p, Kind::Buffer)
                         .with_context(|| format!("{}: buffer {name}", path.display()))?;
+                    outside = o;
                     (data, 0, crate::words::path(&p))
                 }
             },
@@ -400,12 +420,14 @@ pub fn load(
         data.truncate(b.length());
         buffers.push(data);
         origins.push(origin);
+        foreign.push(outside);
     }
     let mut r = Reader {
         path,
         src,
         buffers,
         origins,
+        foreign,
         unmapped: Unmapped::default(),
         images: HashMap::new(),
         materials: HashMap::new(),
@@ -416,7 +438,7 @@ pub fn load(
     for ext in doc.extensions_used() {
         if ext != "KHR_lights_punctual" {
             r.unmapped
-                .note(&crate::words::printable(ext), || "extensionsUsed".into());
+                .note(&crate::words::quoted(ext), || "extensionsUsed".into());
         }
     }
     if doc.animations().next().is_some() {
@@ -442,7 +464,7 @@ pub fn load(
     // once, as the hierarchy is a forest. Each instance of a mesh is a copy
     // of it, counted before anything is read.
     check_trees(path, &doc, &scene)?;
-    let (vertices, triangles, uses) = instanced(&scene);
+    let (vertices, triangles, uses) = r.instanced(&scene)?;
     r.uses = uses;
     mesh_fits(vertices, triangles, parts.budget.room())
         .map_err(|e| anyhow!("{}: its meshes, each instance counted: {e}", path.display()))?;

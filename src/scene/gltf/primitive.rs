@@ -62,11 +62,23 @@ impl Reader<'_> {
     /// `; read from buffer B, FILE`: where the values of accessor `a` come
     /// from, when that is a file (a buffer's URI may name any file, and a
     /// wrong one gives values that make no sense as geometry).
-    fn origin(&self, a: Option<::gltf::Accessor>) -> String {
+    fn origin(&self, a: Option<&::gltf::Accessor>) -> String {
         let b = a.and_then(|a| a.view()).map(|v| v.buffer().index());
         match b.and_then(|b| Some((b, self.origins.get(b)?))) {
             Some((b, o)) if !o.is_empty() => format!("; read from buffer {b}, {o}"),
             _ => String::new(),
+        }
+    }
+
+    /// `value` as read from accessor `a`, or nothing of it where its
+    /// buffer lies outside the glTF's folder ([`Outside`]).
+    ///
+    /// [`Outside`]: crate::scene::source::Outside
+    fn shown(&self, a: Option<&::gltf::Accessor>, value: String) -> String {
+        let b = a.and_then(|a| a.view()).map(|v| v.buffer().index());
+        match b.and_then(|b| self.foreign.get(b)?.as_ref()) {
+            Some(_) => "(not shown: its buffer lies outside the glTF's folder)".into(),
+            None => value,
         }
     }
 
@@ -144,11 +156,7 @@ impl Reader<'_> {
         xf: &DAffine3,
         material: Option<u32>,
     ) -> Result<Option<Placed>> {
-        let here = format!(
-            "{}: mesh {mesh_name} primitive {} (node {node_name})",
-            self.at(),
-            p.index()
-        );
+        let here = self.place(mesh_name, &p, node_name);
         if !drawn(p.mode()) {
             self.unmapped
                 .note("points and lines", || format!("mesh {mesh_name}"));
@@ -210,9 +218,9 @@ impl Reader<'_> {
         }))
     }
 
-    /// Reads a primitive's accessors, checked first (`here` names it in
-    /// messages).
-    fn decode(&self, here: &str, p: &::gltf::Primitive) -> Result<Decoded> {
+    /// Checks a primitive's accessors before anything reads them (`here`
+    /// names it in messages).
+    fn check_primitive(&self, here: &str, p: &::gltf::Primitive) -> Result<()> {
         use DataType::{F32, U16, U32, U8};
         use Dimensions::{Scalar, Vec2 as V2, Vec3 as V3, Vec4 as V4};
         let Some(position) = p.get(&Semantic::Positions) else {
@@ -231,6 +239,12 @@ impl Reader<'_> {
         if let Some(a) = p.indices() {
             self.check_accessor(here, "indices", &a, &[U8, U16, U32], &[Scalar])?;
         }
+        Ok(())
+    }
+
+    /// Reads a primitive's accessors, checked by [`Reader::instanced`]
+    /// (`here` names it in messages).
+    fn decode(&self, here: &str, p: &::gltf::Primitive) -> Result<Decoded> {
         let buffers = &self.buffers;
         let reader = p.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let Some(positions) = reader.read_positions() else {
@@ -244,10 +258,11 @@ impl Reader<'_> {
                 .into_iter()
                 .any(|x| numbers::unusable(x).is_some())
         }) {
+            let a = p.get(&Semantic::Positions);
             bail!(
                 "{here}: position {i} is {}, not a finite number{}",
-                show3(*v),
-                self.origin(p.get(&Semantic::Positions))
+                self.shown(a.as_ref(), show3(*v)),
+                self.origin(a.as_ref())
             );
         }
         let n = positions.len();
@@ -291,9 +306,11 @@ impl Reader<'_> {
             None => (0..n as u32).collect(),
         };
         if let Some((k, &i)) = corners.iter().enumerate().find(|(_, &i)| i as usize >= n) {
+            let a = p.indices();
             bail!(
-                "{here}: index {k} is {i}, out of range ({n} vertices){}",
-                self.origin(p.indices())
+                "{here}: index {k} is {}, out of range ({n} vertices){}",
+                self.shown(a.as_ref(), i.to_string()),
+                self.origin(a.as_ref())
             );
         }
         let indices: Vec<[u32; 3]> = match p.mode() {
@@ -326,23 +343,45 @@ impl Reader<'_> {
     }
 }
 
-/// What the scene's nodes place, known before any accessor is read: its
-/// vertices and triangles, every instance counted (placing it takes that),
-/// and how many primitives each [`Decoded`] is placed for. Its hierarchy a
-/// forest, each node is visited once.
-pub(super) fn instanced(scene: &::gltf::Scene) -> (u64, u64, HashMap<Key, usize>) {
-    let (mut v, mut t, mut uses) = (0u64, 0u64, HashMap::new());
-    let mut stack: Vec<::gltf::Node> = scene.nodes().collect();
-    while let Some(node) = stack.pop() {
-        let primitives = node.mesh().into_iter().flat_map(|m| m.primitives());
-        for p in primitives.filter(|p| drawn(p.mode())) {
-            let n = p.get(&Semantic::Positions).map_or(0, |a| a.count());
-            let corners = p.indices().map_or(n, |a| a.count());
-            v = v.saturating_add(n as u64);
-            t = t.saturating_add(triangles(p.mode(), corners) as u64);
-            *uses.entry(key(&p)).or_insert(0) += 1;
-        }
-        stack.extend(node.children());
+impl Reader<'_> {
+    /// `FILE: mesh M primitive P (node N)`, as messages name a primitive.
+    fn place(&self, mesh_name: &str, p: &::gltf::Primitive, node_name: &str) -> String {
+        format!(
+            "{}: mesh {mesh_name} primitive {} (node {node_name})",
+            self.at(),
+            p.index()
+        )
     }
-    (v, t, uses)
+
+    /// What the scene's nodes place, known before any accessor is read:
+    /// its vertices and triangles, every instance counted (placing it
+    /// takes that), and how many primitives each [`Decoded`] is placed
+    /// for. Each primitive's accessors are checked on the way, so that
+    /// counts they cannot hold are named as such. Its hierarchy a forest,
+    /// each node is visited once.
+    pub(super) fn instanced(
+        &self,
+        scene: &::gltf::Scene,
+    ) -> Result<(u64, u64, HashMap<Key, usize>)> {
+        let (mut v, mut t, mut uses) = (0u64, 0u64, HashMap::new());
+        let mut stack: Vec<::gltf::Node> = scene.nodes().collect();
+        while let Some(node) = stack.pop() {
+            let node_name = super::named(node.name(), node.index());
+            if let Some(mesh) = node.mesh() {
+                let mesh_name = super::named(mesh.name(), mesh.index());
+                for p in mesh.primitives().filter(|p| drawn(p.mode())) {
+                    let n = *uses.entry(key(&p)).and_modify(|n| *n += 1).or_insert(1);
+                    if n == 1 {
+                        self.check_primitive(&self.place(&mesh_name, &p, &node_name), &p)?;
+                    }
+                    let count = p.get(&Semantic::Positions).map_or(0, |a| a.count());
+                    let corners = p.indices().map_or(count, |a| a.count());
+                    v = v.saturating_add(count as u64);
+                    t = t.saturating_add(triangles(p.mode(), corners) as u64);
+                }
+            }
+            stack.extend(node.children());
+        }
+        Ok((v, t, uses))
+    }
 }

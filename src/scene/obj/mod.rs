@@ -480,18 +480,35 @@ fn read_libraries(src: &dyn Source, obj: &ObjFile, warnings: &mut Vec<String>) -
             files = written.split_whitespace().map(read).collect();
         }
         for (mtl_path, text) in files {
+            let outside = src.outside(&obj.path, &mtl_path);
+            // A file outside that is not text is not quoted either.
+            let text = match &outside {
+                Some(o) if text.as_ref().is_err_and(|e| !is_not_found(e)) => {
+                    o.quiet(Kind::Mtl, text, warnings, usize::MAX)
+                }
+                _ => text,
+            };
             let text = match text {
                 Err(e) if is_not_found(&e) => {
                     warnings.push(format!(
                         "{}:{line}: material library {} not found; using the default material",
                         obj.path.display(),
-                        mtl_path.display()
+                        crate::words::path(&mtl_path)
                     ));
                     continue;
                 }
                 t => t.with_context(|| format!("{}:{line}: mtllib", obj.path.display()))?,
             };
-            let materials = mtl::parse(&mtl_path, &text, warnings)?;
+            if let Some(o) = &outside {
+                let from = format!("{}:{line}", obj.path.display());
+                warnings.push(o.warning(&from, "material library", written));
+            }
+            let before = warnings.len();
+            let materials = mtl::parse(&mtl_path, &text, warnings);
+            let materials = match &outside {
+                Some(o) => o.quiet(Kind::Mtl, materials, warnings, before)?,
+                None => materials?,
+            };
             lib.extend(materials.into_iter().map(|m| (mtl_path.clone(), m)));
         }
     }
@@ -507,7 +524,7 @@ fn convert_material(
     let d = Material::default();
     let texture = m.map_kd.as_ref().and_then(|(file, line)| {
         let from = format!("{}:{line}", mtl_path.display());
-        parts.texture(src, &resolve(mtl_path, file), &from)
+        parts.texture(src, mtl_path, file, &from)
     });
     Material {
         name: m.name.clone(),
@@ -573,8 +590,9 @@ pub fn load_placed(
     }
     for (name, line) in unknown {
         parts.warnings.push(format!(
-            "{}:{line}: usemtl {name}: no such material{}; using the default material",
+            "{}:{line}: usemtl {}: no such material{}; using the default material",
             path.display(),
+            crate::words::quoted(&name),
             if lib.is_empty() {
                 String::new()
             } else {

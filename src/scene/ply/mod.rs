@@ -22,6 +22,7 @@ use super::numbers::{self, show3, ABSURD};
 use super::parts::{mesh_fits, place_normals, place_positions, Placed};
 use super::texture::srgb_to_linear;
 use crate::memory;
+use crate::words::quoted;
 
 /// The header must end within this many bytes.
 const MAX_HEADER: usize = 1 << 20;
@@ -209,7 +210,10 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
         let line = std::str::from_utf8(raw.strip_suffix(b"\r").unwrap_or(raw))
             .map_err(|_| at("the header is not text (invalid UTF-8)".into()))?;
         let line = crate::words::printable(line);
-        let words: Vec<&str> = line.split_whitespace().collect();
+        // Names and values reach messages: each cut as messages quote them
+        // (none rayterm knows is near that long).
+        let cut: Vec<String> = line.split_whitespace().map(quoted).collect();
+        let words: Vec<&str> = cut.iter().map(String::as_str).collect();
         match words.as_slice() {
             ["ply"] if n == 1 => {}
             ["format", f, version] => {
@@ -224,8 +228,9 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
                     "binary_little_endian" => Format::Binary { big: false },
                     "binary_big_endian" => Format::Binary { big: true },
                     other => bail!(at(format!(
-                        "unknown format '{other}' (ascii, binary_little_endian or \
-                         binary_big_endian)"
+                        "unknown format '{}' (ascii, binary_little_endian or \
+                         binary_big_endian)",
+                        quoted(other)
                     ))),
                 });
             }
@@ -238,9 +243,13 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
             }
             ["comment", ..] | ["obj_info", ..] | [] => {}
             ["element", name, count] => {
-                let count: u64 = count
-                    .parse()
-                    .map_err(|_| at(format!("element {name}: '{count}' is not a count")))?;
+                let count: u64 = count.parse().map_err(|_| {
+                    at(format!(
+                        "element {}: '{}' is not a count",
+                        quoted(name),
+                        quoted(count)
+                    ))
+                })?;
                 if elements.iter().any(|e| e.name == *name) {
                     bail!(at(format!("element {name} is declared twice")));
                 }
@@ -255,7 +264,8 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
                     bail!(at("a property before any element".into()));
                 };
                 let ty = |t: &str| {
-                    Scalar::parse(t).ok_or_else(|| at(format!("unknown property type '{t}'")))
+                    Scalar::parse(t)
+                        .ok_or_else(|| at(format!("unknown property type '{}'", quoted(t))))
                 };
                 let (kind, name) = match rest {
                     ["list", count, item, name] => {
@@ -487,7 +497,9 @@ impl Values for Ascii<'_> {
     }
     fn int(&mut self, t: Scalar) -> Result<i64, String> {
         let w = self.word()?;
-        let x: i64 = w.parse().map_err(|_| format!("'{w}' is not an integer"))?;
+        let x: i64 = w
+            .parse()
+            .map_err(|_| format!("'{}' is not an integer", quoted(w)))?;
         let (lo, hi) = t.range();
         match (lo..=hi).contains(&x) {
             true => Ok(x),
