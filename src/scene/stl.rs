@@ -142,15 +142,21 @@ pub fn parse(
 }
 
 /// An ASCII STL starts with `solid` (after blanks), followed by a blank,
-/// and has no NUL byte near its start (binary files that start with
-/// `solid` have them among their numbers).
+/// and reads as text near its start: UTF-8 without control characters but
+/// blanks. A binary file that starts with `solid` has its numbers there,
+/// whose bytes hardly ever are text (NUL bytes or not).
 fn ascii_start(bytes: &[u8]) -> bool {
     let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let head = &body[..body.len().min(4096)];
+    // A character cut at the end of the head is still text.
+    let utf8 = std::str::from_utf8(head).map_or_else(|e| e.error_len().is_none(), |_| true);
+    let control = |b: &u8| (*b < 0x20 && !b.is_ascii_whitespace()) || *b == 0x7f;
     let start = body.iter().position(|b| !b.is_ascii_whitespace());
     start.is_some_and(|i| {
         body[i..].starts_with(b"solid")
             && body.get(i + 5).is_none_or(|b| b.is_ascii_whitespace())
-            && !body[..body.len().min(4096)].contains(&0)
+            && utf8
+            && !head.iter().any(control)
     })
 }
 
@@ -344,6 +350,27 @@ mod tests {
         assert_eq!(m[0].positions.len(), 4);
         assert_eq!(m[0].indices, [[0, 1, 2], [1, 3, 2]]);
         assert_eq!(m[0].name, "p");
+    }
+
+    /// A binary file that starts with `solid` and holds no NUL byte (a
+    /// count and numbers without one), cut short, is a truncated binary
+    /// file, not ASCII that makes no sense.
+    #[test]
+    fn binary_without_nul_bytes_is_told_by_its_bytes() {
+        let tri = [[1.1f32, 2.2, 3.3], [4.4, 5.7, 6.6], [7.7, 8.8, 9.9]];
+        let mut b = binary_stl(&[tri, tri], b"solid but binary");
+        b[80..84].copy_from_slice(&0x0101_0101u32.to_le_bytes());
+        for t in 0..2 {
+            let at = 84 + 50 * t;
+            b[at..at + 12].copy_from_slice(&[0x3f; 12]);
+            b[at + 48..at + 50].copy_from_slice(&[1, 1]);
+        }
+        assert!(!b.contains(&0));
+        let e = format!("{:#}", read(&b).unwrap_err());
+        assert!(
+            e.starts_with("p.stl: truncated binary STL: the header counts 16843009 triangles"),
+            "{e}"
+        );
     }
 
     #[test]
