@@ -844,15 +844,38 @@ fn malformed_gltf_files_say_what_is_wrong() {
         j["images"].as_array_mut().unwrap().push(image);
     });
     let s = load(&d.write("unused.glb", unused)).unwrap();
-    for want in [
-        "unused.glb: camera 2: its type is perspective and it has no perspective object; not used",
-        "unused.glb: image 1: it has a bufferView and no mimeType, which glTF requires; not used",
-    ] {
+    let said = |s: &rayterm::scene::Scene, want: &str| {
         assert!(
             s.warnings.iter().any(|w| w.contains(want)),
             "{want}: {:?}",
             s.warnings
         );
+    };
+    for want in [
+        "unused.glb: camera 2: its type is perspective and it has no perspective object; not used",
+        "unused.glb: image 1: it has a bufferView and no mimeType, which glTF requires; not used",
+    ] {
+        said(&s, want);
+    }
+    // What was silently made of the file is said: a texture without
+    // coordinates, a projective matrix, a directional light scaled to
+    // nothing (once named a light beyond f32's range).
+    let quiet = edit(&|j| {
+        j["meshes"][0]["primitives"][0]["attributes"] = serde_json::json!({"POSITION": 0});
+        j["nodes"][4] = serde_json::json!({"name": "Rig", "children": [5],
+            "matrix": [1, 0, 0, 0.5, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 3, 1]});
+        j["nodes"][6]["scale"] = serde_json::json!([0.0, 0.0, 0.0]);
+        j["extensions"]["KHR_lights_punctual"]["lights"][0]["type"] = "directional".into();
+    });
+    let s = load(&d.write("quiet.glb", quiet)).unwrap();
+    for want in [
+        "base colour textures on primitives without TEXCOORD_0 (drawn in the material's colour) \
+         (material Checker, mesh TileMesh)",
+        "projective node matrices (their last row is not 0 0 0 1: read as their affine part) \
+         (node Rig)",
+        "directional lights scaled to nothing (their direction is zero) (node Lamp)",
+    ] {
+        said(&s, want);
     }
     assert!(!all.contains('\u{1b}'), "{all:?}");
     // A byte-order mark before the JSON changes nothing.

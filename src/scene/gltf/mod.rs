@@ -478,6 +478,16 @@ pub fn load(
         let world = parent * DAffine3::from_mat4(local);
         let node_name = named(node.name(), node.index());
         check_transform(path, &node, &node_name, world)?;
+        if let ::gltf::scene::Transform::Matrix { matrix: m } = node.transform() {
+            // Its last row: what an affine placement drops.
+            if [m[0][3], m[1][3], m[2][3], m[3][3]] != [0.0, 0.0, 0.0, 1.0] {
+                r.unmapped.note(
+                    "projective node matrices (their last row is not 0 0 0 1: read as their \
+                     affine part)",
+                    || format!("node {node_name}"),
+                );
+            }
+        }
         if let Some(mesh) = node.mesh() {
             let mesh_name = named(mesh.name(), mesh.index());
             if node.weights().is_some() || mesh.weights().is_some() {
@@ -550,10 +560,15 @@ pub fn load(
                         "directional lights (placed as distant point lights)",
                         || format!("node {node_name}"),
                     );
-                    out.lights.push(FileLight::Directional {
-                        direction: world.transform_vector3(DVec3::NEG_Z),
-                        color,
-                    });
+                    // A zero scale on the way leaves it no direction.
+                    let direction = world.transform_vector3(DVec3::NEG_Z);
+                    match direction.length_squared() > 0.0 && direction.is_finite() {
+                        true => out.lights.push(FileLight::Directional { direction, color }),
+                        false => r.unmapped.note(
+                            "directional lights scaled to nothing (their direction is zero)",
+                            || format!("node {node_name}"),
+                        ),
+                    }
                 }
             }
             if light.range().is_some() {
