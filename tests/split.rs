@@ -788,3 +788,19 @@ fn a_checkpoint_is_claimed_by_one_render_at_a_time() {
     assert_eq!(left, ["after.png", "c.exr"]);
     std::fs::remove_dir_all(d).unwrap();
 }
+
+/// A part that is missing, or not a file, is named as every other file a
+/// command cannot read is.
+#[test]
+fn a_part_that_cannot_be_read_is_named() {
+    let d = dir("unreadable");
+    std::fs::create_dir(d.join("folder.exr")).unwrap();
+    for (part, why) in [
+        ("gone.exr", "cannot read gone.exr: not found"),
+        ("folder.exr", "cannot read folder.exr: not a regular file"),
+    ] {
+        let err = refused(&d, &["merge", part, "-o", "m.png"], "m.png");
+        assert!(err.contains(why), "{err}");
+    }
+    std::fs::remove_dir_all(d).unwrap();
+}
