@@ -37,9 +37,17 @@ impl Claim {
                 .write(true)
                 .create(true)
                 .truncate(false)
-                .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC)
+                .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK | libc::O_CLOEXEC)
                 .open(&lock)
                 .map_err(cannot)?;
+            // Never a link (refused by the open), a FIFO or a device.
+            if !file.metadata().map_err(cannot)?.is_file() {
+                bail!(
+                    "cannot claim {}: {} is not a regular file",
+                    path.display(),
+                    lock.display()
+                );
+            }
             if !try_lock(&file).map_err(cannot)? {
                 bail!(
                     "{} is being written by another render (it holds {}); wait for it to \
