@@ -1513,6 +1513,20 @@ fn files_outside_the_scene_are_refused_or_named_and_never_quoted() {
         let e = refused(&s, &[name, "lies outside", "not shown"]);
         never_quoted(name, &e);
     }
+    // Its error says where, not what.
+    d.write(
+        "bad.obj",
+        format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 {SECRET}\n"),
+    );
+    let s = d.write("scene/bad.toml", scene_with("../bad.obj", ""));
+    let e = refused(
+        &s,
+        &[
+            "bad.toml:1:1: mesh ../bad.obj: ",
+            "bad.obj:4: not read as an OBJ mesh; why is not shown",
+        ],
+    );
+    never_quoted("bad.toml", &e);
     let s = d.write("scene/environ.toml", scene_with("/proc/self/environ", ""));
     let e = refused(
         &s,

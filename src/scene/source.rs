@@ -59,6 +59,12 @@ impl Kind {
         }
     }
 
+    /// The kind in words with its article: `an OBJ mesh`.
+    pub fn a_noun(self) -> String {
+        let an = matches!(self, Kind::Obj | Kind::Stl | Kind::Image);
+        format!("{} {}", if an { "an" } else { "a" }, self.noun())
+    }
+
     /// The kind in words, as messages name it.
     pub const fn noun(self) -> &'static str {
         match self {
@@ -382,9 +388,9 @@ impl Outside {
                 .filter(|digits: &String| !digits.is_empty())
                 .map_or(String::new(), |d| format!(":{d}"));
             anyhow!(
-                "{shown}{line}: not a valid {}; what it holds is not shown, as it lies \
-                 outside {}",
-                kind.noun(),
+                "{shown}{line}: not read as {}; why is not shown, as the reason may quote \
+                 the file, which lies outside {}",
+                kind.a_noun(),
                 crate::words::path(&self.folder)
             )
         })

@@ -212,8 +212,8 @@ impl Reader<'_> {
                 match (bytes, self.foreign.get(view.buffer().index())) {
                     (Some(b), Some(Some(o))) => Texture::decode(&from, b).map_err(|_| {
                         format!(
-                            "not a valid image; what it holds is not shown, as its buffer lies \
-                             outside {}",
+                            "not read as an image; why is not shown, as the reason may quote \
+                             its buffer, which lies outside {}",
                             crate::words::path(&o.folder)
                         )
                     }),
