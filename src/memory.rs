@@ -23,8 +23,10 @@ pub const BYTES_PER_TRIANGLE: u64 = 200;
 /// Peak memory per vertex beyond one a triangle (which
 /// [`BYTES_PER_TRIANGLE`] counts: meshes have about half as many vertices
 /// as triangles): its position in f64 as placed and in f32, its normal,
-/// texture coordinates and colour, 56 to 68 bytes; 55 measured for a PLY
-/// of 20 million vertices of 3 bytes each (`/usr/bin/time`), rounded up.
+/// texture coordinates and colour. Measured (`/usr/bin/time`, the file
+/// itself left out): 52 bytes for a PLY of 20 million bare vertices, 68
+/// for one of 4 million with normals, texture coordinates and colours;
+/// rounded up.
 pub const BYTES_PER_VERTEX: u64 = 72;
 
 /// The budget where `/proc/meminfo` cannot be read.
