@@ -27,14 +27,14 @@ pub const BYTES_PER_TRIANGLE: u64 = 200;
 /// itself left out): 52 bytes for a PLY of 20 million bare vertices, 68
 /// for one of 4 million with normals, texture coordinates and colours;
 /// rounded up.
-pub const BYTES_PER_VERTEX: u64 = 72;
+pub(crate) const BYTES_PER_VERTEX: u64 = 72;
 
 /// The budget where `/proc/meminfo` cannot be read.
 pub const FALLBACK: u64 = 16 << 30;
 
 /// Memory a mesh of `vertices` and `triangles` takes, loaded, built and
 /// rendered.
-pub fn mesh_bytes(vertices: u64, triangles: u64) -> u64 {
+pub(crate) fn mesh_bytes(vertices: u64, triangles: u64) -> u64 {
     let extra = vertices.saturating_sub(triangles);
     triangles
         .saturating_mul(BYTES_PER_TRIANGLE)
@@ -53,14 +53,14 @@ pub struct Budget {
 
 impl Budget {
     /// The bytes left for the next mesh.
-    pub fn room(&mut self) -> u64 {
+    pub(crate) fn room(&mut self) -> u64 {
         self.available
             .get_or_insert_with(available)
             .saturating_sub(self.taken)
     }
 
     /// Counts a mesh read.
-    pub fn take(&mut self, vertices: u64, triangles: u64) {
+    pub(crate) fn take(&mut self, vertices: u64, triangles: u64) {
         self.taken = self.taken.saturating_add(mesh_bytes(vertices, triangles));
     }
 }

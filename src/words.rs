@@ -23,12 +23,12 @@ pub fn printable_but(s: &str, kept: &str) -> String {
 }
 
 /// The most characters of one name, value or path a message quotes.
-pub const QUOTED: usize = 256;
+pub(crate) const QUOTED: usize = 256;
 
 /// A name, value or path from a file or the command line as a message
 /// quotes it: [`printable`], and cut to [`QUOTED`] characters (`…` marking
 /// the cut), so a ten-megabyte key is not echoed whole.
-pub fn quoted(s: &str) -> String {
+pub(crate) fn quoted(s: &str) -> String {
     match s.char_indices().nth(QUOTED) {
         Some((cut, _)) => printable(&s[..cut]) + "…",
         None => printable(s),
@@ -37,7 +37,7 @@ pub fn quoted(s: &str) -> String {
 
 /// A message of another crate's (a parser's) with what it quotes, between
 /// backticks, single or double quotes, cut as [`quoted`] cuts it.
-pub fn clip_quotes(msg: &str) -> String {
+pub(crate) fn clip_quotes(msg: &str) -> String {
     let mut out = String::with_capacity(msg.len().min(4096));
     let mut rest = msg;
     while let Some(open) = rest.find(['`', '\'', '"']) {

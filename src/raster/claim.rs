@@ -14,7 +14,7 @@ use super::output::reason;
 use super::temporary::{short_name, try_lock};
 
 #[derive(Debug)]
-pub struct Claim {
+pub(crate) struct Claim {
     lock: PathBuf,
     _file: File,
 }
@@ -22,7 +22,7 @@ pub struct Claim {
 impl Claim {
     /// Claims `path` for this process; an error naming it when another
     /// process holds it.
-    pub fn take(path: &Path) -> Result<Claim> {
+    pub(crate) fn take(path: &Path) -> Result<Claim> {
         let lock = path.with_file_name(format!(".{}.lock", short_name(path)));
         let cannot = |e: std::io::Error| {
             anyhow::anyhow!(

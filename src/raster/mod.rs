@@ -7,7 +7,7 @@
 //! and every read checks the size an image declares before decoding it.
 
 pub mod canvas;
-pub mod claim;
+pub(crate) mod claim;
 pub mod flat_exr;
 pub mod hdr;
 pub mod metrics;

@@ -15,7 +15,7 @@ pub fn encode(width: u32, height: u32, img: &[Vec3]) -> Result<Vec<u8>> {
 
 /// [`encode`], with a text attribute `(name, value)` saying what the image
 /// is of (a cached reference: the key of its scene and settings).
-pub fn encode_noted(
+pub(crate) fn encode_noted(
     width: u32,
     height: u32,
     img: &[Vec3],
@@ -50,7 +50,7 @@ pub fn encode_noted(
 
 /// The text attribute `name` of the OpenEXR image at `path` (see
 /// [`encode_noted`]), read from its header alone; `None` where it has none.
-pub fn note(path: &Path, name: &str) -> Result<Option<String>> {
+pub(crate) fn note(path: &Path, name: &str) -> Result<Option<String>> {
     let err = |e: exr::error::Error| {
         let e = crate::words::clip_quotes(&e.to_string());
         anyhow::anyhow!("{}: {e}", path.display())

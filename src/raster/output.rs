@@ -170,7 +170,7 @@ impl Output {
 
     /// Whether the output is written in place (a device, a FIFO, a
     /// descriptor), not replaced.
-    pub fn in_place(&self) -> bool {
+    pub(crate) fn in_place(&self) -> bool {
         self.device.is_some()
     }
 

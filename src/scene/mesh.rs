@@ -28,7 +28,7 @@ pub const EXTENSIONS: &str = ".obj, .ply, .stl, .gltf or .glb";
 
 impl Format {
     /// What a file of this format holds, as messages name it.
-    pub fn kind(self) -> Kind {
+    pub(crate) fn kind(self) -> Kind {
         match self {
             Format::Obj => Kind::Obj,
             Format::Ply => Kind::Ply,

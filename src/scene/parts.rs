@@ -90,7 +90,7 @@ pub fn place_normals(normals: &[DVec3], xf: &DAffine3) -> Vec<Vec3> {
 /// Refuses a mesh of `vertices` and `triangles` when it would take more
 /// than `available` bytes ([`memory::mesh_bytes`]): the message, without a
 /// place.
-pub fn mesh_fits(vertices: u64, triangles: u64, available: u64) -> Result<(), String> {
+pub(crate) fn mesh_fits(vertices: u64, triangles: u64, available: u64) -> Result<(), String> {
     let needed = memory::mesh_bytes(vertices, triangles);
     if needed > available {
         let what = match vertices > triangles {
@@ -174,7 +174,7 @@ impl Parts {
     }
 
     /// [`Parts::texture`] at `path`, resolved by the caller.
-    pub fn texture_at(
+    pub(crate) fn texture_at(
         &mut self,
         src: &dyn Source,
         path: &Path,

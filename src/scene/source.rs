@@ -60,7 +60,7 @@ impl Kind {
     }
 
     /// The kind in words with its article: `an OBJ mesh`.
-    pub fn a_noun(self) -> String {
+    pub(crate) fn a_noun(self) -> String {
         let an = matches!(self, Kind::Obj | Kind::Stl | Kind::Image);
         format!("{} {}", if an { "an" } else { "a" }, self.noun())
     }
@@ -340,7 +340,7 @@ pub struct Outside {
 
 impl Outside {
     /// `{from}: {what} {written} lies outside the folder of ...`.
-    pub fn warning(&self, from: &str, what: &str, written: &str) -> String {
+    pub(crate) fn warning(&self, from: &str, what: &str, written: &str) -> String {
         format!(
             "{from}: {what} {} lies outside {} (it resolves to {}); no message quotes what it holds",
             crate::words::quoted(written),
@@ -353,7 +353,7 @@ impl Outside {
     /// warnings pushed onto `warnings` since `before` become one, and an
     /// error names the file (and line) and not what went wrong in it,
     /// unless it is the file's own [`ReadError`] (not found, too large).
-    pub fn quiet<T>(
+    pub(crate) fn quiet<T>(
         &self,
         kind: Kind,
         result: Result<T>,
@@ -430,7 +430,7 @@ pub struct Disk {
 impl Disk {
     /// Files on disk; `allow_outside` lets glTF files name files outside
     /// their folder (`--allow-outside`).
-    pub fn new(allow_outside: bool) -> Self {
+    pub(crate) fn new(allow_outside: bool) -> Self {
         Disk {
             allow_outside,
             ..Disk::default()
