@@ -131,14 +131,27 @@ static PENDING: AtomicPtr<libc::c_char> = AtomicPtr::new(std::ptr::null_mut());
 /// freed: the handler may be reading it on another thread (a few bytes
 /// per output written).
 pub fn writing(tmp: Option<&Path>) {
-    let name = tmp
-        .and_then(|p| CString::new(p.as_os_str().as_bytes()).ok())
-        .map_or(std::ptr::null_mut(), CString::into_raw);
-    PENDING.store(name, Ordering::SeqCst);
+    note(&PENDING, tmp);
 }
 
-/// Ends the process on a second signal: the terminal is given back and a
-/// half-written output removed first. Only async-signal-safe calls.
+/// The lock file of a claim held, if any.
+static CLAIM: AtomicPtr<libc::c_char> = AtomicPtr::new(std::ptr::null_mut());
+
+/// Notes the lock file of a claim held (`Some`) or given up (`None`), for
+/// [`exit_now`] to remove as [`writing`]'s file.
+pub fn claiming(lock: Option<&Path>) {
+    note(&CLAIM, lock);
+}
+
+fn note(slot: &AtomicPtr<libc::c_char>, path: Option<&Path>) {
+    let name = path
+        .and_then(|p| CString::new(p.as_os_str().as_bytes()).ok())
+        .map_or(std::ptr::null_mut(), CString::into_raw);
+    slot.store(name, Ordering::SeqCst);
+}
+
+/// Ends the process on a second signal: the terminal is given back, and a
+/// half-written output and a claim's lock file removed first. Only async-signal-safe calls.
 fn exit_now(sig: i32) -> ! {
     // SAFETY: write, tcsetattr, unlink and _exit are async-signal-safe;
     // the terminal and the file name were set before the handler could
@@ -150,9 +163,11 @@ fn exit_now(sig: i32) -> ! {
                 libc::tcsetattr(t.fd, libc::TCSANOW, &t.modes);
             }
         }
-        let tmp = PENDING.load(Ordering::SeqCst);
-        if !tmp.is_null() {
-            libc::unlink(tmp);
+        for slot in [&PENDING, &CLAIM] {
+            let name = slot.load(Ordering::SeqCst);
+            if !name.is_null() {
+                libc::unlink(name);
+            }
         }
         let note = b"\nrayterm: stopped at once by a second signal\n";
         libc::write(2, note.as_ptr().cast(), note.len());

@@ -5,10 +5,10 @@
 //!
 //! The budget is what the system says is available (`MemAvailable` in
 //! `/proc/meminfo`), or less where the process's control group has a
-//! memory limit (a container's, a batch job's), read when the check is
-//! made; where neither can be read a fixed [`FALLBACK`] stands in. A
-//! request needing more would end in the out-of-memory killer or an abort,
-//! never in a picture.
+//! memory limit (a container's, a batch job's) or the process an address
+//! space limit (`ulimit -v`), read when the check is made; where none can
+//! be read a fixed [`FALLBACK`] stands in. A request needing more would end
+//! in the out-of-memory killer or an allocation abort, never in a picture.
 
 use std::path::Path;
 
@@ -20,11 +20,54 @@ use anyhow::{bail, Result};
 /// up.
 pub const BYTES_PER_TRIANGLE: u64 = 200;
 
+/// Peak memory per vertex beyond one a triangle (which
+/// [`BYTES_PER_TRIANGLE`] counts: meshes have about half as many vertices
+/// as triangles): its position in f64 as placed and in f32, its normal,
+/// texture coordinates and colour. Measured (`/usr/bin/time`, the file
+/// itself left out): 52 bytes for a PLY of 20 million bare vertices, 68
+/// for one of 4 million with normals, texture coordinates and colours;
+/// rounded up.
+pub(crate) const BYTES_PER_VERTEX: u64 = 72;
+
 /// The budget where `/proc/meminfo` cannot be read.
 pub const FALLBACK: u64 = 16 << 30;
 
+/// Memory a mesh of `vertices` and `triangles` takes, loaded, built and
+/// rendered.
+pub(crate) fn mesh_bytes(vertices: u64, triangles: u64) -> u64 {
+    let extra = vertices.saturating_sub(triangles);
+    triangles
+        .saturating_mul(BYTES_PER_TRIANGLE)
+        .saturating_add(extra.saturating_mul(BYTES_PER_VERTEX))
+}
+
+/// What a scene being loaded may still take: the memory available when
+/// its first mesh is read, less what the meshes read before it take once
+/// built. Each mesh is checked against the room the others leave, so the
+/// scene as a whole fits before anything of it is built.
+#[derive(Debug, Default)]
+pub struct Budget {
+    available: Option<u64>,
+    taken: u64,
+}
+
+impl Budget {
+    /// The bytes left for the next mesh.
+    pub(crate) fn room(&mut self) -> u64 {
+        self.available
+            .get_or_insert_with(available)
+            .saturating_sub(self.taken)
+    }
+
+    /// Counts a mesh read.
+    pub(crate) fn take(&mut self, vertices: u64, triangles: u64) {
+        self.taken = self.taken.saturating_add(mesh_bytes(vertices, triangles));
+    }
+}
+
 /// Memory available for new allocations, in bytes: the system's, or the
-/// room the control group's limit leaves where that is less.
+/// room the control group's limit or the address space limit leaves where
+/// that is less.
 pub fn available() -> u64 {
     let system = std::fs::read_to_string("/proc/meminfo")
         .ok()
@@ -38,10 +81,35 @@ pub fn available() -> u64 {
     let group = std::fs::read_to_string("/proc/self/cgroup")
         .ok()
         .and_then(|c| cgroup_room(&c, Path::new("/sys/fs/cgroup")));
-    match (system, group) {
-        (Some(s), Some(g)) => s.min(g),
-        (s, g) => s.or(g).unwrap_or(FALLBACK),
+    [system, group, address_room()]
+        .into_iter()
+        .flatten()
+        .min()
+        .unwrap_or(FALLBACK)
+}
+
+/// The room the address space limit (`RLIMIT_AS`, `ulimit -v`) leaves: the
+/// limit less the address space in use (`VmSize` in `/proc/self/status`),
+/// where one is set. Past it, an allocation fails and the process aborts.
+fn address_room() -> Option<u64> {
+    let mut limit = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: getrlimit writes the limit into the struct it is given.
+    if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut limit) } != 0
+        || limit.rlim_cur == libc::RLIM_INFINITY
+    {
+        return None;
     }
+    let used = std::fs::read_to_string("/proc/self/status")
+        .ok()?
+        .lines()
+        .find_map(|l| l.strip_prefix("VmSize:"))
+        .and_then(|v| v.trim().strip_suffix("kB"))
+        .and_then(|v| v.trim().parse::<u64>().ok())?
+        .saturating_mul(1024);
+    Some(limit.rlim_cur.saturating_sub(used))
 }
 
 /// The room the memory limits of a control group leave: the least, over

@@ -22,10 +22,46 @@ pub fn printable_but(s: &str, kept: &str) -> String {
         .collect()
 }
 
+/// The most characters of one name, value or path a message quotes.
+pub(crate) const QUOTED: usize = 256;
+
+/// A name, value or path from a file or the command line as a message
+/// quotes it: [`printable`], and cut to [`QUOTED`] characters (`…` marking
+/// the cut), so a ten-megabyte key is not echoed whole.
+pub(crate) fn quoted(s: &str) -> String {
+    match s.char_indices().nth(QUOTED) {
+        Some((cut, _)) => printable(&s[..cut]) + "…",
+        None => printable(s),
+    }
+}
+
+/// A message of another crate's (a parser's) with what it quotes, between
+/// backticks, single or double quotes, cut as [`quoted`] cuts it.
+pub(crate) fn clip_quotes(msg: &str) -> String {
+    let mut out = String::with_capacity(msg.len().min(4096));
+    let mut rest = msg;
+    while let Some(open) = rest.find(['`', '\'', '"']) {
+        let q = rest[open..].chars().next().unwrap_or('"');
+        out.push_str(&rest[..=open]);
+        let inner = &rest[open + 1..];
+        let (span, tail) = match inner.find(q) {
+            Some(close) => (&inner[..close], &inner[close..]),
+            None => (inner, ""),
+        };
+        out.push_str(&quoted(span));
+        // The closing quote, if any, and what follows it.
+        let (close, after) = tail.split_at(tail.len().min(1));
+        out.push_str(close);
+        rest = after;
+    }
+    out.push_str(rest);
+    out
+}
+
 /// A path as messages and summaries print it: [`Path::display`] prints
 /// control characters as they are.
 pub fn path(p: &Path) -> String {
-    printable(&p.display().to_string())
+    quoted(&p.display().to_string())
 }
 
 /// `1 light`, `3 lights`; `plural` is the word for any count but one.
@@ -130,5 +166,23 @@ mod tests {
         );
         assert_eq!(printable_but("a\tb\nc\u{1b}", "\n\t"), "a\tb\nc\u{fffd}");
         assert_eq!(path(Path::new("e\u{1b}[2J.png")), "e\u{fffd}[2J.png");
+    }
+
+    #[test]
+    fn quotes_are_cut_to_a_few_hundred_characters() {
+        let key = "k".repeat(10_000_000);
+        let q = quoted(&key);
+        assert_eq!(q.chars().count(), QUOTED + 1);
+        assert!(q.ends_with("k…"));
+        assert_eq!(quoted("é\u{1b}"), "é\u{fffd}");
+        let msg = format!("unknown field `{key}`, expected one of `name`, 'a', \"{key}");
+        let cut = clip_quotes(&msg);
+        assert!(cut.len() < 2 * QUOTED + 100, "{}", cut.len());
+        assert!(cut.starts_with("unknown field `kkk"), "{cut}");
+        assert!(
+            cut.contains("k…`, expected one of `name`, 'a', \"kkk"),
+            "{cut}"
+        );
+        assert_eq!(clip_quotes("it's fine"), "it's fine");
     }
 }

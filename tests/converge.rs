@@ -15,6 +15,7 @@ use rayterm::report::converge::{
 };
 use rayterm::report::stats::fit_log_log;
 use rayterm::scene::{self, Builder, Light, Scene};
+use std::path::PathBuf;
 
 fn config(w: u32, h: u32, budgets: &[u32], reference: ReferenceSource) -> Config {
     Config {
@@ -205,6 +206,24 @@ fn rendered_reference_is_cached_and_reused() -> anyhow::Result<()> {
         .all(|f| f.path().extension().is_some_and(|e| e == "exr")));
     let (w, h, img) = load_reference(&files[0].path())?;
     assert_eq!((w, h, img.len()), (8, 8, 64));
+    // A reference of another scene under this one's name (copied into the
+    // cache) is not taken for it: its file says what it is of.
+    let named = |st: &Study| {
+        let source = &st.reference.source;
+        PathBuf::from(source.rsplit_once("cached as ").map_or("", |(_, p)| p))
+    };
+    std::fs::copy(named(&third), named(&first))?;
+    let fourth = study(&s, features(), &cfg);
+    assert!(fourth.reference.source.starts_with("rendered"));
+    assert!(
+        fourth
+            .notes
+            .iter()
+            .any(|n| n.contains("not used: it is of another scene or settings")),
+        "{:?}",
+        fourth.notes
+    );
+    assert_eq!(errs(&first), errs(&fourth));
     std::fs::remove_dir_all(&dir)?;
     Ok(())
 }

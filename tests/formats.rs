@@ -633,7 +633,11 @@ fn a_gltf_camera_is_chosen_by_name_or_number() {
     let d = Dir::new("formats-gltf-camera");
     let (json, bin) = gltf_parts(serde_json::json!({}));
     let file = d.write("scene.glb", glb(&json, &bin));
-    let with = |camera: &str| scene::load_reading(&file, Some(camera)).map(|(s, _)| s.camera);
+    let through = |camera: &str| scene::Opening {
+        camera: Some(camera.into()),
+        ..Default::default()
+    };
+    let with = |camera: &str| scene::load_reading(&file, &through(camera)).map(|(s, _)| s.camera);
     let near = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
     for name in ["Side", "SideCam", "2"] {
         let c = with(name).unwrap();
@@ -657,7 +661,10 @@ fn a_gltf_camera_is_chosen_by_name_or_number() {
     let obj = d.write("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     let toml = d.write("s.toml", "[[mesh]]\nfile = \"m.obj\"\n");
     for spec in ["cornell", obj.as_str(), toml.as_str()] {
-        let e = format!("{:#}", scene::load_reading(spec, Some("Side")).unwrap_err());
+        let e = format!(
+            "{:#}",
+            scene::load_reading(spec, &through("Side")).unwrap_err()
+        );
         assert!(e.contains("--camera Side"), "{e}");
     }
     // From the command line, the chosen camera is the one rendered.
@@ -735,12 +742,25 @@ fn malformed_gltf_files_say_what_is_wrong() {
     let inf_light =
         edit(&|j| j["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = 1e39.into());
     let huge_scale = edit(&|j| j["nodes"][0]["scale"] = serde_json::json!([1e300, 1e300, 1e300]));
+    // The crate's accessors unwrap what a camera's type names and an
+    // image's source: checked first, an error where used.
+    let ortho = serde_json::json!({"xmag": 1.0, "ymag": 1.0, "zfar": 10.0, "znear": 0.1});
+    let typeless = edit(&|j| {
+        j["cameras"][0] = serde_json::json!({"type": "perspective", "orthographic": ortho})
+    });
+    let flat = edit(&|j| j["cameras"][1]["type"] = "orthographic".into());
+    let mimeless = edit(&|j| j["images"][0] = serde_json::json!({"bufferView": 3}));
+    let sourceless = edit(&|j| j["images"][0] = serde_json::json!({"name": "Nowhere"}));
     let uri = |u: &str| {
         let (mut j, _) = gltf_parts(serde_json::json!({"uri": "x.bin"}));
         j["buffers"][0]["uri"] = u.into();
         serde_json::to_vec(&j).unwrap()
     };
     for (name, bytes, want) in [
+        ("typeless.glb", typeless, "typeless.glb: node Eye: camera 0: its type is perspective and it has no perspective object"),
+        ("flat.glb", flat, "flat.glb: node Side: camera SideCam: its type is orthographic and it has no orthographic object"),
+        ("mimeless.glb", mimeless, "mimeless.glb: image 0 (of material Checker): it has a bufferView and no mimeType"),
+        ("sourceless.glb", sourceless, "sourceless.glb: image Nowhere (of material Checker): it has neither a uri nor a bufferView"),
         ("wide.glb", wide_fov, "camera SideCam: yfov 3.2 radians is not between 1 and 179 degrees"),
         ("v1.glb", v1, "v1.glb: glTF version 1.0: only glTF 2.x is read"),
         ("inf.glb", inf_light, "inf.glb: light 0: intensity inf, color [1, 1, 1]: beyond 32-bit floats"),
@@ -815,6 +835,48 @@ fn malformed_gltf_files_say_what_is_wrong() {
     );
     let all = s.warnings.join("\n");
     assert!(all.contains("E\u{fffd}[2J (extensionsUsed)"), "{all}");
+    // Cameras and images nothing uses are warned about, whatever is wrong
+    // with them.
+    let unused = edit(&|j| {
+        let camera = serde_json::json!({"type": "perspective", "orthographic": ortho});
+        j["cameras"].as_array_mut().unwrap().push(camera);
+        let image = serde_json::json!({"bufferView": 3});
+        j["images"].as_array_mut().unwrap().push(image);
+    });
+    let s = load(&d.write("unused.glb", unused)).unwrap();
+    let said = |s: &rayterm::scene::Scene, want: &str| {
+        assert!(
+            s.warnings.iter().any(|w| w.contains(want)),
+            "{want}: {:?}",
+            s.warnings
+        );
+    };
+    for want in [
+        "unused.glb: camera 2: its type is perspective and it has no perspective object; not used",
+        "unused.glb: image 1: it has a bufferView and no mimeType, which glTF requires; not used",
+    ] {
+        said(&s, want);
+    }
+    // What was silently made of the file is said: a texture without
+    // coordinates, a projective matrix, a directional light scaled to
+    // nothing (once named a light beyond f32's range).
+    let quiet = edit(&|j| {
+        j["meshes"][0]["primitives"][0]["attributes"] = serde_json::json!({"POSITION": 0});
+        j["nodes"][4] = serde_json::json!({"name": "Rig", "children": [5],
+            "matrix": [1, 0, 0, 0.5, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 3, 1]});
+        j["nodes"][6]["scale"] = serde_json::json!([0.0, 0.0, 0.0]);
+        j["extensions"]["KHR_lights_punctual"]["lights"][0]["type"] = "directional".into();
+    });
+    let s = load(&d.write("quiet.glb", quiet)).unwrap();
+    for want in [
+        "base colour textures on primitives without TEXCOORD_0 (drawn in the material's colour) \
+         (material Checker, mesh TileMesh)",
+        "projective node matrices (their last row is not 0 0 0 1: read as their affine part) \
+         (node Rig)",
+        "directional lights scaled to nothing (their direction is zero) (node Lamp)",
+    ] {
+        said(&s, want);
+    }
     assert!(!all.contains('\u{1b}'), "{all:?}");
     // A byte-order mark before the JSON changes nothing.
     let (j, b) = gltf_parts(serde_json::json!({"uri": "ok.bin"}));

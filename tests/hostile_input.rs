@@ -12,7 +12,7 @@
 
 mod files;
 
-use files::{rayterm, within_deadline, Dir};
+use files::{rayterm, rayterm_within, within_deadline, Dir};
 use rayterm::scene::{self, Scene};
 
 const TRI: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
@@ -1273,4 +1273,293 @@ fn an_empty_environment_is_a_warning() {
         scene_with("tri.obj", "[environment]\nsky = true\n"),
     );
     clean(&s);
+}
+
+#[test]
+fn ply_elements_without_properties_are_skipped_without_looping() {
+    let d = Dir::new("hostile-ply-empty");
+    let head = |format: &str| {
+        format!(
+            "ply\nformat {format} 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+             property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+             element junk 9223372036854775807\nend_header\n"
+        )
+    };
+    let mut binary = head("binary_little_endian").into_bytes();
+    for x in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+        binary.extend(x.to_le_bytes());
+    }
+    binary.push(3);
+    for i in 0i32..3 {
+        binary.extend(i.to_le_bytes());
+    }
+    let ascii = head("ascii") + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    for (name, bytes) in [("junk.ply", binary), ("junk-ascii.ply", ascii.into_bytes())] {
+        let s = warned(
+            &d.write(name, bytes),
+            &[
+                name,
+                "ignored, not used: element junk (9223372036854775807)",
+            ],
+        );
+        assert_eq!(s.geometry.indices.len(), 1, "{name}");
+    }
+}
+
+/// A binary PLY of `n` vertices of `char` coordinates, all zero but the
+/// first triangle's (3 bytes each: the file is sparse), and that triangle.
+fn char_ply(d: &Dir, name: &str, n: u64) -> String {
+    use std::io::{Seek, Write};
+    let head = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {n}\nproperty char x\n\
+         property char y\nproperty char z\nelement face 1\n\
+         property list uchar int vertex_indices\nend_header\n"
+    );
+    let p = d.path(name);
+    let mut f = std::fs::File::create(&p).unwrap();
+    f.write_all(head.as_bytes()).unwrap();
+    f.write_all(&[0, 0, 0, 1, 0, 0, 0, 1, 0]).unwrap();
+    f.seek(std::io::SeekFrom::Start(head.len() as u64 + 3 * n))
+        .unwrap();
+    f.write_all(&[3]).unwrap();
+    for i in 0i32..3 {
+        f.write_all(&i.to_le_bytes()).unwrap();
+    }
+    p.to_str().unwrap().to_string()
+}
+
+/// Under an address space limit (`ulimit -v`), what a scene would need is
+/// refused with the reason before it is allocated, never an allocation
+/// abort: vertices as well as triangles, glTF instances of one large
+/// accessor each counted, the meshes of a scene file together; and a
+/// texture many materials share is held once.
+#[test]
+fn memory_is_checked_for_the_whole_scene_under_an_address_space_limit() {
+    const LIMIT: u64 = 1 << 30;
+    let d = Dir::new("hostile-memory");
+    let render = |scene: &str| {
+        let args = [
+            "render", scene, "--size", "8x8", "--spp", "1", "-o", "out.png",
+        ];
+        rayterm_within(LIMIT, &d.0, &args)
+    };
+    let refused = |scene: &str, parts: &[&str]| {
+        let r = render(scene);
+        assert_eq!(r.code, Some(1), "{scene}: {}", r.stderr);
+        for p in parts {
+            assert!(
+                r.stderr.contains(p),
+                "{scene}: '{p}' missing in: {}",
+                r.stderr
+            );
+        }
+        assert!(!d.path("out.png").exists());
+    };
+    // 30 million vertices in 90 MB: 2 GiB once read.
+    let ply = char_ply(&d, "chars.ply", 30_000_000);
+    refused(
+        &ply,
+        &[
+            "chars.ply: 1 triangles and 30000000 vertices would need 2.01 GiB of memory;",
+            "is available",
+        ],
+    );
+    // Three meshes that fit one at a time and not together.
+    for name in ["a.ply", "b.ply", "c.ply"] {
+        char_ply(&d, name, 10_000_000);
+    }
+    let toml = ["a", "b", "c"]
+        .map(|m| format!("[[mesh]]\nfile = \"{m}.ply\"\n"))
+        .concat();
+    let s = d.write("three.toml", toml);
+    refused(
+        &s,
+        &[
+            "three.toml:",
+            "mesh ",
+            ".ply: 1 triangles and 10000000 vertices would need",
+        ],
+    );
+    // 300 instances of a 100,000-vertex accessor: 30 million vertices.
+    let n = 100_000u32;
+    let mut bin = Vec::new();
+    for i in 0..n {
+        for x in [i as f32, (i % 7) as f32, 0.0] {
+            bin.extend(x.to_le_bytes());
+        }
+    }
+    for i in [0u32, 1, 2] {
+        bin.extend(i.to_le_bytes());
+    }
+    d.write("inst.bin", &bin);
+    let gltf = serde_json::json!({
+        "asset": {"version": "2.0"}, "scene": 0,
+        "scenes": [{"nodes": (0..300).collect::<Vec<_>>()}],
+        "nodes": (0..300).map(|k| serde_json::json!({"mesh": 0, "translation": [k, 0, 0]})).collect::<Vec<_>>(),
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": n, "type": "VEC3",
+             "min": [0, 0, 0], "max": [n, 6, 0]},
+            {"bufferView": 1, "componentType": 5125, "count": 3, "type": "SCALAR"}],
+        "bufferViews": [{"buffer": 0, "byteLength": 12 * n},
+                        {"buffer": 0, "byteOffset": 12 * n, "byteLength": 12}],
+        "buffers": [{"uri": "inst.bin", "byteLength": bin.len()}]
+    });
+    let g = d.write("inst.gltf", serde_json::to_vec(&gltf).unwrap());
+    refused(
+        &g,
+        &["inst.gltf: its meshes, each instance counted: 300 triangles and 30000000 vertices would need"],
+    );
+    // A 2000x2000 texture in 50 materials: 46 MiB once, not 2.3 GiB.
+    let img = image::RgbImage::from_fn(2000, 2000, |x, y| image::Rgb([x as u8, y as u8, 7]));
+    img.save(d.path("big.png")).unwrap();
+    let mut tri = Vec::new();
+    for x in [
+        0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0,
+    ] {
+        tri.extend(x.to_le_bytes());
+    }
+    d.write("tex.bin", &tri);
+    let gltf = serde_json::json!({
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": (0..50).map(|m| serde_json::json!(
+            {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": m})).collect::<Vec<_>>()}],
+        "materials": (0..50).map(|m| serde_json::json!({"pbrMetallicRoughness": {
+            "baseColorTexture": {"index": 0}, "baseColorFactor": [1.0, m as f64 / 50.0, 1.0, 1.0]}}))
+            .collect::<Vec<_>>(),
+        "textures": [{"source": 0}], "images": [{"uri": "big.png"}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+             "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36},
+                        {"buffer": 0, "byteOffset": 36, "byteLength": 24}],
+        "buffers": [{"uri": "tex.bin", "byteLength": 60}]
+    });
+    let t = d.write("tex.gltf", serde_json::to_vec(&gltf).unwrap());
+    let r = render(&t);
+    assert!(r.ok(), "{}", r.stderr);
+}
+
+/// A glTF of one triangle whose buffer is the file at `uri`.
+fn gltf_with_buffer(uri: &str) -> String {
+    serde_json::json!({
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [1, 1, 0]}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "buffers": [{"uri": uri, "byteLength": 36}]
+    })
+    .to_string()
+}
+
+/// Files outside a scene's folder: a glTF may not name them (unless
+/// allowed), a scene file or material library may, with a warning naming
+/// where they resolve; and no message ever quotes what such a file holds
+/// (`/etc/passwd`, `/proc/self/environ`), nor more than a few hundred
+/// characters of anything.
+#[test]
+fn files_outside_the_scene_are_refused_or_named_and_never_quoted() {
+    let d = Dir::new("hostile-outside");
+    const SECRET: &str = "hunter2";
+    let secret = d.write("secret.txt", format!("root:x:0:0:{SECRET}:/root:/bin/sh\n"));
+    let mut bin = vec![0xff; 4];
+    bin.extend(format!("{SECRET}{SECRET}{SECRET}{SECRET}{SECRET}").as_bytes());
+    d.write("secret.bin", bin);
+    d.write("scene/tri.obj", TRI);
+    let never_quoted = |what: &str, text: &str| {
+        assert!(!text.contains(SECRET), "{what}: {text}");
+        assert!(!text.contains("root:x"), "{what}: {text}");
+    };
+    // glTF URIs are relative references within the glTF's folder.
+    d.link("scene/link.bin", d.path("secret.bin"));
+    for (name, uri) in [
+        ("up.gltf", "../secret.bin".to_string()),
+        ("absolute.gltf", d.path("secret.bin").display().to_string()),
+        (
+            "file.gltf",
+            format!("file://{}", d.path("secret.bin").display()),
+        ),
+        ("link.gltf", "link.bin".to_string()),
+    ] {
+        let g = d.write(&format!("scene/{name}"), gltf_with_buffer(&uri));
+        let e = refused(
+            &g,
+            &[name, "buffer 0: its uri ", &uri, "leaves the glTF's folder"],
+        );
+        never_quoted(name, &e);
+    }
+    // Allowed, it is read, and what it holds is still not quoted.
+    let r = rayterm(
+        &d.path("scene"),
+        &["render", "up.gltf", "--allow-outside", "-o", "x.png"],
+    );
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    assert!(
+        r.stderr
+            .contains("position 0 is (not shown: its buffer lies outside the glTF's folder)"),
+        "{}",
+        r.stderr
+    );
+    never_quoted("--allow-outside", &r.stderr);
+    // Scene files and material libraries may name files outside, said.
+    for (name, file) in [
+        ("passwd.toml", secret.as_str()),
+        ("up.toml", "../secret.txt"),
+    ] {
+        let s = d.write(&format!("scene/{name}"), scene_with(file, ""));
+        let e = refused(&s, &[name, "lies outside", "not shown"]);
+        never_quoted(name, &e);
+    }
+    // Its error says where, not what.
+    d.write(
+        "bad.obj",
+        format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 {SECRET}\n"),
+    );
+    let s = d.write("scene/bad.toml", scene_with("../bad.obj", ""));
+    let e = refused(
+        &s,
+        &[
+            "bad.toml:1:1: mesh ../bad.obj: ",
+            "bad.obj:4: not read as an OBJ mesh; why is not shown",
+        ],
+    );
+    never_quoted("bad.toml", &e);
+    let s = d.write("scene/environ.toml", scene_with("/proc/self/environ", ""));
+    let e = refused(
+        &s,
+        &[
+            "environ.toml:1:1: mesh /proc/self/environ",
+            "it holds more than its size says",
+        ],
+    );
+    assert!(!e.contains("PATH="), "{e}");
+    for (name, obj, mtl) in [
+        (
+            "lib.obj",
+            "mtllib ../secret.txt\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            None,
+        ),
+        (
+            "map.obj",
+            WITH_MTL,
+            Some("newmtl a\nmap_Kd ../secret.txt\n"),
+        ),
+    ] {
+        if let Some(mtl) = mtl {
+            d.write("scene/m.mtl", mtl);
+        }
+        let s = warned(
+            &d.write(&format!("scene/{name}"), obj),
+            &["lies outside", "secret.txt"],
+        );
+        never_quoted(name, &s.warnings.join("\n"));
+    }
+    // A ten-megabyte key is not echoed whole.
+    let key = "k".repeat(10 << 20);
+    let s = d.write("scene/key.toml", format!("{key} = 1\n"));
+    let e = refused(&s, &["key.toml:1:1: unknown field `kkk"]);
+    assert!(e.len() < 2000, "{} bytes", e.len());
 }

@@ -75,11 +75,42 @@ fn render_from(d: &Dir, cwd: &str, scene: &str) -> Vec<u8> {
         &["render", scene, "--size", "24x16", "--spp", "1", "-o", out],
     );
     assert!(r.ok(), "{scene} from {cwd}: {}", r.stderr);
+    // The files beside the scene's folder are named as lying outside it,
+    // each resolved where it is (what the OBJ's material library says of
+    // its own texture, outside its folder too, is not shown), and nothing
+    // else is said.
+    let warnings: Vec<&str> = r.stderr.lines().filter(|l| l.contains("warning")).collect();
     assert!(
-        !r.stderr.contains("warning"),
+        warnings
+            .iter()
+            .all(|w| w.contains(" lies outside ") || w.contains("1 warning about it not shown")),
         "{scene} from {cwd}: {}",
         r.stderr
     );
+    let top = std::fs::canonicalize(d.path("top")).unwrap();
+    let outside = [
+        ("mesh", "../meshes/box.obj", "meshes/box.obj"),
+        ("mesh", "../p.bpt", "p.bpt"),
+        ("texture", "../textures/t.png", "textures/t.png"),
+    ];
+    let text = std::fs::read_to_string(d.path(cwd).join(scene)).unwrap();
+    let named = outside
+        .into_iter()
+        .filter(|(_, written, _)| text.contains(&format!("\"{written}\"")));
+    for (what, written, at) in named {
+        let want = format!(
+            "{what} {written} lies outside {}",
+            top.join("scenes").display()
+        );
+        let resolved = format!("(it resolves to {})", top.join(at).display());
+        assert!(
+            warnings
+                .iter()
+                .any(|w| w.contains(&want) && w.contains(&resolved)),
+            "{scene} from {cwd}: {want} {resolved}: {}",
+            r.stderr
+        );
+    }
     std::fs::read(out).unwrap()
 }
 

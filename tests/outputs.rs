@@ -590,3 +590,77 @@ fn a_scene_path_that_is_not_utf8_is_named_in_the_error() {
         assert!(err.contains("caf\u{fffd}.obj is not UTF-8 text"), "{err}");
     }
 }
+
+/// `-o /dev/stdout` with standard output redirected to a file writes the
+/// image into it (it neither refuses nor replaces the link with a file),
+/// and a descriptor that cannot take it is named.
+#[test]
+fn an_image_to_a_descriptor_goes_where_the_descriptor_points() {
+    let d = dir("descriptor");
+    let file = d.join("redirected.png");
+    let args = ["render", "cornell", "--size", "8x8", "--spp", "1", "-o"];
+    for name in ["/dev/stdout", "/dev/fd/1", "/proc/self/fd/1"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_rayterm"))
+            .args(args)
+            .arg(name)
+            .stdout(fs::File::create(&file).unwrap())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{name}: {err}");
+        let png = fs::read(&file).unwrap();
+        assert!(
+            png.starts_with(b"\x89PNG"),
+            "{name}: {:?}",
+            &png[..png.len().min(8)]
+        );
+        assert!(err.contains(&format!("-> {name}")), "{err}");
+    }
+    assert_eq!(files(&d), ["redirected.png"]);
+    assert!(fs::symlink_metadata("/dev/stdout").is_ok_and(|m| m.file_type().is_symlink()));
+    let out = Command::new(env!("CARGO_BIN_EXE_rayterm"))
+        .args(args)
+        .arg("/dev/stdin")
+        .stdin(fs::File::open(&file).unwrap())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("/dev/stdin: descriptor 0 is open for reading only"),
+        "{err}"
+    );
+    fs::remove_dir_all(d).unwrap();
+}
+
+/// A temporary file a killed render left under this process's id (a
+/// container's PID 1 again) or a dead one's never makes a write fail, and
+/// goes; a name too long to have a temporary beside it is no reason to
+/// fail after the render.
+#[test]
+fn stale_temporary_files_and_long_names_do_not_fail_the_write() {
+    let d = dir("stale");
+    let out = d.join("x.png");
+    for stale in [
+        ".x.png.1.tmp",
+        ".x.png.2147483646.tmp",
+        ".x.png.2147483646-00c0ffee.tmp",
+    ] {
+        fs::write(d.join(stale), b"left by a killed render").unwrap();
+    }
+    let o = out.display().to_string();
+    let r = rayterm(&["render", "cornell", "--size", "8x8", "--spp", "1", "-o", &o]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    // PID 1 lives (init): its file stays unless rayterm is PID 1 itself.
+    let left = files(&d);
+    assert!(
+        left == ["x.png"] || left == [".x.png.1.tmp", "x.png"],
+        "{left:?}"
+    );
+    let long = d.join("y".repeat(250) + ".png");
+    let l = long.display().to_string();
+    let r = rayterm(&["render", "cornell", "--size", "8x8", "--spp", "1", "-o", &l]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(fs::read(&long).unwrap().starts_with(b"\x89PNG"));
+    fs::remove_dir_all(d).unwrap();
+}

@@ -720,3 +720,87 @@ fn the_slurm_scripts_run_their_commands() {
     assert!(bytes(&d, "out.png") == bytes(&d, "single.png"));
     std::fs::remove_dir_all(d).unwrap();
 }
+
+/// Two renders of one checkpoint would write over each other's every few
+/// seconds: the second is refused at once, resuming or not; a render
+/// killed outright leaves a claim nothing holds, which the next one takes,
+/// and a render that ends leaves no lock file behind.
+#[test]
+fn a_checkpoint_is_claimed_by_one_render_at_a_time() {
+    let d = dir("claim");
+    let long = |signal: i32| {
+        let mut child = Command::new(BIN)
+            .args([
+                "render",
+                "cornell-area",
+                "--size",
+                "40x28",
+                "--spp",
+                "1000000",
+            ])
+            .args(["--checkpoint", "c.exr", "-o", "never.png"])
+            .current_dir(&d)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let start = Instant::now();
+        while !d.join(".c.exr.lock").exists() {
+            assert!(start.elapsed() < Duration::from_secs(30), "no claim");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let mut args = vec!["render"];
+        args.extend(SCENE);
+        for extra in [
+            &["--checkpoint", "c.exr"][..],
+            &["--resume", "c.exr", "--checkpoint", "c.exr"],
+        ] {
+            let mut args = args.clone();
+            args.extend(["--spp", "2"]);
+            args.extend(extra);
+            args.extend(["-o", "second.png"]);
+            let started = Instant::now();
+            let err = refused(&d, &args, "second.png");
+            assert!(started.elapsed() < Duration::from_secs(10), "{err}");
+            assert!(
+                err.contains("c.exr is being written by another render (it holds .c.exr.lock)"),
+                "{err}"
+            );
+        }
+        std::thread::sleep(Duration::from_millis(300));
+        // SAFETY: signalling the child this test started.
+        assert_eq!(unsafe { libc::kill(child.id() as i32, signal) }, 0);
+        child.wait().unwrap();
+    };
+    long(libc::SIGTERM);
+    assert!(!d.join(".c.exr.lock").exists());
+    assert!(d.join("c.exr").exists());
+    std::fs::remove_file(d.join("c.exr")).unwrap();
+    long(libc::SIGKILL);
+    assert!(d.join(".c.exr.lock").exists());
+    render(&d, &["--spp", "2", "--checkpoint", "c.exr"], "after.png");
+    let mut left: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    left.sort();
+    assert_eq!(left, ["after.png", "c.exr"]);
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+/// A part that is missing, or not a file, is named as every other file a
+/// command cannot read is.
+#[test]
+fn a_part_that_cannot_be_read_is_named() {
+    let d = dir("unreadable");
+    std::fs::create_dir(d.join("folder.exr")).unwrap();
+    for (part, why) in [
+        ("gone.exr", "cannot read gone.exr: not found"),
+        ("folder.exr", "cannot read folder.exr: not a regular file"),
+    ] {
+        let err = refused(&d, &["merge", part, "-o", "m.png"], "m.png");
+        assert!(err.contains(why), "{err}");
+    }
+    std::fs::remove_dir_all(d).unwrap();
+}

@@ -186,6 +186,10 @@ pub struct SceneOpts {
     /// name, or its number from 1) instead of the first.
     #[arg(long, value_name = "NAME")]
     pub camera: Option<String>,
+    /// Let glTF files read files outside their folder (absolute paths,
+    /// file: URIs, `..` out of it), which they may not unless told.
+    #[arg(long)]
+    pub allow_outside: bool,
 }
 
 impl SceneOpts {
@@ -206,6 +210,7 @@ impl SceneOpts {
             glossy_samples: self.glossy_samples,
             independent: self.independent,
             camera: self.camera.clone(),
+            allow_outside: self.allow_outside,
             check_film: true,
         }
     }

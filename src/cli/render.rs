@@ -16,6 +16,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use super::args::{RenderArgs, MAX_SPP};
 use super::open_request;
 use crate::interrupt;
+use crate::raster::claim::Claim;
 use crate::raster::{png, Format, Output};
 use crate::render::partial::{self, Meta, Part};
 use crate::render::session::check_film;
@@ -44,6 +45,10 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     if a.debug.is_some() && out.format != Format::Png {
         bail!("--debug views are PNG images; name the output .png");
     }
+    // The checkpoint is claimed for the whole render, before it is read
+    // or asked about: a second render of it is refused at once, where it
+    // would write over the first's every few seconds.
+    let mut _claim = None;
     let checkpoint = match &a.checkpoint {
         Some(c) => {
             if same_path(c, &a.output) {
@@ -51,6 +56,11 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
                     "{} is the output; name the checkpoint another file",
                     words::path(c)
                 );
+            }
+            partial_name(c, "a checkpoint")?;
+            let out = Output::check(c, &scene_file, &[Format::Exr])?;
+            if !out.in_place() {
+                _claim = Some(Claim::take(c)?);
             }
             // A checkpoint left by an interrupted render is work to keep.
             if c.is_file() && !a.resume.as_deref().is_some_and(|r| same_path(r, c)) {
@@ -60,8 +70,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
                     words::path(c)
                 );
             }
-            partial_name(c, "a checkpoint")?;
-            Some(Output::check(c, &scene_file, &[Format::Exr])?)
+            Some(out)
         }
         None => None,
     };
@@ -114,10 +123,14 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         (Some(path), Some(meta)) => resumed(path, &s, meta, range.as_ref().map(|r| &r.0), &stop)?,
         _ => {
             // Most such renders keep their film summarised: made so, one too
-            // large for statistics never allocates them. Statistics are
-            // checked before they are allocated, a summary below.
+            // large for statistics never allocates them. Either is checked
+            // before it is allocated (under an address space limit even
+            // untouched memory counts), a summary again below.
             let film = match image_only {
-                true => Film::new_summary(s.width, s.height),
+                true => {
+                    check_film(s.width, s.height, Film::SUMMARY_BYTES_PER_PIXEL)?;
+                    Film::new_summary(s.width, s.height)
+                }
                 false => {
                     check_film(s.width, s.height, Film::BYTES_PER_PIXEL)?;
                     Film::new(s.width, s.height)

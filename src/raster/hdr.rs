@@ -74,7 +74,11 @@ pub fn read(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
         image::ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
             anyhow::anyhow!("{}: the Radiance HDR image ends early", path.display())
         }
-        e => anyhow::anyhow!("{}: {e}", path.display()),
+        e => anyhow::anyhow!(
+            "{}: {}",
+            path.display(),
+            crate::words::clip_quotes(&e.to_string())
+        ),
     };
     let file = super::open(path)?;
     let dec = HdrDecoder::new(BufReader::new(file)).map_err(flat)?;

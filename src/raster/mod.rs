@@ -7,6 +7,7 @@
 //! and every read checks the size an image declares before decoding it.
 
 pub mod canvas;
+pub(crate) mod claim;
 pub mod flat_exr;
 pub mod hdr;
 pub mod metrics;
@@ -14,6 +15,7 @@ pub mod openexr;
 pub mod output;
 pub mod png;
 pub mod resample;
+mod temporary;
 
 use std::path::Path;
 
@@ -45,13 +47,33 @@ pub fn check_size(path: &Path, width: u32, height: u32, bytes_per_pixel: u64) ->
 }
 
 /// Opens `path` for reading, refusing anything but a regular file (a FIFO
-/// would hang, a device would read forever).
+/// would hang, a device would read forever), before it is opened and once
+/// open (it may have been replaced in between); the error names the file,
+/// as every reader's does.
 fn open(path: &Path) -> Result<std::fs::File> {
-    let m = std::fs::metadata(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    if !m.is_file() {
-        bail!("{}: not a regular file", path.display());
-    }
-    std::fs::File::open(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+    use std::os::unix::fs::OpenOptionsExt;
+    let cannot = |e: std::io::Error| {
+        let why = match e.kind() {
+            std::io::ErrorKind::NotFound => "not found".to_string(),
+            _ => output::reason(&e),
+        };
+        anyhow::anyhow!("cannot read {}: {why}", crate::words::path(path))
+    };
+    let regular = |m: std::fs::Metadata| match m.is_file() {
+        true => Ok(()),
+        false => Err(anyhow::anyhow!(
+            "cannot read {}: not a regular file",
+            crate::words::path(path)
+        )),
+    };
+    regular(std::fs::metadata(path).map_err(cannot)?)?;
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(path)
+        .map_err(cannot)?;
+    regular(file.metadata().map_err(cannot)?)?;
+    Ok(file)
 }
 
 /// Formats for linear (unclamped, untoned) images.

@@ -5,11 +5,22 @@ use std::io::{BufReader, Seek};
 use std::path::Path;
 
 use anyhow::{bail, Result};
-use exr::prelude::{ReadChannels, ReadLayers, SpecificChannels, WritableImage};
+use exr::prelude::{ReadChannels, ReadLayers, SpecificChannels, Text, WritableImage};
 use glam::Vec3;
 
 /// `img` encoded as OpenEXR, f32 R, G and B, losslessly compressed.
 pub fn encode(width: u32, height: u32, img: &[Vec3]) -> Result<Vec<u8>> {
+    encode_noted(width, height, img, None)
+}
+
+/// [`encode`], with a text attribute `(name, value)` saying what the image
+/// is of (a cached reference: the key of its scene and settings).
+pub(crate) fn encode_noted(
+    width: u32,
+    height: u32,
+    img: &[Vec3],
+    note: Option<(&str, &str)>,
+) -> Result<Vec<u8>> {
     if img.len() != width as usize * height as usize {
         bail!("{} pixels for a {width}x{height} image", img.len());
     }
@@ -18,7 +29,17 @@ pub fn encode(width: u32, height: u32, img: &[Vec3]) -> Result<Vec<u8>> {
         let c = img[y * w + x];
         (c.x, c.y, c.z)
     });
-    let image = exr::image::Image::from_channels((w, height as usize), channels);
+    let mut image = exr::image::Image::from_channels((w, height as usize), channels);
+    if let Some((name, value)) = note {
+        let text = |t: &str| {
+            exr::meta::attribute::Text::new_or_none(t)
+                .ok_or_else(|| anyhow::anyhow!("{t} cannot be an OpenEXR attribute"))
+        };
+        image.attributes.other.insert(
+            text(name)?,
+            exr::meta::attribute::AttributeValue::Text(text(value)?),
+        );
+    }
     let mut bytes = std::io::Cursor::new(Vec::new());
     image
         .write()
@@ -27,10 +48,33 @@ pub fn encode(width: u32, height: u32, img: &[Vec3]) -> Result<Vec<u8>> {
     Ok(bytes.into_inner())
 }
 
+/// The text attribute `name` of the OpenEXR image at `path` (see
+/// [`encode_noted`]), read from its header alone; `None` where it has none.
+pub(crate) fn note(path: &Path, name: &str) -> Result<Option<String>> {
+    let err = |e: exr::error::Error| {
+        let e = crate::words::clip_quotes(&e.to_string());
+        anyhow::anyhow!("{}: {e}", path.display())
+    };
+    let mut file = BufReader::new(super::open(path)?);
+    let meta = exr::meta::MetaData::read_from_buffered(&mut file, false).map_err(err)?;
+    // Written with the image's attributes, read back with the layer's.
+    let value = meta.headers.first().and_then(|h| {
+        let mut all = (h.own_attributes.other.iter()).chain(&h.shared_attributes.other);
+        match all.find(|(k, _)| Text::eq(k, name))? {
+            (_, exr::meta::attribute::AttributeValue::Text(t)) => Some(t.to_string()),
+            _ => None,
+        }
+    });
+    Ok(value)
+}
+
 /// Reads the R, G and B channels of an OpenEXR image's first layer as f32,
 /// refusing sizes beyond [`super::MAX_DECODED_BYTES`] before decoding.
 pub fn read(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
-    let err = |e: exr::error::Error| anyhow::anyhow!("{}: {e}", path.display());
+    let err = |e: exr::error::Error| {
+        let e = crate::words::clip_quotes(&e.to_string());
+        anyhow::anyhow!("{}: {e}", path.display())
+    };
     let mut file = BufReader::new(super::open(path)?);
     let meta = exr::meta::MetaData::read_from_buffered(&mut file, false).map_err(err)?;
     for h in meta.headers.iter() {

@@ -12,6 +12,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Result};
 use glam::Vec3;
 
+use super::temporary;
+
 /// The image formats `rayterm render -o` writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
@@ -80,7 +82,13 @@ impl Output {
         if path.as_os_str().as_encoded_bytes().ends_with(b"/") {
             bail!("{shown} ends in /, which names a directory; name a file");
         }
+        // `/dev/stdout` and its kin name a descriptor of this process,
+        // whatever it is open on: written where it stands.
+        if let Some(fd) = descriptor(path) {
+            device = Some(duplicate(path, fd)?);
+        }
         match fs::metadata(path) {
+            _ if device.is_some() => {}
             Ok(m) => {
                 let t = m.file_type();
                 if t.is_dir() {
@@ -160,6 +168,12 @@ impl Output {
         self.write_unless(bytes, &|| false)
     }
 
+    /// Whether the output is written in place (a device, a FIFO, a
+    /// descriptor), not replaced.
+    pub(crate) fn in_place(&self) -> bool {
+        self.device.is_some()
+    }
+
     /// Whether the image goes where standard output goes (`-o
     /// /dev/stdout`): what a command would print there then goes to
     /// standard error, so as not to follow the image into its stream.
@@ -193,17 +207,11 @@ impl Output {
                 .and_then(|()| f.flush())
                 .map_err(|e| anyhow::anyhow!("cannot write {}: {}", path.display(), reason(&e)));
         }
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        let name = path
-            .file_name()
-            .map_or("image".into(), |n| n.to_string_lossy());
-        let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+        temporary::remove_stale(path);
+        let (tmp, mut f) = temporary::create(path)
+            .map_err(|e| anyhow::anyhow!("cannot write {}: {}", path.display(), reason(&e)))?;
         crate::interrupt::writing(Some(&tmp));
         let written = (|| -> std::io::Result<bool> {
-            let mut f = OpenOptions::new().write(true).create_new(true).open(&tmp)?;
             f.write_all(bytes)?;
             // A file replaced keeps its permissions.
             if let Some(m) = fs::symlink_metadata(path).ok().filter(|m| m.is_file()) {
@@ -229,6 +237,48 @@ impl Output {
     }
 }
 
+/// The descriptor `path` names, through `/proc/self/fd` (`/dev/stdout`,
+/// `/dev/fd/2`, `/proc/self/fd/1`): a file there is the one this process
+/// has open, which a regular file standard output is redirected to must
+/// not be replaced by (nor `/dev/stdout` itself, the link, by a file).
+fn descriptor(path: &Path) -> Option<i32> {
+    let fds = PathBuf::from(format!("/proc/{}/fd", std::process::id()));
+    let mut p = path.to_path_buf();
+    // A few links at most: /dev/stdout -> /proc/self/fd/1.
+    for _ in 0..8 {
+        let parent = temporary::folder(&p);
+        if fs::canonicalize(parent).ok().as_deref() == Some(fds.as_path()) {
+            return p.file_name()?.to_str()?.parse().ok();
+        }
+        let target = fs::read_link(&p).ok()?;
+        p = parent.join(target);
+    }
+    None
+}
+
+/// A descriptor of this process, duplicated to write an image to: refused
+/// when not open for writing.
+fn duplicate(path: &Path, fd: i32) -> Result<fs::File> {
+    use std::os::fd::BorrowedFd;
+    // SAFETY: fcntl only asks about the descriptor, open or not.
+    let flags = unsafe { libc::fcntl(fd, libc::F_GETFL) };
+    if flags < 0 {
+        bail!("{}: descriptor {fd} is not open", path.display());
+    }
+    if flags & libc::O_ACCMODE == libc::O_RDONLY {
+        bail!(
+            "{}: descriptor {fd} is open for reading only",
+            path.display()
+        );
+    }
+    // SAFETY: the descriptor is open (fcntl said so) and only borrowed to
+    // be duplicated.
+    unsafe { BorrowedFd::borrow_raw(fd) }
+        .try_clone_to_owned()
+        .map(fs::File::from)
+        .map_err(|e| anyhow::anyhow!("cannot open {}: {}", path.display(), reason(&e)))
+}
+
 /// Clears `O_NONBLOCK` again, so writes wait for a slow reader.
 fn blocking(f: &fs::File) {
     use std::os::fd::AsRawFd;
@@ -242,14 +292,12 @@ fn blocking(f: &fs::File) {
     }
 }
 
-/// The directory `path` goes in exists and takes new files: probed with a
-/// file created and removed at once, which also catches read-only file
-/// systems (root bypasses permission bits, not those).
+/// The directory `path` goes in exists and takes new files: probed with
+/// the temporary file a write makes, created and removed at once, which
+/// also catches read-only file systems (root bypasses permission bits, not
+/// those) and names too long for them.
 fn check_directory(path: &Path) -> Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
+    let dir = temporary::folder(path);
     match fs::metadata(dir) {
         Ok(m) if m.is_dir() => {}
         Ok(_) => bail!("{}: {} is not a directory", path.display(), dir.display()),
@@ -259,9 +307,8 @@ fn check_directory(path: &Path) -> Result<()> {
             dir.display()
         ),
     }
-    let probe = dir.join(format!(".rayterm-probe-{}", std::process::id()));
-    match OpenOptions::new().write(true).create_new(true).open(&probe) {
-        Ok(_) => {
+    match temporary::create(path) {
+        Ok((probe, _)) => {
             let _ = fs::remove_file(&probe);
             Ok(())
         }

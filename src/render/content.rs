@@ -61,7 +61,7 @@ pub fn scene_hash(scene: &Scene, plan: &Plan) -> u64 {
     let mut h = Fnv::new();
     let _ = write!(
         h,
-        "rayterm scene 1 {} {:?} {} {:?} {:?} {:?} {:?} {:?}",
+        "rayterm scene 2 {} {:?} {} {:?} {:?} {:?} {:?} {:?}",
         env!("CARGO_PKG_VERSION"),
         plan.features,
         plan.explain(),
@@ -84,9 +84,21 @@ pub fn scene_hash(scene: &Scene, plan: &Plan) -> u64 {
         }
         Environment::CubeMap(cube) => textures.extend(cube.faces.iter()),
     }
+    // Texels shared by several textures are hashed once, then named by
+    // the first that holds them.
+    let mut hashed: Vec<*const Vec<Vec3>> = Vec::new();
     for t in textures {
-        let _ = write!(h, "tex {}x{}", t.width, t.height);
-        h.vec3s(&t.texels);
+        let _ = write!(h, "tex {}x{} {:?} {}", t.width, t.height, t.wrap, t.tint);
+        let at = std::sync::Arc::as_ptr(&t.texels);
+        match hashed.iter().position(|&p| p == at) {
+            Some(i) => {
+                let _ = write!(h, " as {i}");
+            }
+            None => {
+                hashed.push(at);
+                h.vec3s(&t.texels);
+            }
+        }
     }
     h.finish()
 }

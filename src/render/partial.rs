@@ -23,6 +23,7 @@ use super::Session;
 use crate::geometry::sampling::PIXEL_STRATA;
 use crate::raster::flat_exr::{self, Kind, Layout, Scanlines};
 use crate::scene::BloomSettings;
+use crate::words::quoted;
 
 pub use crate::scene::MAX_SPP;
 
@@ -569,8 +570,8 @@ impl Source {
                     given[k] = true;
                     Ok(k)
                 }
-                Some(_) => bail!("{name} is given twice"),
-                None => bail!("{name} is no word of a pixel"),
+                Some(_) => bail!("{} is given twice", quoted(name)),
+                None => bail!("{} is no word of a pixel", quoted(name)),
             }
         };
         let row = 4 * l.width as usize;
@@ -579,17 +580,24 @@ impl Source {
             match (name.as_str(), kind) {
                 ("R" | "G" | "B", Kind::F32) => {}
                 (_, Kind::U32) => columns.push((give(name)?, 8 + c * row)),
-                _ => bail!("channel {name} is not of the type a partial film stores"),
+                _ => bail!(
+                    "channel {} is not of the type a partial film stores",
+                    quoted(name)
+                ),
             }
         }
         let constants = l.attribute("rayterm.constants").unwrap_or_default();
         for c in constants.split(' ').filter(|c| !c.is_empty()) {
-            let (name, v) = c
-                .split_once('=')
-                .ok_or_else(|| anyhow::anyhow!("rayterm.constants has {c:?}, not NAME=VALUE"))?;
-            shared[give(name)?] = v
-                .parse()
-                .map_err(|_| anyhow::anyhow!("rayterm.constants gives {name} as {v:?}"))?;
+            let (name, v) = c.split_once('=').ok_or_else(|| {
+                anyhow::anyhow!("rayterm.constants has '{}', not NAME=VALUE", quoted(c))
+            })?;
+            shared[give(name)?] = v.parse().map_err(|_| {
+                anyhow::anyhow!(
+                    "rayterm.constants gives {} as '{}'",
+                    quoted(name),
+                    quoted(v)
+                )
+            })?;
         }
         if let Some(k) = given.iter().position(|g| !g) {
             bail!("no channel or constant holds {}", FIELDS[k]);

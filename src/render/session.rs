@@ -33,6 +33,8 @@ pub struct SceneRequest {
     pub independent: bool,
     /// Which of a glTF file's cameras to look through (name or number).
     pub camera: Option<String>,
+    /// Whether glTF files may name files outside their folder.
+    pub allow_outside: bool,
     /// Whether opening refuses an image size whose film of statistics
     /// would not fit in memory; off for a caller that checks the film it
     /// makes, which may keep far less ([`Progressive::bytes_per_pixel`]).
@@ -55,6 +57,7 @@ impl SceneRequest {
             glossy_samples: None,
             independent: false,
             camera: None,
+            allow_outside: false,
             check_film: true,
         }
     }
@@ -80,7 +83,11 @@ impl Session {
     /// Loads the scene `req` names and prepares it; the load warnings are
     /// returned for the caller to show.
     pub fn open(req: &SceneRequest) -> Result<(Session, Vec<String>)> {
-        let (scene, inputs) = scene::load_reading(&req.spec, req.camera.as_deref())?;
+        let how = scene::Opening {
+            camera: req.camera.clone(),
+            allow_outside: req.allow_outside,
+        };
+        let (scene, inputs) = scene::load_reading(&req.spec, &how)?;
         if let Err(e) = scene::check_reach(&scene) {
             // The load's warnings (a rescale, say) may be why, and would
             // otherwise never be shown.

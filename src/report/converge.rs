@@ -28,7 +28,7 @@ use crate::interrupt;
 use crate::render::{Ended, Film, Plan, Progressive, Stop, Tracer};
 use crate::report::stats::{fit_log_log, log_lerp, median};
 use crate::scene::{Scene, Settings};
-use reference::reference_key;
+use reference::{load_cached, reference_key, save_cached};
 
 /// A rendered reference has this many times the samples of the largest budget...
 const REFERENCE_FACTOR: u32 = 64;
@@ -596,8 +596,8 @@ impl Subject<'_> {
                     .as_ref()
                     .map(|d| d.join(format!("{slug}-{w}x{h}-{spp}spp-{key:016x}.exr")));
                 if let Some(f) = file.as_ref().filter(|f| f.exists()) {
-                    match load_reference(f) {
-                        Ok((rw, rh, img)) if (rw, rh) == (w, h) => {
+                    match load_cached(f, key, w, h) {
+                        Ok(img) => {
                             let info = ReferenceInfo {
                                 source: format!("cached {}", f.display()),
                                 spp: Some(spp),
@@ -605,8 +605,8 @@ impl Subject<'_> {
                             };
                             return Ok((img, info));
                         }
-                        _ => notes.push(format!(
-                            "cached reference {} was unreadable; rendered anew",
+                        Err(e) => notes.push(format!(
+                            "cached reference {} not used: {e:#}; rendered anew",
                             f.display()
                         )),
                     }
@@ -636,7 +636,7 @@ impl Subject<'_> {
                         std::fs::create_dir_all(dir)
                             .with_context(|| format!("cannot create {}", dir.display()))?;
                     }
-                    save_reference(f, w, h, &img)
+                    save_cached(f, key, w, h, &img)
                 };
                 let source = match &file {
                     Some(f) => match cached(f) {

@@ -55,6 +55,7 @@
 //! `N = 16`) and at `N = 16` it opens the body/bottom seam, whose two sides
 //! run in opposite directions (288 boundary edges instead of 256).
 
+use crate::words::quoted;
 use glam::{Vec2, Vec3};
 
 /// One bicubic Bézier patch: control points indexed `[row][column]`
@@ -126,13 +127,16 @@ pub fn parse_bpt(text: &str) -> Result<Vec<Patch>, BptError> {
     let (Some(count_token), None) = (tokens.next(), tokens.next()) else {
         return Err(error(
             count_line,
-            format!("expected the number of patches alone on a line, found '{count_text}'"),
+            format!(
+                "expected the number of patches alone on a line, found '{}'",
+                quoted(count_text)
+            ),
         ));
     };
     let count: usize = count_token.parse().map_err(|_| {
         error(
             count_line,
-            format!("invalid number of patches '{count_token}'"),
+            format!("invalid number of patches '{}'", quoted(count_token)),
         )
     })?;
     if count == 0 {
@@ -204,7 +208,10 @@ fn parse_degrees(line: usize, text: &str, patch_index: usize) -> Result<(), BptE
         )),
         None => Err(error(
             line,
-            format!("expected the degrees of patch {patch_index} ('3 3'), found '{text}'"),
+            format!(
+                "expected the degrees of patch {patch_index} ('3 3'), found '{}'",
+                quoted(text)
+            ),
         )),
     }
 }
@@ -230,16 +237,22 @@ fn parse_point(
     for (value, token) in point.iter_mut().zip(&tokens) {
         let parsed: f32 = token
             .parse()
-            .map_err(|_| error(line, format!("invalid coordinate '{token}'")))?;
+            .map_err(|_| error(line, format!("invalid coordinate '{}'", quoted(token))))?;
         // Beyond f32 but finite as written: out of range, not "non-finite".
         let written_finite = token.parse::<f64>().is_ok_and(f64::is_finite);
         if !parsed.is_finite() && !written_finite {
-            return Err(error(line, format!("non-finite coordinate '{token}'")));
+            return Err(error(
+                line,
+                format!("non-finite coordinate '{}'", quoted(token)),
+            ));
         }
         if !parsed.is_finite() || parsed.abs() > MAX_COORDINATE {
             return Err(error(
                 line,
-                format!("coordinate '{token}' is out of range (|x| <= {MAX_COORDINATE:e})"),
+                format!(
+                    "coordinate '{}' is out of range (|x| <= {MAX_COORDINATE:e})",
+                    quoted(token)
+                ),
             ));
         }
         // `+ 0.0` turns -0 into +0, so equal-looking points are equal bit for bit.

@@ -29,7 +29,7 @@ use super::texture::FACE_NAMES;
 use super::{
     bezier, BloomSettings, Builder, Camera, CubeMap, Environment, Light, Material, Scene, Settings,
 };
-use crate::words::printable;
+use crate::words::{clip_quotes, printable, quoted};
 
 /// A number that must be finite (also as f32); kept in f64 until the
 /// scene is placed. The error carries the value's position.
@@ -306,7 +306,9 @@ fn line_col(text: &str, starts: &[usize], at: usize) -> (usize, usize) {
 
 fn parse(path: &Path, text: &str) -> Result<SceneFile> {
     toml::from_str(text).map_err(|e| {
-        let msg = e.message().trim().to_string();
+        // The parser quotes keys and values whole: a ten-megabyte key would
+        // be echoed.
+        let msg = clip_quotes(e.message().trim());
         match e.span() {
             Some(span) => {
                 let (l, c) = line_col(text, &line_starts(text), span.start);
@@ -417,6 +419,7 @@ fn patches(
     segments: u32,
     xf: &DAffine3,
     material: u32,
+    room: u64,
 ) -> Result<Placed> {
     let text = src.read_text(mesh_path, Kind::Patches)?;
     let patches = bezier::parse_bpt(&text)
@@ -432,8 +435,14 @@ fn patches(
     if vertices > u32::MAX as u64 {
         bail!("{what} is more than 32-bit indices address ({vertices} vertices); lower segments");
     }
-    memory::check(&what, triangles * memory::BYTES_PER_TRIANGLE, None)
-        .map_err(|e| anyhow!("{e}; lower segments"))?;
+    let needed = memory::mesh_bytes(vertices, triangles);
+    if needed > room {
+        bail!(
+            "{what} would need {} of memory; {} is available; lower segments",
+            memory::bytes(needed),
+            memory::bytes(room)
+        );
+    }
     let pm = bezier::tessellate(&patches, segments);
     let nxf = xf.matrix3.inverse().transpose();
     let mut positions = Vec::with_capacity(pm.positions.len());
@@ -528,17 +537,27 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("bpt"));
         let first = placed.len();
-        if is_bpt {
+        let outside = src.outside(path, &mesh_path);
+        if let Some(o) = &outside {
+            parts.warnings.push(o.warning(&here, "mesh", &m.file));
+        }
+        let before = parts.warnings.len();
+        let shown = quoted(&m.file);
+        let (loaded, kind) = if is_bpt {
             let segments = match (ov.segments, &m.segments) {
                 (Some(n), _) => n,
                 (None, Some(s)) => loc.range(s, 1..=MAX_SEGMENTS, "segments")?,
                 (None, None) => 8,
             };
             let mat = parts.add_material(material.unwrap_or_default());
-            placed.push(
-                patches(src, &mesh_path, segments, &xf, mat)
-                    .with_context(|| format!("{here}: mesh {}", m.file))?,
-            );
+            let room = parts.budget.room();
+            let p = patches(src, &mesh_path, segments, &xf, mat, room);
+            if let Ok(p) = &p {
+                parts
+                    .budget
+                    .take(p.positions.len() as u64, p.indices.len() as u64);
+            }
+            (p.map(|p| vec![p]), Kind::Patches)
         } else {
             if let Some(s) = &m.segments {
                 parts.warnings.push(format!(
@@ -548,20 +567,22 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
             }
             // An unknown extension is read as OBJ, as it always was.
             let format = mesh::Format::of(&mesh_path).unwrap_or(mesh::Format::Obj);
-            placed.extend(
-                mesh::load_placed(format, &mut parts, src, &mesh_path, &xf, material.as_ref())
-                    .with_context(|| format!("{here}: mesh {}", m.file))?,
-            );
-        }
+            let p = mesh::load_placed(format, &mut parts, src, &mesh_path, &xf, material.as_ref());
+            (p, format.kind())
+        };
+        let loaded = match &outside {
+            Some(o) => o.quiet(kind, loaded, &mut parts.warnings, before),
+            None => loaded,
+        };
+        placed.extend(loaded.with_context(|| format!("{here}: mesh {shown}"))?);
         let reach = placed[first..]
             .iter()
             .flat_map(|p| &p.positions)
             .fold(0.0f64, |r, p| r.max(p.abs().max_element()));
         if reach > ABSURD {
             parts.warnings.push(format!(
-                "{here}: mesh {}: coordinates reach {} once placed; beyond {ABSURD:e} \
+                "{here}: mesh {shown}: coordinates reach {} once placed; beyond {ABSURD:e} \
                  they are almost certainly a mistake",
-                m.file,
                 numbers::show(reach),
             ));
         }
@@ -708,7 +729,7 @@ fn material_from(parts: &mut Parts, src: &dyn Source, loc: &Locator, m: &Materia
             ));
             None
         }
-        Some(t) => parts.texture(src, &resolve(loc.path, t), &from),
+        Some(t) => parts.texture(src, loc.path, t, &from),
         None => None,
     };
     Material {
@@ -802,21 +823,48 @@ fn light_from(
 /// The generated sky cube map that ships inside the binary.
 pub fn sky() -> Result<CubeMap> {
     let src = super::builtin::files();
-    load_cube(&src, Path::new("data/sky/x"), |face| format!("{face}.png"))
+    load_cube(
+        &src,
+        Path::new("data/sky/x"),
+        |face| format!("{face}.png"),
+        &mut Vec::new(),
+    )
 }
 
-fn load_cube(src: &dyn Source, base: &Path, name: impl Fn(&str) -> String) -> Result<CubeMap> {
+/// The six faces `name` gives, beside `base`; those outside its folder are
+/// warned about in `warnings` and read at arm's length.
+fn load_cube(
+    src: &dyn Source,
+    base: &Path,
+    name: impl Fn(&str) -> String,
+    warnings: &mut Vec<String>,
+) -> Result<CubeMap> {
     let mut faces = Vec::with_capacity(6);
     for face in FACE_NAMES {
         let written = name(face);
-        let p = resolve(base, named(&written, &format!("environment face {face}"))?);
-        let bytes = src
+        let what = format!("environment face {face}");
+        let p = resolve(base, named(&written, &what)?);
+        let outside = src.outside(base, &p);
+        if let Some(o) = &outside {
+            warnings.push(o.warning(&base.display().to_string(), &what, &written));
+        }
+        let read = src
             .read(&p, Kind::Image)
-            .with_context(|| format!("environment face {face}"))?;
-        faces.push(
-            super::Texture::decode(&p.display().to_string(), &bytes)
-                .with_context(|| format!("environment face {face}: {}", p.display()))?,
-        );
+            .map_err(anyhow::Error::from)
+            .and_then(|bytes| {
+                super::Texture::decode(&crate::words::path(&p), &bytes).map_err(|e| {
+                    anyhow!(
+                        "{}: {}",
+                        crate::words::path(&p),
+                        clip_quotes(&format!("{e:#}"))
+                    )
+                })
+            });
+        let read = match &outside {
+            Some(o) => o.quiet(Kind::Image, read, warnings, usize::MAX),
+            None => read,
+        };
+        faces.push(read.with_context(|| what.clone())?);
     }
     let faces: [super::Texture; 6] = faces
         .try_into()
@@ -849,11 +897,12 @@ fn environment_from(
     }
     if let Some(f) = e.faces {
         let names = [f.posx, f.negx, f.posy, f.negy, f.posz, f.negz];
-        let cube = load_cube(src, path, |face| {
+        let name = |face: &str| {
             let i = FACE_NAMES.iter().position(|n| *n == face).unwrap_or(0);
             names[i].clone()
-        })
-        .with_context(|| format!("{}: environment", path.display()))?;
+        };
+        let cube = load_cube(src, path, name, warnings)
+            .with_context(|| format!("{}: environment", path.display()))?;
         // Faces of unequal sizes or not square are read as they are, but
         // were hardly meant: their edges will not meet texel for texel.
         let sizes: Vec<String> = cube

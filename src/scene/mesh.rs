@@ -11,7 +11,7 @@ use super::frame::Frame;
 use super::gltf::{self, FileCamera, FileLight};
 use super::obj;
 use super::parts::{Parts, Placed};
-use super::source::{resolve, Kind, Source};
+use super::source::{Kind, Source};
 use super::{Camera, Environment, Light, Material, Scene, Settings};
 
 /// The mesh formats, by extension.
@@ -27,6 +27,16 @@ pub enum Format {
 pub const EXTENSIONS: &str = ".obj, .ply, .stl, .gltf or .glb";
 
 impl Format {
+    /// What a file of this format holds, as messages name it.
+    pub(crate) fn kind(self) -> Kind {
+        match self {
+            Format::Obj => Kind::Obj,
+            Format::Ply => Kind::Ply,
+            Format::Stl => Kind::Stl,
+            Format::Gltf => Kind::Gltf,
+        }
+    }
+
     /// The format of `path` by its extension (any case).
     pub fn of(path: &Path) -> Option<Format> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
@@ -51,6 +61,23 @@ pub fn load_placed(
     xf: &DAffine3,
     material: Option<&Material>,
 ) -> Result<Vec<Placed>> {
+    let placed = read_placed(format, parts, src, path, xf, material)?;
+    for m in &placed {
+        parts
+            .budget
+            .take(m.positions.len() as u64, m.indices.len() as u64);
+    }
+    Ok(placed)
+}
+
+fn read_placed(
+    format: Format,
+    parts: &mut Parts,
+    src: &dyn Source,
+    path: &Path,
+    xf: &DAffine3,
+    material: Option<&Material>,
+) -> Result<Vec<Placed>> {
     match format {
         Format::Obj => obj::load_placed(parts, src, path, xf, material),
         Format::Gltf => {
@@ -67,18 +94,20 @@ pub fn load_placed(
         Format::Stl => {
             let bytes = src.read(path, Kind::Stl)?;
             let id = parts.add_material(material.cloned().unwrap_or_default());
-            super::stl::parse(path, &bytes, xf, id, &mut parts.warnings)
+            let room = parts.budget.room();
+            super::stl::parse(path, &bytes, xf, id, &mut parts.warnings, room)
         }
         Format::Ply => {
             let bytes = src.read(path, Kind::Ply)?;
-            let ply = super::ply::parse(path, &bytes, &mut parts.warnings)?;
+            let room = parts.budget.room();
+            let ply = super::ply::parse(path, &bytes, &mut parts.warnings, room)?;
             drop(bytes);
             let material = match material {
                 Some(m) => m.clone(),
                 None => {
                     let texture = ply.texture.as_ref().and_then(|(file, line)| {
                         let from = format!("{}:{line}", path.display());
-                        parts.texture(src, &resolve(path, file), &from)
+                        parts.texture(src, path, file, &from)
                     });
                     Material {
                         name: "ply".into(),

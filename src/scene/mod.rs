@@ -262,13 +262,22 @@ impl Scene {
 /// file or a bare mesh file ([`mesh::Format`]); far-away and huge scenes are moved and scaled in
 /// f64 as they load ([`frame::Frame`]).
 pub fn load(spec: &str) -> Result<Scene> {
-    load_reading(spec, None).map(|(scene, _)| scene)
+    load_reading(spec, &Opening::default()).map(|(scene, _)| scene)
 }
 
-/// As [`load`], with the camera named `camera` where the file names its
-/// cameras (glTF), and the files read.
-pub fn load_reading(spec: &str, camera: Option<&str>) -> Result<(Scene, Vec<PathBuf>)> {
-    let (mut scene, read) = load_any(spec, camera)?;
+/// How a scene named on the command line is opened.
+#[derive(Clone, Debug, Default)]
+pub struct Opening {
+    /// The camera to look through, where the file names its cameras
+    /// (glTF).
+    pub camera: Option<String>,
+    /// Whether glTF files may name files outside their folder.
+    pub allow_outside: bool,
+}
+
+/// As [`load`], opened as `how` says, with the files read.
+pub fn load_reading(spec: &str, how: &Opening) -> Result<(Scene, Vec<PathBuf>)> {
+    let (mut scene, read) = load_any(spec, how)?;
     scene.warnings = fold_repeats(std::mem::take(&mut scene.warnings));
     Ok((scene, read))
 }
@@ -316,7 +325,8 @@ fn without_line(w: &str) -> String {
     w.to_string()
 }
 
-fn load_any(spec: &str, camera: Option<&str>) -> Result<(Scene, Vec<PathBuf>)> {
+fn load_any(spec: &str, how: &Opening) -> Result<(Scene, Vec<PathBuf>)> {
+    let camera = how.camera.as_deref();
     if let Some(scene) = builtin::load(spec)? {
         if let Some(name) = camera {
             bail!("--camera {name}: the built-in scene {spec} has one camera, no named ones");
@@ -328,7 +338,7 @@ fn load_any(spec: &str, camera: Option<&str>) -> Result<(Scene, Vec<PathBuf>)> {
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    let disk = source::Disk::default();
+    let disk = source::Disk::new(how.allow_outside);
     match ext.as_deref() {
         Some("toml") if camera.is_some() => bail!(
             "--camera {}: {spec} is a scene file: its [camera] is the one used",
@@ -359,7 +369,7 @@ fn load_any(spec: &str, camera: Option<&str>) -> Result<(Scene, Vec<PathBuf>)> {
     }
     .map(|mut scene| {
         // Summaries print it; a mesh's name is its file's, from the command line.
-        scene.name = crate::words::printable(&scene.name);
+        scene.name = crate::words::quoted(&scene.name);
         (scene, disk.files())
     })
     .with_context(|| format!("loading scene '{spec}'"))

@@ -14,6 +14,7 @@ use anyhow::{anyhow, bail, Result};
 use glam::Vec3;
 
 use super::numbers::{self, Absurd};
+use crate::words::quoted;
 
 /// One `newmtl` block as written.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -75,15 +76,22 @@ fn texture_args(rest: &str) -> (Vec<String>, &str) {
     (options, rest.trim_end())
 }
 
-/// Statements ignored in one file, for one warning: name, first line, count.
+/// Statements ignored in one file, for one warning: name, first line,
+/// count; past [`Ignored::KINDS`] kinds, counted together (a file of a
+/// million made-up keywords says so in a line).
 #[derive(Default)]
-struct Ignored(Vec<(String, usize, usize)>);
+struct Ignored(Vec<(String, usize, usize)>, usize);
 
 impl Ignored {
+    const KINDS: usize = 16;
+
     fn note(&mut self, what: &str, line: usize) {
-        match self.0.iter_mut().find(|(w, _, _)| w == what) {
+        let what = quoted(what);
+        let kinds = self.0.len();
+        match self.0.iter_mut().find(|(w, _, _)| *w == what) {
             Some(e) => e.2 += 1,
-            None => self.0.push((what.to_string(), line, 1)),
+            None if kinds < Self::KINDS => self.0.push((what, line, 1)),
+            None => self.1 += 1,
         }
     }
 
@@ -98,6 +106,9 @@ impl Ignored {
                 1 => format!("{w} (line {line})"),
                 n => format!("{w} (line {line} and {} more)", n - 1),
             })
+            .chain((self.1 > 0).then(|| {
+                crate::words::count(self.1 as u64, "statement", "statements") + " of other kinds"
+            }))
             .collect();
         Some(format!(
             "{}: ignored, not supported: {}",
@@ -163,8 +174,9 @@ pub fn parse(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Vec<
             };
             if c.min_element() < 0.0 {
                 warnings.push(format!(
-                    "{}:{n}: negative colour {key} {rest}: no surface reflects less than nothing",
-                    path.display()
+                    "{}:{n}: negative colour {key} {}: no surface reflects less than nothing",
+                    path.display(),
+                    quoted(rest)
                 ));
             }
             Ok(Some(c))
@@ -190,8 +202,9 @@ pub fn parse(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Vec<
                 let ns = single(&mut absurd)?;
                 if ns < 0.0 {
                     warnings.push(format!(
-                        "{}:{n}: negative Ns {rest}: using 0",
-                        path.display()
+                        "{}:{n}: negative Ns {}: using 0",
+                        path.display(),
+                        quoted(rest)
                     ));
                 }
                 m.ns = Some(ns.max(0.0));
@@ -210,8 +223,9 @@ pub fn parse(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Vec<
                 };
                 if !(0.0..=1.0).contains(&d) {
                     warnings.push(format!(
-                        "{}:{n}: d {value} is outside 0..1: clamped",
-                        path.display()
+                        "{}:{n}: d {} is outside 0..1: clamped",
+                        path.display(),
+                        quoted(value)
                     ));
                 }
                 m.dissolve = Some(d.clamp(0.0, 1.0));
@@ -238,7 +252,7 @@ pub fn parse(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Vec<
                     warnings.push(format!(
                         "{}:{n}: map_Kd options ignored: {} (the texture is applied as is)",
                         path.display(),
-                        options.join(", ")
+                        quoted(&options.join(", "))
                     ));
                 }
                 m.map_kd = Some((file.to_string(), n));

@@ -2,6 +2,7 @@
 //! the f32 the renderer stores can hold them. Huge but representable values
 //! load with one warning per file.
 
+use crate::words::quoted;
 use std::path::Path;
 
 /// Coordinates beyond this are legal but almost certainly a mistake.
@@ -24,9 +25,9 @@ pub fn unusable(x: f64) -> Option<&'static str> {
 pub fn parse(word: &str) -> Result<f64, String> {
     let x: f64 = word
         .parse()
-        .map_err(|_| format!("'{word}' is not a number"))?;
+        .map_err(|_| format!("'{}' is not a number", quoted(word)))?;
     match unusable(x) {
-        Some(why) => Err(format!("'{word}' {why}")),
+        Some(why) => Err(format!("'{}' {why}", quoted(word))),
         None => Ok(x),
     }
 }

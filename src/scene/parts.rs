@@ -11,7 +11,7 @@ use glam::{Affine3A, DAffine3, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::frame::Frame;
-use super::source::{Kind, Source};
+use super::source::{resolve, Kind, Outside, Source};
 use super::{Geometry, Material, MeshInfo, Texture};
 use crate::memory;
 
@@ -87,13 +87,18 @@ pub fn place_normals(normals: &[DVec3], xf: &DAffine3) -> Vec<Vec3> {
         .collect()
 }
 
-/// Refuses `triangles` when they would take more than `available` bytes
-/// ([`memory::BYTES_PER_TRIANGLE`] each): the message, without a place.
-pub fn triangles_fit(triangles: u64, available: u64) -> Result<(), String> {
-    let needed = triangles.saturating_mul(memory::BYTES_PER_TRIANGLE);
+/// Refuses a mesh of `vertices` and `triangles` when it would take more
+/// than `available` bytes ([`memory::mesh_bytes`]): the message, without a
+/// place.
+pub(crate) fn mesh_fits(vertices: u64, triangles: u64, available: u64) -> Result<(), String> {
+    let needed = memory::mesh_bytes(vertices, triangles);
     if needed > available {
+        let what = match vertices > triangles {
+            true => format!("{triangles} triangles and {vertices} vertices"),
+            false => format!("{triangles} triangles"),
+        };
         return Err(format!(
-            "{triangles} triangles would need {} of memory; {} is available",
+            "{what} would need {} of memory; {} is available",
             memory::bytes(needed),
             memory::bytes(available)
         ));
@@ -142,21 +147,60 @@ pub struct Parts {
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
     pub warnings: Vec<String>,
+    /// The memory the meshes still to come may take.
+    pub budget: memory::Budget,
     texture_ids: Vec<(PathBuf, Option<u32>)>,
 }
 
 impl Parts {
-    /// Loads a texture once per path; `None` (with a warning naming `from`,
-    /// where it was asked for) when missing, unreadable or too large.
-    pub fn texture(&mut self, src: &dyn Source, path: &Path, from: &str) -> Option<u32> {
+    /// Loads the texture `written` in the file `base` names once per path;
+    /// `None` (with a warning naming `from`, where it was asked for) when
+    /// missing, unreadable or too large. One outside `base`'s folder is
+    /// read at arm's length ([`Outside`]).
+    pub fn texture(
+        &mut self,
+        src: &dyn Source,
+        base: &Path,
+        written: &str,
+        from: &str,
+    ) -> Option<u32> {
+        self.texture_at(
+            src,
+            &resolve(base, written),
+            src.outside(base, &resolve(base, written)),
+            written,
+            from,
+        )
+    }
+
+    /// [`Parts::texture`] at `path`, resolved by the caller.
+    pub(crate) fn texture_at(
+        &mut self,
+        src: &dyn Source,
+        path: &Path,
+        outside: Option<Outside>,
+        written: &str,
+        from: &str,
+    ) -> Option<u32> {
         if let Some((_, id)) = self.texture_ids.iter().find(|(p, _)| p == path) {
             return *id;
         }
-        let name = path.display().to_string();
+        let name = crate::words::path(path);
+        if let Some(o) = &outside {
+            self.warnings.push(o.warning(from, "texture", written));
+        }
         let decoded = src
             .read(path, Kind::Image)
             .map_err(anyhow::Error::from)
-            .and_then(|bytes| Texture::decode(&name, &bytes));
+            .and_then(|bytes| {
+                Texture::decode(&name, &bytes).map_err(|e| {
+                    anyhow::anyhow!("{}", crate::words::clip_quotes(&format!("{e:#}")))
+                })
+            });
+        let decoded = match &outside {
+            Some(o) => o.quiet(Kind::Image, decoded, &mut self.warnings, usize::MAX),
+            None => decoded,
+        };
         let id = match decoded {
             Ok(t) => {
                 self.textures.push(t);
@@ -274,7 +318,8 @@ impl Parts {
         grow(&mut g.tri_mesh, g.indices.len(), mesh_id);
         if degenerate > 0 {
             self.warnings.push(format!(
-                "{name}: skipped {degenerate} degenerate (zero-area) triangle{}",
+                "{}: skipped {degenerate} degenerate (zero-area) triangle{}",
+                crate::words::quoted(&name),
                 if degenerate == 1 { "" } else { "s" }
             ));
         }

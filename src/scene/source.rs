@@ -59,6 +59,12 @@ impl Kind {
         }
     }
 
+    /// The kind in words with its article: `an OBJ mesh`.
+    pub(crate) fn a_noun(self) -> String {
+        let an = matches!(self, Kind::Obj | Kind::Stl | Kind::Image);
+        format!("{} {}", if an { "an" } else { "a" }, self.noun())
+    }
+
     /// The kind in words, as messages name it.
     pub const fn noun(self) -> &'static str {
         match self {
@@ -133,7 +139,7 @@ impl fmt::Display for ReadError {
             f,
             "cannot read {} {}: {}",
             self.kind.noun(),
-            self.path.display(),
+            crate::words::path(&self.path),
             self.cause
         )
     }
@@ -224,13 +230,16 @@ fn read_limited(path: &Path, limit: u64) -> Result<Vec<u8>, Cause> {
     let file = open_nonblocking(path)?;
     let meta = file.metadata()?;
     check_meta(path, &meta, limit)?;
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    file.take(limit + 1).read_to_end(&mut bytes)?;
-    if bytes.len() as u64 > limit {
-        return Err(Cause::TooLarge {
-            size: bytes.len() as u64,
-            limit,
-        });
+    // No more than the size it was opened with: a file of the kernel's
+    // (`/proc/self/environ`) says it is empty and then reads as anything,
+    // and a file growing as it is read is not one to trust either.
+    let size = meta.len();
+    let mut bytes = Vec::with_capacity(size as usize);
+    file.take(size + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > size {
+        return Err(Cause::NotRegular(
+            "it holds more than its size says: a file of the kernel's, or one being written".into(),
+        ));
     }
     Ok(bytes)
 }
@@ -300,6 +309,113 @@ pub trait Source: Sync {
     fn read_text(&self, path: &Path, kind: Kind) -> Result<String> {
         text(path, self.read(path, kind)?)
     }
+
+    /// `target`, named inside `base`, when it lies outside `base`'s folder
+    /// ([`Outside`]); never for files without folders to leave (embedded,
+    /// in memory).
+    fn outside(&self, _base: &Path, _target: &Path) -> Option<Outside> {
+        None
+    }
+
+    /// Whether a glTF file may name files outside its folder (it may not
+    /// unless asked: its URIs are relative references).
+    fn outside_allowed(&self) -> bool {
+        false
+    }
+}
+
+/// A file named inside another that lies outside that file's folder (by
+/// `..`, an absolute path or a symbolic link). It is read all the same,
+/// with a warning naming where it resolves, but at arm's length: no
+/// message quotes what it holds, since a scene could name `/etc/passwd`
+/// or `/proc/self/environ` to have a message show it.
+#[derive(Clone, Debug)]
+pub struct Outside {
+    pub path: PathBuf,
+    /// Where it resolves, symbolic links followed.
+    pub resolved: PathBuf,
+    /// The folder it lies outside of.
+    pub folder: PathBuf,
+}
+
+impl Outside {
+    /// `{from}: {what} {written} lies outside the folder of ...`.
+    pub(crate) fn warning(&self, from: &str, what: &str, written: &str) -> String {
+        format!(
+            "{from}: {what} {} lies outside {} (it resolves to {}); no message quotes what it holds",
+            crate::words::quoted(written),
+            crate::words::path(&self.folder),
+            crate::words::path(&self.resolved)
+        )
+    }
+
+    /// What reading the file as `kind` gave, said without quoting it: the
+    /// warnings pushed onto `warnings` since `before` become one, and an
+    /// error names the file (and line) and not what went wrong in it,
+    /// unless it is the file's own [`ReadError`] (not found, too large).
+    pub(crate) fn quiet<T>(
+        &self,
+        kind: Kind,
+        result: Result<T>,
+        warnings: &mut Vec<String>,
+        before: usize,
+    ) -> Result<T> {
+        let shown = crate::words::path(&self.path);
+        let hidden = warnings.len().saturating_sub(before);
+        if hidden > 0 {
+            warnings.truncate(before);
+            warnings.push(format!(
+                "{shown}: {} about it not shown, as it lies outside {}",
+                crate::words::count(hidden as u64, "warning", "warnings"),
+                crate::words::path(&self.folder)
+            ));
+        }
+        result.map_err(|e| {
+            let own = e
+                .chain()
+                .filter_map(|c| c.downcast_ref::<ReadError>())
+                .any(|r| r.path == self.path);
+            if own {
+                return e;
+            }
+            // The line an error names is no part of the file's text.
+            let (text, path) = (format!("{e:#}"), self.path.display().to_string());
+            let line: String = text
+                .find(&path)
+                .map(|at| &text[at + path.len()..])
+                .and_then(|rest| rest.strip_prefix(':'))
+                .map(|rest| rest.chars().take_while(char::is_ascii_digit).collect())
+                .filter(|digits: &String| !digits.is_empty())
+                .map_or(String::new(), |d| format!(":{d}"));
+            anyhow!(
+                "{shown}{line}: not read as {}; why is not shown, as the reason may quote \
+                 the file, which lies outside {}",
+                kind.a_noun(),
+                crate::words::path(&self.folder)
+            )
+        })
+    }
+}
+
+/// `target`, named inside `base`, when outside `base`'s folder, both with
+/// symbolic links followed (a path that does not exist yet, lexically).
+fn outside_of(base: &Path, target: &Path) -> Option<Outside> {
+    let real = |p: &Path| {
+        std::fs::canonicalize(p)
+            .or_else(|_| std::path::absolute(p).map(|a| normalize(&a)))
+            .ok()
+    };
+    let folder = real(
+        base.parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new(".")),
+    )?;
+    let resolved = real(target)?;
+    (!resolved.starts_with(&folder)).then(|| Outside {
+        path: target.to_path_buf(),
+        resolved,
+        folder,
+    })
 }
 
 /// The file system, through [`read_file`], remembering the files it read
@@ -307,9 +423,20 @@ pub trait Source: Sync {
 #[derive(Default)]
 pub struct Disk {
     read: std::sync::Mutex<Vec<PathBuf>>,
+    /// Whether glTF files may name files outside their folder.
+    allow_outside: bool,
 }
 
 impl Disk {
+    /// Files on disk; `allow_outside` lets glTF files name files outside
+    /// their folder (`--allow-outside`).
+    pub(crate) fn new(allow_outside: bool) -> Self {
+        Disk {
+            allow_outside,
+            ..Disk::default()
+        }
+    }
+
     /// The files read so far.
     pub fn files(self) -> Vec<PathBuf> {
         self.read.into_inner().unwrap_or_else(|e| e.into_inner())
@@ -323,6 +450,14 @@ impl Source for Disk {
             r.push(path.to_path_buf());
         }
         Ok(bytes)
+    }
+
+    fn outside(&self, base: &Path, target: &Path) -> Option<Outside> {
+        outside_of(base, target)
+    }
+
+    fn outside_allowed(&self) -> bool {
+        self.allow_outside
     }
 }
 

@@ -18,8 +18,7 @@ use anyhow::{anyhow, bail, Result};
 use glam::{DAffine3, DVec3};
 
 use super::numbers::{self, show3, Absurd};
-use super::parts::{place_positions, triangles_fit, Placed};
-use crate::memory;
+use super::parts::{mesh_fits, place_positions, Placed};
 
 /// Bytes of a binary triangle: normal, three vertices, attribute count.
 const TRIANGLE: u64 = 50;
@@ -85,18 +84,9 @@ impl Solid {
 }
 
 /// Reads an STL file's bytes: its meshes placed by `xf` in f64, all with
-/// `material`.
+/// `material`, refusing triangles that would need more than `available`
+/// bytes.
 pub fn parse(
-    path: &Path,
-    bytes: &[u8],
-    xf: &DAffine3,
-    material: u32,
-    warnings: &mut Vec<String>,
-) -> Result<Vec<Placed>> {
-    parse_within(path, bytes, xf, material, warnings, memory::available())
-}
-
-fn parse_within(
     path: &Path,
     bytes: &[u8],
     xf: &DAffine3,
@@ -152,22 +142,28 @@ fn parse_within(
 }
 
 /// An ASCII STL starts with `solid` (after blanks), followed by a blank,
-/// and has no NUL byte near its start (binary files that start with
-/// `solid` have them among their numbers).
+/// and reads as text near its start: UTF-8 without control characters but
+/// blanks. A binary file that starts with `solid` has its numbers there,
+/// whose bytes hardly ever are text (NUL bytes or not).
 fn ascii_start(bytes: &[u8]) -> bool {
     let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let head = &body[..body.len().min(4096)];
+    // A character cut at the end of the head is still text.
+    let utf8 = std::str::from_utf8(head).map_or_else(|e| e.error_len().is_none(), |_| true);
+    let control = |b: &u8| (*b < 0x20 && !b.is_ascii_whitespace()) || *b == 0x7f;
     let start = body.iter().position(|b| !b.is_ascii_whitespace());
     start.is_some_and(|i| {
         body[i..].starts_with(b"solid")
             && body.get(i + 5).is_none_or(|b| b.is_ascii_whitespace())
-            && !body[..body.len().min(4096)].contains(&0)
+            && utf8
+            && !head.iter().any(control)
     })
 }
 
 fn binary(path: &Path, bytes: &[u8], name: String, available: u64) -> Result<Solid> {
     let body = &bytes[HEADER as usize..];
     let n = body.len() / TRIANGLE as usize;
-    triangles_fit(n as u64, available).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    mesh_fits(0, n as u64, available).map_err(|e| anyhow!("{}: {e}", path.display()))?;
     let mut solid = Solid::new(name);
     solid.indices.reserve_exact(n);
     for (t, tri) in body.chunks_exact(TRIANGLE as usize).enumerate() {
@@ -279,7 +275,7 @@ fn ascii(
                     )));
                 }
                 triangles += v.len() as u64 - 2;
-                triangles_fit(triangles, available).map_err(at)?;
+                mesh_fits(0, triangles, available).map_err(at)?;
                 let ids: Vec<u32> = v.iter().map(|&p| solid.welder.id(p)).collect();
                 for k in 2..ids.len() {
                     solid.indices.push([ids[0], ids[k - 1], ids[k]]);
@@ -336,7 +332,14 @@ mod tests {
 
     fn read(bytes: &[u8]) -> Result<(Vec<Placed>, Vec<String>)> {
         let mut w = Vec::new();
-        let m = parse(Path::new("p.stl"), bytes, &DAffine3::IDENTITY, 0, &mut w)?;
+        let m = parse(
+            Path::new("p.stl"),
+            bytes,
+            &DAffine3::IDENTITY,
+            0,
+            &mut w,
+            u64::MAX,
+        )?;
         Ok((m, w))
     }
 
@@ -347,6 +350,27 @@ mod tests {
         assert_eq!(m[0].positions.len(), 4);
         assert_eq!(m[0].indices, [[0, 1, 2], [1, 3, 2]]);
         assert_eq!(m[0].name, "p");
+    }
+
+    /// A binary file that starts with `solid` and holds no NUL byte (a
+    /// count and numbers without one), cut short, is a truncated binary
+    /// file, not ASCII that makes no sense.
+    #[test]
+    fn binary_without_nul_bytes_is_told_by_its_bytes() {
+        let tri = [[1.1f32, 2.2, 3.3], [4.4, 5.7, 6.6], [7.7, 8.8, 9.9]];
+        let mut b = binary_stl(&[tri, tri], b"solid but binary");
+        b[80..84].copy_from_slice(&0x0101_0101u32.to_le_bytes());
+        for t in 0..2 {
+            let at = 84 + 50 * t;
+            b[at..at + 12].copy_from_slice(&[0x3f; 12]);
+            b[at + 48..at + 50].copy_from_slice(&[1, 1]);
+        }
+        assert!(!b.contains(&0));
+        let e = format!("{:#}", read(&b).unwrap_err());
+        assert!(
+            e.starts_with("p.stl: truncated binary STL: the header counts 16843009 triangles"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -423,13 +447,13 @@ mod tests {
         let (m, w) = read(&padded).unwrap();
         assert_eq!(m[0].indices.len(), 2);
         assert!(w[0].contains("3 bytes after the 2 triangles"), "{w:?}");
-        let e = parse_within(
+        let e = parse(
             Path::new("p.stl"),
             &binary_stl(&TWO, b"x"),
             &DAffine3::IDENTITY,
             0,
             &mut Vec::new(),
-            memory::BYTES_PER_TRIANGLE,
+            crate::memory::BYTES_PER_TRIANGLE,
         )
         .err()
         .map(|e| e.to_string());

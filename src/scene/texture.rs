@@ -1,21 +1,28 @@
 //! Textures (linear RGB, repeat, clamped or mirrored wrapping, nearest or
 //! bilinear lookup) and cube maps in the OpenGL face convention.
 
+use std::sync::Arc;
+
 use anyhow::{bail, Result};
 use glam::{Vec2, Vec3};
 use image::ImageDecoder;
 
 use crate::memory;
 
+/// A decoded image and how a material looks it up. Cloning one shares its
+/// texels: every material of an image (or of a file) holds them once.
 #[derive(Clone, Debug)]
 pub struct Texture {
     pub name: String,
     pub width: u32,
     pub height: u32,
     /// Row 0 is the top of the image; values are linear (sRGB decoded).
-    pub texels: Vec<Vec3>,
+    pub texels: Arc<Vec<Vec3>>,
     /// How coordinates outside 0..1 wrap, along u and v.
     pub wrap: [Wrap; 2],
+    /// What every lookup is multiplied by (a glTF material's base colour
+    /// factor).
+    pub tint: Vec3,
 }
 
 /// How texture coordinates outside 0..1 (and neighbours across an edge)
@@ -107,8 +114,9 @@ impl Texture {
             name: name.to_string(),
             width: rgb.width(),
             height: rgb.height(),
-            texels,
+            texels: Arc::new(texels),
             wrap: [Wrap::Repeat; 2],
+            tint: Vec3::ONE,
         }
     }
 
@@ -164,12 +172,12 @@ impl Texture {
 
     pub fn nearest(&self, uv: Vec2) -> Vec3 {
         let (x, y) = self.coords(uv);
-        self.texel(x as i64, y as i64)
+        self.texel(x as i64, y as i64) * self.tint
     }
 
     pub fn bilinear(&self, uv: Vec2) -> Vec3 {
         let (x, y) = self.coords(uv);
-        self.bilinear_px(x, y)
+        self.bilinear_px(x, y) * self.tint
     }
 
     /// Bilinear lookup at pixel coordinates (texel centres at +0.5).
@@ -244,11 +252,14 @@ mod tests {
             name: "t".into(),
             width: w,
             height: h,
-            texels: (0..h)
-                .flat_map(|y| (0..w).map(move |x| (x, y)))
-                .map(|(x, y)| f(x, y))
-                .collect(),
+            texels: Arc::new(
+                (0..h)
+                    .flat_map(|y| (0..w).map(move |x| (x, y)))
+                    .map(|(x, y)| f(x, y))
+                    .collect(),
+            ),
             wrap: [Wrap::Repeat; 2],
+            tint: Vec3::ONE,
         }
     }
 

@@ -100,9 +100,32 @@ impl Run {
 /// (the test then fails); output goes through files, so a full pipe
 /// cannot stall it.
 pub fn rayterm(cwd: &Path, args: &[&str]) -> Run {
+    run(Command::new(env!("CARGO_BIN_EXE_rayterm")), cwd, args)
+}
+
+/// [`rayterm`] with its address space limited to `bytes` (`ulimit -v`).
+pub fn rayterm_within(bytes: u64, cwd: &Path, args: &[&str]) -> Run {
+    use std::os::unix::process::CommandExt;
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_rayterm"));
+    let limit = libc::rlimit {
+        rlim_cur: bytes,
+        rlim_max: bytes,
+    };
+    // SAFETY: setrlimit is async-signal-safe, as the child's code between
+    // fork and exec must be.
+    unsafe {
+        cmd.pre_exec(move || match libc::setrlimit(libc::RLIMIT_AS, &limit) {
+            0 => Ok(()),
+            _ => Err(std::io::Error::last_os_error()),
+        });
+    }
+    run(cmd, cwd, args)
+}
+
+fn run(mut cmd: Command, cwd: &Path, args: &[&str]) -> Run {
     let out = output_file("stdout");
     let err = output_file("stderr");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_rayterm"))
+    let mut child = cmd
         .args(args)
         .current_dir(cwd)
         .stdin(Stdio::null())

@@ -50,6 +50,40 @@ pub fn save_reference(path: &Path, width: u32, height: u32, img: &[Vec3]) -> Res
     raster::write_linear(path, width, height, img)
 }
 
+/// The attribute a cached reference carries its [`reference_key`] in.
+const KEY: &str = "rayterm.reference";
+
+/// Caches a rendered reference as OpenEXR, with the key of what it is of.
+pub(super) fn save_cached(
+    path: &Path,
+    key: u64,
+    width: u32,
+    height: u32,
+    img: &[Vec3],
+) -> Result<()> {
+    let bytes =
+        raster::openexr::encode_noted(width, height, img, Some((KEY, &format!("{key:016x}"))))?;
+    raster::Output::check(path, &[], &[raster::Format::Exr])?.write(&bytes)
+}
+
+/// A cached reference of `key` at `width` x `height`; an error saying why
+/// not when the file is of something else (its name is no proof: a cache
+/// is a folder anyone may copy files into) or unreadable.
+pub(super) fn load_cached(path: &Path, key: u64, width: u32, height: u32) -> Result<Vec<Vec3>> {
+    let held = raster::openexr::note(path, KEY)?;
+    if held.as_deref() != Some(format!("{key:016x}").as_str()) {
+        anyhow::bail!(
+            "it is of another scene or settings (its key is {}, this study's {key:016x})",
+            held.map_or("missing".into(), |k| crate::words::quoted(&k))
+        );
+    }
+    let (w, h, img) = load_reference(path)?;
+    if (w, h) != (width, height) {
+        anyhow::bail!("it is {w}x{h}, the study {width}x{height}");
+    }
+    Ok(img)
+}
+
 /// The relative error (root relMSE, as `converge` measures it) that
 /// storing `img` in `format` adds by itself: rounding to a step `s` is an
 /// error of variance `s²/12` per channel. Errors measured against such a

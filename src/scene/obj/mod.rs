@@ -17,13 +17,14 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicU64;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use glam::{DAffine3, DVec3, Vec2};
 use rayon::prelude::*;
 
 use super::frame::Frame;
 use super::mtl::{self, MtlMaterial};
 use super::numbers::{self, show3, Absurd};
+use super::parts::mesh_fits;
 use super::source::{resolve, Kind, ReadError, Source};
 use super::Material;
 use crate::memory;
@@ -76,17 +77,13 @@ pub struct ObjFile {
 }
 
 impl ObjFile {
-    /// Parses OBJ text; non-fatal findings are appended to `warnings`.
+    /// Parses OBJ text; non-fatal findings are appended to `warnings`. A
+    /// mesh whose vertices or triangles would need more than `available`
+    /// bytes ([`memory::mesh_bytes`]) is refused.
     ///
     /// A big file is read in pieces, in parallel ([`piece`]); the result,
     /// errors and warnings included, is the one of a reading from the top.
-    pub fn parse(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<ObjFile> {
-        Self::parse_within(path, text, warnings, memory::available())
-    }
-
-    /// [`ObjFile::parse`], refusing a mesh whose triangles would need more
-    /// than `available` bytes ([`memory::BYTES_PER_TRIANGLE`] each).
-    fn parse_within(
+    pub fn parse(
         path: &Path,
         text: &str,
         warnings: &mut Vec<String>,
@@ -95,7 +92,7 @@ impl ObjFile {
         Self::parse_in(path, text, warnings, available, piece::PIECE)
     }
 
-    /// [`ObjFile::parse_within`] in pieces of about `size` bytes.
+    /// [`ObjFile::parse`] in pieces of about `size` bytes.
     fn parse_in(
         path: &Path,
         text: &str,
@@ -126,6 +123,10 @@ impl ObjFile {
         let total = census
             .iter()
             .fold([0; 3], |a, (_, c)| [0, 1, 2].map(|k| a[k] + c[k]));
+        // Vertices are checked before they are allocated (a file of them
+        // alone takes seven times its size), triangles as they are read.
+        let vertices = total.iter().sum::<usize>() as u64;
+        mesh_fits(vertices, 0, available).map_err(|e| anyhow!("{}: {e}", path.display()))?;
         let mut f = ObjFile {
             path: path.to_path_buf(),
             positions: vec![DVec3::ZERO; total[0]],
@@ -479,18 +480,35 @@ fn read_libraries(src: &dyn Source, obj: &ObjFile, warnings: &mut Vec<String>) -
             files = written.split_whitespace().map(read).collect();
         }
         for (mtl_path, text) in files {
+            let outside = src.outside(&obj.path, &mtl_path);
+            // A file outside that is not text is not quoted either.
+            let text = match &outside {
+                Some(o) if text.as_ref().is_err_and(|e| !is_not_found(e)) => {
+                    o.quiet(Kind::Mtl, text, warnings, usize::MAX)
+                }
+                _ => text,
+            };
             let text = match text {
                 Err(e) if is_not_found(&e) => {
                     warnings.push(format!(
                         "{}:{line}: material library {} not found; using the default material",
                         obj.path.display(),
-                        mtl_path.display()
+                        crate::words::path(&mtl_path)
                     ));
                     continue;
                 }
                 t => t.with_context(|| format!("{}:{line}: mtllib", obj.path.display()))?,
             };
-            let materials = mtl::parse(&mtl_path, &text, warnings)?;
+            if let Some(o) = &outside {
+                let from = format!("{}:{line}", obj.path.display());
+                warnings.push(o.warning(&from, "material library", written));
+            }
+            let before = warnings.len();
+            let materials = mtl::parse(&mtl_path, &text, warnings);
+            let materials = match &outside {
+                Some(o) => o.quiet(Kind::Mtl, materials, warnings, before)?,
+                None => materials?,
+            };
             lib.extend(materials.into_iter().map(|m| (mtl_path.clone(), m)));
         }
     }
@@ -506,7 +524,7 @@ fn convert_material(
     let d = Material::default();
     let texture = m.map_kd.as_ref().and_then(|(file, line)| {
         let from = format!("{}:{line}", mtl_path.display());
-        parts.texture(src, &resolve(mtl_path, file), &from)
+        parts.texture(src, mtl_path, file, &from)
     });
     Material {
         name: m.name.clone(),
@@ -530,7 +548,7 @@ pub fn load_placed(
     material: Option<&Material>,
 ) -> Result<Vec<Placed>> {
     let text = src.read_text(path, Kind::Obj)?;
-    let obj = ObjFile::parse(path, &text, &mut parts.warnings)?;
+    let obj = ObjFile::parse(path, &text, &mut parts.warnings, parts.budget.room())?;
     drop(text);
     if let Some(m) = material {
         let id = parts.add_material(m.clone());
@@ -572,8 +590,9 @@ pub fn load_placed(
     }
     for (name, line) in unknown {
         parts.warnings.push(format!(
-            "{}:{line}: usemtl {name}: no such material{}; using the default material",
+            "{}:{line}: usemtl {}: no such material{}; using the default material",
             path.display(),
+            crate::words::quoted(&name),
             if lib.is_empty() {
                 String::new()
             } else {
@@ -885,7 +904,7 @@ mod tests {
             " 1 2 3".repeat(1000)
         );
         let budget = 1000 * memory::BYTES_PER_TRIANGLE;
-        let e = ObjFile::parse_within(Path::new("m.obj"), &big, &mut Vec::new(), budget)
+        let e = ObjFile::parse(Path::new("m.obj"), &big, &mut Vec::new(), budget)
             .err()
             .map(|e| e.to_string())
             .unwrap_or_default();
@@ -893,7 +912,7 @@ mod tests {
             e,
             "m.obj:5: 2999 triangles by this line would need 586 KiB of memory; 195 KiB is available"
         );
-        assert!(ObjFile::parse_within(Path::new("m.obj"), QUAD, &mut Vec::new(), budget).is_ok());
+        assert!(ObjFile::parse(Path::new("m.obj"), QUAD, &mut Vec::new(), budget).is_ok());
     }
 
     /// Sixteen kinds are named, the rest counted; a keyword is cut to 32

@@ -16,6 +16,7 @@ use glam::{DVec3, Vec2};
 use super::{Face, Faces, NONE};
 use crate::memory;
 use crate::scene::numbers::{self, show, show3, Absurd};
+use crate::words::quoted;
 
 /// Pieces are cut after about this many bytes.
 pub const PIECE: usize = 4 << 20;
@@ -391,7 +392,7 @@ fn numbers(words: Words, line: usize, absurd: &mut Absurd) -> Result<Numbers, St
 fn index(word: &str, count: usize, what: &str) -> Result<u32, String> {
     let k: i64 = word
         .parse()
-        .map_err(|_| format!("'{word}' is not a valid {what} index"))?;
+        .map_err(|_| format!("'{}' is not a valid {what} index", quoted(word)))?;
     let i = match k {
         0 => return Err(format!("{what} index 0 (indices start at 1)")),
         k if k > 0 => k - 1,
@@ -420,7 +421,8 @@ fn corner(word: &str, counts: [usize; 3]) -> Result<[u32; 3], String> {
     let vn = parts.next().unwrap_or("");
     if parts.next().is_some() || v.is_empty() {
         return Err(format!(
-            "'{word}' is not a face vertex (v, v/vt, v//vn or v/vt/vn)"
+            "'{}' is not a face vertex (v, v/vt, v//vn or v/vt/vn)",
+            quoted(word)
         ));
     }
     let optional = |w: &str, count, what| match w {

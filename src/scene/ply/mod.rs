@@ -19,9 +19,10 @@ use anyhow::{anyhow, bail, Result};
 use glam::{DAffine3, DVec3, Vec2, Vec3};
 
 use super::numbers::{self, show3, ABSURD};
-use super::parts::{place_normals, place_positions, triangles_fit, Placed};
+use super::parts::{mesh_fits, place_normals, place_positions, Placed};
 use super::texture::srgb_to_linear;
 use crate::memory;
+use crate::words::quoted;
 
 /// The header must end within this many bytes.
 const MAX_HEADER: usize = 1 << 20;
@@ -209,7 +210,10 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
         let line = std::str::from_utf8(raw.strip_suffix(b"\r").unwrap_or(raw))
             .map_err(|_| at("the header is not text (invalid UTF-8)".into()))?;
         let line = crate::words::printable(line);
-        let words: Vec<&str> = line.split_whitespace().collect();
+        // Names and values reach messages: each cut as messages quote them
+        // (none rayterm knows is near that long).
+        let cut: Vec<String> = line.split_whitespace().map(quoted).collect();
+        let words: Vec<&str> = cut.iter().map(String::as_str).collect();
         match words.as_slice() {
             ["ply"] if n == 1 => {}
             ["format", f, version] => {
@@ -224,8 +228,9 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
                     "binary_little_endian" => Format::Binary { big: false },
                     "binary_big_endian" => Format::Binary { big: true },
                     other => bail!(at(format!(
-                        "unknown format '{other}' (ascii, binary_little_endian or \
-                         binary_big_endian)"
+                        "unknown format '{}' (ascii, binary_little_endian or \
+                         binary_big_endian)",
+                        quoted(other)
                     ))),
                 });
             }
@@ -238,9 +243,13 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
             }
             ["comment", ..] | ["obj_info", ..] | [] => {}
             ["element", name, count] => {
-                let count: u64 = count
-                    .parse()
-                    .map_err(|_| at(format!("element {name}: '{count}' is not a count")))?;
+                let count: u64 = count.parse().map_err(|_| {
+                    at(format!(
+                        "element {}: '{}' is not a count",
+                        quoted(name),
+                        quoted(count)
+                    ))
+                })?;
                 if elements.iter().any(|e| e.name == *name) {
                     bail!(at(format!("element {name} is declared twice")));
                 }
@@ -255,7 +264,8 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
                     bail!(at("a property before any element".into()));
                 };
                 let ty = |t: &str| {
-                    Scalar::parse(t).ok_or_else(|| at(format!("unknown property type '{t}'")))
+                    Scalar::parse(t)
+                        .ok_or_else(|| at(format!("unknown property type '{}'", quoted(t))))
                 };
                 let (kind, name) = match rest {
                     ["list", count, item, name] => {
@@ -487,7 +497,9 @@ impl Values for Ascii<'_> {
     }
     fn int(&mut self, t: Scalar) -> Result<i64, String> {
         let w = self.word()?;
-        let x: i64 = w.parse().map_err(|_| format!("'{w}' is not an integer"))?;
+        let x: i64 = w
+            .parse()
+            .map_err(|_| format!("'{}' is not an integer", quoted(w)))?;
         let (lo, hi) = t.range();
         match (lo..=hi).contains(&x) {
             true => Ok(x),
@@ -515,12 +527,9 @@ fn least_bytes(e: &Element, format: Format) -> u64 {
         .sum()
 }
 
-/// Parses a PLY file's bytes.
-pub fn parse(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<PlyMesh> {
-    parse_within(path, bytes, warnings, memory::available())
-}
-
-fn parse_within(
+/// Parses a PLY file's bytes, refusing one that would need more than
+/// `available` bytes ([`memory::mesh_bytes`]) before reading its body.
+pub fn parse(
     path: &Path,
     bytes: &[u8],
     warnings: &mut Vec<String>,
@@ -566,7 +575,7 @@ fn parse_within(
         .iter()
         .find(|e| e.name == "face")
         .map_or(0, |e| e.count);
-    triangles_fit(faces, available).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    mesh_fits(vertices.count, faces, available).map_err(|e| anyhow!("{}: {e}", path.display()))?;
     match h.format {
         Format::Binary { big } => {
             let mut r = Binary {
@@ -651,6 +660,11 @@ fn body_from<R: Values>(
                 colors.reserve_exact(vertex_count);
             }
         }
+        // An element without properties holds nothing, in either format:
+        // its count, however large, is no reason to loop.
+        if e.props.is_empty() {
+            continue;
+        }
         let in_bulk = r.bulk().and_then(|(body, big)| match e.name.as_str() {
             "vertex" => bulk::vertices(e, body, big, color_full),
             "face" => bulk::triangles(e, body, big, vertex_count),
@@ -729,7 +743,8 @@ fn body_from<R: Values>(
                             ));
                         }
                         triangles += n as u64 - 2;
-                        triangles_fit(triangles, available).map_err(|m| fail(r, name, m))?;
+                        mesh_fits(vertex_count as u64, triangles, available)
+                            .map_err(|m| fail(r, name, m))?;
                         corners.clear();
                         for _ in 0..n {
                             let k = r.int(item).map_err(|m| fail(r, name, m))?;
@@ -836,7 +851,7 @@ mod tests {
 
     fn read(bytes: &[u8]) -> Result<(PlyMesh, Vec<String>)> {
         let mut w = Vec::new();
-        let m = parse(Path::new("p.ply"), bytes, &mut w)?;
+        let m = parse(Path::new("p.ply"), bytes, &mut w, u64::MAX)?;
         Ok((m, w))
     }
 
@@ -1126,9 +1141,9 @@ mod tests {
     #[test]
     fn face_counts_are_checked_against_memory() {
         let text = format!("{HEAD}{QUAD}");
-        let e = parse_within(Path::new("p.ply"), text.as_bytes(), &mut Vec::new(), 1)
+        let e = parse(Path::new("p.ply"), text.as_bytes(), &mut Vec::new(), 1)
             .err()
             .map(|e| e.to_string());
-        assert!(e.is_some_and(|e| e.contains("1 triangles would need")));
+        assert!(e.is_some_and(|e| e.contains("1 triangles and 4 vertices would need")));
     }
 }

@@ -1,0 +1,597 @@
+//! glTF 2.0 (`.gltf` with external or embedded buffers, and `.glb`),
+//! through the `gltf` crate for the document (parsed and validated); its
+//! buffers and images are read through the scene's [`Source`], with the
+//! same limits as every other file.
+//!
+//! Read: the default scene (or the first) through its node hierarchy, each
+//! node's transform applied in f64; triangle primitives (strips and fans
+//! turned into triangles) with positions, normals, the first UV set and
+//! `COLOR_0`; materials mapped onto Phong (see [`phong`]) with the
+//! `baseColorTexture` and its sampler's wrap modes; perspective cameras
+//! (the first, or the one `--camera` names); `KHR_lights_punctual` lights (spot lights become point lights,
+//! directional lights point lights far away). What cannot be mapped is
+//! listed once in the warnings.
+
+mod check;
+mod primitive;
+mod uri;
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use ::gltf::camera::Projection;
+use ::gltf::khr_lights_punctual::Kind as LightKind;
+use ::gltf::material::AlphaMode;
+use ::gltf::texture::WrappingMode;
+use anyhow::{anyhow, bail, Context, Result};
+use glam::{DAffine3, DMat4, DVec3, Vec3};
+
+use super::parts::{mesh_fits, Parts, Placed};
+use super::source::{Kind, Outside, Source};
+use super::texture::{Texture, Wrap};
+use super::Material;
+use check::{check_lights, check_transform, check_trees, check_values, Broken};
+use primitive::{Decoded, Key};
+use uri::inline_uri;
+
+/// A camera of the file, placed in f64.
+#[derive(Clone, Debug)]
+pub struct FileCamera {
+    /// The names `--camera` knows it by: its node's and its own.
+    pub names: Vec<String>,
+    pub eye: DVec3,
+    pub forward: DVec3,
+    pub up: DVec3,
+    /// Vertical field of view, degrees.
+    pub vfov: f64,
+}
+
+/// A light of the file, placed in f64.
+#[derive(Clone, Copy, Debug)]
+pub enum FileLight {
+    Point {
+        position: DVec3,
+        color: Vec3,
+    },
+    /// Light travelling along `direction`.
+    Directional {
+        direction: DVec3,
+        color: Vec3,
+    },
+}
+
+/// What a glTF file holds, placed.
+pub struct GltfScene {
+    pub meshes: Vec<Placed>,
+    /// The usable perspective cameras, in the order the scene's nodes
+    /// are visited.
+    pub cameras: Vec<FileCamera>,
+    pub lights: Vec<FileLight>,
+}
+
+/// Things of the file rayterm cannot show, each listed once with where it
+/// was first found and how often.
+#[derive(Default)]
+struct Unmapped(Vec<(String, String, usize)>);
+
+impl Unmapped {
+    fn note(&mut self, what: &str, first: impl FnOnce() -> String) {
+        match self.0.iter_mut().find(|(w, _, _)| w == what) {
+            Some(e) => e.2 += 1,
+            None => self.0.push((what.to_string(), first(), 1)),
+        }
+    }
+
+    fn warning(&self, path: &Path) -> Option<String> {
+        if self.0.is_empty() {
+            return None;
+        }
+        let list: Vec<String> = self
+            .0
+            .iter()
+            .map(|(w, first, n)| match n {
+                1 => format!("{w} ({first})"),
+                n => format!("{w} ({first} and {} more)", n - 1),
+            })
+            .collect();
+        Some(format!(
+            "{}: not shown, rayterm has no equivalent: {}",
+            path.display(),
+            list.join(", ")
+        ))
+    }
+}
+
+/// An object's name in the file, or its index when it has none (messages
+/// put the kind before either: `mesh Body`, `mesh 3`).
+fn named(name: Option<&str>, index: usize) -> String {
+    match name {
+        Some(n) if !n.trim().is_empty() => crate::words::quoted(n),
+        _ => index.to_string(),
+    }
+}
+
+/// The Phong material for a glTF metallic-roughness material:
+/// `kd = base * (1 - metallic)`, `ks = mix(0.04, base, metallic)`, `ns`
+/// the Phong exponent of the same highlight width as the roughness
+/// (`2 / roughness^4 - 2`, a mirror from roughness 0.21 down), and the
+/// alpha of `BLEND` (and of `MASK`, 0 or 1 by its cutoff) as dissolve.
+pub fn phong(
+    base: [f32; 4],
+    metallic: f32,
+    roughness: f32,
+    alpha: AlphaMode,
+    cutoff: f32,
+) -> Material {
+    let b = Vec3::new(base[0], base[1], base[2]).clamp(Vec3::ZERO, Vec3::ONE);
+    let m = metallic.clamp(0.0, 1.0);
+    let a2 = roughness.clamp(0.0, 1.0).powi(4);
+    let ns = if a2 > 0.0 {
+        (2.0 / a2 - 2.0).min(1e6)
+    } else {
+        1e6
+    };
+    Material {
+        name: String::new(),
+        kd: b * (1.0 - m),
+        ks: Vec3::splat(0.04).lerp(b, m),
+        ns,
+        dissolve: match alpha {
+            AlphaMode::Opaque => 1.0,
+            AlphaMode::Blend => base[3].clamp(0.0, 1.0),
+            AlphaMode::Mask => {
+                if base[3] >= cutoff {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+        },
+        texture: None,
+    }
+}
+
+fn wrap(mode: WrappingMode) -> Wrap {
+    match mode {
+        WrappingMode::Repeat => Wrap::Repeat,
+        WrappingMode::ClampToEdge => Wrap::Clamp,
+        WrappingMode::MirroredRepeat => Wrap::Mirror,
+    }
+}
+
+struct Reader<'a> {
+    path: &'a Path,
+    src: &'a dyn Source,
+    buffers: Vec<Vec<u8>>,
+    /// Where each buffer's bytes come from, for messages that quote them.
+    origins: Vec<String>,
+    /// The buffers outside the glTF's folder, read as allowed: messages
+    /// quote nothing they hold.
+    foreign: Vec<Option<Outside>>,
+    unmapped: Unmapped,
+    /// Decoded images by index (`None` when they could not be).
+    images: HashMap<usize, Option<Texture>>,
+    /// Materials made so far: glTF index to rayterm id.
+    materials: HashMap<Option<usize>, u32>,
+    /// Cameras and images the crate cannot read, until used.
+    broken: Broken,
+    /// Primitives decoded, until the last primitive sharing their
+    /// accessors takes them, and how many are still to come.
+    decoded: HashMap<Key, Decoded>,
+    uses: HashMap<Key, usize>,
+}
+
+impl Reader<'_> {
+    fn at(&self) -> String {
+        self.path.display().to_string()
+    }
+
+    /// An image's texture, decoded once; an error for one the crate cannot
+    /// read ([`Broken`]), named with the material that uses it (`user`).
+    fn image(
+        &mut self,
+        parts: &mut Parts,
+        image: ::gltf::Image,
+        user: &str,
+    ) -> Result<Option<Texture>> {
+        let index = image.index();
+        if let Some(t) = self.images.get(&index) {
+            return Ok(t.clone());
+        }
+        let name = named(image.name(), index);
+        let from = format!("{}: image {name}", self.at());
+        if let Some(why) = self.broken.images.get(&index) {
+            bail!("{from} (of {user}): {why}");
+        }
+        let decoded = match image.source() {
+            ::gltf::image::Source::View { view, .. } => {
+                let bytes = self
+                    .buffers
+                    .get(view.buffer().index())
+                    .and_then(|b| b.get(view.offset()..view.offset().checked_add(view.length())?));
+                match (bytes, self.foreign.get(view.buffer().index())) {
+                    (Some(b), Some(Some(o))) => Texture::decode(&from, b).map_err(|_| {
+                        format!(
+                            "not read as an image; why is not shown, as the reason may quote \
+                             its buffer, which lies outside {}",
+                            crate::words::path(&o.folder)
+                        )
+                    }),
+                    (Some(b), _) => Texture::decode(&from, b)
+                        .map_err(|e| crate::words::clip_quotes(&format!("{e:#}"))),
+                    (None, _) => Err("its buffer view lies outside the buffer".into()),
+                }
+            }
+            ::gltf::image::Source::Uri { uri, .. } => match inline_uri(uri) {
+                Some(Ok(b)) => Texture::decode(&from, &b)
+                    .map_err(|e| crate::words::clip_quotes(&format!("{e:#}"))),
+                Some(Err(e)) => Err(e),
+                None => {
+                    // Read, decoded and warned about as every texture is.
+                    let (p, o) = match uri::file(self.src, self.path, uri) {
+                        Ok(found) => found,
+                        Err(e) => bail!("{from} (of {user}): {e}"),
+                    };
+                    let id = parts.texture_at(self.src, &p, o, uri, &from);
+                    let t = id.map(|i| parts.textures[i as usize].clone());
+                    self.images.insert(index, t.clone());
+                    return Ok(t);
+                }
+            },
+        };
+        let t = match decoded {
+            Ok(t) => Some(t),
+            Err(e) => {
+                parts
+                    .warnings
+                    .push(format!("{from}: {e}; using the material colour"));
+                None
+            }
+        };
+        self.images.insert(index, t.clone());
+        Ok(t)
+    }
+
+    /// The rayterm material of a primitive's material, made once.
+    fn material(&mut self, parts: &mut Parts, m: ::gltf::Material) -> Result<u32> {
+        let key = m.index();
+        if let Some(&id) = self.materials.get(&key) {
+            return Ok(id);
+        }
+        let Some(index) = key else {
+            // No material: rayterm's default, as for an OBJ without one.
+            let id = parts.add_material(Material::default());
+            self.materials.insert(key, id);
+            return Ok(id);
+        };
+        let name = named(m.name(), index);
+        let pbr = m.pbr_metallic_roughness();
+        let base = pbr.base_color_factor();
+        let mut mat = phong(
+            base,
+            pbr.metallic_factor(),
+            pbr.roughness_factor(),
+            m.alpha_mode(),
+            m.alpha_cutoff().unwrap_or(0.5),
+        );
+        mat.name = match m.name() {
+            Some(n) if !n.trim().is_empty() => name.clone(),
+            _ => format!("material {name}"),
+        };
+        let here = || format!("material {name}");
+        if let Some(info) = pbr.base_color_texture() {
+            if info.tex_coord() != 0 {
+                self.unmapped.note("textures on a second UV set", here);
+            }
+            let sampler = info.texture().sampler();
+            if let Some(mut t) = self.image(parts, info.texture().source(), &here())? {
+                // The texture takes the place of kd: the factor and the
+                // metallic share of kd multiply its texels, which every
+                // material of the image shares.
+                t.tint = mat.kd;
+                t.wrap = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
+                mat.texture = Some(parts.add_texture(t));
+            }
+        }
+        if pbr.metallic_roughness_texture().is_some() {
+            self.unmapped.note("metallic-roughness textures", here);
+        }
+        if m.normal_texture().is_some() {
+            self.unmapped.note("normal maps", here);
+        }
+        if m.occlusion_texture().is_some() {
+            self.unmapped.note("occlusion maps", here);
+        }
+        if m.emissive_texture().is_some() || m.emissive_factor() != [0.0; 3] {
+            self.unmapped.note("emission", here);
+        }
+        if m.alpha_mode() != AlphaMode::Opaque && pbr.base_color_texture().is_some() {
+            self.unmapped.note("alpha from textures", here);
+        }
+        let id = parts.add_material(mat);
+        self.materials.insert(key, id);
+        Ok(id)
+    }
+}
+
+/// Reads a glTF file: materials and textures go into `parts`; meshes,
+/// the perspective cameras and the lights come back placed by `xf`
+/// in f64. `material` replaces the file's materials when given.
+pub fn load(
+    parts: &mut Parts,
+    src: &dyn Source,
+    path: &Path,
+    xf: &DAffine3,
+    material: Option<&Material>,
+) -> Result<GltfScene> {
+    let bytes = src.read(path, Kind::Gltf)?;
+    let invalid = |e: &dyn std::fmt::Display| {
+        let e = crate::words::clip_quotes(&e.to_string());
+        anyhow!("{}: not a valid glTF file: {e}", path.display())
+    };
+    // A .gltf is JSON text, read with or without a byte-order mark as every
+    // text file is (a .glb starts with its magic number).
+    let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
+    let file = ::gltf::Gltf::from_slice_without_validation(body).map_err(|e| invalid(&e))?;
+    drop(bytes);
+    let json = file.document.into_json();
+    // glTF 1.0 is another format, which the 2.0 schema misreads.
+    let version = &json.asset.version;
+    if version.split('.').next() != Some("2") {
+        bail!(
+            "{}: glTF version {}: only glTF 2.x is read",
+            path.display(),
+            crate::words::quoted(version)
+        );
+    }
+    // The crate's validation indexes the POSITION accessor before
+    // checking it: checked here first.
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let position = prim
+                .attributes
+                .get(&::gltf::json::validation::Checked::Valid(
+                    ::gltf::json::mesh::Semantic::Positions,
+                ))
+                .map(|i| i.value());
+            if let Some(i) = position.filter(|&i| i >= json.accessors.len()) {
+                bail!(invalid(&format!(
+                    "meshes[{m}].primitives[{p}].attributes.POSITION: accessor {i} does not exist \
+                     ({} accessors)",
+                    json.accessors.len()
+                )));
+            }
+        }
+    }
+    let broken = Broken::of(&json);
+    let doc = ::gltf::Document::from_json(json).map_err(|e| invalid(&e))?;
+    let mut blob = file.blob;
+    let (mut buffers, mut origins, mut foreign) = (Vec::new(), Vec::new(), Vec::new());
+    for b in doc.buffers() {
+        let name = named(b.name(), b.index());
+        let mut outside = None;
+        // The binary chunk is padded to 4 bytes past the buffer's length.
+        let (mut data, padding, origin) = match b.source() {
+            ::gltf::buffer::Source::Bin => (
+                blob.take().ok_or_else(|| {
+                    anyhow!(
+                        "{}: buffer {name} is the binary chunk of a .glb, and the file has none",
+                        path.display()
+                    )
+                })?,
+                3,
+                String::new(),
+            ),
+            ::gltf::buffer::Source::Uri(uri) => match inline_uri(uri) {
+                Some(d) => (
+                    d.map_err(|e| anyhow!("{}: buffer {name}: {e}", path.display()))?,
+                    0,
+                    String::new(),
+                ),
+                None => {
+                    let (p, o) = uri::file(src, path, uri)
+                        .map_err(|e| anyhow!("{}: buffer {name}: {e}", path.display()))?;
+                    let data = src
+                        .read(&p, Kind::Buffer)
+                        .with_context(|| format!("{}: buffer {name}", path.display()))?;
+                    outside = o;
+                    (data, 0, crate::words::path(&p))
+                }
+            },
+        };
+        if data.len() < b.length() {
+            bail!(
+                "{}: buffer {name} holds {} bytes, the file declares {} (truncated?)",
+                path.display(),
+                data.len(),
+                b.length()
+            );
+        }
+        // byteLength is the buffer's length: bytes past it are no part of it.
+        if data.len() > b.length() + padding {
+            parts.warnings.push(format!(
+                "{}: buffer {name} holds {} bytes, the file declares {}: the first {} are read",
+                path.display(),
+                data.len(),
+                b.length(),
+                b.length()
+            ));
+        }
+        data.truncate(b.length());
+        buffers.push(data);
+        origins.push(origin);
+        foreign.push(outside);
+    }
+    let mut r = Reader {
+        path,
+        src,
+        buffers,
+        origins,
+        foreign,
+        unmapped: Unmapped::default(),
+        images: HashMap::new(),
+        materials: HashMap::new(),
+        broken,
+        decoded: HashMap::new(),
+        uses: HashMap::new(),
+    };
+    for ext in doc.extensions_used() {
+        if ext != "KHR_lights_punctual" {
+            r.unmapped
+                .note(&crate::words::quoted(ext), || "extensionsUsed".into());
+        }
+    }
+    if doc.animations().next().is_some() {
+        r.unmapped.note("animations", || "shown at rest".into());
+    }
+    if doc.skins().next().is_some() {
+        r.unmapped.note("skins", || "shown at rest".into());
+    }
+    let override_id = material.map(|m| parts.add_material(m.clone()));
+    let scene = doc.default_scene().or_else(|| doc.scenes().next());
+    let mut out = GltfScene {
+        meshes: Vec::new(),
+        cameras: Vec::new(),
+        lights: Vec::new(),
+    };
+    let Some(scene) = scene else {
+        // Without scenes, nothing is placed (the spec says so).
+        parts.warnings.extend(r.unmapped.warning(path));
+        parts.warnings.extend(r.broken.unused(path, doc.as_json()));
+        return Ok(out);
+    };
+    // Depth first, with each node's world transform in f64: each node
+    // once, as the hierarchy is a forest. Each instance of a mesh is a copy
+    // of it, counted before anything is read.
+    check_trees(path, &doc, &scene)?;
+    let (vertices, triangles, uses) = r.instanced(&scene)?;
+    r.uses = uses;
+    mesh_fits(vertices, triangles, parts.budget.room())
+        .map_err(|e| anyhow!("{}: its meshes, each instance counted: {e}", path.display()))?;
+    check_values(path, &doc, &r.broken)?;
+    check_lights(path, &doc, &mut parts.warnings)?;
+    let mut stack: Vec<(::gltf::Node, DAffine3)> = scene.nodes().map(|n| (n, *xf)).collect();
+    stack.reverse();
+    let mut brightest = 0.0f32;
+    while let Some((node, parent)) = stack.pop() {
+        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
+        let world = parent * DAffine3::from_mat4(local);
+        let node_name = named(node.name(), node.index());
+        check_transform(path, &node, &node_name, world)?;
+        if let ::gltf::scene::Transform::Matrix { matrix: m } = node.transform() {
+            // Its last row: what an affine placement drops.
+            if [m[0][3], m[1][3], m[2][3], m[3][3]] != [0.0, 0.0, 0.0, 1.0] {
+                r.unmapped.note(
+                    "projective node matrices (their last row is not 0 0 0 1: read as their \
+                     affine part)",
+                    || format!("node {node_name}"),
+                );
+            }
+        }
+        if let Some(mesh) = node.mesh() {
+            let mesh_name = named(mesh.name(), mesh.index());
+            if node.weights().is_some() || mesh.weights().is_some() {
+                r.unmapped
+                    .note("morph targets", || format!("mesh {mesh_name}"));
+            }
+            for p in mesh.primitives() {
+                out.meshes.extend(r.primitive(
+                    parts,
+                    p,
+                    &mesh_name,
+                    &node_name,
+                    &world,
+                    override_id,
+                )?);
+            }
+        }
+        if let Some(cam) = node.camera() {
+            if let Some(why) = r.broken.cameras.get(&cam.index()) {
+                bail!(
+                    "{}: node {node_name}: camera {}: {why}",
+                    path.display(),
+                    named(cam.name(), cam.index())
+                );
+            }
+            match cam.projection() {
+                Projection::Perspective(p) => {
+                    let names = [node.name(), cam.name()]
+                        .into_iter()
+                        .flatten()
+                        .map(str::to_string)
+                        .collect();
+                    let c = FileCamera {
+                        names,
+                        eye: world.transform_point3(DVec3::ZERO),
+                        forward: world.transform_vector3(DVec3::NEG_Z),
+                        up: world.transform_vector3(DVec3::Y),
+                        vfov: (p.yfov() as f64).to_degrees(),
+                    };
+                    let usable = c.eye.is_finite()
+                        && c.forward.cross(c.up).length_squared() > 0.0
+                        && c.forward.cross(c.up).is_finite();
+                    match usable {
+                        true => out.cameras.push(c),
+                        false => r
+                            .unmapped
+                            .note("cameras scaled to nothing", || format!("node {node_name}")),
+                    }
+                }
+                Projection::Orthographic(_) => r
+                    .unmapped
+                    .note("orthographic cameras", || format!("node {node_name}")),
+            }
+        }
+        if let Some(light) = node.light() {
+            let color = Vec3::from_array(light.color()) * light.intensity().max(0.0);
+            brightest = brightest.max(color.max_element());
+            let position = world.transform_point3(DVec3::ZERO);
+            match light.kind() {
+                LightKind::Point => out.lights.push(FileLight::Point { position, color }),
+                LightKind::Spot { .. } => {
+                    r.unmapped
+                        .note("spot cones (spot lights shine all round)", || {
+                            format!("node {node_name}")
+                        });
+                    out.lights.push(FileLight::Point { position, color });
+                }
+                LightKind::Directional => {
+                    r.unmapped.note(
+                        "directional lights (placed as distant point lights)",
+                        || format!("node {node_name}"),
+                    );
+                    // A zero scale on the way leaves it no direction.
+                    let direction = world.transform_vector3(DVec3::NEG_Z);
+                    match direction.length_squared() > 0.0 && direction.is_finite() {
+                        true => out.lights.push(FileLight::Directional { direction, color }),
+                        false => r.unmapped.note(
+                            "directional lights scaled to nothing (their direction is zero)",
+                            || format!("node {node_name}"),
+                        ),
+                    }
+                }
+            }
+            if light.range().is_some() {
+                r.unmapped
+                    .note("light ranges", || format!("node {node_name}"));
+            }
+        }
+        for child in node.children().collect::<Vec<_>>().into_iter().rev() {
+            stack.push((child, world));
+        }
+    }
+    // rayterm's lights do not fall off with distance: intensities keep
+    // their ratios, the brightest light of the file at 1.
+    if brightest > 0.0 {
+        for l in &mut out.lights {
+            match l {
+                FileLight::Point { color, .. } | FileLight::Directional { color, .. } => {
+                    *color /= brightest
+                }
+            }
+        }
+    }
+    parts.warnings.extend(r.unmapped.warning(path));
+    parts.warnings.extend(r.broken.unused(path, doc.as_json()));
+    Ok(out)
+}
