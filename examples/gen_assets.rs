@@ -1,6 +1,6 @@
 //! Regenerates rayterm's procedural assets under `data/`:
 //!
-//! * `data/textures/checker.png`: a 256x256 test texture;
+//! * `data/meshes/checker.png`: a 256x256 test texture;
 //! * `data/sky/{posx,negx,posy,negy,posz,negz}.png`: a 128x128-per-face sky
 //!   cube map (OpenGL face convention, see [`face_direction`]);
 //! * `data/meshes/*.obj` and `*.mtl`: sphere, plane, cube, Cornell box and the
@@ -31,11 +31,11 @@ fn main() -> Result<()> {
         .nth(1)
         .map(PathBuf::from)
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("data"));
-    for dir in ["textures", "sky", "meshes"] {
+    for dir in ["sky", "meshes"] {
         fs::create_dir_all(out.join(dir))?;
     }
 
-    let checker = out.join("textures/checker.png");
+    let checker = out.join("meshes/checker.png");
     checker_texture().save(&checker)?;
     println!("wrote {}", checker.display());
 
@@ -870,7 +870,7 @@ Ks 0.000000 0.000000 0.000000
 Ns 10.000000
 d 1.000000
 illum 1
-map_Kd ../textures/checker.png
+map_Kd checker.png
 ";
 
 const CORNELL_MTL: &str = "\

@@ -65,9 +65,9 @@ const CORNELL_MTL: &str = include_str!("../data/meshes/cornell.mtl");
 const CUBE_OBJ: &str = include_str!("../data/meshes/cube.obj");
 const TEAPOT_BPT: &str = include_str!("../data/teapot.bpt");
 const SCENES: [&str; 3] = [
-    include_str!("../data/scenes/cornell.toml"),
-    include_str!("../data/scenes/teapot.toml"),
-    include_str!("../data/scenes/cube-textured.toml"),
+    include_str!("../data/cornell.toml"),
+    include_str!("../data/teapot.toml"),
+    include_str!("../data/cube-textured.toml"),
 ];
 
 /// One patch, for scene files that name `p.bpt`.
@@ -95,14 +95,14 @@ fn files(main: (&str, Vec<u8>)) -> Memory {
         .with("m.mtl", "newmtl a\nKd 1 0 0\nmap_Kd t.png\n")
         .with("t.png", b"\x89PNG\r\n\x1a\ngarbage".to_vec())
         .with("p.bpt", one_patch())
-        .with("../meshes/cornell.obj", CORNELL_OBJ)
-        .with("../meshes/cornell.mtl", CORNELL_MTL)
-        .with("../meshes/cube.obj", CUBE_OBJ)
+        .with("meshes/cornell.obj", CORNELL_OBJ)
+        .with("meshes/cornell.mtl", CORNELL_MTL)
+        .with("meshes/cube.obj", CUBE_OBJ)
         .with(
-            "../meshes/plane.obj",
+            "meshes/plane.obj",
             "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nf 1 2 3 4\n",
         )
-        .with("../teapot.bpt", one_patch());
+        .with("teapot.bpt", one_patch());
     m.0.retain(|(p, _)| p != Path::new(main.0));
     m.with(main.0, main.1)
 }

@@ -16,7 +16,7 @@ use files::{rayterm, rayterm_within, within_deadline, Dir};
 use rayterm::scene::{self, Scene};
 
 const TRI: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-const CHECKER: &[u8] = include_bytes!("../data/textures/checker.png");
+const CHECKER: &[u8] = include_bytes!("../data/meshes/checker.png");
 
 /// Loads `spec` as the command line would, with a deadline.
 fn load(spec: &str) -> Result<Scene, String> {

@@ -15,7 +15,7 @@ use rayterm::scene::file::{load_with, Overrides};
 use rayterm::scene::source::Memory;
 use rayterm::scene::{Builder, Scene};
 
-const CHECKER: &[u8] = include_bytes!("../data/textures/checker.png");
+const CHECKER: &[u8] = include_bytes!("../data/meshes/checker.png");
 const SPHERE: &str = include_str!("../data/meshes/sphere.obj");
 
 /// A scene in `scenes/` whose OBJ, MTL, texture and patch file sit beside
@@ -201,19 +201,18 @@ fn built_in_scenes_load_from_any_directory() {
         ],
     );
     assert!(r.ok(), "{}", r.stderr);
-    // Its files on disk, loaded from their own folder and from elsewhere.
+    // Their files on disk, loaded from their own folder and from elsewhere,
+    // with no warning: a scene names nothing outside its folder.
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("data");
-    for (cwd, scene) in [
-        (root.join("scenes"), "env.toml".to_string()),
-        (root.join("scenes"), "./cornell.toml".to_string()),
-        (
-            d.0.clone(),
-            root.join("scenes/cornell.toml")
-                .to_str()
-                .unwrap()
-                .to_string(),
-        ),
-    ] {
+    let mut runs = vec![(
+        d.0.clone(),
+        root.join("cornell.toml").to_str().unwrap().to_string(),
+    )];
+    for (name, _) in rayterm::scene::builtin::SCENES {
+        runs.push((root.clone(), format!("{name}.toml")));
+    }
+    runs.push((root.clone(), "./cornell.toml".to_string()));
+    for (cwd, scene) in runs {
         let out = d.path("y.png");
         let r = rayterm(
             &cwd,
@@ -229,6 +228,12 @@ fn built_in_scenes_load_from_any_directory() {
             ],
         );
         assert!(r.ok(), "{scene} from {}: {}", cwd.display(), r.stderr);
+        assert!(
+            !r.stderr.contains("warning"),
+            "{scene} from {}: {}",
+            cwd.display(),
+            r.stderr
+        );
     }
 }
 

@@ -41,7 +41,7 @@ const COMMANDS: &[(&str, How)] = &[
         Run,
     ),
     (
-        "rayterm render data/scenes/mirrors.toml -o out.png --no shadows --no reflections",
+        "rayterm render data/mirrors.toml -o out.png --no shadows --no reflections",
         Run,
     ),
     (

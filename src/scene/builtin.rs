@@ -17,12 +17,12 @@ macro_rules! embed {
 }
 
 static FILES: &[(&str, &[u8])] = embed![
-    "scenes/cornell.toml",
-    "scenes/cornell-area.toml",
-    "scenes/cube-textured.toml",
-    "scenes/mirrors.toml",
-    "scenes/teapot.toml",
-    "scenes/env.toml",
+    "cornell.toml",
+    "cornell-area.toml",
+    "cube-textured.toml",
+    "mirrors.toml",
+    "teapot.toml",
+    "env.toml",
     "meshes/cornell.obj",
     "meshes/cornell.mtl",
     "meshes/cube.obj",
@@ -36,7 +36,7 @@ static FILES: &[(&str, &[u8])] = embed![
     "meshes/floor_mirror.obj",
     "meshes/mirrors.mtl",
     "teapot.bpt",
-    "textures/checker.png",
+    "meshes/checker.png",
     "sky/posx.png",
     "sky/negx.png",
     "sky/posy.png",
@@ -92,7 +92,7 @@ pub fn load(spec: &str) -> Result<Option<Scene>> {
             .with_context(|| format!("teapot:{a}: N must be a whole number from 1 to 1024"))?;
         ov.segments = Some(n);
     }
-    let path = format!("data/scenes/{name}.toml");
+    let path = format!("data/{name}.toml");
     let mut scene = load_with(&files(), Path::new(&path), ov)?;
     scene.name = spec.to_string();
     if scene.description.is_empty() {
