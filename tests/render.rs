@@ -306,6 +306,28 @@ fn cli_target_error_adaptive_and_uniform() {
         !uniform.contains("adaptive") && error(&uniform) < 2.0,
         "{uniform}"
     );
+    // The passes' rate beside that of the same samples in one pass.
+    let compared = run(&["--compare-one-shot"]);
+    let ratio: f64 = compared
+        .lines()
+        .find_map(|l| l.strip_prefix("the same samples in one pass: "))
+        .and_then(|l| l.split(" are ").nth(1))
+        .and_then(|l| l.strip_suffix("x that"))
+        .and_then(|r| r.parse().ok())
+        .unwrap_or_else(|| panic!("{compared}"));
+    assert!(ratio > 0.0 && ratio.is_finite(), "{compared}");
+    let o = rayterm(&[
+        "render",
+        "cornell-area",
+        "-o",
+        out.to_str().unwrap(),
+        "--spp",
+        "2",
+        "--part",
+        "1/2",
+        "--compare-one-shot",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{o:?}");
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -255,6 +255,12 @@ pub struct RenderArgs {
     /// Print the scene plan (stage, on/off, reason) before rendering.
     #[arg(long)]
     pub explain: bool,
+    /// After the render, trace the samples it took again in one pass, each
+    /// pixel's together as `--spp N` would, and print that rate beside the
+    /// render's: what its passes cost against a one-shot render of the same
+    /// samples (BENCHMARKS.md).
+    #[arg(long, conflicts_with_all = ["debug", "part", "checkpoint", "resume"])]
+    pub compare_one_shot: bool,
     /// Write a debug view instead: bvh-level:K (boxes of level K over the
     /// image), bvh-leaves, bvh-heat (nodes visited per pixel) or
     /// bvh-heat:tests; bloom (the pixels over the threshold and their glow);

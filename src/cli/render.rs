@@ -316,6 +316,23 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         true => crate::noteln!("{line}"),
         false => crate::outln!("{line}")?,
     }
+    if a.compare_one_shot {
+        check_film(s.width, s.height, Film::BYTES_PER_PIXEL)?;
+        let again = p.retrace(&tracer);
+        let passes = rays as f64 / (ms.max(1e-6) / 1e3);
+        let once = again.rays as f64 / (again.ms.max(1e-6) / 1e3);
+        let line = format!(
+            "the same samples in one pass: {} in {}; the passes' {} are {:.2}x that",
+            words::rays_per_s(once),
+            duration(again.ms),
+            words::rays_per_s(passes),
+            passes / once.max(1e-12)
+        );
+        match out.is_stdout() {
+            true => crate::noteln!("{line}"),
+            false => crate::outln!("{line}")?,
+        }
+    }
     Ok(ExitCode::SUCCESS)
 }
 

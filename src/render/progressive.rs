@@ -434,6 +434,37 @@ impl Progressive {
         }
     }
 
+    /// Traces every sample the film holds again, in one pass into a
+    /// scratch film, each pixel's samples together as a one-shot render of
+    /// the same counts (`render --spp N`) traces them: the rate the passes
+    /// that took them are measured against. The samples, and so the rays,
+    /// are the same; only the passes differ.
+    pub fn retrace(&self, tracer: &Tracer) -> PassStats {
+        let f = &self.film;
+        let counts: Vec<u32> = match &f.adaptive {
+            Some(a) => a.spp.clone(),
+            None => vec![f.spp; f.pixels_len()],
+        };
+        let mut scratch = Film::new_adaptive(f.width, f.height);
+        let start = Instant::now();
+        let give = Give::Each(counts);
+        let rec: RayCounter = sample_rows(
+            tracer,
+            &mut scratch,
+            &give,
+            &|| false,
+            None,
+            false,
+            Layout::Stats,
+        );
+        PassStats {
+            samples: f.spp_range().2,
+            pixels: f.pixels_len() as u64,
+            rays: rec.rays(),
+            ms: start.elapsed().as_secs_f64() * 1e3,
+        }
+    }
+
     /// Runs to `spp` samples per pixel, uncancellable: for tests and tools.
     pub fn render(tracer: &Tracer, spp: u32) -> Film {
         let mut p = Progressive::new(tracer.width, tracer.height);
@@ -915,6 +946,33 @@ mod tests {
             means.windows(2).all(|m| m[1] >= (m[0] + 16.0).min(42.0)),
             "{means:?}"
         );
+    }
+
+    /// A retrace traces the film's samples again, so the same rays, in
+    /// one pass: for uniform and adaptive films, grown in passes.
+    #[test]
+    fn a_retrace_traces_the_same_rays_in_one_pass() {
+        let s = session(&[]);
+        let t = s.tracer();
+        for adaptive in [false, true] {
+            let mut p = match adaptive {
+                true => Progressive::new_adaptive(12, 8),
+                false => Progressive::new(12, 8),
+            };
+            p.growing = true;
+            let stop = Stop {
+                spp: Some(4096),
+                seconds: Some(1e9),
+                error: None,
+            };
+            for _ in 0..6 {
+                p.pass(&t, &stop, &|| false).unwrap();
+            }
+            let (lo, _, hi) = p.film.spp_range();
+            assert_eq!(lo < hi, adaptive);
+            let again = p.retrace(&t);
+            assert_eq!(again.rays, p.rays, "adaptive: {adaptive}");
+        }
     }
 
     /// A share reaches the mean in whole quarters and blocks, heavier

@@ -38,6 +38,10 @@ pub struct TuiPassStats {
     /// worst pixels and snapshot.
     pub step_ms_mean: f64,
     pub mrays_per_s: f64,
+    /// The film's samples traced again in one pass, each pixel's together as
+    /// a one-shot render of the same counts does: the rate the passes'
+    /// `mrays_per_s` is measured against.
+    pub one_shot_mrays_per_s: f64,
     /// The film's mean samples per pixel after the last pass.
     pub spp_mean: f64,
     /// Bytes written to the terminal for the first frame (every cell) and
@@ -131,6 +135,7 @@ pub fn measure_pass(req: &SceneRequest, cols: u16, rows: u16, passes: u32) -> Re
         mean(&later(&v))
     };
     let pass_mean = mean(&sorted);
+    let once = worker.retrace().map_or(0.0, |p| p.mrays_per_s());
     Ok(TuiPassStats {
         scene: scene.name.clone(),
         triangles: scene.geometry.triangle_count(),
@@ -144,6 +149,7 @@ pub fn measure_pass(req: &SceneRequest, cols: u16, rows: u16, passes: u32) -> Re
         pass_ms_min: sorted[0],
         step_ms_mean: mean(&later(&step_ms)),
         mrays_per_s: later(&rays).iter().sum::<f64>() / (later(&pass_ms).iter().sum::<f64>() * 1e3),
+        one_shot_mrays_per_s: once,
         spp_mean,
         first_frame_bytes: frame_bytes[0],
         frame_bytes_mean: later_bytes(&frame_bytes),
@@ -159,7 +165,7 @@ mod tests {
     fn measures_passes_and_bytes() {
         let s = measure_pass(&SceneRequest::new("cornell"), 40, 12, 3).unwrap();
         assert_eq!((s.width, s.height, s.passes), (40, 24, 3));
-        assert!(s.pass_ms_mean > 0.0 && s.mrays_per_s > 0.0);
+        assert!(s.pass_ms_mean > 0.0 && s.mrays_per_s > 0.0 && s.one_shot_mrays_per_s > 0.0);
         // The first frame paints every cell: at least the half block per cell.
         assert!(
             s.first_frame_bytes >= 40 * 12 * 3,

@@ -442,6 +442,15 @@ impl Worker {
         )
     }
 
+    /// The film's samples traced again in one pass, as a one-shot render
+    /// of the same counts would ([`Progressive::retrace`]); `None` before a
+    /// view.
+    pub fn retrace(&self) -> Option<crate::render::PassStats> {
+        let view = self.view.as_ref()?;
+        let f = &self.film.film;
+        Some(self.film.retrace(&self.tracer(view, (f.width, f.height))))
+    }
+
     /// Does the next piece of work: shows a kept film again, draws the
     /// overlay, or runs a pass; `None` when idle or cancelled.
     pub fn step(&mut self, cancel: &(dyn Fn() -> bool + Sync)) -> Option<Msg> {
