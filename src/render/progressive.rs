@@ -547,9 +547,12 @@ const CAMERA_BATCH: usize = crate::bvh::PACKET_RAYS;
 /// a frustum wide enough to hold thousands of a dense mesh's triangles, and
 /// its walk visits every leaf that any of its rays might reach: on a mesh of
 /// 4.2 million triangles at 160x96 pixels, 130 thousand rays a second
-/// against 2.6 million one by one. Within a pixel the rays share almost
-/// every node, and 16 or more of them walk faster together than alone on
-/// every scene measured (BENCHMARKS.md).
+/// against 2.6 million one by one. Within a pixel the rays share most
+/// nodes: 16 or more of them walk faster together than alone where a pixel
+/// holds a few triangles (1.1x to 1.2x the rays a second on the bunny),
+/// and take 0.85x to 0.95x where it holds hundreds (`teapot:256` at
+/// 160x96 and 16 spp) or where reflections are most of the rays
+/// (`mirrors`); see BENCHMARKS.md.
 pub const PACKET_SAMPLES: u32 = PIXEL_STRATA;
 
 /// The most samples per pixel a growing pass gives ([`Progressive::growing`]):
