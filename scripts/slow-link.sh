@@ -2,6 +2,7 @@
 # rayterm over a slow link: the TUI runs in a 160x48 tmux pane with its
 # output throttled by pv (default 32 kB/s), and this measures how long the
 # first full picture takes to appear and how long `q` takes to act.
+# The TUI gets --color 256 unless the extra options name a --color.
 # Needs tmux, pv and script (util-linux). Usage:
 #   scripts/slow-link.sh [RATE] [SCENE] [extra rayterm tui options...]
 set -eu
@@ -18,7 +19,11 @@ cleanup() { tmux -L "$sock" kill-server 2>/dev/null || true; }
 trap cleanup EXIT
 now() { date +%s.%N; }
 screen() { tmux -L "$sock" capture-pane -p -t 0 2>/dev/null || true; }
-cmd="$bin tui $scene --color 256 $*"
+color="--color 256"
+for a in "$@"; do
+    case "$a" in --color | --color=*) color="" ;; esac
+done
+cmd="$bin tui $scene $color $*"
 start=$(now)
 tmux -L "$sock" new-session -d -x 160 -y 48 \
     "script -qfec '$cmd' /dev/null | pv -qL $rate; sleep 60"
