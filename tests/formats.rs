@@ -785,6 +785,17 @@ fn malformed_gltf_files_say_what_is_wrong() {
         ("missing.gltf", serde_json::to_vec(&ext).unwrap(), "missing.gltf: buffer 0"),
         ("cycle.glb", glb(&cycle, &bin), "a cycle in the node hierarchy"),
         ("junk.glb", b"glTF\x02\x00\x00\x00junk".to_vec(), "junk.glb: not a valid glTF file"),
+        // glTF 1.0, as its writers left it: objects where 2.0 has arrays.
+        (
+            "old.gltf",
+            br#"{"asset":{"version":"1.0"},"meshes":{"m":{"primitives":[]}},"scene":"s","scenes":{"s":{"nodes":[]}}}"#.to_vec(),
+            "old.gltf: glTF 1.0 is not supported (rayterm reads glTF 2.0",
+        ),
+        (
+            "old.glb",
+            b"glTF\x01\x00\x00\x00\x20\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00".to_vec(),
+            "old.glb: glTF 1.0 is not supported",
+        ),
     ] {
         let e = load(&d.write(name, bytes)).err().unwrap_or_else(|| panic!("{name} loaded"));
         assert!(e.contains(want), "{name}: {e}\nwanted: {want}");

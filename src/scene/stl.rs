@@ -153,7 +153,9 @@ fn ascii_start(bytes: &[u8]) -> bool {
     let control = |b: &u8| (*b < 0x20 && !b.is_ascii_whitespace()) || *b == 0x7f;
     let start = body.iter().position(|b| !b.is_ascii_whitespace());
     start.is_some_and(|i| {
-        body[i..].starts_with(b"solid")
+        body[i..]
+            .get(..5)
+            .is_some_and(|w| w.eq_ignore_ascii_case(b"solid"))
             && body.get(i + 5).is_none_or(|b| b.is_ascii_whitespace())
             && utf8
             && !head.iter().any(control)
@@ -213,6 +215,9 @@ fn ascii(
         let at = |msg: String| anyhow!("{}:{n}: {msg}", path.display());
         let mut words = line.split_whitespace();
         let Some(key) = words.next() else { continue };
+        // Keywords in any case, as exporters write them (SOLID, FACET ...).
+        let key = key.to_ascii_lowercase();
+        let key = key.as_str();
         let rest: Vec<&str> = words.collect();
         let expect = |what: &str| {
             at(format!(
@@ -233,7 +238,11 @@ fn ascii(
                 solids.extend(current.take());
             }
             ("facet", true, None, _) => {
-                if rest.first() != Some(&"normal") || rest.len() != 4 {
+                if !rest
+                    .first()
+                    .is_some_and(|w| w.eq_ignore_ascii_case("normal"))
+                    || rest.len() != 4
+                {
                     bail!(expect("'facet normal nx ny nz'"));
                 }
                 for w in &rest[1..] {
@@ -242,7 +251,7 @@ fn ascii(
                 facet = Some((n, Vec::new()));
             }
             ("outer", true, Some((_, v)), false) if v.is_empty() => {
-                if rest != ["loop"] {
+                if !(rest.len() == 1 && rest[0].eq_ignore_ascii_case("loop")) {
                     bail!(expect("'outer loop'"));
                 }
                 in_loop = true;
@@ -386,6 +395,17 @@ mod tests {
         assert_eq!(m[0].indices, [[0, 1, 2], [0, 2, 3]]);
         assert_eq!(m[1].name, "p");
         assert_eq!(m[1].positions[1], DVec3::new(1.0, 0.0, 1.0));
+    }
+
+    /// Keywords in upper or mixed case, as some exporters write them.
+    #[test]
+    fn ascii_keywords_in_any_case() {
+        let text = "SOLID Part\nFACET NORMAL 0 0 1\nOuter Loop\nVERTEX 0 0 0\nVERTEX 1 0 0\n\
+                    VERTEX 0 1 0\nENDLOOP\nENDFACET\nENDSOLID Part\n";
+        let (m, w) = read(text.as_bytes()).unwrap();
+        assert!(w.is_empty(), "{w:?}");
+        assert_eq!((m.len(), m[0].name.as_str()), (1, "Part"));
+        assert_eq!(m[0].indices, [[0, 1, 2]]);
     }
 
     #[test]

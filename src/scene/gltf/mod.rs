@@ -314,6 +314,21 @@ impl Reader<'_> {
     }
 }
 
+/// Whether a file the glTF 2.0 reader refused is a glTF 1.0 one: a binary
+/// file of container version 1, or JSON whose `asset.version` is 1.x
+/// (glTF 1.0 keeps its meshes and nodes in objects, not arrays, so the
+/// reader's own message would be about a type).
+fn version_1(body: &[u8]) -> bool {
+    if let Some(v) = body.strip_prefix(b"glTF").and_then(|b| b.get(..4)) {
+        return v == 1u32.to_le_bytes();
+    }
+    serde_json::from_slice::<serde_json::Value>(body).is_ok_and(|j| {
+        j.pointer("/asset/version")
+            .and_then(|v| v.as_str())
+            .is_some_and(|v| v == "1" || v.starts_with("1."))
+    })
+}
+
 /// Reads a glTF file: materials and textures go into `parts`; meshes,
 /// the perspective cameras and the lights come back placed by `xf`
 /// in f64. `material` replaces the file's materials when given.
@@ -332,7 +347,15 @@ pub fn load(
     // A .gltf is JSON text, read with or without a byte-order mark as every
     // text file is (a .glb starts with its magic number).
     let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
-    let file = ::gltf::Gltf::from_slice_without_validation(body).map_err(|e| invalid(&e))?;
+    let file =
+        ::gltf::Gltf::from_slice_without_validation(body).map_err(|e| match version_1(body) {
+            true => anyhow!(
+                "{}: glTF 1.0 is not supported (rayterm reads glTF 2.0; \
+                 glTF-Pipeline or Blender convert a 1.0 file)",
+                path.display()
+            ),
+            false => invalid(&e),
+        })?;
     drop(bytes);
     let json = file.document.into_json();
     // glTF 1.0 is another format, which the 2.0 schema misreads.
