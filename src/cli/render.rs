@@ -317,7 +317,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         false => crate::outln!("{line}")?,
     }
     if a.compare_one_shot {
-        check_film(s.width, s.height, Film::BYTES_PER_PIXEL)?;
+        check_film(s.width, s.height, Film::SUMMARY_BYTES_PER_PIXEL)?;
         let again = p.retrace(&tracer);
         let passes = rays as f64 / (ms.max(1e-6) / 1e3);
         let once = again.rays as f64 / (again.ms.max(1e-6) / 1e3);

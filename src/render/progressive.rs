@@ -435,19 +435,19 @@ impl Progressive {
     }
 
     /// Traces every sample the film holds again, in one pass into a
-    /// scratch film, each pixel's samples together as a one-shot render of
-    /// the same counts (`render --spp N`) traces them: the rate the passes
-    /// that took them are measured against. The samples, and so the rays,
-    /// are the same; only the passes differ.
+    /// scratch film that keeps what a one-shot render to an image keeps
+    /// (each pixel's mean and error, [`Layout::Summary`]), each pixel's
+    /// samples together, as `render --spp N` traces them: the rate the
+    /// passes that took them are measured against. The samples, and so the
+    /// rays, are the same; only the passes differ.
     pub fn retrace(&self, tracer: &Tracer) -> PassStats {
         let f = &self.film;
-        let counts: Vec<u32> = match &f.adaptive {
-            Some(a) => a.spp.clone(),
-            None => vec![f.spp; f.pixels_len()],
+        let give = match &f.adaptive {
+            Some(a) => Give::Each(a.spp.clone()),
+            None => Give::All(f.spp),
         };
-        let mut scratch = Film::new_adaptive(f.width, f.height);
+        let mut scratch = Film::new_summary(f.width, f.height);
         let start = Instant::now();
-        let give = Give::Each(counts);
         let rec: RayCounter = sample_rows(
             tracer,
             &mut scratch,
@@ -455,7 +455,7 @@ impl Progressive {
             &|| false,
             None,
             false,
-            Layout::Stats,
+            Layout::Summary,
         );
         PassStats {
             samples: f.spp_range().2,
