@@ -5,9 +5,9 @@
 //! and the BVH agrees with brute force on every ray with both builders.
 //!
 //! And of the loaders: a byte-order mark, CRLF or CR-only line endings and
-//! line continuations change nothing; a w component divides exactly; a
-//! number beyond f32 (huge exponents, also once divided by w) is an error at
-//! its line and one within f32 loads; a mesh far from the origin loads as
+//! line continuations change nothing; a w component (a curve weight) is
+//! ignored; a number beyond f32 (huge exponents) is an error at its line
+//! and one within f32 loads; a mesh far from the origin loads as
 //! it does near it; TOML arrays of the wrong length are errors at their
 //! position.
 
@@ -341,14 +341,11 @@ proptest! {
     }
 
     #[test]
-    fn w_components_divide_exactly(pts in points(), k in -20i32..20) {
-        // A power of two, so that x * w / w is x exactly.
+    fn w_components_are_ignored(pts in points(), k in -20i32..20) {
+        // A curve weight: polygons keep x, y and z as written.
         let w = 2f64.powi(k);
         let unweighted = load_obj(obj_text(&pts, plain));
-        let weighted = obj_text(&pts, |_, p| {
-            let q = p.as_dvec3() * w;
-            format!("v {} {} {} {w}", q.x, q.y, q.z)
-        });
+        let weighted = obj_text(&pts, |_, p| format!("v {} {} {} {w}", p.x, p.y, p.z));
         prop_assert_eq!(load_obj(weighted), unweighted);
     }
 
@@ -358,21 +355,17 @@ proptest! {
         which in any::<prop::sample::Index>(),
         mantissa in 1.0f64..9.99,
         exponent in prop_oneof![39i32..=45, 300i32..=400, Just(99999)],
-        via_w in any::<bool>(),
     ) {
         let bad = which.index(pts.len());
-        let text = obj_text(&pts, |i, p| match (i == bad, via_w) {
-            (false, _) => plain(i, p),
-            (true, false) => format!("v {} {mantissa}e{exponent} {}", p.x, p.z),
-            // w below 1e-39, so 1/w is beyond f32 (3.4e38), or so small it
-            // reads as 0.
-            (true, true) => format!("v 1 {} {} {mantissa}e-{}", p.y, p.z, exponent + 1),
+        let text = obj_text(&pts, |i, p| match i == bad {
+            false => plain(i, p),
+            true => format!("v {} {mantissa}e{exponent} {}", p.x, p.z),
         });
         let e = load_obj(text).expect_err("beyond f32");
         let at = format!("m.obj:{}: ", bad + 1);
         prop_assert!(e.starts_with(&at), "{}", e);
         prop_assert!(
-            ["32-bit floats", "not a finite number", "w = 0"].iter().any(|w| e.contains(w)),
+            ["32-bit floats", "not a finite number"].iter().any(|w| e.contains(w)),
             "{}",
             e
         );

@@ -5,7 +5,8 @@
 //! position/UV/normal indices. Every index is checked exactly against the
 //! vertices, UVs and normals the file holds (relative, negative ones
 //! included), and every number is finite and within the range of f32, also
-//! after a `w` component divides it and after the mesh is placed. Points
+//! after the mesh is placed (a vertex's `w`, a curve weight, is ignored for
+//! polygons, as other readers do). Points
 //! and lines (`p`, `l`) and smoothing groups are ignored; other statements
 //! are ignored with one warning per file. Materials come from the `mtllib`
 //! files ([`super::mtl`]); a missing MTL or texture is a warning.
@@ -730,18 +731,14 @@ mod tests {
     }
 
     #[test]
-    fn numbers_are_checked_before_and_after_w() {
+    fn numbers_are_checked_and_w_is_ignored() {
         for (obj, want) in [
             (
                 "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n",
                 "m/a.obj:2: 'nan' is not a finite",
             ),
             ("v 0 0 0\nv 1e39 0 0\n", "m/a.obj:2: '1e39' is too large"),
-            (
-                "v 0 0 0\nv 1 0 0 1e-45\n",
-                "m/a.obj:2: w = 1e-45 divides the vertex to (1e45, 0, 0)",
-            ),
-            ("v 1 0 0 0\n", "m/a.obj:1: vertex with w = 0"),
+            ("v 0 0 0\nv 1 0 0 inf\n", "m/a.obj:2: 'inf' is not a finite"),
             ("v 1 0\n", "m/a.obj:1: a vertex takes 3 coordinates"),
             ("vn 1 0\n", "m/a.obj:1: a normal takes 3 numbers"),
             ("vt\n", "m/a.obj:1: a texture coordinate takes 1 to 3"),
@@ -750,14 +747,15 @@ mod tests {
             let e = error(obj);
             assert!(e.contains(want), "{obj:?}: {e}");
         }
-        // w divides; a colour is ignored; a trailing comment is a comment.
+        // w, a curve weight, is ignored (0 too); a colour is ignored; a
+        // trailing comment is a comment.
         let p = load(vec![(
             "m/a.obj",
-            "v 0 0 0 2\nv 2 0 0 2\nv 0 4 0 2\nv 0 0 1 0.5 0.5 0.5 # grey\nf 1 2 3\n".into(),
+            "v 0 0 0 2\nv 2 0 0 0\nv 0 4 0 1e-45\nv 0 0 1 0.5 0.5 0.5 # grey\nf 1 2 3\n".into(),
         )])
         .unwrap();
-        assert_eq!(p.geometry.positions[1], Vec3::X);
-        assert_eq!(p.geometry.positions[2], Vec3::new(0.0, 2.0, 0.0));
+        assert_eq!(p.geometry.positions[1], Vec3::new(2.0, 0.0, 0.0));
+        assert_eq!(p.geometry.positions[2], Vec3::new(0.0, 4.0, 0.0));
     }
 
     #[test]

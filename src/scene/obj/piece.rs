@@ -15,7 +15,7 @@ use glam::{DVec3, Vec2};
 
 use super::{Face, Faces, NONE};
 use crate::memory;
-use crate::scene::numbers::{self, show, show3, Absurd};
+use crate::scene::numbers::{self, Absurd};
 use crate::words::quoted;
 
 /// Pieces are cut after about this many bytes.
@@ -449,25 +449,10 @@ impl Reader<'_> {
             "v" => {
                 let v = numbers(plain.words(rest), n, absurd).map_err(at)?;
                 let p = match *v {
-                    [x, y, z] | [x, y, z, _, _, _] => DVec3::new(x, y, z),
-                    [x, y, z, w] => {
-                        if w == 0.0 {
-                            return Err(at("vertex with w = 0".into()).into());
-                        }
-                        let p = DVec3::new(x, y, z) / w;
-                        if let Some(why) = p.to_array().into_iter().find_map(numbers::unusable) {
-                            return Err(at(format!(
-                                "w = {} divides the vertex to {}, which {why}",
-                                show(w),
-                                show3(p)
-                            ))
-                            .into());
-                        }
-                        absurd.check(n, p.abs().max_element(), || {
-                            format!("{} (x, y, z divided by w)", show(p.abs().max_element()))
-                        });
-                        p
-                    }
+                    // A fourth number is a rational curve's weight, which
+                    // polygons ignore, as other OBJ readers do; six are a
+                    // position and a colour.
+                    [x, y, z] | [x, y, z, _] | [x, y, z, _, _, _] => DVec3::new(x, y, z),
                     _ => {
                         return Err(at(format!(
                             "a vertex takes 3 coordinates (x y z), optionally with w or an \
