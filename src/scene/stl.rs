@@ -215,9 +215,16 @@ fn ascii(
         let at = |msg: String| anyhow!("{}:{n}: {msg}", path.display());
         let mut words = line.split_whitespace();
         let Some(key) = words.next() else { continue };
-        // Keywords in any case, as exporters write them (SOLID, FACET ...).
-        let key = key.to_ascii_lowercase();
-        let key = key.as_str();
+        // Keywords in any case, as exporters write them (SOLID, FACET ...);
+        // lower case, as most are, is taken as it is.
+        let lower;
+        let key = match key.bytes().any(|b| b.is_ascii_uppercase()) {
+            true => {
+                lower = key.to_ascii_lowercase();
+                lower.as_str()
+            }
+            false => key,
+        };
         let rest: Vec<&str> = words.collect();
         let expect = |what: &str| {
             at(format!(
