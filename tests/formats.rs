@@ -178,6 +178,17 @@ fn load(spec: &str) -> Result<Scene, String> {
     within_deadline(spec, move || scene::load(&s).map_err(|e| format!("{e:#}")))
 }
 
+/// As [`load`], with the file's up axis given.
+fn load_up(spec: &str, up: &str) -> Result<Scene, String> {
+    let how = scene::Opening {
+        up: Some(up.parse().unwrap()),
+        ..Default::default()
+    };
+    scene::load_reading(spec, &how)
+        .map(|(s, _)| s)
+        .map_err(|e| format!("{e:#}"))
+}
+
 /// Deterministic: one pass is exact.
 fn exact() -> Features {
     Features::all().without(&[Feature::Supersampling, Feature::Bloom])
@@ -212,7 +223,8 @@ fn one_mesh_in_every_format_renders_the_same_image() {
         let want = image(&reference);
         assert!(want.iter().any(|c| c.max_element() > 0.1), "a black image");
         for f in &files[1..] {
-            let s = load(f).unwrap();
+            // STL files are Z-up unless told.
+            let s = load_up(f, "y").unwrap();
             assert!(s.warnings.is_empty(), "{f}: {:?}", s.warnings);
             let (g, r) = (&s.geometry, &reference.geometry);
             assert_eq!(g.positions, r.positions, "{f}");
@@ -291,7 +303,7 @@ fn every_format_opens_from_the_command_line_and_in_scene_files() {
     // As meshes of a scene file, placed like an OBJ.
     let scene = |mesh: &str| {
         format!(
-            "[[mesh]]\nfile = \"{mesh}\"\ntranslate = [1, 0, 0]\n[[mesh]]\nfile = \"m.obj\"\n\
+            "[[mesh]]\nfile = \"{mesh}\"\nup = \"y\"\ntranslate = [1, 0, 0]\n[[mesh]]\nfile = \"m.obj\"\n\
              translate = [-1.5, 0, 0]\n[[light]]\ntype = \"point\"\nposition = [0, 3, 3]\n\
              color = [1, 1, 1]\n"
         )
@@ -302,6 +314,112 @@ fn every_format_opens_from_the_command_line_and_in_scene_files() {
         assert!(s.warnings.is_empty(), "{mesh}: {:?}", s.warnings);
         assert_eq!(s.geometry.positions, reference.geometry.positions, "{mesh}");
         assert!(image(&s) == image(&reference), "{mesh}");
+    }
+}
+
+/// The extent of a scene's geometry along y over that along z.
+fn tall(s: &Scene) -> f32 {
+    let (lo, hi) = s.geometry.positions.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+    );
+    (hi.y - lo.y) / (hi.z - lo.z)
+}
+
+#[test]
+fn stl_files_are_z_up_and_any_mesh_takes_its_up_axis() {
+    let d = Dir::new("formats-up");
+    // A spike along +z, four times as long as it is wide.
+    let p = [
+        [-0.5, -0.5, 0.0],
+        [0.5, -0.5, 0.0],
+        [0.0, 0.5, 0.0],
+        [0.0, 0.0, 4.0],
+    ];
+    let t = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]];
+    let stl = d.write("spike.stl", stl_binary(&p, &t));
+    let objf = d.write("spike.obj", obj(&p, None, &t));
+    // Bare: the STL stands up, the OBJ lies as written until told.
+    let (s, o) = (load(&stl).unwrap(), load(&objf).unwrap());
+    assert!(
+        tall(&s) > 3.0 && tall(&o) < 0.3,
+        "{} {}",
+        tall(&s),
+        tall(&o)
+    );
+    let oz = load_up(&objf, "z").unwrap();
+    assert_eq!(oz.geometry.positions, s.geometry.positions);
+    assert_eq!(oz.camera, s.camera);
+    assert_eq!(
+        load_up(&stl, "y").unwrap().geometry.positions,
+        o.geometry.positions
+    );
+    // -z turns it upside down: the tip below the base.
+    let down = load_up(&stl, "-z").unwrap();
+    let lowest = down
+        .geometry
+        .positions
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::MAX, f32::min);
+    assert!(
+        down.geometry
+            .positions
+            .iter()
+            .filter(|p| p.y == lowest)
+            .count()
+            == 1
+    );
+    // The same in scene files, before the entry's own placement.
+    let scene = |mesh: &str, up: &str| {
+        format!(
+            "[[mesh]]\nfile = \"{mesh}\"\n{up}translate = [0, 1, 0]\n[[light]]\n\
+             type = \"point\"\nposition = [0, 9, 9]\ncolor = [1, 1, 1]\n"
+        )
+    };
+    let a = load(&d.write("a.toml", scene("spike.stl", ""))).unwrap();
+    let b = load(&d.write("b.toml", scene("spike.obj", "up = \"Z\"\n"))).unwrap();
+    assert!(tall(&a) > 3.0);
+    assert_eq!(a.geometry.positions, b.geometry.positions);
+    let e = load(&d.write("c.toml", scene("spike.obj", "up = \"sideways\"\n"))).unwrap_err();
+    assert!(
+        e.contains("c.toml:3") && e.contains("x, y, z, -x, -y or -z"),
+        "{e}"
+    );
+    // On the command line: any mesh file, nothing else.
+    let r = rayterm(
+        &d.0,
+        &[
+            "render",
+            "spike.obj",
+            "--up",
+            "-x",
+            "--size",
+            "8x8",
+            "--spp",
+            "1",
+            "-o",
+            "o.png",
+        ],
+    );
+    assert!(r.ok(), "{}", r.stderr);
+    for (args, says) in [
+        (
+            &["render", "spike.obj", "--up", "w", "-o", "w.png"][..],
+            "x, y, z, -x, -y or -z",
+        ),
+        (
+            &["render", "cornell", "--up", "z", "-o", "w.png"][..],
+            "applies to mesh files",
+        ),
+        (
+            &["render", "a.toml", "--up", "z", "-o", "w.png"][..],
+            "its own `up`",
+        ),
+    ] {
+        let r = rayterm(&d.0, args);
+        assert!(!r.ok() && r.stderr.contains(says), "{args:?}: {}", r.stderr);
+        assert!(!d.0.join("w.png").exists());
     }
 }
 

@@ -6,6 +6,7 @@ use clap::{Args, Parser, Subcommand};
 
 use super::debug::DebugSpec;
 use crate::render::{Feature, Features, PlanPolicy, SceneRequest, Worst};
+use crate::scene::up::Up;
 use crate::scene::Builder;
 use crate::tui::color::ColorMode;
 use crate::tui::graphics::symbols::Symbols;
@@ -190,6 +191,10 @@ pub struct SceneOpts {
     /// file: URIs, `..` out of it), which they may not unless told.
     #[arg(long)]
     pub allow_outside: bool,
+    /// A mesh file's up axis (x, y, z, -x, -y, -z), turned to rayterm's +Y:
+    /// STL files are Z-up unless told, OBJ, PLY and glTF Y-up.
+    #[arg(long, value_name = "AXIS", allow_hyphen_values = true)]
+    pub up: Option<Up>,
 }
 
 impl SceneOpts {
@@ -211,6 +216,7 @@ impl SceneOpts {
             independent: self.independent,
             camera: self.camera.clone(),
             allow_outside: self.allow_outside,
+            up: self.up,
             check_film: true,
         }
     }

@@ -35,6 +35,8 @@ pub struct SceneRequest {
     pub camera: Option<String>,
     /// Whether glTF files may name files outside their folder.
     pub allow_outside: bool,
+    /// A mesh file's up axis, where not its format's.
+    pub up: Option<crate::scene::up::Up>,
     /// Whether opening refuses an image size whose film of statistics
     /// would not fit in memory; off for a caller that checks the film it
     /// makes, which may keep far less ([`Progressive::bytes_per_pixel`]).
@@ -58,6 +60,7 @@ impl SceneRequest {
             independent: false,
             camera: None,
             allow_outside: false,
+            up: None,
             check_film: true,
         }
     }
@@ -86,6 +89,7 @@ impl Session {
         let how = scene::Opening {
             camera: req.camera.clone(),
             allow_outside: req.allow_outside,
+            up: req.up,
         };
         let (scene, inputs) = scene::load_reading(&req.spec, &how)?;
         if let Err(e) = scene::check_reach(&scene) {

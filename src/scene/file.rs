@@ -26,6 +26,7 @@ use super::obj::{Parts, Placed};
 use super::parts::bounds;
 use super::source::{resolve, Disk, Kind, Source};
 use super::texture::FACE_NAMES;
+use super::up::Up;
 use super::{
     bezier, BloomSettings, Builder, Camera, CubeMap, Environment, Light, Material, Scene, Settings,
 };
@@ -194,6 +195,8 @@ struct MeshSpec {
     scale: Option<Spanned<ScaleSpec>>,
     /// Segments per patch edge for Bézier patch (`.bpt`) files.
     segments: Option<Spanned<u32>>,
+    /// The file's up axis, where not its format's.
+    up: Option<Spanned<String>>,
     material: Option<MaterialSpec>,
 }
 
@@ -383,9 +386,17 @@ impl Locator<'_> {
     }
 }
 
-/// The placement of a `[[mesh]]`: scale, then rotate, then translate.
-fn placement(m: &MeshSpec, loc: &Locator) -> Result<DAffine3> {
-    let mut xf = DAffine3::IDENTITY;
+/// The placement of a `[[mesh]]`: its up axis turned to +Y (`up`, or its
+/// format's; a `.bpt` is Y-up unless told), then scale, rotate, translate.
+fn placement(m: &MeshSpec, loc: &Locator, format: Option<mesh::Format>) -> Result<DAffine3> {
+    let up = match &m.up {
+        Some(u) => u
+            .get_ref()
+            .parse::<Up>()
+            .map_err(|e| anyhow!("{}: up: {e}", loc.at(u.span())))?,
+        None => format.map_or(Up::Y, mesh::Format::up),
+    };
+    let mut xf = up.to_y();
     if let Some(s) = &m.scale {
         let v = match s.get_ref() {
             ScaleSpec::Uniform(s) => DVec3::splat(s.0),
@@ -394,7 +405,7 @@ fn placement(m: &MeshSpec, loc: &Locator) -> Result<DAffine3> {
         if v.cmpeq(DVec3::ZERO).any() {
             bail!("{}: scale must not be zero", loc.at(s.span()));
         }
-        xf = DAffine3::from_scale(v);
+        xf = DAffine3::from_scale(v) * xf;
     }
     if let Some(r) = m.rotate {
         let r = v3(r);
@@ -528,14 +539,16 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
         let m = spanned.get_ref();
         let here = loc.at(spanned.span());
         let mesh_path = resolve(path, named(&m.file, &format!("{here}: mesh"))?);
-        let xf = placement(m, &loc)?;
+        let is_bpt = mesh_path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("bpt"));
+        // An unknown extension is read as OBJ, as it always was.
+        let format = (!is_bpt).then(|| mesh::Format::of(&mesh_path).unwrap_or(mesh::Format::Obj));
+        let xf = placement(m, &loc, format)?;
         let material = m
             .material
             .as_ref()
             .map(|ms| material_from(&mut parts, src, &loc, ms));
-        let is_bpt = mesh_path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("bpt"));
         let first = placed.len();
         let outside = src.outside(path, &mesh_path);
         if let Some(o) = &outside {
@@ -565,8 +578,7 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
                     loc.at(s.span())
                 ));
             }
-            // An unknown extension is read as OBJ, as it always was.
-            let format = mesh::Format::of(&mesh_path).unwrap_or(mesh::Format::Obj);
+            let format = format.unwrap_or(mesh::Format::Obj);
             let p = mesh::load_placed(format, &mut parts, src, &mesh_path, &xf, material.as_ref());
             (p, format.kind())
         };

@@ -12,6 +12,7 @@ use super::gltf::{self, FileCamera, FileLight};
 use super::obj;
 use super::parts::{Parts, Placed};
 use super::source::{Kind, Source};
+use super::up::Up;
 use super::{Camera, Environment, Light, Material, Scene, Settings};
 
 /// The mesh formats, by extension.
@@ -34,6 +35,16 @@ impl Format {
             Format::Ply => Kind::Ply,
             Format::Stl => Kind::Stl,
             Format::Gltf => Kind::Gltf,
+        }
+    }
+
+    /// The up axis of a file of this format unless told otherwise: Z for
+    /// STL (3D printing and CAD are Z-up), Y for the others (glTF's
+    /// specification says so; OBJ and PLY writers mostly are).
+    pub fn up(self) -> Up {
+        match self {
+            Format::Stl => Up::Z,
+            _ => Up::Y,
         }
     }
 
@@ -137,11 +148,13 @@ pub fn load_bare_from(
     path: &Path,
     format: Format,
     camera: Option<&str>,
+    up: Option<Up>,
 ) -> Result<Scene> {
     let mut parts = Parts::default();
+    let xf = up.unwrap_or(format.up()).to_y();
     let (meshes, camera, file_lights) = match format {
         Format::Gltf => {
-            let g = gltf::load(&mut parts, src, path, &DAffine3::IDENTITY, None)?;
+            let g = gltf::load(&mut parts, src, path, &xf, None)?;
             let camera = match camera {
                 Some(name) => Some(pick_camera(path, g.cameras, name)?),
                 None => g.cameras.into_iter().next(),
@@ -156,7 +169,7 @@ pub fn load_bare_from(
                 );
             }
             (
-                load_placed(format, &mut parts, src, path, &DAffine3::IDENTITY, None)?,
+                load_placed(format, &mut parts, src, path, &xf, None)?,
                 None,
                 Vec::new(),
             )

@@ -20,6 +20,7 @@ mod reach;
 pub mod source;
 pub mod stl;
 pub mod texture;
+pub mod up;
 
 use std::path::{Path, PathBuf};
 
@@ -273,6 +274,9 @@ pub struct Opening {
     pub camera: Option<String>,
     /// Whether glTF files may name files outside their folder.
     pub allow_outside: bool,
+    /// A bare mesh file's up axis, where not its format's
+    /// ([`mesh::Format::up`]).
+    pub up: Option<up::Up>,
 }
 
 /// As [`load`], opened as `how` says, with the files read.
@@ -331,6 +335,9 @@ fn load_any(spec: &str, how: &Opening) -> Result<(Scene, Vec<PathBuf>)> {
         if let Some(name) = camera {
             bail!("--camera {name}: the built-in scene {spec} has one camera, no named ones");
         }
+        if let Some(up) = how.up {
+            bail!("--up {up}: applies to mesh files; {spec} is a built-in scene");
+        }
         return Ok((scene, Vec::new()));
     }
     let path = Path::new(spec);
@@ -344,10 +351,14 @@ fn load_any(spec: &str, how: &Opening) -> Result<(Scene, Vec<PathBuf>)> {
             "--camera {}: {spec} is a scene file: its [camera] is the one used",
             camera.unwrap_or_default()
         ),
+        Some("toml") if how.up.is_some() => bail!(
+            "--up {}: {spec} is a scene file: give each [[mesh]] its own `up`",
+            how.up.unwrap_or(up::Up::Y)
+        ),
         Some("toml") => file::load_with(&disk, path, file::Overrides::default()),
         _ if mesh::Format::of(path).is_some() => {
             let format = mesh::Format::of(path).unwrap_or(mesh::Format::Obj);
-            mesh::load_bare_from(&disk, path, format, camera)
+            mesh::load_bare_from(&disk, path, format, camera, how.up)
         }
         _ if !path.exists() => {
             bail!("unknown scene '{spec}': not a built-in (see `rayterm scenes`) and no such file")
