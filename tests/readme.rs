@@ -294,8 +294,9 @@ fn masked(line: &str) -> String {
         }
         number = digit;
     }
-    // A duration reads in the unit that fits it: `812.3 ms`, `24.9 s`.
-    out.replace("# ms", "# s")
+    // A duration reads in the unit that fits it: `812.3 ms`, `24.9 s`; a
+    // rate too (`980.2 krays/s` on a loaded machine).
+    out.replace("# ms", "# s").replace("# krays/s", "# Mrays/s")
 }
 
 /// The examples with output print lines of the same shape: each README
