@@ -1016,3 +1016,129 @@ fn malformed_gltf_files_say_what_is_wrong() {
     let plain = load(&d.write("plain.glb", glb(&json, &bin))).unwrap();
     assert_eq!(s.geometry.positions, plain.geometry.positions);
 }
+
+#[test]
+fn obj_vertex_colours_shade_as_ply_vertex_colours_do() {
+    let d = Dir::new("formats-obj-colours");
+    let ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+               property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
+               element face 1\nproperty list uchar int vertex_indices\nend_header\n\
+               -1 -1 0 255 0 0\n1 -1 0 0 255 0\n1 1 0 0 0 255\n-1 1 0 255 255 255\n4 0 1 2 3\n";
+    let obj = "v -1 -1 0 1 0 0\nv 1 -1 0 0 1 0\nv 1 1 0 0 0 1\nv -1 1 0 1 1 1\nf 1 2 3 4\n";
+    let ply = load(&d.write("m.ply", ply)).unwrap();
+    let obj = load(&d.write("m.obj", obj)).unwrap();
+    assert!(obj.warnings.is_empty(), "{:?}", obj.warnings);
+    assert!(obj.meshes[0].colored);
+    assert_eq!(obj.geometry.colors, ply.geometry.colors);
+    let img = image(&obj);
+    assert!(img == image(&ply), "another image");
+    // Interpolated: red near the red corner, blue near the blue one.
+    let near = |p: Vec3| pixel_at(&obj, &img, 48, 40, p).0;
+    let (r, b) = (
+        near(Vec3::new(-0.8, -0.8, 0.0)),
+        near(Vec3::new(0.8, 0.8, 0.0)),
+    );
+    assert!(r.x > 4.0 * r.z && b.z > 4.0 * b.x, "{r} {b}");
+}
+
+/// A MeshLab-style quad of two triangles textured with `t.png`: its UVs
+/// given by `uv` (`vertex`, or `face` for `texcoord` lists).
+fn textured_quad(uv: &str) -> String {
+    let (vertex_uv, face_uv, uvs, lists) = match uv {
+        "vertex" => (
+            "property float u\nproperty float v\n",
+            "",
+            [" 0 0", " 1 0", " 1 1", " 0 1"],
+            ["", ""],
+        ),
+        _ => (
+            "",
+            "property list uchar float texcoord\n",
+            [""; 4],
+            [" 6 0 0 1 0 1 1", " 6 0 0 1 1 0 1"],
+        ),
+    };
+    format!(
+        "ply\nformat ascii 1.0\ncomment TextureFile t.png\nelement vertex 4\n\
+         property float x\nproperty float y\nproperty float z\n{vertex_uv}element face 2\n\
+         property list uchar int vertex_indices\n{face_uv}end_header\n-1 -1 0{}\n1 -1 0{}\n\
+         1 1 0{}\n-1 1 0{}\n3 0 1 2{}\n3 0 2 3{}\n",
+        uvs[0], uvs[1], uvs[2], uvs[3], lists[0], lists[1]
+    )
+}
+
+#[test]
+fn ply_face_texcoords_and_face_colours_shade() {
+    let d = Dir::new("formats-ply-faces");
+    d.write("t.png", half_red_png());
+    let by_vertex = load(&d.write("v.ply", textured_quad("vertex"))).unwrap();
+    let by_face = load(&d.write("f.ply", textured_quad("face"))).unwrap();
+    assert!(by_face.warnings.is_empty(), "{:?}", by_face.warnings);
+    assert!(by_face.meshes[0].textured);
+    let (g, r) = (&by_face.geometry, &by_vertex.geometry);
+    assert_eq!(
+        (&g.positions, &g.uvs, &g.indices),
+        (&r.positions, &r.uvs, &r.indices)
+    );
+    let img = image(&by_face);
+    assert!(img == image(&by_vertex), "another image");
+    // u < 0.5 is red, the rest blue.
+    let at = |x: f32| pixel_at(&by_face, &img, 48, 40, Vec3::new(x, 0.1, 0.0)).0;
+    let (left, right) = (at(-0.5), at(0.5));
+    assert!(
+        left.x > 4.0 * left.z && right.z > 4.0 * right.x,
+        "{left} {right}"
+    );
+    // Face colours: the lower right triangle red, the upper left green.
+    let colours = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n\
+                   property float y\nproperty float z\nelement face 2\n\
+                   property list uchar int vertex_indices\nproperty uchar red\n\
+                   property uchar green\nproperty uchar blue\nend_header\n\
+                   -1 -1 0\n1 -1 0\n1 1 0\n-1 1 0\n3 0 1 2 255 0 0\n3 0 2 3 0 255 0\n";
+    let s = load(&d.write("c.ply", colours)).unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let img = image(&s);
+    let at = |x: f32, y: f32| pixel_at(&s, &img, 48, 40, Vec3::new(x, y, 0.0)).0;
+    let (red, green) = (at(0.5, -0.5), at(-0.5, 0.5));
+    assert!(red.x > 0.05 && (red.y, red.z) == (0.0, 0.0), "{red}");
+    assert!(
+        green.y > 0.05 && (green.x, green.z) == (0.0, 0.0),
+        "{green}"
+    );
+}
+
+#[test]
+fn concave_polygons_render_without_filling_their_notches() {
+    let d = Dir::new("formats-concave");
+    // A U, 3 across, with a notch 1 wide from its top down to y = 1.
+    let corners = [
+        [0, 0],
+        [3, 0],
+        [3, 3],
+        [2, 3],
+        [2, 1],
+        [1, 1],
+        [1, 3],
+        [0, 3],
+    ];
+    let mut obj = String::new();
+    let mut ply = String::from(
+        "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n\
+         property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n",
+    );
+    for [x, y] in corners {
+        obj += &format!("v {x} {y} 0\n");
+        ply += &format!("{x} {y} 0\n");
+    }
+    obj += "f 1 2 3 4 5 6 7 8\n";
+    ply += "8 0 1 2 3 4 5 6 7\n";
+    let s = load(&d.write("u.obj", obj)).unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let img = image(&s);
+    let at = |x: f32, y: f32| pixel_at(&s, &img, 48, 40, Vec3::new(x, y, 0.0)).0;
+    assert!(at(0.5, 2.0).max_element() > 0.05, "an arm is dark");
+    assert_eq!(at(1.5, 2.2), Vec3::ZERO, "the notch is filled");
+    let p = load(&d.write("u.ply", ply)).unwrap();
+    assert_eq!(p.geometry.indices, s.geometry.indices);
+    assert!(image(&p) == img, "another image");
+}

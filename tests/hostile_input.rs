@@ -447,17 +447,19 @@ fn invalid_utf8_names_the_file_and_line() {
         b.extend(b"# caf\xe9\n");
         b
     };
-    refused(
+    // OBJ and MTL files, which tools write in Latin-1 too, are read
+    // lossily, as other readers read them.
+    warned(
         &d.write("a.obj", bad(TRI)),
-        &["a.obj:5: not valid UTF-8 (byte 0xe9 at column 6)"],
+        &["a.obj:5: not valid UTF-8 (byte 0xe9 at column 6): read as U+FFFD"],
     );
     let s = d.write("s.toml", bad(&scene_with("tri.obj", "")));
     refused(&s, &["s.toml:8: not valid UTF-8"]);
     d.write("tri.obj", TRI);
     d.write("m.mtl", bad("newmtl a\nKd 1 1 1\n"));
-    refused(
+    warned(
         &d.write("with.obj", WITH_MTL),
-        &["m.mtl:3: not valid UTF-8"],
+        &["m.mtl:3: not valid UTF-8 (byte 0xe9 at column 6): read as U+FFFD"],
     );
     d.write("p.bpt", bad(&patches(1)));
     refused(
@@ -477,7 +479,10 @@ fn truncated_and_empty_files_name_the_line() {
     d.write("tri.obj", TRI);
     refused(
         &d.write("a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2"),
-        &["a.obj:4: a face needs at least 3 vertices"],
+        &[
+            "a.obj: no triangles",
+            "a.obj:4: 1 face with fewer than 3 vertices: skipped",
+        ],
     );
     refused(
         &d.write("b.obj", "v 0 0 0\nv 1 0"),
@@ -647,16 +652,6 @@ fn indices_are_checked_exactly() {
             "normal index 6148914691236517207 is out of range",
         ),
         (
-            "vn.obj",
-            "f 1//4 2//1 3//1",
-            "the face refers to normal 4 but the file defines 3",
-        ),
-        (
-            "vt.obj",
-            "f 1/2 2/1 3/1",
-            "the face refers to texture coordinate 2 but the file defines 1",
-        ),
-        (
             "v.obj",
             "f 1 2 4",
             "the face refers to vertex 4 but the file defines 3",
@@ -695,6 +690,26 @@ fn indices_are_checked_exactly() {
         ),
     ] {
         refused(&obj(name, face), &[&format!("{name}:8: "), want]);
+    }
+    // Texture coordinates and normals beyond those defined: the face is
+    // read without them, as tinyobjloader reads it.
+    for (name, face, want) in [
+        (
+            "vn.obj",
+            "f 1//4 2//1 3//1",
+            "the face refers to normal 4 but the file defines 3",
+        ),
+        (
+            "vt.obj",
+            "f 1/2 2/1 3/1",
+            "the face refers to texture coordinate 2 but the file defines 1",
+        ),
+    ] {
+        let s = warned(
+            &obj(name, face),
+            &[&format!("{name}:8: "), want, "read without"],
+        );
+        assert_eq!(s.geometry.indices.len(), 1);
     }
     // Relative and forward references that land in range load.
     clean(&obj("ok.obj", "f -3/-1/-3 -2/1/-2 -1/1/-1"));
@@ -1557,4 +1572,34 @@ fn files_outside_the_scene_are_refused_or_named_and_never_quoted() {
     let s = d.write("scene/key.toml", format!("{key} = 1\n"));
     let e = refused(&s, &["key.toml:1:1: unknown field `kkk"]);
     assert!(e.len() < 2000, "{} bytes", e.len());
+}
+
+/// A comb of `teeth` teeth as one OBJ polygon: concave, so clipped.
+fn comb(teeth: usize) -> String {
+    let mut obj = String::from("v 0 -1 0\n");
+    for k in 0..teeth {
+        obj += &format!("v {k} 0 0\nv {k}.5 5 0\n");
+    }
+    obj += &format!("v {teeth} -1 0\nf");
+    for i in (1..=2 * teeth + 2).rev() {
+        obj += &format!(" {i}");
+    }
+    obj + "\n"
+}
+
+#[test]
+fn huge_concave_polygons_load_in_time() {
+    let d = Dir::new("hostile-polygons");
+    // Clipped: every tooth apart, no warning.
+    let s = clean(&d.write("comb.obj", comb(30_000)));
+    assert_eq!(s.geometry.indices.len(), 2 * 30_000);
+    // Too many corners to clip: a fan, said once.
+    let s = warned(
+        &d.write("huge.obj", comb(40_000)),
+        &[
+            "huge.obj:80003: a polygon",
+            "more than 65536 corners: triangulated as a fan",
+        ],
+    );
+    assert!(!s.geometry.indices.is_empty());
 }

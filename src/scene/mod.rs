@@ -16,6 +16,7 @@ pub mod numbers;
 pub mod obj;
 pub mod parts;
 pub mod ply;
+mod polygon;
 mod reach;
 pub mod source;
 pub mod stl;

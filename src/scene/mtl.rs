@@ -147,7 +147,10 @@ pub fn parse(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Vec<
             .map_or((line, ""), |(k, r)| (k, r.trim()));
         if key == "newmtl" {
             if rest.is_empty() {
-                bail!(at("newmtl needs a material name".into()));
+                warnings.push(format!(
+                    "{}:{n}: newmtl without a name: the material of a usemtl without one",
+                    path.display()
+                ));
             }
             materials.push(MtlMaterial {
                 name: rest.to_string(),
@@ -325,7 +328,6 @@ mod tests {
             ("newmtl a\nKd nan 0 0\n", 2),
             ("newmtl a\nNs\n", 2),
             ("newmtl a\nd 1 2\n", 2),
-            ("newmtl\n", 1),
         ] {
             let e = parse_err(text);
             assert!(e.starts_with(&format!("m.mtl:{line}: ")), "{text:?}: {e}");
@@ -374,6 +376,13 @@ mod tests {
         ] {
             assert!(all.contains(part), "missing '{part}' in {all}");
         }
+        // A material without a name is read as one named "".
+        let (m, w) = parse_ok("newmtl a\nnewmtl\t\nKd 1 0 0\n");
+        assert_eq!((m[1].name.as_str(), m[1].kd), ("", Some(Vec3::X)));
+        assert_eq!(
+            w,
+            ["m.mtl:2: newmtl without a name: the material of a usemtl without one"]
+        );
         let (_, w) = parse_ok("Kd 1 1 1\nnewmtl a\n");
         assert!(
             w[0].starts_with("m.mtl:1: statements before the first newmtl"),

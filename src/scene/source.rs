@@ -258,6 +258,24 @@ fn suspect(b: u8) -> bool {
     (b < 0x20 && b != b'\n' && b != b'\t') || b == 0x7f || b == 0xc2
 }
 
+/// Where UTF-8 stops being valid in `body` (at byte `at`): its line,
+/// column and byte, as messages name them.
+fn invalid_utf8(path: &Path, body: &[u8], at: usize) -> String {
+    let before = &body[..at];
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let column = before.len()
+        - before
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |i| i + 1)
+        + 1;
+    format!(
+        "{}:{line}: not valid UTF-8 (byte 0x{:02x} at column {column})",
+        path.display(),
+        body[at]
+    )
+}
+
 /// The text of a file: a UTF-8 byte-order mark removed, CRLF and lone CR
 /// line endings turned into LF (so files from any system read alike),
 /// other control characters than tab turned into U+FFFD (names and
@@ -268,28 +286,43 @@ pub fn text(path: &Path, mut bytes: Vec<u8>) -> Result<String> {
     }
     // Checked in place: a big mesh is read without a copy.
     let s = String::from_utf8(bytes).map_err(|e| {
-        let body = e.as_bytes();
-        let e = e.utf8_error();
-        let before = &body[..e.valid_up_to()];
-        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-        let column = before.len()
-            - before
-                .iter()
-                .rposition(|&b| b == b'\n')
-                .map_or(0, |i| i + 1)
-            + 1;
+        let at = e.utf8_error().valid_up_to();
         anyhow!(
-            "{}:{line}: not valid UTF-8 (byte 0x{:02x} at column {column}); save the file as UTF-8",
-            path.display(),
-            body[e.valid_up_to()]
+            "{}; save the file as UTF-8",
+            invalid_utf8(path, e.as_bytes(), at)
         )
     })?;
+    Ok(clean(s))
+}
+
+/// [`text`], with invalid UTF-8 read as U+FFFD and said in one warning
+/// naming the first line where it is: for OBJ and MTL files, which tools
+/// write in Latin-1 and other code pages as often as in UTF-8, and which
+/// other readers take byte by byte.
+pub(crate) fn text_lossy(path: &Path, mut bytes: Vec<u8>, warnings: &mut Vec<String>) -> String {
+    if bytes.starts_with(b"\xEF\xBB\xBF") {
+        bytes.drain(..3);
+    }
+    let s = String::from_utf8(bytes).unwrap_or_else(|e| {
+        let at = e.utf8_error().valid_up_to();
+        warnings.push(format!(
+            "{}: read as U+FFFD, as are the file's other invalid bytes (is it Latin-1?)",
+            invalid_utf8(path, e.as_bytes(), at)
+        ));
+        String::from_utf8_lossy(e.as_bytes()).into_owned()
+    });
+    clean(s)
+}
+
+/// Line endings made LF and control characters other than tab U+FFFD
+/// ([`text`]).
+fn clean(s: String) -> String {
     if !s
         .as_bytes()
         .chunks(64)
         .any(|c| c.iter().fold(false, |a, &b| a | suspect(b)))
     {
-        return Ok(s);
+        return s;
     }
     let mut s = if s.contains('\r') {
         s.replace("\r\n", "\n").replace('\r', "\n")
@@ -299,7 +332,7 @@ pub fn text(path: &Path, mut bytes: Vec<u8>) -> Result<String> {
     if s.contains(unprintable) {
         s = crate::words::printable_but(&s, "\n\t");
     }
-    Ok(s)
+    s
 }
 
 pub trait Source: Sync {
@@ -599,5 +632,19 @@ mod tests {
             e.to_string(),
             "f:3: not valid UTF-8 (byte 0xff at column 5); save the file as UTF-8"
         );
+        // Read lossily, the same text with U+FFFD, and one warning.
+        let mut w = Vec::new();
+        let t = text_lossy(p, b"\xEF\xBB\xBFok\r\nd\xe9j\xe0\n\xff\n".to_vec(), &mut w);
+        assert_eq!(t, "ok\nd\u{fffd}j\u{fffd}\n\u{fffd}\n");
+        assert_eq!(
+            w,
+            [
+                "f:2: not valid UTF-8 (byte 0xe9 at column 2): read as U+FFFD, as are the \
+              file's other invalid bytes (is it Latin-1?)"
+            ]
+        );
+        w.clear();
+        assert_eq!(text_lossy(p, b"v 1\r\n".to_vec(), &mut w), "v 1\n");
+        assert!(w.is_empty());
     }
 }

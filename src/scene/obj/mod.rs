@@ -1,15 +1,20 @@
 //! Wavefront OBJ, read in f64 with errors that name the file and line.
 //!
-//! Polygons (`f`) become triangle fans; `o`, `g` and a change of `usemtl`
-//! start a new mesh, and each mesh's vertices are welded by their
-//! position/UV/normal indices. Every index is checked exactly against the
-//! vertices, UVs and normals the file holds (relative, negative ones
-//! included), and every number is finite and within the range of f32, also
-//! after the mesh is placed (a vertex's `w`, a curve weight, is ignored for
-//! polygons, as other readers do). Points
-//! and lines (`p`, `l`) and smoothing groups are ignored; other statements
-//! are ignored with one warning per file. Materials come from the `mtllib`
-//! files ([`super::mtl`]); a missing MTL or texture is a warning.
+//! Polygons (`f`) become triangles ([`super::polygon`]: fans where they
+//! are convex); `o`, `g` and a change of `usemtl` start a new mesh, and
+//! each mesh's vertices are welded by their position/UV/normal indices.
+//! Every vertex index is checked exactly against the vertices the file
+//! holds (relative, negative ones included), and every number is finite and
+//! within the range of f32, also after the mesh is placed (a vertex's `w`,
+//! a curve weight, is ignored for polygons, as other readers do). What
+//! other readers forgive is a warning: a face's UV or normal indices beyond
+//! those defined (the face is read without them), faces of fewer than three
+//! vertices (skipped), a vertex colour that is not a number (none), text
+//! that is not UTF-8 (read lossily). Vertex colours (`v x y z r g b`) are
+//! the diffuse colour. Points and lines (`p`, `l`) and smoothing groups are
+//! ignored; other statements are ignored with one warning per file.
+//! Materials come from the `mtllib` files ([`super::mtl`]); a missing MTL
+//! or texture is a warning.
 
 mod piece;
 
@@ -19,17 +24,19 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicU64;
 
 use anyhow::{anyhow, bail, Context, Result};
-use glam::{DAffine3, DVec3, Vec2};
+use glam::{DAffine3, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::frame::Frame;
 use super::mtl::{self, MtlMaterial};
 use super::numbers::{self, show3, Absurd};
 use super::parts::mesh_fits;
-use super::source::{resolve, Kind, ReadError, Source};
+use super::polygon::Triangulator;
+use super::source::{resolve, text_lossy, Kind, ReadError, Source};
+use super::texture::srgb_to_linear;
 use super::Material;
 use crate::memory;
-use piece::{Budget, Out, Piece, Switch};
+use piece::{Budget, Out, Piece, Switch, Tally};
 
 pub use super::numbers::ABSURD;
 pub use super::parts::{MeshData, Parts, Placed, Placement};
@@ -70,6 +77,9 @@ pub struct ObjFile {
     position_lines: Vec<u32>,
     normals: Vec<DVec3>,
     uvs: Vec<Vec2>,
+    /// Each vertex's colour (linear RGB) where it has one; empty when none
+    /// has.
+    colors: Vec<Option<Vec3>>,
     /// The faces of each piece the file was read in.
     pieces: Vec<Faces>,
     groups: Vec<Group>,
@@ -134,6 +144,7 @@ impl ObjFile {
             position_lines: vec![0; total[0]],
             normals: vec![DVec3::ZERO; total[2]],
             uvs: vec![Vec2::ZERO; total[1]],
+            colors: Vec::new(),
             pieces: Vec::new(),
             groups: Vec::new(),
             libraries: Vec::new(),
@@ -170,6 +181,8 @@ impl ObjFile {
         };
         let mut absurd = Absurd::default();
         let mut ignored = piece::Ignored::default();
+        let (mut bad_colors, mut short_faces) = (Tally::default(), Tally::default());
+        let mut colors = Vec::new();
         let mut current = Group {
             name: String::new(),
             material: None,
@@ -191,10 +204,36 @@ impl ObjFile {
             f.libraries.extend(p.libraries);
             absurd = absurd.then(p.absurd);
             ignored.extend(p.ignored);
+            bad_colors = bad_colors.then(p.bad_colors);
+            short_faces = short_faces.then(p.short_faces);
+            colors.extend(p.colors);
         }
         f.finish(current);
-        f.check_indices()?;
+        f.colors = vertex_colors(&colors, f.positions.len());
+        drop(colors);
+        let dropped = f.check_indices()?;
         warnings.extend(absurd.warning(path));
+        let tallied = [
+            (
+                short_faces,
+                "face with fewer than 3 vertices",
+                "faces with fewer than 3 vertices",
+                "skipped",
+            ),
+            (
+                bad_colors,
+                "vertex colour is not a finite number",
+                "vertex colours are not finite numbers",
+                "read as none (white)",
+            ),
+        ];
+        for (t, one, many, done) in tallied {
+            if let Some(line) = t.first {
+                let what = crate::words::count(t.count as u64, one, many);
+                warnings.push(format!("{}:{line}: {what}: {done}", path.display()));
+            }
+        }
+        warnings.extend(dropped);
         if let Some(list) = ignored.list() {
             warnings.push(format!(
                 "{}: ignored, not supported: {list}",
@@ -308,35 +347,64 @@ impl ObjFile {
         })
     }
 
-    /// Every index of every face refers to something the file defines
-    /// (forward references included, as other readers allow them).
-    fn check_indices(&self) -> Result<()> {
+    /// Every vertex of every face is one the file defines (forward
+    /// references included, as other readers allow them). A face that
+    /// refers to texture coordinates or normals beyond those the file
+    /// defines is read without them, as tinyobjloader reads it: the
+    /// warning that says so.
+    fn check_indices(&mut self) -> Result<Option<String>> {
         let counts = [self.positions.len(), self.uvs.len(), self.normals.len()];
         let names = ["vertex", "texture coordinate", "normal"];
-        for (line, corners) in self.groups.iter().flat_map(|g| self.faces(g)) {
-            for c in corners {
-                for k in 0..3 {
-                    if c[k] != NONE && c[k] as usize >= counts[k] {
-                        bail!(
-                            "{}:{line}: the face refers to {} {} but the file defines {}",
-                            self.path.display(),
-                            names[k],
-                            c[k] as u64 + 1,
-                            counts[k]
-                        );
+        let beyond = |c: &[u32; 3], k: usize| c[k] != NONE && c[k] as usize >= counts[k];
+        // The first such face (line, what, index) and how many there are.
+        let mut first = None;
+        let mut dropped = 0;
+        for p in &mut self.pieces {
+            for f in &p.faces {
+                let corners = &mut p.corners[f.start as usize..][..f.len as usize];
+                let line = f.line;
+                if let Some(c) = corners.iter().find(|c| beyond(c, 0)) {
+                    bail!(
+                        "{}:{line}: the face refers to vertex {} but the file defines {}",
+                        self.path.display(),
+                        c[0] as u64 + 1,
+                        counts[0]
+                    );
+                }
+                let mut lost = false;
+                for k in 1..3 {
+                    if let Some(c) = corners.iter().find(|c| beyond(c, k)) {
+                        first.get_or_insert((line, k, c[k]));
+                        corners.iter_mut().for_each(|c| c[k] = NONE);
+                        lost = true;
                     }
                 }
+                dropped += lost as u64;
             }
         }
-        Ok(())
+        Ok(first.map(|(line, k, index)| {
+            let more = match dropped {
+                1 => String::new(),
+                2 => " (and 1 more face)".into(),
+                n => format!(" (and {} more faces)", n - 1),
+            };
+            format!(
+                "{}:{line}: the face refers to {} {} but the file defines {}{more}: read \
+                 without its texture coordinates or normals",
+                self.path.display(),
+                names[k],
+                index as u64 + 1,
+                counts[k]
+            )
+        }))
     }
 
     /// The meshes placed by `xf` (in f64), each group with the material
-    /// `material(group's usemtl)` gives.
+    /// `material(group's usemtl, whether its vertices have colours)` gives.
     fn place(
         &self,
         xf: &DAffine3,
-        mut material: impl FnMut(Option<&(String, usize)>) -> u32,
+        mut material: impl FnMut(Option<&(String, usize)>, bool) -> u32,
         warnings: &mut Vec<String>,
     ) -> Result<Vec<Placed>> {
         let nxf = xf.matrix3.inverse().transpose();
@@ -347,6 +415,10 @@ impl ObjFile {
             .unwrap_or_default();
         let mut partial = Vec::new();
         let mut meshes = Vec::with_capacity(self.groups.len());
+        let mut triangulator = Triangulator::default();
+        // Polygons left as fans: the first one's line, and how many.
+        let (mut fans, mut fan_line) = (0, None);
+        let (mut points, mut ids, mut cut) = (Vec::new(), Vec::new(), Vec::new());
         // Welding: the mesh vertex a position was first used as, by
         // position; corners that reuse a position with other UV or normal
         // indices go through a map. Reset after each mesh.
@@ -355,7 +427,7 @@ impl ObjFile {
             let mut other: HashMap<[u32; 3], u32> = HashMap::new();
             let mut corners: Vec<[u32; 3]> = Vec::new();
             let mut indices = Vec::new();
-            for (_, c) in self.faces(g) {
+            for (line, c) in self.faces(g) {
                 let mut id = |corner: [u32; 3]| {
                     let slot = &mut first[corner[0] as usize];
                     if *slot == NONE {
@@ -371,13 +443,19 @@ impl ObjFile {
                         corners.len() as u32 - 1
                     })
                 };
-                let first = id(c[0]);
-                let mut prev = id(c[1]);
-                for &corner in &c[2..] {
-                    let next = id(corner);
-                    indices.push([first, prev, next]);
-                    prev = next;
+                if let [p, q, r] = c {
+                    indices.push([id(*p), id(*q), id(*r)]);
+                    continue;
                 }
+                ids.clear();
+                ids.extend(c.iter().map(|&corner| id(corner)));
+                points.clear();
+                points.extend(c.iter().map(|k| self.positions[k[0] as usize]));
+                if !triangulator.triangles(&points, &mut cut) {
+                    fans += 1;
+                    fan_line.get_or_insert(line);
+                }
+                indices.extend(cut.drain(..).map(|t| t.map(|k| ids[k as usize])));
             }
             for c in &corners {
                 first[c[0] as usize] = NONE;
@@ -413,6 +491,16 @@ impl ObjFile {
             }
             let uvs = (with_uv == corners.len())
                 .then(|| corners.iter().map(|c| self.uvs[c[1] as usize]).collect());
+            // White where a vertex of a coloured mesh has no colour: the
+            // material's own.
+            let colors = (!self.colors.is_empty()
+                && corners.iter().any(|c| self.colors[c[0] as usize].is_some()))
+            .then(|| {
+                corners
+                    .iter()
+                    .map(|c| self.colors[c[0] as usize].unwrap_or(Vec3::ONE))
+                    .collect()
+            });
             let normals = (with_normal == corners.len()).then(|| {
                 corners
                     .iter()
@@ -432,10 +520,14 @@ impl ObjFile {
                 positions,
                 normals,
                 uvs,
-                colors: None,
+                material: material(g.material.as_ref(), colors.is_some()),
+                colors,
                 indices,
-                material: material(g.material.as_ref()),
             });
+        }
+        if let Some(line) = fan_line {
+            let what = Triangulator::warning(fans);
+            warnings.push(format!("{}:{line}: {what}", self.path.display()));
         }
         if let Some(line) = partial.first() {
             warnings.push(format!(
@@ -448,6 +540,25 @@ impl ObjFile {
         }
         Ok(meshes)
     }
+}
+
+/// The colours of `vertices` vertices from those written (`v x y z r g
+/// b`), in linear RGB. Written as 0..1, as trimesh and Blender write them,
+/// or as 0..255 where any value is above 1, as MeshLab reads them (which
+/// decides vertex by vertex: a 0..255 file's `1 0 0` would be full red);
+/// sRGB either way, as Blender reads them and PLY colours are.
+fn vertex_colors(written: &[(u32, [f32; 3])], vertices: usize) -> Vec<Option<Vec3>> {
+    if written.is_empty() {
+        return Vec::new();
+    }
+    let bytes = written.iter().any(|(_, c)| c.iter().any(|&x| x > 1.0));
+    let full = if bytes { 255.0 } else { 1.0 };
+    let mut colors = vec![None; vertices];
+    for &(i, c) in written {
+        let linear = c.map(|x| srgb_to_linear((x / full).clamp(0.0, 1.0)));
+        colors[i as usize] = Some(Vec3::from_array(linear));
+    }
+    colors
 }
 
 /// The first `n` items of `rest`, which keeps the others.
@@ -465,31 +576,63 @@ fn is_not_found(e: &anyhow::Error) -> bool {
         .is_some_and(ReadError::is_not_found)
 }
 
+/// An `mtllib` argument as one name, and as names split at whitespace,
+/// where a backslash before a space escapes it (`my\ file.mtl` names `my
+/// file.mtl`, as other readers take it).
+fn library_names(written: &str) -> (String, Vec<String>) {
+    let (mut whole, mut names) = (String::new(), vec![String::new()]);
+    let mut chars = written.chars().peekable();
+    while let Some(c) = chars.next() {
+        let word = names.last_mut().expect("never empty");
+        match c {
+            '\\' if chars.peek().is_some_and(|n| n.is_whitespace()) => {
+                let escaped = chars.next().expect("peeked");
+                whole.push(escaped);
+                word.push(escaped);
+            }
+            c if c.is_whitespace() => {
+                whole.push(c);
+                if !word.is_empty() {
+                    names.push(String::new());
+                }
+            }
+            c => {
+                whole.push(c);
+                word.push(c);
+            }
+        }
+    }
+    names.retain(|n| !n.is_empty());
+    (whole, names)
+}
+
 /// Reads the `mtllib` files of `obj`. A missing file is a warning; an
 /// unreadable or broken one an error. `mtllib a.mtl b.mtl` names two
-/// files unless one file has that whole name.
+/// files unless one file has that whole name. Text that is not UTF-8 is
+/// read lossily ([`text_lossy`]).
 fn read_libraries(src: &dyn Source, obj: &ObjFile, warnings: &mut Vec<String>) -> Result<Library> {
     let mut lib = Library::new();
     for (written, line) in &obj.libraries {
         let read = |w: &str| {
             let p = resolve(&obj.path, w);
-            let text = src.read_text(&p, Kind::Mtl);
-            (p, text)
+            let bytes = src.read(&p, Kind::Mtl).map_err(anyhow::Error::from);
+            (p, bytes)
         };
-        let mut files = vec![read(written)];
-        if files[0].1.as_ref().is_err_and(is_not_found) && written.contains(char::is_whitespace) {
-            files = written.split_whitespace().map(read).collect();
+        let (whole, split) = library_names(written);
+        let mut files = vec![read(&whole)];
+        if files[0].1.as_ref().is_err_and(is_not_found) && split.len() > 1 {
+            files = split.iter().map(|w| read(w)).collect();
         }
-        for (mtl_path, text) in files {
+        for (mtl_path, bytes) in files {
             let outside = src.outside(&obj.path, &mtl_path);
-            // A file outside that is not text is not quoted either.
-            let text = match &outside {
-                Some(o) if text.as_ref().is_err_and(|e| !is_not_found(e)) => {
-                    o.quiet(Kind::Mtl, text, warnings, usize::MAX)
+            // A file outside that cannot be read is not quoted either.
+            let bytes = match &outside {
+                Some(o) if bytes.as_ref().is_err_and(|e| !is_not_found(e)) => {
+                    o.quiet(Kind::Mtl, bytes, warnings, usize::MAX)
                 }
-                _ => text,
+                _ => bytes,
             };
-            let text = match text {
+            let bytes = match bytes {
                 Err(e) if is_not_found(&e) => {
                     warnings.push(format!(
                         "{}:{line}: material library {} not found; using the default material",
@@ -498,18 +641,19 @@ fn read_libraries(src: &dyn Source, obj: &ObjFile, warnings: &mut Vec<String>) -
                     ));
                     continue;
                 }
-                t => t.with_context(|| format!("{}:{line}: mtllib", obj.path.display()))?,
+                b => b.with_context(|| format!("{}:{line}: mtllib", obj.path.display()))?,
             };
             if let Some(o) = &outside {
                 let from = format!("{}:{line}", obj.path.display());
                 warnings.push(o.warning(&from, "material library", written));
             }
             let before = warnings.len();
+            let text = text_lossy(&mtl_path, bytes, warnings);
             let materials = mtl::parse(&mtl_path, &text, warnings);
             let materials = match &outside {
-                Some(o) => o.quiet(Kind::Mtl, materials, warnings, before)?,
-                None => materials?,
-            };
+                Some(o) => o.quiet(Kind::Mtl, materials, warnings, before),
+                None => materials,
+            }?;
             lib.extend(materials.into_iter().map(|m| (mtl_path.clone(), m)));
         }
     }
@@ -548,12 +692,12 @@ pub fn load_placed(
     xf: &DAffine3,
     material: Option<&Material>,
 ) -> Result<Vec<Placed>> {
-    let text = src.read_text(path, Kind::Obj)?;
+    let text = text_lossy(path, src.read(path, Kind::Obj)?, &mut parts.warnings);
     let obj = ObjFile::parse(path, &text, &mut parts.warnings, parts.budget.room())?;
     drop(text);
     if let Some(m) = material {
         let id = parts.add_material(m.clone());
-        return obj.place(xf, |_| id, &mut parts.warnings);
+        return obj.place(xf, |_, _| id, &mut parts.warnings);
     }
     let lib = read_libraries(src, &obj, &mut parts.warnings)?;
     let first = parts.materials.len() as u32;
@@ -561,12 +705,14 @@ pub fn load_placed(
         let conv = convert_material(parts, src, mtl_path, m);
         parts.add_material(conv);
     }
-    let mut default = None;
+    // The default material, and for meshes with vertex colours one of
+    // white, so that they are the diffuse colour as they are (as in PLY).
+    let mut defaults = [None, None];
     let mut unknown: Vec<(String, usize)> = Vec::new();
     let mut new_materials = Vec::new();
     let meshes = obj.place(
         xf,
-        |used| {
+        |used, colored| {
             // The last definition of a name wins, as in other readers.
             let found = used.and_then(|(name, _)| lib.iter().rposition(|(_, m)| &m.name == name));
             match (found, used) {
@@ -577,9 +723,16 @@ pub fn load_placed(
                             unknown.push((name.clone(), *line));
                         }
                     }
-                    *default.get_or_insert_with(|| {
-                        new_materials.push(Material::default());
-                        first + lib.len() as u32
+                    *defaults[colored as usize].get_or_insert_with(|| {
+                        new_materials.push(Material {
+                            kd: if colored {
+                                Vec3::ONE
+                            } else {
+                                Material::default().kd
+                            },
+                            ..Material::default()
+                        });
+                        first + (lib.len() + new_materials.len()) as u32 - 1
                     })
                 }
             }
@@ -590,10 +743,13 @@ pub fn load_placed(
         parts.add_material(m);
     }
     for (name, line) in unknown {
+        let what = match name.is_empty() {
+            true => "usemtl without a material name: no material without one".to_string(),
+            false => format!("usemtl {}: no such material", crate::words::quoted(&name)),
+        };
         parts.warnings.push(format!(
-            "{}:{line}: usemtl {}: no such material{}; using the default material",
+            "{}:{line}: {what}{}; using the default material",
             path.display(),
-            crate::words::quoted(&name),
             if lib.is_empty() {
                 String::new()
             } else {
@@ -636,7 +792,6 @@ pub fn load_into(
 mod tests {
     use super::*;
     use crate::scene::source::Memory;
-    use glam::Vec3;
 
     fn load(files: Vec<(&'static str, String)>) -> Result<Parts> {
         let src = files
@@ -702,16 +857,8 @@ mod tests {
                 "m/a.obj:7: normal index 6148914691236517207 is out of range",
             ),
             (
-                format!("{QUAD}vt 0 0\nf 1/2 2/1 3/1\n"),
-                "m/a.obj:7: the face refers to texture coordinate 2",
-            ),
-            (
                 format!("{QUAD}f 1 2 99999999999999999999\n"),
                 "m/a.obj:6: '99999999999999999999'",
-            ),
-            (
-                format!("{QUAD}f 1 2\n"),
-                "m/a.obj:6: a face needs at least 3",
             ),
             (
                 format!("{QUAD}f 1/1/1/1 2 3\n"),
@@ -841,6 +988,187 @@ mod tests {
     }
 
     #[test]
+    fn faults_other_readers_forgive_are_warnings() {
+        // UV and normal indices beyond those defined: those faces without
+        // them; faces of fewer than three vertices: skipped.
+        let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nf 1/5/7 2/5/7 3/5/7\n\
+                   f 2/1 4/1 3/1\nf 2/1/9 4/1/9 3/1/9\nf 1 2\nf 3 # one\n";
+        let p = load(vec![("m/a.obj", obj.into())]).unwrap();
+        assert_eq!(p.geometry.indices.len(), 3);
+        let all = p.warnings.join("\n");
+        for part in [
+            "m/a.obj:9: 2 faces with fewer than 3 vertices: skipped",
+            "m/a.obj:6: the face refers to texture coordinate 5 but the file defines 1 (and 1 \
+             more face): read without its texture coordinates or normals",
+        ] {
+            assert!(all.contains(part), "missing '{part}' in {all}");
+        }
+        // The face on line 7 keeps its UVs: the mesh has some.
+        assert!(all.contains("some faces of a mesh have UVs"), "{all}");
+        // Vertices beyond those defined stay an error.
+        assert!(
+            error("v 0 0 0\nf 1/1 2/1 3/1\n").contains("m/a.obj:2: the face refers to vertex 2")
+        );
+    }
+
+    #[test]
+    fn vertex_colours_are_the_diffuse_colour() {
+        let tri = "f 1 2 3\n";
+        // 0..1, with alpha after the colour or not.
+        let p = load(vec![(
+            "m/a.obj",
+            format!("v 0 0 0 1 0 0\nv 1 0 0 0 1 0 0.5\nv 0 1 0 0 0 1\n{tri}"),
+        )])
+        .unwrap();
+        assert!(p.warnings.is_empty(), "{:?}", p.warnings);
+        assert_eq!(p.geometry.colors, [Vec3::X, Vec3::Y, Vec3::Z]);
+        assert!(p.meshes[0].colored);
+        assert_eq!(p.materials[0].kd, Vec3::ONE);
+        // 0..255 where any value is above 1; sRGB.
+        let p = load(vec![(
+            "m/a.obj",
+            format!("v 0 0 0 255 0 0\nv 1 0 0 0 128 1\nv 0 1 0 0 0 1\n{tri}"),
+        )])
+        .unwrap();
+        let c = p.geometry.colors[1];
+        assert_eq!(c.y, srgb_to_linear(128.0 / 255.0));
+        assert_eq!(c.z, srgb_to_linear(1.0 / 255.0));
+        // A colour that is not a number is none: white.
+        let p = load(vec![(
+            "m/a.obj",
+            format!("v 0 0 0 nan 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 inf\nv 1 1 0\n{tri}f 2 4 3\n"),
+        )])
+        .unwrap();
+        assert_eq!(
+            p.geometry.colors,
+            [Vec3::ONE, Vec3::Y, Vec3::ONE, Vec3::ONE]
+        );
+        assert_eq!(
+            p.warnings,
+            ["m/a.obj:1: 2 vertex colours are not finite numbers: read as none (white)"]
+        );
+        // Only a colour: a position or w that is no number is an error.
+        assert!(error("v nan 0 0 1 1 1\n").contains("m/a.obj:1: 'nan' is not a finite"));
+        assert!(error("v 0 0 0 nan\n").contains("m/a.obj:1: 'nan' is not a finite"));
+        assert!(error("v 0 0 0 1 x 1\n").contains("m/a.obj:1: 'x' is not a number"));
+        // A material's Kd is multiplied by them; meshes without colours
+        // keep the default material.
+        let obj = format!(
+            "mtllib a.mtl\nv 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0\nv 5 5 5\n{tri}usemtl m\n{tri}\
+             g plain\nusemtl nope\nf 2 3 4\n"
+        );
+        let p = load(vec![
+            ("m/a.obj", obj),
+            ("m/a.mtl", "newmtl m\nKd 0.5 0.5 0.5\n".into()),
+        ])
+        .unwrap();
+        let kd: Vec<Vec3> = p
+            .geometry
+            .tri_material
+            .iter()
+            .map(|&m| p.materials[m as usize].kd)
+            .collect();
+        assert_eq!(kd, [Vec3::ONE, Vec3::splat(0.5), Vec3::splat(0.8)]);
+        let colored: Vec<bool> = p.meshes.iter().map(|m| m.colored).collect();
+        assert_eq!(colored, [true, true, false]);
+    }
+
+    #[test]
+    fn empty_material_names_escaped_spaces_and_latin1_are_read() {
+        // A newmtl without a name is what a usemtl without one uses.
+        let mtl = "newmtl x\nKd 0 1 0\nnewmtl\nKd 1 0 0\n";
+        let obj = format!("mtllib my\\ lib.mtl\nusemtl\n{QUAD}");
+        let p = load(vec![("m/a.obj", obj.clone()), ("m/my lib.mtl", mtl.into())]).unwrap();
+        assert_eq!(p.materials[p.geometry.tri_material[0] as usize].kd, Vec3::X);
+        assert_eq!(
+            p.warnings,
+            ["m/my lib.mtl:3: newmtl without a name: the material of a usemtl without one"]
+        );
+        let p = load(vec![
+            ("m/a.obj", obj),
+            ("m/my lib.mtl", "newmtl x\n".into()),
+        ])
+        .unwrap();
+        assert_eq!(
+            p.warnings,
+            [
+                "m/a.obj:2: usemtl without a material name: no material without one in \
+              m/my lib.mtl; using the default material"
+            ]
+        );
+        // Escaped spaces in one of two names.
+        let obj = format!("mtllib a\\ b.mtl c.mtl\nusemtl y\n{QUAD}");
+        let p = load(vec![
+            ("m/a.obj", obj),
+            ("m/a b.mtl", "newmtl x\n".into()),
+            ("m/c.mtl", "newmtl y\nKd 0 0 1\n".into()),
+        ])
+        .unwrap();
+        assert_eq!(p.materials[p.geometry.tri_material[0] as usize].kd, Vec3::Z);
+        // Latin-1 names in both files still match.
+        let src = Memory::default()
+            .with(
+                "m/a.obj",
+                [
+                    b"mtllib a.mtl\nusemtl caf\xe9\n".as_slice(),
+                    QUAD.as_bytes(),
+                ]
+                .concat(),
+            )
+            .with("m/a.mtl", b"# \xa9\nnewmtl caf\xe9\nKd 1 0 0\n".to_vec());
+        let mut p = Parts::default();
+        load_into(
+            &mut p,
+            &src,
+            Path::new("m/a.obj"),
+            &Placement::default(),
+            None,
+        )
+        .unwrap();
+        assert_eq!(p.materials[p.geometry.tri_material[0] as usize].kd, Vec3::X);
+        assert_eq!(p.materials[0].name, "caf\u{fffd}");
+        let all = p.warnings.join("\n");
+        for part in [
+            "m/a.obj:2: not valid UTF-8 (byte 0xe9 at column 11): read as U+FFFD",
+            "m/a.mtl:1: not valid UTF-8 (byte 0xa9 at column 3): read as U+FFFD",
+        ] {
+            assert!(all.contains(part), "missing '{part}' in {all}");
+        }
+    }
+
+    #[test]
+    fn concave_polygons_are_clipped_and_convex_ones_stay_fans() {
+        // A U whose fan would cover its notch.
+        let u = "v 0 0 0\nv 3 0 0\nv 3 3 0\nv 2 3 0\nv 2 1 0\nv 1 1 0\nv 1 3 0\nv 0 3 0\n";
+        let p = load(vec![("m/a.obj", format!("{u}f 1 2 3 4 5 6 7 8\n"))]).unwrap();
+        assert!(p.warnings.is_empty(), "{:?}", p.warnings);
+        let g = &p.geometry;
+        let twice: f32 = (0..g.indices.len())
+            .map(|i| {
+                let [a, b, c] = g.triangle(i);
+                (b - a).cross(c - a).z
+            })
+            .sum();
+        assert_eq!((g.indices.len(), twice), (6, 14.0));
+        // A convex polygon is the fan it always was.
+        let p = load(vec![("m/a.obj", format!("{u}f 1 2 3 8\n"))]).unwrap();
+        assert_eq!(p.geometry.indices, [[0, 1, 2], [0, 2, 3]]);
+        // Corners on a line: a fan, and a warning.
+        let p = load(vec![(
+            "m/a.obj",
+            "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3 4\n".into(),
+        )])
+        .unwrap();
+        assert!(
+            p.warnings
+                .iter()
+                .any(|w| w.starts_with("m/a.obj:5: a polygon fits no plane")),
+            "{:?}",
+            p.warnings
+        );
+    }
+
+    #[test]
     fn degenerate_triangles_are_skipped_and_counted() {
         let p = load(vec![(
             "m/a.obj",
@@ -859,8 +1187,9 @@ mod tests {
             let mut w = Vec::new();
             let f = ObjFile::parse_in(Path::new("m.obj"), text, &mut w, available, size);
             let placed = f.and_then(|f| {
-                let material = |m: Option<&(String, usize)>| {
+                let material = |m: Option<&(String, usize)>, colored: bool| {
                     m.map_or(0, |(name, line)| name.len() as u32 * 1000 + *line as u32)
+                        + colored as u32 * 100_000
                 };
                 let placed = f.place(&DAffine3::IDENTITY, material, &mut w)?;
                 Ok(format!("{placed:?} {:?}", f.libraries))

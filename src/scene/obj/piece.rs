@@ -270,10 +270,39 @@ impl Ignored {
     }
 }
 
+/// Lines of one kind that a warning counts: the first and how many.
+#[derive(Default)]
+pub struct Tally {
+    pub first: Option<usize>,
+    pub count: usize,
+}
+
+impl Tally {
+    fn add(&mut self, line: usize) {
+        self.first.get_or_insert(line);
+        self.count += 1;
+    }
+
+    /// Both counts, `self` first (from earlier in the file).
+    pub fn then(self, later: Tally) -> Tally {
+        Tally {
+            first: self.first.or(later.first),
+            count: self.count + later.count,
+        }
+    }
+}
+
 /// One piece as read, up to its first error.
 #[derive(Default)]
 pub struct Piece {
     pub faces: Faces,
+    /// The colours of the vertices that have one (`v x y z r g b`), by
+    /// their number in the file, as written.
+    pub colors: Vec<(u32, [f32; 3])>,
+    /// Vertices whose colour is not a finite number: read without one.
+    pub bad_colors: Tally,
+    /// Faces of fewer than three vertices: skipped.
+    pub short_faces: Tally,
     pub switches: Vec<(usize, Switch)>,
     pub libraries: Vec<(String, usize)>,
     /// Warnings with their lines.
@@ -363,6 +392,19 @@ pub fn read(
 struct Numbers {
     values: [f64; 7],
     total: usize,
+    /// The first number that is not finite or beyond f32 (read as NaN),
+    /// and why: an error unless it is a vertex colour's.
+    unusable: Option<(usize, String)>,
+}
+
+impl Numbers {
+    /// The numbers, where every one is usable.
+    fn usable(self) -> Result<Numbers, String> {
+        match self.unusable {
+            Some((_, why)) => Err(why),
+            None => Ok(self),
+        }
+    }
 }
 
 impl std::ops::Deref for Numbers {
@@ -376,9 +418,18 @@ fn numbers(words: Words, line: usize, absurd: &mut Absurd) -> Result<Numbers, St
     let mut n = Numbers {
         values: [0.0; 7],
         total: 0,
+        unusable: None,
     };
     for w in words.take_while(|w| !w.starts_with('#')) {
-        let x = numbers::parse(w)?;
+        let x = match numbers::parse(w) {
+            Ok(x) => x,
+            // A number, but not one f32 holds (`nan`, `inf`, `1e39`).
+            Err(why) if w.parse::<f64>().is_ok() => {
+                n.unusable.get_or_insert((n.total, why));
+                f64::NAN
+            }
+            Err(why) => return Err(why),
+        };
         absurd.check(line, x, || w.to_string());
         if let Some(slot) = n.values.get_mut(n.total) {
             *slot = x;
@@ -448,11 +499,32 @@ impl Reader<'_> {
         match key {
             "v" => {
                 let v = numbers(plain.words(rest), n, absurd).map_err(at)?;
+                // Only a colour may hold a number that is not finite:
+                // read without it, as Blender does.
+                let v = match v.unusable {
+                    Some((k, _)) if k >= 3 && matches!(v.total, 6 | 7) => {
+                        self.piece.bad_colors.add(n);
+                        Numbers {
+                            unusable: None,
+                            ..v
+                        }
+                    }
+                    _ => v.usable().map_err(at)?,
+                };
                 let p = match *v {
                     // A fourth number is a rational curve's weight, which
                     // polygons ignore, as other OBJ readers do; six are a
-                    // position and a colour.
-                    [x, y, z] | [x, y, z, _] | [x, y, z, _, _, _] => DVec3::new(x, y, z),
+                    // position and an RGB colour, seven RGBA (alpha
+                    // unused).
+                    [x, y, z] | [x, y, z, _] => DVec3::new(x, y, z),
+                    [x, y, z, r, g, b] | [x, y, z, r, g, b, _] => {
+                        let rgb = [r, g, b];
+                        if rgb.iter().all(|c| !c.is_nan()) {
+                            let i = self.counts[0] as u32;
+                            self.piece.colors.push((i, rgb.map(|c| c as f32)));
+                        }
+                        DVec3::new(x, y, z)
+                    }
                     _ => {
                         return Err(at(format!(
                             "a vertex takes 3 coordinates (x y z), optionally with w or an \
@@ -468,7 +540,9 @@ impl Reader<'_> {
                 self.counts[0] += 1;
             }
             "vt" => {
-                let v = numbers(plain.words(rest), n, absurd).map_err(at)?;
+                let v = numbers(plain.words(rest), n, absurd)
+                    .and_then(Numbers::usable)
+                    .map_err(at)?;
                 let uv = match *v {
                     [u] => Vec2::new(u as f32, 0.0),
                     [u, v] | [u, v, _] => Vec2::new(u as f32, v as f32),
@@ -485,7 +559,9 @@ impl Reader<'_> {
                 self.counts[1] += 1;
             }
             "vn" => {
-                let v = numbers(plain.words(rest), n, absurd).map_err(at)?;
+                let v = numbers(plain.words(rest), n, absurd)
+                    .and_then(Numbers::usable)
+                    .map_err(at)?;
                 match *v {
                     [x, y, z] => self.out.normals[self.here[2]] = DVec3::new(x, y, z),
                     _ => {
@@ -506,21 +582,13 @@ impl Reader<'_> {
                     .switches
                     .push((at, Switch::Object(rest.to_string())));
             }
+            // Without a name, the material `newmtl` without one defines
+            // (or none), as in other readers.
             "usemtl" => {
-                if rest.is_empty() {
-                    self.piece.warnings.push((
-                        n,
-                        format!(
-                            "{}:{n}: usemtl without a material name: ignored",
-                            path.display()
-                        ),
-                    ));
-                } else {
-                    let at = self.piece.faces.faces.len();
-                    self.piece
-                        .switches
-                        .push((at, Switch::Material(rest.to_string(), n)));
-                }
+                let at = self.piece.faces.faces.len();
+                self.piece
+                    .switches
+                    .push((at, Switch::Material(rest.to_string(), n)));
             }
             "mtllib" => {
                 if rest.is_empty() {
@@ -553,7 +621,9 @@ impl Reader<'_> {
         }
         let len = corners.len() - start;
         if len < 3 {
-            return Err(at(format!("a face needs at least 3 vertices, found {len}")).into());
+            corners.truncate(start);
+            self.piece.short_faces.add(n);
+            return Ok(());
         }
         faces.push(Face {
             line: n as u32,

@@ -6,12 +6,15 @@
 //! `s t`, `texture_u texture_v` or `texture_s texture_t`), colours (`red
 //! green blue`, sRGB as images are, 0..255 for integers, 0..1 for floats)
 //! and `face` `vertex_indices` (or `vertex_index`) lists, polygons becoming
-//! fans; MeshLab's `comment TextureFile` names the texture. Other elements
-//! and properties are skipped with one warning. The header's counts are
-//! checked against the file's size before anything is allocated, and every
-//! index against the vertex count.
+//! triangles ([`faces`]), with MeshLab's `texcoord` lists and face colours;
+//! MeshLab's `comment TextureFile` names the texture. Other elements and
+//! properties, and header lines of kinds the format does not name, are
+//! skipped with one warning. The header's counts are checked against the
+//! file's size before anything is allocated, and every index against the
+//! vertex count.
 
 mod bulk;
+mod faces;
 
 use std::path::Path;
 
@@ -23,6 +26,7 @@ use super::parts::{mesh_fits, place_normals, place_positions, Placed};
 use super::texture::srgb_to_linear;
 use crate::memory;
 use crate::words::quoted;
+use faces::{Faces, Given};
 
 /// The header must end within this many bytes.
 const MAX_HEADER: usize = 1 << 20;
@@ -106,6 +110,8 @@ enum Role {
     Uv(usize),
     Color(usize),
     Indices,
+    /// A face's texture coordinates, two a corner (MeshLab's `texcoord`).
+    FaceUvs,
 }
 
 struct Property {
@@ -193,6 +199,10 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
     let mut start = 0;
     let mut n = 0;
     let mut ignored_elements: Vec<String> = Vec::new();
+    // Header lines of kinds the format does not name: the first's line and
+    // keyword, and how many.
+    let mut unknown: Option<(usize, String)> = None;
+    let mut unknown_count = 0;
     loop {
         n += 1;
         let at = |msg: String| anyhow!("{}:{n}: {msg}", path.display());
@@ -314,11 +324,25 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
                 });
             }
             ["end_header"] => break,
+            [keyword, ..] if !["ply", "format", "element", "property"].contains(keyword) => {
+                unknown.get_or_insert((n, keyword.to_string()));
+                unknown_count += 1;
+            }
             _ => bail!(at(format!(
                 "not a header line: '{}'",
                 line.chars().take(40).collect::<String>()
             ))),
         }
+    }
+    // Other readers (trimesh, MeshLab's) skip lines they do not know, as
+    // later versions of a format may add them.
+    if let Some((line, keyword)) = unknown {
+        warnings.push(format!(
+            "{}:{line}: {} of a kind the PLY format does not name ('{keyword}'{}): skipped",
+            path.display(),
+            crate::words::count(unknown_count as u64, "header line", "header lines"),
+            if unknown_count > 1 { " ..." } else { "" }
+        ));
     }
     let Some(format) = format else {
         bail!("{}: the header has no 'format' line", path.display());
@@ -377,13 +401,20 @@ fn role(element: &str, name: &str, kind: Kind) -> Option<Role> {
             "blue" | "diffuse_blue" => Role::Color(2),
             _ => Role::Ignored,
         },
-        "face" if matches!(name, "vertex_indices" | "vertex_index") => Role::Indices,
+        "face" => match name {
+            "vertex_indices" | "vertex_index" => Role::Indices,
+            "texcoord" => Role::FaceUvs,
+            "red" => Role::Color(0),
+            "green" => Role::Color(1),
+            "blue" => Role::Color(2),
+            _ => Role::Ignored,
+        },
         _ => Role::Ignored,
     };
     let list = matches!(kind, Kind::List(..));
     match role {
         Role::Ignored => Some(role),
-        Role::Indices => list.then_some(role),
+        Role::Indices | Role::FaceUvs => list.then_some(role),
         _ => (!list).then_some(role),
     }
 }
@@ -634,6 +665,19 @@ fn body_from<R: Values>(
     let mut absurd: (Option<(u64, f64)>, u64) = (None, 0);
     let mut triangles = 0u64;
     let mut corners: Vec<u32> = Vec::new();
+    let mut face_uvs: Vec<f32> = Vec::new();
+    let face = h.elements.iter().find(|e| e.name == "face");
+    let given = |f: fn(Role) -> bool| face.is_some_and(|e| e.props.iter().any(|p| f(p.role)));
+    let mut faces = Faces::new(Given {
+        uvs: given(|r| r == Role::FaceUvs),
+        colors: face.is_some_and(|e| {
+            e.props
+                .iter()
+                .filter(|p| matches!(p.role, Role::Color(_)))
+                .count()
+                == 3
+        }),
+    });
     for e in &h.elements {
         let has = |f: fn(Role) -> bool| e.props.iter().filter(|p| f(p.role)).count();
         let (n_normal, n_uv, n_color) = (
@@ -729,6 +773,18 @@ fn body_from<R: Values>(
                         if n < 0 {
                             return Err(fail(r, name, format!("negative count {n}")));
                         }
+                        if role == Role::FaceUvs {
+                            face_uvs.clear();
+                            for _ in 0..n {
+                                let x = r.float(item).map_err(|m| fail(r, name, m))?;
+                                if let Some(why) = numbers::unusable(x) {
+                                    let shown = numbers::show(x);
+                                    return Err(fail(r, name, format!("{shown} {why}")));
+                                }
+                                face_uvs.push(x as f32);
+                            }
+                            continue;
+                        }
                         if role != Role::Indices {
                             for _ in 0..n {
                                 r.float(item).map_err(|m| fail(r, name, m))?;
@@ -743,8 +799,8 @@ fn body_from<R: Values>(
                             ));
                         }
                         triangles += n as u64 - 2;
-                        mesh_fits(vertex_count as u64, triangles, available)
-                            .map_err(|m| fail(r, name, m))?;
+                        let vertices = vertex_count.max(faces.split()) as u64;
+                        mesh_fits(vertices, triangles, available).map_err(|m| fail(r, name, m))?;
                         corners.clear();
                         for _ in 0..n {
                             let k = r.int(item).map_err(|m| fail(r, name, m))?;
@@ -760,13 +816,22 @@ fn body_from<R: Values>(
                             }
                             corners.push(k as u32);
                         }
-                        for k in 2..corners.len() {
-                            m.indices.push([corners[0], corners[k - 1], corners[k]]);
-                        }
                     }
                 }
             }
             r.end().map_err(|m| fail(r, None, m))?;
+            if e.name == "face" {
+                let color = rgb.map(|c| srgb_to_linear((c / color_full).clamp(0.0, 1.0) as f32));
+                faces.add(
+                    i,
+                    &mut corners,
+                    &face_uvs,
+                    Vec3::from_array(color),
+                    &mut m.indices,
+                );
+                corners.clear();
+                face_uvs.clear();
+            }
             if e.name == "vertex" {
                 m.positions.push(DVec3::from_array(p));
                 if n_normal == 3 {
@@ -790,8 +855,8 @@ fn body_from<R: Values>(
         ));
     }
     for (n, what) in [
-        (n_of(h, "normal"), "normal"),
-        (n_of(h, "uv"), "texture coordinate"),
+        (n_of(h, "vertex", "normal"), "normal"),
+        (n_of(h, "vertex", "uv"), "texture coordinate"),
     ] {
         if n > 0 && n < if what == "normal" { 3 } else { 2 } {
             warnings.push(format!(
@@ -800,11 +865,13 @@ fn body_from<R: Values>(
             ));
         }
     }
-    if n_of(h, "color") > 0 && n_of(h, "color") < 3 {
-        warnings.push(format!(
-            "{}: element vertex has only some of red, green and blue: ignored",
-            path.display()
-        ));
+    for element in ["vertex", "face"] {
+        if (1..3).contains(&n_of(h, element, "color")) {
+            warnings.push(format!(
+                "{}: element {element} has only some of red, green and blue: ignored",
+                path.display()
+            ));
+        }
     }
     if let (Some((i, x)), more) = absurd {
         let more = if more > 0 {
@@ -822,14 +889,15 @@ fn body_from<R: Values>(
     m.normals = (!normals.is_empty()).then_some(normals);
     m.uvs = (!uvs.is_empty()).then_some(uvs);
     m.colors = (!colors.is_empty()).then_some(colors);
+    faces.finish(&path.display().to_string(), &mut m, warnings);
     Ok(m)
 }
 
-/// How many properties of the vertex element have the role named `what`.
-fn n_of(h: &Header, what: &str) -> usize {
+/// How many properties of `element` have the role named `what`.
+fn n_of(h: &Header, element: &str, what: &str) -> usize {
     h.elements
         .iter()
-        .filter(|e| e.name == "vertex")
+        .filter(|e| e.name == element)
         .flat_map(|e| &e.props)
         .filter(|p| {
             matches!(
@@ -1135,6 +1203,146 @@ mod tests {
             let [a, b] = both_ways(&cut);
             assert_eq!(a, b);
             assert!(a.contains("the file ends here (truncated)"), "{a}");
+        }
+    }
+
+    /// A quad's header with `face` properties after its vertex indices.
+    fn quad(face_props: &str) -> String {
+        format!(
+            "ply\nformat ascii 1.0\ncomment TextureFile t.png\nelement vertex 4\n\
+             property float x\nproperty float y\nproperty float z\nelement face 2\n\
+             property list uchar int vertex_indices\n{face_props}end_header\n\
+             0 0 0\n1 0 0\n1 1 0\n0 1 0\n"
+        )
+    }
+
+    #[test]
+    fn face_texcoords_give_corners_their_own_vertices() {
+        let text = quad("property list uchar float texcoord\nproperty int texnumber\n")
+            + "3 0 1 2 6 0 0 1 0 1 1 0\n3 0 2 3 6 0 0.5 1 1 0 1 0\n";
+        let (m, w) = read(text.as_bytes()).unwrap();
+        assert_eq!(w, ["p.ply: ignored, not used: face texnumber"]);
+        assert_eq!(m.texture, Some(("t.png".into(), 3)));
+        // Vertex 0 is at two UVs: two vertices; vertex 2 at one.
+        assert_eq!(m.indices, [[0, 1, 2], [3, 2, 4]]);
+        let uv = |u, v| Vec2::new(u, v);
+        assert_eq!(
+            m.uvs.unwrap(),
+            [
+                uv(0.0, 0.0),
+                uv(1.0, 0.0),
+                uv(1.0, 1.0),
+                uv(0.0, 0.5),
+                uv(0.0, 1.0)
+            ]
+        );
+        assert_eq!(m.positions[3], DVec3::ZERO);
+        assert_eq!(m.positions[4], DVec3::Y);
+        // A list of another length leaves its face at UV 0 0.
+        let text = quad("property list uchar float texcoord\n")
+            + "3 0 1 2 4 0 0 1 0\n3 0 2 3 6 0 0 1 1 0 1\n";
+        let (m, w) = read(text.as_bytes()).unwrap();
+        assert_eq!(m.uvs.unwrap()[..3], [Vec2::ZERO; 3]);
+        assert_eq!(
+            w,
+            [
+                "p.ply: element face 0: the texcoord list does not hold two numbers a corner: \
+              its corners are at UV 0 0"
+            ]
+        );
+    }
+
+    #[test]
+    fn face_colours_are_the_faces_diffuse_colour() {
+        let props = "property uchar red\nproperty uchar green\nproperty uchar blue\n\
+                     property uchar alpha\n";
+        let text = quad(props) + "3 0 1 2 255 0 0 255\n3 0 2 3 0 255 0 9\n";
+        let (m, w) = read(text.as_bytes()).unwrap();
+        assert_eq!(w, ["p.ply: ignored, not used: face alpha"]);
+        assert_eq!(m.indices, [[0, 1, 2], [3, 4, 5]]);
+        let c = m.colors.unwrap();
+        assert_eq!(c, [Vec3::X, Vec3::X, Vec3::X, Vec3::Y, Vec3::Y, Vec3::Y]);
+        let text = quad("property uchar red\n") + "3 0 1 2 255\n3 0 2 3 0\n";
+        let (m, w) = read(text.as_bytes()).unwrap();
+        assert!(m.colors.is_none());
+        assert_eq!(
+            w,
+            ["p.ply: element face has only some of red, green and blue: ignored"]
+        );
+    }
+
+    #[test]
+    fn concave_polygons_are_clipped_wherever_the_faces_come() {
+        let u = "0 0 0\n3 0 0\n3 3 0\n2 3 0\n2 1 0\n1 1 0\n1 3 0\n0 3 0\n";
+        let vertices = "element vertex 8\nproperty float x\nproperty float y\nproperty float z\n";
+        let faces = "element face 2\nproperty list uchar int vertex_indices\n";
+        let polygons = "8 0 1 2 3 4 5 6 7\n4 0 1 2 7\n";
+        let head = "ply\nformat ascii 1.0\n";
+        let first = format!("{head}{vertices}{faces}end_header\n{u}{polygons}");
+        let (m, w) = read(first.as_bytes()).unwrap();
+        assert!(w.is_empty(), "{w:?}");
+        // The U in six triangles, each turning as it does, covering its
+        // area; the square after it the fan it was.
+        assert_eq!(m.indices.len(), 8);
+        assert_eq!(m.indices[6..], [[0, 1, 2], [0, 2, 7]]);
+        let twice: f64 = m.indices[..6]
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                let z = (b - a).cross(c - a).z;
+                assert!(z >= 0.0, "{t:?}");
+                z
+            })
+            .sum();
+        assert_eq!(twice, 14.0);
+        let last = format!("{head}{faces}{vertices}end_header\n{polygons}{u}");
+        let (late, _) = read(last.as_bytes()).unwrap();
+        assert_eq!(late.indices, m.indices);
+        // Corners on a line: a fan, and a warning.
+        let line = format!(
+            "{head}{vertices}{faces}end_header\n{}{}",
+            "0 0 0\n1 0 0\n2 0 0\n3 0 0\n4 0 0\n5 0 0\n6 0 0\n7 0 0\n", polygons
+        );
+        let (_, w) = read(line.as_bytes()).unwrap();
+        assert_eq!(
+            w,
+            [
+                "p.ply: element face 0: 2 polygons fit no plane (their corners on a line or \
+              their edges crossing) or have more than 65536 corners: triangulated as fans"
+            ]
+        );
+    }
+
+    #[test]
+    fn header_lines_of_unknown_kinds_are_skipped() {
+        let text = format!("{HEAD}{QUAD}").replace(
+            "comment made by hand\n",
+            "obj_info by hand\nfoo bar\n\nvendor x\n",
+        );
+        let (m, w) = read(text.as_bytes()).unwrap();
+        assert_eq!(m.indices.len(), 2);
+        assert_eq!(
+            w,
+            [
+                "p.ply:4: 2 header lines of a kind the PLY format does not name ('foo' ...): \
+              skipped"
+            ]
+        );
+        // Lines of kinds the format names are read as they must be.
+        for (from, to, want) in [
+            (
+                "element face 1",
+                "element face",
+                "p.ply:8: not a header line",
+            ),
+            (
+                "format ascii 1.0",
+                "format ascii",
+                "p.ply:2: not a header line",
+            ),
+        ] {
+            let e = err(&format!("{HEAD}{QUAD}").replace(from, to));
+            assert!(e.starts_with(want), "{e}");
         }
     }
 

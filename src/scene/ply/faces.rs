@@ -1,0 +1,171 @@
+//! The faces of a PLY file as triangles, read value by value: polygons
+//! clipped in their plane once every vertex is read ([`Triangulator`]),
+//! and, where the face element gives corners texture coordinates (MeshLab's
+//! `texcoord` lists) or faces a colour, each corner a vertex of its own
+//! (shared by the corners of one vertex that agree).
+
+use std::collections::HashMap;
+
+use glam::{Vec2, Vec3};
+
+use super::PlyMesh;
+use crate::scene::polygon::Triangulator;
+
+/// What the face element gives each face beyond its vertices.
+#[derive(Clone, Copy, Default)]
+pub struct Given {
+    pub uvs: bool,
+    pub colors: bool,
+}
+
+/// The faces read so far.
+pub struct Faces {
+    given: Given,
+    /// With [`Given`] anything: the corner vertices by their vertex in the
+    /// file, UV and colour (as bits), each one's vertex in the file, UV and
+    /// colour.
+    ids: HashMap<(u32, [u32; 2], [u32; 3]), u32>,
+    from: Vec<u32>,
+    uvs: Vec<Vec2>,
+    colors: Vec<Vec3>,
+    /// Polygons of more than three corners: where their fans start among
+    /// the triangles, their corners and the face's number.
+    polygons: Vec<(usize, u32, u64)>,
+    /// Faces whose `texcoord` list is not two numbers a corner: the first
+    /// face's number and how many.
+    odd_uvs: (Option<u64>, u64),
+}
+
+impl Faces {
+    pub fn new(given: Given) -> Faces {
+        Faces {
+            given,
+            ids: HashMap::new(),
+            from: Vec::new(),
+            uvs: Vec::new(),
+            colors: Vec::new(),
+            polygons: Vec::new(),
+            odd_uvs: (None, 0),
+        }
+    }
+
+    /// The vertices the mesh has so far, where corners have their own.
+    pub fn split(&self) -> usize {
+        self.from.len()
+    }
+
+    /// Adds face `face` of `corners` (vertex numbers), with `uvs` (two
+    /// numbers a corner) and `color` where the element gives them, to
+    /// `triangles`: a fan, until [`Faces::finish`] clips it.
+    pub fn add(
+        &mut self,
+        face: u64,
+        corners: &mut [u32],
+        uvs: &[f32],
+        color: Vec3,
+        triangles: &mut Vec<[u32; 3]>,
+    ) {
+        let Given {
+            uvs: given_uvs,
+            colors: given_colors,
+        } = self.given;
+        let whole = uvs.len() == 2 * corners.len();
+        if given_uvs && !whole {
+            self.odd_uvs.0.get_or_insert(face);
+            self.odd_uvs.1 += 1;
+        }
+        if given_uvs || given_colors {
+            for (k, c) in corners.iter_mut().enumerate() {
+                let uv = match uvs.get(2 * k..2 * k + 2) {
+                    Some(&[u, v]) if whole => Vec2::new(u, v),
+                    _ => Vec2::ZERO,
+                };
+                let key = (
+                    *c,
+                    uv.to_array().map(f32::to_bits),
+                    color.to_array().map(f32::to_bits),
+                );
+                *c = *self.ids.entry(key).or_insert_with(|| {
+                    self.from.push(*c);
+                    if given_uvs {
+                        self.uvs.push(uv);
+                    }
+                    if given_colors {
+                        self.colors.push(color);
+                    }
+                    self.from.len() as u32 - 1
+                });
+            }
+        }
+        if corners.len() > 3 {
+            self.polygons
+                .push((triangles.len(), corners.len() as u32, face));
+        }
+        triangles.extend((2..corners.len()).map(|k| [corners[0], corners[k - 1], corners[k]]));
+    }
+
+    /// The mesh `m`, whose vertices are all read, with its corners' own
+    /// vertices and its polygons clipped; warnings naming `file`.
+    pub fn finish(self, file: &str, m: &mut PlyMesh, warnings: &mut Vec<String>) {
+        if let (Some(face), n) = self.odd_uvs {
+            let more = match n {
+                1 => String::new(),
+                n => format!(" (and {} more)", n - 1),
+            };
+            warnings.push(format!(
+                "{file}: element face {face}{more}: the texcoord list does not hold two numbers \
+                 a corner: its corners are at UV 0 0"
+            ));
+        }
+        if self.given.uvs || self.given.colors {
+            let from = &self.from;
+            m.positions = pick(from, std::mem::take(&mut m.positions));
+            m.normals = m.normals.take().map(|v| pick(from, v));
+            m.uvs = match self.given.uvs {
+                true => Some(self.uvs),
+                false => m.uvs.take().map(|v| pick(from, v)),
+            };
+            m.colors = match self.given.colors {
+                true => Some(self.colors),
+                false => m.colors.take().map(|v| pick(from, v)),
+            };
+        }
+        if self.polygons.is_empty() {
+            return;
+        }
+        let mut triangulator = Triangulator::default();
+        let (mut fans, mut first) = (0, None);
+        let old = std::mem::take(&mut m.indices);
+        m.indices.reserve_exact(old.len());
+        let (mut points, mut corners, mut cut) = (Vec::new(), Vec::new(), Vec::new());
+        let mut done = 0;
+        for (start, n, face) in self.polygons {
+            m.indices.extend_from_slice(&old[done..start]);
+            done = start + n as usize - 2;
+            let fan = &old[start..done];
+            corners.clear();
+            corners.extend([fan[0][0], fan[0][1]]);
+            corners.extend(fan.iter().map(|t| t[2]));
+            points.clear();
+            points.extend(corners.iter().map(|&i| m.positions[i as usize]));
+            if !triangulator.triangles(&points, &mut cut) {
+                fans += 1;
+                first.get_or_insert(face);
+            }
+            m.indices
+                .extend(cut.drain(..).map(|t| t.map(|k| corners[k as usize])));
+        }
+        m.indices.extend_from_slice(&old[done..]);
+        if let Some(face) = first {
+            warnings.push(format!(
+                "{file}: element face {face}: {}",
+                Triangulator::warning(fans)
+            ));
+        }
+    }
+}
+
+/// The items of `v` that `from` names, in its order.
+fn pick<T: Copy>(from: &[u32], v: Vec<T>) -> Vec<T> {
+    from.iter().map(|&i| v[i as usize]).collect()
+}
