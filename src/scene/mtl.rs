@@ -118,9 +118,11 @@ impl Ignored {
     }
 }
 
-/// The numbers after a statement, each checked.
+/// The numbers after a statement, each checked, up to a comment (`Ka 0 0
+/// 0 # ambient`, as tinyobjloader and tobj read it).
 fn numbers(rest: &str, line: usize, absurd: &mut Absurd) -> Result<Vec<f64>, String> {
     rest.split_whitespace()
+        .take_while(|w| !w.starts_with('#'))
         .map(|w| {
             let x = numbers::parse(w)?;
             absurd.check(line, x, || w.to_string());
@@ -346,6 +348,13 @@ mod tests {
                 )]
             );
         }
+        // A comment may end a line of numbers.
+        let (m, w) = parse_ok("newmtl a\nKd 0.5 0.25 1 #there's a comment\nNs 10 # shiny\n");
+        assert_eq!(
+            (m[0].kd, m[0].ns),
+            (Some(Vec3::new(0.5, 0.25, 1.0)), Some(10.0))
+        );
+        assert!(w.is_empty(), "{w:?}");
         // One number is grey, as the MTL specification says.
         assert_eq!(
             parse_ok("newmtl a\nKd 0.5\n").0[0].kd,

@@ -181,13 +181,14 @@ impl PlyMesh {
 fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Header> {
     let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let skipped = bytes.len() - body.len();
-    if body.starts_with(b"ply\r") && !body.starts_with(b"ply\r\n") {
-        bail!(
-            "{}: the PLY header's lines end in a lone CR: a PLY header's lines end in LF or CRLF",
-            path.display()
-        );
-    }
-    if !(body.starts_with(b"ply\n") || body.starts_with(b"ply\r\n")) {
+    // Lines end where the first one does: in LF, CRLF, or a lone CR as
+    // classic Mac OS wrote them (Draco's test files do; other readers take
+    // them).
+    let eol = match body.starts_with(b"ply\r") && !body.starts_with(b"ply\r\n") {
+        true => b'\r',
+        false => b'\n',
+    };
+    if !(body.starts_with(b"ply\n") || body.starts_with(b"ply\r")) {
         bail!(
             "{}: not a PLY file: it does not start with a 'ply' line",
             path.display()
@@ -206,7 +207,7 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
     loop {
         n += 1;
         let at = |msg: String| anyhow!("{}:{n}: {msg}", path.display());
-        let Some(len) = body[start..].iter().position(|&b| b == b'\n') else {
+        let Some(len) = body[start..].iter().position(|&b| b == eol) else {
             bail!(at("the header has no 'end_header' line".into()));
         };
         if start + len > MAX_HEADER {
@@ -219,10 +220,14 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
         start += len + 1;
         let line = std::str::from_utf8(raw.strip_suffix(b"\r").unwrap_or(raw))
             .map_err(|_| at("the header is not text (invalid UTF-8)".into()))?;
-        let line = crate::words::printable(line);
         // Names and values reach messages: each cut as messages quote them
-        // (none rayterm knows is near that long).
-        let cut: Vec<String> = line.split_whitespace().map(quoted).collect();
+        // (none rayterm knows is near that long), and made printable once
+        // split, so that a tab separates words as a space does.
+        let cut: Vec<String> = line
+            .split_whitespace()
+            .map(|w| quoted(&crate::words::printable(w)))
+            .collect();
+        let line = crate::words::printable(line);
         let words: Vec<&str> = cut.iter().map(String::as_str).collect();
         match words.as_slice() {
             ["ply"] if n == 1 => {}
@@ -423,8 +428,9 @@ fn role(element: &str, name: &str, kind: Kind) -> Option<Role> {
 trait Values {
     /// Starts the next element (an ASCII line).
     fn begin(&mut self) -> Result<(), String>;
-    /// Ends an element (no values left on an ASCII line).
-    fn end(&mut self) -> Result<(), String>;
+    /// Ends an element: how many values an ASCII line holds past the
+    /// declared ones (ignored, as other readers ignore them).
+    fn end(&mut self) -> usize;
     fn float(&mut self, t: Scalar) -> Result<f64, String>;
     fn int(&mut self, t: Scalar) -> Result<i64, String>;
     /// Where the reader is, for messages: `file:line` or `file (byte N)`.
@@ -450,8 +456,8 @@ impl Values for Binary<'_> {
     fn begin(&mut self) -> Result<(), String> {
         Ok(())
     }
-    fn end(&mut self) -> Result<(), String> {
-        Ok(())
+    fn end(&mut self) -> usize {
+        0
     }
     #[inline]
     fn float(&mut self, t: Scalar) -> Result<f64, String> {
@@ -510,14 +516,8 @@ impl Values for Ascii<'_> {
             }
         }
     }
-    fn end(&mut self) -> Result<(), String> {
-        match self.words.clone().count() {
-            0 => Ok(()),
-            n => Err(format!(
-                "{n} more value{} on the line than the header declares",
-                if n == 1 { "" } else { "s" }
-            )),
-        }
+    fn end(&mut self) -> usize {
+        self.words.clone().count()
     }
     fn float(&mut self, t: Scalar) -> Result<f64, String> {
         if t.is_int() {
@@ -663,6 +663,9 @@ fn body_from<R: Values>(
     let mut colors = Vec::new();
     // The first absurd coordinate (vertex, value) and how many more.
     let mut absurd: (Option<(u64, f64)>, u64) = (None, 0);
+    // The first line with values past the declared ones (where, how
+    // many), and how many such lines.
+    let mut longer: (Option<(String, usize)>, u64) = (None, 0);
     let mut triangles = 0u64;
     let mut corners: Vec<u32> = Vec::new();
     let mut face_uvs: Vec<f32> = Vec::new();
@@ -819,7 +822,11 @@ fn body_from<R: Values>(
                     }
                 }
             }
-            r.end().map_err(|m| fail(r, None, m))?;
+            let extra = r.end();
+            if extra > 0 {
+                longer.0.get_or_insert_with(|| (r.place(path), extra));
+                longer.1 += 1;
+            }
             if e.name == "face" {
                 let color = rgb.map(|c| srgb_to_linear((c / color_full).clamp(0.0, 1.0) as f32));
                 faces.add(
@@ -847,6 +854,16 @@ fn body_from<R: Values>(
                 }
             }
         }
+    }
+    if let (Some((place, n)), lines) = longer {
+        warnings.push(format!(
+            "{place}: {} past those the header declares: ignored{}",
+            crate::words::count(n as u64, "value", "values"),
+            match lines {
+                1 => String::new(),
+                l => format!(" (on {l} lines)"),
+            }
+        ));
     }
     if let Some(rest) = r.rest() {
         warnings.push(format!(
@@ -985,7 +1002,6 @@ mod tests {
         let cases = [
             (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 9\n"), "p.ply:15: element face 0 (of 1), vertex_indices: vertex index 9 is out of range (4 vertices)"),
             (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2\n"), "p.ply:15: element face 0 (of 1), vertex_indices: the line ends"),
-            (format!("{HEAD}0 0 0 7\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n"), "p.ply:11: element vertex 0 (of 4): 1 more value"),
             (format!("{HEAD}0 0 nan\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n"), "p.ply:11: element vertex 0 (of 4), z: 'nan' is not a finite"),
             (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 1\n"), "p.ply:15: element face 0 (of 1), vertex_indices: a face needs at least 3"),
             (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 -1\n"), "p.ply:15: element face 0 (of 1), vertex_indices: vertex index -1 is out of range"),
@@ -997,7 +1013,6 @@ mod tests {
             (HEAD.replace("property float z\n", ""), "p.ply: element vertex has no property z"),
             (HEAD.replace("uchar int vertex", "uchar float vertex"), "p.ply:9: vertex_indices: indices must be of an integer type"),
             ("plyx\n".into(), "p.ply: not a PLY file"),
-            (HEAD.replace('\n', "\r"), "p.ply: the PLY header's lines end in a lone CR"),
         ];
         for (text, want) in cases {
             let e = err(&text);
@@ -1077,7 +1092,7 @@ mod tests {
         fn begin(&mut self) -> Result<(), String> {
             self.0.begin()
         }
-        fn end(&mut self) -> Result<(), String> {
+        fn end(&mut self) -> usize {
             self.0.end()
         }
         fn float(&mut self, t: Scalar) -> Result<f64, String> {
@@ -1344,6 +1359,41 @@ mod tests {
             let e = err(&format!("{HEAD}{QUAD}").replace(from, to));
             assert!(e.starts_with(want), "{e}");
         }
+    }
+
+    #[test]
+    fn lone_cr_lines_tabs_and_values_past_the_declared_ones_are_read() {
+        let (want, _) = read(format!("{HEAD}{QUAD}").as_bytes()).unwrap();
+        // Lines ending in a lone CR (Draco's test files), in an ASCII body
+        // and before a binary one.
+        let (m, w) = read(format!("{HEAD}{QUAD}").replace('\n', "\r").as_bytes()).unwrap();
+        assert_eq!(
+            (m.positions, m.indices, w.len()),
+            (want.positions.clone(), want.indices.clone(), 0)
+        );
+        let mut bin = binary(false);
+        let end = bin.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+        for b in &mut bin[..end] {
+            if *b == b'\n' {
+                *b = b'\r';
+            }
+        }
+        assert_eq!(
+            read(&bin).unwrap().0.indices,
+            read(&binary(false)).unwrap().0.indices
+        );
+        // Tabs and leading blanks between a header line's words.
+        let tabs = format!("{HEAD}{QUAD}").replace("element vertex 4", " element\tvertex\t4");
+        assert_eq!(read(tabs.as_bytes()).unwrap().0.positions, want.positions);
+        // Values past the declared ones, as MeshLab's writers have left
+        // them: ignored, said once with where the first was.
+        let long = format!("{HEAD}0 0 0 7\n1 0 0 7 7\n1 1 0\n0 1 0\n4 0 1 2 3 9\n");
+        let (m, w) = read(long.as_bytes()).unwrap();
+        assert_eq!(m.indices, want.indices);
+        assert_eq!(
+            w,
+            ["p.ply:11: 1 value past those the header declares: ignored (on 3 lines)"]
+        );
     }
 
     #[test]
