@@ -10,7 +10,7 @@ mod files;
 use files::{rayterm, within_deadline, Dir};
 use glam::Vec3;
 use rayterm::render::{Feature, Features};
-use rayterm::scene::{self, Builder, Scene};
+use rayterm::scene::{self, Builder, Projection, Scene};
 
 /// Positions, vertex normals and triangles of a mesh.
 type Mesh = (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<[u32; 3]>);
@@ -666,7 +666,8 @@ fn a_gltf_scene_renders_with_its_hierarchy_materials_camera_and_light() {
     assert!(near(corners[2], Vec3::new(-2.2, 1.0, 0.0)), "{corners:?}");
     // Camera (Rig then Eye) and light from the file; the light at 1.
     assert!(near(s.camera.eye, Vec3::new(0.0, 0.0, 6.0)));
-    assert!((s.camera.vfov - 0.8f32.to_degrees()).abs() < 1e-4);
+    assert!(matches!(s.camera.projection,
+        Projection::Perspective { vfov } if (vfov - 0.8f32.to_degrees()).abs() < 1e-4));
     assert_eq!(
         s.lights,
         [rayterm::scene::Light::Point {
@@ -761,7 +762,8 @@ fn a_gltf_camera_is_chosen_by_name_or_number() {
         let c = with(name).unwrap();
         assert!(near(c.eye, Vec3::new(4.0, 0.0, 0.0)), "{name}: {c:?}");
         assert!((c.target - c.eye).normalize().x < -0.999, "{name}: {c:?}");
-        assert!((c.vfov - 0.5f32.to_degrees()).abs() < 1e-4);
+        assert!(matches!(c.projection,
+            Projection::Perspective { vfov } if (vfov - 0.5f32.to_degrees()).abs() < 1e-4));
     }
     for name in ["Eye", "1"] {
         assert!(near(with(name).unwrap().eye, Vec3::new(0.0, 0.0, 6.0)));

@@ -10,7 +10,7 @@ use exact::*;
 use glam::Vec3;
 use rayterm::bvh;
 use rayterm::render::{Feature, Features, Plan, PlanPolicy};
-use rayterm::scene::{self, Builder, Camera, Light, Scene};
+use rayterm::scene::{self, Builder, Camera, Light, Projection, Scene};
 
 /// Renders `s` with `light_samples` per hit, jittered or independent.
 fn render_lights(
@@ -154,7 +154,7 @@ fn floor_under_ceiling(ns: f32) -> Scene {
             eye: Vec3::new(0.0, 1.2, 1.5),
             target: Vec3::new(0.0, 0.0, 0.0),
             up: Vec3::Y,
-            vfov: 30.0,
+            projection: Projection::perspective(30.0),
         },
     );
     s.settings.ambient = Vec3::ZERO;

@@ -9,7 +9,7 @@ use common::*;
 use glam::Vec3;
 use rayterm::bvh;
 use rayterm::report::stability::scale::{image_difference, interior_lost, probe_render, Probed};
-use rayterm::scene::{Camera, Light, Scene};
+use rayterm::scene::{Camera, Light, Projection, Scene};
 
 /// A box standing on a plane, lit by a point light from the side: a shadow
 /// on the plane and on the box's far faces.
@@ -49,7 +49,7 @@ fn box_on_plane() -> Scene {
             eye: Vec3::new(0.3, 2.2, 3.0),
             target: Vec3::new(0.0, 0.2, 0.0),
             up: Vec3::Y,
-            vfov: 45.0,
+            projection: Projection::perspective(45.0),
         },
     );
     s.settings.ambient = Vec3::splat(0.1);

@@ -63,7 +63,7 @@ fn occluded_light_contributes_nothing() {
             eye: Vec3::new(3.0, 0.5, 0.0),
             target: Vec3::ZERO,
             up: Vec3::Y,
-            vfov: 10.0,
+            projection: rayterm::scene::Projection::perspective(10.0),
         },
     );
     s.settings.ambient = Vec3::splat(0.1);
@@ -145,7 +145,7 @@ fn reflection_depth_is_limited() {
             eye: Vec3::new(0.0, 0.5, 0.0),
             target: Vec3::new(0.1, 0.0, 0.0),
             up: Vec3::Z,
-            vfov: 1.0,
+            projection: rayterm::scene::Projection::perspective(1.0),
         },
     );
     s.settings.ambient = Vec3::ONE;
@@ -182,7 +182,7 @@ fn between_planes() -> rayterm::scene::Camera {
         eye: Vec3::new(0.0, 0.5, 0.0),
         target: Vec3::new(1.0, 0.2, 0.0),
         up: Vec3::Y,
-        vfov: 1.0,
+        projection: rayterm::scene::Projection::perspective(1.0),
     }
 }
 

@@ -165,7 +165,7 @@ pub fn clip_to_rect(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::Camera;
+    use crate::scene::{Camera, Projection};
 
     const W: u32 = 64;
     const H: u32 = 48;
@@ -176,7 +176,7 @@ mod tests {
             eye: Vec3::ZERO,
             target: Vec3::NEG_Z,
             up: Vec3::Y,
-            vfov: 60.0,
+            projection: Projection::perspective(60.0),
         }
         .frame(W, H)
     }

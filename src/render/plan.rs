@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use super::integrator::MAX_PATHS;
 use super::{Feature, Features};
-use crate::scene::{Environment, Scene};
+use crate::scene::{Environment, Projection, Scene};
 
 /// Whether stages the scene cannot use are left out (`--no-plan` runs them).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -172,10 +172,17 @@ pub struct Plan {
     /// the same hits, found together, whenever the BVH is used, for a
     /// pixel that a pass gives at least
     /// [`PACKET_SAMPLES`](super::progressive::PACKET_SAMPLES) samples.
+    /// Not for an orthographic camera, whose rays start apart (a packet
+    /// would walk them one by one).
     pub packets: bool,
     /// Nothing is sampled (no sample draws a random number): one pass
     /// gives the exact image.
     pub deterministic: bool,
+}
+
+/// Whether the scene's camera is orthographic.
+fn orthographic(scene: &Scene) -> bool {
+    matches!(scene.camera.projection, Projection::Orthographic { .. })
 }
 
 impl Plan {
@@ -225,7 +232,7 @@ impl Plan {
             environment: on(Feature::Environment),
             bloom: on(Feature::Bloom),
             bvh: on(Feature::Bvh),
-            packets: on(Feature::Bvh),
+            packets: on(Feature::Bvh) && !orthographic(scene),
             deterministic,
         }
     }
@@ -283,6 +290,8 @@ impl Plan {
                     "on: a pixel's samples in one pass, {} or more, walk together",
                     super::progressive::PACKET_SAMPLES
                 )
+            } else if self.bvh {
+                "not needed: the orthographic camera's rays start apart".into()
             } else {
                 format!("off: needs {}", Feature::Bvh.name())
             },

@@ -15,7 +15,7 @@ use serde::Serialize;
 use super::stats::median;
 use crate::bvh::{self, Bvh, Simd, TraversalStats};
 use crate::geometry::{Aabb, Ray};
-use crate::scene::camera::CameraFrame;
+use crate::scene::camera::{CameraFrame, Projection};
 use crate::scene::{Builder, Geometry};
 
 /// Rows handed out together, as the harness does (interleaved chunks).
@@ -55,7 +55,14 @@ impl Workload {
         Workload {
             width,
             height,
-            frame: CameraFrame::new(eye, c, DVec3::Y, 45.0, width, height),
+            frame: CameraFrame::new(
+                eye,
+                c,
+                DVec3::Y,
+                Projection::perspective(45.0),
+                width,
+                height,
+            ),
             eye: eye.as_vec3(),
             light,
             light_f: light.as_vec3(),

@@ -1,5 +1,6 @@
-//! Pinhole camera, with the ray generation of the shared ray workload
-//! (camera math in f64, rays cast to f32) so renders and benchmarks agree.
+//! Pinhole and orthographic cameras, with the ray generation of the shared
+//! ray workload (camera math in f64, rays cast to f32) so renders and
+//! benchmarks agree.
 
 use glam::{DVec3, Vec3};
 
@@ -10,8 +11,36 @@ pub struct Camera {
     pub eye: Vec3,
     pub target: Vec3,
     pub up: Vec3,
-    /// Vertical field of view in degrees.
-    pub vfov: f32,
+    pub projection: Projection,
+}
+
+/// How a camera's rays leave it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// From the eye, through a view of this vertical field of view, degrees.
+    Perspective { vfov: f32 },
+    /// Parallel, along the line of sight, from the plane through the eye
+    /// square to it: a view this many scene units high, half above the eye
+    /// and half below (glTF's `ymag`). Nothing behind that plane is seen.
+    Orthographic { half_height: f32 },
+}
+
+impl Projection {
+    /// The perspective view of vertical field of view `vfov` degrees.
+    pub fn perspective(vfov: f32) -> Self {
+        Projection::Perspective { vfov }
+    }
+
+    /// Scaled with the scene by `s`: an orthographic view's extent is a
+    /// length, a field of view an angle.
+    pub fn scaled(self, s: f32) -> Self {
+        match self {
+            Projection::Orthographic { half_height } => Projection::Orthographic {
+                half_height: half_height * s,
+            },
+            p => p,
+        }
+    }
 }
 
 impl Camera {
@@ -23,7 +52,7 @@ impl Camera {
             eye: c + r * Vec3::new(1.2, 0.8, 2.0),
             target: c,
             up: Vec3::Y,
-            vfov: 45.0,
+            projection: Projection::perspective(45.0),
         }
     }
 
@@ -39,7 +68,7 @@ impl Camera {
             self.eye.as_dvec3(),
             self.target.as_dvec3(),
             self.up.as_dvec3(),
-            self.vfov as f64,
+            self.projection,
             width,
             height,
         )
@@ -80,6 +109,12 @@ pub struct CameraFrame {
     fwd: DVec3,
     right: DVec3,
     upv: DVec3,
+    /// Orthographic: offsets are distances along `right` and `upv` on the
+    /// plane through the eye, every ray along `fwd`; else the rays leave
+    /// the eye through `fwd + sx * right + sy * upv`.
+    ortho: bool,
+    /// Half the view's height: `tan(vfov / 2)` at distance 1, or the
+    /// orthographic half height.
     h: f64,
     aspect: f64,
     width: f64,
@@ -91,16 +126,27 @@ impl CameraFrame {
     /// The basis from an f64 eye, target and up: the ray workload derives
     /// them in f64 from the mesh bounds, and rounding them to f32 first
     /// would change the rays.
-    pub fn new(eye: DVec3, target: DVec3, up: DVec3, vfov: f64, width: u32, height: u32) -> Self {
+    pub fn new(
+        eye: DVec3,
+        target: DVec3,
+        up: DVec3,
+        projection: Projection,
+        width: u32,
+        height: u32,
+    ) -> Self {
         let fwd = (target - eye).normalize();
         let right = fwd.cross(up).normalize();
         let upv = right.cross(fwd);
-        let h = (vfov * 0.5).to_radians().tan();
+        let (ortho, h) = match projection {
+            Projection::Perspective { vfov } => (false, (vfov as f64 * 0.5).to_radians().tan()),
+            Projection::Orthographic { half_height } => (true, half_height as f64),
+        };
         CameraFrame {
             eye,
             fwd,
             right,
             upv,
+            ortho,
             h,
             aspect: width as f64 / height as f64,
             width: width as f64,
@@ -137,7 +183,13 @@ impl CameraFrame {
     /// rays of a tile of pixels share theirs per column and per row.
     #[inline]
     pub fn ray_through(&self, sx: f64, sy: f64) -> Ray {
-        Ray::new(self.eye.as_vec3(), self.dir(sx, sy).as_vec3())
+        match self.ortho {
+            true => Ray::new(
+                (self.eye + sx * self.right + sy * self.upv).as_vec3(),
+                self.fwd.as_vec3(),
+            ),
+            false => Ray::new(self.eye.as_vec3(), self.dir(sx, sy).as_vec3()),
+        }
     }
 
     /// The unit direction at offsets `sx`, `sy`, in f64.
@@ -162,14 +214,15 @@ impl CameraFrame {
     /// divisions and square root wait on one another): the same operations
     /// in the same order, each correctly rounded, so the same rays to the
     /// bit as one at a time. `POS`: `a` and `b` are image positions, else
-    /// offsets.
+    /// offsets. Orthographic rays, with no square root and one direction,
+    /// are made one at a time.
     #[inline]
     fn batch<const POS: bool>(&self, a: &[f64], b: &[f64], out: &mut Vec<Ray>) {
         assert_eq!(a.len(), b.len());
         out.reserve(a.len());
         let mut done = 0;
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
+        if !self.ortho && std::arch::is_x86_feature_detected!("avx") {
             done = a.len() / 4 * 4;
             // SAFETY: the CPU has AVX.
             unsafe { self.batch_avx::<POS>(&a[..done], &b[..done], out) };
@@ -249,7 +302,8 @@ impl CameraFrame {
         d.map(|v| mul(v, recip))
     }
 
-    /// Image position of a world point, or `None` when it is behind the camera.
+    /// Image position of a world point, or `None` when it is behind the
+    /// camera (the eye, or an orthographic camera's plane).
     pub fn project(&self, p: Vec3) -> Option<(f64, f64)> {
         let d = p.as_dvec3() - self.eye;
         let z = d.dot(self.fwd);
@@ -282,7 +336,8 @@ impl CameraFrame {
 
     /// Image position of a camera-relative point in front of the eye.
     fn image_pos(&self, d: DVec3) -> (f64, f64) {
-        let z = d.dot(self.fwd);
+        // Orthographic offsets are lengths on the view plane.
+        let z = if self.ortho { 1.0 } else { d.dot(self.fwd) };
         let sx = d.dot(self.right) / z;
         let sy = d.dot(self.upv) / z;
         let x = (sx / (self.h * self.aspect) + 1.0) * 0.5 * self.width;
@@ -294,6 +349,36 @@ impl CameraFrame {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An orthographic view: rays along the line of sight from the plane
+    /// through the eye, spread over the view's height and the image's
+    /// aspect; a point projects to the same place at any depth in front.
+    #[test]
+    fn orthographic_rays_are_parallel_and_spread_over_the_view() {
+        let ortho = Projection::Orthographic { half_height: 2.0 };
+        let (eye, target) = (DVec3::new(1.0, 2.0, 10.0), DVec3::new(1.0, 2.0, 0.0));
+        let f = CameraFrame::new(eye, target, DVec3::Y, ortho, 64, 32);
+        for (x, y, o) in [
+            (0.0, 0.0, Vec3::new(-3.0, 4.0, 10.0)),
+            (32.0, 16.0, Vec3::new(1.0, 2.0, 10.0)),
+            (64.0, 32.0, Vec3::new(5.0, 0.0, 10.0)),
+        ] {
+            let r = f.ray(x, y);
+            assert_eq!((r.origin, r.dir), (o, Vec3::NEG_Z), "({x}, {y})");
+        }
+        for z in [9.0, 0.0, -1e6] {
+            assert_eq!(f.project(Vec3::new(-3.0, 4.0, z)), Some((0.0, 0.0)));
+        }
+        assert_eq!(f.project(Vec3::new(0.0, 0.0, 11.0)), None);
+        let ((ax, _), (bx, _)) = f
+            .project_clip(Vec3::new(1.0, 2.0, 20.0), Vec3::new(3.0, 2.0, 0.0), 1.0)
+            .unwrap();
+        // Cut at the plane 1 ahead of the eye: x = 1 + 2 * 11 / 20.
+        assert!(
+            (ax - 32.0 - 1.1 * 8.0).abs() < 1e-9 && (bx - 48.0).abs() < 1e-9,
+            "{ax} {bx}"
+        );
+    }
 
     /// Batches of every length up to 13 (the four-lane part and the rest),
     /// over cameras and positions from a hash, give the rays made one at a
@@ -312,7 +397,13 @@ mod tests {
             let mut v = || DVec3::new(next(), next(), next()) * 200.0 - 100.0;
             let (eye, target) = (v(), v());
             let (w, h) = (1 + (next() * 3000.0) as u32, 1 + (next() * 3000.0) as u32);
-            let f = CameraFrame::new(eye, target, DVec3::Y, 1.0 + next() * 170.0, w, h);
+            let projection = match next() < 0.25 {
+                true => Projection::Orthographic {
+                    half_height: (next() * 100.0) as f32,
+                },
+                false => Projection::perspective((1.0 + next() * 170.0) as f32),
+            };
+            let f = CameraFrame::new(eye, target, DVec3::Y, projection, w, h);
             let n = (next() * 14.0) as usize;
             let x: Vec<f64> = (0..n).map(|_| next() * w as f64).collect();
             let y: Vec<f64> = (0..n).map(|_| next() * h as f64).collect();
@@ -323,7 +414,7 @@ mod tests {
             f.rays_through(&sx, &sy, &mut through);
             assert_eq!((at.len(), through.len()), (n, n));
             #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx") {
+            if !f.ortho && std::arch::is_x86_feature_detected!("avx") {
                 // The f64 directions too: a difference there seldom
                 // survives the rounding to f32.
                 for i in (0..n / 4 * 4).step_by(4) {

@@ -28,7 +28,8 @@ use super::source::{resolve, Disk, Kind, Source};
 use super::texture::FACE_NAMES;
 use super::up::Up;
 use super::{
-    bezier, BloomSettings, Builder, Camera, CubeMap, Environment, Light, Material, Scene, Settings,
+    bezier, BloomSettings, Builder, Camera, CubeMap, Environment, Light, Material, Projection,
+    Scene, Settings,
 };
 use crate::words::{clip_quotes, printable, quoted};
 
@@ -153,8 +154,18 @@ struct CameraTable {
     eye: V3,
     target: V3,
     up: Option<V3>,
-    /// Vertical field of view, degrees.
+    projection: Option<Spanned<ProjectionType>>,
+    /// Vertical field of view, degrees (perspective).
     fov: Option<Spanned<Num>>,
+    /// The view's height in scene units (orthographic).
+    height: Option<Spanned<Num>>,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq)]
+#[serde(rename_all = "lowercase")]
+enum ProjectionType {
+    Perspective,
+    Orthographic,
 }
 
 /// `scale = 2.0` or `scale = [1, 2, 1]`.
@@ -690,18 +701,15 @@ fn camera_from(
     if fwd.length_squared() == 0.0 || fwd.cross(up).length_squared() == 0.0 {
         bail!("{here}: camera: eye, target and up must not be collinear");
     }
+    let projection = projection_from(c, frame, loc, &here)?;
     let cam = Camera {
         eye: frame.point(eye),
         target: frame.point(target),
         up: up.as_vec3(),
-        vfov: c.fov.as_ref().map_or(45.0, |f| f.get_ref().f32()),
+        projection,
     };
     if cam.eye == cam.target {
         bail!("{here}: camera: eye and target are too close to tell apart in f32");
-    }
-    if !(1.0..179.0).contains(&cam.vfov) {
-        let at = c.fov.as_ref().map_or(here.clone(), |f| loc.at(f.span()));
-        bail!("{at}: camera: fov must be between 1 and 179 degrees");
     }
     if cam.eye.abs().max(cam.target.abs()).max_element() as f64 > ABSURD {
         parts.warnings.push(format!(
@@ -709,6 +717,54 @@ fn camera_from(
         ));
     }
     Ok(cam)
+}
+
+/// A camera table's projection: perspective with `fov` (default), or
+/// orthographic with `height`; the other's field is an error.
+fn projection_from(
+    c: &CameraTable,
+    frame: &Frame,
+    loc: &Locator,
+    here: &str,
+) -> Result<Projection> {
+    let ortho = c
+        .projection
+        .as_ref()
+        .is_some_and(|p| *p.get_ref() == ProjectionType::Orthographic);
+    let at = |n: &Spanned<Num>| loc.at(n.span());
+    if ortho {
+        if let Some(f) = &c.fov {
+            bail!(
+                "{}: camera: fov is for perspective cameras; an orthographic one takes height",
+                at(f)
+            );
+        }
+        let Some(h) = &c.height else {
+            bail!(
+                "{here}: camera: an orthographic camera needs height (the view's height in \
+                 scene units)"
+            );
+        };
+        // Placed with the scene, which may be scaled for f32.
+        let half_height = (h.get_ref().0 * 0.5 * frame.scale) as f32;
+        if !(half_height > 0.0 && half_height.is_finite()) {
+            bail!("{}: camera: height must be more than 0", at(h));
+        }
+        return Ok(Projection::Orthographic { half_height });
+    }
+    if let Some(h) = &c.height {
+        bail!(
+            "{}: camera: height is for orthographic cameras (projection = \"orthographic\"); \
+             a perspective one takes fov",
+            at(h)
+        );
+    }
+    let vfov = c.fov.as_ref().map_or(45.0, |f| f.get_ref().f32());
+    if !(1.0..179.0).contains(&vfov) {
+        let at = c.fov.as_ref().map_or(here.to_string(), at);
+        bail!("{at}: camera: fov must be between 1 and 179 degrees");
+    }
+    Ok(Projection::perspective(vfov))
 }
 
 fn material_from(parts: &mut Parts, src: &dyn Source, loc: &Locator, m: &MaterialSpec) -> Material {

@@ -201,7 +201,7 @@ pub fn load_bare_from(
                 eye: frame.point(c.eye),
                 target: frame.point(c.eye + ahead * d),
                 up: c.up.normalize().as_vec3(),
-                vfov: c.vfov as f32,
+                projection: c.projection.scaled(frame.scale as f32),
             }
         }
         None => Camera::auto(&b),

@@ -29,7 +29,7 @@ use anyhow::{bail, Context, Result};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-pub use camera::Camera;
+pub use camera::{Camera, Projection};
 pub use light::Light;
 pub use material::Material;
 pub use reach::check_reach;
@@ -228,6 +228,7 @@ impl Scene {
         }
         self.camera.eye = f(self.camera.eye);
         self.camera.target = f(self.camera.target);
+        self.camera.projection = self.camera.projection.scaled(scale);
         for l in &mut self.lights {
             l.transform(scale, offset);
         }

@@ -124,6 +124,17 @@ impl Texture {
     /// would take more than [`TEXTURE_BUDGET`] (or the memory available) to
     /// decode and store, is refused before anything large is allocated.
     pub fn decode(name: &str, bytes: &[u8]) -> Result<Self> {
+        // Formats of GPU textures, which the decoder would call unknown.
+        for (magic, what) in [
+            (&b"\xABKTX 20\xBB\r\n\x1A\n"[..], "KTX2 (Basis Universal)"),
+            (b"DDS ", "DDS"),
+        ] {
+            if bytes.starts_with(magic) {
+                bail!(
+                    "a {what} image, which rayterm does not decode (it reads PNG, JPEG and WebP)"
+                );
+            }
+        }
         let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
             .with_guessed_format()
             .map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -290,6 +301,30 @@ mod tests {
         assert_eq!(t.nearest(Vec2::new(1.75, 0.5)), Vec3::ZERO);
         assert_eq!(t.nearest(Vec2::new(-0.25, 0.5)), Vec3::ZERO);
         assert_eq!(t.bilinear(Vec2::new(1.0, 0.5)), Vec3::ONE);
+    }
+
+    /// WebP decodes as PNG does (a lossless 2x1 image of a red and a blue
+    /// texel, from the image crate's encoder); KTX2 is named.
+    #[test]
+    fn webp_decodes_and_ktx2_is_named() {
+        let img = image::RgbImage::from_fn(2, 1, |x, _| match x {
+            0 => image::Rgb([255, 0, 0]),
+            _ => image::Rgb([0, 0, 255]),
+        });
+        let mut webp = Vec::new();
+        img.write_to(
+            &mut std::io::Cursor::new(&mut webp),
+            image::ImageFormat::WebP,
+        )
+        .unwrap();
+        assert!(webp.starts_with(b"RIFF") && &webp[8..12] == b"WEBP");
+        let t = Texture::decode("t.webp", &webp).unwrap();
+        assert_eq!((t.width, t.height), (2, 1));
+        assert_eq!(t.texels[..], [Vec3::X, Vec3::Z]);
+        let mut ktx2 = b"\xABKTX 20\xBB\r\n\x1A\n".to_vec();
+        ktx2.extend([0; 64]);
+        let e = Texture::decode("t.ktx2", &ktx2).unwrap_err().to_string();
+        assert!(e.contains("KTX2 (Basis Universal)"), "{e}");
     }
 
     #[test]

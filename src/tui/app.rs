@@ -29,7 +29,7 @@ use crate::inspect::overlay::{PixelView, VIEWS};
 use crate::render::debug_view::{DebugView, FilmView};
 use crate::render::{Decision, Feature, Features, Plan, Session, Worst};
 use crate::report::converge::load_reference;
-use crate::scene::Builder;
+use crate::scene::{Builder, Projection};
 use crate::words;
 
 /// How long a status message stays before the status line shows the
@@ -436,8 +436,16 @@ impl App {
                 self.send_view();
             }
             Action::Fov(d) => {
-                let fov = self.camera.zoom(d);
-                self.say(format!("field of view {fov:.0}°"));
+                let zoomed = self.camera.zoom(d);
+                self.say(match zoomed {
+                    Projection::Perspective { vfov } => format!("field of view {vfov:.0}°"),
+                    Projection::Orthographic { half_height } => {
+                        format!(
+                            "view height {}",
+                            crate::words::significant(2.0 * half_height as f64)
+                        )
+                    }
+                });
                 self.send_view();
             }
             Action::ResetView => {

@@ -194,7 +194,7 @@ pub const ROWS: &[Row] = &[
             (K::Char('='), A::Fov(-1)),
             (K::Char('-'), A::Fov(1)),
         ],
-        help: "zoom in, in, out (field of view)",
+        help: "zoom in, in, out (field of view, or an orthographic view's height)",
         hint: Some("zoom"),
     },
     Row {

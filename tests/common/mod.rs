@@ -5,7 +5,7 @@ use glam::{Vec2, Vec3};
 use rayterm::bvh::Bvh;
 use rayterm::render::{Features, Film, Plan, Progressive, SceneRequest, Session, Tracer};
 use rayterm::scene::obj::{MeshData, Parts, Placement};
-use rayterm::scene::{Builder, Camera, Environment, Light, Material, Scene, Settings};
+use rayterm::scene::{Builder, Camera, Environment, Light, Material, Projection, Scene, Settings};
 
 /// Positions, triangles and material of one mesh.
 pub type TestMesh = (Vec<Vec3>, Vec<[u32; 3]>, Material);
@@ -71,7 +71,7 @@ pub fn top_camera(height: f32) -> Camera {
         eye: Vec3::new(0.0, height, 0.0),
         target: Vec3::ZERO,
         up: Vec3::NEG_Z,
-        vfov: 30.0,
+        projection: Projection::perspective(30.0),
     }
 }
 

@@ -6,7 +6,7 @@
 use glam::{DVec3, Vec3};
 use rayterm::render::film::LUMA;
 use rayterm::render::{Feature, Features};
-use rayterm::scene::{Camera, Light, Scene};
+use rayterm::scene::{Camera, Light, Projection, Scene};
 
 use crate::common::{material, quad_y, scene, top_camera};
 
@@ -232,7 +232,7 @@ pub fn box_under(light: Light) -> Scene {
             eye: Vec3::new(0.2, 1.6, 1.3),
             target: Vec3::new(0.0, 0.1, -0.1),
             up: Vec3::Y,
-            vfov: 40.0,
+            projection: Projection::perspective(40.0),
         },
     );
     s.settings.ambient = Vec3::splat(0.02);

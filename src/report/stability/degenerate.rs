@@ -13,7 +13,7 @@ use super::stiff::render;
 use super::{Options, Row};
 use crate::scene::obj::{self, Parts, Placement};
 use crate::scene::source::Memory;
-use crate::scene::{Camera, Environment, Geometry, Light, MeshInfo, Scene, Settings};
+use crate::scene::{Camera, Environment, Geometry, Light, MeshInfo, Projection, Scene, Settings};
 
 /// An OBJ of good, degenerate and nearly degenerate triangles; the comments
 /// say which. [`ZERO_AREA`] of its faces have no area.
@@ -96,7 +96,7 @@ fn camera() -> Camera {
         eye: Vec3::new(0.3, 3.0, 3.5),
         target: Vec3::new(0.0, 0.2, 0.0),
         up: Vec3::Y,
-        vfov: 50.0,
+        projection: Projection::perspective(50.0),
     }
 }
 

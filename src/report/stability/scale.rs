@@ -355,6 +355,7 @@ fn map_scene(scene: &Scene, f: impl Fn(Vec3) -> Vec3, s: f32) -> Scene {
     }
     out.camera.eye = f(out.camera.eye);
     out.camera.target = f(out.camera.target);
+    out.camera.projection = out.camera.projection.scaled(s);
     for l in &mut out.lights {
         match l {
             Light::Point { position, .. } => *position = f(*position),

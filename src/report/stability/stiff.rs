@@ -14,7 +14,9 @@ use super::{format_figure, Options, Row};
 use crate::bvh::{self, TraversalStats};
 use crate::render::{Features, Film, Progressive, SceneRequest, Session};
 use crate::scene::obj::{self, MeshData, Parts, Placement};
-use crate::scene::{builtin, Builder, Camera, Environment, Light, Material, Scene, Settings};
+use crate::scene::{
+    builtin, Builder, Camera, Environment, Light, Material, Projection, Scene, Settings,
+};
 use glam::Affine3A;
 
 /// Renders `spp` passes with every feature (or `features`) on.
@@ -138,7 +140,7 @@ pub fn stage(ns: f32, light: Vec3, intensity: f32, shut_in: bool) -> Result<Scen
             eye: Vec3::new(0.0, 2.0, 5.0),
             target: Vec3::new(0.0, 0.8, 0.0),
             up: Vec3::Y,
-            vfov: 45.0,
+            projection: Projection::perspective(45.0),
         },
         environment: Environment::Color(Vec3::splat(0.02)),
         settings: Settings {
@@ -278,7 +280,7 @@ pub fn stiff_shading(o: &Options) -> Result<Vec<Row>> {
         eye: Vec3::new(0.0, 1.0, 0.0),
         target: Vec3::new(1.0, 1.2, 0.3),
         up: Vec3::Y,
-        vfov: 90.0,
+        projection: Projection::perspective(90.0),
     };
     let b = bvh::build(&inside.geometry, Builder::Sah);
     let frame = inside.camera.frame(w, h);

@@ -99,15 +99,29 @@ pub(super) fn check_values(path: &Path, doc: &::gltf::Document, broken: &Broken)
         .cameras()
         .filter(|c| !broken.cameras.contains_key(&c.index()))
     {
-        if let ::gltf::camera::Projection::Perspective(p) = c.projection() {
-            // The range a scene file's camera allows.
-            let y = p.yfov();
-            if !(1.0..179.0).contains(&y.to_degrees()) {
-                bail!(
-                    "{}: camera {}: yfov {y} radians is not between 1 and 179 degrees",
-                    path.display(),
-                    named(c.name(), c.index())
-                );
+        match c.projection() {
+            ::gltf::camera::Projection::Perspective(p) => {
+                // The range a scene file's camera allows.
+                let y = p.yfov();
+                if !(1.0..179.0).contains(&y.to_degrees()) {
+                    bail!(
+                        "{}: camera {}: yfov {y} radians is not between 1 and 179 degrees",
+                        path.display(),
+                        named(c.name(), c.index())
+                    );
+                }
+            }
+            ::gltf::camera::Projection::Orthographic(o) => {
+                // glTF forbids zero; a negative one (which it advises
+                // against) is read as its size.
+                let y = o.ymag();
+                if y == 0.0 || !y.is_finite() {
+                    bail!(
+                        "{}: camera {}: ymag {y} is not a height (it must be a nonzero number)",
+                        path.display(),
+                        named(c.name(), c.index())
+                    );
+                }
             }
         }
     }

@@ -7,19 +7,24 @@
 //! node's transform applied in f64; triangle primitives (strips and fans
 //! turned into triangles) with positions, normals, the first UV set and
 //! `COLOR_0`; materials mapped onto Phong (see [`phong`]) with the
-//! `baseColorTexture` and its sampler's wrap modes; perspective cameras
-//! (the first, or the one `--camera` names); `KHR_lights_punctual` lights (spot lights become point lights,
+//! `baseColorTexture` and its sampler's wrap modes (WebP images through
+//! `EXT_texture_webp`); `EXT_mesh_gpu_instancing`; perspective and
+//! orthographic cameras (the first, or the one `--camera` names);
+//! `KHR_lights_punctual` lights (spot lights become point lights,
 //! directional lights point lights far away). What cannot be mapped is
 //! listed once in the warnings.
 
 mod check;
+mod extensions;
+mod instancing;
+mod lenient;
 mod primitive;
 mod uri;
 
 use std::collections::HashMap;
 use std::path::Path;
 
-use ::gltf::camera::Projection;
+use ::gltf::camera::Projection as CameraKind;
 use ::gltf::khr_lights_punctual::Kind as LightKind;
 use ::gltf::material::AlphaMode;
 use ::gltf::texture::WrappingMode;
@@ -29,7 +34,7 @@ use glam::{DAffine3, DMat4, DVec3, Vec3};
 use super::parts::{mesh_fits, Parts, Placed};
 use super::source::{Kind, Outside, Source};
 use super::texture::{Texture, Wrap};
-use super::Material;
+use super::{Material, Projection};
 use check::{check_lights, check_transform, check_trees, check_values, Broken};
 use primitive::{Decoded, Key};
 use uri::inline_uri;
@@ -42,8 +47,9 @@ pub struct FileCamera {
     pub eye: DVec3,
     pub forward: DVec3,
     pub up: DVec3,
-    /// Vertical field of view, degrees.
-    pub vfov: f64,
+    /// Its projection; an orthographic one's extent in the file's units
+    /// (scaled by its node), which the scene's frame scales in turn.
+    pub projection: Projection,
 }
 
 /// A light of the file, placed in f64.
@@ -63,7 +69,7 @@ pub enum FileLight {
 /// What a glTF file holds, placed.
 pub struct GltfScene {
     pub meshes: Vec<Placed>,
-    /// The usable perspective cameras, in the order the scene's nodes
+    /// The usable cameras, in the order the scene's nodes
     /// are visited.
     pub cameras: Vec<FileCamera>,
     pub lights: Vec<FileLight>,
@@ -161,6 +167,7 @@ fn wrap(mode: WrappingMode) -> Wrap {
 
 struct Reader<'a> {
     path: &'a Path,
+    doc: &'a ::gltf::Document,
     src: &'a dyn Source,
     buffers: Vec<Vec<u8>>,
     /// Where each buffer's bytes come from, for messages that quote them.
@@ -283,8 +290,19 @@ impl Reader<'_> {
             if info.tex_coord() != 0 {
                 self.unmapped.note("textures on a second UV set", here);
             }
-            let sampler = info.texture().sampler();
-            if let Some(mut t) = self.image(parts, info.texture().source(), &here())? {
+            let texture = info.texture();
+            let sampler = texture.sampler();
+            let image = match texture.source() {
+                Some(image) => self.image(parts, image, &here())?,
+                None => {
+                    let t = named(texture.name(), texture.index());
+                    let what = extensions::sourceless(&texture);
+                    self.unmapped
+                        .note(&what, || format!("texture {t} of material {name}"));
+                    None
+                }
+            };
+            if let Some(mut t) = image {
                 // The texture takes the place of kd: the factor and the
                 // metallic share of kd multiply its texels, which every
                 // material of the image shares.
@@ -330,7 +348,7 @@ fn version_1(body: &[u8]) -> bool {
 }
 
 /// Reads a glTF file: materials and textures go into `parts`; meshes,
-/// the perspective cameras and the lights come back placed by `xf`
+/// the cameras and the lights come back placed by `xf`
 /// in f64. `material` replaces the file's materials when given.
 pub fn load(
     parts: &mut Parts,
@@ -347,8 +365,9 @@ pub fn load(
     // A .gltf is JSON text, read with or without a byte-order mark as every
     // text file is (a .glb starts with its magic number).
     let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
-    let file =
-        ::gltf::Gltf::from_slice_without_validation(body).map_err(|e| match version_1(body) {
+    let file = ::gltf::Gltf::from_slice_without_validation(body)
+        .or_else(|e| lenient::reread(body).unwrap_or(Err(e)))
+        .map_err(|e| match version_1(body) {
             true => anyhow!(
                 "{}: glTF 1.0 is not supported (rayterm reads glTF 2.0; \
                  glTF-Pipeline or Blender convert a 1.0 file)",
@@ -357,7 +376,7 @@ pub fn load(
             false => invalid(&e),
         })?;
     drop(bytes);
-    let json = file.document.into_json();
+    let mut json = file.document.into_json();
     // glTF 1.0 is another format, which the 2.0 schema misreads.
     let version = &json.asset.version;
     if version.split('.').next() != Some("2") {
@@ -386,6 +405,11 @@ pub fn load(
             }
         }
     }
+    extensions::accept_required(&mut json);
+    extensions::prefer_webp(path, &mut json)?;
+    // rayterm shows a file at rest: its animations are counted, not read,
+    // so nothing in them (targets of other extensions) can refuse it.
+    let animations = std::mem::take(&mut json.animations).len();
     let broken = Broken::of(&json);
     let doc = ::gltf::Document::from_json(json).map_err(|e| invalid(&e))?;
     let mut blob = file.blob;
@@ -447,6 +471,7 @@ pub fn load(
     }
     let mut r = Reader {
         path,
+        doc: &doc,
         src,
         buffers,
         origins,
@@ -459,12 +484,12 @@ pub fn load(
         uses: HashMap::new(),
     };
     for ext in doc.extensions_used() {
-        if ext != "KHR_lights_punctual" {
+        if !extensions::reads(ext) {
             r.unmapped
                 .note(&crate::words::quoted(ext), || "extensionsUsed".into());
         }
     }
-    if doc.animations().next().is_some() {
+    if animations > 0 {
         r.unmapped.note("animations", || "shown at rest".into());
     }
     if doc.skins().next().is_some() {
@@ -477,6 +502,20 @@ pub fn load(
         cameras: Vec::new(),
         lights: Vec::new(),
     };
+    // An empty scene is valid (Blender writes one beside the scene it
+    // exports); one that leaves the file's meshes unplaced is said.
+    let meshes = doc.meshes().len();
+    if meshes > 0 && scene.as_ref().is_none_or(|s| s.nodes().len() == 0) {
+        let which = match &scene {
+            Some(s) => format!("its scene {} has no nodes", named(s.name(), s.index())),
+            None => "it has no scenes".into(),
+        };
+        parts.warnings.push(format!(
+            "{}: {which}, so nothing is placed, though the file has {}",
+            path.display(),
+            crate::words::count(meshes as u64, "mesh", "meshes")
+        ));
+    }
     let Some(scene) = scene else {
         // Without scenes, nothing is placed (the spec says so).
         parts.warnings.extend(r.unmapped.warning(path));
@@ -517,15 +556,16 @@ pub fn load(
                 r.unmapped
                     .note("morph targets", || format!("mesh {mesh_name}"));
             }
-            for p in mesh.primitives() {
-                out.meshes.extend(r.primitive(
-                    parts,
-                    p,
-                    &mesh_name,
-                    &node_name,
-                    &world,
-                    override_id,
-                )?);
+            let drawn = mesh.primitives().any(|p| primitive::drawn(p.mode()));
+            let placements = match drawn {
+                true => r.placements(&node, &node_name, world)?,
+                false => vec![(world, node_name.clone())],
+            };
+            for (xf, name) in &placements {
+                for p in mesh.primitives() {
+                    out.meshes
+                        .extend(r.primitive(parts, p, &mesh_name, name, xf, override_id)?);
+                }
             }
         }
         if let Some(cam) = node.camera() {
@@ -536,33 +576,43 @@ pub fn load(
                     named(cam.name(), cam.index())
                 );
             }
-            match cam.projection() {
-                Projection::Perspective(p) => {
-                    let names = [node.name(), cam.name()]
-                        .into_iter()
-                        .flatten()
-                        .map(str::to_string)
-                        .collect();
-                    let c = FileCamera {
-                        names,
-                        eye: world.transform_point3(DVec3::ZERO),
-                        forward: world.transform_vector3(DVec3::NEG_Z),
-                        up: world.transform_vector3(DVec3::Y),
-                        vfov: (p.yfov() as f64).to_degrees(),
-                    };
-                    let usable = c.eye.is_finite()
-                        && c.forward.cross(c.up).length_squared() > 0.0
-                        && c.forward.cross(c.up).is_finite();
-                    match usable {
-                        true => out.cameras.push(c),
-                        false => r
-                            .unmapped
-                            .note("cameras scaled to nothing", || format!("node {node_name}")),
-                    }
-                }
-                Projection::Orthographic(_) => r
+            let names = [node.name(), cam.name()]
+                .into_iter()
+                .flatten()
+                .map(str::to_string)
+                .collect();
+            let up = world.transform_vector3(DVec3::Y);
+            let projection = match cam.projection() {
+                CameraKind::Perspective(p) => Projection::perspective(p.yfov().to_degrees()),
+                // ymag is the half height in the camera's own space: the
+                // node's scale on the way scales it. The width follows the
+                // image's aspect, as a perspective camera's does (xmag, like
+                // aspectRatio, is not read).
+                CameraKind::Orthographic(o) => Projection::Orthographic {
+                    half_height: (o.ymag().abs() as f64 * up.length()) as f32,
+                },
+            };
+            let c = FileCamera {
+                names,
+                eye: world.transform_point3(DVec3::ZERO),
+                forward: world.transform_vector3(DVec3::NEG_Z),
+                up,
+                projection,
+            };
+            let usable = c.eye.is_finite()
+                && c.forward.cross(c.up).length_squared() > 0.0
+                && c.forward.cross(c.up).is_finite()
+                && match c.projection {
+                    Projection::Orthographic { half_height: h } => h > 0.0 && h.is_finite(),
+                    Projection::Perspective { .. } => true,
+                };
+            match usable {
+                true => out.cameras.push(c),
+                false => r
                     .unmapped
-                    .note("orthographic cameras", || format!("node {node_name}")),
+                    .note("cameras scaled to nothing (or past 32-bit floats)", || {
+                        format!("node {node_name}")
+                    }),
             }
         }
         if let Some(light) = node.light() {

@@ -74,7 +74,7 @@ impl Reader<'_> {
     /// buffer lies outside the glTF's folder ([`Outside`]).
     ///
     /// [`Outside`]: crate::scene::source::Outside
-    fn shown(&self, a: Option<&::gltf::Accessor>, value: String) -> String {
+    pub(super) fn shown(&self, a: Option<&::gltf::Accessor>, value: String) -> String {
         let b = a.and_then(|a| a.view()).map(|v| v.buffer().index());
         match b.and_then(|b| self.foreign.get(b)?.as_ref()) {
             Some(_) => "(not shown: its buffer lies outside the glTF's folder)".into(),
@@ -86,7 +86,7 @@ impl Reader<'_> {
     /// garbage otherwise): the accessor's type is one glTF allows for
     /// `what`, and every element it reads lies, aligned, inside its view
     /// and buffer.
-    fn check_accessor(
+    pub(super) fn check_accessor(
         &self,
         here: &str,
         what: &str,
@@ -355,7 +355,8 @@ impl Reader<'_> {
 
     /// What the scene's nodes place, known before any accessor is read:
     /// its vertices and triangles, every instance counted (placing it
-    /// takes that), and how many primitives each [`Decoded`] is placed
+    /// takes that: a node's, and each of its `EXT_mesh_gpu_instancing`
+    /// instances), and how many primitives each [`Decoded`] is placed
     /// for. Each primitive's accessors are checked on the way, so that
     /// counts they cannot hold are named as such. Its hierarchy a forest,
     /// each node is visited once.
@@ -369,15 +370,22 @@ impl Reader<'_> {
             let node_name = super::named(node.name(), node.index());
             if let Some(mesh) = node.mesh() {
                 let mesh_name = super::named(mesh.name(), mesh.index());
+                let copies = self.copies(&node, &node_name)?;
                 for p in mesh.primitives().filter(|p| drawn(p.mode())) {
-                    let n = *uses.entry(key(&p)).and_modify(|n| *n += 1).or_insert(1);
-                    if n == 1 {
+                    let n = *uses
+                        .entry(key(&p))
+                        .and_modify(|n| *n += copies)
+                        .or_insert(copies);
+                    if n == copies {
                         self.check_primitive(&self.place(&mesh_name, &p, &node_name), &p)?;
                     }
                     let count = p.get(&Semantic::Positions).map_or(0, |a| a.count());
                     let corners = p.indices().map_or(count, |a| a.count());
-                    v = v.saturating_add(count as u64);
-                    t = t.saturating_add(triangles(p.mode(), corners) as u64);
+                    let copies = copies as u64;
+                    v = v.saturating_add((count as u64).saturating_mul(copies));
+                    t = t.saturating_add(
+                        (triangles(p.mode(), corners) as u64).saturating_mul(copies),
+                    );
                 }
             }
             stack.extend(node.children());

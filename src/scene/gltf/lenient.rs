@@ -1,0 +1,82 @@
+//! Documents that glTF allows and the `gltf` crate's types refuse, read
+//! again with what the crate requires filled in: a scene without `nodes`
+//! (Blender writes an empty one), an animation channel whose target has no
+//! `node` (`KHR_animation_pointer` aims it elsewhere). rayterm shows a file
+//! at rest, so such a channel is simply left out.
+
+use ::gltf::json::{self, Value};
+use serde_json::Map;
+
+/// The document in `body` (JSON or `.glb`) read with the fills above, or
+/// `None` when it needs none (the crate's first error then stands). Only a
+/// document the crate refused comes here, so a readable one is parsed once.
+pub(super) fn reread(body: &[u8]) -> Option<Result<::gltf::Gltf, ::gltf::Error>> {
+    let glb = match body.starts_with(b"glTF") {
+        true => Some(::gltf::Glb::from_slice(body).ok()?),
+        false => None,
+    };
+    let text = glb.as_ref().map_or(body, |g| &g.json);
+    let mut doc: Value = json::deserialize::from_slice(text).ok()?;
+    if !fill(&mut doc) {
+        return None;
+    }
+    let root: json::Root = match json::deserialize::from_value(doc) {
+        Ok(r) => r,
+        Err(e) => return Some(Err(::gltf::Error::Deserialize(e))),
+    };
+    Some(Ok(::gltf::Gltf {
+        document: ::gltf::Document::from_json_without_validation(root),
+        blob: glb.and_then(|g| g.bin).map(|b| b.into_owned()),
+    }))
+}
+
+/// Fills in what the crate requires; whether anything was.
+fn fill(doc: &mut Value) -> bool {
+    let mut filled = false;
+    fn objects<'v>(doc: &'v mut Value, key: &str) -> Vec<&'v mut Map<String, Value>> {
+        match doc.get_mut(key) {
+            Some(Value::Array(a)) => a.iter_mut().filter_map(Value::as_object_mut).collect(),
+            _ => Vec::new(),
+        }
+    }
+    for scene in objects(doc, "scenes") {
+        if !scene.contains_key("nodes") {
+            scene.insert("nodes".into(), Value::Array(Vec::new()));
+            filled = true;
+        }
+    }
+    for animation in objects(doc, "animations") {
+        if let Some(Value::Array(channels)) = animation.get_mut("channels") {
+            let before = channels.len();
+            channels.retain(|c| c.pointer("/target/node").is_some());
+            filled |= channels.len() != before;
+        }
+    }
+    filled
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_what_the_crate_requires_is_filled_in() {
+        let mut doc = serde_json::json!({
+            "scenes": [{"nodes": [0]}, {"name": "Scene.001"}],
+            "animations": [{"channels": [
+                {"sampler": 0, "target": {"node": 0, "path": "rotation"}},
+                {"sampler": 1, "target": {"path": "pointer"}}
+            ]}]
+        });
+        assert!(fill(&mut doc));
+        assert_eq!(doc["scenes"][1]["nodes"], serde_json::json!([]));
+        assert_eq!(doc["scenes"][0]["nodes"], serde_json::json!([0]));
+        let channels = doc["animations"][0]["channels"].as_array().unwrap();
+        assert_eq!(channels.len(), 1);
+        assert_eq!(channels[0]["sampler"], 0);
+        assert!(!fill(&mut doc), "filled twice");
+        // glTF 1.0 keeps scenes in an object: nothing to fill.
+        let mut old = serde_json::json!({"scenes": {"s": {}}});
+        assert!(!fill(&mut old));
+    }
+}

@@ -1,0 +1,851 @@
+//! glTF files as other tools write them: empty scenes, animations aimed
+//! by `KHR_animation_pointer`, `EXT_mesh_gpu_instancing`, orthographic
+//! cameras (and the scene file's), WebP textures and KTX2 ones.
+
+mod common;
+mod files;
+
+use files::{rayterm, within_deadline, Dir};
+use glam::Vec3;
+use rayterm::render::{Feature, Features, Plan, PlanPolicy};
+use rayterm::scene::{self, Builder, Projection, Scene};
+use serde_json::{json, Value};
+
+fn load(spec: &str) -> Result<Scene, String> {
+    let s = spec.to_string();
+    within_deadline(spec, move || scene::load(&s).map_err(|e| format!("{e:#}")))
+}
+
+/// Deterministic: one pass is exact.
+fn exact() -> Features {
+    Features::all().without(&[Feature::Supersampling, Feature::Bloom])
+}
+
+/// A glTF's binary buffer as it is built: views and accessors of it.
+#[derive(Default)]
+struct Bin {
+    bytes: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl Bin {
+    /// A buffer view of `data`, 4-byte aligned.
+    fn view(&mut self, data: &[u8]) -> usize {
+        while !self.bytes.len().is_multiple_of(4) {
+            self.bytes.push(0);
+        }
+        self.views
+            .push(json!({"buffer": 0, "byteOffset": self.bytes.len(),
+                               "byteLength": data.len()}));
+        self.bytes.extend(data);
+        self.views.len() - 1
+    }
+
+    /// An accessor of `count` elements of `kind` over `data`; `more`
+    /// joins its fields.
+    fn accessor(
+        &mut self,
+        data: &[u8],
+        component: u32,
+        count: usize,
+        kind: &str,
+        more: Value,
+    ) -> usize {
+        let view = self.view(data);
+        let mut a = json!({"bufferView": view, "componentType": component, "count": count,
+                           "type": kind});
+        for (k, v) in more.as_object().into_iter().flatten() {
+            a[k] = v.clone();
+        }
+        self.accessors.push(a);
+        self.accessors.len() - 1
+    }
+
+    fn floats(&mut self, v: &[f32], width: usize, kind: &str) -> usize {
+        let data: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+        self.accessor(&data, 5126, v.len() / width, kind, json!({}))
+    }
+
+    /// A mesh's positions (with their bounds, which glTF requires) and
+    /// indices: the `attributes` and `indices` of its primitive.
+    fn mesh(&mut self, p: &[Vec3], t: &[[u16; 3]]) -> (usize, usize) {
+        let flat: Vec<f32> = p.iter().flat_map(|v| v.to_array()).collect();
+        let (min, max) = p
+            .iter()
+            .fold((Vec3::MAX, Vec3::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
+        let data: Vec<u8> = flat.iter().flat_map(|x| x.to_le_bytes()).collect();
+        let pos = self.accessor(
+            &data,
+            5126,
+            p.len(),
+            "VEC3",
+            json!({"min": min.to_array(), "max": max.to_array()}),
+        );
+        let idx: Vec<u8> = t.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
+        let ind = self.accessor(&idx, 5123, t.len() * 3, "SCALAR", json!({}));
+        (pos, ind)
+    }
+
+    /// `doc` with this buffer, its views and accessors, as a `.glb`.
+    fn glb(mut self, mut doc: Value) -> Vec<u8> {
+        while !self.bytes.len().is_multiple_of(4) {
+            self.bytes.push(0);
+        }
+        doc["asset"] = json!({"version": "2.0"});
+        doc["buffers"] = json!([{"byteLength": self.bytes.len()}]);
+        doc["bufferViews"] = self.views.into();
+        doc["accessors"] = self.accessors.into();
+        let mut j = serde_json::to_vec(&doc).unwrap();
+        while !j.len().is_multiple_of(4) {
+            j.push(b' ');
+        }
+        let total = 12 + 8 + j.len() + 8 + self.bytes.len();
+        let mut b = b"glTF".to_vec();
+        b.extend(2u32.to_le_bytes());
+        b.extend((total as u32).to_le_bytes());
+        b.extend((j.len() as u32).to_le_bytes());
+        b.extend(b"JSON");
+        b.extend(&j);
+        b.extend((self.bytes.len() as u32).to_le_bytes());
+        b.extend(b"BIN\0");
+        b.extend(&self.bytes);
+        b
+    }
+}
+
+/// One triangle, for files about their scenes rather than their meshes.
+fn triangle() -> (Vec<Vec3>, Vec<[u16; 3]>) {
+    (vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]])
+}
+
+/// A UV sphere of radius 1 about the origin, with no zero-area
+/// triangles at its poles.
+fn sphere() -> (Vec<Vec3>, Vec<[u16; 3]>) {
+    let (rings, segments) = (16u16, 32u16);
+    let mut p = Vec::new();
+    for i in 0..=rings {
+        let theta = std::f32::consts::PI * i as f32 / rings as f32;
+        let (r, y) = match i {
+            0 => (0.0, 1.0),
+            i if i == rings => (0.0, -1.0),
+            _ => (theta.sin(), theta.cos()),
+        };
+        for j in 0..segments {
+            let phi = std::f32::consts::TAU * j as f32 / segments as f32;
+            p.push(Vec3::new(r * phi.cos(), y, r * phi.sin()));
+        }
+    }
+    let at = |i: u16, j: u16| i * segments + j % segments;
+    let mut t = Vec::new();
+    for i in 0..rings {
+        for j in 0..segments {
+            if i + 1 < rings {
+                t.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+            }
+            if i > 0 {
+                t.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+            }
+        }
+    }
+    (p, t)
+}
+
+/// A file of one triangle mesh placed by node 0, with `doc`'s fields
+/// added (they replace the scene's when given).
+fn one_mesh(doc: Value) -> Vec<u8> {
+    let mut bin = Bin::default();
+    let (p, t) = triangle();
+    let (pos, ind) = bin.mesh(&p, &t);
+    let mut d = json!({
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "Tri", "mesh": 0}],
+        "meshes": [{"name": "TriMesh", "primitives": [{"attributes": {"POSITION": pos},
+                                                       "indices": ind}]}]
+    });
+    for (k, v) in doc.as_object().unwrap() {
+        d[k] = v.clone();
+    }
+    bin.glb(d)
+}
+
+#[test]
+fn empty_scenes_open_and_an_unplaced_default_scene_is_said() {
+    let d = Dir::new("gltf-empty-scene");
+    // As Blender writes it: a second scene with a name and no nodes.
+    let blender = json!({"scenes": [{"name": "Scene", "nodes": [0]}, {"name": "Scene.001"}]});
+    let s = load(&d.write("two.glb", one_mesh(blender.clone()))).unwrap();
+    assert_eq!(s.geometry.triangle_count(), 1);
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    // The same scene as JSON text.
+    let mut text = blender.clone();
+    text["scene"] = 1.into();
+    let glb = one_mesh(text);
+    // The empty scene the default: valid, but nothing to show.
+    let e = load(&d.write("empty.glb", &glb)).unwrap_err();
+    assert!(
+        e.contains("empty.glb: no triangles")
+            && e.contains("its scene Scene.001 has no nodes, so nothing is placed, though the file has 1 mesh"),
+        "{e}"
+    );
+    // In a scene file beside another mesh it is a warning.
+    d.write("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let toml = d.write(
+        "s.toml",
+        "[[mesh]]\nfile = \"m.obj\"\n[[mesh]]\nfile = \"empty.glb\"\n",
+    );
+    let s = load(&toml).unwrap();
+    assert_eq!(s.geometry.triangle_count(), 1);
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("empty.glb: its scene Scene.001 has no nodes")),
+        "{:?}",
+        s.warnings
+    );
+}
+
+#[test]
+fn animations_aimed_elsewhere_do_not_refuse_a_file() {
+    let d = Dir::new("gltf-animation-pointer");
+    // KHR_animation_pointer aims a channel at a material, not a node; a
+    // channel with a sampler that does not exist is not read either.
+    let doc = json!({
+        "extensionsUsed": ["KHR_animation_pointer"],
+        "animations": [{"name": "Fade", "channels": [
+            {"sampler": 0, "target": {"path": "pointer", "extensions": {"KHR_animation_pointer":
+                {"pointer": "/materials/0/pbrMetallicRoughness/baseColorFactor"}}}},
+            {"sampler": 7, "target": {"node": 0, "path": "translation"}}
+        ], "samplers": [{"input": 0, "output": 0}]}]
+    });
+    for name in ["pointer.glb", "pointer.gltf"] {
+        let bytes = match name.ends_with(".glb") {
+            true => one_mesh(doc.clone()),
+            // The JSON of the .glb, its buffer inline.
+            false => {
+                let glb = one_mesh(doc.clone());
+                let len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+                let mut j: Value = serde_json::from_slice(&glb[20..20 + len]).unwrap();
+                let bin = &glb[20 + len + 8..];
+                use base64::Engine;
+                let b64 = base64::engine::general_purpose::STANDARD.encode(bin);
+                j["buffers"][0]["uri"] =
+                    format!("data:application/octet-stream;base64,{b64}").into();
+                serde_json::to_vec(&j).unwrap()
+            }
+        };
+        let s = load(&d.write(name, bytes)).unwrap();
+        assert_eq!(s.geometry.triangle_count(), 1, "{name}");
+        let w = s.warnings.join("\n");
+        assert!(
+            w.contains("animations (shown at rest)") && w.contains("KHR_animation_pointer"),
+            "{name}: {w}"
+        );
+    }
+}
+
+/// Positions of mesh `name`'s first triangle.
+fn corners(s: &Scene, name: &str) -> [Vec3; 3] {
+    let m = s
+        .meshes
+        .iter()
+        .position(|m| m.name == name)
+        .unwrap_or_else(|| {
+            panic!(
+                "no mesh {name}: {:?}",
+                s.meshes.iter().map(|m| &m.name).collect::<Vec<_>>()
+            )
+        });
+    let t = s
+        .geometry
+        .tri_mesh
+        .iter()
+        .position(|&x| x as usize == m)
+        .unwrap();
+    s.geometry.indices[t].map(|i| s.geometry.positions[i as usize])
+}
+
+fn near(a: Vec3, b: Vec3) -> bool {
+    (a - b).length() < 1e-5
+}
+
+/// A triangle placed by an instanced node (three instances: the node's
+/// transform, then each instance's, inside it) and by a plain one; `edit`
+/// changes the document first.
+fn instanced(edit: impl Fn(&mut Value, &mut Bin)) -> Vec<u8> {
+    let mut bin = Bin::default();
+    let (p, t) = triangle();
+    let (pos, ind) = bin.mesh(&p, &t);
+    let tr = bin.floats(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 5.0, 0.0], 3, "VEC3");
+    // 90 degrees about z for instance 1, as normalized shorts.
+    let h = (32767.0 * std::f32::consts::FRAC_1_SQRT_2).round() as i16;
+    let rot: Vec<u8> = [0, 0, 0, 32767, 0, 0, h, h, 0, 0, 0, 32767]
+        .iter()
+        .flat_map(|x: &i16| x.to_le_bytes())
+        .collect();
+    let rot = bin.accessor(&rot, 5122, 3, "VEC4", json!({"normalized": true}));
+    let sc = bin.floats(&[1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 3.0, 3.0, 3.0], 3, "VEC3");
+    let mut doc = json!({
+        "extensionsUsed": ["EXT_mesh_gpu_instancing"],
+        "extensionsRequired": ["EXT_mesh_gpu_instancing"],
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [
+            {"name": "Forest", "mesh": 0, "translation": [10.0, 0.0, 0.0], "scale": [2.0, 2.0, 2.0],
+             "extensions": {"EXT_mesh_gpu_instancing": {"attributes":
+                 {"TRANSLATION": tr, "ROTATION": rot, "SCALE": sc, "_ID": tr}}}},
+            {"name": "Lone", "mesh": 0}
+        ],
+        "meshes": [{"name": "Tree", "primitives": [{"attributes": {"POSITION": pos},
+                                                    "indices": ind}]}]
+    });
+    edit(&mut doc, &mut bin);
+    bin.glb(doc)
+}
+
+#[test]
+fn gpu_instancing_places_the_mesh_once_per_instance() {
+    let d = Dir::new("gltf-instancing");
+    let s = load(&d.write("forest.glb", instanced(|_, _| {}))).unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert_eq!(s.geometry.triangle_count(), 4);
+    // Instance k: node (translate 10, scale 2) of instance (T, R, S).
+    let [a, b, c] = corners(&s, "Tree (node Forest, instance 0)");
+    assert!(
+        near(a, Vec3::new(10.0, 0.0, 0.0)) && near(b, Vec3::new(12.0, 0.0, 0.0)),
+        "{a} {b}"
+    );
+    assert!(near(c, Vec3::new(10.0, 2.0, 0.0)), "{c}");
+    // Turned 90 degrees: x runs along y.
+    let [a, b, c] = corners(&s, "Tree (node Forest, instance 1)");
+    assert!(near(a, Vec3::new(12.0, 0.0, 0.0)), "{a}");
+    assert!((b - Vec3::new(12.0, 2.0, 0.0)).length() < 1e-3, "{b}");
+    assert!((c - Vec3::new(10.0, 0.0, 0.0)).length() < 1e-3, "{c}");
+    let [a, b, _] = corners(&s, "Tree (node Forest, instance 2)");
+    assert!(
+        near(a, Vec3::new(10.0, 10.0, 0.0)) && near(b, Vec3::new(16.0, 10.0, 0.0)),
+        "{a} {b}"
+    );
+    let [a, b, _] = corners(&s, "Tree (node Lone)");
+    assert!(near(a, Vec3::ZERO) && near(b, Vec3::X), "{a} {b}");
+    // Float rotations, and translations alone, read too.
+    let floats = instanced(|doc, bin| {
+        let r = std::f32::consts::FRAC_1_SQRT_2;
+        let rot = bin.floats(
+            &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, r, r, 0.0, 0.0, 0.0, 1.0],
+            4,
+            "VEC4",
+        );
+        doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["ROTATION"] =
+            rot.into();
+    });
+    let f = load(&d.write("floats.glb", floats)).unwrap();
+    let [_, b, _] = corners(&f, "Tree (node Forest, instance 1)");
+    assert!(near(b, Vec3::new(12.0, 2.0, 0.0)), "{b}");
+    let moved = instanced(|doc, _| {
+        let attributes =
+            &mut doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"];
+        attributes
+            .as_object_mut()
+            .unwrap()
+            .retain(|k, _| k == "TRANSLATION");
+    });
+    let m = load(&d.write("moved.glb", moved)).unwrap();
+    let [_, b, _] = corners(&m, "Tree (node Forest, instance 1)");
+    assert!(near(b, Vec3::new(14.0, 0.0, 0.0)), "{b}");
+    // As the mesh of a scene file, placed by it after the file's nodes.
+    let toml = d.write(
+        "s.toml",
+        "[[mesh]]\nfile = \"forest.glb\"\ntranslate = [0, 0, 1]\n",
+    );
+    let t = load(&toml).unwrap();
+    let [_, b, _] = corners(&t, "Tree (node Forest, instance 2)");
+    assert!(near(b, Vec3::new(16.0, 10.0, 1.0)), "{b}");
+}
+
+#[test]
+fn bad_instances_say_which_node_and_accessor() {
+    let d = Dir::new("gltf-instancing-bad");
+    let attr = |doc: &mut Value, k: &str, v: Value| {
+        doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"][k] = v;
+    };
+    let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+        (
+            "count.glb",
+            instanced(|doc, bin| {
+                let tr = bin.floats(&[0.0; 6], 3, "VEC3");
+                attr(doc, "TRANSLATION", tr.into());
+            }),
+            "node Forest: EXT_mesh_gpu_instancing: ROTATION (accessor 3) has 3 instances, \
+             TRANSLATION (accessor 5) 2; glTF requires as many in each",
+        ),
+        (
+            "vec2.glb",
+            instanced(|doc, bin| {
+                let tr = bin.floats(&[0.0; 6], 2, "VEC2");
+                attr(doc, "TRANSLATION", tr.into());
+            }),
+            "node Forest: EXT_mesh_gpu_instancing: TRANSLATION (accessor 5) is Vec2 F32; glTF allows Vec3 of F32",
+        ),
+        (
+            "raw.glb",
+            instanced(|_, bin| bin.accessors[3]["normalized"] = false.into()),
+            "node Forest: EXT_mesh_gpu_instancing: ROTATION (accessor 3) is I16 and not normalized",
+        ),
+        (
+            "gone.glb",
+            instanced(|doc, _| attr(doc, "SCALE", 40.into())),
+            "node Forest: EXT_mesh_gpu_instancing: SCALE is accessor 40, which does not exist (5 accessors)",
+        ),
+        (
+            "short.glb",
+            instanced(|_, bin| bin.accessors[2]["count"] = 300.into()),
+            "node Forest: EXT_mesh_gpu_instancing: TRANSLATION (accessor 2): its 300 elements end at byte",
+        ),
+        (
+            "nan.glb",
+            instanced(|doc, bin| {
+                let tr = bin.floats(&[0.0, 0.0, 0.0, f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0], 3, "VEC3");
+                attr(doc, "TRANSLATION", tr.into());
+            }),
+            "node Forest: EXT_mesh_gpu_instancing: instance 1: TRANSLATION (accessor 5) is (NaN, 0, 0), not a finite number",
+        ),
+        (
+            "zero.glb",
+            instanced(|doc, bin| {
+                let rot = bin.floats(&[0.0; 12], 4, "VEC4");
+                attr(doc, "ROTATION", rot.into());
+            }),
+            "node Forest: EXT_mesh_gpu_instancing: instance 0: ROTATION (accessor 5) is [0, 0, 0, 0], not a rotation",
+        ),
+        (
+            "none.glb",
+            instanced(|doc, _| {
+                doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"] = json!({});
+            }),
+            "node Forest: EXT_mesh_gpu_instancing: it has none of TRANSLATION, ROTATION and SCALE",
+        ),
+    ];
+    for (name, bytes, want) in cases {
+        let e = load(&d.write(name, bytes))
+            .err()
+            .unwrap_or_else(|| panic!("{name} loaded"));
+        assert!(
+            e.contains(&format!("{name}: {want}")),
+            "{name}: {e}\nwanted: {want}"
+        );
+    }
+}
+
+/// Instances are counted against the memory available before anything is
+/// read: a mesh of a million triangles placed by a million instances
+/// (about 2e14 bytes) is refused at once, in a process whose address
+/// space could not hold a fraction of it.
+#[test]
+fn instances_count_in_the_memory_check() {
+    let d = Dir::new("gltf-instancing-memory");
+    let mut bin = Bin::default();
+    let (p, _) = triangle();
+    let flat: Vec<u8> = p
+        .iter()
+        .flat_map(|v| v.to_array())
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let pos = bin.accessor(
+        &flat,
+        5126,
+        3,
+        "VEC3",
+        json!({"min": [0, 0, 0], "max": [1, 1, 0]}),
+    );
+    let ind = bin.accessor(&vec![0u8; 3_000_000], 5121, 3_000_000, "SCALAR", json!({}));
+    let tr = bin.accessor(&vec![0u8; 12_000_000], 5126, 1_000_000, "VEC3", json!({}));
+    let doc = json!({
+        "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "Crowd", "mesh": 0,
+                   "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": tr}}}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos}, "indices": ind}]}]
+    });
+    d.write("crowd.glb", bin.glb(doc));
+    let r = files::rayterm_within(
+        1 << 30,
+        &d.0,
+        &["render", "crowd.glb", "--size", "8x8", "-o", "x.png"],
+    );
+    assert!(
+        !r.ok()
+            && r.stderr
+                .contains("crowd.glb: its meshes, each instance counted"),
+        "{}",
+        r.stderr
+    );
+}
+
+/// Two spheres of radius 1 at different depths (`Near` at z = 0, `Far` at
+/// z = -6), seen from z = 10 by an orthographic camera 4 units high
+/// (`Ortho`) and a perspective one (`Persp`).
+fn spheres() -> Vec<u8> {
+    let mut bin = Bin::default();
+    let (p, t) = sphere();
+    let (pos, ind) = bin.mesh(&p, &t);
+    bin.glb(json!({
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1, 2, 3]}],
+        "nodes": [
+            {"name": "Ortho", "camera": 0, "translation": [0.0, 0.0, 10.0]},
+            {"name": "Persp", "camera": 1, "translation": [0.0, 0.0, 10.0]},
+            {"name": "Near", "mesh": 0, "translation": [-2.0, 0.0, 0.0]},
+            {"name": "Far", "mesh": 0, "translation": [2.0, 0.0, -6.0]}
+        ],
+        "cameras": [
+            {"type": "orthographic", "orthographic": {"xmag": 4.0, "ymag": 2.0, "znear": 0.1, "zfar": 100.0}},
+            {"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1}}
+        ],
+        "meshes": [{"name": "Ball", "primitives": [{"attributes": {"POSITION": pos}, "indices": ind}]}]
+    }))
+}
+
+/// The pixels of the left and right halves of a 64x32 render that see
+/// something.
+fn covered(s: &Scene) -> (Vec<bool>, usize, usize) {
+    let img = common::render(s, 64, 32, 1, exact(), Builder::Sah, 1).image;
+    let seen: Vec<bool> = img.iter().map(|c| c.max_element() > 0.0).collect();
+    let half = |left: bool| {
+        (0..64 * 32)
+            .filter(|&i| seen[i] && (i % 64 < 32) == left)
+            .count()
+    };
+    (seen.clone(), half(true), half(false))
+}
+
+#[test]
+fn an_orthographic_camera_shows_equal_things_equally_large_at_any_depth() {
+    let d = Dir::new("gltf-ortho");
+    let file = d.write("spheres.glb", spheres());
+    let s = load(&file).unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert_eq!(
+        s.camera.projection,
+        Projection::Orthographic { half_height: 2.0 }
+    );
+    let (ortho, near_px, far_px) = covered(&s);
+    // 8 pixels a unit: each sphere's disc is about pi * 8^2 pixels.
+    assert!((180..=220).contains(&near_px), "{near_px}");
+    assert_eq!(near_px, far_px);
+    let through = scene::Opening {
+        camera: Some("Persp".into()),
+        ..Default::default()
+    };
+    let (p, _) = scene::load_reading(&file, &through).unwrap();
+    let (_, near_px, far_px) = covered(&p);
+    // At distances 10 and 16: about (16 / 10)^2 = 2.56 times the pixels.
+    assert!(near_px as f64 > 2.0 * far_px as f64, "{near_px} {far_px}");
+    // The scene file's orthographic camera sees what the glTF's does.
+    let toml = d.write(
+        "s.toml",
+        "[camera]\neye = [0, 0, 10]\ntarget = [0, 0, 0]\nprojection = \"orthographic\"\nheight = 4\n\
+         [[mesh]]\nfile = \"spheres.glb\"\n[[light]]\ntype = \"point\"\nposition = [0, 0, 10]\n\
+         color = [1, 1, 1]\n[render]\nambient = [0.1, 0.1, 0.1]\n",
+    );
+    let t = load(&toml).unwrap();
+    assert_eq!(
+        t.camera.projection,
+        Projection::Orthographic { half_height: 2.0 }
+    );
+    assert!(
+        covered(&t).0 == ortho,
+        "the scene file's camera sees otherwise"
+    );
+    // Its rays start apart, so a pass traces them one by one: the image of
+    // single rays, supersampled, on any number of threads.
+    let plan = Plan::new(
+        &s,
+        Features::all().without(&[Feature::Bloom]),
+        PlanPolicy::Prune,
+    );
+    assert!(!plan.packets);
+    let bvh = rayterm::bvh::build(&s.geometry, Builder::Sah);
+    let a = common::render_with(&s, &bvh, &plan, 40, 30, 20, 9).image;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let b = pool.install(|| common::render_with(&s, &bvh, &plan, 40, 30, 20, 9).image);
+    assert!(a == b, "the image depends on the threads");
+    let mut packets = plan.clone();
+    packets.packets = true;
+    let c = common::render_with(&s, &bvh, &packets, 40, 30, 20, 9).image;
+    assert!(a == c, "packets of rays that start apart find other hits");
+    // The inspector's camera ray is the orthographic one: along -z from
+    // the view plane, through the far sphere's centre.
+    let r = rayterm(
+        &d.0,
+        &[
+            "inspect",
+            "spheres.glb",
+            "--pixel",
+            "48,16",
+            "--size",
+            "64x32",
+        ],
+    );
+    assert!(r.ok(), "{}", r.stderr);
+    let ray = r
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("camera ray"))
+        .unwrap_or_default();
+    assert!(ray.contains(", 10.000) d=(0, 0, -1.0000)"), "{}", r.stdout);
+    assert!(r.stdout.contains("(node Far)"), "{}", r.stdout);
+}
+
+#[test]
+fn orthographic_camera_settings_are_checked() {
+    let d = Dir::new("gltf-ortho-bad");
+    let head = "[[mesh]]\nfile = \"m.obj\"\n[camera]\neye = [0, 0, 5]\ntarget = [0, 0, 0]\n";
+    d.write("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    for (body, want) in [
+        (
+            "projection = \"orthographic\"\n",
+            "s.toml:3:1: camera: an orthographic camera needs height",
+        ),
+        (
+            "projection = \"orthographic\"\nheight = 0\n",
+            "s.toml:7:10: camera: height must be more than 0",
+        ),
+        (
+            "projection = \"orthographic\"\nheight = 2\nfov = 30\n",
+            "s.toml:8:7: camera: fov is for perspective cameras",
+        ),
+        (
+            "height = 2\n",
+            "s.toml:6:10: camera: height is for orthographic cameras",
+        ),
+        ("projection = \"fisheye\"\n", "s.toml:6:14"),
+    ] {
+        let e = load(&d.write("s.toml", format!("{head}{body}"))).unwrap_err();
+        assert!(e.contains(want), "{body}: {e}\nwanted: {want}");
+    }
+    let ok = load(&d.write(
+        "s.toml",
+        format!("{head}projection = \"perspective\"\nfov = 30\n"),
+    ))
+    .unwrap();
+    assert_eq!(ok.camera.projection, Projection::perspective(30.0));
+    // A glTF camera's ymag must be a size; the node's scale scales it.
+    let edit = |f: &dyn Fn(&mut Value)| {
+        let glb = spheres();
+        let len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+        let mut j: Value = serde_json::from_slice(&glb[20..20 + len]).unwrap();
+        f(&mut j);
+        let bin = glb[20 + len + 8..].to_vec();
+        let mut b = Bin {
+            bytes: bin,
+            ..Default::default()
+        };
+        b.views = j["bufferViews"].as_array().unwrap().clone();
+        b.accessors = j["accessors"].as_array().unwrap().clone();
+        b.glb(j)
+    };
+    let zero = edit(&|j| j["cameras"][0]["orthographic"]["ymag"] = 0.0.into());
+    let e = load(&d.write("zero.glb", zero)).unwrap_err();
+    assert!(
+        e.contains("zero.glb: camera 0: ymag 0 is not a height"),
+        "{e}"
+    );
+    let scaled = edit(&|j| j["nodes"][0]["scale"] = json!([3.0, 3.0, 3.0]));
+    let s = load(&d.write("scaled.glb", scaled)).unwrap();
+    assert_eq!(
+        s.camera.projection,
+        Projection::Orthographic { half_height: 6.0 }
+    );
+}
+
+/// A 4x4 lossy WebP of pure green, as libwebp 1.6.0 writes it (through
+/// Pillow 13: `Image.new("RGB", (4, 4), (0, 255, 0)).save(f, "WEBP",
+/// quality=90)`); it decodes to (0, 255, 1).
+const GREEN_WEBP: &[u8] = b"RIFF@\x00\x00\x00WEBPVP8 4\x00\x00\x00\x10\x02\x00\x9d\x01*\x04\x00\
+\x04\x00\x00\xc0\x12%\xa0\x02t\xba\x01\xf8\x01\xfa\x00\x03\xc8\x00\xfe\xee\xbd\x9f\xffr\xf6\x9f\xa2|?\
+\xee\xa2\xbf\xfeP~\x11\x886\xff\xe5b\x00\x00\x00";
+
+/// A 4x4 PNG of pure red.
+fn red_png() -> Vec<u8> {
+    let img = image::RgbImage::from_pixel(4, 4, image::Rgb([255, 0, 0]));
+    let mut png = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    png
+}
+
+/// A textured quad facing +z whose texture 0 is made by `texture` from
+/// image 0 (a red PNG) and image 1 (the green WebP), both in the buffer.
+fn textured(texture: Value, more: Value) -> Vec<u8> {
+    let mut bin = Bin::default();
+    let p = [
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(1.0, -1.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(-1.0, 1.0, 0.0),
+    ];
+    let (pos, ind) = bin.mesh(&p, &[[0, 1, 2], [0, 2, 3]]);
+    let uv = bin.floats(&[0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0], 2, "VEC2");
+    let png = bin.view(&red_png());
+    let webp = bin.view(GREEN_WEBP);
+    let mut doc = json!({
+        "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos, "TEXCOORD_0": uv},
+                                    "indices": ind, "material": 0}]}],
+        "materials": [{"name": "Leaf", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
+                                                                "metallicFactor": 0.0}}],
+        "textures": [texture],
+        "images": [{"bufferView": png, "mimeType": "image/png"},
+                   {"bufferView": webp, "mimeType": "image/webp"}]
+    });
+    for (k, v) in more.as_object().unwrap() {
+        doc[k] = v.clone();
+    }
+    bin.glb(doc)
+}
+
+/// The colour of the only texture of `s`'s only textured material.
+fn texel(s: &Scene) -> Vec3 {
+    let m = s.materials.iter().find(|m| m.name == "Leaf").unwrap();
+    let t = &s.textures[m.texture.expect("no texture") as usize];
+    t.texels[0]
+}
+
+#[test]
+fn webp_textures_are_read_and_ktx2_is_named() {
+    let d = Dir::new("gltf-webp");
+    let webp = json!({"EXT_texture_webp": {"source": 1}});
+    // A WebP with a PNG fallback, the extension required or not: the WebP.
+    for (name, texture, required) in [
+        (
+            "fallback.glb",
+            json!({"source": 0, "extensions": webp}),
+            json!([]),
+        ),
+        (
+            "required.glb",
+            json!({"extensions": webp}),
+            json!(["EXT_texture_webp"]),
+        ),
+        ("plain.glb", json!({"source": 1}), json!([])),
+    ] {
+        let more = json!({"extensionsUsed": ["EXT_texture_webp"], "extensionsRequired": required});
+        let s = load(&d.write(name, textured(texture, more))).unwrap();
+        assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
+        let c = texel(&s);
+        assert!(c.y > 0.99 && c.x < 0.01 && c.z < 0.01, "{name}: {c}");
+    }
+    // A WebP image that does not exist is named.
+    let gone = textured(
+        json!({"source": 0, "extensions": {"EXT_texture_webp": {"source": 9}}}),
+        json!({}),
+    );
+    let e = load(&d.write("gone.glb", gone)).unwrap_err();
+    assert!(
+        e.contains(
+            "gone.glb: texture 0: its EXT_texture_webp source 9 is not one of the file's 2 images"
+        ),
+        "{e}"
+    );
+    // KTX2: its PNG fallback is used; without one, the material's colour,
+    // and the warning names KTX2.
+    let ktx2 = json!({"KHR_texture_basisu": {"source": 1}});
+    let more = json!({"extensionsUsed": ["KHR_texture_basisu"]});
+    let s = load(&d.write(
+        "ktx-fallback.glb",
+        textured(json!({"source": 0, "extensions": ktx2}), more.clone()),
+    ))
+    .unwrap();
+    assert!(texel(&s).x > 0.99, "{}", texel(&s));
+    let mut required = more.clone();
+    required["extensionsRequired"] = json!(["KHR_texture_basisu"]);
+    let dds = json!({"MSFT_texture_dds": {"source": 1}});
+    let dds_required = json!({"extensionsUsed": ["MSFT_texture_dds"],
+                              "extensionsRequired": ["MSFT_texture_dds"]});
+    for (name, texture, m, want) in [
+        (
+            "ktx.glb",
+            ktx2.clone(),
+            more,
+            "KTX2 textures (Basis Universal, KHR_texture_basisu)",
+        ),
+        (
+            "ktx-required.glb",
+            ktx2,
+            required,
+            "KTX2 textures (Basis Universal, KHR_texture_basisu)",
+        ),
+        (
+            "dds.glb",
+            dds,
+            dds_required,
+            "DDS textures (MSFT_texture_dds)",
+        ),
+    ] {
+        let s = load(&d.write(name, textured(json!({"extensions": texture}), m))).unwrap();
+        let leaf = s.materials.iter().find(|m| m.name == "Leaf").unwrap();
+        assert!(leaf.texture.is_none());
+        let w = s.warnings.join("\n");
+        let want = format!(
+            "{want} without a PNG, JPEG or WebP source (drawn in the material's colour) \
+             (texture 0 of material Leaf)"
+        );
+        assert!(w.contains(&want), "{name}: {w}");
+    }
+    // A KTX2 file named as a texture's image says what it is.
+    let direct = textured(json!({"source": 1}), json!({}));
+    let direct = {
+        let mut b = direct;
+        let at = b.windows(4).position(|w| w == b"RIFF").unwrap();
+        b[at..at + 12].copy_from_slice(b"\xABKTX 20\xBB\r\n\x1A\n");
+        b
+    };
+    let s = load(&d.write("direct.glb", direct)).unwrap();
+    let w = s.warnings.join("\n");
+    assert!(
+        w.contains("image 1: a KTX2 (Basis Universal) image, which rayterm does not decode"),
+        "{w}"
+    );
+    // Extensions rayterm does not read are still refused when required.
+    let other = textured(
+        json!({"source": 0}),
+        json!({"extensionsRequired": ["EXT_made_up"]}),
+    );
+    let e = load(&d.write("other.glb", other)).unwrap_err();
+    assert!(e.contains("EXT_made_up"), "{e}");
+}
+
+#[test]
+fn webp_files_are_textures_of_gltf_and_obj_alike() {
+    let d = Dir::new("webp-files");
+    d.write("leaf.webp", GREEN_WEBP);
+    let bytes = textured(json!({"source": 2}), json!({}));
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let mut j: Value = serde_json::from_slice(&bytes[20..20 + len]).unwrap();
+    j["images"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"uri": "leaf.webp"}));
+    let mut b = Bin {
+        bytes: bytes[20 + len + 8..].to_vec(),
+        ..Default::default()
+    };
+    b.views = j["bufferViews"].as_array().unwrap().clone();
+    b.accessors = j["accessors"].as_array().unwrap().clone();
+    let s = load(&d.write("file.glb", b.glb(j))).unwrap();
+    assert!(texel(&s).y > 0.99, "{}", texel(&s));
+    // An OBJ's map_Kd, through the same loader.
+    d.write("leaf.mtl", "newmtl Leaf\nKd 1 1 1\nmap_Kd leaf.webp\n");
+    let obj = d.write(
+        "leaf.obj",
+        "mtllib leaf.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl Leaf\nf 1/1 2/2 3/3\n",
+    );
+    let s = load(&obj).unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert!(texel(&s).y > 0.99, "{}", texel(&s));
+}
