@@ -6,13 +6,17 @@
 //! Read: the default scene (or the first) through its node hierarchy, each
 //! node's transform applied in f64; triangle primitives (strips and fans
 //! turned into triangles) with positions, normals, the first UV set and
-//! `COLOR_0`; materials mapped onto Phong (see [`phong`]) with the
+//! `COLOR_0`, quantized or not, sparse or not, compressed with
+//! meshoptimizer or not (see [`accessor`]); materials mapped onto Phong (see [`phong`]) with the
 //! `baseColorTexture` and its sampler's wrap modes; perspective cameras
 //! (the first, or the one `--camera` names); `KHR_lights_punctual` lights (spot lights become point lights,
 //! directional lights point lights far away). What cannot be mapped is
 //! listed once in the warnings.
 
+mod accessor;
 mod check;
+mod extensions;
+mod meshopt;
 mod primitive;
 mod uri;
 
@@ -179,6 +183,9 @@ struct Reader<'a> {
     /// accessors takes them, and how many are still to come.
     decoded: HashMap<Key, Decoded>,
     uses: HashMap<Key, usize>,
+    /// `EXT_meshopt_compression` views by index, and those decoded so far.
+    compressed: HashMap<usize, Result<meshopt::Compressed, String>>,
+    unpacked: HashMap<usize, Vec<u8>>,
 }
 
 impl Reader<'_> {
@@ -357,7 +364,7 @@ pub fn load(
             false => invalid(&e),
         })?;
     drop(bytes);
-    let json = file.document.into_json();
+    let mut json = file.document.into_json();
     // glTF 1.0 is another format, which the 2.0 schema misreads.
     let version = &json.asset.version;
     if version.split('.').next() != Some("2") {
@@ -386,12 +393,20 @@ pub fn load(
             }
         }
     }
+    extensions::check(path, &mut json)?;
+    let undefined = extensions::undefined_attributes(&mut json);
     let broken = Broken::of(&json);
     let doc = ::gltf::Document::from_json(json).map_err(|e| invalid(&e))?;
     let mut blob = file.blob;
     let (mut buffers, mut origins, mut foreign) = (Vec::new(), Vec::new(), Vec::new());
     for b in doc.buffers() {
         let name = named(b.name(), b.index());
+        if meshopt::fallback(&b) {
+            buffers.push(Vec::new());
+            origins.push(String::new());
+            foreign.push(None);
+            continue;
+        }
         let mut outside = None;
         // The binary chunk is padded to 4 bytes past the buffer's length.
         let (mut data, padding, origin) = match b.source() {
@@ -457,11 +472,21 @@ pub fn load(
         broken,
         decoded: HashMap::new(),
         uses: HashMap::new(),
+        compressed: meshopt::views(&doc),
+        unpacked: HashMap::new(),
     };
     for ext in doc.extensions_used() {
-        if ext != "KHR_lights_punctual" {
+        if !extensions::READ.contains(&ext) {
             r.unmapped
                 .note(&crate::words::quoted(ext), || "extensionsUsed".into());
+        }
+    }
+    if let Some((first, count)) = undefined {
+        for _ in 0..count {
+            r.unmapped
+                .note("vertex attributes whose names glTF does not define", || {
+                    first.clone()
+                });
         }
     }
     if doc.animations().next().is_some() {
