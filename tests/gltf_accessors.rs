@@ -493,6 +493,15 @@ fn a_texture_transform_moves_the_coordinates_of_its_texture() {
         assert!((*got - want(u, v)).abs().max_element() < 1e-6, "{uvs:?}");
     }
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    // The transform may move the texture to another set, which is said.
+    let info = "/materials/0/pbrMetallicRoughness/baseColorTexture";
+    json.pointer_mut(info).unwrap()["extensions"]["KHR_texture_transform"]["texCoord"] = 1.into();
+    let s = load(&d.write("second.glb", glb(&json, &bin))).unwrap();
+    assert!(
+        warned(&s, "textures on a second UV set (material 0)"),
+        "{:?}",
+        s.warnings
+    );
 }
 
 fn fixture(name: &str) -> String {

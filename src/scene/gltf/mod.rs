@@ -287,7 +287,9 @@ impl Reader<'_> {
         };
         let here = || format!("material {name}");
         if let Some(info) = pbr.base_color_texture() {
-            if info.tex_coord() != 0 {
+            // KHR_texture_transform may name another set.
+            let set = info.texture_transform().and_then(|t| t.tex_coord());
+            if set.unwrap_or(info.tex_coord()) != 0 {
                 self.unmapped.note("textures on a second UV set", here);
             }
             let sampler = info.texture().sampler();
