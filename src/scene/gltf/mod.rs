@@ -7,8 +7,9 @@
 //! node's transform applied in f64; triangle primitives (strips and fans
 //! turned into triangles) with positions, normals, the first UV set and
 //! `COLOR_0`, quantized or not, sparse or not, compressed with
-//! meshoptimizer or not (see [`accessor`]); materials mapped onto Phong (see [`phong`]) with the
-//! `baseColorTexture` and its sampler's wrap modes; perspective cameras
+//! meshoptimizer or not (see [`accessor`]); materials mapped onto Phong
+//! (see [`phong`]) with the `baseColorTexture`, its sampler's wrap modes
+//! and its `KHR_texture_transform`; perspective cameras
 //! (the first, or the one `--camera` names); `KHR_lights_punctual` lights (spot lights become point lights,
 //! directional lights point lights far away). What cannot be mapped is
 //! listed once in the warnings.

@@ -1,4 +1,4 @@
-//! A primitive's accessors, checked before the crate reads them, decoded
+//! A primitive's accessors, checked before anything is read, decoded
 //! once however many nodes place the primitive, and placed per instance.
 
 use std::collections::HashMap;
