@@ -4,8 +4,7 @@
 //! node's world transform. The instances share their primitives' decoded
 //! accessors, as every placement of a primitive does.
 
-use ::gltf::accessor::{DataType, Dimensions, Iter};
-use ::gltf::animation::util::Rotations;
+use ::gltf::accessor::{DataType, Dimensions};
 use anyhow::{anyhow, bail, Result};
 use glam::{DAffine3, DQuat, DVec3};
 
@@ -98,7 +97,7 @@ impl<'a> Reader<'a> {
     /// Where `node` places its mesh: `world`, or each instance's
     /// transform inside it, each with the name messages give the node.
     pub(super) fn placements(
-        &self,
+        &mut self,
         node: &::gltf::Node,
         node_name: &str,
         world: DAffine3,
@@ -107,31 +106,36 @@ impl<'a> Reader<'a> {
             return Ok(vec![(world, node_name.to_string())]);
         };
         let here = self.instancing_at(node_name);
-        let buffers = &self.buffers;
-        let data = |b: ::gltf::Buffer| buffers.get(b.index()).map(Vec::as_slice);
-        let unread = |what: &str| anyhow!("{here}: {what} cannot be read");
-        let vec3s = |acc: &Option<::gltf::Accessor>, what: &str, default: DVec3| -> Result<_> {
-            Ok(match acc {
-                Some(acc) => Iter::<[f32; 3]>::new(acc.clone(), data)
-                    .ok_or_else(|| unread(what))?
-                    .map(|v| DVec3::from_array(v.map(f64::from)))
-                    .collect(),
-                None => vec![default; a.count],
-            })
-        };
-        let translations = vec3s(&a.translation, "TRANSLATION", DVec3::ZERO)?;
-        let scales = vec3s(&a.scale, "SCALE", DVec3::ONE)?;
-        let rotations: Vec<[f32; 4]> = match &a.rotation {
-            Some(acc) => {
-                let r = match acc.data_type() {
-                    DataType::I8 => Iter::new(acc.clone(), data).map(Rotations::I8),
-                    DataType::I16 => Iter::new(acc.clone(), data).map(Rotations::I16),
-                    _ => Iter::new(acc.clone(), data).map(Rotations::F32),
-                };
-                r.ok_or_else(|| unread("ROTATION"))?.into_f32().collect()
+        // Read as every accessor is: sparse, normalised or compressed.
+        let used: Vec<_> = [&a.translation, &a.rotation, &a.scale]
+            .into_iter()
+            .flatten()
+            .cloned()
+            .collect();
+        self.unpack(&used)?;
+        let read = |acc: &Option<::gltf::Accessor>, what: &str, default: &[f64]| -> Result<_> {
+            let mut out: Vec<[f64; 4]> = Vec::with_capacity(a.count);
+            match acc {
+                Some(acc) => self.each(&here, what, acc, |e| {
+                    let mut v = [0.0; 4];
+                    v[..e.len().min(4)].copy_from_slice(&e[..e.len().min(4)]);
+                    out.push(v);
+                })?,
+                None => {
+                    let mut v = [0.0; 4];
+                    v[..default.len()].copy_from_slice(default);
+                    out.resize(a.count, v);
+                }
             }
-            None => vec![[0.0, 0.0, 0.0, 1.0]; a.count],
+            Ok(out)
         };
+        let v3 = |v: &[f64; 4]| DVec3::new(v[0], v[1], v[2]);
+        let translations: Vec<DVec3> = read(&a.translation, "TRANSLATION", &[0.0; 3])?
+            .iter()
+            .map(v3)
+            .collect();
+        let scales: Vec<DVec3> = read(&a.scale, "SCALE", &[1.0; 3])?.iter().map(v3).collect();
+        let rotations = read(&a.rotation, "ROTATION", &[0.0, 0.0, 0.0, 1.0])?;
         // A value named in a message, unless its buffer lies outside the
         // glTF's folder.
         let shown = |acc: &Option<::gltf::Accessor<'a>>, what: &str, k: usize, v: String| {
@@ -153,7 +157,7 @@ impl<'a> Reader<'a> {
                     shown(&a.scale, "SCALE", k, show3(*s))
                 );
             }
-            let q = DQuat::from_array(r.map(f64::from));
+            let q = DQuat::from_array(*r);
             if !q.is_finite() || q.length_squared() == 0.0 {
                 let v = format!("[{}]", r.map(|x| x.to_string()).join(", "));
                 bail!("{}, not a rotation", shown(&a.rotation, "ROTATION", k, v));
@@ -168,7 +172,7 @@ impl<'a> Reader<'a> {
             out.push((placed, format!("{node_name}, instance {k}")));
         }
         if out.len() != a.count {
-            bail!(unread("an instance"));
+            bail!("{here}: an instance cannot be read");
         }
         Ok(out)
     }

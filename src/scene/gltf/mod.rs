@@ -6,18 +6,22 @@
 //! Read: the default scene (or the first) through its node hierarchy, each
 //! node's transform applied in f64; triangle primitives (strips and fans
 //! turned into triangles) with positions, normals, the first UV set and
-//! `COLOR_0`; materials mapped onto Phong (see [`phong`]) with the
-//! `baseColorTexture` and its sampler's wrap modes (WebP images through
+//! `COLOR_0`, quantized or not, sparse or not, compressed with
+//! meshoptimizer or not (see [`accessor`]); materials mapped onto Phong
+//! (see [`phong`]) with the `baseColorTexture`, its sampler's wrap modes
+//! and its `KHR_texture_transform` (WebP images through
 //! `EXT_texture_webp`); `EXT_mesh_gpu_instancing`; perspective and
 //! orthographic cameras (the first, or the one `--camera` names);
 //! `KHR_lights_punctual` lights (spot lights become point lights,
 //! directional lights point lights far away). What cannot be mapped is
 //! listed once in the warnings.
 
+mod accessor;
 mod check;
 mod extensions;
 mod instancing;
 mod lenient;
+mod meshopt;
 mod primitive;
 mod uri;
 
@@ -186,6 +190,9 @@ struct Reader<'a> {
     /// accessors takes them, and how many are still to come.
     decoded: HashMap<Key, Decoded>,
     uses: HashMap<Key, usize>,
+    /// `EXT_meshopt_compression` views by index, and those decoded so far.
+    compressed: HashMap<usize, Result<meshopt::Compressed, String>>,
+    unpacked: HashMap<usize, Vec<u8>>,
 }
 
 impl Reader<'_> {
@@ -287,7 +294,9 @@ impl Reader<'_> {
         };
         let here = || format!("material {name}");
         if let Some(info) = pbr.base_color_texture() {
-            if info.tex_coord() != 0 {
+            // KHR_texture_transform may name another set.
+            let set = info.texture_transform().and_then(|t| t.tex_coord());
+            if set.unwrap_or(info.tex_coord()) != 0 {
                 self.unmapped.note("textures on a second UV set", here);
             }
             let texture = info.texture();
@@ -405,8 +414,9 @@ pub fn load(
             }
         }
     }
-    extensions::accept_required(&mut json);
+    let drawn_without = extensions::check(path, &mut json, &mut parts.warnings)?;
     extensions::prefer_webp(path, &mut json)?;
+    let undefined = extensions::undefined_attributes(&mut json);
     // rayterm shows a file at rest: its animations are counted, not read,
     // so nothing in them (targets of other extensions) can refuse it.
     let animations = std::mem::take(&mut json.animations).len();
@@ -416,6 +426,12 @@ pub fn load(
     let (mut buffers, mut origins, mut foreign) = (Vec::new(), Vec::new(), Vec::new());
     for b in doc.buffers() {
         let name = named(b.name(), b.index());
+        if meshopt::fallback(&b) {
+            buffers.push(Vec::new());
+            origins.push(String::new());
+            foreign.push(None);
+            continue;
+        }
         let mut outside = None;
         // The binary chunk is padded to 4 bytes past the buffer's length.
         let (mut data, padding, origin) = match b.source() {
@@ -482,11 +498,21 @@ pub fn load(
         broken,
         decoded: HashMap::new(),
         uses: HashMap::new(),
+        compressed: meshopt::views(&doc),
+        unpacked: HashMap::new(),
     };
     for ext in doc.extensions_used() {
-        if !extensions::reads(ext) {
+        if !extensions::reads(ext) && !drawn_without.iter().any(|d| d == ext) {
             r.unmapped
                 .note(&crate::words::quoted(ext), || "extensionsUsed".into());
+        }
+    }
+    if let Some((first, count)) = undefined {
+        for _ in 0..count {
+            r.unmapped
+                .note("vertex attributes whose names glTF does not define", || {
+                    first.clone()
+                });
         }
     }
     if animations > 0 {

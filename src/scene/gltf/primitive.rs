@@ -1,4 +1,4 @@
-//! A primitive's accessors, checked before the crate reads them, decoded
+//! A primitive's accessors, checked before anything is read, decoded
 //! once however many nodes place the primitive, and placed per instance.
 
 use std::collections::HashMap;
@@ -58,12 +58,25 @@ pub(super) fn triangles(mode: Mode, corners: usize) -> usize {
     }
 }
 
+/// Texture coordinates (rayterm's, v up) through a `KHR_texture_transform`:
+/// scaled, turned, then offset, in glTF's coordinates (v down).
+fn transformed(mut uvs: Vec<Vec2>, t: &::gltf::texture::TextureTransform) -> Vec<Vec2> {
+    let ([ox, oy], [sx, sy]) = (t.offset(), t.scale());
+    let (sin, cos) = t.rotation().sin_cos();
+    for uv in &mut uvs {
+        let (u, v) = (uv.x * sx, (1.0 - uv.y) * sy);
+        let (u, v) = (cos * u + sin * v + ox, cos * v - sin * u + oy);
+        *uv = Vec2::new(u, 1.0 - v);
+    }
+    uvs
+}
+
 impl Reader<'_> {
     /// `; read from buffer B, FILE`: where the values of accessor `a` come
     /// from, when that is a file (a buffer's URI may name any file, and a
     /// wrong one gives values that make no sense as geometry).
     fn origin(&self, a: Option<&::gltf::Accessor>) -> String {
-        let b = a.and_then(|a| a.view()).map(|v| v.buffer().index());
+        let b = a.and_then(|a| self.buffer_of(a));
         match b.and_then(|b| Some((b, self.origins.get(b)?))) {
             Some((b, o)) if !o.is_empty() => format!("; read from buffer {b}, {o}"),
             _ => String::new(),
@@ -75,73 +88,11 @@ impl Reader<'_> {
     ///
     /// [`Outside`]: crate::scene::source::Outside
     pub(super) fn shown(&self, a: Option<&::gltf::Accessor>, value: String) -> String {
-        let b = a.and_then(|a| a.view()).map(|v| v.buffer().index());
+        let b = a.and_then(|a| self.buffer_of(a));
         match b.and_then(|b| self.foreign.get(b)?.as_ref()) {
             Some(_) => "(not shown: its buffer lies outside the glTF's folder)".into(),
             None => value,
         }
-    }
-
-    /// Checks what the crate's reader takes on trust (it panics or reads
-    /// garbage otherwise): the accessor's type is one glTF allows for
-    /// `what`, and every element it reads lies, aligned, inside its view
-    /// and buffer.
-    pub(super) fn check_accessor(
-        &self,
-        here: &str,
-        what: &str,
-        a: &::gltf::Accessor,
-        types: &[DataType],
-        dims: &[Dimensions],
-    ) -> Result<()> {
-        let name = format!("{here}: {what} (accessor {})", a.index());
-        if !types.contains(&a.data_type()) || !dims.contains(&a.dimensions()) {
-            bail!(
-                "{name} is {:?} {:?}; glTF allows {} of {}",
-                a.dimensions(),
-                a.data_type(),
-                dims.iter()
-                    .map(|d| format!("{d:?}"))
-                    .collect::<Vec<_>>()
-                    .join(" or "),
-                types
-                    .iter()
-                    .map(|t| format!("{t:?}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-        }
-        if a.sparse().is_some() {
-            bail!("{name} is sparse, which rayterm does not read");
-        }
-        let Some(view) = a.view() else {
-            bail!("{name} has no buffer view");
-        };
-        if a.count() == 0 {
-            bail!("{name} has no elements (count 0)");
-        }
-        let component = a.data_type().size() as u128;
-        let element = a.size() as u128;
-        let stride = view.stride().map_or(element, |s| s as u128);
-        if stride < element {
-            bail!("{name}: the buffer view's byteStride {stride} is smaller than one element ({element} bytes)");
-        }
-        let start = view.offset() as u128 + a.offset() as u128;
-        if !start.is_multiple_of(component) || !stride.is_multiple_of(component) {
-            bail!("{name} is not aligned to its {component}-byte components (offset {start}, stride {stride})");
-        }
-        let end_in_view = a.offset() as u128 + stride * (a.count() as u128 - 1) + element;
-        let buffer = self.buffers.get(view.buffer().index()).map_or(0, Vec::len) as u128;
-        let view_end = view.offset() as u128 + view.length() as u128;
-        if end_in_view > view.length() as u128 || view_end > buffer {
-            bail!(
-                "{name}: its {} elements end at byte {end_in_view} of a {}-byte buffer view \
-                 ending at byte {view_end} of a {buffer}-byte buffer (truncated or wrong counts?)",
-                a.count(),
-                view.length()
-            );
-        }
-        Ok(())
     }
 
     /// The triangles of one primitive, placed by `xf`; `None` for points
@@ -167,7 +118,21 @@ impl Reader<'_> {
         let k = key(&p);
         let d = match self.decoded.remove(&k) {
             Some(d) => d,
-            None => self.decode(&here, &p)?,
+            None => {
+                let used = [
+                    Semantic::Positions,
+                    Semantic::Normals,
+                    Semantic::TexCoords(0),
+                    Semantic::Colors(0),
+                ];
+                let used: Vec<_> = used
+                    .iter()
+                    .filter_map(|s| p.get(s))
+                    .chain(p.indices())
+                    .collect();
+                self.unpack(&used)?;
+                self.decode(&here, &p)?
+            }
         };
         let left = self.uses.get_mut(&k).map_or(0, |n| {
             *n = n.saturating_sub(1);
@@ -195,6 +160,19 @@ impl Reader<'_> {
                 },
             );
         }
+        // A texture's KHR_texture_transform (gltfpack's de-quantization of
+        // coordinates, atlases) moves the coordinates only it reads.
+        let transform = textured.as_ref().and_then(|t| t.texture_transform());
+        let uvs = match (material, transform, d.uvs) {
+            (None, Some(t), Some(uvs)) => {
+                let uvs = transformed(uvs, &t);
+                if !uvs.iter().all(|uv| uv.is_finite()) {
+                    bail!("{here}: TEXCOORD_0 through its material's texture transform holds a number that is not finite");
+                }
+                Some(uvs)
+            }
+            (_, _, uvs) => uvs,
+        };
         let material = match material {
             Some(m) => m,
             None => self.material(parts, p.material())?,
@@ -211,7 +189,7 @@ impl Reader<'_> {
             name,
             positions: placed,
             normals: d.normals.map(|n| place_normals(&n, xf)),
-            uvs: d.uvs,
+            uvs,
             colors: d.colors,
             indices: d.indices,
             material,
@@ -219,22 +197,38 @@ impl Reader<'_> {
     }
 
     /// Checks a primitive's accessors before anything reads them (`here`
-    /// names it in messages).
+    /// names it in messages): the types glTF allows, with those
+    /// `KHR_mesh_quantization` adds, and as many values of each attribute
+    /// as positions.
     fn check_primitive(&self, here: &str, p: &::gltf::Primitive) -> Result<()> {
-        use DataType::{F32, U16, U32, U8};
+        use DataType::{F32, I16, I8, U16, U32, U8};
         use Dimensions::{Scalar, Vec2 as V2, Vec3 as V3, Vec4 as V4};
         let Some(position) = p.get(&Semantic::Positions) else {
             bail!("{here}: no POSITION attribute");
         };
-        self.check_accessor(here, "POSITION", &position, &[F32], &[V3])?;
-        if let Some(a) = p.get(&Semantic::Normals) {
-            self.check_accessor(here, "NORMAL", &a, &[F32], &[V3])?;
-        }
-        if let Some(a) = p.get(&Semantic::TexCoords(0)) {
-            self.check_accessor(here, "TEXCOORD_0", &a, &[F32, U8, U16], &[V2])?;
-        }
-        if let Some(a) = p.get(&Semantic::Colors(0)) {
-            self.check_accessor(here, "COLOR_0", &a, &[F32, U8, U16], &[V3, V4])?;
+        self.check_accessor(here, "POSITION", &position, &[F32, I8, U8, I16, U16], &[V3])?;
+        let attributes: [(_, _, &[_], &[_]); 3] = [
+            (Semantic::Normals, "NORMAL", &[F32, I8, I16], &[V3]),
+            (
+                Semantic::TexCoords(0),
+                "TEXCOORD_0",
+                &[F32, I8, U8, I16, U16],
+                &[V2],
+            ),
+            (Semantic::Colors(0), "COLOR_0", &[F32, U8, U16], &[V3, V4]),
+        ];
+        for (semantic, what, types, dims) in attributes {
+            if let Some(a) = p.get(&semantic) {
+                self.check_accessor(here, what, &a, types, dims)?;
+                if a.count() != position.count() {
+                    bail!(
+                        "{here}: {what} (accessor {}) has {} values for {} positions",
+                        a.index(),
+                        a.count(),
+                        position.count()
+                    );
+                }
+            }
         }
         if let Some(a) = p.indices() {
             self.check_accessor(here, "indices", &a, &[U8, U16, U32], &[Scalar])?;
@@ -242,17 +236,30 @@ impl Reader<'_> {
         Ok(())
     }
 
-    /// Reads a primitive's accessors, checked by [`Reader::instanced`]
-    /// (`here` names it in messages).
-    fn decode(&self, here: &str, p: &::gltf::Primitive) -> Result<Decoded> {
-        let buffers = &self.buffers;
-        let reader = p.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-        let Some(positions) = reader.read_positions() else {
-            bail!("{here}: POSITION cannot be read");
+    /// The values of accessor `a`, if any, each made by `f` from its
+    /// components.
+    fn all<T>(
+        &self,
+        here: &str,
+        what: &str,
+        a: Option<::gltf::Accessor>,
+        f: impl Fn(&[f64]) -> T,
+    ) -> Result<Option<Vec<T>>> {
+        let Some(a) = a else {
+            return Ok(None);
         };
-        let positions: Vec<DVec3> = positions
-            .map(|v| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
-            .collect();
+        let mut out = Vec::with_capacity(a.count());
+        self.each(here, what, &a, |v| out.push(f(v)))?;
+        Ok(Some(out))
+    }
+
+    /// Reads a primitive's accessors, checked by [`Reader::instanced`]
+    /// and unpacked by [`Reader::unpack`] (`here` names it in messages).
+    fn decode(&self, here: &str, p: &::gltf::Primitive) -> Result<Decoded> {
+        let d3 = |v: &[f64]| DVec3::new(v[0], v[1], v[2]);
+        let Some(positions) = self.all(here, "POSITION", p.get(&Semantic::Positions), d3)? else {
+            bail!("{here}: no POSITION attribute");
+        };
         if let Some((i, v)) = positions.iter().enumerate().find(|(_, v)| {
             v.to_array()
                 .into_iter()
@@ -266,32 +273,21 @@ impl Reader<'_> {
             );
         }
         let n = positions.len();
-        let count_of = |what: &str, len: usize| -> Result<()> {
-            if len != n {
-                bail!("{here}: {what} has {len} values for {n} positions");
-            }
-            Ok(())
-        };
-        let normals: Option<Vec<DVec3>> = reader.read_normals().map(|it| {
-            it.map(|v| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
-                .collect()
-        });
-        if let Some(v) = &normals {
-            count_of("NORMAL", v.len())?;
-        }
+        let normals = self.all(here, "NORMAL", p.get(&Semantic::Normals), d3)?;
         // glTF puts v = 0 at the top of the image, rayterm at the bottom.
-        let uvs: Option<Vec<Vec2>> = reader
-            .read_tex_coords(0)
-            .map(|t| t.into_f32().map(|[u, v]| Vec2::new(u, 1.0 - v)).collect());
-        if let Some(v) = &uvs {
-            count_of("TEXCOORD_0", v.len())?;
-        }
-        let colors: Option<Vec<Vec3>> = reader
-            .read_colors(0)
-            .map(|c| c.into_rgb_f32().map(Vec3::from_array).collect());
-        if let Some(v) = &colors {
-            count_of("COLOR_0", v.len())?;
-        }
+        let uvs = self.all(here, "TEXCOORD_0", p.get(&Semantic::TexCoords(0)), |v| {
+            Vec2::new(v[0] as f32, 1.0 - v[1] as f32)
+        })?;
+        // Integer colours are normalised (glTF allows no others).
+        let color = p.get(&Semantic::Colors(0));
+        let scale = match color.as_ref().map(|a| (a.data_type(), a.normalized())) {
+            Some((DataType::U8, false)) => 255.0,
+            Some((DataType::U16, false)) => 65535.0,
+            _ => 1.0,
+        };
+        let colors = self.all(here, "COLOR_0", color, |v| {
+            Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32) / scale
+        })?;
         let finite = |ok: bool, what: &str| -> Result<()> {
             if !ok {
                 bail!("{here}: {what} holds a number that is not finite");
@@ -301,8 +297,8 @@ impl Reader<'_> {
         finite(normals.iter().flatten().all(|v| v.is_finite()), "NORMAL")?;
         finite(uvs.iter().flatten().all(|v| v.is_finite()), "TEXCOORD_0")?;
         finite(colors.iter().flatten().all(|v| v.is_finite()), "COLOR_0")?;
-        let corners: Vec<u32> = match reader.read_indices() {
-            Some(ix) => ix.into_u32().collect(),
+        let corners = match self.all(here, "indices", p.indices(), |v| v[0] as u32)? {
+            Some(c) => c,
             None => (0..n as u32).collect(),
         };
         if let Some((k, &i)) = corners.iter().enumerate().find(|(_, &i)| i as usize >= n) {
