@@ -921,10 +921,32 @@ fn malformed_gltf_files_say_what_is_wrong() {
             b"glTF\x01\x00\x00\x00\x20\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00".to_vec(),
             "old.glb: glTF 1.0 is not supported",
         ),
+        // As collada2gltf wrote it: the version a number, or none at all.
+        (
+            "number.gltf",
+            br#"{"asset":{"version":1},"meshes":{"m":{"primitives":[]}}}"#.to_vec(),
+            "number.gltf: glTF 1.0 is not supported",
+        ),
+        (
+            "none.gltf",
+            br#"{"asset":{},"nodes":{"n":{}},"accessors":{}}"#.to_vec(),
+            "none.gltf: glTF 1.0 is not supported",
+        ),
     ] {
         let e = load(&d.write(name, bytes)).err().unwrap_or_else(|| panic!("{name} loaded"));
         assert!(e.contains(want), "{name}: {e}\nwanted: {want}");
     }
+    // An empty version is read as 2.0, as other readers read it.
+    let mut unversioned = json.clone();
+    unversioned["asset"]["version"] = "".into();
+    let s = load(&d.write("unversioned.glb", glb(&unversioned, &bin))).unwrap();
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("unversioned.glb: its asset.version is empty: read as glTF 2.0")),
+        "{:?}",
+        s.warnings
+    );
     let e = load(&d.path("missing.gltf").to_string_lossy()).unwrap_err();
     assert!(e.contains("gone.bin: not found"), "{e}");
     d.write("gone.bin", &short_bin);

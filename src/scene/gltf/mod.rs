@@ -350,9 +350,15 @@ fn version_1(body: &[u8]) -> bool {
         return v == 1u32.to_le_bytes();
     }
     serde_json::from_slice::<serde_json::Value>(body).is_ok_and(|j| {
-        j.pointer("/asset/version")
-            .and_then(|v| v.as_str())
+        let v = j.pointer("/asset/version");
+        // A number (`"version": 1`, as collada2gltf wrote it), or no
+        // version where 2.0's arrays are 1.0's objects.
+        v.and_then(|v| v.as_str())
             .is_some_and(|v| v == "1" || v.starts_with("1."))
+            || v.and_then(|v| v.as_f64()).is_some_and(|v| v < 2.0)
+            || ["meshes", "nodes", "accessors"]
+                .iter()
+                .any(|k| j.get(k).is_some_and(|v| v.is_object()))
     })
 }
 
@@ -388,7 +394,14 @@ pub fn load(
     let mut json = file.document.into_json();
     // glTF 1.0 is another format, which the 2.0 schema misreads.
     let version = &json.asset.version;
-    if version.split('.').next() != Some("2") {
+    // Written by hand or by a careless tool: read as 2.0, as other readers
+    // read it.
+    if version.trim().is_empty() {
+        parts.warnings.push(format!(
+            "{}: its asset.version is empty: read as glTF 2.0",
+            path.display()
+        ));
+    } else if version.split('.').next() != Some("2") {
         bail!(
             "{}: glTF version {}: only glTF 2.x is read",
             path.display(),
