@@ -1,9 +1,9 @@
 //! The faces of a PLY file as triangles, read value by value: polygons
-//! clipped in their plane ([`Triangulator`]) as they are read, or once
-//! every vertex is where the faces come first, and, where the face element
-//! gives corners texture coordinates (MeshLab's `texcoord` lists) or faces
-//! a colour, each corner a vertex of its own (shared by the corners of one
-//! vertex that agree).
+//! clipped in their plane ([`Triangulator`]) as they are read (or, where
+//! the faces come before the vertices, once every vertex is read), and,
+//! where the face element gives corners texture coordinates (MeshLab's
+//! `texcoord` lists) or faces a colour, each corner a vertex of its own
+//! (shared by the corners of one vertex that agree).
 
 use std::collections::HashMap;
 
@@ -13,7 +13,7 @@ use super::PlyMesh;
 use crate::scene::polygon::{quad_is_fan, Triangulator};
 
 /// What the face element gives each face beyond its vertices.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy)]
 pub struct Given {
     pub uvs: bool,
     pub colors: bool,
@@ -22,9 +22,9 @@ pub struct Given {
 /// The faces read so far.
 pub struct Faces {
     given: Given,
-    /// With [`Given`] anything: the corner vertices by their vertex in the
-    /// file, UV and colour (as bits), each one's vertex in the file, UV and
-    /// colour.
+    /// Where the faces give corners anything ([`Given`]): the vertex of a
+    /// corner by its vertex in the file, UV and colour (as bits), and each
+    /// such vertex's vertex in the file, UV and colour.
     ids: HashMap<(u32, [u32; 2], [u32; 3]), u32>,
     from: Vec<u32>,
     uvs: Vec<Vec2>,
