@@ -29,6 +29,14 @@ fn fan(n: usize, from: usize, out: &mut Vec<[u32; 3]>) {
     out.extend((1..n - 1).map(|k| [at(0), at(k), at(k + 1)]));
 }
 
+/// Whether the quad `points` is the fan from its first corner: its two fan
+/// triangles face the same way (it is convex, or flat), as most quads are,
+/// which takes no more work.
+pub(crate) fn quad_is_fan([p, q, r, s]: [DVec3; 4]) -> bool {
+    let (a, b, c) = (q - p, r - p, s - p);
+    a.cross(b).dot(b.cross(c)) >= 0.0
+}
+
 /// Twice the polygon's area along its normal (Newell's method), corners
 /// taken from the first so that far from the origin nothing cancels.
 fn newell(points: &[DVec3]) -> DVec3 {
@@ -74,12 +82,19 @@ impl Triangulator {
     /// least three) to `out`, as corner numbers, each turning as the
     /// polygon does. `false` where the polygon fits no plane (its corners
     /// on a line, or a figure of eight whose halves cancel) or is too large
-    /// to clip, and is a fan all the same ([`Triangulator::warning`]).
+    /// to clip, and is a fan all the same ([`Triangulator::warning`]); a
+    /// quad whose fan triangles face the same way is the fan, flat or not.
     pub(crate) fn triangles(&mut self, points: &[DVec3], out: &mut Vec<[u32; 3]>) -> bool {
         let n = points.len();
         if n == 3 {
             out.push([0, 1, 2]);
             return true;
+        }
+        if let &[p, q, r, s] = points {
+            if quad_is_fan([p, q, r, s]) {
+                fan(n, 0, out);
+                return true;
+            }
         }
         let normal = newell(points);
         // The polygon's area against its size: nothing when it fits no plane.

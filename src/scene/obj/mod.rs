@@ -363,23 +363,27 @@ impl ObjFile {
             for f in &p.faces {
                 let corners = &mut p.corners[f.start as usize..][..f.len as usize];
                 let line = f.line;
-                if let Some(c) = corners.iter().find(|c| beyond(c, 0)) {
-                    bail!(
-                        "{}:{line}: the face refers to vertex {} but the file defines {}",
-                        self.path.display(),
-                        c[0] as u64 + 1,
-                        counts[0]
-                    );
+                let mut lost = [false; 3];
+                for c in corners.iter() {
+                    if beyond(c, 0) {
+                        bail!(
+                            "{}:{line}: the face refers to vertex {} but the file defines {}",
+                            self.path.display(),
+                            c[0] as u64 + 1,
+                            counts[0]
+                        );
+                    }
+                    lost[1] |= beyond(c, 1);
+                    lost[2] |= beyond(c, 2);
                 }
-                let mut lost = false;
-                for k in 1..3 {
-                    if let Some(c) = corners.iter().find(|c| beyond(c, k)) {
+                if lost[1] || lost[2] {
+                    for k in [1, 2].into_iter().filter(|&k| lost[k]) {
+                        let c = corners.iter().find(|c| beyond(c, k)).expect("one is");
                         first.get_or_insert((line, k, c[k]));
                         corners.iter_mut().for_each(|c| c[k] = NONE);
-                        lost = true;
                     }
+                    dropped += 1;
                 }
-                dropped += lost as u64;
             }
         }
         Ok(first.map(|(line, k, index)| {
@@ -1156,13 +1160,13 @@ mod tests {
         // Corners on a line: a fan, and a warning.
         let p = load(vec![(
             "m/a.obj",
-            "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3 4\n".into(),
+            "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nv 4 0 0\nf 1 2 3 4 5\n".into(),
         )])
         .unwrap();
         assert!(
             p.warnings
                 .iter()
-                .any(|w| w.starts_with("m/a.obj:5: a polygon fits no plane")),
+                .any(|w| w.starts_with("m/a.obj:6: a polygon fits no plane")),
             "{:?}",
             p.warnings
         );

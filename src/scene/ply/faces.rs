@@ -1,18 +1,19 @@
 //! The faces of a PLY file as triangles, read value by value: polygons
-//! clipped in their plane once every vertex is read ([`Triangulator`]),
-//! and, where the face element gives corners texture coordinates (MeshLab's
+//! clipped in their plane ([`Triangulator`]) as they are read (or, where
+//! the faces come before the vertices, once every vertex is read), and,
+//! where the face element gives corners texture coordinates (MeshLab's
 //! `texcoord` lists) or faces a colour, each corner a vertex of its own
 //! (shared by the corners of one vertex that agree).
 
 use std::collections::HashMap;
 
-use glam::{Vec2, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 
 use super::PlyMesh;
-use crate::scene::polygon::Triangulator;
+use crate::scene::polygon::{quad_is_fan, Triangulator};
 
 /// What the face element gives each face beyond its vertices.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy)]
 pub struct Given {
     pub uvs: bool,
     pub colors: bool,
@@ -21,16 +22,22 @@ pub struct Given {
 /// The faces read so far.
 pub struct Faces {
     given: Given,
-    /// With [`Given`] anything: the corner vertices by their vertex in the
-    /// file, UV and colour (as bits), each one's vertex in the file, UV and
-    /// colour.
+    /// Where the faces give corners anything ([`Given`]): the vertex of a
+    /// corner by its vertex in the file, UV and colour (as bits), and each
+    /// such vertex's vertex in the file, UV and colour.
     ids: HashMap<(u32, [u32; 2], [u32; 3]), u32>,
     from: Vec<u32>,
     uvs: Vec<Vec2>,
     colors: Vec<Vec3>,
-    /// Polygons of more than three corners: where their fans start among
-    /// the triangles, their corners and the face's number.
+    /// Polygons of more than three corners read before the vertices: where
+    /// their fans start among the triangles, their corners and the face's
+    /// number.
     polygons: Vec<(usize, u32, u64)>,
+    triangulator: Triangulator,
+    points: Vec<DVec3>,
+    cut: Vec<[u32; 3]>,
+    /// Polygons left as fans: the first face's number and how many.
+    fans: (Option<u64>, usize),
     /// Faces whose `texcoord` list is not two numbers a corner: the first
     /// face's number and how many.
     odd_uvs: (Option<u64>, u64),
@@ -45,7 +52,23 @@ impl Faces {
             uvs: Vec::new(),
             colors: Vec::new(),
             polygons: Vec::new(),
+            triangulator: Triangulator::default(),
+            points: Vec::new(),
+            cut: Vec::new(),
+            fans: (None, 0),
             odd_uvs: (None, 0),
+        }
+    }
+
+    /// Cuts the polygon of `corners`, with their vertices at `positions`,
+    /// into `self.cut`.
+    fn cut(&mut self, face: u64, corners: &[u32], positions: &[DVec3]) {
+        self.points.clear();
+        self.points
+            .extend(corners.iter().map(|&i| positions[i as usize]));
+        if !self.triangulator.triangles(&self.points, &mut self.cut) {
+            self.fans.0.get_or_insert(face);
+            self.fans.1 += 1;
         }
     }
 
@@ -56,15 +79,27 @@ impl Faces {
 
     /// Adds face `face` of `corners` (vertex numbers), with `uvs` (two
     /// numbers a corner) and `color` where the element gives them, to
-    /// `triangles`: a fan, until [`Faces::finish`] clips it.
+    /// `triangles`; `positions` are the vertices' where they are read, else
+    /// a polygon is a fan until [`Faces::finish`] cuts it.
     pub fn add(
         &mut self,
         face: u64,
         corners: &mut [u32],
         uvs: &[f32],
         color: Vec3,
+        positions: Option<&[DVec3]>,
         triangles: &mut Vec<[u32; 3]>,
     ) {
+        // Cut where the vertices are read, but for the quads that are
+        // their fan, most of them, which take no detour.
+        let cut = match (&*corners, positions) {
+            ([a, b, c, d], Some(p)) if quad_is_fan([a, b, c, d].map(|&i| p[i as usize])) => false,
+            (corners, Some(p)) if corners.len() > 3 => {
+                self.cut(face, corners, p);
+                true
+            }
+            _ => false,
+        };
         let Given {
             uvs: given_uvs,
             colors: given_colors,
@@ -97,7 +132,11 @@ impl Faces {
                 });
             }
         }
-        if corners.len() > 3 {
+        if cut {
+            triangles.extend(self.cut.drain(..).map(|t| t.map(|k| corners[k as usize])));
+            return;
+        }
+        if corners.len() > 3 && positions.is_none() {
             self.polygons
                 .push((triangles.len(), corners.len() as u32, face));
         }
@@ -106,7 +145,7 @@ impl Faces {
 
     /// The mesh `m`, whose vertices are all read, with its corners' own
     /// vertices and its polygons clipped; warnings naming `file`.
-    pub fn finish(self, file: &str, m: &mut PlyMesh, warnings: &mut Vec<String>) {
+    pub fn finish(mut self, file: &str, m: &mut PlyMesh, warnings: &mut Vec<String>) {
         if let (Some(face), n) = self.odd_uvs {
             let more = match n {
                 1 => String::new(),
@@ -122,44 +161,36 @@ impl Faces {
             m.positions = pick(from, std::mem::take(&mut m.positions));
             m.normals = m.normals.take().map(|v| pick(from, v));
             m.uvs = match self.given.uvs {
-                true => Some(self.uvs),
+                true => Some(std::mem::take(&mut self.uvs)),
                 false => m.uvs.take().map(|v| pick(from, v)),
             };
             m.colors = match self.given.colors {
-                true => Some(self.colors),
+                true => Some(std::mem::take(&mut self.colors)),
                 false => m.colors.take().map(|v| pick(from, v)),
             };
         }
-        if self.polygons.is_empty() {
-            return;
-        }
-        let mut triangulator = Triangulator::default();
-        let (mut fans, mut first) = (0, None);
-        let old = std::mem::take(&mut m.indices);
-        m.indices.reserve_exact(old.len());
-        let (mut points, mut corners, mut cut) = (Vec::new(), Vec::new(), Vec::new());
-        let mut done = 0;
-        for (start, n, face) in self.polygons {
-            m.indices.extend_from_slice(&old[done..start]);
-            done = start + n as usize - 2;
-            let fan = &old[start..done];
-            corners.clear();
-            corners.extend([fan[0][0], fan[0][1]]);
-            corners.extend(fan.iter().map(|t| t[2]));
-            points.clear();
-            points.extend(corners.iter().map(|&i| m.positions[i as usize]));
-            if !triangulator.triangles(&points, &mut cut) {
-                fans += 1;
-                first.get_or_insert(face);
+        if !self.polygons.is_empty() {
+            let old = std::mem::take(&mut m.indices);
+            m.indices.reserve_exact(old.len());
+            let mut corners = Vec::new();
+            let mut done = 0;
+            for (start, n, face) in std::mem::take(&mut self.polygons) {
+                m.indices.extend_from_slice(&old[done..start]);
+                done = start + n as usize - 2;
+                let fan = &old[start..done];
+                corners.clear();
+                corners.extend([fan[0][0], fan[0][1]]);
+                corners.extend(fan.iter().map(|t| t[2]));
+                self.cut(face, &corners, &m.positions);
+                m.indices
+                    .extend(self.cut.drain(..).map(|t| t.map(|k| corners[k as usize])));
             }
-            m.indices
-                .extend(cut.drain(..).map(|t| t.map(|k| corners[k as usize])));
+            m.indices.extend_from_slice(&old[done..]);
         }
-        m.indices.extend_from_slice(&old[done..]);
-        if let Some(face) = first {
+        if let (Some(face), n) = self.fans {
             warnings.push(format!(
                 "{file}: element face {face}: {}",
-                Triangulator::warning(fans)
+                Triangulator::warning(n)
             ));
         }
     }

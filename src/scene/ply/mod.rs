@@ -829,13 +829,11 @@ fn body_from<R: Values>(
             }
             if e.name == "face" {
                 let color = rgb.map(|c| srgb_to_linear((c / color_full).clamp(0.0, 1.0) as f32));
-                faces.add(
-                    i,
-                    &mut corners,
-                    &face_uvs,
-                    Vec3::from_array(color),
-                    &mut m.indices,
-                );
+                // The vertices are read where they come first, as they do
+                // in most files.
+                let positions = (m.positions.len() == vertex_count).then_some(&m.positions[..]);
+                let color = Vec3::from_array(color);
+                faces.add(i, &mut corners, &face_uvs, color, positions, &mut m.indices);
                 corners.clear();
                 face_uvs.clear();
             }
@@ -1314,18 +1312,15 @@ mod tests {
         let (late, _) = read(last.as_bytes()).unwrap();
         assert_eq!(late.indices, m.indices);
         // Corners on a line: a fan, and a warning.
-        let line = format!(
-            "{head}{vertices}{faces}end_header\n{}{}",
-            "0 0 0\n1 0 0\n2 0 0\n3 0 0\n4 0 0\n5 0 0\n6 0 0\n7 0 0\n", polygons
-        );
+        let collinear = "0 0 0\n1 0 0\n2 0 0\n3 0 0\n4 0 0\n5 0 0\n6 0 0\n7 0 0\n";
+        let line = format!("{head}{vertices}{faces}end_header\n{collinear}{polygons}");
         let (_, w) = read(line.as_bytes()).unwrap();
-        assert_eq!(
-            w,
-            [
-                "p.ply: element face 0: 2 polygons fit no plane (their corners on a line or \
-              their edges crossing) or have more than 65536 corners: triangulated as fans"
-            ]
-        );
+        let warning = "p.ply: element face 0: a polygon fits no plane (its corners on a line or \
+                       its edges crossing) or has more than 65536 corners: triangulated as a fan";
+        assert_eq!(w, [warning]);
+        // The same where the faces come first.
+        let last = format!("{head}{faces}{vertices}end_header\n{polygons}{collinear}");
+        assert_eq!(read(last.as_bytes()).unwrap().1, [warning]);
     }
 
     #[test]
