@@ -669,52 +669,62 @@ fn a_gltf_scene_renders_with_its_hierarchy_materials_camera_and_light() {
     assert!(near(corners[0], Vec3::new(-0.2, -1.0, 0.0)), "{corners:?}");
     assert!(near(corners[1], Vec3::new(-0.2, 1.0, 0.0)), "{corners:?}");
     assert!(near(corners[2], Vec3::new(-2.2, 1.0, 0.0)), "{corners:?}");
-    // Camera (Rig then Eye) and light from the file; the light at 1.
+    // Camera (Rig then Eye) and light from the file, in candela.
     assert!(near(s.camera.eye, Vec3::new(0.0, 0.0, 6.0)));
     assert!(matches!(s.camera.projection,
         Projection::Perspective { vfov } if (vfov - 0.8f32.to_degrees()).abs() < 1e-4));
     assert_eq!(
         s.lights,
-        [rayterm::scene::Light::Point {
+        [rayterm::scene::Light::Photometric {
             position: Vec3::new(0.0, 0.0, 6.0),
-            color: Vec3::ONE
+            intensity: Vec3::splat(5.0),
+            range: None,
+            cone: None,
         }]
     );
-    // The metallic material, mapped.
+    // The metallic material, as the file has it.
     let chrome = s.materials.iter().find(|m| m.name == "Chrome").unwrap();
-    assert_eq!(chrome.kd, Vec3::ZERO);
-    assert!(near(chrome.ks, Vec3::new(0.2, 0.8, 0.2)));
-    assert!(chrome.ns >= 1000.0 && chrome.texture.is_none());
-    // What was not mapped, once each.
+    let pbr = chrome.pbr.as_ref().unwrap();
+    assert_eq!(chrome.kd, Vec3::new(0.2, 0.8, 0.2));
+    assert_eq!((pbr.metallic, pbr.roughness), (1.0, 0.0));
+    assert_eq!(pbr.emissive, Vec3::X);
+    // What was not read, once.
     let w = s.warnings.join("\n");
-    for part in [
-        "KHR_materials_clearcoat",
-        "normal maps (material Checker)",
-        "emission (material Chrome)",
-    ] {
-        assert!(w.contains(part), "{part} missing in {w}");
-    }
+    assert!(w.contains("KHR_materials_clearcoat"), "{w}");
     assert_eq!(s.warnings.len(), 1, "{w}");
-    // Hand-checked pixels: kd = red texel * factor 0.5 (dielectric),
-    // ambient 0.1, the light at the eye, and the 0.04 highlight of a
-    // dielectric of roughness 1 (Phong exponent 0).
+    // Hand-checked pixels of the glTF BRDF (normal maps off: the file's
+    // is its colour texture): base = texel * factor 0.5 (a dielectric,
+    // roughness 1), the light at the eye, so v = l = h: Fresnel is 0.04,
+    // the diffuse share 0.96 base/π, the specular 0.04 D V with D = 1/π
+    // and V = 1/(4 cos); 5 cd at 6/cos give E = 5 cos²/36 lux. No
+    // ambient light: the file has its own.
     let (w_, h_) = (64, 48);
-    let img = common::render(&s, w_, h_, 1, exact(), Builder::Sah, 1).image;
+    let features = exact().without(&[Feature::NormalMaps]);
+    let img = common::render(&s, w_, h_, 1, features, Builder::Sah, 1).image;
+    let pi = std::f32::consts::PI;
+    let lit = |base: Vec3, cos: f32| {
+        let e = 5.0 * cos * cos / 36.0;
+        (0.96 * base / pi * cos + Vec3::splat(0.01 / pi)) * e
+    };
     let (red, cos) = pixel_at(&s, &img, w_, h_, Vec3::new(-1.2, -0.5, 0.0));
-    let want = Vec3::new(0.5 * 0.1 + 0.5 * cos + 0.04, 0.04, 0.04);
+    let want = lit(Vec3::new(0.5, 0.0, 0.0), cos);
     assert!(
-        (red - want).abs().max_element() < 1e-4,
+        (red - want).abs().max_element() < 1e-5,
         "{red} against {want}"
     );
     let (blue, cos) = pixel_at(&s, &img, w_, h_, Vec3::new(-1.2, 0.5, 0.0));
-    let want = Vec3::new(0.04, 0.04, 0.1 + cos + 0.04);
+    let want = lit(Vec3::new(0.0, 0.0, 1.0), cos);
     assert!(
-        (blue - want).abs().max_element() < 1e-4,
+        (blue - want).abs().max_element() < 1e-5,
         "{blue} against {want}"
     );
-    // The mirror shows the black sky; the background is black.
+    // The mirror shows the black sky and glows red; the background is
+    // black.
     let (chrome_px, _) = pixel_at(&s, &img, w_, h_, Vec3::new(1.7, 0.5, 0.0));
-    assert!(chrome_px.max_element() < 1e-3, "{chrome_px}");
+    assert!(
+        (chrome_px - Vec3::X).abs().max_element() < 1e-3,
+        "{chrome_px}"
+    );
     assert_eq!(img[0], Vec3::ZERO);
     // The inspector names the glTF mesh, node and material.
     let f = s.camera.frame(w_, h_);
@@ -737,7 +747,7 @@ fn a_gltf_scene_renders_with_its_hierarchy_materials_camera_and_light() {
     d.write("scene data.bin", &bin);
     let t = load(&d.write("scene.gltf", serde_json::to_vec(&json).unwrap())).unwrap();
     assert_eq!(t.geometry.positions, s.geometry.positions);
-    assert!(common::render(&t, w_, h_, 1, exact(), Builder::Sah, 1).image == img);
+    assert!(common::render(&t, w_, h_, 1, features, Builder::Sah, 1).image == img);
     // As a mesh of a scene file: the meshes, with a note on the rest.
     let toml = d.write(
         "s.toml",

@@ -307,6 +307,15 @@ fn load_toml(text: Vec<u8>) -> Result<(), TestCaseError> {
                     edge2,
                     ..
                 } => corner.is_finite() && edge1.is_finite() && edge2.is_finite(),
+                Light::Photometric {
+                    position,
+                    intensity,
+                    ..
+                } => position.is_finite() && intensity.is_finite(),
+                Light::Directional {
+                    direction,
+                    illuminance,
+                } => direction.is_finite() && illuminance.is_finite(),
             };
             prop_assert!(ok, "{:?}", l);
         }

@@ -502,7 +502,10 @@ fn spheres() -> Vec<u8> {
             {"type": "orthographic", "orthographic": {"xmag": 4.0, "ymag": 2.0, "znear": 0.1, "zfar": 100.0}},
             {"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1}}
         ],
-        "meshes": [{"name": "Ball", "primitives": [{"attributes": {"POSITION": pos}, "indices": ind}]}]
+        // Glowing, so that every pixel that sees a ball is lit.
+        "materials": [{"emissiveFactor": [1.0, 1.0, 1.0]}],
+        "meshes": [{"name": "Ball", "primitives": [{"attributes": {"POSITION": pos}, "indices": ind,
+                                                    "material": 0}]}]
     }))
 }
 
@@ -848,4 +851,171 @@ fn webp_files_are_textures_of_gltf_and_obj_alike() {
     let s = load(&obj).unwrap();
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     assert!(texel(&s).y > 0.99, "{}", texel(&s));
+}
+
+/// Lights keep the extension's units: point and spot lights in candela
+/// (colour times intensity) with their range and cone, directional
+/// lights in lux along the node's -Z.
+#[test]
+fn lights_keep_their_units_cones_and_ranges() {
+    use rayterm::scene::Light;
+    let d = Dir::new("gltf-light-units");
+    // A quarter turn about +X: the node's -Z points down.
+    let down = [
+        -std::f32::consts::FRAC_1_SQRT_2,
+        0.0,
+        0.0,
+        std::f32::consts::FRAC_1_SQRT_2,
+    ];
+    let file = d.write(
+        "lights.glb",
+        one_mesh(json!({
+            "extensionsUsed": ["KHR_lights_punctual"],
+            "extensions": {"KHR_lights_punctual": {"lights": [
+                {"type": "point", "color": [1.0, 0.5, 0.0], "intensity": 10.0, "range": 7.0},
+                {"type": "spot", "intensity": 4.0,
+                 "spot": {"innerConeAngle": 0.1, "outerConeAngle": 0.5}},
+                {"type": "directional", "intensity": 3.0}
+            ]}},
+            "scenes": [{"nodes": [0, 1, 2, 3]}],
+            "nodes": [{"name": "Tri", "mesh": 0},
+                      {"translation": [0.0, 2.0, 0.0],
+                       "extensions": {"KHR_lights_punctual": {"light": 0}}},
+                      {"translation": [0.0, 3.0, 0.0], "rotation": down,
+                       "extensions": {"KHR_lights_punctual": {"light": 1}}},
+                      {"rotation": down, "extensions": {"KHR_lights_punctual": {"light": 2}}}]
+        })),
+    );
+    let s = load(&file).unwrap();
+    assert_eq!(s.lights.len(), 3, "{:?}", s.lights);
+    match &s.lights[0] {
+        Light::Photometric {
+            intensity,
+            range,
+            cone: None,
+            ..
+        } => {
+            assert_eq!(*intensity, Vec3::new(10.0, 5.0, 0.0));
+            assert_eq!(*range, Some(7.0));
+        }
+        l => panic!("{l:?}"),
+    }
+    match &s.lights[1] {
+        Light::Photometric {
+            intensity,
+            cone: Some(c),
+            range: None,
+            ..
+        } => {
+            assert_eq!(*intensity, Vec3::splat(4.0));
+            assert!(near(c.axis, Vec3::NEG_Y), "{:?}", c.axis);
+            assert!((c.cos_inner - 0.1f32.cos()).abs() < 1e-6);
+            assert!((c.cos_outer - 0.5f32.cos()).abs() < 1e-6);
+        }
+        l => panic!("{l:?}"),
+    }
+    match &s.lights[2] {
+        Light::Directional {
+            direction,
+            illuminance,
+        } => {
+            assert!(near(*direction, Vec3::NEG_Y), "{direction:?}");
+            assert_eq!(*illuminance, Vec3::splat(3.0));
+        }
+        l => panic!("{l:?}"),
+    }
+    assert!(
+        !s.warnings
+            .iter()
+            .any(|w| w.contains("spot") || w.contains("range")),
+        "{:?}",
+        s.warnings
+    );
+}
+
+/// A 2x2 PNG of one grey level.
+fn grey_png(level: u8) -> Vec<u8> {
+    let img = image::RgbImage::from_pixel(2, 2, image::Rgb([level, level, level]));
+    let mut png = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    png
+}
+
+/// Every core texture of a metallic-roughness material is read: colours
+/// (base, emissive) sRGB-decoded, data (metallic-roughness, normal,
+/// occlusion) as stored; emissive strength multiplies the emissive
+/// colour; a primitive without a material takes the specification's
+/// default, a rough white metal.
+#[test]
+fn metallic_roughness_materials_take_every_core_texture() {
+    let d = Dir::new("gltf-pbr-textures");
+    let mut bin = Bin::default();
+    let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let (pos, ind) = bin.mesh(&p, &[[0, 1, 2]]);
+    let uv = bin.floats(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0], 2, "VEC2");
+    let png = bin.view(&grey_png(128));
+    let tex = |i: usize| json!({"index": i});
+    let doc = json!({
+        "scene": 0, "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"mesh": 1, "translation": [2.0, 0.0, 0.0]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos, "TEXCOORD_0": uv},
+                                    "indices": ind, "material": 0}]},
+                   {"primitives": [{"attributes": {"POSITION": pos}, "indices": ind}]}],
+        "extensionsUsed": ["KHR_materials_emissive_strength"],
+        "materials": [{
+            "name": "Worn",
+            "pbrMetallicRoughness": {"baseColorTexture": tex(0),
+                                     "baseColorFactor": [0.5, 1.0, 1.0, 1.0],
+                                     "metallicFactor": 0.25, "roughnessFactor": 0.75,
+                                     "metallicRoughnessTexture": tex(0)},
+            "normalTexture": {"index": 0, "scale": 0.5},
+            "occlusionTexture": {"index": 0, "strength": 0.3},
+            "emissiveTexture": tex(0),
+            "emissiveFactor": [1.0, 0.5, 0.0],
+            "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}}
+        }],
+        "textures": [{"source": 0}],
+        "images": [{"bufferView": png, "mimeType": "image/png"}]
+    });
+    let file = d.write("worn.glb", bin.glb(doc));
+    let s = load(&file).unwrap();
+    let m = s.materials.iter().find(|m| m.name == "Worn").unwrap();
+    let p = m.pbr.as_ref().expect("a metallic-roughness material");
+    assert_eq!((p.metallic, p.roughness), (0.25, 0.75));
+    assert_eq!(p.emissive, Vec3::new(4.0, 2.0, 0.0));
+    let texel = |id: u32| {
+        let t = &s.textures[id as usize];
+        t.texels[0] * t.tint
+    };
+    // sRGB 128 is 0.2158 linear; stored data 128 is 0.502.
+    let srgb = 0.21586;
+    let linear = 128.0 / 255.0;
+    let base = texel(m.texture.unwrap());
+    assert!(near(base, Vec3::new(0.5, 1.0, 1.0) * srgb), "{base}");
+    assert!(near(
+        texel(p.metallic_roughness.unwrap()),
+        Vec3::splat(linear)
+    ));
+    let (normal, scale) = p.normal.unwrap();
+    assert!(near(texel(normal), Vec3::splat(linear)) && scale == 0.5);
+    let (occlusion, strength) = p.occlusion.unwrap();
+    assert!(near(texel(occlusion), Vec3::splat(linear)) && strength == 0.3);
+    let emitted = texel(p.emissive_texture.unwrap());
+    assert!(near(emitted, Vec3::new(4.0, 2.0, 0.0) * srgb), "{emitted}");
+    assert!(m.emissive());
+    let default = &s.materials[s.geometry.tri_material[1] as usize];
+    let dp = default
+        .pbr
+        .as_ref()
+        .expect("the default is metallic-roughness");
+    assert_eq!(
+        (default.kd, dp.metallic, dp.roughness),
+        (Vec3::ONE, 1.0, 1.0)
+    );
+    assert!(
+        !s.warnings.iter().any(|w| w.contains("not shown")),
+        "{:?}",
+        s.warnings
+    );
 }

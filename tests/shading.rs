@@ -302,3 +302,197 @@ fn a_tree_lists_a_bounded_number_of_light_samples() {
         &text[text.len().saturating_sub(300)..]
     );
 }
+
+/// The centre pixel of a 9x9 exact render from straight above the
+/// origin, with no ambient light and no reflection rays.
+fn centre(meshes: &[TestMesh], lights: Vec<Light>) -> Vec3 {
+    let mut s = scene(meshes, lights, top_camera(3.0));
+    s.settings.max_depth = 0;
+    let r = render(&s, 9, 9, 1, no_sampling(), Builder::Sah, 1);
+    r.image[4 * 9 + 4]
+}
+
+fn floor(m: rayterm::scene::Material) -> Vec<TestMesh> {
+    let (p, t) = quad_y(-10.0, -10.0, 10.0, 10.0, 0.0);
+    vec![(p, t, m)]
+}
+
+fn candela(position: Vec3, intensity: f32) -> Light {
+    Light::Photometric {
+        position,
+        intensity: Vec3::splat(intensity),
+        range: None,
+        cone: None,
+    }
+}
+
+fn close(got: f32, want: f32, tolerance: f32) -> bool {
+    (got - want).abs() <= tolerance * want.abs()
+}
+
+/// A diffuse surface under a point light of I candela at distance d has
+/// radiance albedo/π · I cos θ / d², and a quarter of it at twice the
+/// distance (half at 1.414 d).
+#[test]
+fn a_point_light_in_candela_falls_off_with_the_square_of_the_distance() {
+    let albedo = 0.5;
+    let lambert = || floor(material(Vec3::splat(albedo), Vec3::ZERO, 1.0));
+    let i = 100.0;
+    for (a, d) in [
+        (0.0f32, 2.0f32),
+        (1.5, 2.0),
+        (0.0, 2.0 * 2f32.sqrt()),
+        (3.0, 1.0),
+    ] {
+        let got = centre(&lambert(), vec![candela(Vec3::new(a, d, 0.0), i)]).x;
+        let r2 = a * a + d * d;
+        let want = albedo / std::f32::consts::PI * i * (d / r2.sqrt()) / r2;
+        assert!(close(got, want, 0.005), "at ({a}, {d}): {got}, want {want}");
+    }
+    let near = centre(&lambert(), vec![candela(Vec3::new(0.0, 2.0, 0.0), i)]).x;
+    let far = centre(
+        &lambert(),
+        vec![candela(Vec3::new(0.0, 2.0 * 2f32.sqrt(), 0.0), i)],
+    )
+    .x;
+    assert!(close(far / near, 0.5, 0.005), "{far} / {near}");
+}
+
+/// A spot light's cone follows `KHR_lights_punctual`'s falloff: full
+/// inside the inner angle, none outside the outer, the square of the
+/// cosine's ramp between; a range windows the light to zero at it.
+#[test]
+fn spot_cones_and_ranges_follow_the_lights_extension() {
+    use rayterm::scene::light::Cone;
+    let lambert = || floor(material(Vec3::splat(1.0), Vec3::ZERO, 1.0));
+    let (inner, outer) = (0.2f32, 0.6f32);
+    let spot = |tilt: f32, range: Option<f32>| Light::Photometric {
+        position: Vec3::new(0.0, 2.0, 0.0),
+        intensity: Vec3::splat(40.0),
+        range,
+        cone: Some(Cone {
+            axis: Vec3::new(tilt.sin(), -tilt.cos(), 0.0),
+            cos_inner: inner.cos(),
+            cos_outer: outer.cos(),
+        }),
+    };
+    let full = 40.0 / std::f32::consts::PI / 4.0;
+    for (tilt, share) in [
+        (0.0f32, 1.0f32),
+        (0.15, 1.0),
+        (0.4, {
+            let t = (0.4f32.cos() - outer.cos()) / (inner.cos() - outer.cos());
+            t * t
+        }),
+        (0.7, 0.0),
+    ] {
+        let got = centre(&lambert(), vec![spot(tilt, None)]).x;
+        let want = full * share;
+        assert!(
+            (got - want).abs() <= 0.005 * full,
+            "tilt {tilt}: {got}, want {want}"
+        );
+    }
+    // The window 1 - (d/range)^4: at half the range, 15/16.
+    let got = centre(&lambert(), vec![spot(0.0, Some(4.0))]).x;
+    assert!(close(got, full * 15.0 / 16.0, 0.005), "{got}");
+    assert_eq!(centre(&lambert(), vec![spot(0.0, Some(1.9))]).x, 0.0);
+}
+
+/// A directional light of E lux gives albedo/π · E cos θ, wherever the
+/// surface is, and its shadow rays reach to infinity.
+#[test]
+fn a_directional_light_in_lux_lights_by_the_cosine() {
+    let albedo = 0.8;
+    let theta = 0.5f32;
+    let sun = Light::Directional {
+        direction: Vec3::new(theta.sin(), -theta.cos(), 0.0),
+        illuminance: Vec3::splat(3.0),
+    };
+    let got = centre(
+        &floor(material(Vec3::splat(albedo), Vec3::ZERO, 1.0)),
+        vec![sun.clone()],
+    )
+    .x;
+    let want = albedo / std::f32::consts::PI * 3.0 * theta.cos();
+    assert!(close(got, want, 0.005), "{got}, want {want}");
+    // A far blocker on the light's way, off camera.
+    let (bp, bt) = quad_y(-1e4, -1e4, 1e4, 1e4, 5e3);
+    let mut meshes = floor(material(Vec3::splat(albedo), Vec3::ZERO, 1.0));
+    meshes.push((bp, bt, material(Vec3::ONE, Vec3::ZERO, 1.0)));
+    assert_eq!(centre(&meshes, vec![sun]).x, 0.0);
+}
+
+/// glTF's metallic-roughness BRDF, by hand from its specification at
+/// normal incidence (light and viewer straight above): a dielectric
+/// reflects (1 - 0.04) of its base colour diffusely, plus 0.04 D V with
+/// D = 1/(π α²) and V = 1/4 at the normal; a metal only the specular
+/// term with its base colour as F0. A Phong light lights it as one of π
+/// times its colour in lux.
+#[test]
+fn metallic_roughness_matches_its_specification_at_normal_incidence() {
+    use rayterm::scene::{Material, Pbr};
+    let pi = std::f32::consts::PI;
+    let pbr = |base: f32, metallic: f32, roughness: f32| Material {
+        kd: Vec3::splat(base),
+        pbr: Some(Pbr {
+            metallic,
+            roughness,
+            ..Pbr::default()
+        }),
+        ..Material::default()
+    };
+    // The light just beside the camera's ray, both 3 above the floor:
+    // light, view and normal agree to 1e-4.
+    let light = |i: f32| candela(Vec3::new(1e-4, 3.0, 0.0), i);
+    let e = 90.0 / 9.0;
+    for (base, metallic, roughness) in [(0.5f32, 0.0f32, 1.0f32), (0.5, 0.0, 0.5), (0.8, 1.0, 0.7)]
+    {
+        let alpha = roughness * roughness;
+        let d = 1.0 / (pi * alpha * alpha);
+        let f0 = 0.04 * (1.0 - metallic) + base * metallic;
+        let diffuse = (1.0 - f0) * base * (1.0 - metallic) / pi;
+        let want = (diffuse + f0 * d * 0.25) * e;
+        let got = centre(&floor(pbr(base, metallic, roughness)), vec![light(90.0)]).x;
+        assert!(
+            close(got, want, 0.005),
+            "{base} {metallic} {roughness}: {got}, want {want}"
+        );
+    }
+    let phong_light = Light::Point {
+        position: Vec3::new(1e-4, 3.0, 0.0),
+        color: Vec3::splat(e / pi),
+    };
+    let by_phong = centre(&floor(pbr(0.5, 0.0, 1.0)), vec![phong_light]).x;
+    let by_candela = centre(&floor(pbr(0.5, 0.0, 1.0)), vec![light(90.0)]).x;
+    assert!(close(by_phong, by_candela, 1e-5), "{by_phong} {by_candela}");
+}
+
+/// Lights from a millionth to a billion candela, mirror and fully rough
+/// surfaces, grazing lights: the film stays finite and non-negative.
+#[test]
+fn extreme_lights_and_roughness_stay_finite() {
+    use rayterm::scene::{Material, Pbr};
+    for roughness in [0.0f32, 0.01, 1.0] {
+        for metallic in [0.0f32, 1.0] {
+            for i in [1e-6f32, 1.0, 1e9] {
+                for light in [Vec3::new(0.0, 1e-3, 5.0), Vec3::new(0.0, 2.0, 0.0)] {
+                    let m = Material {
+                        kd: Vec3::ONE,
+                        pbr: Some(Pbr {
+                            metallic,
+                            roughness,
+                            ..Pbr::default()
+                        }),
+                        ..Material::default()
+                    };
+                    let got = centre(&floor(m), vec![candela(light, i)]);
+                    assert!(
+                        got.is_finite() && got.min_element() >= 0.0,
+                        "r {roughness} m {metallic} i {i} at {light}: {got}"
+                    );
+                }
+            }
+        }
+    }
+}

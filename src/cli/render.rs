@@ -89,7 +89,12 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         c.check_not_input(&s.inputs)?;
     }
     if a.explain {
-        crate::noteln!("plan for {}:\n{}", s.scene.name, s.plan.explain());
+        crate::noteln!(
+            "plan for {}:\n{}{}\n",
+            s.scene.name,
+            s.plan.explain(),
+            crate::scene::summary::explain(&s.scene)
+        );
     }
     if let Some(spec) = a.debug {
         check_film(s.width, s.height, Film::BYTES_PER_PIXEL)?;

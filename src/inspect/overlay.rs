@@ -926,10 +926,16 @@ impl Drawing<'_, '_> {
             self.seg(h.point, h.point + axis * len, LOBE_AXIS);
             self.say(
                 Some(LOBE_AXIS),
-                format!(
-                    "magenta: the lobe axis (mirror direction) at {} (Phong exponent {})",
-                    h.mesh, h.ns
-                ),
+                match &h.pbr {
+                    None => format!(
+                        "magenta: the lobe axis (mirror direction) at {} (Phong exponent {})",
+                        h.mesh, h.ns
+                    ),
+                    Some(p) => format!(
+                        "magenta: the lobe axis (mirror direction) at {} (GGX, roughness {:.3})",
+                        h.mesh, p.roughness
+                    ),
+                },
             );
         }
         if rays == 0 {

@@ -198,11 +198,42 @@ fn ray(out: &mut Out, n: &RayNode, d: usize) {
                 .map_or(String::new(), |t| format!(" texel {}", v(t)));
             out.push(d + 2, LineKind::Detail, format!("uv {}{texel}", uv(c)));
         }
-        out.push(
-            d + 2,
-            LineKind::Detail,
-            format!("kd {} ks {} Ns {}", v(h.kd), v(h.ks), h.ns),
-        );
+        match &h.pbr {
+            None => out.push(
+                d + 2,
+                LineKind::Detail,
+                format!("kd {} ks {} Ns {}", v(h.kd), v(h.ks), h.ns),
+            ),
+            Some(p) => {
+                out.push(
+                    d + 2,
+                    LineKind::Detail,
+                    format!(
+                        "metallic-roughness: base colour {} metallic {:.3} roughness {:.3}",
+                        v(h.kd),
+                        p.metallic,
+                        p.roughness
+                    ),
+                );
+                if let Some(m) = p.normal_mapped {
+                    out.push(
+                        d + 2,
+                        LineKind::Detail,
+                        format!("normal map: normal {}", v(m)),
+                    );
+                }
+                if p.emitted != glam::Vec3::ZERO {
+                    out.push(d + 2, LineKind::Detail, format!("emits {}", v(p.emitted)));
+                }
+                if p.occlusion < 1.0 {
+                    out.push(
+                        d + 2,
+                        LineKind::Detail,
+                        format!("occlusion {:.3} (of ambient light)", p.occlusion),
+                    );
+                }
+            }
+        }
     }
     if let Some(m) = &n.miss {
         let text = match (&m.face, m.uv) {

@@ -28,10 +28,14 @@ pub enum Feature {
     Bloom,
     /// The BVH (brute force over every triangle otherwise).
     Bvh,
+    /// Normal maps of metallic-roughness materials.
+    NormalMaps,
+    /// Light emitted by materials.
+    Emission,
 }
 
 impl Feature {
-    pub const ALL: [Feature; 11] = [
+    pub const ALL: [Feature; 13] = [
         Feature::Shadows,
         Feature::Reflections,
         Feature::SmoothNormals,
@@ -43,6 +47,8 @@ impl Feature {
         Feature::Environment,
         Feature::Bloom,
         Feature::Bvh,
+        Feature::NormalMaps,
+        Feature::Emission,
     ];
 
     pub fn name(self) -> &'static str {
@@ -58,6 +64,8 @@ impl Feature {
             Feature::Environment => "environment",
             Feature::Bloom => "bloom",
             Feature::Bvh => "bvh",
+            Feature::NormalMaps => "normal-maps",
+            Feature::Emission => "emission",
         }
     }
 

@@ -1,20 +1,26 @@
 //! The one shading code path: Whitted ray tracing with Phong lights, hard or
-//! sampled shadows, mirror and glossy reflection, textures and environment.
+//! sampled shadows, mirror and glossy reflection, textures and environment;
+//! metallic-roughness materials ([`super::brdf`]) under the same lights and
+//! glTF's lights in their units.
 //!
 //! Generic over a [`Recorder`]: the renderer passes a ray counter, the
 //! inspector a tree builder. Both run exactly this code.
 
+use std::f32::consts::{FRAC_1_PI, PI};
+
 use glam::{Vec2, Vec3};
 
+use super::brdf::Brdf;
 use super::plan::Plan;
-use super::recorder::{HitInfo, LightSample, MissInfo, RayKind, Recorder};
+use super::recorder::{HitInfo, LightSample, MissInfo, PbrInfo, RayKind, Recorder};
 use crate::bvh::{Bvh, Hit};
 use crate::geometry::offset::{geometric_normal, hit_point, offset_origin, SHADOW_EPSILON};
 use crate::geometry::sampling::{jittered, phong_lobe, Rng, Run, PIXEL_GRID};
 use crate::geometry::Ray;
 use crate::scene::camera::CameraFrame;
+use crate::scene::light::{Arriving, From};
 use crate::scene::texture::{cube_face_uv, FACE_NAMES};
-use crate::scene::{Environment, Light, Material, Scene};
+use crate::scene::{Environment, Light, Material, Scene, Texture};
 
 /// Tries to draw a glossy direction above the surface before using the mirror direction.
 const GLOSSY_TRIES: u32 = 8;
@@ -124,6 +130,48 @@ struct Surface<'m> {
     v: Vec3,
     kd: Vec3,
     mat: &'m Material,
+    /// A metallic-roughness material's BRDF here, its textures read.
+    brdf: Option<Brdf>,
+}
+
+/// A texture's value at `uv`, filtered as the plan says.
+#[inline]
+fn lookup(tex: &Texture, uv: Vec2, bilinear: bool) -> Vec3 {
+    if bilinear {
+        tex.bilinear(uv)
+    } else {
+        tex.nearest(uv)
+    }
+}
+
+/// The shading normal `n` tilted by a normal map's texel `t` (tangent
+/// space, 0..1 a channel) scaled by `scale`: the tangent frame from the
+/// triangle's positions and texture coordinates, made orthonormal about
+/// `n`. `n` itself where the triangle spans no texture area, or where
+/// the tilted normal would face away from the viewer `v` (a map that
+/// tilts past the silhouette would shade the surface's back).
+fn normal_mapped(verts: [Vec3; 3], uvs: [Vec2; 3], n: Vec3, v: Vec3, t: Vec3, scale: f32) -> Vec3 {
+    let (e1, e2) = (verts[1] - verts[0], verts[2] - verts[0]);
+    let (d1, d2) = (uvs[1] - uvs[0], uvs[2] - uvs[0]);
+    let det = d1.x * d2.y - d2.x * d1.y;
+    if det == 0.0 || !det.is_finite() {
+        return n;
+    }
+    let tangent = (e1 * d2.y - e2 * d1.y) / det;
+    let bitangent = (e2 * d1.x - e1 * d2.x) / det;
+    let tt = (tangent - n * n.dot(tangent)).normalize_or_zero();
+    if tt == Vec3::ZERO || !tt.is_finite() {
+        return n;
+    }
+    // Mirrored texture coordinates flip the bitangent.
+    let bt = n.cross(tt) * n.cross(tt).dot(bitangent).signum();
+    let m = t * 2.0 - Vec3::ONE;
+    let out = (tt * (m.x * scale) + bt * (m.y * scale) + n * m.z).normalize_or_zero();
+    if out.dot(v) > 0.0 && out.is_finite() {
+        out
+    } else {
+        n
+    }
 }
 
 impl<'a> Tracer<'a> {
@@ -417,6 +465,44 @@ impl<'a> Tracer<'a> {
             kd *= c[0] * b.x + c[1] * b.y + c[2] * b.z;
         }
         let v = -ray.dir.normalize();
+        let (mut brdf, mut emitted, mut occlusion) = (None, Vec3::ZERO, 1.0);
+        let (mut pbr_info, mut pbr_mapped) = (None, None);
+        if let Some(pbr) = &mat.pbr {
+            let (mut metallic, mut roughness) = (pbr.metallic, pbr.roughness);
+            if self.plan.emission {
+                emitted = pbr.emissive;
+            }
+            let mut mapped = None;
+            if let Some(st) = uv {
+                let textures = &scene.textures;
+                let tex = |id: u32| lookup(&textures[id as usize], st, self.plan.bilinear);
+                if let Some(id) = pbr.metallic_roughness {
+                    let t = tex(id);
+                    (metallic, roughness) = (metallic * t.z, roughness * t.y);
+                }
+                if let Some(id) = pbr.emissive_texture.filter(|_| self.plan.emission) {
+                    emitted = tex(id);
+                }
+                if let Some((id, strength)) = pbr.occlusion {
+                    occlusion = 1.0 + strength * (tex(id).x - 1.0);
+                }
+                if let Some((id, scale)) = pbr.normal.filter(|_| self.plan.normal_maps) {
+                    let uvs = idx.map(|i| geo.uvs[i as usize]);
+                    mapped = Some(normal_mapped(verts, uvs, n, v, tex(id), scale));
+                }
+            }
+            brdf = Some(Brdf::new(kd, metallic, roughness));
+            pbr_mapped = mapped;
+            if R::ACTIVE {
+                pbr_info = Some(PbrInfo {
+                    metallic,
+                    roughness,
+                    emitted,
+                    occlusion,
+                    normal_mapped: mapped,
+                });
+            }
+        }
         if R::ACTIVE {
             rec.hit(HitInfo {
                 t: hit.t,
@@ -433,7 +519,11 @@ impl<'a> Tracer<'a> {
                 kd,
                 ks: mat.ks,
                 ns: mat.ns,
+                pbr: pbr_info,
             });
+        }
+        if let Some(m) = pbr_mapped {
+            n = m;
         }
         let s = Surface {
             p,
@@ -443,8 +533,14 @@ impl<'a> Tracer<'a> {
             v,
             kd,
             mat,
+            brdf,
         };
-        let mut color = kd * scene.settings.ambient;
+        // Ambient light reaches a metallic-roughness surface's diffuse
+        // share, less its occlusion; what it emits adds as it is.
+        let mut color = match &brdf {
+            None => kd * scene.settings.ambient,
+            Some(b) => b.c_diff * scene.settings.ambient * occlusion + emitted,
+        };
         for (i, light) in scene.lights.iter().enumerate() {
             color += self.light(&s, i, light, rng, rec);
         }
@@ -456,7 +552,8 @@ impl<'a> Tracer<'a> {
         // Past `MAX_PATHS`, a surface that does both takes one, at random.
         let (reflect, through, split, scale) =
             if reflect && through && !depth.may_split(2, self.max_paths) {
-                let r = mat.ks.max_element() * mat.dissolve;
+                let ks = s.brdf.map_or(mat.ks, |b| b.f0);
+                let r = ks.max_element() * mat.dissolve;
                 let chance = r / (r + 1.0 - mat.dissolve);
                 match rng.next_f32() < chance {
                     true => (true, false, 1, Vec3::splat(1.0 / chance)),
@@ -467,7 +564,12 @@ impl<'a> Tracer<'a> {
             };
         let next = depth.next(split);
         if reflect {
-            color += scale * self.reflect(ray, &s, next, weight * scale, rng, rec);
+            let w = weight * scale;
+            color += scale
+                * match &s.brdf {
+                    None => self.reflect(ray, &s, next, w, rng, rec),
+                    Some(b) => self.reflect_lobe(ray, &s, b, next, w, rng, rec),
+                };
         }
         if mat.dissolve < 1.0 {
             color *= mat.dissolve;
@@ -493,7 +595,7 @@ impl<'a> Tracer<'a> {
     ) -> Vec3 {
         rec.begin_light(index, light.kind());
         let n_samples = match light {
-            Light::Point { .. } => 1,
+            Light::Point { .. } | Light::Photometric { .. } | Light::Directional { .. } => 1,
             _ if !self.plan.area_sampling => 1,
             Light::Segment { .. } => self.scene.settings.light_samples.max(1),
             Light::Parallelogram { .. } => {
@@ -508,7 +610,9 @@ impl<'a> Tracer<'a> {
         let (mut diffuse, mut specular) = (Vec3::ZERO, Vec3::ZERO);
         for k in 0..n_samples {
             let st = match light {
-                Light::Point { .. } => Vec2::ZERO,
+                Light::Point { .. } | Light::Photometric { .. } | Light::Directional { .. } => {
+                    Vec2::ZERO
+                }
                 _ if !self.plan.area_sampling => Vec2::splat(0.5),
                 Light::Segment { .. } if !stratify => Vec2::new(rng.next_f32(), 0.0),
                 Light::Segment { .. } => {
@@ -517,8 +621,7 @@ impl<'a> Tracer<'a> {
                 Light::Parallelogram { .. } if !stratify => rng.next_vec2(),
                 Light::Parallelogram { .. } => jittered(k, grid(), rng.next_vec2()),
             };
-            let (lp, lc) = light.point_at(st);
-            let (d, sp) = self.light_point(s, lp, lc, rec);
+            let (d, sp) = self.light_point(s, light.arriving(s.p, st), rec);
             diffuse += d;
             specular += sp;
         }
@@ -530,17 +633,19 @@ impl<'a> Tracer<'a> {
         diffuse + specular
     }
 
-    /// Diffuse and specular terms from one point of a light, shadow-tested.
-    fn light_point<R: Recorder>(
-        &self,
-        s: &Surface,
-        lp: Vec3,
-        lc: Vec3,
-        rec: &mut R,
-    ) -> (Vec3, Vec3) {
-        let to_light = lp - s.p;
-        let dist = to_light.length();
-        let l = to_light / dist;
+    /// Diffuse and specular terms from one point of a light (or one
+    /// direction), shadow-tested.
+    fn light_point<R: Recorder>(&self, s: &Surface, a: Arriving, rec: &mut R) -> (Vec3, Vec3) {
+        let lc = a.value;
+        let (lp, to_light, dist, l) = match a.from {
+            From::Point(lp) => {
+                let to_light = lp - s.p;
+                let dist = to_light.length();
+                (lp, to_light, dist, to_light / dist)
+            }
+            // The recorder's point: a unit toward the light.
+            From::Direction(l) => (s.p + l, l, f32::INFINITY, l),
+        };
         let facing = s.ng.dot(to_light) > 0.0 && s.n.dot(l) > 0.0 && dist > 0.0 && l.is_finite();
         if !facing {
             if R::ACTIVE {
@@ -560,17 +665,36 @@ impl<'a> Tracer<'a> {
         let mut occluder = None;
         if self.plan.shadows {
             let o = offset_origin(s.p, s.err, s.ng, to_light);
-            let ray = Ray::segment(o, lp - o, 1.0 - SHADOW_EPSILON);
+            let ray = match a.from {
+                From::Point(_) => Ray::segment(o, lp - o, 1.0 - SHADOW_EPSILON),
+                From::Direction(l) => Ray::new(o, l),
+            };
             occluder = self.blocked(&ray, rec);
             shadow_ray = Some(ray);
         }
         let visible = occluder.is_none();
         let (mut d, mut sp) = (Vec3::ZERO, Vec3::ZERO);
         if visible {
-            d = s.kd * s.n.dot(l) * lc;
-            if self.plan.specular && s.mat.reflective() {
-                let r = (2.0 * s.n.dot(l)) * s.n - l;
-                sp = s.mat.ks * r.dot(s.v).max(0.0).powf(s.mat.ns) * lc;
+            match &s.brdf {
+                None => {
+                    // A Phong surface's kd is its BRDF times π.
+                    let lc = if a.physical { lc * FRAC_1_PI } else { lc };
+                    d = s.kd * s.n.dot(l) * lc;
+                    if self.plan.specular && s.mat.reflective() {
+                        let r = (2.0 * s.n.dot(l)) * s.n - l;
+                        sp = s.mat.ks * r.dot(s.v).max(0.0).powf(s.mat.ns) * lc;
+                    }
+                }
+                Some(b) => {
+                    // A Phong light lights a white Phong surface facing
+                    // it to its colour: the illuminance π times that.
+                    let e = if a.physical { lc } else { lc * PI };
+                    let lobes = b.eval(s.n, s.v, l);
+                    d = lobes.diffuse * e;
+                    if self.plan.specular {
+                        sp = lobes.specular * e;
+                    }
+                }
             }
         }
         if R::ACTIVE {
@@ -593,6 +717,75 @@ impl<'a> Tracer<'a> {
             });
         }
         (d, sp)
+    }
+
+    /// A metallic-roughness surface's specular reflection: the mirror
+    /// direction weighted by Fresnel for a mirror (or with glossy
+    /// reflection off), else `glossy_samples` directions drawn from the
+    /// lobe; `next` is the reflected rays' place in the tree.
+    #[allow(clippy::too_many_arguments)]
+    fn reflect_lobe<R: Recorder>(
+        &self,
+        ray: &Ray,
+        s: &Surface,
+        brdf: &Brdf,
+        next: Depth,
+        weight: Vec3,
+        rng: &mut Rng,
+        rec: &mut R,
+    ) -> Vec3 {
+        if !self.plan.glossy || brdf.is_mirror() {
+            let mirror_lobe = Brdf {
+                alpha: 0.0,
+                ..*brdf
+            };
+            let Some(m) = mirror_lobe.sample_specular(s.n, s.v, Vec2::ZERO) else {
+                return Vec3::ZERO;
+            };
+            let r = mirror(ray.dir, s.n, s.ng);
+            let o = offset_origin(s.p, s.err, s.ng, r);
+            let kind = RayKind::Reflection;
+            return m.weight
+                * self.trace(
+                    &Ray::new(o, r),
+                    None,
+                    next,
+                    kind,
+                    weight * m.weight,
+                    rng,
+                    rec,
+                );
+        }
+        let n = self.scene.settings.glossy_samples.max(1);
+        let n = if next.may_split(n, self.max_paths) {
+            n
+        } else {
+            1
+        };
+        let next = Depth {
+            paths: next.paths.saturating_mul(n),
+            ..next
+        };
+        let share = 1.0 / n as f32;
+        let mut sum = Vec3::ZERO;
+        for _ in 0..n {
+            if self.cancelled() {
+                break;
+            }
+            let u = rng.next_vec2();
+            // A direction below the surface carries no light.
+            let Some(g) = brdf.sample_specular(s.n, s.v, u) else {
+                continue;
+            };
+            if g.dir.dot(s.ng) <= 0.0 {
+                continue;
+            }
+            let w = g.weight * share;
+            let o = offset_origin(s.p, s.err, s.ng, g.dir);
+            let kind = RayKind::Glossy;
+            sum += w * self.trace(&Ray::new(o, g.dir), None, next, kind, weight * w, rng, rec);
+        }
+        sum
     }
 
     /// Mirror or glossy reflection, weighted by ks; `next` is the

@@ -2,6 +2,7 @@
 //! the one shading code path (generic over a [`Recorder`]), the film, the
 //! one progressive loop and the one post-processing step.
 
+pub(crate) mod brdf;
 pub mod content;
 pub mod debug_view;
 pub mod features;

@@ -30,6 +30,8 @@ pub enum Reason {
     NoVertexNormals,
     PointLightsOnly,
     NoEnvironment,
+    NoNormalMaps,
+    NoEmission,
 }
 
 impl Reason {
@@ -42,6 +44,8 @@ impl Reason {
             Reason::NoVertexNormals => "no vertex normals in scene",
             Reason::PointLightsOnly => "point lights only",
             Reason::NoEnvironment => "no environment map in scene",
+            Reason::NoNormalMaps => "no normal maps in scene",
+            Reason::NoEmission => "no emissive material in scene",
         }
     }
 
@@ -55,6 +59,8 @@ impl Reason {
             Reason::NoVertexNormals => "no normals",
             Reason::PointLightsOnly => "point lights",
             Reason::NoEnvironment => "no env. map",
+            Reason::NoNormalMaps => "no normal map",
+            Reason::NoEmission => "no emission",
         }
     }
 }
@@ -102,6 +108,17 @@ pub fn not_needed(scene: &Scene, f: Feature) -> Option<Reason> {
         Feature::Environment if !matches!(scene.environment, Environment::CubeMap(_)) => {
             Some(Reason::NoEnvironment)
         }
+        Feature::NormalMaps
+            if !scene
+                .materials
+                .iter()
+                .any(|m| m.pbr.as_ref().is_some_and(|p| p.normal.is_some())) =>
+        {
+            Some(Reason::NoNormalMaps)
+        }
+        Feature::Emission if !scene.materials.iter().any(|m| m.emissive()) => {
+            Some(Reason::NoEmission)
+        }
         _ => None,
     }
 }
@@ -120,17 +137,21 @@ fn stage_name(f: Feature) -> &'static str {
         Feature::Environment => "environment lookups",
         Feature::Bloom => "bloom",
         Feature::Bvh => "BVH traversal",
+        Feature::NormalMaps => "normal maps",
+        Feature::Emission => "emission",
     }
 }
 
 /// Stages in the order `--explain` lists them; a refinement comes after the
 /// feature it needs.
-const ORDER: [Feature; 11] = [
+const ORDER: [Feature; 13] = [
     Feature::Shadows,
     Feature::Reflections,
     Feature::Glossy,
     Feature::Textures,
     Feature::Bilinear,
+    Feature::NormalMaps,
+    Feature::Emission,
     Feature::SmoothNormals,
     Feature::SoftShadows,
     Feature::Supersampling,
@@ -143,7 +164,7 @@ const ORDER: [Feature; 11] = [
 fn refines(f: Feature) -> Option<Feature> {
     match f {
         Feature::Glossy => Some(Feature::Reflections),
-        Feature::Bilinear => Some(Feature::Textures),
+        Feature::Bilinear | Feature::NormalMaps => Some(Feature::Textures),
         _ => None,
     }
 }
@@ -167,6 +188,8 @@ pub struct Plan {
     pub environment: bool,
     pub bloom: bool,
     pub bvh: bool,
+    pub normal_maps: bool,
+    pub emission: bool,
     /// Camera rays, which all start at the eye, are traced in packets
     /// ([`Bvh::intersect_packet`](crate::bvh::Bvh::intersect_packet)):
     /// the same hits, found together, whenever the BVH is used, for a
@@ -232,6 +255,8 @@ impl Plan {
             environment: on(Feature::Environment),
             bloom: on(Feature::Bloom),
             bvh: on(Feature::Bvh),
+            normal_maps: on(Feature::NormalMaps),
+            emission: on(Feature::Emission),
             packets: on(Feature::Bvh) && !orthographic(scene),
             deterministic,
         }
@@ -400,6 +425,6 @@ mod tests {
         let text = Plan::new(&s, Features::all(), PlanPolicy::Prune).explain();
         let lines: Vec<&str> = text.lines().collect();
         assert!(lines[0].contains("stage") && lines[0].contains("why"));
-        assert_eq!(lines.len(), 1 + 14);
+        assert_eq!(lines.len(), 1 + Feature::ALL.len() + 3);
     }
 }

@@ -41,6 +41,23 @@ pub struct HitInfo {
     pub kd: Vec3,
     pub ks: Vec3,
     pub ns: f32,
+    /// A metallic-roughness material's parameters here (absent for
+    /// Phong).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pbr: Option<PbrInfo>,
+}
+
+/// A metallic-roughness material at a hit, after its textures.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct PbrInfo {
+    pub metallic: f32,
+    pub roughness: f32,
+    /// Emitted radiance.
+    pub emitted: Vec3,
+    /// The occlusion map's factor on ambient light (1 without one).
+    pub occlusion: f32,
+    /// The normal after the normal map, when one tilted it.
+    pub normal_mapped: Option<Vec3>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]

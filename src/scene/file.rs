@@ -25,7 +25,7 @@ use super::numbers::{self, ABSURD};
 use super::obj::{Parts, Placed};
 use super::parts::bounds;
 use super::source::{resolve, Disk, Kind, Source};
-use super::texture::FACE_NAMES;
+use super::texture::{Encoding, FACE_NAMES};
 use super::up::Up;
 use super::{
     bezier, BloomSettings, Builder, Camera, CubeMap, Environment, Light, Material, Projection,
@@ -643,7 +643,10 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
             let light = light_from(l.get_ref(), &frame, &loc, &mut parts.warnings)
                 .map_err(|e| anyhow!("{here}: {e}"))?;
             let reach = match &light {
-                Light::Point { position, .. } => position.abs().max_element(),
+                Light::Point { position, .. } | Light::Photometric { position, .. } => {
+                    position.abs().max_element()
+                }
+                Light::Directional { .. } => 0.0,
                 Light::Segment { a, b, .. } => a.abs().max(b.abs()).max_element(),
                 Light::Parallelogram {
                     corner,
@@ -807,6 +810,7 @@ fn material_from(parts: &mut Parts, src: &dyn Source, loc: &Locator, m: &Materia
         ns,
         dissolve,
         texture,
+        pbr: None,
     }
 }
 
@@ -920,13 +924,15 @@ fn load_cube(
             .read(&p, Kind::Image)
             .map_err(anyhow::Error::from)
             .and_then(|bytes| {
-                super::Texture::decode(&crate::words::path(&p), &bytes).map_err(|e| {
-                    anyhow!(
-                        "{}: {}",
-                        crate::words::path(&p),
-                        clip_quotes(&format!("{e:#}"))
-                    )
-                })
+                super::Texture::decode(&crate::words::path(&p), &bytes, Encoding::Srgb).map_err(
+                    |e| {
+                        anyhow!(
+                            "{}: {}",
+                            crate::words::path(&p),
+                            clip_quotes(&format!("{e:#}"))
+                        )
+                    },
+                )
             });
         let read = match &outside {
             Some(o) => o.quiet(Kind::Image, read, warnings, usize::MAX),

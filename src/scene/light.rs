@@ -1,5 +1,7 @@
-//! Point, segment and parallelogram lights. Area lights carry a colour per
-//! end or corner, interpolated over the light.
+//! Point, segment and parallelogram lights, whose colour a Phong surface
+//! multiplies as it is (area lights carry one per end or corner,
+//! interpolated over the light); and glTF's punctual lights in their
+//! physical units.
 
 use glam::{Vec2, Vec3};
 
@@ -22,6 +24,61 @@ pub enum Light {
         edge2: Vec3,
         colors: [Vec3; 4],
     },
+    /// A point or spot light of `intensity` candela per channel, falling
+    /// off with the square of the distance and, with a `range`, to zero
+    /// at it (`KHR_lights_punctual`'s recommended window).
+    Photometric {
+        position: Vec3,
+        intensity: Vec3,
+        range: Option<f32>,
+        cone: Option<Cone>,
+    },
+    /// Parallel light travelling along `direction` (unit), of
+    /// `illuminance` lux per channel on a surface facing it.
+    Directional {
+        direction: Vec3,
+        illuminance: Vec3,
+    },
+}
+
+/// A spot light's cone: full intensity inside `cos_inner`, none outside
+/// `cos_outer`, the square of a linear ramp of the cosine between them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cone {
+    /// Where the spot points (unit).
+    pub axis: Vec3,
+    pub cos_inner: f32,
+    pub cos_outer: f32,
+}
+
+impl Cone {
+    /// The share of the intensity sent along `dir` (unit, from the light).
+    pub fn falloff(&self, dir: Vec3) -> f32 {
+        let scale = 1.0 / (self.cos_inner - self.cos_outer).max(1e-3);
+        let t = ((dir.dot(self.axis) - self.cos_outer) * scale).clamp(0.0, 1.0);
+        t * t
+    }
+}
+
+/// Light arriving at a shading point from one point of a light (or from
+/// a direction).
+#[derive(Clone, Copy, Debug)]
+pub struct Arriving {
+    /// The light's point, or, for a directional light, where the unit
+    /// vector toward it points from the origin.
+    pub from: From,
+    /// Phong units (the colour a white Phong surface facing it shows) or,
+    /// where `physical`, the illuminance in lux of a surface facing it.
+    pub value: Vec3,
+    pub physical: bool,
+}
+
+/// Where light comes from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum From {
+    Point(Vec3),
+    /// The unit direction toward a light at infinity.
+    Direction(Vec3),
 }
 
 impl Light {
@@ -30,11 +87,65 @@ impl Light {
             Light::Point { .. } => "point",
             Light::Segment { .. } => "segment",
             Light::Parallelogram { .. } => "parallelogram",
+            Light::Photometric { cone: None, .. } => "point (cd)",
+            Light::Photometric { .. } => "spot (cd)",
+            Light::Directional { .. } => "directional (lux)",
         }
     }
 
     pub fn is_area(&self) -> bool {
-        !matches!(self, Light::Point { .. })
+        matches!(self, Light::Segment { .. } | Light::Parallelogram { .. })
+    }
+
+    /// The light reaching `p` from parameter `s` of the light (see
+    /// [`Light::point_at`]); a photometric light's falls off with
+    /// distance, range and cone.
+    #[inline(always)]
+    pub fn arriving(&self, p: Vec3, s: Vec2) -> Arriving {
+        match self {
+            Light::Photometric {
+                position,
+                intensity,
+                range,
+                cone,
+            } => {
+                let d = *position - p;
+                let d2 = d.length_squared();
+                let mut f = 1.0 / d2;
+                if let Some(r) = range {
+                    let q = d2 / (r * r);
+                    f *= (1.0 - q * q).clamp(0.0, 1.0);
+                }
+                if let Some(c) = cone {
+                    f *= c.falloff(-d / d2.sqrt());
+                }
+                Arriving {
+                    from: From::Point(*position),
+                    value: if f.is_finite() {
+                        *intensity * f
+                    } else {
+                        Vec3::ZERO
+                    },
+                    physical: true,
+                }
+            }
+            Light::Directional {
+                direction,
+                illuminance,
+            } => Arriving {
+                from: From::Direction(-*direction),
+                value: *illuminance,
+                physical: true,
+            },
+            _ => {
+                let (lp, lc) = self.point_at(s);
+                Arriving {
+                    from: From::Point(lp),
+                    value: lc,
+                    physical: false,
+                }
+            }
+        }
     }
 
     /// Position and colour at parameter `s` in [0,1]^2 (segments use `s.x`).
@@ -45,6 +156,16 @@ impl Light {
     pub fn point_at(&self, s: Vec2) -> (Vec3, Vec3) {
         match self {
             Light::Point { position, color } => (*position, *color),
+            Light::Photometric {
+                position,
+                intensity,
+                ..
+            } => (*position, *intensity),
+            // Where the light comes from, a unit away from the origin.
+            Light::Directional {
+                direction,
+                illuminance,
+            } => (-*direction, *illuminance),
             Light::Segment {
                 a,
                 b,
@@ -69,6 +190,21 @@ impl Light {
         let f = |p: &mut Vec3| *p = *p * scale + offset;
         match self {
             Light::Point { position, .. } => f(position),
+            // The picture stays the same: the falloff over the scaled
+            // distances is made up by the intensity; a range is a length.
+            Light::Photometric {
+                position,
+                intensity,
+                range,
+                ..
+            } => {
+                f(position);
+                *intensity *= scale * scale;
+                if let Some(r) = range {
+                    *r *= scale;
+                }
+            }
+            Light::Directional { .. } => {}
             Light::Segment { a, b, .. } => {
                 f(a);
                 f(b);

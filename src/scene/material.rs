@@ -1,4 +1,5 @@
-//! Phong materials as read from MTL.
+//! Materials: Phong as read from MTL, and glTF's metallic-roughness model
+//! beside it.
 
 use glam::Vec3;
 
@@ -7,15 +8,59 @@ use glam::Vec3;
 /// Phong lobe of exponent `ns`.
 pub const GLOSSY_MAX_NS: f32 = 1000.0;
 
+/// Roughness below which a metallic-roughness material's specular lobe is
+/// a mirror (GGX alpha under [`crate::render::brdf::MIRROR_ALPHA`]).
+pub const MIRROR_ROUGHNESS: f32 = 0.0316;
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
+    /// Diffuse colour; a metallic-roughness material's base colour.
     pub kd: Vec3,
     pub ks: Vec3,
     pub ns: f32,
     /// Opacity (MTL `d`): the rest of the light passes straight through.
     pub dissolve: f32,
+    /// The texture of `kd` (of the base colour).
     pub texture: Option<u32>,
+    /// Shaded by glTF's metallic-roughness BRDF rather than Phong, with
+    /// lights in their physical units.
+    pub pbr: Option<Pbr>,
+}
+
+/// glTF 2.0's metallic-roughness parameters and textures (texture indices
+/// into the scene's textures).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pbr {
+    pub metallic: f32,
+    pub roughness: f32,
+    /// Linear texels: blue scales `metallic`, green `roughness`.
+    pub metallic_roughness: Option<u32>,
+    /// Tangent-space normals (linear texels) and their scale.
+    pub normal: Option<(u32, f32)>,
+    /// Emitted radiance, strength included, before its texture.
+    pub emissive: Vec3,
+    pub emissive_texture: Option<u32>,
+    /// Ambient occlusion (linear, red channel) and its strength: it
+    /// darkens ambient and environment light only, as the glTF
+    /// specification intends (direct light finds its own shadows).
+    pub occlusion: Option<(u32, f32)>,
+}
+
+impl Default for Pbr {
+    /// The specification's defaults: a fully metallic, fully rough
+    /// material.
+    fn default() -> Self {
+        Self {
+            metallic: 1.0,
+            roughness: 1.0,
+            metallic_roughness: None,
+            normal: None,
+            emissive: Vec3::ZERO,
+            emissive_texture: None,
+            occlusion: None,
+        }
+    }
 }
 
 impl Default for Material {
@@ -27,16 +72,31 @@ impl Default for Material {
             ns: 10.0,
             dissolve: 1.0,
             texture: None,
+            pbr: None,
         }
     }
 }
 
 impl Material {
+    /// Whether it reflects the scene in a mirror or glossy lobe: a Phong
+    /// material with ks, every metallic-roughness one (even a dielectric
+    /// reflects at grazing angles).
     pub fn reflective(&self) -> bool {
-        self.ks.max_element() > 0.0
+        self.pbr.is_some() || self.ks.max_element() > 0.0
     }
 
+    /// Whether its reflection is sampled from a lobe rather than a mirror.
     pub fn glossy(&self) -> bool {
-        self.reflective() && self.ns < GLOSSY_MAX_NS
+        match &self.pbr {
+            Some(p) => p.roughness >= MIRROR_ROUGHNESS || p.metallic_roughness.is_some(),
+            None => self.reflective() && self.ns < GLOSSY_MAX_NS,
+        }
+    }
+
+    /// Whether it emits light.
+    pub fn emissive(&self) -> bool {
+        self.pbr
+            .as_ref()
+            .is_some_and(|p| p.emissive.max_element() > 0.0)
     }
 }

@@ -9,6 +9,7 @@ use glam::{DAffine3, Vec3};
 
 use super::frame::Frame;
 use super::gltf::{self, FileCamera, FileLight};
+use super::light::Cone;
 use super::obj;
 use super::parts::{Parts, Placed};
 use super::source::{Kind, Source};
@@ -206,20 +207,39 @@ pub fn load_bare_from(
         }
         None => Camera::auto(&b),
     };
+    // The frame's scale (a power of two, for scenes past f32's comfort)
+    // scales distances: intensities make up for it.
+    let s = frame.scale as f32;
     let mut lights: Vec<Light> = file_lights
         .iter()
         .map(|l| match *l {
-            FileLight::Point { position, color } => Light::Point {
+            FileLight::Point {
+                position,
+                intensity,
+                range,
+                cone,
+            } => Light::Photometric {
                 position: frame.point(position),
-                color,
+                intensity: intensity * (s * s),
+                range: range.map(|r| (r * frame.scale) as f32),
+                cone: cone.map(|c| Cone {
+                    axis: c.axis.as_vec3(),
+                    cos_inner: c.cos_inner,
+                    cos_outer: c.cos_outer,
+                }),
             },
-            // Far enough that its rays are all but parallel.
-            FileLight::Directional { direction, color } => Light::Point {
-                position: frame.point(centre - direction.normalize() * radius * 1000.0),
-                color,
+            FileLight::Directional {
+                direction,
+                illuminance,
+            } => Light::Directional {
+                direction: direction.as_vec3(),
+                illuminance,
             },
         })
         .collect();
+    // A file's own lights light it as authored; a file without lights
+    // gets a light and ambient light so that every face shows.
+    let ambient = if lights.is_empty() { 0.1 } else { 0.0 };
     if lights.is_empty() {
         lights.push(Light::Point {
             position: Camera::auto_light(&b),
@@ -234,7 +254,7 @@ pub fn load_bare_from(
         lights,
         environment: Environment::Color(Vec3::ZERO),
         settings: Settings {
-            ambient: Vec3::splat(0.1),
+            ambient: Vec3::splat(ambient),
             ..Settings::default()
         },
         geometry: parts.geometry,

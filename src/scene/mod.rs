@@ -20,6 +20,7 @@ mod polygon;
 mod reach;
 pub mod source;
 pub mod stl;
+pub mod summary;
 pub mod texture;
 pub mod up;
 
@@ -31,7 +32,7 @@ use rayon::prelude::*;
 
 pub use camera::{Camera, Projection};
 pub use light::Light;
-pub use material::Material;
+pub use material::{Material, Pbr};
 pub use reach::check_reach;
 pub use texture::{CubeMap, Texture, Wrap};
 

@@ -12,6 +12,7 @@ use rayon::prelude::*;
 
 use super::frame::Frame;
 use super::source::{resolve, Kind, Outside, Source};
+use super::texture::Encoding;
 use super::{Geometry, Material, MeshInfo, Texture};
 use crate::memory;
 
@@ -149,7 +150,8 @@ pub struct Parts {
     pub warnings: Vec<String>,
     /// The memory the meshes still to come may take.
     pub budget: memory::Budget,
-    texture_ids: Vec<(PathBuf, Option<u32>)>,
+    /// Textures read so far, by path and encoding.
+    texture_ids: Vec<((PathBuf, Encoding), Option<u32>)>,
 }
 
 impl Parts {
@@ -170,10 +172,12 @@ impl Parts {
             src.outside(base, &resolve(base, written)),
             written,
             from,
+            Encoding::Srgb,
         )
     }
 
-    /// [`Parts::texture`] at `path`, resolved by the caller.
+    /// [`Parts::texture`] at `path`, resolved by the caller, its values
+    /// read as `encoding` says.
     pub(crate) fn texture_at(
         &mut self,
         src: &dyn Source,
@@ -181,8 +185,10 @@ impl Parts {
         outside: Option<Outside>,
         written: &str,
         from: &str,
+        encoding: Encoding,
     ) -> Option<u32> {
-        if let Some((_, id)) = self.texture_ids.iter().find(|(p, _)| p == path) {
+        let key = (path.to_path_buf(), encoding);
+        if let Some((_, id)) = self.texture_ids.iter().find(|(k, _)| *k == key) {
             return *id;
         }
         let name = crate::words::path(path);
@@ -193,7 +199,7 @@ impl Parts {
             .read(path, Kind::Image)
             .map_err(anyhow::Error::from)
             .and_then(|bytes| {
-                Texture::decode(&name, &bytes).map_err(|e| {
+                Texture::decode(&name, &bytes, encoding).map_err(|e| {
                     anyhow::anyhow!("{}", crate::words::clip_quotes(&format!("{e:#}")))
                 })
             });
@@ -213,7 +219,7 @@ impl Parts {
                 None
             }
         };
-        self.texture_ids.push((path.to_path_buf(), id));
+        self.texture_ids.push((key, id));
         id
     }
 

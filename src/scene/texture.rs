@@ -71,6 +71,15 @@ impl Wrap {
     }
 }
 
+/// How an image's 8-bit values become linear ones: colours are sRGB
+/// encoded, data (normals, roughness, occlusion) are stored linearly.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Encoding {
+    #[default]
+    Srgb,
+    Linear,
+}
+
 /// sRGB transfer function, decoded to linear.
 pub fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 {
@@ -103,9 +112,15 @@ fn image_error(e: image::ImageError) -> anyhow::Error {
 const TEXEL_BYTES: u64 = std::mem::size_of::<Vec3>() as u64;
 
 impl Texture {
-    pub fn from_image(name: &str, img: image::DynamicImage) -> Self {
+    pub fn from_image(name: &str, img: image::DynamicImage, encoding: Encoding) -> Self {
         let rgb = img.into_rgb8();
-        let lut: Vec<f32> = (0..256).map(|i| srgb_to_linear(i as f32 / 255.0)).collect();
+        let lut: Vec<f32> = (0..256)
+            .map(|i| i as f32 / 255.0)
+            .map(|c| match encoding {
+                Encoding::Srgb => srgb_to_linear(c),
+                Encoding::Linear => c,
+            })
+            .collect();
         let texels = rgb
             .pixels()
             .map(|p| Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
@@ -123,7 +138,7 @@ impl Texture {
     /// Decodes an image file's bytes. An image without pixels, or one that
     /// would take more than [`TEXTURE_BUDGET`] (or the memory available) to
     /// decode and store, is refused before anything large is allocated.
-    pub fn decode(name: &str, bytes: &[u8]) -> Result<Self> {
+    pub fn decode(name: &str, bytes: &[u8], encoding: Encoding) -> Result<Self> {
         // Formats of GPU textures, which the decoder would call unknown.
         for (magic, what) in [
             (&b"\xABKTX 20\xBB\r\n\x1A\n"[..], "KTX2 (Basis Universal)"),
@@ -160,6 +175,7 @@ impl Texture {
         Ok(Self::from_image(
             name,
             image::DynamicImage::from_decoder(decoder).map_err(image_error)?,
+            encoding,
         ))
     }
 
@@ -318,12 +334,14 @@ mod tests {
         )
         .unwrap();
         assert!(webp.starts_with(b"RIFF") && &webp[8..12] == b"WEBP");
-        let t = Texture::decode("t.webp", &webp).unwrap();
+        let t = Texture::decode("t.webp", &webp, Encoding::Srgb).unwrap();
         assert_eq!((t.width, t.height), (2, 1));
         assert_eq!(t.texels[..], [Vec3::X, Vec3::Z]);
         let mut ktx2 = b"\xABKTX 20\xBB\r\n\x1A\n".to_vec();
         ktx2.extend([0; 64]);
-        let e = Texture::decode("t.ktx2", &ktx2).unwrap_err().to_string();
+        let e = Texture::decode("t.ktx2", &ktx2, Encoding::Srgb)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("KTX2 (Basis Universal)"), "{e}");
     }
 

@@ -217,6 +217,8 @@ pub const ROWS: &[Row] = &[
             (K::Char('9'), A::Toggle(Feature::Environment)),
             (K::Char('0'), A::Toggle(Feature::Bloom)),
             (K::Char('t'), A::Toggle(Feature::Bvh)),
+            (K::Char('N'), A::Toggle(Feature::NormalMaps)),
+            (K::Char('E'), A::Toggle(Feature::Emission)),
         ],
         help: "toggle a feature (each key is listed in the Features panel)",
         hint: Some("features"),

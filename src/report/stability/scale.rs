@@ -359,6 +359,19 @@ fn map_scene(scene: &Scene, f: impl Fn(Vec3) -> Vec3, s: f32) -> Scene {
     for l in &mut out.lights {
         match l {
             Light::Point { position, .. } => *position = f(*position),
+            Light::Photometric {
+                position,
+                intensity,
+                range,
+                ..
+            } => {
+                *position = f(*position);
+                *intensity *= s * s;
+                if let Some(r) = range {
+                    *r *= s;
+                }
+            }
+            Light::Directional { .. } => {}
             Light::Segment { a, b, .. } => {
                 *a = f(*a);
                 *b = f(*b);

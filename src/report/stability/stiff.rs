@@ -160,6 +160,11 @@ pub fn bound(scene: &Scene) -> f32 {
         .iter()
         .map(|l| match l {
             Light::Point { color, .. } => color.max_element(),
+            // Lux and candela at a unit's distance; the battery's stiff
+            // scenes hold Phong lights only.
+            Light::Photometric { intensity: c, .. } | Light::Directional { illuminance: c, .. } => {
+                c.max_element()
+            }
             Light::Segment {
                 color_a, color_b, ..
             } => color_a.max(*color_b).max_element(),

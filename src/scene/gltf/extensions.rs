@@ -20,6 +20,7 @@ pub(super) const READ: &[&str] = &[
     "KHR_texture_transform",
     "EXT_mesh_gpu_instancing",
     "EXT_texture_webp",
+    "KHR_materials_emissive_strength",
 ];
 
 const DRACO: &str = "KHR_draco_mesh_compression";

@@ -7,13 +7,13 @@
 //! node's transform applied in f64; triangle primitives (strips and fans
 //! turned into triangles) with positions, normals, the first UV set and
 //! `COLOR_0`, quantized or not, sparse or not, compressed with
-//! meshoptimizer or not (see [`accessor`]); materials mapped onto Phong
-//! (see [`phong`]) with the `baseColorTexture`, its sampler's wrap modes
-//! and its `KHR_texture_transform` (WebP images through
-//! `EXT_texture_webp`); `EXT_mesh_gpu_instancing`; perspective and
+//! meshoptimizer or not (see [`accessor`]); metallic-roughness materials
+//! (see [`metallic_roughness`]) with their base colour, metallic-roughness,
+//! normal, occlusion and emissive textures, `KHR_materials_emissive_strength`,
+//! the samplers' wrap modes and the base colour's `KHR_texture_transform`
+//! (WebP images through `EXT_texture_webp`); `EXT_mesh_gpu_instancing`; perspective and
 //! orthographic cameras (the first, or the one `--camera` names);
-//! `KHR_lights_punctual` lights (spot lights become point lights,
-//! directional lights point lights far away). What cannot be mapped is
+//! `KHR_lights_punctual` lights in their units (candela and lux). What cannot be mapped is
 //! listed once in the warnings.
 
 mod accessor;
@@ -37,8 +37,8 @@ use glam::{DAffine3, DMat4, DVec3, Vec3};
 
 use super::parts::{mesh_fits, Parts, Placed};
 use super::source::{Kind, Outside, Source};
-use super::texture::{Texture, Wrap};
-use super::{Material, Projection};
+use super::texture::{Encoding, Texture, Wrap};
+use super::{Material, Pbr, Projection};
 use check::{check_lights, check_transform, check_trees, check_values, Broken};
 use primitive::{Decoded, Key};
 use uri::inline_uri;
@@ -56,18 +56,32 @@ pub struct FileCamera {
     pub projection: Projection,
 }
 
-/// A light of the file, placed in f64.
+/// A light of the file, placed in f64, in its units.
 #[derive(Clone, Copy, Debug)]
 pub enum FileLight {
+    /// A point light, or a spot light with its cone.
     Point {
         position: DVec3,
-        color: Vec3,
+        /// Candela per channel.
+        intensity: Vec3,
+        range: Option<f64>,
+        cone: Option<FileCone>,
     },
     /// Light travelling along `direction`.
     Directional {
         direction: DVec3,
-        color: Vec3,
+        /// Lux per channel.
+        illuminance: Vec3,
     },
+}
+
+/// A spot light's cone: its axis and the cosines of its inner and outer
+/// angles.
+#[derive(Clone, Copy, Debug)]
+pub struct FileCone {
+    pub axis: DVec3,
+    pub cos_inner: f32,
+    pub cos_outer: f32,
 }
 
 /// What a glTF file holds, placed.
@@ -121,31 +135,22 @@ fn named(name: Option<&str>, index: usize) -> String {
     }
 }
 
-/// The Phong material for a glTF metallic-roughness material:
-/// `kd = base * (1 - metallic)`, `ks = mix(0.04, base, metallic)`, `ns`
-/// the Phong exponent of the same highlight width as the roughness
-/// (`2 / roughness^4 - 2`, a mirror from roughness 0.21 down), and the
-/// alpha of `BLEND` (and of `MASK`, 0 or 1 by its cutoff) as dissolve.
-pub fn phong(
+/// The material of glTF metallic-roughness factors, shaded by
+/// [`crate::render::brdf`]: the base colour as kd, and the alpha of
+/// `BLEND` (and of `MASK`, 0 or 1 by its cutoff) as dissolve. The reader
+/// adds the textures.
+pub fn metallic_roughness(
     base: [f32; 4],
     metallic: f32,
     roughness: f32,
     alpha: AlphaMode,
     cutoff: f32,
 ) -> Material {
-    let b = Vec3::new(base[0], base[1], base[2]).clamp(Vec3::ZERO, Vec3::ONE);
-    let m = metallic.clamp(0.0, 1.0);
-    let a2 = roughness.clamp(0.0, 1.0).powi(4);
-    let ns = if a2 > 0.0 {
-        (2.0 / a2 - 2.0).min(1e6)
-    } else {
-        1e6
-    };
     Material {
         name: String::new(),
-        kd: b * (1.0 - m),
-        ks: Vec3::splat(0.04).lerp(b, m),
-        ns,
+        kd: Vec3::new(base[0], base[1], base[2]).clamp(Vec3::ZERO, Vec3::ONE),
+        ks: Vec3::ZERO,
+        ns: 0.0,
         dissolve: match alpha {
             AlphaMode::Opaque => 1.0,
             AlphaMode::Blend => base[3].clamp(0.0, 1.0),
@@ -158,6 +163,11 @@ pub fn phong(
             }
         },
         texture: None,
+        pbr: Some(Pbr {
+            metallic: metallic.clamp(0.0, 1.0),
+            roughness: roughness.clamp(0.0, 1.0),
+            ..Pbr::default()
+        }),
     }
 }
 
@@ -180,8 +190,9 @@ struct Reader<'a> {
     /// quote nothing they hold.
     foreign: Vec<Option<Outside>>,
     unmapped: Unmapped,
-    /// Decoded images by index (`None` when they could not be).
-    images: HashMap<usize, Option<Texture>>,
+    /// Decoded images by index and encoding (`None` when they could not
+    /// be).
+    images: HashMap<(usize, Encoding), Option<Texture>>,
     /// Materials made so far: glTF index to rayterm id.
     materials: HashMap<Option<usize>, u32>,
     /// Cameras and images the crate cannot read, until used.
@@ -207,9 +218,10 @@ impl Reader<'_> {
         parts: &mut Parts,
         image: ::gltf::Image,
         user: &str,
+        encoding: Encoding,
     ) -> Result<Option<Texture>> {
         let index = image.index();
-        if let Some(t) = self.images.get(&index) {
+        if let Some(t) = self.images.get(&(index, encoding)) {
             return Ok(t.clone());
         }
         let name = named(image.name(), index);
@@ -224,20 +236,20 @@ impl Reader<'_> {
                     .get(view.buffer().index())
                     .and_then(|b| b.get(view.offset()..view.offset().checked_add(view.length())?));
                 match (bytes, self.foreign.get(view.buffer().index())) {
-                    (Some(b), Some(Some(o))) => Texture::decode(&from, b).map_err(|_| {
+                    (Some(b), Some(Some(o))) => Texture::decode(&from, b, encoding).map_err(|_| {
                         format!(
                             "not read as an image; why is not shown, as the reason may quote \
                              its buffer, which lies outside {}",
                             crate::words::path(&o.folder)
                         )
                     }),
-                    (Some(b), _) => Texture::decode(&from, b)
+                    (Some(b), _) => Texture::decode(&from, b, encoding)
                         .map_err(|e| crate::words::clip_quotes(&format!("{e:#}"))),
                     (None, _) => Err("its buffer view lies outside the buffer".into()),
                 }
             }
             ::gltf::image::Source::Uri { uri, .. } => match inline_uri(uri) {
-                Some(Ok(b)) => Texture::decode(&from, &b)
+                Some(Ok(b)) => Texture::decode(&from, &b, encoding)
                     .map_err(|e| crate::words::clip_quotes(&format!("{e:#}"))),
                 Some(Err(e)) => Err(e),
                 None => {
@@ -246,9 +258,9 @@ impl Reader<'_> {
                         Ok(found) => found,
                         Err(e) => bail!("{from} (of {user}): {e}"),
                     };
-                    let id = parts.texture_at(self.src, &p, o, uri, &from);
+                    let id = parts.texture_at(self.src, &p, o, uri, &from, encoding);
                     let t = id.map(|i| parts.textures[i as usize].clone());
-                    self.images.insert(index, t.clone());
+                    self.images.insert((index, encoding), t.clone());
                     return Ok(t);
                 }
             },
@@ -262,8 +274,70 @@ impl Reader<'_> {
                 None
             }
         };
-        self.images.insert(index, t.clone());
+        self.images.insert((index, encoding), t.clone());
         Ok(t)
+    }
+
+    /// The texture of a material's texture slot, tinted by `tint`.
+    fn texture(
+        &mut self,
+        parts: &mut Parts,
+        info: Option<::gltf::texture::Info>,
+        user: &str,
+        encoding: Encoding,
+        tint: Vec3,
+    ) -> Result<Option<u32>> {
+        let Some(info) = info else {
+            return Ok(None);
+        };
+        let set = info.texture_transform().and_then(|t| t.tex_coord());
+        self.texture_of(
+            parts,
+            info.texture(),
+            info.tex_coord(),
+            set,
+            user,
+            encoding,
+            tint,
+        )
+    }
+
+    /// A texture decoded as `encoding`, with its sampler's wrapping and
+    /// `tint`; `None` (noted) where it cannot be shown. `set` is the UV
+    /// set a `KHR_texture_transform` names instead of `tex_coord`.
+    #[allow(clippy::too_many_arguments)]
+    fn texture_of(
+        &mut self,
+        parts: &mut Parts,
+        texture: ::gltf::Texture,
+        tex_coord: u32,
+        set: Option<u32>,
+        user: &str,
+        encoding: Encoding,
+        tint: Vec3,
+    ) -> Result<Option<u32>> {
+        if set.unwrap_or(tex_coord) != 0 {
+            self.unmapped
+                .note("textures on a second UV set", || user.to_string());
+            return Ok(None);
+        }
+        let sampler = texture.sampler();
+        let image = match texture.source() {
+            Some(image) => self.image(parts, image, user, encoding)?,
+            None => {
+                let t = named(texture.name(), texture.index());
+                let what = extensions::sourceless(&texture);
+                self.unmapped
+                    .note(&what, || format!("texture {t} of {user}"));
+                None
+            }
+        };
+        Ok(image.map(|mut t| {
+            // Every material of the image shares its texels.
+            t.tint = tint;
+            t.wrap = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
+            parts.add_texture(t)
+        }))
     }
 
     /// The rayterm material of a primitive's material, made once.
@@ -273,15 +347,17 @@ impl Reader<'_> {
             return Ok(id);
         }
         let Some(index) = key else {
-            // No material: rayterm's default, as for an OBJ without one.
-            let id = parts.add_material(Material::default());
+            // No material: the specification's default, a rough metal.
+            let mut m = metallic_roughness([1.0; 4], 1.0, 1.0, AlphaMode::Opaque, 0.5);
+            m.name = "default".into();
+            let id = parts.add_material(m);
             self.materials.insert(key, id);
             return Ok(id);
         };
         let name = named(m.name(), index);
         let pbr = m.pbr_metallic_roughness();
         let base = pbr.base_color_factor();
-        let mut mat = phong(
+        let mut mat = metallic_roughness(
             base,
             pbr.metallic_factor(),
             pbr.roughness_factor(),
@@ -292,49 +368,83 @@ impl Reader<'_> {
             Some(n) if !n.trim().is_empty() => name.clone(),
             _ => format!("material {name}"),
         };
-        let here = || format!("material {name}");
-        if let Some(info) = pbr.base_color_texture() {
-            // KHR_texture_transform may name another set.
-            let set = info.texture_transform().and_then(|t| t.tex_coord());
-            if set.unwrap_or(info.tex_coord()) != 0 {
-                self.unmapped.note("textures on a second UV set", here);
-            }
-            let texture = info.texture();
-            let sampler = texture.sampler();
-            let image = match texture.source() {
-                Some(image) => self.image(parts, image, &here())?,
-                None => {
-                    let t = named(texture.name(), texture.index());
-                    let what = extensions::sourceless(&texture);
-                    self.unmapped
-                        .note(&what, || format!("texture {t} of material {name}"));
-                    None
-                }
-            };
-            if let Some(mut t) = image {
-                // The texture takes the place of kd: the factor and the
-                // metallic share of kd multiply its texels, which every
-                // material of the image shares.
-                t.tint = mat.kd;
-                t.wrap = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
-                mat.texture = Some(parts.add_texture(t));
-            }
+        let here = format!("material {name}");
+        let mut p = mat.pbr.take().expect("a metallic-roughness material");
+        // Each texture multiplies its factor: the base colour's, the
+        // emissive colour's; metallic and roughness scale at lookup.
+        let base_tint = mat.kd;
+        mat.texture = self.texture(
+            parts,
+            pbr.base_color_texture(),
+            &here,
+            Encoding::Srgb,
+            base_tint,
+        )?;
+        p.metallic_roughness = self.texture(
+            parts,
+            pbr.metallic_roughness_texture(),
+            &here,
+            Encoding::Linear,
+            Vec3::ONE,
+        )?;
+        if let Some(n) = m.normal_texture() {
+            let scale = n.scale();
+            let id = self.texture_of(
+                parts,
+                n.texture(),
+                n.tex_coord(),
+                None,
+                &here,
+                Encoding::Linear,
+                Vec3::ONE,
+            )?;
+            p.normal = id.map(|id| (id, if scale.is_finite() { scale } else { 1.0 }));
         }
-        if pbr.metallic_roughness_texture().is_some() {
-            self.unmapped.note("metallic-roughness textures", here);
+        if let Some(o) = m.occlusion_texture() {
+            let strength = o.strength();
+            let id = self.texture_of(
+                parts,
+                o.texture(),
+                o.tex_coord(),
+                None,
+                &here,
+                Encoding::Linear,
+                Vec3::ONE,
+            )?;
+            p.occlusion = id.map(|id| {
+                (
+                    id,
+                    if strength.is_finite() {
+                        strength.clamp(0.0, 1.0)
+                    } else {
+                        1.0
+                    },
+                )
+            });
         }
-        if m.normal_texture().is_some() {
-            self.unmapped.note("normal maps", here);
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        let strength = if strength.is_finite() {
+            strength.max(0.0)
+        } else {
+            0.0
+        };
+        p.emissive = (Vec3::from_array(m.emissive_factor()) * strength).max(Vec3::ZERO);
+        if !p.emissive.is_finite() {
+            p.emissive = Vec3::ZERO;
         }
-        if m.occlusion_texture().is_some() {
-            self.unmapped.note("occlusion maps", here);
-        }
-        if m.emissive_texture().is_some() || m.emissive_factor() != [0.0; 3] {
-            self.unmapped.note("emission", here);
+        if p.emissive != Vec3::ZERO {
+            p.emissive_texture = self.texture(
+                parts,
+                m.emissive_texture(),
+                &here,
+                Encoding::Srgb,
+                p.emissive,
+            )?;
         }
         if m.alpha_mode() != AlphaMode::Opaque && pbr.base_color_texture().is_some() {
-            self.unmapped.note("alpha from textures", here);
+            self.unmapped.note("alpha from textures", || here.clone());
         }
+        mat.pbr = Some(p);
         let id = parts.add_material(mat);
         self.materials.insert(key, id);
         Ok(id)
@@ -573,7 +683,6 @@ pub fn load(
     check_lights(path, &doc, &mut parts.warnings)?;
     let mut stack: Vec<(::gltf::Node, DAffine3)> = scene.nodes().map(|n| (n, *xf)).collect();
     stack.reverse();
-    let mut brightest = 0.0f32;
     while let Some((node, parent)) = stack.pop() {
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         let world = parent * DAffine3::from_mat4(local);
@@ -655,52 +764,54 @@ pub fn load(
             }
         }
         if let Some(light) = node.light() {
-            let color = Vec3::from_array(light.color()) * light.intensity().max(0.0);
-            brightest = brightest.max(color.max_element());
+            // Lights keep their units whatever the node's scale (the
+            // extension's rule); only where they are and point moves.
+            let value =
+                Vec3::from_array(light.color()).max(Vec3::ZERO) * light.intensity().max(0.0);
             let position = world.transform_point3(DVec3::ZERO);
+            let direction = world.transform_vector3(DVec3::NEG_Z);
+            let aimed = direction.length_squared() > 0.0 && direction.is_finite();
+            let range = light
+                .range()
+                .filter(|r| *r > 0.0 && r.is_finite())
+                .map(f64::from);
             match light.kind() {
-                LightKind::Point => out.lights.push(FileLight::Point { position, color }),
-                LightKind::Spot { .. } => {
-                    r.unmapped
-                        .note("spot cones (spot lights shine all round)", || {
-                            format!("node {node_name}")
-                        });
-                    out.lights.push(FileLight::Point { position, color });
+                LightKind::Point => out.lights.push(FileLight::Point {
+                    position,
+                    intensity: value,
+                    range,
+                    cone: None,
+                }),
+                LightKind::Spot {
+                    inner_cone_angle,
+                    outer_cone_angle,
+                } if aimed => {
+                    let outer = outer_cone_angle.clamp(0.0, std::f32::consts::FRAC_PI_2);
+                    let inner = inner_cone_angle.clamp(0.0, outer);
+                    out.lights.push(FileLight::Point {
+                        position,
+                        intensity: value,
+                        range,
+                        cone: Some(FileCone {
+                            axis: direction.normalize(),
+                            cos_inner: inner.cos(),
+                            cos_outer: outer.cos(),
+                        }),
+                    })
                 }
-                LightKind::Directional => {
-                    r.unmapped.note(
-                        "directional lights (placed as distant point lights)",
-                        || format!("node {node_name}"),
-                    );
-                    // A zero scale on the way leaves it no direction.
-                    let direction = world.transform_vector3(DVec3::NEG_Z);
-                    match direction.length_squared() > 0.0 && direction.is_finite() {
-                        true => out.lights.push(FileLight::Directional { direction, color }),
-                        false => r.unmapped.note(
-                            "directional lights scaled to nothing (their direction is zero)",
-                            || format!("node {node_name}"),
-                        ),
-                    }
-                }
-            }
-            if light.range().is_some() {
-                r.unmapped
-                    .note("light ranges", || format!("node {node_name}"));
+                LightKind::Directional if aimed => out.lights.push(FileLight::Directional {
+                    direction: direction.normalize(),
+                    illuminance: value,
+                }),
+                // A zero scale on the way leaves it no direction.
+                _ => r.unmapped.note(
+                    "spot and directional lights scaled to nothing (their direction is zero)",
+                    || format!("node {node_name}"),
+                ),
             }
         }
         for child in node.children().collect::<Vec<_>>().into_iter().rev() {
             stack.push((child, world));
-        }
-    }
-    // rayterm's lights do not fall off with distance: intensities keep
-    // their ratios, the brightest light of the file at 1.
-    if brightest > 0.0 {
-        for l in &mut out.lights {
-            match l {
-                FileLight::Point { color, .. } | FileLight::Directional { color, .. } => {
-                    *color /= brightest
-                }
-            }
         }
     }
     parts.warnings.extend(r.unmapped.warning(path));

@@ -682,6 +682,7 @@ fn convert_material(
         ns: m.ns.unwrap_or(d.ns),
         dissolve: m.dissolve.unwrap_or(d.dissolve),
         texture,
+        pbr: None,
     }
 }
 

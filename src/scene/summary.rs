@@ -1,0 +1,96 @@
+//! What `--explain` says of a scene's materials and lights: the shading
+//! model each material takes and each light with its units.
+
+use glam::Vec3;
+
+use super::{Light, Scene};
+use crate::scene::numbers::show3;
+
+/// A light's colour or intensity, three channels or one where they agree.
+fn value(v: Vec3) -> String {
+    if v.x == v.y && v.y == v.z {
+        format!("{}", v.x)
+    } else {
+        show3(v.as_dvec3())
+    }
+}
+
+/// One line per light.
+fn light(l: &Light) -> String {
+    match l {
+        Light::Point { position, color } => format!(
+            "point at {}, colour {} (Phong units: a white Phong surface facing it shows it)",
+            show3(position.as_dvec3()),
+            value(*color)
+        ),
+        Light::Segment { a, b, .. } => format!(
+            "segment from {} to {} (Phong units)",
+            show3(a.as_dvec3()),
+            show3(b.as_dvec3())
+        ),
+        Light::Parallelogram { corner, .. } => format!(
+            "parallelogram at {} (Phong units)",
+            show3(corner.as_dvec3())
+        ),
+        Light::Photometric {
+            position,
+            intensity,
+            range,
+            cone,
+        } => {
+            let kind = match cone {
+                None => "point".to_string(),
+                Some(c) => format!(
+                    "spot along {}, cone {:.1}° to {:.1}°",
+                    show3(c.axis.as_dvec3()),
+                    c.cos_inner.clamp(-1.0, 1.0).acos().to_degrees(),
+                    c.cos_outer.clamp(-1.0, 1.0).acos().to_degrees()
+                ),
+            };
+            let range = range.map_or(String::new(), |r| format!(", range {r}"));
+            format!(
+                "{kind} at {}, {} cd, falling off with the square of the distance{range}",
+                show3(position.as_dvec3()),
+                value(*intensity)
+            )
+        }
+        Light::Directional {
+            direction,
+            illuminance,
+        } => format!(
+            "directional along {}, {} lux",
+            show3(direction.as_dvec3()),
+            value(*illuminance)
+        ),
+    }
+}
+
+/// The materials' shading models and the lights, for `--explain`.
+pub fn explain(scene: &Scene) -> String {
+    let pbr = scene.materials.iter().filter(|m| m.pbr.is_some()).count();
+    let phong = scene.materials.len() - pbr;
+    let emissive = scene.materials.iter().filter(|m| m.emissive()).count();
+    let mut out = String::from("materials:\n");
+    if pbr > 0 {
+        out += &format!(
+            "  {pbr} metallic-roughness (glTF 2.0: Lambert and GGX, Smith height-correlated, \
+             Schlick's Fresnel){}\n",
+            match emissive {
+                0 => String::new(),
+                n => format!(", {n} emissive"),
+            }
+        );
+    }
+    if phong > 0 {
+        out += &format!("  {phong} Phong\n");
+    }
+    out += "lights:\n";
+    if scene.lights.is_empty() {
+        out += "  none\n";
+    }
+    for l in &scene.lights {
+        out += &format!("  {}\n", light(l));
+    }
+    out += &format!("ambient: {}", value(scene.settings.ambient));
+    out
+}
