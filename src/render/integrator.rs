@@ -13,6 +13,7 @@ use crate::geometry::offset::{geometric_normal, hit_point, offset_origin, SHADOW
 use crate::geometry::sampling::{jittered, phong_lobe, Rng, Run, PIXEL_GRID};
 use crate::geometry::Ray;
 use crate::scene::camera::CameraFrame;
+use crate::scene::envlight::LATLONG;
 use crate::scene::texture::{cube_face_uv, FACE_NAMES};
 use crate::scene::{Environment, Light, Material, Scene};
 
@@ -319,19 +320,31 @@ impl<'a> Tracer<'a> {
         color
     }
 
+    /// What a ray leaving the scene sees: the background colour, or the
+    /// cube map or environment light where the plan looks them up (black
+    /// where it does not).
     fn miss<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Vec3 {
-        let (color, face) = match &self.scene.environment {
-            Environment::CubeMap(cube) if self.plan.environment => (cube.lookup(ray.dir), true),
-            Environment::Color(c) => (*c, false),
-            Environment::CubeMap(_) => (Vec3::ZERO, false),
+        let env = &self.scene.environment;
+        let on = self.plan.environment;
+        let color = match env {
+            Environment::CubeMap(cube) if on => cube.lookup(ray.dir),
+            Environment::Light(light) if on => light.eval(ray.dir),
+            Environment::Color(c) => *c,
+            Environment::CubeMap(_) | Environment::Light(_) => Vec3::ZERO,
         };
         if R::ACTIVE {
-            let (f, uv) = cube_face_uv(ray.dir);
-            rec.miss(MissInfo {
-                face: face.then(|| FACE_NAMES[f].to_string()),
-                uv: face.then_some(uv),
-                color,
-            });
+            let (face, uv) = match env {
+                Environment::CubeMap(_) if on => {
+                    let (f, uv) = cube_face_uv(ray.dir);
+                    (Some(FACE_NAMES[f].to_string()), Some(uv))
+                }
+                Environment::Light(light) if on => match light.map_uv(ray.dir) {
+                    Some(uv) => (Some(LATLONG.to_string()), Some(uv)),
+                    None => (None, None),
+                },
+                _ => (None, None),
+            };
+            rec.miss(MissInfo { face, uv, color });
         }
         color
     }

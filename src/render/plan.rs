@@ -99,7 +99,7 @@ pub fn not_needed(scene: &Scene, f: Feature) -> Option<Reason> {
         Feature::Textures | Feature::Bilinear if !scene.has_textures() => Some(Reason::NoTextures),
         Feature::SmoothNormals if !scene.has_vertex_normals() => Some(Reason::NoVertexNormals),
         Feature::SoftShadows if !any_area => Some(Reason::PointLightsOnly),
-        Feature::Environment if !matches!(scene.environment, Environment::CubeMap(_)) => {
+        Feature::Environment if matches!(scene.environment, Environment::Color(_)) => {
             Some(Reason::NoEnvironment)
         }
         _ => None,
