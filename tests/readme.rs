@@ -53,6 +53,14 @@ const COMMANDS: &[(&str, How)] = &[
         Run,
     ),
     (
+        "rayterm render env --env 0.4,0.6,1.0 --size 640x360 -o blue-sky.png",
+        Run,
+    ),
+    (
+        "rayterm render env --env 0.5 --env-strength 2 --size 640x360 -o grey-sky.png",
+        Run,
+    ),
+    (
         "rayterm render teapot --debug bvh-level:4 -o level4.png",
         Run,
     ),

@@ -496,3 +496,37 @@ fn extreme_lights_and_roughness_stay_finite() {
         }
     }
 }
+
+/// A constant environment of radiance L lights an open floor with the
+/// irradiance πL: a matte Phong floor of colour kd shows kd L, a white
+/// matte metallic-roughness one its diffuse share; a roof cuts it off
+/// (its shadow rays are blocked), and `--no environment` turns it off.
+#[test]
+fn an_environment_light_lights_by_its_irradiance() {
+    use rayterm::scene::{EnvLight, Environment};
+    let mean = |meshes: &[TestMesh], features: Features| {
+        let mut s = scene(meshes, vec![], top_camera(3.0));
+        s.environment = Environment::Light(Box::new(EnvLight::constant(Vec3::splat(2.0))));
+        s.settings.max_depth = 0;
+        let r = render(&s, 9, 9, 64, features, Builder::Sah, 1);
+        // The middle 5x5 pixels, all on the floor.
+        let mut sum = Vec3::ZERO;
+        for y in 2..7 {
+            for x in 2..7 {
+                sum += r.image[y * 9 + x];
+            }
+        }
+        sum / 25.0
+    };
+    let matte = floor(material(Vec3::splat(0.5), Vec3::ZERO, 1.0));
+    let got = mean(&matte, Features::all().without(&[Feature::Bloom])).x;
+    assert!(close(got, 1.0, 0.01), "{got}");
+    let off = Features::all().without(&[Feature::Bloom, Feature::Environment]);
+    assert_eq!(mean(&matte, off).x, 0.0);
+    let mut roofed = matte.clone();
+    let (rp, rt) = quad_y(-1e4, -1e4, 1e4, 1e4, 10.0);
+    // The roof faces up: the camera below it sees the floor.
+    roofed.push((rp, rt, material(Vec3::ONE, Vec3::ZERO, 1.0)));
+    let got = mean(&roofed, Features::all().without(&[Feature::Bloom])).x;
+    assert!(got < 0.01, "{got}");
+}

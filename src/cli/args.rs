@@ -6,6 +6,7 @@ use clap::{Args, Parser, Subcommand};
 
 use super::debug::DebugSpec;
 use crate::render::{Feature, Features, PlanPolicy, SceneRequest, Worst};
+use crate::scene::envlight::EnvRequest;
 use crate::scene::up::Up;
 use crate::scene::Builder;
 use crate::tui::color::ColorMode;
@@ -195,6 +196,23 @@ pub struct SceneOpts {
     /// STL files are Z-up unless told, OBJ, PLY and glTF Y-up.
     #[arg(long, value_name = "AXIS", allow_hyphen_values = true)]
     pub up: Option<Up>,
+    /// An environment light in place of the scene's environment (any
+    /// scene): an equirectangular map (.hdr, .exr, .png, .jpg), a grey
+    /// level (0.5) or a linear colour (0.2,0.3,0.5).
+    #[arg(long, value_name = "MAP|GREY|R,G,B", allow_hyphen_values = true)]
+    pub env: Option<String>,
+    /// What the environment light is multiplied by [default: 1].
+    #[arg(long, value_name = "F", requires = "env", allow_hyphen_values = true)]
+    pub env_strength: Option<f32>,
+    /// Degrees the environment light turns about +Y, counter-clockwise
+    /// seen from above [default: 0].
+    #[arg(
+        long,
+        value_name = "DEGREES",
+        requires = "env",
+        allow_hyphen_values = true
+    )]
+    pub env_rotate: Option<f32>,
 }
 
 impl SceneOpts {
@@ -217,6 +235,11 @@ impl SceneOpts {
             camera: self.camera.clone(),
             allow_outside: self.allow_outside,
             up: self.up,
+            env: self.env.as_ref().map(|given| EnvRequest {
+                given: given.clone(),
+                strength: self.env_strength.unwrap_or(1.0),
+                rotate: self.env_rotate.unwrap_or(0.0),
+            }),
             check_film: true,
         }
     }

@@ -83,6 +83,16 @@ pub fn scene_hash(scene: &Scene, plan: &Plan) -> u64 {
             let _ = write!(h, "env {c:?}");
         }
         Environment::CubeMap(cube) => textures.extend(cube.faces.iter()),
+        Environment::Light(light) => {
+            let _ = write!(
+                h,
+                "env light {:?} {:?} {:?}",
+                light.color(),
+                light.strength(),
+                light.rotation()
+            );
+            textures.extend(light.map());
+        }
     }
     // Texels shared by several textures are hashed once, then named by
     // the first that holds them.

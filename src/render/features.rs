@@ -22,7 +22,7 @@ pub enum Feature {
     Supersampling,
     /// Reflections sampled from the Phong lobe for materials with Ns below the glossy threshold.
     Glossy,
-    /// Cube-map environment for rays that leave the scene.
+    /// The cube map or environment light for rays that leave the scene.
     Environment,
     /// Glow around bright pixels.
     Bloom,

@@ -18,9 +18,10 @@ use crate::geometry::offset::{geometric_normal, hit_point, offset_origin, SHADOW
 use crate::geometry::sampling::{jittered, phong_lobe, Rng, Run, PIXEL_GRID};
 use crate::geometry::Ray;
 use crate::scene::camera::CameraFrame;
+use crate::scene::envlight::LATLONG;
 use crate::scene::light::{Arriving, From};
 use crate::scene::texture::{cube_face_uv, FACE_NAMES};
-use crate::scene::{Environment, Light, Material, Scene, Texture};
+use crate::scene::{EnvLight, Environment, Light, Material, Scene, Texture};
 
 /// Tries to draw a glossy direction above the surface before using the mirror direction.
 const GLOSSY_TRIES: u32 = 8;
@@ -367,19 +368,31 @@ impl<'a> Tracer<'a> {
         color
     }
 
+    /// What a ray leaving the scene sees: the background colour, or the
+    /// cube map or environment light where the plan looks them up (black
+    /// where it does not).
     fn miss<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Vec3 {
-        let (color, face) = match &self.scene.environment {
-            Environment::CubeMap(cube) if self.plan.environment => (cube.lookup(ray.dir), true),
-            Environment::Color(c) => (*c, false),
-            Environment::CubeMap(_) => (Vec3::ZERO, false),
+        let env = &self.scene.environment;
+        let on = self.plan.environment;
+        let color = match env {
+            Environment::CubeMap(cube) if on => cube.lookup(ray.dir),
+            Environment::Light(light) if on => light.eval(ray.dir),
+            Environment::Color(c) => *c,
+            Environment::CubeMap(_) | Environment::Light(_) => Vec3::ZERO,
         };
         if R::ACTIVE {
-            let (f, uv) = cube_face_uv(ray.dir);
-            rec.miss(MissInfo {
-                face: face.then(|| FACE_NAMES[f].to_string()),
-                uv: face.then_some(uv),
-                color,
-            });
+            let (face, uv) = match env {
+                Environment::CubeMap(_) if on => {
+                    let (f, uv) = cube_face_uv(ray.dir);
+                    (Some(FACE_NAMES[f].to_string()), Some(uv))
+                }
+                Environment::Light(light) if on => match light.map_uv(ray.dir) {
+                    Some(uv) => (Some(LATLONG.to_string()), Some(uv)),
+                    None => (None, None),
+                },
+                _ => (None, None),
+            };
+            rec.miss(MissInfo { face, uv, color });
         }
         color
     }
@@ -544,6 +557,11 @@ impl<'a> Tracer<'a> {
         for (i, light) in scene.lights.iter().enumerate() {
             color += self.light(&s, i, light, rng, rec);
         }
+        if let Environment::Light(env) = &scene.environment {
+            if self.plan.environment {
+                color += self.environment_light(&s, env, occlusion, rng, rec);
+            }
+        }
         let reflect = self.plan.reflections && mat.reflective();
         let through = mat.dissolve < 1.0;
         if !(reflect || through) || depth.bounces >= self.max_depth || self.cancelled() {
@@ -631,6 +649,69 @@ impl<'a> Tracer<'a> {
         }
         rec.end_light(diffuse, specular);
         diffuse + specular
+    }
+
+    /// The diffuse light an environment light gives, from `light_samples`
+    /// directions (rounded up to a square, jittered on its grid) drawn in
+    /// proportion to its radiance, each shadow-tested, times the
+    /// surface's occlusion. The specular lobe sees the environment through
+    /// its reflection rays instead, so nothing is counted twice.
+    fn environment_light<R: Recorder>(
+        &self,
+        s: &Surface,
+        env: &EnvLight,
+        occlusion: f32,
+        rng: &mut Rng,
+        rec: &mut R,
+    ) -> Vec3 {
+        rec.begin_light(self.scene.lights.len(), "environment");
+        let m = ((self.scene.settings.light_samples.max(1) as f32).sqrt().ceil() as u32).max(1);
+        let n = m * m;
+        let mut sum = Vec3::ZERO;
+        for k in 0..n {
+            let u = match self.scene.settings.stratify {
+                true => jittered(k, m, rng.next_vec2()),
+                false => rng.next_vec2(),
+            };
+            let e = env.sample(u);
+            let l = e.dir;
+            let facing = e.pdf > 0.0 && s.ng.dot(l) > 0.0 && s.n.dot(l) > 0.0 && l.is_finite();
+            let mut shadow_ray = None;
+            let mut occluder = None;
+            if facing && self.plan.shadows {
+                let ray = Ray::new(offset_origin(s.p, s.err, s.ng, l), l);
+                occluder = self.blocked(&ray, rec);
+                shadow_ray = Some(ray);
+            }
+            let visible = facing && occluder.is_none();
+            let mut d = Vec3::ZERO;
+            if visible {
+                let f = match &s.brdf {
+                    Some(b) => b.eval(s.n, s.v, l).diffuse,
+                    None => s.kd * (s.n.dot(l) * FRAC_1_PI),
+                };
+                d = f * e.radiance * (occlusion / e.pdf);
+                sum += d;
+            }
+            if R::ACTIVE {
+                let geo = &self.scene.geometry;
+                rec.light_sample(LightSample {
+                    point: s.p + l,
+                    color: e.radiance,
+                    shadow_ray,
+                    visible,
+                    occluder: occluder.map(|t| {
+                        let mesh = &self.scene.meshes[geo.tri_mesh[t as usize] as usize];
+                        (mesh.name.clone(), t)
+                    }),
+                    diffuse: d,
+                    specular: Vec3::ZERO,
+                });
+            }
+        }
+        let diffuse = sum / n as f32;
+        rec.end_light(diffuse, Vec3::ZERO);
+        diffuse
     }
 
     /// Diffuse and specular terms from one point of a light (or one

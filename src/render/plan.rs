@@ -99,13 +99,17 @@ pub fn not_needed(scene: &Scene, f: Feature) -> Option<Reason> {
     let any_reflective = scene.materials.iter().any(|m| m.reflective());
     let any_area = scene.lights.iter().any(|l| l.is_area());
     match f {
-        Feature::Shadows if scene.lights.is_empty() => Some(Reason::NoLights),
+        Feature::Shadows
+            if scene.lights.is_empty() && !matches!(scene.environment, Environment::Light(_)) =>
+        {
+            Some(Reason::NoLights)
+        }
         Feature::Reflections if !any_reflective => Some(Reason::NoReflective),
         Feature::Glossy if !scene.materials.iter().any(|m| m.glossy()) => Some(Reason::NoGlossy),
         Feature::Textures | Feature::Bilinear if !scene.has_textures() => Some(Reason::NoTextures),
         Feature::SmoothNormals if !scene.has_vertex_normals() => Some(Reason::NoVertexNormals),
         Feature::SoftShadows if !any_area => Some(Reason::PointLightsOnly),
-        Feature::Environment if !matches!(scene.environment, Environment::CubeMap(_)) => {
+        Feature::Environment if matches!(scene.environment, Environment::Color(_)) => {
             Some(Reason::NoEnvironment)
         }
         Feature::NormalMaps
@@ -235,8 +239,11 @@ impl Plan {
                 .materials
                 .iter()
                 .any(|m| m.reflective() && m.dissolve < 1.0);
+        // An environment light is sampled at every hit.
+        let env_light = on(Feature::Environment) && matches!(scene.environment, Environment::Light(_));
         let deterministic = !(on(Feature::Supersampling)
             || on(Feature::Glossy)
+            || env_light
             || (on(Feature::SoftShadows) && any_area)
             || forks);
         Plan {

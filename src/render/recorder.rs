@@ -62,7 +62,9 @@ pub struct PbrInfo {
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct MissInfo {
-    /// Cube face (`posx` ...) and its coordinates, when an environment map was used.
+    /// Where an environment map was looked up: a cube face (`posx` ...),
+    /// or `latlong` for an environment light's equirectangular map (u from
+    /// the left, v from the top), and the coordinates there.
     pub face: Option<String>,
     pub uv: Option<Vec2>,
     pub color: Vec3,

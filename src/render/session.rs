@@ -37,6 +37,8 @@ pub struct SceneRequest {
     pub allow_outside: bool,
     /// A mesh file's up axis, where not its format's.
     pub up: Option<crate::scene::up::Up>,
+    /// An environment light in place of the scene's environment.
+    pub env: Option<crate::scene::envlight::EnvRequest>,
     /// Whether opening refuses an image size whose film of statistics
     /// would not fit in memory; off for a caller that checks the film it
     /// makes, which may keep far less ([`Progressive::bytes_per_pixel`]).
@@ -61,6 +63,7 @@ impl SceneRequest {
             camera: None,
             allow_outside: false,
             up: None,
+            env: None,
             check_film: true,
         }
     }
@@ -90,6 +93,7 @@ impl Session {
             camera: req.camera.clone(),
             allow_outside: req.allow_outside,
             up: req.up,
+            env: req.env.clone(),
         };
         let (scene, inputs) = scene::load_reading(&req.spec, &how)?;
         if let Err(e) = scene::check_reach(&scene) {

@@ -28,8 +28,8 @@ use super::source::{resolve, Disk, Kind, Source};
 use super::texture::{Encoding, FACE_NAMES};
 use super::up::Up;
 use super::{
-    bezier, BloomSettings, Builder, Camera, CubeMap, Environment, Light, Material, Projection,
-    Scene, Settings,
+    bezier, BloomSettings, Builder, Camera, CubeMap, EnvLight, Environment, Light, Material,
+    Projection, Scene, Settings,
 };
 use crate::words::{clip_quotes, printable, quoted};
 
@@ -257,6 +257,12 @@ struct EnvSpec {
     color: Option<Rgb>,
     sky: Option<bool>,
     faces: Option<FacesSpec>,
+    /// An equirectangular map: an environment light.
+    map: Option<Spanned<String>>,
+    /// The map's radiance multiplied by this.
+    strength: Option<Spanned<Num>>,
+    /// Degrees the map turns about +Y.
+    rotate: Option<Spanned<Num>>,
 }
 
 #[derive(Deserialize)]
@@ -512,6 +518,9 @@ fn sanitize(f: &mut SceneFile) {
             mat.name.iter_mut().for_each(clean);
             mat.texture.iter_mut().for_each(clean);
         }
+    }
+    if let Some(map) = f.environment.as_mut().and_then(|e| e.map.as_mut()) {
+        clean(map.get_mut());
     }
     if let Some(faces) = f.environment.as_mut().and_then(|e| e.faces.as_mut()) {
         for s in [
@@ -957,15 +966,45 @@ fn environment_from(
         return Ok(Environment::Color(Vec3::ZERO));
     };
     let given = e.color.is_some() as u8 + e.sky.unwrap_or(false) as u8 + e.faces.is_some() as u8;
+    if let Some(map) = &e.map {
+        if given > 0 {
+            bail!(
+                "{}: environment: map is the whole environment: give it without color, sky or \
+                 faces",
+                loc.at(map.span())
+            );
+        }
+        let strength = match &e.strength {
+            Some(s) if s.get_ref().0 < 0.0 => bail!(
+                "{}: environment strength must be 0 or more, not {}",
+                loc.at(s.span()),
+                numbers::show(s.get_ref().0)
+            ),
+            Some(s) => s.get_ref().f32(),
+            None => 1.0,
+        };
+        let rotate = e.rotate.as_ref().map_or(0.0, |r| r.get_ref().f32());
+        let light = map_from(src, loc, map, warnings)?;
+        return Ok(Environment::Light(Box::new(
+            light.scaled(strength).rotated(rotate),
+        )));
+    }
+    if let Some(n) = e.strength.as_ref().or(e.rotate.as_ref()) {
+        bail!(
+            "{}: environment: strength and rotate apply to a map",
+            loc.at(n.span())
+        );
+    }
     if given > 1 {
         bail!(
-            "{}: environment: give one of color, sky = true or faces",
+            "{}: environment: give one of color, sky = true, faces or map",
             path.display()
         );
     }
-    if e.color.is_none() && e.sky.is_none() && e.faces.is_none() {
+    if given == 0 && e.sky.is_none() {
         warnings.push(format!(
-            "{}: environment: none of color, sky = true or faces given; the background stays black",
+            "{}: environment: none of color, sky = true, faces or map given; the background \
+             stays black",
             path.display()
         ));
     }
@@ -1005,6 +1044,33 @@ fn environment_from(
     Ok(Environment::Color(e.color.map_or(Vec3::ZERO, |c| {
         loc.colour(&c, "environment color", warnings)
     })))
+}
+
+/// The environment light of `[environment] map`, beside the scene file;
+/// one outside its folder is warned about and read at arm's length.
+fn map_from(
+    src: &dyn Source,
+    loc: &Locator,
+    map: &Spanned<String>,
+    warnings: &mut Vec<String>,
+) -> Result<EnvLight> {
+    let here = loc.at(map.span());
+    let written = map.get_ref();
+    let p = resolve(
+        loc.path,
+        named(written, &format!("{here}: environment map"))?,
+    );
+    let outside = src.outside(loc.path, &p);
+    if let Some(o) = &outside {
+        warnings.push(o.warning(&here, "environment map", written));
+    }
+    let before = warnings.len();
+    let read = EnvLight::load(src, &p, warnings);
+    let read = match &outside {
+        Some(o) => o.quiet(Kind::Image, read, warnings, before),
+        None => read,
+    };
+    read.with_context(|| format!("{here}: environment map {}", quoted(written)))
 }
 
 /// Render settings, range-checked as the command line checks its options.

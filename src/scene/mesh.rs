@@ -14,7 +14,13 @@ use super::obj;
 use super::parts::{Parts, Placed};
 use super::source::{Kind, Source};
 use super::up::Up;
-use super::{Camera, Environment, Light, Material, Scene, Settings};
+use super::{Camera, EnvLight, Environment, Light, Material, Scene, Settings};
+
+/// The key light of a glTF file without lights, in Phong units (π times
+/// this in lux), and the radiance of its sky: a white matte surface
+/// facing both shows about 1.
+const DEFAULT_KEY: Vec3 = Vec3::splat(0.6);
+const DEFAULT_SKY: Vec3 = Vec3::splat(0.4);
 
 /// The mesh formats, by extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -142,14 +148,16 @@ fn read_placed(
 
 /// A bare mesh file: its own camera (the first, or the one named by
 /// `camera`) and lights where it has them (glTF), else the shared
-/// workload's auto camera and point light; moved next to the origin (and
-/// scaled) in f64 when far or huge ([`Frame`]).
+/// workload's auto camera and point light (none where `env_given`: the
+/// environment light the caller puts in lights it); moved next to the
+/// origin (and scaled) in f64 when far or huge ([`Frame`]).
 pub fn load_bare_from(
     src: &dyn Source,
     path: &Path,
     format: Format,
     camera: Option<&str>,
     up: Option<Up>,
+    env_given: bool,
 ) -> Result<Scene> {
     let mut parts = Parts::default();
     let xf = up.unwrap_or(format.up()).to_y();
@@ -237,14 +245,27 @@ pub fn load_bare_from(
             },
         })
         .collect();
-    // A file's own lights light it as authored; a file without lights
-    // gets a light and ambient light so that every face shows.
-    let ambient = if lights.is_empty() { 0.1 } else { 0.0 };
-    if lights.is_empty() {
+    // A file's own lights light it as authored. A file without lights
+    // gets a key light and, so that every face shows, ambient light (a
+    // Phong file) or a grey sky (a glTF file, whose metals show only
+    // what they reflect).
+    let unlit = lights.is_empty() && !env_given;
+    let sky = unlit && format == Format::Gltf;
+    let mut environment = Environment::Color(Vec3::ZERO);
+    let mut ambient = Vec3::ZERO;
+    if unlit {
+        let (key, fill) = match sky {
+            true => (DEFAULT_KEY, Vec3::ZERO),
+            false => (Vec3::ONE, Vec3::splat(0.1)),
+        };
         lights.push(Light::Point {
             position: Camera::auto_light(&b),
-            color: Vec3::ONE,
+            color: key,
         });
+        ambient = fill;
+    }
+    if sky {
+        environment = Environment::Light(Box::new(EnvLight::constant(DEFAULT_SKY)));
     }
     let name = path.display().to_string();
     Ok(Scene {
@@ -252,9 +273,9 @@ pub fn load_bare_from(
         name,
         camera,
         lights,
-        environment: Environment::Color(Vec3::ZERO),
+        environment,
         settings: Settings {
-            ambient: Vec3::splat(ambient),
+            ambient,
             ..Settings::default()
         },
         geometry: parts.geometry,

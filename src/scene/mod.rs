@@ -5,6 +5,7 @@
 pub mod bezier;
 pub mod builtin;
 pub mod camera;
+pub mod envlight;
 pub mod file;
 pub mod frame;
 pub mod gltf;
@@ -31,6 +32,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 pub use camera::{Camera, Projection};
+pub use envlight::EnvLight;
 pub use light::Light;
 pub use material::{Material, Pbr};
 pub use reach::check_reach;
@@ -99,6 +101,9 @@ pub struct MeshInfo {
 pub enum Environment {
     Color(Vec3),
     CubeMap(Box<CubeMap>),
+    /// An environment light: a constant or an equirectangular map, which
+    /// can also be sampled as a light.
+    Light(Box<EnvLight>),
 }
 
 /// Which BVH builder to use.
@@ -280,6 +285,9 @@ pub struct Opening {
     /// A bare mesh file's up axis, where not its format's
     /// ([`mesh::Format::up`]).
     pub up: Option<up::Up>,
+    /// An environment light in place of the scene's environment, whatever
+    /// the scene.
+    pub env: Option<envlight::EnvRequest>,
 }
 
 /// As [`load`], opened as `how` says, with the files read.
@@ -332,7 +340,24 @@ fn without_line(w: &str) -> String {
     w.to_string()
 }
 
+/// The scene `spec` names, opened as `how` says, with the files read.
 fn load_any(spec: &str, how: &Opening) -> Result<(Scene, Vec<PathBuf>)> {
+    let Some(env) = &how.env else {
+        return load_named(spec, how);
+    };
+    // The command line's own mistakes before a long load.
+    let disk = source::Disk::new(how.allow_outside);
+    let mut warnings = Vec::new();
+    let light = env.light(&disk, &mut warnings)?;
+    let (mut scene, mut read) = load_named(spec, how)?;
+    scene.environment = Environment::Light(Box::new(light));
+    scene.warnings.extend(warnings);
+    read.extend(disk.files());
+    Ok((scene, read))
+}
+
+/// [`load_any`] but for the environment light asked for.
+fn load_named(spec: &str, how: &Opening) -> Result<(Scene, Vec<PathBuf>)> {
     let camera = how.camera.as_deref();
     if let Some(scene) = builtin::load(spec)? {
         if let Some(name) = camera {
@@ -361,7 +386,7 @@ fn load_any(spec: &str, how: &Opening) -> Result<(Scene, Vec<PathBuf>)> {
         Some("toml") => file::load_with(&disk, path, file::Overrides::default()),
         _ if mesh::Format::of(path).is_some() => {
             let format = mesh::Format::of(path).unwrap_or(mesh::Format::Obj);
-            mesh::load_bare_from(&disk, path, format, camera, how.up)
+            mesh::load_bare_from(&disk, path, format, camera, how.up, how.env.is_some())
         }
         _ if !path.exists() => {
             bail!("unknown scene '{spec}': not a built-in (see `rayterm scenes`) and no such file")

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use super::{Light, Scene};
+use super::{Environment, Light, Scene};
 use crate::scene::numbers::show3;
 
 /// A light's colour or intensity, three channels or one where they agree.
@@ -91,6 +91,28 @@ pub fn explain(scene: &Scene) -> String {
     for l in &scene.lights {
         out += &format!("  {}\n", light(l));
     }
-    out += &format!("ambient: {}", value(scene.settings.ambient));
+    out += &format!("ambient: {}\n", value(scene.settings.ambient));
+    out += &format!("environment: {}", environment(&scene.environment));
     out
+}
+
+/// What rays leaving the scene see, and whether it lights the scene.
+fn environment(e: &Environment) -> String {
+    match e {
+        Environment::Color(c) => format!("background {} (lights nothing)", value(*c)),
+        Environment::CubeMap(_) => "cube map (seen and reflected; lights nothing)".into(),
+        Environment::Light(l) => {
+            let what = match (l.color(), l.map()) {
+                (Some(c), _) => format!("constant radiance {}", value(c)),
+                (_, Some(t)) => format!("map {} ({}x{})", t.name, t.width, t.height),
+                _ => "nothing".into(),
+            };
+            format!(
+                "light, {what}, strength {}, turned {}° about +Y, importance-sampled \
+                 (`--no environment` turns it off)",
+                l.strength(),
+                l.rotation()
+            )
+        }
+    }
 }

@@ -97,7 +97,7 @@ pub const TEXTURE_BUDGET: u64 = 1536 << 20;
 
 /// A decoder's error as one message: its text already holds its cause,
 /// which an error chain would repeat.
-fn image_error(e: image::ImageError) -> anyhow::Error {
+pub(super) fn image_error(e: image::ImageError) -> anyhow::Error {
     match e {
         // The decoder's own check of the header against the budget.
         image::ImageError::Limits(_) => anyhow::anyhow!(
@@ -109,7 +109,7 @@ fn image_error(e: image::ImageError) -> anyhow::Error {
 }
 
 /// Bytes a stored texel takes.
-const TEXEL_BYTES: u64 = std::mem::size_of::<Vec3>() as u64;
+pub(super) const TEXEL_BYTES: u64 = std::mem::size_of::<Vec3>() as u64;
 
 impl Texture {
     pub fn from_image(name: &str, img: image::DynamicImage, encoding: Encoding) -> Self {
@@ -180,7 +180,7 @@ impl Texture {
     }
 
     #[inline]
-    fn texel(&self, x: i64, y: i64) -> Vec3 {
+    pub(super) fn texel(&self, x: i64, y: i64) -> Vec3 {
         let x = self.wrap[0].index(x, self.width as i64);
         let y = self.wrap[1].index(y, self.height as i64);
         self.texels[y * self.width as usize + x]
@@ -208,7 +208,7 @@ impl Texture {
     }
 
     /// Bilinear lookup at pixel coordinates (texel centres at +0.5).
-    fn bilinear_px(&self, x: f32, y: f32) -> Vec3 {
+    pub(super) fn bilinear_px(&self, x: f32, y: f32) -> Vec3 {
         let (x, y) = (x - 0.5, y - 0.5);
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);

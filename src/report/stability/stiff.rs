@@ -184,6 +184,7 @@ pub fn bound(scene: &Scene) -> f32 {
     let env = match &scene.environment {
         Environment::Color(c) => c.max_element(),
         Environment::CubeMap(_) => 1.0,
+        Environment::Light(light) => light.brightest(),
     };
     let amb = scene.settings.ambient.max_element();
     (kd * (amb + lights) + ks * lights).max(env) / (1.0 - ks).max(1e-3)
