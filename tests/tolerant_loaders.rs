@@ -1,0 +1,66 @@
+//! Files other readers open as they are: OBJ vertices 32-bit floats cannot
+//! hold (the faces using them left out). Each opens, with a warning naming
+//! the file (and line), or, attacked (every face using such a vertex), is
+//! refused with a message naming it: through the loader with a deadline,
+//! and through the binary, which exits 1 without a panic.
+
+mod files;
+
+use files::{rayterm, within_deadline, Dir};
+use rayterm::scene::{self, Scene};
+
+fn load(spec: &str) -> Result<Scene, String> {
+    let s = spec.to_string();
+    within_deadline(spec, move || scene::load(&s).map_err(|e| format!("{e:#}")))
+}
+
+/// The load succeeds, with exactly the warnings `want`.
+fn warned(spec: &str, want: &[String]) -> Scene {
+    let s = load(spec).unwrap_or_else(|e| panic!("{spec}: {e}"));
+    assert_eq!(s.warnings, want, "{spec}");
+    s
+}
+
+/// The binary refuses `file`: exit status 1, a message holding every one
+/// of `parts`, no panic.
+fn refused(d: &Dir, file: &str, parts: &[&str]) {
+    let out = d.path("out.png");
+    let args = ["render", file, "--size", "8x6", "--spp", "1", "-o"];
+    let r = rayterm(&d.0, &[&args[..], &[out.to_str().unwrap()]].concat());
+    assert_eq!(r.code, Some(1), "{file}: {}", r.stderr);
+    assert!(!r.stderr.contains("panicked"), "{file}: {}", r.stderr);
+    for p in parts {
+        assert!(
+            r.stderr.contains(p),
+            "{file}: '{p}' missing in: {}",
+            r.stderr
+        );
+    }
+}
+
+const QUAD: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+
+#[test]
+fn obj_faces_using_vertices_beyond_f32_are_left_out() {
+    let d = Dir::new("tolerant-nonfinite");
+    let obj = d.write(
+        "nan.obj",
+        format!("{QUAD}v inf nan 0\nv 1e39 0 0\nv 2 0 0 1.#IND\nf 1 2 5\nf 2 6 3\nf 7 3 4\n"),
+    );
+    let s = warned(
+        &obj,
+        &[format!(
+            "{obj}:6: vertex 'inf' is not a finite number (and 2 more vertices like it): 3 \
+             faces using them skipped"
+        )],
+    );
+    assert_eq!(s.geometry.indices.len(), 2);
+    assert!(s.geometry.positions.iter().all(|p| p.is_finite()));
+    // Every face uses one: nothing left to draw, and said why.
+    let all = d.write("all.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    refused(
+        &d,
+        &all,
+        &[&format!("{all}: no triangles ({all}:1: vertex 'nan' is not a finite number: 1 face using it skipped)")],
+    );
+}
