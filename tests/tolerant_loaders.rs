@@ -1,12 +1,14 @@
 //! Files other readers open as they are: OBJ vertices 32-bit floats cannot
-//! hold (the faces using them left out). Each opens, with a warning naming
-//! the file (and line), or, attacked (every face using such a vertex), is
+//! hold (the faces using them left out), OBJ and MTL text in UTF-16. Each
+//! opens, with a warning naming the file (and line), or, attacked (every
+//! face using such a vertex, a byte-order mark and nothing else), is
 //! refused with a message naming it: through the loader with a deadline,
 //! and through the binary, which exits 1 without a panic.
 
 mod files;
 
 use files::{rayterm, within_deadline, Dir};
+use glam::Vec3;
 use rayterm::scene::{self, Scene};
 
 fn load(spec: &str) -> Result<Scene, String> {
@@ -38,6 +40,16 @@ fn refused(d: &Dir, file: &str, parts: &[&str]) {
     }
 }
 
+/// Text as UTF-16 with its byte-order mark.
+fn utf16(text: &str, big: bool) -> Vec<u8> {
+    let mark: &[u8] = if big { &[0xFE, 0xFF] } else { &[0xFF, 0xFE] };
+    let units = text.encode_utf16().flat_map(|u| match big {
+        true => u.to_be_bytes(),
+        false => u.to_le_bytes(),
+    });
+    mark.iter().copied().chain(units).collect()
+}
+
 const QUAD: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
 
 #[test]
@@ -63,4 +75,35 @@ fn obj_faces_using_vertices_beyond_f32_are_left_out() {
         &all,
         &[&format!("{all}: no triangles ({all}:1: vertex 'nan' is not a finite number: 1 face using it skipped)")],
     );
+}
+
+#[test]
+fn utf16_obj_and_mtl_files_are_decoded() {
+    let d = Dir::new("tolerant-utf16");
+    let mtl = "newmtl rouge\r\nKd 1 0 0\r\n";
+    let obj = format!(
+        "mtllib m.mtl\r\nusemtl rouge\r\n{}",
+        QUAD.replace('\n', "\r\n")
+    );
+    for big in [false, true] {
+        let order = if big { "big-endian" } else { "little-endian" };
+        let m = d.write("m.mtl", utf16(mtl, big));
+        let o = d.write("m.obj", utf16(&obj, big));
+        let said =
+            |f: &str| format!("{f}: UTF-16 text ({order}, as its byte-order mark says): decoded");
+        let s = warned(&o, &[said(&o), said(&m)]);
+        assert_eq!(s.geometry.indices.len(), 2);
+        assert_eq!(s.materials[s.geometry.tri_material[0] as usize].kd, Vec3::X);
+    }
+    // A UTF-8 mark goes without a word.
+    let o = d.write("utf8.obj", format!("\u{feff}{QUAD}"));
+    warned(&o, &[]);
+    // A mark and nothing else, or an odd byte after it: an empty file.
+    for (name, bytes) in [
+        ("mark.obj", vec![0xFF, 0xFE]),
+        ("odd.obj", vec![0xFE, 0xFF, b'v']),
+    ] {
+        let o = d.write(name, bytes);
+        refused(&d, &o, &[&format!("{o}: no triangles ({o}: UTF-16 text")]);
+    }
 }

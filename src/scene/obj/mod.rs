@@ -11,9 +11,10 @@
 //! those defined (the face is read without them), faces of fewer than three
 //! vertices (skipped), a vertex whose coordinates f32 cannot hold (the
 //! faces using it skipped), a vertex colour that is not a number (none),
-//! text that is not UTF-8 (read lossily). Vertex colours (`v x y z r g b`)
-//! are the diffuse colour. Points and lines (`p`, `l`) and smoothing groups
-//! are ignored; other statements are ignored with one warning per file.
+//! text that is not UTF-8 (read lossily) or is UTF-16 (decoded). Vertex
+//! colours (`v x y z r g b`) are the diffuse colour. Points and lines (`p`,
+//! `l`) and smoothing groups are ignored; other statements are ignored with
+//! one warning per file.
 //! Materials come from the `mtllib` files ([`super::mtl`]); a missing MTL
 //! or texture is a warning.
 
