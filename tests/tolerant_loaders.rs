@@ -1,9 +1,11 @@
 //! Files other readers open as they are: OBJ vertices 32-bit floats cannot
-//! hold (the faces using them left out), OBJ and MTL text in UTF-16. Each
-//! opens, with a warning naming the file (and line), or, attacked (every
-//! face using such a vertex, a byte-order mark and nothing else), is
-//! refused with a message naming it: through the loader with a deadline,
-//! and through the binary, which exits 1 without a panic.
+//! hold (the faces using them left out), OBJ and MTL text in UTF-16, PLY
+//! triangle strips and faces of fewer than three vertices. Each opens, with
+//! a warning naming the file (and line), or, attacked (every face using
+//! such a vertex, a byte-order mark and nothing else, huge counts, cut
+//! files, strips of nothing but restarts), is refused with a message naming
+//! it: through the loader with a deadline, and through the binary, which
+//! exits 1 without a panic.
 
 mod files;
 
@@ -106,4 +108,65 @@ fn utf16_obj_and_mtl_files_are_decoded() {
         let o = d.write(name, bytes);
         refused(&d, &o, &[&format!("{o}: no triangles ({o}: UTF-16 text")]);
     }
+}
+
+const STRIP_HEAD: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n\
+                          property float y\nproperty float z\nelement tristrips 1\n\
+                          property list int int vertex_indices\nend_header\n\
+                          0 0 0\n1 0 0\n0 1 0\n1 1 0\n";
+
+#[test]
+fn ply_triangle_strips_and_short_faces_are_read_as_other_readers_read_them() {
+    let d = Dir::new("tolerant-ply");
+    let p = d.write("strip.ply", format!("{STRIP_HEAD}4 0 1 2 3\n"));
+    let s = warned(&p, &[]);
+    assert_eq!(s.geometry.indices, [[0, 1, 2], [2, 1, 3]]);
+    let face = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+                property float z\nelement face 3\nproperty list uchar int vertex_indices\n\
+                end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 1\n4 0 1 2 3\n0\n";
+    let p = d.write("short.ply", face);
+    let s = warned(
+        &p,
+        &[format!(
+            "{p}:14: element face 0: a face of 2 vertices (and 1 more of fewer than 3): skipped"
+        )],
+    );
+    assert_eq!(s.geometry.indices.len(), 2);
+    // Attacked: nothing but restarts, an index past the vertices, a count
+    // past the file (ASCII; binary, where it is past memory too).
+    for (name, body, want) in [
+        ("restarts.ply", "3 -1 -1 -1\n", "no triangles"),
+        (
+            "range.ply",
+            "3 0 1 4\n",
+            ":14: element tristrips 0 (of 1), vertex_indices: vertex index 4 is out of range",
+        ),
+        (
+            "long.ply",
+            "1000 0 1 2\n",
+            ":14: element tristrips 0 (of 1), vertex_indices: the line ends",
+        ),
+    ] {
+        let p = d.write(name, format!("{STRIP_HEAD}{body}"));
+        refused(&d, &p, &[&p, want]);
+    }
+    let mut binary = STRIP_HEAD
+        .split_once("end_header\n")
+        .unwrap()
+        .0
+        .replace("ascii", "binary_little_endian")
+        .into_bytes();
+    binary.extend(b"end_header\n");
+    binary.extend([0f32; 12].iter().flat_map(|x| x.to_le_bytes()));
+    binary.extend(i32::MAX.to_le_bytes());
+    binary.extend(1i32.to_le_bytes());
+    let p = d.write("cut.ply", &binary);
+    refused(
+        &d,
+        &p,
+        &[
+            &format!("{p} (byte "),
+            "element tristrips 0 (of 1), vertex_indices: ",
+        ],
+    );
 }
