@@ -1,17 +1,20 @@
 //! Files other readers open as they are: OBJ vertices 32-bit floats cannot
 //! hold (the faces using them left out), OBJ and MTL text in UTF-16, PLY
-//! triangle strips and faces of fewer than three vertices. Each opens, with
-//! a warning naming the file (and line), or, attacked (every face using
-//! such a vertex, a byte-order mark and nothing else, huge counts, cut
-//! files, strips of nothing but restarts), is refused with a message naming
-//! it: through the loader with a deadline, and through the binary, which
-//! exits 1 without a panic.
+//! triangle strips and faces of fewer than three vertices, `map_Kd` options
+//! and escaped spaces. Each opens with a warning naming the file (and
+//! line), as does a `map_Kd` of options without a name; attacked (every
+//! face using such a vertex, a byte-order mark and nothing else, huge
+//! counts, cut files, strips of nothing but restarts), it is refused with a
+//! message naming it: through the loader with a deadline, and through the
+//! binary, which exits 1 without a panic.
 
 mod files;
 
 use files::{rayterm, within_deadline, Dir};
 use glam::Vec3;
-use rayterm::scene::{self, Scene};
+use rayterm::scene::{self, Scene, Wrap};
+
+const CHECKER: &[u8] = include_bytes!("../data/meshes/checker.png");
 
 fn load(spec: &str) -> Result<Scene, String> {
     let s = spec.to_string();
@@ -169,4 +172,49 @@ fn ply_triangle_strips_and_short_faces_are_read_as_other_readers_read_them() {
             "element tristrips 0 (of 1), vertex_indices: ",
         ],
     );
+}
+
+#[test]
+fn map_kd_options_and_escaped_spaces_are_read() {
+    let d = Dir::new("tolerant-mtl");
+    d.write("my texture.png", CHECKER);
+    d.write(
+        "m.mtl",
+        "newmtl a\nmap_Kd -s 1 1 1 -o 0 0 0 -bm 0.5 -clamp on my\\ texture.png\n\
+         newmtl b\nmap_Kd -blendu off -colorspace sRGB my texture.png\n\
+         newmtl c\nKd 0.5 0.5 0.5\nmap_Kd -clamp on -s 2 2\n",
+    );
+    let o = d.write(
+        "m.obj",
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 2 0\nvt 0 2\n\
+         usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 1/1 3/3 2/2\nusemtl c\nf 1 2 3\n",
+    );
+    let m = d.path("m.mtl").display().to_string();
+    let s = warned(
+        &o,
+        &[
+            format!("{m}:2: map_Kd options ignored: -s 1 1 1, -o 0 0 0, -bm 0.5 (the texture is applied as is)"),
+            format!("{m}:4: map_Kd options ignored: -blendu off, -colorspace sRGB (the texture is applied as is)"),
+            format!("{m}:7: map_Kd names no file: ignored (Kd is used)"),
+        ],
+    );
+    let wrap = |name: &str| {
+        let m = s.materials.iter().find(|m| m.name == name).unwrap();
+        m.texture.map(|t| s.textures[t as usize].wrap)
+    };
+    // One image, its texels held once, clamped where `-clamp on` says so.
+    assert_eq!(wrap("a"), Some([Wrap::Clamp; 2]));
+    assert_eq!(wrap("b"), Some([Wrap::Repeat; 2]));
+    assert_eq!(wrap("c"), None);
+    let [a, b] = ["a", "b"].map(|n| {
+        let t = s
+            .materials
+            .iter()
+            .find(|m| m.name == n)
+            .unwrap()
+            .texture
+            .unwrap();
+        s.textures[t as usize].texels.clone()
+    });
+    assert!(std::sync::Arc::ptr_eq(&a, &b));
 }

@@ -35,7 +35,7 @@ use super::numbers::{self, show3, Absurd};
 use super::parts::mesh_fits;
 use super::polygon::Triangulator;
 use super::source::{resolve, text_lossy, Kind, ReadError, Source};
-use super::texture::srgb_to_linear;
+use super::texture::{srgb_to_linear, Wrap};
 use super::Material;
 use crate::memory;
 use piece::{Budget, Out, Piece, Switch, Tally, Unusable};
@@ -716,7 +716,14 @@ fn convert_material(
     let d = Material::default();
     let texture = m.map_kd.as_ref().and_then(|(file, line)| {
         let from = format!("{}:{line}", mtl_path.display());
-        parts.texture(src, mtl_path, file, &from)
+        let id = parts.texture(src, mtl_path, file, &from)?;
+        if !m.clamp {
+            return Some(id);
+        }
+        // `-clamp on`: a texture of its own, its texels shared.
+        let mut t = parts.textures[id as usize].clone();
+        t.wrap = [Wrap::Clamp; 2];
+        Some(parts.add_texture(t))
     });
     Material {
         name: m.name.clone(),
