@@ -295,6 +295,139 @@ fn sparse_accessors_are_read_with_their_substitutions() {
 }
 
 #[test]
+fn accessors_without_a_view_are_zeros() {
+    let d = Dir::new("gltf-viewless");
+    let (mut json, mut bin) = quad();
+    // Positions on a zero base, three of them moved by sparse values: the
+    // first corner stays at the origin.
+    let moved = bin.put(&[1u8, 2, 3]);
+    let values = bin.put(&f32s(&[1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.0]));
+    json["accessors"][0] = json!({"componentType": 5126, "count": 4, "type": "VEC3",
+        "min": [0, 0, 0], "max": [1, 1, 0],
+        "sparse": {"count": 3, "indices": {"bufferView": moved, "componentType": 5121},
+                   "values": {"bufferView": values}}});
+    // Neither a view nor sparse values: zeros, as glTF says.
+    let uv = accessor(
+        &mut json,
+        json!({"componentType": 5126, "count": 4, "type": "VEC2"}),
+    );
+    json["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = uv.into();
+    let s = load(&d.write("zeros.glb", glb(&json, &bin))).unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let g = &s.geometry;
+    assert_eq!(
+        g.positions,
+        [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y]
+    );
+    assert_eq!(g.indices, [[0, 1, 2], [0, 2, 3]]);
+    // glTF's v runs down the image, rayterm's up.
+    assert_eq!(g.uvs, [Vec2::Y; 4]);
+
+    // Positions all zeros: a file of nothing but degenerate triangles.
+    let mut flat = json.clone();
+    flat["accessors"][0] = json!({"componentType": 5126, "count": 4, "type": "VEC3",
+        "min": [0, 0, 0], "max": [0, 0, 0]});
+    let e = load(&d.write("flat.glb", glb(&flat, &bin))).unwrap_err();
+    assert!(
+        e.contains("flat.glb: no triangles (mesh 0 (node 0): skipped 2 degenerate"),
+        "{e}"
+    );
+    // Without a view, counts are still checked before anything is
+    // allocated for them.
+    let mut huge = flat.clone();
+    huge["accessors"][0]["count"] = 4_000_000_000u64.into();
+    huge["meshes"][0]["primitives"][0]["attributes"] = json!({"POSITION": 0});
+    let e = load(&d.write("huge.glb", glb(&huge, &bin))).unwrap_err();
+    assert!(
+        e.contains("huge.glb: its meshes, each instance counted: 2 triangles and 4000000000 vertices would need"),
+        "{e}"
+    );
+    let mut many = json.clone();
+    many["accessors"][uv]["count"] = 1_000_000_000_000u64.into();
+    let e = load(&d.write("many.glb", glb(&many, &bin))).unwrap_err();
+    assert!(
+        e.contains(&format!(
+            "TEXCOORD_0 (accessor {uv}) has 1000000000000 values for 4 positions"
+        )),
+        "{e}"
+    );
+
+    // A primitive without POSITION is not drawn, as glTF asks; the mesh's
+    // others are.
+    let mut partial = json.clone();
+    partial["meshes"][0]["primitives"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"attributes": {"TEXCOORD_0": uv}}));
+    let s = load(&d.write("partial.glb", glb(&partial, &bin))).unwrap();
+    assert_eq!(s.geometry.indices.len(), 2);
+    assert!(
+        warned(&s, "partial.glb: not shown, rayterm has no equivalent: primitives without POSITION (mesh 0 primitive 1)"),
+        "{:?}",
+        s.warnings
+    );
+    // A missing field glTF requires is still refused.
+    let mut typeless = json.clone();
+    typeless["accessors"][uv]
+        .as_object_mut()
+        .unwrap()
+        .remove("type");
+    let e = load(&d.write("typeless.glb", glb(&typeless, &bin))).unwrap_err();
+    assert!(e.contains("typeless.glb: not a valid glTF file"), "{e}");
+}
+
+#[test]
+fn accessors_not_aligned_to_their_components_are_read_with_a_warning() {
+    let d = Dir::new("gltf-misaligned");
+    let (plain, _) = quad();
+    let mut json = plain.clone();
+    let mut bin = Bin::default();
+    // Positions one byte into their view, indices one byte into theirs.
+    let p = bin.put(&[[7u8].as_slice(), &f32s(&QUAD)].concat());
+    let i = bin.put(&[[7u8].as_slice(), &u16s(&[0, 1, 2, 0, 2, 3])].concat());
+    json["accessors"][0]["bufferView"] = p.into();
+    json["accessors"][0]["byteOffset"] = 1.into();
+    json["accessors"][1]["bufferView"] = i.into();
+    json["accessors"][1]["byteOffset"] = 1.into();
+    let s = load(&d.write("misaligned.glb", glb(&json, &bin))).unwrap();
+    let (_, aligned) = quad();
+    let reference = load(&d.write("aligned.glb", glb(&plain, &aligned))).unwrap();
+    assert_eq!(s.geometry.positions, reference.geometry.positions);
+    assert_eq!(s.geometry.indices, reference.geometry.indices);
+    assert_eq!(
+        s.warnings,
+        [format!(
+            "{}: mesh 0 primitive 0 (node 0): POSITION (accessor 0): its elements are not \
+             aligned to their 4-byte components (offset 1, stride 12), which glTF requires \
+             (and 1 more accessor): read all the same",
+            d.path("misaligned.glb").display()
+        )]
+    );
+    // A stride that is no multiple of the components is read alike.
+    let mut strided = plain.clone();
+    let mut bin = Bin::default();
+    let mut bytes = Vec::new();
+    for v in QUAD.chunks(3) {
+        bytes.extend(f32s(v));
+        bytes.push(0);
+    }
+    let p = bin.put(&bytes);
+    bin.views[p]["byteStride"] = 13.into();
+    bin.put(&u16s(&[0, 1, 2, 0, 2, 3]));
+    strided["accessors"][0]["bufferView"] = p.into();
+    let s = load(&d.write("strided.glb", glb(&strided, &bin))).unwrap();
+    assert_eq!(s.geometry.positions, reference.geometry.positions);
+    assert!(
+        warned(
+            &s,
+            "(offset 0, stride 13), which glTF requires: read all the same"
+        ),
+        "{:?}",
+        s.warnings
+    );
+}
+
+#[test]
 fn quantized_attributes_are_read_as_normalised_or_plain_integers() {
     let d = Dir::new("gltf-quantized");
     let (mut json, mut bin) = quad();

@@ -6,8 +6,8 @@
 //!
 //! And of the loaders: a byte-order mark, CRLF or CR-only line endings and
 //! line continuations change nothing; a w component (a curve weight) is
-//! ignored; a number beyond f32 (huge exponents) is an error at its line
-//! and one within f32 loads; a mesh far from the origin loads as
+//! ignored; a vertex beyond f32 (huge exponents) leaves out the faces
+//! that use it, with a warning at its line, and one within f32 loads; a mesh far from the origin loads as
 //! it does near it; TOML arrays of the wrong length are errors at their
 //! position.
 
@@ -350,7 +350,7 @@ proptest! {
     }
 
     #[test]
-    fn numbers_beyond_f32_are_errors_at_their_line(
+    fn vertices_beyond_f32_leave_out_the_faces_using_them(
         pts in points(),
         which in any::<prop::sample::Index>(),
         mantissa in 1.0f64..9.99,
@@ -361,13 +361,31 @@ proptest! {
             false => plain(i, p),
             true => format!("v {} {mantissa}e{exponent} {}", p.x, p.z),
         });
-        let e = load_obj(text).expect_err("beyond f32");
-        let at = format!("m.obj:{}: ", bad + 1);
-        prop_assert!(e.starts_with(&at), "{}", e);
+        // As the file without the faces that use the vertex.
+        let n = pts.len() as i64;
+        let uses_bad = |face: &str| {
+            face.split_whitespace().skip(1).any(|w| {
+                let k: i64 = w.parse().unwrap();
+                (if k > 0 { k - 1 } else { n + k }) == bad as i64
+            })
+        };
+        let without: String = text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !(l.starts_with("f ") && uses_bad(l)))
+            .map(|(i, l)| if i == bad { "v 0 0 0\n".to_string() } else { format!("{l}\n") })
+            .collect();
+        prop_assert_eq!(load_obj(text.clone()), load_obj(without));
+        let mut parts = Parts::default();
+        let src = Memory::default().with("m.obj", text);
+        obj::load_into(&mut parts, &src, std::path::Path::new("m.obj"), &Placement::default(), None)
+            .map_err(|e| TestCaseError::fail(format!("{e:#}")))?;
+        let at = format!("m.obj:{}: vertex ", bad + 1);
         prop_assert!(
-            ["32-bit floats", "not a finite number"].iter().any(|w| e.contains(w)),
-            "{}",
-            e
+            parts.warnings.iter().any(|w| w.starts_with(&at)
+                && ["32-bit floats", "not a finite number"].iter().any(|k| w.contains(k))),
+            "{:?}",
+            parts.warnings
         );
     }
 

@@ -665,7 +665,10 @@ impl<'a> Tracer<'a> {
         rec: &mut R,
     ) -> Vec3 {
         rec.begin_light(self.scene.lights.len(), "environment");
-        let m = ((self.scene.settings.light_samples.max(1) as f32).sqrt().ceil() as u32).max(1);
+        let m = ((self.scene.settings.light_samples.max(1) as f32)
+            .sqrt()
+            .ceil() as u32)
+            .max(1);
         let n = m * m;
         let mut sum = Vec3::ZERO;
         for k in 0..n {

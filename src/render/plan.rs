@@ -240,7 +240,8 @@ impl Plan {
                 .iter()
                 .any(|m| m.reflective() && m.dissolve < 1.0);
         // An environment light is sampled at every hit.
-        let env_light = on(Feature::Environment) && matches!(scene.environment, Environment::Light(_));
+        let env_light =
+            on(Feature::Environment) && matches!(scene.environment, Environment::Light(_));
         let deterministic = !(on(Feature::Supersampling)
             || on(Feature::Glossy)
             || env_light

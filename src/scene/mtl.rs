@@ -1,9 +1,10 @@
 //! Wavefront MTL material libraries: the Phong subset rayterm renders.
 //!
 //! `Kd`, `Ks` (one number for grey or three for RGB), `Ns`, `d` and
-//! `map_Kd` are used; `Ka`, `Tf`, `Ni`, `illum` and `sharpness` are checked
-//! and ignored (the ambient term is the scene's, there is no refraction);
-//! a non-black `Ke`, `Tr`, the other texture maps, texture options and
+//! `map_Kd` (with `-clamp`) are used; `Ka`, `Tf`, `Ni`, `illum` and
+//! `sharpness` are checked and ignored (the ambient term is the scene's,
+//! there is no refraction); a non-black `Ke`, `Tr`, the other texture
+//! maps, other texture options (skipped with the values each takes) and
 //! unknown statements are ignored with one warning per file. Malformed
 //! statements are errors naming the file and line; negative colours and
 //! out-of-range `Ns` or `d` are warnings.
@@ -24,56 +25,111 @@ pub struct MtlMaterial {
     pub ks: Option<Vec3>,
     pub ns: Option<f32>,
     pub dissolve: Option<f32>,
-    /// The `map_Kd` file as written (options removed) and its line.
+    /// The `map_Kd` file as written (options removed, escaped spaces
+    /// unescaped) and its line.
     pub map_kd: Option<(String, usize)>,
+    /// `map_Kd -clamp on`: the texture clamped rather than repeated.
+    pub clamp: bool,
 }
 
-/// Texture options (`-s 2 2 1`) and how many values each takes; the
-/// position, scale and turbulence ones take one to three numbers.
-const TEXTURE_OPTIONS: &[(&str, usize)] = &[
-    ("-blendu", 1),
-    ("-blendv", 1),
-    ("-bm", 1),
-    ("-boost", 1),
-    ("-cc", 1),
-    ("-clamp", 1),
-    ("-imfchan", 1),
-    ("-mm", 2),
-    ("-o", 3),
-    ("-s", 3),
-    ("-t", 3),
-    ("-texres", 1),
-    ("-type", 1),
+/// What a texture option takes after its name.
+#[derive(Clone, Copy)]
+enum Takes {
+    /// Up to this many numbers (`-o 0.5` or `-o 0.5 0.5 0`).
+    Numbers(usize),
+    /// `on` or `off`.
+    Switch,
+    /// One word (`-type sphere`, `-imfchan r`).
+    Word,
+}
+
+/// The texture options of the MTL format, and `-colorspace`
+/// (tinyobjloader's).
+const TEXTURE_OPTIONS: &[(&str, Takes)] = &[
+    ("-blendu", Takes::Switch),
+    ("-blendv", Takes::Switch),
+    ("-bm", Takes::Numbers(1)),
+    ("-boost", Takes::Numbers(1)),
+    ("-cc", Takes::Switch),
+    ("-clamp", Takes::Switch),
+    ("-colorspace", Takes::Word),
+    ("-imfchan", Takes::Word),
+    ("-mm", Takes::Numbers(2)),
+    ("-o", Takes::Numbers(3)),
+    ("-s", Takes::Numbers(3)),
+    ("-t", Takes::Numbers(3)),
+    ("-texres", Takes::Numbers(1)),
+    ("-type", Takes::Word),
 ];
 
-/// Splits `map_Kd` arguments into the options (as written) and the file
-/// name, which may hold spaces.
-fn texture_args(rest: &str) -> (Vec<String>, &str) {
-    let mut options = Vec::new();
+/// A texture statement's arguments.
+#[derive(Debug, PartialEq)]
+struct TextureArgs {
+    /// The options rayterm does not use, as written.
+    ignored: Vec<String>,
+    /// `-clamp on` (or `off`), the last one written.
+    clamp: Option<bool>,
+    /// The file name, which may hold spaces, a backslash before one
+    /// escaping it (`my\ texture.png`).
+    file: String,
+}
+
+/// Splits texture statement arguments into options, each with the values
+/// it takes, and the file name. An option's values end early at a word
+/// that is not one (`-o 0.5 t.png`).
+fn texture_args(rest: &str) -> TextureArgs {
+    let mut args = TextureArgs {
+        ignored: Vec::new(),
+        clamp: None,
+        file: String::new(),
+    };
+    // The first word of `rest`, taken off it.
+    fn word(rest: &mut &str) -> String {
+        let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
+        let w = rest[..end].to_string();
+        *rest = rest[end..].trim_start();
+        w
+    }
     let mut rest = rest.trim_start();
     while rest.starts_with('-') {
-        let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
-        let name = &rest[..end];
-        let takes = TEXTURE_OPTIONS
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map_or(0, |(_, k)| *k);
-        let numeric = matches!(name, "-o" | "-s" | "-t");
-        let mut option = name.to_string();
-        rest = rest[end..].trim_start();
-        for i in 0..takes {
-            let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
-            let value = &rest[..end];
-            if value.is_empty() || (numeric && i > 0 && value.parse::<f64>().is_err()) {
-                break;
+        let name = word(&mut rest);
+        let takes = TEXTURE_OPTIONS.iter().find(|(n, _)| *n == name);
+        let next = rest.split_whitespace().next().unwrap_or("");
+        let mut values = Vec::new();
+        match takes.map(|(_, t)| *t) {
+            Some(Takes::Numbers(most)) => {
+                while values.len() < most
+                    && rest
+                        .split_whitespace()
+                        .next()
+                        .is_some_and(|w| w.parse::<f64>().is_ok())
+                {
+                    values.push(word(&mut rest));
+                }
             }
-            option.push(' ');
-            option.push_str(value);
-            rest = rest[end..].trim_start();
+            Some(Takes::Switch) if ["on", "off"].contains(&next) => values.push(word(&mut rest)),
+            Some(Takes::Word) if !next.is_empty() => values.push(word(&mut rest)),
+            _ => {}
         }
-        options.push(option);
+        match (name.as_str(), values.first().map(String::as_str)) {
+            ("-clamp", Some(v)) => args.clamp = Some(v == "on"),
+            _ => args.ignored.push(
+                [name]
+                    .into_iter()
+                    .chain(values)
+                    .collect::<Vec<_>>()
+                    .join(" "),
+            ),
+        }
     }
-    (options, rest.trim_end())
+    let mut chars = rest.trim_end().chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '\\' if chars.peek().is_some_and(|n| n.is_whitespace()) => {}
+            c => args.file.push(c),
+        }
+    }
+    args
 }
 
 /// Statements ignored in one file, for one warning: name, first line,
@@ -244,7 +300,11 @@ pub fn parse(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Vec<
             }
             "illum" => {}
             "map_Kd" => {
-                let (options, file) = texture_args(rest);
+                let TextureArgs {
+                    ignored: options,
+                    clamp,
+                    file,
+                } = texture_args(rest);
                 // As a missing texture: the material keeps its Kd.
                 if file.trim_matches('"').trim().is_empty() {
                     warnings.push(format!(
@@ -260,7 +320,8 @@ pub fn parse(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Vec<
                         quoted(&options.join(", "))
                     ));
                 }
-                m.map_kd = Some((file.to_string(), n));
+                m.map_kd = Some((file, n));
+                m.clamp = clamp == Some(true);
             }
             other => ignored.note(other, n),
         }
@@ -359,6 +420,64 @@ mod tests {
         assert_eq!(
             parse_ok("newmtl a\nKd 0.5\n").0[0].kd,
             Some(Vec3::splat(0.5))
+        );
+    }
+
+    #[test]
+    fn texture_options_take_their_values_and_escaped_spaces_are_spaces() {
+        let args = |ignored: &[&str], clamp, file: &str| TextureArgs {
+            ignored: ignored.iter().map(|s| s.to_string()).collect(),
+            clamp,
+            file: file.into(),
+        };
+        for (written, want) in [
+            ("my\\ texture.png", args(&[], None, "my texture.png")),
+            ("a\\  b.png ", args(&[], None, "a  b.png")),
+            (
+                "-s 1 1 1 -o 0 0 0 -bm 0.5 tex.png",
+                args(&["-s 1 1 1", "-o 0 0 0", "-bm 0.5"], None, "tex.png"),
+            ),
+            (
+                "-blendu off -blendv on -cc off -colorspace sRGB -type sphere -imfchan r \
+                 -mm 0 1 -texres 512 -boost 2 -t 1 2 my\\ t.png",
+                args(
+                    &[
+                        "-blendu off",
+                        "-blendv on",
+                        "-cc off",
+                        "-colorspace sRGB",
+                        "-type sphere",
+                        "-imfchan r",
+                        "-mm 0 1",
+                        "-texres 512",
+                        "-boost 2",
+                        "-t 1 2",
+                    ],
+                    None,
+                    "my t.png",
+                ),
+            ),
+            ("-clamp on t.png", args(&[], Some(true), "t.png")),
+            (
+                "-clamp on -clamp off t.png",
+                args(&[], Some(false), "t.png"),
+            ),
+            // Values end where a word is not one.
+            ("-s 2 t.png", args(&["-s 2"], None, "t.png")),
+            ("-clamp t.png", args(&["-clamp"], None, "t.png")),
+            ("-foo t.png", args(&["-foo"], None, "t.png")),
+            ("-o 1 -clamp on", args(&["-o 1"], Some(true), "")),
+            ("", args(&[], None, "")),
+        ] {
+            assert_eq!(texture_args(written), want, "{written}");
+        }
+        let (m, w) =
+            parse_ok("newmtl a\nmap_Kd -clamp on -bm 2 my\\ t.png\nnewmtl b\nmap_Kd b.png\n");
+        assert_eq!(m[0].map_kd, Some(("my t.png".into(), 2)));
+        assert!(m[0].clamp && !m[1].clamp);
+        assert_eq!(
+            w,
+            ["m.mtl:2: map_Kd options ignored: -bm 2 (the texture is applied as is)"]
         );
     }
 

@@ -20,6 +20,19 @@ pub fn unusable(x: f64) -> Option<&'static str> {
     }
 }
 
+/// Whether `word` is how the C runtimes of Windows print a number that is
+/// not finite (`1.#INF`, `-1.#IND`, `1.#QNAN`, `-nan(ind)`), which Rust
+/// does not read as a number.
+pub fn spelled_not_finite(word: &str) -> bool {
+    let w = word.trim_start_matches(['-', '+']).to_ascii_lowercase();
+    match w.strip_prefix("1.#") {
+        Some(kind) => ["inf", "ind", "qnan", "snan"]
+            .iter()
+            .any(|k| kind.starts_with(k) && kind[k.len()..].bytes().all(|b| b.is_ascii_digit())),
+        None => w.starts_with("nan(") && w.ends_with(')'),
+    }
+}
+
 /// Parses one number: an error message (without the location) when it is
 /// not a number or [`unusable`].
 pub fn parse(word: &str) -> Result<f64, String> {
@@ -125,6 +138,25 @@ mod tests {
         assert!(parse("1e39")
             .unwrap_err()
             .contains("32-bit floats are finite only"));
+    }
+
+    #[test]
+    fn windows_spellings_of_infinity_and_nan_are_known() {
+        for w in [
+            "1.#INF",
+            "-1.#INF",
+            "1.#IND",
+            "-1.#IND",
+            "1.#QNAN",
+            "1.#QNAN0",
+            "-nan(ind)",
+            "nan(snan)",
+        ] {
+            assert!(spelled_not_finite(w), "{w}");
+        }
+        for w in ["1.#", "1.#INFX", "2.#INF", "nan(", "1.5", "#IND", "x"] {
+            assert!(!spelled_not_finite(w), "{w}");
+        }
     }
 
     #[test]

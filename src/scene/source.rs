@@ -298,8 +298,12 @@ pub fn text(path: &Path, mut bytes: Vec<u8>) -> Result<String> {
 /// [`text`], with invalid UTF-8 read as U+FFFD and said in one warning
 /// naming the first line where it is: for OBJ and MTL files, which tools
 /// write in Latin-1 and other code pages as often as in UTF-8, and which
-/// other readers take byte by byte.
+/// other readers take byte by byte. Text with a UTF-16 byte-order mark is
+/// decoded as such ([`utf16`]).
 pub(crate) fn text_lossy(path: &Path, mut bytes: Vec<u8>, warnings: &mut Vec<String>) -> String {
+    if let Some(s) = utf16(path, &bytes, warnings) {
+        return clean(s);
+    }
     if bytes.starts_with(b"\xEF\xBB\xBF") {
         bytes.drain(..3);
     }
@@ -312,6 +316,47 @@ pub(crate) fn text_lossy(path: &Path, mut bytes: Vec<u8>, warnings: &mut Vec<Str
         String::from_utf8_lossy(e.as_bytes()).into_owned()
     });
     clean(s)
+}
+
+/// Text that starts with a UTF-16 byte-order mark, little- or
+/// big-endian, decoded (Windows tools save text so), with a warning that
+/// says so; `None` for other text. A lone surrogate reads as U+FFFD, and
+/// an odd last byte is left out; the warning counts both.
+fn utf16(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Option<String> {
+    let (big, order) = match bytes.get(..2)? {
+        [0xFF, 0xFE] => (false, "little-endian"),
+        [0xFE, 0xFF] => (true, "big-endian"),
+        _ => return None,
+    };
+    let units = bytes[2..].chunks_exact(2).map(|u| match big {
+        true => u16::from_be_bytes([u[0], u[1]]),
+        false => u16::from_le_bytes([u[0], u[1]]),
+    });
+    let mut lone = 0u64;
+    let text = char::decode_utf16(units)
+        .map(|c| {
+            c.unwrap_or_else(|_| {
+                lone += 1;
+                char::REPLACEMENT_CHARACTER
+            })
+        })
+        .collect();
+    let mut faults = Vec::new();
+    if lone > 0 {
+        faults.push(format!(
+            "{} read as U+FFFD",
+            crate::words::count(lone, "lone surrogate", "lone surrogates")
+        ));
+    }
+    if bytes.len() % 2 == 1 {
+        faults.push("its odd last byte left out".to_string());
+    }
+    let faults: String = faults.iter().map(|f| format!("; {f}")).collect();
+    warnings.push(format!(
+        "{}: UTF-16 text ({order}, as its byte-order mark says): decoded{faults}",
+        path.display()
+    ));
+    Some(text)
 }
 
 /// Line endings made LF and control characters other than tab U+FFFD
@@ -646,5 +691,43 @@ mod tests {
         w.clear();
         assert_eq!(text_lossy(p, b"v 1\r\n".to_vec(), &mut w), "v 1\n");
         assert!(w.is_empty());
+    }
+
+    #[test]
+    fn utf16_text_is_decoded_with_a_warning() {
+        let p = Path::new("f");
+        let text = "v 1 é\r\nf 1\n";
+        let le: Vec<u8> = [0xFF, 0xFE]
+            .into_iter()
+            .chain(text.encode_utf16().flat_map(u16::to_le_bytes))
+            .collect();
+        let be: Vec<u8> = [0xFE, 0xFF]
+            .into_iter()
+            .chain(text.encode_utf16().flat_map(u16::to_be_bytes))
+            .collect();
+        for (bytes, order) in [(le, "little-endian"), (be, "big-endian")] {
+            let mut w = Vec::new();
+            assert_eq!(text_lossy(p, bytes, &mut w), "v 1 é\nf 1\n");
+            assert_eq!(
+                w,
+                [format!(
+                    "f: UTF-16 text ({order}, as its byte-order mark says): decoded"
+                )]
+            );
+        }
+        // A lone surrogate, an odd last byte, nothing but the mark.
+        let mut w = Vec::new();
+        let t = text_lossy(p, vec![0xFF, 0xFE, b'a', 0, 0x00, 0xD8, b'b', 0, 7], &mut w);
+        assert_eq!(t, "a\u{fffd}b");
+        assert_eq!(
+            w,
+            [
+                "f: UTF-16 text (little-endian, as its byte-order mark says): decoded; 1 lone \
+              surrogate read as U+FFFD; its odd last byte left out"
+            ]
+        );
+        w.clear();
+        assert_eq!(text_lossy(p, vec![0xFE, 0xFF], &mut w), "");
+        assert_eq!(w.len(), 1);
     }
 }

@@ -1,7 +1,9 @@
 //! Accessors, checked and read by rayterm itself rather than through the
 //! crate's reader (which takes them on trust and reads floats only): every
 //! component type with its `normalized` flag (`KHR_mesh_quantization`),
-//! sparse substitutions, and views decoded from `EXT_meshopt_compression`.
+//! sparse substitutions, zeros where there is no view, values not aligned
+//! to their components (read byte by byte, with a warning), and views
+//! decoded from `EXT_meshopt_compression`.
 
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::buffer::View;
@@ -61,9 +63,9 @@ impl Reader<'_> {
     }
 
     /// Checks that `count` `things` of `size` bytes (`component`-byte
-    /// components) from `offset` lie, aligned, inside view `v` and the
-    /// view inside its buffer (or, compressed, its compressed bytes in
-    /// theirs).
+    /// components) from `offset` lie inside view `v` and the view inside
+    /// its buffer (or, compressed, its compressed bytes in theirs); what
+    /// is wrong with their alignment, if anything.
     #[allow(clippy::too_many_arguments)]
     fn check_span(
         &self,
@@ -74,7 +76,7 @@ impl Reader<'_> {
         count: usize,
         size: usize,
         component: usize,
-    ) -> Result<()> {
+    ) -> Result<Option<String>> {
         let (element, component) = (size as u128, component as u128);
         let stride = v.stride().map_or(element, |s| s as u128);
         if stride < element {
@@ -91,9 +93,15 @@ impl Reader<'_> {
         // A decoded view starts a buffer of its own.
         let view_offset = compressed.map_or(v.offset() as u128, |_| 0);
         let start = view_offset + offset as u128;
-        if !start.is_multiple_of(component) || !stride.is_multiple_of(component) {
-            bail!("{name} is not aligned to its {component}-byte components (offset {start}, stride {stride})");
-        }
+        // Values are read byte by byte, so misaligned ones read as well as
+        // others; glTF requires alignment, so it is said.
+        let misaligned = (!start.is_multiple_of(component) || !stride.is_multiple_of(component))
+            .then(|| {
+                format!(
+                    "{name}: its {things} are not aligned to their {component}-byte components \
+                     (offset {start}, stride {stride})"
+                )
+            });
         let end_in_view = offset as u128 + stride * (count as u128).saturating_sub(1) + element;
         let (buffer, view_end) = match compressed {
             Some(c) => {
@@ -120,12 +128,13 @@ impl Reader<'_> {
                 v.length()
             );
         }
-        Ok(())
+        Ok(misaligned)
     }
 
     /// Checks what reading accessor `a` takes: its type is one glTF allows
     /// for `what`, and every element it reads (and every sparse index and
-    /// value) lies, aligned, inside its view and buffer.
+    /// value) lies inside its view and buffer; one that is not aligned is
+    /// noted for [`Reader::misaligned_warning`].
     pub(super) fn check_accessor(
         &self,
         here: &str,
@@ -148,8 +157,11 @@ impl Reader<'_> {
             bail!("{name} has no elements (count 0)");
         }
         let (size, component) = (a.size(), a.data_type().size());
-        match (a.view(), a.sparse()) {
-            (Some(v), _) => self.check_span(
+        // Without a view, its values are zeros (glTF says so), with or
+        // without sparse ones over them.
+        let mut misaligned = None;
+        if let Some(v) = a.view() {
+            misaligned = self.check_span(
                 &name,
                 "elements",
                 &v,
@@ -157,9 +169,7 @@ impl Reader<'_> {
                 a.count(),
                 size,
                 component,
-            )?,
-            (None, Some(_)) => {}
-            (None, None) => bail!("{name} has no buffer view"),
+            )?;
         }
         if let Some(s) = a.sparse().filter(|s| s.count() > 0) {
             if s.count() > a.count() {
@@ -171,7 +181,7 @@ impl Reader<'_> {
             }
             let (ix, values) = (s.indices(), s.values());
             let index = ix.index_type().size();
-            self.check_span(
+            let indices = self.check_span(
                 &name,
                 "sparse indices",
                 &ix.view(),
@@ -180,7 +190,7 @@ impl Reader<'_> {
                 index,
                 index,
             )?;
-            self.check_span(
+            let values = self.check_span(
                 &name,
                 "sparse values",
                 &values.view(),
@@ -189,8 +199,29 @@ impl Reader<'_> {
                 size,
                 component,
             )?;
+            misaligned = misaligned.or(indices).or(values);
+        }
+        if let Some(why) = misaligned {
+            self.misaligned.borrow_mut().entry(a.index()).or_insert(why);
         }
         Ok(())
+    }
+
+    /// The warning for the accessors not aligned as glTF requires, read
+    /// all the same: the first named, the others counted.
+    pub(super) fn misaligned_warning(&self) -> Option<String> {
+        let all = self.misaligned.borrow();
+        let first = all.values().next()?;
+        let more = match all.len() {
+            1 => String::new(),
+            n => format!(
+                " (and {})",
+                crate::words::count(n as u64 - 1, "more accessor", "more accessors")
+            ),
+        };
+        Some(format!(
+            "{first}, which glTF requires{more}: read all the same"
+        ))
     }
 
     /// Decodes the compressed views accessors `used` read (their own and

@@ -2,7 +2,8 @@
 //! again with what the crate requires filled in: a scene without `nodes`
 //! (Blender writes an empty one), an animation channel whose target has no
 //! `node` (`KHR_animation_pointer` aims it elsewhere). rayterm shows a file
-//! at rest, so such a channel is simply left out.
+//! at rest, so such a channel is simply left out. And the crate's
+//! validation, which [`document`] runs forgiving what glTF allows.
 
 use ::gltf::json::{self, Value};
 use serde_json::Map;
@@ -28,6 +29,40 @@ pub(super) fn reread(body: &[u8]) -> Option<Result<::gltf::Gltf, ::gltf::Error>>
         document: ::gltf::Document::from_json_without_validation(root),
         blob: glb.and_then(|g| g.bin).map(|b| b.into_owned()),
     }))
+}
+
+/// The document of `json`, validated as the crate validates it but for two
+/// things glTF allows: an accessor with neither a `bufferView` nor
+/// `sparse` (its values are zeros, which [`super::accessor`] reads) and a
+/// primitive without `POSITION` (which glTF asks readers not to draw).
+pub(super) fn document(json: json::Root) -> Result<::gltf::Document, ::gltf::Error> {
+    use json::validation::{Error, Validate};
+    let mut errors = Vec::new();
+    json.validate(&json, json::Path::new, &mut |path, error| {
+        errors.push((path(), error))
+    });
+    errors.retain(|(path, error)| !(matches!(error, Error::Missing) && allowed(path.as_str())));
+    match errors.is_empty() {
+        true => Ok(::gltf::Document::from_json_without_validation(json)),
+        false => Err(::gltf::Error::Validation(errors)),
+    }
+}
+
+/// Whether a missing field at `path` is one glTF allows to be missing:
+/// `accessors[A].bufferView` (the crate reports it only where `sparse` is
+/// missing too) or `meshes[M].primitives[P].attributes["POSITION"]`.
+fn allowed(path: &str) -> bool {
+    let index = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    if let Some(a) = path
+        .strip_prefix("accessors[")
+        .and_then(|p| p.strip_suffix("].bufferView"))
+    {
+        return index(a);
+    }
+    path.strip_prefix("meshes[")
+        .and_then(|p| p.strip_suffix("].attributes[\"POSITION\"]"))
+        .and_then(|p| p.split_once("].primitives["))
+        .is_some_and(|(m, p)| index(m) && index(p))
 }
 
 /// Fills in what the crate requires; whether anything was.
@@ -78,5 +113,27 @@ mod tests {
         // glTF 1.0 keeps scenes in an object: nothing to fill.
         let mut old = serde_json::json!({"scenes": {"s": {}}});
         assert!(!fill(&mut old));
+    }
+
+    #[test]
+    fn only_what_gltf_allows_is_forgiven() {
+        for ok in [
+            "accessors[0].bufferView",
+            "accessors[12].bufferView",
+            "meshes[0].primitives[3].attributes[\"POSITION\"]",
+        ] {
+            assert!(allowed(ok), "{ok}");
+        }
+        for refused in [
+            "accessors[0].byteOffset",
+            "accessors[].bufferView",
+            "accessors[x].bufferView",
+            "images[0].bufferView",
+            "meshes[0].primitives[0].attributes[\"NORMAL\"]",
+            "meshes[0].primitives[0].indices",
+            "meshes[0].attributes[\"POSITION\"]",
+        ] {
+            assert!(!allowed(refused), "{refused}");
+        }
     }
 }

@@ -25,7 +25,8 @@ mod meshopt;
 mod primitive;
 mod uri;
 
-use std::collections::HashMap;
+use std::cell::RefCell;
+use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
 use ::gltf::camera::Projection as CameraKind;
@@ -204,6 +205,9 @@ struct Reader<'a> {
     /// `EXT_meshopt_compression` views by index, and those decoded so far.
     compressed: HashMap<usize, Result<meshopt::Compressed, String>>,
     unpacked: HashMap<usize, Vec<u8>>,
+    /// Accessors not aligned to their components, by index, with why:
+    /// noted by the checks, which take the reader as it is.
+    misaligned: RefCell<BTreeMap<usize, String>>,
 }
 
 impl Reader<'_> {
@@ -544,7 +548,7 @@ pub fn load(
     // so nothing in them (targets of other extensions) can refuse it.
     let animations = std::mem::take(&mut json.animations).len();
     let broken = Broken::of(&json);
-    let doc = ::gltf::Document::from_json(json).map_err(|e| invalid(&e))?;
+    let doc = lenient::document(json).map_err(|e| invalid(&e))?;
     let mut blob = file.blob;
     let (mut buffers, mut origins, mut foreign) = (Vec::new(), Vec::new(), Vec::new());
     for b in doc.buffers() {
@@ -623,6 +627,7 @@ pub fn load(
         uses: HashMap::new(),
         compressed: meshopt::views(&doc),
         unpacked: HashMap::new(),
+        misaligned: RefCell::default(),
     };
     for ext in doc.extensions_used() {
         if !extensions::reads(ext) && !drawn_without.iter().any(|d| d == ext) {
@@ -814,6 +819,7 @@ pub fn load(
             stack.push((child, world));
         }
     }
+    parts.warnings.extend(r.misaligned_warning());
     parts.warnings.extend(r.unmapped.warning(path));
     parts.warnings.extend(r.broken.unused(path, doc.as_json()));
     Ok(out)

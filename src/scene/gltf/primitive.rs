@@ -113,6 +113,13 @@ impl Reader<'_> {
                 .note("points and lines", || format!("mesh {mesh_name}"));
             return Ok(None);
         }
+        if p.get(&Semantic::Positions).is_none() {
+            // glTF asks that such a primitive not be drawn.
+            self.unmapped.note("primitives without POSITION", || {
+                format!("mesh {mesh_name} primitive {}", p.index())
+            });
+            return Ok(None);
+        }
         // Kept for the primitive's next instance, if any: the last one
         // takes it.
         let k = key(&p);
@@ -199,12 +206,12 @@ impl Reader<'_> {
     /// Checks a primitive's accessors before anything reads them (`here`
     /// names it in messages): the types glTF allows, with those
     /// `KHR_mesh_quantization` adds, and as many values of each attribute
-    /// as positions.
+    /// as positions. One without positions is not drawn, so not read.
     fn check_primitive(&self, here: &str, p: &::gltf::Primitive) -> Result<()> {
         use DataType::{F32, I16, I8, U16, U32, U8};
         use Dimensions::{Scalar, Vec2 as V2, Vec3 as V3, Vec4 as V4};
         let Some(position) = p.get(&Semantic::Positions) else {
-            bail!("{here}: no POSITION attribute");
+            return Ok(());
         };
         self.check_accessor(here, "POSITION", &position, &[F32, I8, U8, I16, U16], &[V3])?;
         let attributes: [(_, _, &[_], &[_]); 3] = [

@@ -9,10 +9,12 @@
 //! a curve weight, is ignored for polygons, as other readers do). What
 //! other readers forgive is a warning: a face's UV or normal indices beyond
 //! those defined (the face is read without them), faces of fewer than three
-//! vertices (skipped), a vertex colour that is not a number (none), text
-//! that is not UTF-8 (read lossily). Vertex colours (`v x y z r g b`) are
-//! the diffuse colour. Points and lines (`p`, `l`) and smoothing groups are
-//! ignored; other statements are ignored with one warning per file.
+//! vertices (skipped), a vertex whose coordinates f32 cannot hold (the
+//! faces using it skipped), a vertex colour that is not a number (none),
+//! text that is not UTF-8 (read lossily) or is UTF-16 (decoded). Vertex
+//! colours (`v x y z r g b`) are the diffuse colour. Points and lines (`p`,
+//! `l`) and smoothing groups are ignored; other statements are ignored with
+//! one warning per file.
 //! Materials come from the `mtllib` files ([`super::mtl`]); a missing MTL
 //! or texture is a warning.
 
@@ -33,10 +35,10 @@ use super::numbers::{self, show3, Absurd};
 use super::parts::mesh_fits;
 use super::polygon::Triangulator;
 use super::source::{resolve, text_lossy, Kind, ReadError, Source};
-use super::texture::srgb_to_linear;
+use super::texture::{srgb_to_linear, Wrap};
 use super::Material;
 use crate::memory;
-use piece::{Budget, Out, Piece, Switch, Tally};
+use piece::{Budget, Out, Piece, Switch, Tally, Unusable};
 
 pub use super::numbers::ABSURD;
 pub use super::parts::{MeshData, Parts, Placed, Placement};
@@ -182,6 +184,7 @@ impl ObjFile {
         let mut absurd = Absurd::default();
         let mut ignored = piece::Ignored::default();
         let (mut bad_colors, mut short_faces) = (Tally::default(), Tally::default());
+        let mut unusable = Unusable::default();
         let mut colors = Vec::new();
         let mut current = Group {
             name: String::new(),
@@ -206,13 +209,35 @@ impl ObjFile {
             ignored.extend(p.ignored);
             bad_colors = bad_colors.then(p.bad_colors);
             short_faces = short_faces.then(p.short_faces);
+            unusable = unusable.then(p.unusable);
             colors.extend(p.colors);
         }
         f.finish(current);
         f.colors = vertex_colors(&colors, f.positions.len());
         drop(colors);
-        let dropped = f.check_indices()?;
+        let (dropped, skipped) = f.check_indices(unusable.count > 0)?;
         warnings.extend(absurd.warning(path));
+        if let Some((line, why)) = unusable.first {
+            let more = match unusable.count {
+                1 => String::new(),
+                n => format!(
+                    " (and {} like it)",
+                    crate::words::count(n as u64 - 1, "more vertex", "more vertices")
+                ),
+            };
+            let it = if unusable.count == 1 { "it" } else { "them" };
+            let faces = match skipped {
+                0 => format!("no face uses {it}"),
+                n => format!(
+                    "{} using {it} skipped",
+                    crate::words::count(n as u64, "face", "faces")
+                ),
+            };
+            warnings.push(format!(
+                "{}:{line}: vertex {why}{more}: {faces}",
+                path.display()
+            ));
+        }
         let tallied = [
             (
                 short_faces,
@@ -340,10 +365,14 @@ impl ObjFile {
     fn faces<'a>(&'a self, g: &'a Group) -> impl Iterator<Item = (usize, &'a [[u32; 3]])> + 'a {
         g.runs.iter().flat_map(move |(k, run)| {
             let p = &self.pieces[*k];
-            p.faces[run.clone()].iter().map(move |f| {
-                let start = f.start as usize;
-                (f.line as usize, &p.corners[start..start + f.len as usize])
-            })
+            // Faces using a vertex that cannot be placed have no corners.
+            p.faces[run.clone()]
+                .iter()
+                .filter(|f| f.len > 0)
+                .map(move |f| {
+                    let start = f.start as usize;
+                    (f.line as usize, &p.corners[start..start + f.len as usize])
+                })
         })
     }
 
@@ -351,19 +380,22 @@ impl ObjFile {
     /// references included, as other readers allow them). A face that
     /// refers to texture coordinates or normals beyond those the file
     /// defines is read without them, as tinyobjloader reads it: the
-    /// warning that says so.
-    fn check_indices(&mut self) -> Result<Option<String>> {
+    /// warning that says so. A face using a vertex that cannot be placed
+    /// (NaN; only looked for where `some_unusable`) is left with no
+    /// corners: how many were.
+    fn check_indices(&mut self, some_unusable: bool) -> Result<(Option<String>, usize)> {
         let counts = [self.positions.len(), self.uvs.len(), self.normals.len()];
         let names = ["vertex", "texture coordinate", "normal"];
         let beyond = |c: &[u32; 3], k: usize| c[k] != NONE && c[k] as usize >= counts[k];
         // The first such face (line, what, index) and how many there are.
         let mut first = None;
-        let mut dropped = 0;
+        let (mut dropped, mut skipped) = (0, 0);
         for p in &mut self.pieces {
-            for f in &p.faces {
+            for f in &mut p.faces {
                 let corners = &mut p.corners[f.start as usize..][..f.len as usize];
                 let line = f.line;
                 let mut lost = [false; 3];
+                let mut unusable = false;
                 for c in corners.iter() {
                     if beyond(c, 0) {
                         bail!(
@@ -373,8 +405,14 @@ impl ObjFile {
                             counts[0]
                         );
                     }
+                    unusable |= some_unusable && self.positions[c[0] as usize].is_nan();
                     lost[1] |= beyond(c, 1);
                     lost[2] |= beyond(c, 2);
+                }
+                if unusable {
+                    f.len = 0;
+                    skipped += 1;
+                    continue;
                 }
                 if lost[1] || lost[2] {
                     for k in [1, 2].into_iter().filter(|&k| lost[k]) {
@@ -386,7 +424,7 @@ impl ObjFile {
                 }
             }
         }
-        Ok(first.map(|(line, k, index)| {
+        let warning = first.map(|(line, k, index)| {
             let more = match dropped {
                 1 => String::new(),
                 2 => " (and 1 more face)".into(),
@@ -400,7 +438,8 @@ impl ObjFile {
                 index as u64 + 1,
                 counts[k]
             )
-        }))
+        });
+        Ok((warning, skipped))
     }
 
     /// The meshes placed by `xf` (in f64), each group with the material
@@ -428,6 +467,10 @@ impl ObjFile {
         // indices go through a map. Reset after each mesh.
         let mut first: Vec<u32> = vec![NONE; self.positions.len()];
         for g in &self.groups {
+            // Every face skipped: no mesh.
+            if self.faces(g).next().is_none() {
+                continue;
+            }
             let mut other: HashMap<[u32; 3], u32> = HashMap::new();
             let mut corners: Vec<[u32; 3]> = Vec::new();
             let mut indices = Vec::new();
@@ -673,7 +716,14 @@ fn convert_material(
     let d = Material::default();
     let texture = m.map_kd.as_ref().and_then(|(file, line)| {
         let from = format!("{}:{line}", mtl_path.display());
-        parts.texture(src, mtl_path, file, &from)
+        let id = parts.texture(src, mtl_path, file, &from)?;
+        if !m.clamp {
+            return Some(id);
+        }
+        // `-clamp on`: a texture of its own, its texels shared.
+        let mut t = parts.textures[id as usize].clone();
+        t.wrap = [Wrap::Clamp; 2];
+        Some(parts.add_texture(t))
     });
     Material {
         name: m.name.clone(),
@@ -885,12 +935,9 @@ mod tests {
     #[test]
     fn numbers_are_checked_and_w_is_ignored() {
         for (obj, want) in [
-            (
-                "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n",
-                "m/a.obj:2: 'nan' is not a finite",
-            ),
-            ("v 0 0 0\nv 1e39 0 0\n", "m/a.obj:2: '1e39' is too large"),
-            ("v 0 0 0\nv 1 0 0 inf\n", "m/a.obj:2: 'inf' is not a finite"),
+            ("v nan 0\n", "m/a.obj:1: 'nan' is not a finite"),
+            ("vn 0 0 1e39\n", "m/a.obj:1: '1e39' is too large"),
+            ("vt 1.#INF 0\n", "m/a.obj:1: '1.#INF' is not a finite"),
             ("v 1 0\n", "m/a.obj:1: a vertex takes 3 coordinates"),
             ("vn 1 0\n", "m/a.obj:1: a normal takes 3 numbers"),
             ("vt\n", "m/a.obj:1: a texture coordinate takes 1 to 3"),
@@ -908,6 +955,42 @@ mod tests {
         .unwrap();
         assert_eq!(p.geometry.positions[1], Vec3::new(2.0, 0.0, 0.0));
         assert_eq!(p.geometry.positions[2], Vec3::new(0.0, 4.0, 0.0));
+    }
+
+    #[test]
+    fn faces_using_vertices_f32_cannot_hold_are_skipped() {
+        // Vertices 2 (nan), 5 (past f32, with a colour) and 6 (w): the
+        // faces using them go, the others stay.
+        let obj = "v 0 0 0\nv nan 0 0\nv 1 0 0\nv 0 1 0\nv 1e39 0 0 1 1 1\nv 0 0 1 -1.#IND\n\
+                   f 1 2 3\nf 1 3 4\nf 3 4 5\no other\nf 4 6 1\n";
+        let p = load(vec![("m/a.obj", obj.into())]).unwrap();
+        assert_eq!(p.geometry.indices, [[0, 1, 2]]);
+        assert_eq!(p.geometry.positions, [Vec3::ZERO, Vec3::X, Vec3::Y]);
+        assert_eq!(p.meshes.len(), 1);
+        assert_eq!(
+            p.warnings,
+            [
+                "m/a.obj:2: vertex 'nan' is not a finite number (and 2 more vertices like it): 3 \
+              faces using them skipped"
+            ]
+        );
+        let p = load(vec![("m/a.obj", format!("{QUAD}v inf 0 0\n"))]).unwrap();
+        assert_eq!(p.geometry.indices.len(), 2);
+        assert_eq!(
+            p.warnings,
+            ["m/a.obj:6: vertex 'inf' is not a finite number: no face uses it"]
+        );
+        // In a file read in pieces, as in one read whole.
+        let mut w = Vec::new();
+        let text = format!("{QUAD}v 1e40 0 0\nf 1 2 -1\n{QUAD}f 1 2 3\n");
+        ObjFile::parse_in(Path::new("m.obj"), &text, &mut w, u64::MAX, 8).unwrap();
+        assert_eq!(
+            w,
+            [
+                "m.obj:6: vertex '1e40' is too large: 32-bit floats are finite only up to 3.4e38: \
+              1 face using it skipped"
+            ]
+        );
     }
 
     #[test]
@@ -1052,9 +1135,15 @@ mod tests {
             p.warnings,
             ["m/a.obj:1: 2 vertex colours are not finite numbers: read as none (white)"]
         );
-        // Only a colour: a position or w that is no number is an error.
-        assert!(error("v nan 0 0 1 1 1\n").contains("m/a.obj:1: 'nan' is not a finite"));
-        assert!(error("v 0 0 0 nan\n").contains("m/a.obj:1: 'nan' is not a finite"));
+        // Only a colour: a position or w that is no number leaves the
+        // vertex out, text that is no number is an error.
+        for obj in ["v nan 0 0 1 1 1\n", "v 0 0 0 nan\n"] {
+            let p = load(vec![("m/a.obj", obj.into())]).unwrap();
+            assert_eq!(
+                p.warnings,
+                ["m/a.obj:1: vertex 'nan' is not a finite number: no face uses it"]
+            );
+        }
         assert!(error("v 0 0 0 1 x 1\n").contains("m/a.obj:1: 'x' is not a number"));
         // A material's Kd is multiplied by them; meshes without colours
         // keep the default material.

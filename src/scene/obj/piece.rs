@@ -292,6 +292,29 @@ impl Tally {
     }
 }
 
+/// Vertices holding a number 32-bit floats cannot hold (`inf`, `nan`,
+/// `1e39`): the first one's line and why, and how many.
+#[derive(Default)]
+pub struct Unusable {
+    pub first: Option<(usize, String)>,
+    pub count: usize,
+}
+
+impl Unusable {
+    fn add(&mut self, line: usize, why: &str) {
+        self.first.get_or_insert_with(|| (line, why.to_string()));
+        self.count += 1;
+    }
+
+    /// Both counts, `self` first (from earlier in the file).
+    pub fn then(self, later: Unusable) -> Unusable {
+        Unusable {
+            first: self.first.or(later.first),
+            count: self.count + later.count,
+        }
+    }
+}
+
 /// One piece as read, up to its first error.
 #[derive(Default)]
 pub struct Piece {
@@ -303,6 +326,8 @@ pub struct Piece {
     pub bad_colors: Tally,
     /// Faces of fewer than three vertices: skipped.
     pub short_faces: Tally,
+    /// Vertices that cannot be placed: NaN, the faces using them skipped.
+    pub unusable: Unusable,
     pub switches: Vec<(usize, Switch)>,
     pub libraries: Vec<(String, usize)>,
     /// Warnings with their lines.
@@ -428,6 +453,11 @@ fn numbers(words: Words, line: usize, absurd: &mut Absurd) -> Result<Numbers, St
                 n.unusable.get_or_insert((n.total, why));
                 f64::NAN
             }
+            Err(_) if numbers::spelled_not_finite(w) => {
+                let why = format!("'{}' is not a finite number", quoted(w));
+                n.unusable.get_or_insert((n.total, why));
+                f64::NAN
+            }
             Err(why) => return Err(why),
         };
         absurd.check(line, x, || w.to_string());
@@ -499,15 +529,24 @@ impl Reader<'_> {
         match key {
             "v" => {
                 let v = numbers(plain.words(rest), n, absurd).map_err(at)?;
-                // Only a colour may hold a number that is not finite:
-                // read without it, as Blender does.
+                let mut unusable = false;
                 let v = match v.unusable {
+                    // A colour that is not a number: read without it, as
+                    // Blender reads it.
                     Some((k, _)) if k >= 3 && matches!(v.total, 6 | 7) => {
                         self.piece.bad_colors.add(n);
                         Numbers {
                             unusable: None,
                             ..v
                         }
+                    }
+                    // A coordinate (or w): the vertex cannot be placed, and
+                    // the faces using it are skipped, as other readers
+                    // leave what such faces would draw.
+                    Some((_, ref why)) if matches!(v.total, 3 | 4 | 6 | 7) => {
+                        self.piece.unusable.add(n, why);
+                        unusable = true;
+                        v
                     }
                     _ => v.usable().map_err(at)?,
                 };
@@ -534,7 +573,7 @@ impl Reader<'_> {
                         .into())
                     }
                 };
-                self.out.positions[self.here[0]] = p;
+                self.out.positions[self.here[0]] = if unusable { DVec3::NAN } else { p };
                 self.out.position_lines[self.here[0]] = n as u32;
                 self.here[0] += 1;
                 self.counts[0] += 1;

@@ -9,14 +9,31 @@ use std::collections::HashMap;
 
 use glam::{DVec3, Vec2, Vec3};
 
-use super::PlyMesh;
+use super::{Element, PlyMesh, Role};
 use crate::scene::polygon::{quad_is_fan, Triangulator};
 
 /// What the face element gives each face beyond its vertices.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Default)]
 pub struct Given {
     pub uvs: bool,
     pub colors: bool,
+}
+
+impl Given {
+    /// Whether corners get vertices of their own.
+    pub fn any(self) -> bool {
+        self.uvs || self.colors
+    }
+}
+
+/// What the face element `face` gives: `texcoord` lists, and colours
+/// where it has all three.
+pub fn given(face: &Element) -> Given {
+    let has = |f: fn(Role) -> bool| face.props.iter().filter(|p| f(p.role)).count();
+    Given {
+        uvs: has(|r| r == Role::FaceUvs) > 0,
+        colors: has(|r| matches!(r, Role::Color(_))) == 3,
+    }
 }
 
 /// The faces read so far.
@@ -109,7 +126,7 @@ impl Faces {
             self.odd_uvs.0.get_or_insert(face);
             self.odd_uvs.1 += 1;
         }
-        if given_uvs || given_colors {
+        if self.given.any() {
             for (k, c) in corners.iter_mut().enumerate() {
                 let uv = match uvs.get(2 * k..2 * k + 2) {
                     Some(&[u, v]) if whole => Vec2::new(u, v),
@@ -156,7 +173,7 @@ impl Faces {
                  a corner: its corners are at UV 0 0"
             ));
         }
-        if self.given.uvs || self.given.colors {
+        if self.given.any() {
             let from = &self.from;
             m.positions = pick(from, std::mem::take(&mut m.positions));
             m.normals = m.normals.take().map(|v| pick(from, v));

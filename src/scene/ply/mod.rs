@@ -7,11 +7,12 @@
 //! green blue`, sRGB as images are, 0..255 for integers, 0..1 for floats)
 //! and `face` `vertex_indices` (or `vertex_index`) lists, polygons becoming
 //! triangles ([`faces`]), with MeshLab's `texcoord` lists and face colours;
-//! MeshLab's `comment TextureFile` names the texture. Other elements and
-//! properties, and header lines of kinds the format does not name, are
-//! skipped with one warning. The header's counts are checked against the
-//! file's size before anything is allocated, and every index against the
-//! vertex count.
+//! `tristrips` lists (triangle strips, -1 starting a new one); MeshLab's
+//! `comment TextureFile` names the texture. Other elements and
+//! properties, header lines of kinds the format does not name, and faces
+//! of fewer than three vertices are skipped with one warning. The header's
+//! counts are checked against the file's size before anything is
+//! allocated, and every index against the vertex count.
 
 mod bulk;
 mod faces;
@@ -26,7 +27,7 @@ use super::parts::{mesh_fits, place_normals, place_positions, Placed};
 use super::texture::srgb_to_linear;
 use crate::memory;
 use crate::words::quoted;
-use faces::{Faces, Given};
+use faces::Faces;
 
 /// The header must end within this many bytes.
 const MAX_HEADER: usize = 1 << 20;
@@ -112,6 +113,8 @@ enum Role {
     Indices,
     /// A face's texture coordinates, two a corner (MeshLab's `texcoord`).
     FaceUvs,
+    /// Triangle strips' vertex indices (`element tristrips`).
+    Strips,
 }
 
 struct Property {
@@ -315,7 +318,7 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
                         }
                     )));
                 };
-                if role == Role::Indices {
+                if role == Role::Indices || role == Role::Strips {
                     if let Kind::List(_, item) = kind {
                         if !item.is_int() {
                             bail!(at(format!("{name}: indices must be of an integer type")));
@@ -352,14 +355,27 @@ fn header(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Heade
     let Some(format) = format else {
         bail!("{}: the header has no 'format' line", path.display());
     };
-    for e in &elements {
-        if e.name != "vertex" && e.name != "face" {
+    // Strips name the file's vertices, which faces that give their corners
+    // UVs or colours of their own renumber: such strips are not read.
+    let renumbered = elements
+        .iter()
+        .any(|e| e.name == "face" && faces::given(e).any());
+    for e in &mut elements {
+        if e.name == "tristrips" && renumbered {
+            e.props.iter_mut().for_each(|p| p.role = Role::Ignored);
+            ignored_elements.push(format!(
+                "{} ({}, as the faces give corners texture coordinates or colours of their own)",
+                e.name, e.count
+            ));
+        } else if !["vertex", "face", "tristrips"].contains(&e.name.as_str()) {
             ignored_elements.push(format!("{} ({})", e.name, e.count));
         }
     }
     let mut ignored_props: Vec<String> = elements
         .iter()
-        .filter(|e| e.name == "vertex" || e.name == "face")
+        .filter(|e| {
+            ["vertex", "face"].contains(&e.name.as_str()) || (e.name == "tristrips" && !renumbered)
+        })
         .flat_map(|e| {
             e.props
                 .iter()
@@ -414,12 +430,16 @@ fn role(element: &str, name: &str, kind: Kind) -> Option<Role> {
             "blue" => Role::Color(2),
             _ => Role::Ignored,
         },
+        "tristrips" => match name {
+            "vertex_indices" | "vertex_index" => Role::Strips,
+            _ => Role::Ignored,
+        },
         _ => Role::Ignored,
     };
     let list = matches!(kind, Kind::List(..));
     match role {
         Role::Ignored => Some(role),
-        Role::Indices | Role::FaceUvs => list.then_some(role),
+        Role::Indices | Role::FaceUvs | Role::Strips => list.then_some(role),
         _ => (!list).then_some(role),
     }
 }
@@ -667,20 +687,13 @@ fn body_from<R: Values>(
     // many), and how many such lines.
     let mut longer: (Option<(String, usize)>, u64) = (None, 0);
     let mut triangles = 0u64;
+    // The first face of fewer than three vertices (where, which, how
+    // many), and how many such faces.
+    let mut short: (Option<(String, u64, i64)>, u64) = (None, 0);
     let mut corners: Vec<u32> = Vec::new();
     let mut face_uvs: Vec<f32> = Vec::new();
     let face = h.elements.iter().find(|e| e.name == "face");
-    let given = |f: fn(Role) -> bool| face.is_some_and(|e| e.props.iter().any(|p| f(p.role)));
-    let mut faces = Faces::new(Given {
-        uvs: given(|r| r == Role::FaceUvs),
-        colors: face.is_some_and(|e| {
-            e.props
-                .iter()
-                .filter(|p| matches!(p.role, Role::Color(_)))
-                .count()
-                == 3
-        }),
-    });
+    let mut faces = Faces::new(face.map(faces::given).unwrap_or_default());
     for e in &h.elements {
         let has = |f: fn(Role) -> bool| e.props.iter().filter(|p| f(p.role)).count();
         let (n_normal, n_uv, n_color) = (
@@ -740,6 +753,7 @@ fn body_from<R: Values>(
                 )
             };
             r.begin().map_err(|m| fail(r, None, m))?;
+            let mut skipped = false;
             let mut p = [0.0; 3];
             let mut nrm = [0.0; 3];
             let mut uv = [0.0; 2];
@@ -788,18 +802,31 @@ fn body_from<R: Values>(
                             }
                             continue;
                         }
-                        if role != Role::Indices {
+                        if role == Role::Strips {
+                            // The most triangles it can make, checked first.
+                            let most = triangles + (n as u64).saturating_sub(2);
+                            let vertices = vertex_count.max(faces.split()) as u64;
+                            mesh_fits(vertices, most, available).map_err(|m| fail(r, name, m))?;
+                            let read = strips(r, item, n as u64, vertex_count)
+                                .map_err(|m| fail(r, name, m))?;
+                            triangles += read.len() as u64;
+                            m.indices.extend(read);
+                            continue;
+                        }
+                        // Skipped, as other readers skip them; their
+                        // indices read past.
+                        if role != Role::Indices || n < 3 {
+                            if role == Role::Indices {
+                                short.1 += 1;
+                                if short.0.is_none() {
+                                    short.0 = Some((r.place(path), i, n));
+                                }
+                                skipped = true;
+                            }
                             for _ in 0..n {
                                 r.float(item).map_err(|m| fail(r, name, m))?;
                             }
                             continue;
-                        }
-                        if n < 3 {
-                            return Err(fail(
-                                r,
-                                name,
-                                format!("a face needs at least 3 vertices, found {n}"),
-                            ));
                         }
                         triangles += n as u64 - 2;
                         let vertices = vertex_count.max(faces.split()) as u64;
@@ -827,16 +854,16 @@ fn body_from<R: Values>(
                 longer.0.get_or_insert_with(|| (r.place(path), extra));
                 longer.1 += 1;
             }
-            if e.name == "face" {
+            if e.name == "face" && !skipped {
                 let color = rgb.map(|c| srgb_to_linear((c / color_full).clamp(0.0, 1.0) as f32));
                 // The vertices are read where they come first, as they do
                 // in most files.
                 let positions = (m.positions.len() == vertex_count).then_some(&m.positions[..]);
                 let color = Vec3::from_array(color);
                 faces.add(i, &mut corners, &face_uvs, color, positions, &mut m.indices);
-                corners.clear();
-                face_uvs.clear();
             }
+            corners.clear();
+            face_uvs.clear();
             if e.name == "vertex" {
                 m.positions.push(DVec3::from_array(p));
                 if n_normal == 3 {
@@ -861,6 +888,16 @@ fn body_from<R: Values>(
                 1 => String::new(),
                 l => format!(" (on {l} lines)"),
             }
+        ));
+    }
+    if let (Some((place, i, n)), count) = short {
+        let more = match count {
+            1 => String::new(),
+            c => format!(" (and {c} more of fewer than 3)", c = c - 1),
+        };
+        warnings.push(format!(
+            "{place}: element face {i}: a face of {}{more}: skipped",
+            crate::words::count(n as u64, "vertex", "vertices")
         ));
     }
     if let Some(rest) = r.rest() {
@@ -906,6 +943,43 @@ fn body_from<R: Values>(
     m.colors = (!colors.is_empty()).then_some(colors);
     faces.finish(&path.display().to_string(), &mut m, warnings);
     Ok(m)
+}
+
+/// The triangles of a `tristrips` list of `n` indices of type `item`
+/// into `vertex_count` vertices: each index after a strip's first two
+/// makes one with the two before it, every other one turned the other way
+/// (so that all face one way), and -1 starts a new strip. Triangles with a
+/// repeated corner, which join strips, are left out.
+fn strips<R: Values>(
+    r: &mut R,
+    item: Scalar,
+    n: u64,
+    vertex_count: usize,
+) -> Result<Vec<[u32; 3]>, String> {
+    let mut out = Vec::new();
+    // The strip's last two corners, and its triangles so far.
+    let (mut last, mut made) = ([None; 2], 0u64);
+    for _ in 0..n {
+        let k = r.int(item)?;
+        if k == -1 {
+            (last, made) = ([None; 2], 0);
+            continue;
+        }
+        if k < 0 || k as u64 >= vertex_count as u64 {
+            return Err(format!(
+                "vertex index {k} is out of range ({vertex_count} vertices; -1 starts a strip)"
+            ));
+        }
+        let c = k as u32;
+        if let [Some(a), Some(b)] = last {
+            if a != b && b != c && a != c {
+                out.push(if made % 2 == 0 { [a, b, c] } else { [b, a, c] });
+            }
+            made += 1;
+        }
+        last = [last[1], Some(c)];
+    }
+    Ok(out)
 }
 
 /// How many properties of `element` have the role named `what`.
@@ -1001,7 +1075,6 @@ mod tests {
             (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 9\n"), "p.ply:15: element face 0 (of 1), vertex_indices: vertex index 9 is out of range (4 vertices)"),
             (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2\n"), "p.ply:15: element face 0 (of 1), vertex_indices: the line ends"),
             (format!("{HEAD}0 0 nan\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n"), "p.ply:11: element vertex 0 (of 4), z: 'nan' is not a finite"),
-            (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 1\n"), "p.ply:15: element face 0 (of 1), vertex_indices: a face needs at least 3"),
             (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 -1\n"), "p.ply:15: element face 0 (of 1), vertex_indices: vertex index -1 is out of range"),
             (format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n259 0 1 2\n"), "p.ply:15: element face 0 (of 1), vertex_indices: 259 is out of range for its type (0 to 255)"),
             (HEAD.replace("vertex 4", "vertex 4000"), "p.ply: truncated: the header declares element vertex 4000, element face 1:"),
@@ -1398,5 +1471,130 @@ mod tests {
             .err()
             .map(|e| e.to_string());
         assert!(e.is_some_and(|e| e.contains("1 triangles and 4 vertices would need")));
+    }
+
+    #[test]
+    fn faces_of_fewer_than_three_vertices_are_skipped() {
+        let text = format!(
+            "{}0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 1\n3 0 1 2\n0\n1 9\n",
+            HEAD.replace("face 1", "face 4")
+        );
+        let (m, w) = read(text.as_bytes()).unwrap();
+        assert_eq!(m.indices, [[0, 1, 2]]);
+        assert_eq!(
+            w,
+            ["p.ply:15: element face 0: a face of 2 vertices (and 2 more of fewer than 3): skipped"]
+        );
+        // Binary: the bulk reading leaves them to the value-by-value one.
+        for big in [false, true] {
+            let mut b = binary(big);
+            let at = b.windows(14).position(|w| w == b"element face 1").unwrap();
+            b[at + 13] = b'2';
+            b.push(1);
+            b.extend(if big {
+                3u32.to_be_bytes()
+            } else {
+                3u32.to_le_bytes()
+            });
+            let (m, w) = read(&b).unwrap();
+            assert_eq!(m.indices, [[0, 1, 2], [0, 2, 3]]);
+            assert_eq!(w.len(), 1, "{w:?}");
+            assert!(
+                w[0].ends_with("element face 1: a face of 1 vertex: skipped"),
+                "{w:?}"
+            );
+        }
+    }
+
+    const STRIPS: &str = "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\n\
+                          property float y\nproperty float z\nelement tristrips 1\n\
+                          property list int int vertex_indices\nend_header\n\
+                          0 0 0\n1 0 0\n0 1 0\n1 1 0\n2 1 0\n";
+
+    #[test]
+    fn triangle_strips_are_triangles_facing_one_way() {
+        // Two strips; the second ends in a triangle with a repeated corner,
+        // as strips are joined.
+        let (m, w) = read(format!("{STRIPS}9 0 1 2 3 -1 3 1 4 4\n").as_bytes()).unwrap();
+        assert!(w.is_empty(), "{w:?}");
+        assert_eq!(m.indices, [[0, 1, 2], [2, 1, 3], [3, 1, 4]]);
+        for t in &m.indices {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            assert!((b - a).cross(c - a).z > 0.0, "{t:?}");
+        }
+        // Binary, either byte order, read as ASCII is.
+        for big in [false, true] {
+            let head = STRIPS.split_once("end_header\n").unwrap().0.replace(
+                "ascii",
+                if big {
+                    "binary_big_endian"
+                } else {
+                    "binary_little_endian"
+                },
+            );
+            let mut b = format!("{head}end_header\n").into_bytes();
+            let f = |x: f32| {
+                if big {
+                    x.to_be_bytes()
+                } else {
+                    x.to_le_bytes()
+                }
+            };
+            let i = |x: i32| {
+                if big {
+                    x.to_be_bytes()
+                } else {
+                    x.to_le_bytes()
+                }
+            };
+            for x in [
+                0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 2.0, 1.0, 0.0,
+            ] {
+                b.extend(f(x));
+            }
+            for k in [9, 0, 1, 2, 3, -1, 3, 1, 4, 4] {
+                b.extend(i(k));
+            }
+            let (n, w) = read(&b).unwrap();
+            assert!(w.is_empty(), "{w:?}");
+            assert_eq!(n.indices, m.indices);
+        }
+        // Nothing but restarts: no triangles; an index out of range, or
+        // more than the line holds, an error naming the place.
+        let (m, _) = read(format!("{STRIPS}3 -1 -1 -1\n").as_bytes()).unwrap();
+        assert!(m.indices.is_empty());
+        for (body, want) in [
+            ("4 0 1 -2 3\n", "p.ply:15: element tristrips 0 (of 1), vertex_indices: vertex index -2 is out of range (5 vertices; -1 starts a strip)"),
+            ("4 0 1 5\n", "vertex index 5 is out of range"),
+            ("2147483647 0 1 2\n", "p.ply:15: element tristrips 0 (of 1), vertex_indices: the line ends"),
+        ] {
+            let e = err(&format!("{STRIPS}{body}"));
+            assert!(e.contains(want), "{body}: {e}");
+        }
+        // The most triangles a strip can make are checked against memory
+        // before they are read.
+        let e = parse(
+            Path::new("p.ply"),
+            format!("{STRIPS}2147483647 0\n").as_bytes(),
+            &mut Vec::new(),
+            1 << 20,
+        )
+        .err()
+        .map(|e| format!("{e:#}"))
+        .unwrap_or_default();
+        assert!(e.contains("2147483645 triangles would need"), "{e}");
+        // Faces giving corners UVs of their own renumber the vertices that
+        // strips name: such strips are not read.
+        let text = STRIPS.replace(
+            "end_header",
+            "element face 1\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\nend_header",
+        ) + "3 0 1 2\n3 0 1 2 6 0 0 1 0 0 1\n";
+        let (m, w) = read(text.as_bytes()).unwrap();
+        assert_eq!(m.indices.len(), 1);
+        assert_eq!(
+            w,
+            ["p.ply: ignored, not used: element tristrips (1, as the faces give corners texture \
+              coordinates or colours of their own)"]
+        );
     }
 }
