@@ -1020,3 +1020,44 @@ fn metallic_roughness_materials_take_every_core_texture() {
         s.warnings
     );
 }
+
+/// A material whose only textures are data or emission (no base colour
+/// texture) still has them looked up: the plan keeps texture lookups,
+/// and the emission is the factor times the texture.
+#[test]
+fn textures_other_than_the_base_colours_are_looked_up() {
+    let d = Dir::new("gltf-pbr-no-base-texture");
+    let mut bin = Bin::default();
+    let p = [
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(1.0, -1.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(-1.0, 1.0, 0.0),
+    ];
+    let (pos, ind) = bin.mesh(&p, &[[0, 1, 2], [0, 2, 3]]);
+    let uv = bin.floats(&[0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0], 2, "VEC2");
+    let png = bin.view(&grey_png(128));
+    let doc = json!({
+        "scene": 0, "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"camera": 0, "translation": [0.0, 0.0, 3.0]}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos, "TEXCOORD_0": uv},
+                                    "indices": ind, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0]},
+                       "normalTexture": {"index": 0},
+                       "emissiveFactor": [1.0, 1.0, 1.0], "emissiveTexture": {"index": 0}}],
+        "textures": [{"source": 0}],
+        "images": [{"bufferView": png, "mimeType": "image/png"}]
+    });
+    let s = load(&d.write("glow.glb", bin.glb(doc))).unwrap();
+    let plan = Plan::new(&s, Features::all(), PlanPolicy::Prune);
+    assert!(plan.decision(Feature::Textures).runs());
+    assert!(plan.decision(Feature::NormalMaps).runs());
+    assert!(plan.decision(Feature::Emission).runs());
+    // A black rough metal: what the centre shows is its emission, sRGB
+    // 128 (0.2158), not the factor's 1.
+    let off = exact().without(&[Feature::Environment, Feature::Shadows]);
+    let img = common::render(&s, 9, 9, 1, off, Builder::Sah, 1).image;
+    let c = img[4 * 9 + 4];
+    assert!((c - Vec3::splat(0.21586)).abs().max_element() < 1e-3, "{c}");
+}

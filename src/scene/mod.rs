@@ -213,8 +213,18 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Whether some material looks a texture up: its colour's, or any of
+    /// a metallic-roughness material's.
     pub fn has_textures(&self) -> bool {
-        self.materials.iter().any(|m| m.texture.is_some())
+        self.materials.iter().any(|m| {
+            m.texture.is_some()
+                || m.pbr.as_ref().is_some_and(|p| {
+                    p.metallic_roughness.is_some()
+                        || p.normal.is_some()
+                        || p.occlusion.is_some()
+                        || p.emissive_texture.is_some()
+                })
+        })
     }
 
     pub fn has_vertex_normals(&self) -> bool {

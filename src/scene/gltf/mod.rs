@@ -427,6 +427,13 @@ impl Reader<'_> {
             });
         }
         let strength = m.emissive_strength().unwrap_or(1.0);
+        if !(strength >= 0.0 && strength.is_finite()) {
+            parts.warnings.push(format!(
+                "{}: {here}: emissiveStrength {strength} is not a finite number of at least 0; \
+                 the material emits nothing",
+                self.at()
+            ));
+        }
         let strength = if strength.is_finite() {
             strength.max(0.0)
         } else {
