@@ -85,6 +85,15 @@ pub fn read(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
         super::check_size(path, clamp(w), clamp(hh), per_pixel)?;
     }
     file.rewind()?;
+    let (w, h, pixels) = rgb(file).map_err(err)?;
+    Ok((w as u32, h as u32, pixels))
+}
+
+/// The R, G and B channels of the first layer that has them, as f32, with
+/// its width and height: the caller has checked the sizes.
+pub(crate) fn rgb(
+    reader: impl std::io::BufRead + Seek,
+) -> exr::error::Result<(usize, usize, Vec<Vec3>)> {
     let image = exr::image::read::read()
         .no_deep_data()
         .largest_resolution_level()
@@ -96,11 +105,10 @@ pub fn read(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
         )
         .first_valid_layer()
         .all_attributes()
-        .from_buffered(file)
-        .map_err(err)?;
+        .from_buffered(reader)?;
     let size = image.layer_data.size;
     let (_, pixels) = image.layer_data.channel_data.pixels;
-    Ok((size.0 as u32, size.1 as u32, pixels))
+    Ok((size.0, size.1, pixels))
 }
 
 #[cfg(test)]

@@ -63,6 +63,19 @@ impl Depth {
     fn may_split(self, n: u32, max: u32) -> bool {
         self.paths.saturating_mul(n) <= max
     }
+
+    /// How many directions a glossy lobe asked for `samples` draws here
+    /// (one where that would take the tree past `max` paths), and the
+    /// place of the rays drawn.
+    fn glossy(self, samples: u32, max: u32) -> (u32, Depth) {
+        let n = samples.max(1);
+        let n = if self.may_split(n, max) { n } else { 1 };
+        let next = Depth {
+            paths: self.paths.saturating_mul(n),
+            ..self
+        };
+        (n, next)
+    }
 }
 
 /// Everything needed to shade samples of one image.
@@ -840,16 +853,7 @@ impl<'a> Tracer<'a> {
                     rec,
                 );
         }
-        let n = self.scene.settings.glossy_samples.max(1);
-        let n = if next.may_split(n, self.max_paths) {
-            n
-        } else {
-            1
-        };
-        let next = Depth {
-            paths: next.paths.saturating_mul(n),
-            ..next
-        };
+        let (n, next) = next.glossy(self.scene.settings.glossy_samples, self.max_paths);
         let share = 1.0 / n as f32;
         let mut sum = Vec3::ZERO;
         for _ in 0..n {
@@ -886,16 +890,7 @@ impl<'a> Tracer<'a> {
         let r = mirror(ray.dir, s.n, s.ng);
         let ks = s.mat.ks;
         if self.plan.glossy && s.mat.glossy() {
-            let n = self.scene.settings.glossy_samples.max(1);
-            let n = if next.may_split(n, self.max_paths) {
-                n
-            } else {
-                1
-            };
-            let next = Depth {
-                paths: next.paths.saturating_mul(n),
-                ..next
-            };
+            let (n, next) = next.glossy(self.scene.settings.glossy_samples, self.max_paths);
             let w = ks / n as f32;
             let mut sum = Vec3::ZERO;
             for _ in 0..n {

@@ -572,7 +572,6 @@ fn decode(name: &str, bytes: &[u8]) -> Result<Texture> {
 /// The R, G and B channels of an OpenEXR map's first layer that has them,
 /// as f32.
 fn decode_exr(name: &str, bytes: &[u8]) -> Result<Texture> {
-    use exr::prelude::{ReadChannels, ReadLayers};
     let err = |e: exr::error::Error| anyhow!("{}", clip_quotes(&e.to_string()));
     let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(err)?;
     for layer in &meta.headers {
@@ -581,25 +580,11 @@ fn decode_exr(name: &str, bytes: &[u8]) -> Result<Texture> {
         let channels = layer.channels.list.len() as u64;
         check_size(w, h, w.saturating_mul(h).saturating_mul(4 * channels))?;
     }
-    let image = exr::image::read::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgb_channels(
-            |size, _| (size.0, vec![Vec3::ZERO; size.0 * size.1]),
-            |(w, px): &mut (usize, Vec<Vec3>), pos, (r, g, b): (f32, f32, f32)| {
-                px[pos.1 * *w + pos.0] = Vec3::new(r, g, b);
-            },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(Cursor::new(bytes))
-        .map_err(err)?;
-    let size = image.layer_data.size;
-    let (_, texels) = image.layer_data.channel_data.pixels;
+    let (w, h, texels) = crate::raster::openexr::rgb(Cursor::new(bytes)).map_err(err)?;
     Ok(Texture {
         name: name.to_string(),
-        width: size.0 as u32,
-        height: size.1 as u32,
+        width: w as u32,
+        height: h as u32,
         texels: Arc::new(texels),
         wrap: [Wrap::Repeat; 2],
         tint: Vec3::ONE,
