@@ -151,7 +151,10 @@ fn what_cannot_be_light_is_refused_naming_it() {
             &["--env missing.hdr", "not found"][..],
         ),
         (&["--env", "junk.hdr"], &["junk.hdr", "not an image"]),
-        (&["--env", "cut.hdr"], &["--env cut.hdr: cut.hdr: "]),
+        (
+            &["--env", "cut.hdr"],
+            &["--env cut.hdr: cut.hdr: ", "truncated"],
+        ),
         (
             &["--env", "0.5", "--env-strength", "-1"],
             &["--env-strength -1", "0 or more"],

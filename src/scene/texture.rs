@@ -104,6 +104,9 @@ pub(super) fn image_error(e: image::ImageError) -> anyhow::Error {
             "the image's header asks for more than the {} per texture",
             crate::memory::bytes(TEXTURE_BUDGET)
         ),
+        image::ImageError::IoError(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+            anyhow::anyhow!("the file ends before the pixels its header declares (truncated?)")
+        }
         e => anyhow::anyhow!("{e}"),
     }
 }
