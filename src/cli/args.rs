@@ -8,7 +8,7 @@ use super::debug::DebugSpec;
 use crate::render::{Feature, Features, PlanPolicy, SceneRequest, Worst};
 use crate::scene::envlight::EnvRequest;
 use crate::scene::up::Up;
-use crate::scene::Builder;
+use crate::scene::{Builder, Integrator, MAX_DEPTH};
 use crate::tui::color::ColorMode;
 use crate::tui::graphics::symbols::Symbols;
 use crate::tui::graphics::GraphicsArg;
@@ -181,6 +181,13 @@ pub struct SceneOpts {
     /// Glossy reflection directions per glossy hit (default: the scene's).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=256))]
     pub glossy_samples: Option<u32>,
+    /// How light is followed [default: the scene file's, else path for
+    /// scenes with metallic-roughness (glTF) materials, whitted otherwise].
+    #[arg(long, value_enum)]
+    pub integrator: Option<Integrator>,
+    /// The most bounces after the camera ray [default: the scene's, 5].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=MAX_DEPTH as i64))]
+    pub max_depth: Option<u32>,
     /// Independent uniform samples instead of jittered (stratified) ones.
     #[arg(long)]
     pub independent: bool,
@@ -231,6 +238,8 @@ impl SceneOpts {
             seed: self.seed,
             light_samples: self.light_samples,
             glossy_samples: self.glossy_samples,
+            integrator: self.integrator,
+            max_depth: self.max_depth,
             independent: self.independent,
             camera: self.camera.clone(),
             allow_outside: self.allow_outside,

@@ -144,6 +144,7 @@ pub fn kind_color(k: RayKind) -> Vec3 {
         RayKind::Reflection => Vec3::new(0.0, 1.0, 1.0),
         RayKind::Glossy => Vec3::new(0.3, 0.5, 1.0),
         RayKind::Transmission => Vec3::new(0.0, 1.0, 0.0),
+        RayKind::Diffuse => Vec3::new(1.0, 0.5, 0.0),
     }
 }
 
@@ -153,6 +154,7 @@ fn kind_color_name(k: RayKind) -> &'static str {
         RayKind::Reflection => "cyan",
         RayKind::Glossy => "blue",
         RayKind::Transmission => "green",
+        RayKind::Diffuse => "orange",
     }
 }
 
@@ -162,6 +164,7 @@ fn kind_name(k: RayKind) -> &'static str {
         RayKind::Reflection => "reflection",
         RayKind::Glossy => "glossy",
         RayKind::Transmission => "transmitted",
+        RayKind::Diffuse => "diffuse",
     }
 }
 

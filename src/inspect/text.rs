@@ -145,6 +145,7 @@ fn ray(out: &mut Out, n: &RayNode, d: usize) {
         RayKind::Reflection => "reflection ray",
         RayKind::Glossy => "glossy ray",
         RayKind::Transmission => "transmitted ray",
+        RayKind::Diffuse => "diffuse ray",
     };
     out.push(
         d,
@@ -244,10 +245,39 @@ fn ray(out: &mut Out, n: &RayNode, d: usize) {
             ),
             _ => format!("miss: background {}", v(m.color)),
         };
-        out.push(d + 1, LineKind::Detail, text);
+        out.push(
+            d + 1,
+            LineKind::Detail,
+            text + &mis_text(m.mis.as_ref(), false),
+        );
+    }
+    if let Some(e) = &n.emission {
+        out.push(
+            d + 1,
+            LineKind::Detail,
+            format!("emits {}{}", v(e.radiance), mis_text(e.mis.as_ref(), false)),
+        );
     }
     for l in &n.lights {
         light(out, l, d + 1);
+    }
+    if let Some(b) = &n.bounce {
+        let pdf = b.pdf.map_or("none (one direction)".into(), |p| num(p, 5));
+        let ends = if n.children.is_empty() {
+            ", ended by Russian roulette"
+        } else {
+            ""
+        };
+        out.push(
+            d + 1,
+            LineKind::Detail,
+            format!(
+                "bounce: {} lobe, pdf {pdf}, factor {}, survival {}{ends}",
+                b.lobe.name(),
+                v(b.factor),
+                num(b.survival, 4)
+            ),
+        );
     }
     for c in &n.children {
         ray(out, c, d + 1);
@@ -263,9 +293,29 @@ fn ray(out: &mut Out, n: &RayNode, d: usize) {
     );
 }
 
+/// How a light arrival was weighed between light and BSDF sampling:
+/// `light` for the light sample's side, else the BSDF's.
+fn mis_text(m: Option<&crate::render::recorder::Mis>, light: bool) -> String {
+    m.map_or(String::new(), |m| {
+        format!(
+            "; MIS weight {} (light {} / bsdf {}; pdfs light {} bsdf {})",
+            num(if light { m.light_weight } else { m.bsdf_weight }, 4),
+            num(m.light_weight, 4),
+            num(m.bsdf_weight, 4),
+            num(m.light_pdf, 5),
+            num(m.bsdf_pdf, 5)
+        )
+    })
+}
+
 /// One light sample, its verdict first so that a narrow pane shows it.
 fn sample_line(s: &LightSample) -> (LineKind, String) {
-    let at = format!("point {} colour {}", v(s.point), v(s.color));
+    let at = format!(
+        "point {} colour {}{}",
+        v(s.point),
+        v(s.color),
+        mis_text(s.mis.as_ref(), true)
+    );
     match (&s.shadow_ray, &s.occluder) {
         (None, _) => (LineKind::Detail, format!("behind the surface: {at}")),
         (Some(r), Some((mesh, tri))) => (

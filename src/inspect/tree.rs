@@ -6,7 +6,9 @@ use serde::{Deserialize, Serialize};
 use crate::bvh::{Bvh, Hit, TraversalStats};
 use crate::geometry::Ray;
 use crate::render::post::Displayed;
-use crate::render::recorder::{HitInfo, LightSample, MissInfo, RayKind, Recorder};
+use crate::render::recorder::{
+    Bounce, Emission, HitInfo, LightSample, MissInfo, RayKind, Recorder,
+};
 use crate::render::Tracer;
 
 /// One traced ray and everything that happened along it.
@@ -21,6 +23,11 @@ pub struct RayNode {
     pub hit: Option<HitInfo>,
     pub miss: Option<MissInfo>,
     pub lights: Vec<LightNode>,
+    /// On a path: the hit's own light, and how the path went on.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub emission: Option<Emission>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bounce: Option<Bounce>,
     pub children: Vec<RayNode>,
     /// Radiance returned along the ray.
     pub color: Vec3,
@@ -134,6 +141,8 @@ impl Recorder for TreeRecorder {
             hit: None,
             miss: None,
             lights: Vec::new(),
+            emission: None,
+            bounce: None,
             children: Vec::new(),
             color: Vec3::ZERO,
             contribution: Vec3::ZERO,
@@ -180,6 +189,18 @@ impl Recorder for TreeRecorder {
         if let Some(l) = self.light() {
             l.diffuse = diffuse;
             l.specular = specular;
+        }
+    }
+
+    fn emission(&mut self, e: Emission) {
+        if let Some(n) = self.stack.last_mut() {
+            n.emission = Some(e);
+        }
+    }
+
+    fn bounce(&mut self, b: Bounce) {
+        if let Some(n) = self.stack.last_mut() {
+            n.bounce = Some(b);
         }
     }
 

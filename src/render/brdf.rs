@@ -176,10 +176,15 @@ impl Brdf {
         })
     }
 
+    /// Schlick's Fresnel seen from `cos_v`: what a mirror reflects.
+    #[inline]
+    pub(crate) fn fresnel(&self, cos_v: f32) -> Vec3 {
+        schlick(self.f0, cos_v)
+    }
+
     /// The density (per solid angle) with which [`Brdf::sample_specular`]
     /// draws `l` for `v`, for a rough lobe.
-    #[cfg(test)]
-    fn specular_pdf(&self, n: Vec3, v: Vec3, l: Vec3) -> f32 {
+    pub(crate) fn specular_pdf(&self, n: Vec3, v: Vec3, l: Vec3) -> f32 {
         let (cos_v, cos_l) = (n.dot(v), n.dot(l));
         if cos_v <= 0.0 || cos_l <= 0.0 {
             return 0.0;

@@ -32,10 +32,13 @@ pub enum Feature {
     NormalMaps,
     /// Light emitted by materials.
     Emission,
+    /// Light arriving after bounces off other surfaces (path tracing;
+    /// direct light only when off).
+    Indirect,
 }
 
 impl Feature {
-    pub const ALL: [Feature; 13] = [
+    pub const ALL: [Feature; 14] = [
         Feature::Shadows,
         Feature::Reflections,
         Feature::SmoothNormals,
@@ -49,6 +52,7 @@ impl Feature {
         Feature::Bvh,
         Feature::NormalMaps,
         Feature::Emission,
+        Feature::Indirect,
     ];
 
     pub fn name(self) -> &'static str {
@@ -66,6 +70,7 @@ impl Feature {
             Feature::Bvh => "bvh",
             Feature::NormalMaps => "normal-maps",
             Feature::Emission => "emission",
+            Feature::Indirect => "indirect",
         }
     }
 

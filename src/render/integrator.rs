@@ -40,15 +40,21 @@ pub const MAX_PATHS: u32 = 256;
 /// A ray's place in its sample's tree: the bounces above it, and the paths
 /// the tree had split into on the way.
 #[derive(Clone, Copy, Debug)]
-struct Depth {
-    bounces: u32,
+pub(super) struct Depth {
+    pub(super) bounces: u32,
     paths: u32,
+    /// On a path, the density (per solid angle) of the bounce that drew
+    /// this ray, for weighing the light it finds against light sampling;
+    /// `None` for the camera's rays, mirrors, passes through and Whitted's
+    /// rays, which light sampling cannot stand in for.
+    pub(super) pdf: Option<f32>,
 }
 
 impl Depth {
     const CAMERA: Depth = Depth {
         bounces: 0,
         paths: 1,
+        pdf: None,
     };
 
     /// The next bounce, on one of `split` branches.
@@ -56,6 +62,16 @@ impl Depth {
         Depth {
             bounces: self.bounces + 1,
             paths: self.paths.saturating_mul(split),
+            pdf: None,
+        }
+    }
+
+    /// A path's next bounce, drawn with density `pdf`.
+    pub(super) fn bounce(self, pdf: Option<f32>) -> Depth {
+        Depth {
+            bounces: self.bounces + 1,
+            paths: self.paths,
+            pdf,
         }
     }
 
@@ -136,16 +152,16 @@ impl Placed {
 }
 
 /// Shading point, as the lights and reflections need it.
-struct Surface<'m> {
-    p: Vec3,
-    err: Vec3,
-    ng: Vec3,
-    n: Vec3,
-    v: Vec3,
-    kd: Vec3,
-    mat: &'m Material,
+pub(super) struct Surface<'m> {
+    pub(super) p: Vec3,
+    pub(super) err: Vec3,
+    pub(super) ng: Vec3,
+    pub(super) n: Vec3,
+    pub(super) v: Vec3,
+    pub(super) kd: Vec3,
+    pub(super) mat: &'m Material,
     /// A metallic-roughness material's BRDF here, its textures read.
-    brdf: Option<Brdf>,
+    pub(super) brdf: Option<Brdf>,
 }
 
 /// A texture's value at `uv`, filtered as the plan says.
@@ -206,7 +222,7 @@ impl<'a> Tracer<'a> {
             width,
             height,
             seed,
-            max_depth: scene.settings.max_depth,
+            max_depth: plan.max_depth,
             max_paths: MAX_PATHS,
             cancel: None,
         }
@@ -214,7 +230,7 @@ impl<'a> Tracer<'a> {
 
     /// Whether [`Tracer::cancel`] says stop.
     #[inline]
-    fn cancelled(&self) -> bool {
+    pub(super) fn cancelled(&self) -> bool {
         self.cancel.is_some_and(|c| c())
     }
 
@@ -343,7 +359,7 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    fn blocked<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Option<u32> {
+    pub(super) fn blocked<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Option<u32> {
         rec.shadow_ray();
         if self.plan.bvh {
             rec.occluded(self.bvh, ray)
@@ -358,7 +374,7 @@ impl<'a> Tracer<'a> {
     /// then costs its caller no call, and the traversal is left out.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn trace<R: Recorder>(
+    pub(super) fn trace<R: Recorder>(
         &self,
         ray: &Ray,
         found: Option<Option<Hit>>,
@@ -374,7 +390,7 @@ impl<'a> Tracer<'a> {
             None => self.closest(ray, rec),
         };
         let color = match hit {
-            None => self.miss(ray, rec),
+            None => self.miss(ray, depth, rec),
             Some(hit) => self.shade(ray, &hit, depth, weight, rng, rec),
         };
         rec.end_ray(color);
@@ -383,13 +399,28 @@ impl<'a> Tracer<'a> {
 
     /// What a ray leaving the scene sees: the background colour, or the
     /// cube map or environment light where the plan looks them up (black
-    /// where it does not).
-    fn miss<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Vec3 {
+    /// where it does not). On a path, a background colour is a backdrop
+    /// that lights nothing (seen by the camera and in mirrors only), and
+    /// an environment light found by a bounce is weighed against sampling
+    /// it.
+    fn miss<R: Recorder>(&self, ray: &Ray, depth: Depth, rec: &mut R) -> Vec3 {
         let env = &self.scene.environment;
         let on = self.plan.environment;
+        let mut mis = None;
         let color = match env {
             Environment::CubeMap(cube) if on => cube.lookup(ray.dir),
-            Environment::Light(light) if on => light.eval(ray.dir),
+            Environment::Light(light) if on => {
+                let radiance = light.eval(ray.dir);
+                match depth.pdf {
+                    Some(bsdf_pdf) => {
+                        let m = super::recorder::Mis::new(light.pdf(ray.dir), bsdf_pdf);
+                        mis = Some(m);
+                        radiance * m.bsdf_weight
+                    }
+                    None => radiance,
+                }
+            }
+            Environment::Color(_) if depth.pdf.is_some() => Vec3::ZERO,
             Environment::Color(c) => *c,
             Environment::CubeMap(_) | Environment::Light(_) => Vec3::ZERO,
         };
@@ -405,7 +436,12 @@ impl<'a> Tracer<'a> {
                 },
                 _ => (None, None),
             };
-            rec.miss(MissInfo { face, uv, color });
+            rec.miss(MissInfo {
+                face,
+                uv,
+                color,
+                mis,
+            });
         }
         color
     }
@@ -495,9 +531,7 @@ impl<'a> Tracer<'a> {
         let (mut pbr_info, mut pbr_mapped) = (None, None);
         if let Some(pbr) = &mat.pbr {
             let (mut metallic, mut roughness) = (pbr.metallic, pbr.roughness);
-            if self.plan.emission {
-                emitted = pbr.emissive;
-            }
+            emitted = self.emitted(pbr, uv);
             let mut mapped = None;
             if let Some(st) = uv {
                 let textures = &scene.textures;
@@ -505,9 +539,6 @@ impl<'a> Tracer<'a> {
                 if let Some(id) = pbr.metallic_roughness {
                     let t = tex(id);
                     (metallic, roughness) = (metallic * t.z, roughness * t.y);
-                }
-                if let Some(id) = pbr.emissive_texture.filter(|_| self.plan.emission) {
-                    emitted = tex(id);
                 }
                 if let Some((id, strength)) = pbr.occlusion {
                     occlusion = 1.0 + strength * (tex(id).x - 1.0);
@@ -561,6 +592,10 @@ impl<'a> Tracer<'a> {
             mat,
             brdf,
         };
+        if self.plan.path {
+            let t = hit.t * ray.dir.length();
+            return self.path_vertex(&s, (hit.prim, t, emitted), depth, weight, rng, rec);
+        }
         // Ambient light reaches a metallic-roughness surface's diffuse
         // share, less its occlusion; what it emits adds as it is.
         let mut color = match &brdf {
@@ -613,6 +648,20 @@ impl<'a> Tracer<'a> {
             color += self.trace(&ray, None, next, kind, weight * w, rng, rec) * w;
         }
         color
+    }
+
+    /// The light a metallic-roughness surface gives off at texture
+    /// coordinates `uv` (where the plan reads textures), as emission has it.
+    pub(super) fn emitted(&self, pbr: &crate::scene::material::Pbr, uv: Option<Vec2>) -> Vec3 {
+        if !self.plan.emission {
+            return Vec3::ZERO;
+        }
+        match (pbr.emissive_texture, uv) {
+            (Some(id), Some(st)) => {
+                lookup(&self.scene.textures[id as usize], st, self.plan.bilinear)
+            }
+            _ => pbr.emissive,
+        }
     }
 
     /// One light's Phong contribution, averaged over its samples.
@@ -722,6 +771,7 @@ impl<'a> Tracer<'a> {
                     }),
                     diffuse: d,
                     specular: Vec3::ZERO,
+                    mis: None,
                 });
             }
         }
@@ -754,6 +804,7 @@ impl<'a> Tracer<'a> {
                     occluder: None,
                     diffuse: Vec3::ZERO,
                     specular: Vec3::ZERO,
+                    mis: None,
                 });
             }
             return (Vec3::ZERO, Vec3::ZERO);
@@ -811,6 +862,7 @@ impl<'a> Tracer<'a> {
                 }),
                 diffuse: d,
                 specular: sp,
+                mis: None,
             });
         }
         (d, sp)

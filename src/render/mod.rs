@@ -3,6 +3,7 @@
 //! one progressive loop and the one post-processing step.
 
 pub(crate) mod brdf;
+pub(crate) mod bsdf;
 pub mod content;
 pub mod debug_view;
 pub mod features;
@@ -10,6 +11,7 @@ pub mod film;
 pub mod integrator;
 pub mod overlay;
 pub mod partial;
+mod path;
 pub mod plan;
 pub mod post;
 pub mod progressive;

@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use super::integrator::MAX_PATHS;
 use super::{Feature, Features};
-use crate::scene::{Environment, Projection, Scene};
+use crate::scene::{Environment, Integrator, Projection, Scene};
 
 /// Whether stages the scene cannot use are left out (`--no-plan` runs them).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -32,6 +32,7 @@ pub enum Reason {
     NoEnvironment,
     NoNormalMaps,
     NoEmission,
+    Whitted,
 }
 
 impl Reason {
@@ -46,6 +47,7 @@ impl Reason {
             Reason::NoEnvironment => "no environment map in scene",
             Reason::NoNormalMaps => "no normal maps in scene",
             Reason::NoEmission => "no emissive material in scene",
+            Reason::Whitted => "the Whitted integrator runs",
         }
     }
 
@@ -61,6 +63,7 @@ impl Reason {
             Reason::NoEnvironment => "no env. map",
             Reason::NoNormalMaps => "no normal map",
             Reason::NoEmission => "no emission",
+            Reason::Whitted => "whitted",
         }
     }
 }
@@ -123,6 +126,7 @@ pub fn not_needed(scene: &Scene, f: Feature) -> Option<Reason> {
         Feature::Emission if !scene.materials.iter().any(|m| m.emissive()) => {
             Some(Reason::NoEmission)
         }
+        Feature::Indirect if integrator(scene).0 == Integrator::Whitted => Some(Reason::Whitted),
         _ => None,
     }
 }
@@ -143,12 +147,14 @@ fn stage_name(f: Feature) -> &'static str {
         Feature::Bvh => "BVH traversal",
         Feature::NormalMaps => "normal maps",
         Feature::Emission => "emission",
+        Feature::Indirect => "path tracing (indirect light)",
     }
 }
 
 /// Stages in the order `--explain` lists them; a refinement comes after the
 /// feature it needs.
-const ORDER: [Feature; 13] = [
+const ORDER: [Feature; 14] = [
+    Feature::Indirect,
     Feature::Shadows,
     Feature::Reflections,
     Feature::Glossy,
@@ -163,6 +169,22 @@ const ORDER: [Feature; 13] = [
     Feature::Bloom,
     Feature::Bvh,
 ];
+
+/// The integrator `scene` is rendered with, and why.
+pub fn integrator(scene: &Scene) -> (Integrator, &'static str) {
+    match scene.settings.integrator {
+        Some(Integrator::Path) => (Integrator::Path, "asked for"),
+        Some(Integrator::Whitted) => (Integrator::Whitted, "the Whitted integrator was asked for"),
+        None if scene.materials.iter().any(|m| m.pbr.is_some()) => (
+            Integrator::Path,
+            "metallic-roughness materials (--integrator whitted for direct light only)",
+        ),
+        None => (
+            Integrator::Whitted,
+            "Phong materials only, made for Whitted's model (--integrator path traces paths)",
+        ),
+    }
+}
 
 /// The feature a refinement needs to be running.
 fn refines(f: Feature) -> Option<Feature> {
@@ -205,6 +227,13 @@ pub struct Plan {
     /// Nothing is sampled (no sample draws a random number): one pass
     /// gives the exact image.
     pub deterministic: bool,
+    /// The integrator chosen, and why ([`integrator`]).
+    pub integrator: Integrator,
+    integrator_why: &'static str,
+    /// Paths are traced: the path integrator with indirect light on.
+    pub path: bool,
+    /// The most bounces after the camera ray.
+    pub max_depth: u32,
 }
 
 /// Whether the scene's camera is orthographic.
@@ -216,10 +245,14 @@ impl Plan {
     /// The plan for `scene` with `features` enabled.
     pub fn new(scene: &Scene, features: Features, policy: PlanPolicy) -> Self {
         let prune = policy == PlanPolicy::Prune;
+        let (integrator, integrator_why) = integrator(scene);
         let mut decisions = [Decision::Off; Feature::ALL.len()];
         for f in ORDER {
             decisions[f as usize] = if !features.on(f) {
                 Decision::Off
+            } else if f == Feature::Indirect && integrator == Integrator::Whitted {
+                // Not a stage the plan prunes: the integrator is a choice.
+                Decision::NotNeeded(Reason::Whitted)
             } else if let Some(g) = refines(f).filter(|g| !decisions[*g as usize].runs()) {
                 Decision::Needs(g)
             } else if let Some(why) = not_needed(scene, f).filter(|_| prune) {
@@ -242,7 +275,9 @@ impl Plan {
         // An environment light is sampled at every hit.
         let env_light =
             on(Feature::Environment) && matches!(scene.environment, Environment::Light(_));
-        let deterministic = !(on(Feature::Supersampling)
+        let path = on(Feature::Indirect);
+        let deterministic = !(path
+            || on(Feature::Supersampling)
             || on(Feature::Glossy)
             || env_light
             || (on(Feature::SoftShadows) && any_area)
@@ -267,7 +302,17 @@ impl Plan {
             emission: on(Feature::Emission),
             packets: on(Feature::Bvh) && !orthographic(scene),
             deterministic,
+            integrator,
+            integrator_why,
+            path,
+            max_depth: scene.settings.max_depth,
         }
+    }
+
+    /// The plan with another maximum depth (the TUI's `<` and `>`).
+    pub fn with_max_depth(mut self, depth: u32) -> Self {
+        self.max_depth = depth.min(crate::scene::MAX_DEPTH);
+        self
     }
 
     /// The decision for `f`'s stage.
@@ -277,14 +322,14 @@ impl Plan {
 
     /// Whether each stage runs, the specular term and the progressive
     /// passes included: what the image depends on.
-    fn runs(&self) -> [bool; Feature::ALL.len() + 2] {
+    fn runs(&self) -> ([bool; Feature::ALL.len() + 2], u32) {
         let mut r = [false; Feature::ALL.len() + 2];
         for f in Feature::ALL {
             r[f as usize] = self.decision(f).runs();
         }
         r[Feature::ALL.len()] = self.specular;
         r[Feature::ALL.len() + 1] = self.deterministic;
-        r
+        (r, self.max_depth)
     }
 
     /// Whether the same stages run under both plans (features that are not
@@ -298,10 +343,10 @@ impl Plan {
     /// force finds the same hits as the BVH, so only they may differ.
     pub fn same_film(&self, other: &Plan) -> bool {
         let shaping = |p: &Plan| {
-            let mut r = p.runs();
+            let (mut r, depth) = p.runs();
             r[Feature::Bloom as usize] = false;
             r[Feature::Bvh as usize] = false;
-            r
+            (r, depth)
         };
         shaping(self) == shaping(other)
     }
@@ -312,7 +357,18 @@ impl Plan {
             .iter()
             .map(|&f| {
                 let d = self.decision(f);
-                (stage_name(f), d.runs(), d.reason())
+                let why = match (f, d) {
+                    (Feature::Indirect, Decision::On | Decision::NotNeeded(_)) => {
+                        format!(
+                            "{}: {}",
+                            if d.runs() { "on" } else { "not needed" },
+                            self.integrator_why
+                        )
+                    }
+                    (Feature::Indirect, Decision::Off) => "off: direct light only".into(),
+                    _ => d.reason(),
+                };
+                (stage_name(f), d.runs(), why)
             })
             .collect();
         rows.push((

@@ -20,6 +20,8 @@ pub enum RayKind {
     Reflection,
     Glossy,
     Transmission,
+    /// A path's bounce drawn from a diffuse lobe.
+    Diffuse,
 }
 
 /// Everything known about a hit, gathered only for active recorders.
@@ -68,6 +70,53 @@ pub struct MissInfo {
     pub face: Option<String>,
     pub uv: Option<Vec2>,
     pub color: Vec3,
+    /// On a path: how the environment's light found this way is weighed
+    /// against sampling it (absent where it counts whole).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mis: Option<Mis>,
+}
+
+/// Multiple importance sampling (the power heuristic) of one light
+/// arrival that two strategies could have found: the densities of both
+/// per solid angle, and both weights (they sum to 1; the one for the
+/// strategy that found it applies).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Mis {
+    pub light_pdf: f32,
+    pub bsdf_pdf: f32,
+    pub light_weight: f32,
+    pub bsdf_weight: f32,
+}
+
+impl Mis {
+    pub fn new(light_pdf: f32, bsdf_pdf: f32) -> Self {
+        let light_weight = super::bsdf::power_heuristic(light_pdf, bsdf_pdf);
+        Self {
+            light_pdf,
+            bsdf_pdf,
+            light_weight,
+            bsdf_weight: 1.0 - light_weight,
+        }
+    }
+}
+
+/// How a path went on from a hit: the lobe drawn, its density (`None` for
+/// a mirror or a pass through), the throughput factor (BSDF times cosine
+/// over the density) and the chance Russian roulette let the path live.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Bounce {
+    pub lobe: super::bsdf::Lobe,
+    pub pdf: Option<f32>,
+    pub factor: Vec3,
+    pub survival: f32,
+}
+
+/// Light a surface gives off, seen along a ray, and how it is weighed
+/// against sampling the emitter (absent where it counts whole).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Emission {
+    pub radiance: Vec3,
+    pub mis: Option<Mis>,
 }
 
 /// One shadow-tested point on a light.
@@ -82,6 +131,10 @@ pub struct LightSample {
     pub occluder: Option<(String, u32)>,
     pub diffuse: Vec3,
     pub specular: Vec3,
+    /// On a path, for lights a bounce could also find: the weighing of
+    /// this sample against the BSDF's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mis: Option<Mis>,
 }
 
 pub trait Recorder {
@@ -125,6 +178,12 @@ pub trait Recorder {
     /// The light's averaged diffuse and specular terms.
     #[inline(always)]
     fn end_light(&mut self, _diffuse: Vec3, _specular: Vec3) {}
+    /// On a path: the hit's own light.
+    #[inline(always)]
+    fn emission(&mut self, _e: Emission) {}
+    /// On a path: how it goes on from the hit, before the next ray begins.
+    #[inline(always)]
+    fn bounce(&mut self, _b: Bounce) {}
     /// The ray's radiance.
     #[inline(always)]
     fn end_ray(&mut self, _color: Vec3) {}

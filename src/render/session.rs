@@ -29,6 +29,10 @@ pub struct SceneRequest {
     pub light_samples: Option<u32>,
     /// Glossy directions per glossy hit (default: the scene's).
     pub glossy_samples: Option<u32>,
+    /// The integrator (default: the scene's, else the plan's choice).
+    pub integrator: Option<crate::scene::Integrator>,
+    /// The most bounces a ray tree or path takes (default: the scene's).
+    pub max_depth: Option<u32>,
     /// Independent instead of jittered sub-pixel and light samples.
     pub independent: bool,
     /// Which of a glTF file's cameras to look through (name or number).
@@ -59,6 +63,8 @@ impl SceneRequest {
             seed: 1,
             light_samples: None,
             glossy_samples: None,
+            integrator: None,
+            max_depth: None,
             independent: false,
             camera: None,
             allow_outside: false,
@@ -124,6 +130,8 @@ impl Session {
         st.builder = req.builder.unwrap_or(st.builder);
         st.light_samples = req.light_samples.unwrap_or(st.light_samples);
         st.glossy_samples = req.glossy_samples.unwrap_or(st.glossy_samples);
+        st.integrator = req.integrator.or(st.integrator);
+        st.max_depth = req.max_depth.unwrap_or(st.max_depth);
         st.stratify &= !req.independent;
         let (width, height) = req.size.unwrap_or((st.width, st.height));
         let plan = Plan::new(&scene, req.features, req.policy);

@@ -282,6 +282,7 @@ struct RenderSpec {
     size: Option<Spanned<Exact<u32, 2>>>,
     spp: Option<Spanned<u32>>,
     max_depth: Option<Spanned<u32>>,
+    integrator: Option<super::Integrator>,
     builder: Option<Builder>,
     ambient: Option<Rgb>,
     light_samples: Option<Spanned<u32>>,
@@ -696,6 +697,7 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
         environment,
         settings,
         warnings: parts.warnings,
+        emitters: Default::default(),
     })
 }
 
@@ -1095,9 +1097,10 @@ fn settings_from(
         s.spp = loc.range(v, 1..=super::MAX_SPP, "render.spp")?;
     }
     if let Some(v) = &r.max_depth {
-        s.max_depth = loc.range(v, 0..=64, "render.max_depth")?;
+        s.max_depth = loc.range(v, 0..=super::MAX_DEPTH, "render.max_depth")?;
     }
     s.builder = r.builder.unwrap_or(s.builder);
+    s.integrator = r.integrator.or(s.integrator);
     if let Some(c) = &r.ambient {
         s.ambient = loc.colour(c, "ambient", warnings);
     }

@@ -283,6 +283,7 @@ pub fn load_bare_from(
         materials: parts.materials,
         textures: parts.textures,
         warnings: parts.warnings,
+        emitters: Default::default(),
     })
 }
 

@@ -5,6 +5,7 @@
 pub mod bezier;
 pub mod builtin;
 pub mod camera;
+pub mod emitters;
 pub mod envlight;
 pub mod file;
 pub mod frame;
@@ -106,6 +107,27 @@ pub enum Environment {
     Light(Box<EnvLight>),
 }
 
+/// How light is followed from the camera.
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize, clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Integrator {
+    /// Whitted ray tracing: direct light, mirror and glossy reflection.
+    Whitted,
+    /// Path tracing: light arriving by any number of bounces.
+    Path,
+}
+
+impl std::fmt::Display for Integrator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Integrator::Whitted => "whitted",
+            Integrator::Path => "path",
+        })
+    }
+}
+
 /// Which BVH builder to use.
 #[derive(
     Clone,
@@ -140,6 +162,9 @@ impl std::fmt::Display for Builder {
 /// range of samples.
 pub const MAX_SPP: u32 = 1 << 20;
 
+/// The most bounces a ray tree or path may take.
+pub const MAX_DEPTH: u32 = 64;
+
 /// Render defaults a scene can set; the CLI and TUI override them.
 #[derive(Clone, Debug)]
 pub struct Settings {
@@ -147,6 +172,8 @@ pub struct Settings {
     pub height: u32,
     pub spp: u32,
     pub max_depth: u32,
+    /// The integrator asked for; `None` leaves it to the plan.
+    pub integrator: Option<Integrator>,
     pub builder: Builder,
     /// Constant light added as `kd * ambient`, so surfaces no light reaches are not pitch black.
     pub ambient: Vec3,
@@ -186,6 +213,7 @@ impl Default for Settings {
             height: 720,
             spp: 16,
             max_depth: 5,
+            integrator: None,
             builder: Builder::Sah,
             ambient: Vec3::ZERO,
             light_samples: 16,
@@ -210,6 +238,9 @@ pub struct Scene {
     pub settings: Settings,
     /// Non-fatal problems found while loading (missing MTL or texture, degenerate triangles).
     pub warnings: Vec<String>,
+    /// The emissive triangles as lights, found when first asked for
+    /// ([`Scene::emitters`]).
+    pub emitters: std::sync::OnceLock<emitters::Emitters>,
 }
 
 impl Scene {
@@ -227,6 +258,11 @@ impl Scene {
         })
     }
 
+    /// The emissive triangles, for light sampling.
+    pub fn emitters(&self) -> &emitters::Emitters {
+        self.emitters.get_or_init(|| emitters::Emitters::of(self))
+    }
+
     pub fn has_vertex_normals(&self) -> bool {
         self.meshes.iter().any(|m| m.smooth)
     }
@@ -239,6 +275,7 @@ impl Scene {
     /// stability battery's scale and offset cases.
     pub fn transform(&mut self, scale: f32, offset: Vec3) {
         let f = |p: Vec3| p * scale + offset;
+        self.emitters = Default::default();
         for p in &mut self.geometry.positions {
             *p = f(*p);
         }

@@ -454,6 +454,20 @@ impl App {
                 self.send_view();
             }
             Action::Toggle(f) => self.toggle(f),
+            Action::Depth(d) => {
+                let max = crate::scene::MAX_DEPTH as i64;
+                let depth = (self.plan.max_depth as i64 + d as i64).clamp(0, max) as u32;
+                let what = if self.plan.path { "path" } else { "ray tree" };
+                if depth == self.plan.max_depth {
+                    self.say(format!(
+                        "maximum depth {depth}: the {what} cannot go further"
+                    ));
+                } else {
+                    self.plan = self.plan.clone().with_max_depth(depth);
+                    self.say(format!("maximum depth {depth}: bounces a {what} takes"));
+                    self.send_view();
+                }
+            }
             Action::SwitchBuilder => {
                 self.builder = match self.builder {
                     Builder::Sah => Builder::Median,
@@ -590,7 +604,10 @@ impl App {
 
     fn toggle(&mut self, f: Feature) {
         self.features.toggle(f);
-        let plan = self.session.plan_for(self.features);
+        let plan = self
+            .session
+            .plan_for(self.features)
+            .with_max_depth(self.plan.max_depth);
         let same = plan.same_stages(&self.plan);
         let state = if self.features.on(f) { "on" } else { "off" };
         self.say(

@@ -93,6 +93,8 @@ pub enum Action {
     Fov(i8),
     ResetView,
     Toggle(Feature),
+    /// Change the maximum depth by steps.
+    Depth(i8),
     SwitchBuilder,
     SelectMode,
     /// Leave select mode.
@@ -219,9 +221,16 @@ pub const ROWS: &[Row] = &[
             (K::Char('t'), A::Toggle(Feature::Bvh)),
             (K::Char('N'), A::Toggle(Feature::NormalMaps)),
             (K::Char('E'), A::Toggle(Feature::Emission)),
+            (K::Char('i'), A::Toggle(Feature::Indirect)),
         ],
         help: "toggle a feature (each key is listed in the Features panel)",
         hint: Some("features"),
+    },
+    Row {
+        mode: Mode::Any,
+        keys: &[(K::Char('<'), A::Depth(-1)), (K::Char('>'), A::Depth(1))],
+        help: "fewer, more bounces (the maximum depth of paths and ray trees)",
+        hint: None,
     },
     Row {
         mode: Mode::Any,

@@ -334,7 +334,7 @@ fn a_small_terminal_shows_a_message() {
 #[test]
 fn help_lists_every_binding() {
     let mut app = app("cornell", &[]);
-    let mut t = terminal(140, 60);
+    let mut t = terminal(150, 64);
     settle(&mut t, &mut app);
     app.handle_key(Key::Char('?'));
     super::draw(&mut t, &mut app).unwrap();

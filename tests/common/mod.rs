@@ -39,6 +39,7 @@ pub fn scene(meshes: &[TestMesh], lights: Vec<Light>, camera: Camera) -> Scene {
         environment: Environment::Color(Vec3::ZERO),
         settings: Settings::default(),
         warnings: parts.warnings,
+        emitters: Default::default(),
     }
 }
 

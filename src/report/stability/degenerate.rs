@@ -119,6 +119,7 @@ fn scene_from(parts: Parts, name: &str) -> Scene {
             ..Settings::default()
         },
         warnings: parts.warnings,
+        emitters: Default::default(),
     }
 }
 

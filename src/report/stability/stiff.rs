@@ -148,6 +148,7 @@ pub fn stage(ns: f32, light: Vec3, intensity: f32, shut_in: bool) -> Result<Scen
             ..Settings::default()
         },
         warnings: parts.warnings,
+        emitters: Default::default(),
     })
 }
 
