@@ -16,11 +16,13 @@ term.  Usage:
                               [--out compare-cycles-out] [--size 160x120]
                               [--spp 256] [--scenes a,c]
                               [--distribution MULTI_GGX|GGX] [--analytic]
+                              [--integrator path|whitted] [--depth 8]
 
 Outputs, under --out (default compare-cycles-out/ in the repository, which
-git ignores), per scene NAME and Cycles distribution DIST (multi_ggx, ggx):
+git ignores), per scene NAME and Cycles distribution DIST (multi_ggx, ggx;
+multi_ggx-whitted and ggx-whitted with --integrator whitted):
     NAME.glb                 the test scene
-    NAME.rayterm.exr         rayterm's linear film
+    NAME.rayterm.exr         rayterm's linear film (the last run's)
     NAME.cycles-DIST.exr     Cycles' linear render
     NAME.DIST.side.png       rayterm | Cycles | heat map of the ratio (sRGB,
                              one exposure for both pictures)
@@ -43,6 +45,11 @@ environment light, which the Cycles render would not have):
     e_emissive     an emissive quad (emissiveFactor (1, 0.5, 0.25), emissive
                    strength 4, black base colour) facing the camera; its
                    only light is behind it and lights nothing that is seen
+    f_sky          a rough gold metal and a smooth red dielectric sphere on
+                   the floor under a constant sky (0.5, 0.6, 0.8), no lights
+    g_glow         a glowing sphere (emissive (1, 0.7, 0.4) x 6) beside a grey
+                   sphere on the floor, in a black world: the emitter is the
+                   only light
 
 Matching the two renderers
 --------------------------
@@ -72,13 +79,17 @@ Matching the two renderers
   The importer sets spot_blend from the ratio of the angles; the script sets
   spot_blend = (cos_inner - cos_outer) / (1 - cos_outer), so that both ramps
   start and end at the same angles.  Their shapes still differ.
-* Light paths.  rayterm is Whitted-style: direct light from the lights plus
-  specular reflection rays, no diffuse interreflection.  Cycles gets
-  diffuse_bounces 0, transmission, volume and transparent bounces 0,
-  glossy_bounces = max_bounces = 4 (so that glossy rays see the direct light
-  on what they hit, as rayterm's reflection rays do), caustics off, no
-  sample clamping, no glossy filter, no light tree, no denoising, adaptive
-  sampling off, and a black world.
+* Light paths.  With --integrator path (the default) both renderers follow
+  --depth bounces (default 8) after the first hit: rayterm with
+  --integrator path --max-depth N, Cycles with max, diffuse and glossy
+  bounces N and reflective caustics on (rayterm's paths carry them).  With
+  --integrator whitted rayterm gives direct light plus specular reflection
+  rays, and Cycles gets diffuse_bounces 0, glossy_bounces = max_bounces = 4
+  (so that glossy rays see the direct light on what they hit, as rayterm's
+  reflection rays do) and caustics off.  Either way transmission, volume
+  and transparent bounces are 0, and there is no sample clamping, no glossy filter, no light tree, no denoising, adaptive
+  sampling off, and a black world, except for the scenes lit by a constant
+  sky (WORLD below: rayterm's --env, Cycles' world colour).
 * Film.  rayterm jitters its samples uniformly over each pixel (a box filter
   one pixel wide); Cycles gets the box filter of width 1.  Both write linear
   32-bit float EXR, exposure 0, Standard view transform; rayterm's EXR is
@@ -98,13 +109,14 @@ Matching the two renderers
 
 Comparison: over the pixels where either image's luminance exceeds 1 % of
 the larger of the two images' 99.9th percentiles ("lit"), the script reports
-the median of rayterm / Cycles (of luminance) and the shares of pixels whose
+the median of rayterm / Cycles (of luminance), the ratio of their means,
+and the shares of pixels whose
 ratio is within 10 % and 20 % of 1; then the same per object (the pixels
 next to an outline left out, which the two renderers' jitter covers
 differently) and, for the spot, inside the inner cone alone.
 
---analytic does not run Cycles: it renders a_spheres with rayterm, with
-reflection rays off (direct light only), and compares each sphere's pixels
+--analytic does not run Cycles: it renders a_spheres with rayterm's path
+tracer at --max-depth 0 (direct light only), and compares each sphere's pixels
 with glTF's Appendix B BRDF x cosine x I / d^2 evaluated here at the pixel
 centres, printing quantiles of rayterm / analytic (red channel).
 """
@@ -414,12 +426,52 @@ def scene_e():
     return g
 
 
+def scene_f():
+    """A rough gold metal sphere and a smooth red dielectric one on the
+    grey floor, lit only by a constant blue-grey sky of radiance (0.5, 0.6,
+    0.8): what metals reflect and the floor's bounce light."""
+    g = Gltf()
+    floor(g)
+    gold = g.material("gold", base=(1.0, 0.78, 0.34), metallic=1.0, roughness=0.35)
+    red = g.material("red", base=BASE, metallic=0.0, roughness=0.15)
+    g.sphere("sphere_gold", (-0.7, 0.6, 0.0), 0.6, gold)
+    g.sphere("sphere_red", (0.7, 0.6, 0.0), 0.6, red)
+    g.camera("cam", (0.0, 1.8, 4.0), (0.0, 0.5, 0.0), 0.7, ASPECT)
+    return g
+
+
+def scene_g():
+    """A glowing sphere (emissiveFactor (1, 0.7, 0.4) at strength 6) beside
+    a grey sphere on the grey floor, in a black world: the emitter is the
+    only light."""
+    g = Gltf()
+    floor(g)
+    glow = g.material("glow", base=(0.0, 0.0, 0.0), metallic=0.0, roughness=1.0,
+                      emissive=(1.0, 0.7, 0.4), emissive_strength=6.0)
+    grey = g.material("grey", base=GREY, metallic=0.0, roughness=0.6)
+    g.sphere("sphere_glow", (-0.6, 0.9, -0.3), 0.35, glow)
+    g.sphere("sphere_grey", (0.5, 0.5, 0.2), 0.5, grey)
+    g.camera("cam", (0.0, 1.8, 4.0), (0.0, 0.5, 0.0), 0.7, ASPECT)
+    return g
+
+
 SCENES = {
     "a_spheres": scene_a,
     "b_diffuse": scene_b,
     "c_spot": scene_c,
     "d_directional": scene_d,
     "e_emissive": scene_e,
+    "f_sky": scene_f,
+    "g_glow": scene_g,
+}
+
+# The world each scene is lit by besides its lights: a constant linear
+# colour given to rayterm as --env and to Cycles as its world's colour.
+# Scenes without lights of their own need one (black for none), or
+# rayterm would give them its default light.
+WORLD = {
+    "f_sky": (0.5, 0.6, 0.8),
+    "g_glow": (0.0, 0.0, 0.0),
 }
 
 # --------------------------------------------------------------------------
@@ -455,7 +507,7 @@ class quiet_stdout:
         os.close(self.saved)
 
 
-def render_cycles(glb, exr, width, height, spp, distribution):
+def render_cycles(glb, exr, width, height, spp, distribution, depth, world):
     import bpy
 
     doc = glb_json(glb)
@@ -490,11 +542,11 @@ def render_cycles(glb, exr, width, height, spp, distribution):
             if node.type == "BSDF_PRINCIPLED":
                 node.distribution = distribution
 
-    world = bpy.data.worlds.new("black")
-    world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
-    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0, 0, 0, 1)
-    scene.world = world
+    sky = bpy.data.worlds.new("world")
+    sky.use_nodes = True
+    sky.node_tree.nodes["Background"].inputs["Strength"].default_value = 1.0
+    sky.node_tree.nodes["Background"].inputs["Color"].default_value = (*world, 1)
+    scene.world = sky
 
     r = scene.render
     r.engine = "CYCLES"
@@ -516,13 +568,18 @@ def render_cycles(glb, exr, width, height, spp, distribution):
     c.samples = spp
     c.use_adaptive_sampling = False
     c.use_denoising = False
-    c.max_bounces = 4
-    c.diffuse_bounces = 0
-    c.glossy_bounces = 4
+    if depth is None:
+        # Whitted: direct light, and glossy rays that see it.
+        c.max_bounces = 4
+        c.diffuse_bounces = 0
+        c.glossy_bounces = 4
+        c.caustics_reflective = False
+    else:
+        c.max_bounces = c.diffuse_bounces = c.glossy_bounces = depth
+        c.caustics_reflective = True
     c.transmission_bounces = 0
     c.volume_bounces = 0
     c.transparent_max_bounces = 0
-    c.caustics_reflective = False
     c.caustics_refractive = False
     c.sample_clamp_direct = 0.0
     c.sample_clamp_indirect = 0.0
@@ -634,6 +691,7 @@ def compare(rt, cy, within=None):
     stats = {
         "lit_pixels": int(lit.sum()),
         "median_ratio": float(np.median(ratio[lit])) if lit.any() else nan,
+        "mean_ratio": float(lr[lit].sum() / max(lc[lit].sum(), 1e-12)) if lit.any() else nan,
         "within_10": float((dev <= 0.10).mean() * 100) if lit.any() else nan,
         "within_20": float((dev <= 0.20).mean() * 100) if lit.any() else nan,
     }
@@ -706,14 +764,14 @@ def analytic(args):
     glb = os.path.join(args.out, "a_spheres.glb")
     exr = os.path.join(args.out, "a_spheres.direct.exr")
     g.write(glb)
-    render_rayterm(args.rayterm, glb, exr, "%dx%d" % (w, h), 64, ["--no", "reflections"])
+    render_rayterm(args.rayterm, glb, exr, "%dx%d" % (w, h), 64, ["--max-depth", "0"])
     direct = read_exr(exr)
     labels = object_labels(g, w, h)
     eye, d = camera_rays(g.view, w, h)
     light = g.doc["extensions"]["KHR_lights_punctual"]["lights"][0]
     lnode = next(n for n in g.doc["nodes"] if "extensions" in n)
     lpos, intensity = np.array(lnode["translation"]), light["intensity"]
-    print("rayterm (reflections off) / glTF Appendix B at pixel centres, red channel")
+    print("rayterm (direct light: --max-depth 0) / glTF Appendix B at pixel centres, red channel")
     print("%-16s %6s  %s" % ("sphere", "pixels", "quantiles 5 / 25 / 50 / 75 / 95 %"))
     results = {}
     for mat, (name, c, rad) in zip(g.doc["materials"][1:], g.spheres):
@@ -744,7 +802,7 @@ def analytic(args):
 
 def compare_with_cycles(args):
     width, height = (int(v) for v in args.size.split("x"))
-    dist = args.distribution.lower()
+    dist = args.distribution.lower() + ("" if args.integrator == "path" else "-whitted")
     wanted = args.scenes.split(",")
     results = {}
     for name, build in SCENES.items():
@@ -755,11 +813,19 @@ def compare_with_cycles(args):
         g.write(glb)
         rt_exr = os.path.join(args.out, name + ".rayterm.exr")
         cy_exr = os.path.join(args.out, "%s.cycles-%s.exr" % (name, dist))
+        world = WORLD.get(name)
+        extra = ["--integrator", args.integrator]
+        if args.integrator == "path":
+            extra += ["--max-depth", str(args.depth)]
+        if world is not None:
+            extra += ["--env", ",".join("%g" % c for c in world)]
+        depth = args.depth if args.integrator == "path" else None
         t0 = time.time()
-        render_rayterm(args.rayterm, glb, rt_exr, args.size, args.spp)
+        render_rayterm(args.rayterm, glb, rt_exr, args.size, args.spp, extra)
         t1 = time.time()
         with quiet_stdout():
-            render_cycles(glb, cy_exr, width, height, args.spp, args.distribution)
+            render_cycles(glb, cy_exr, width, height, args.spp, args.distribution, depth,
+                          world or (0.0, 0.0, 0.0))
         t2 = time.time()
         rt, cy = read_exr(rt_exr), read_exr(cy_exr)
 
@@ -783,16 +849,17 @@ def compare_with_cycles(args):
         save_png(os.path.join(args.out, "%s.%s.side.png" % (name, dist)), side)
         save_png(os.path.join(args.out, "%s.%s.diff.png" % (name, dist)), h)
 
-    print("rayterm / Cycles (%s), luminance over lit pixels" % args.distribution)
-    print("%-15s %7s %7s %7s %7s" % ("scene", "lit px", "median", "<=10%", "<=20%"))
+    print("rayterm / Cycles (%s, %s), luminance over lit pixels" % (args.integrator, args.distribution))
+    print("%-15s %7s %7s %7s %7s %7s" % ("scene", "lit px", "median", "mean", "<=10%", "<=20%"))
     for name, s in results.items():
-        print("%-15s %7d %7.3f %6.1f%% %6.1f%%" % (
-            name, s["lit_pixels"], s["median_ratio"], s["within_10"], s["within_20"]))
+        print("%-15s %7d %7.3f %7.3f %6.1f%% %6.1f%%" % (
+            name, s["lit_pixels"], s["median_ratio"], s["mean_ratio"], s["within_10"], s["within_20"]))
     print("\nby object (pixels next to an outline left out):")
     for name, s in results.items():
         for obj, o in s["objects"].items():
-            print("  %-15s %-18s %6d px  median %6.3f  <=10%% %5.1f%%  <=20%% %5.1f%%" % (
-                name, obj, o["lit_pixels"], o["median_ratio"], o["within_10"], o["within_20"]))
+            print("  %-15s %-18s %6d px  median %6.3f  mean %6.3f  <=10%% %5.1f%%  <=20%% %5.1f%%" % (
+                name, obj, o["lit_pixels"], o["median_ratio"], o["mean_ratio"], o["within_10"],
+                o["within_20"]))
     with open(os.path.join(args.out, "summary-%s.json" % dist), "w") as f:
         json.dump(results, f, indent=1)
 
@@ -808,6 +875,11 @@ def main():
     ap.add_argument("--scenes", default=",".join(SCENES), help="comma-separated names or prefixes")
     ap.add_argument("--distribution", default="MULTI_GGX", choices=["MULTI_GGX", "GGX"],
                     help="the Principled BSDF's microfacet distribution in Cycles")
+    ap.add_argument("--integrator", default="path", choices=["path", "whitted"],
+                    help="rayterm's integrator; Cycles follows as many bounces (path) or "
+                         "direct light and glossy rays (whitted)")
+    ap.add_argument("--depth", type=int, default=8,
+                    help="bounces after the first hit for both renderers (path)")
     ap.add_argument("--analytic", action="store_true",
                     help="compare rayterm's direct light with glTF's BRDF instead of Cycles")
     args = ap.parse_args()

@@ -325,6 +325,12 @@ pub struct RenderArgs {
     /// Partial films are uniform: the render is too.
     #[arg(long, value_name = "FILE.exr", conflicts_with = "debug")]
     pub checkpoint: Option<PathBuf>,
+    /// Write these beside the picture in the EXR output, as channels
+    /// albedo.R/G/B, normal.X/Y/Z and Z: what each pixel's camera rays
+    /// first hit (its colour, its normal, its distance).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "albedo,normal,depth",
+          conflicts_with_all = ["debug", "samples", "part", "checkpoint", "resume"])]
+    pub aov: Vec<crate::render::aov::Aov>,
     /// Continue from a checkpoint (or a part) of this same render: its
     /// samples are kept, and rendering goes on to the requested spp, time
     /// or error, uniformly.

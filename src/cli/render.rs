@@ -18,6 +18,7 @@ use super::open_request;
 use crate::interrupt;
 use crate::raster::claim::Claim;
 use crate::raster::{png, Format, Output};
+use crate::render::aov;
 use crate::render::partial::{self, Meta, Part};
 use crate::render::session::check_film;
 use crate::render::{post, Ended, Film, Progressive, Report, SceneRequest, Session, Stop};
@@ -44,6 +45,12 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     let out = Output::check(&a.output, &scene_file, formats)?;
     if a.debug.is_some() && out.format != Format::Png {
         bail!("--debug views are PNG images; name the output .png");
+    }
+    if !a.aov.is_empty() && out.format != Format::Exr {
+        bail!(
+            "--aov writes channels beside the picture in an OpenEXR file; name the output .exr, not {}",
+            words::path(&a.output)
+        );
     }
     // The checkpoint is claimed for the whole render, before it is read
     // or asked about: a second render of it is refused at once, where it
@@ -251,7 +258,17 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
             // at once, with nothing written.
             let (format, image, (w, h)) = (out.format, film.image(), (s.width, s.height));
             let bloom = s.plan.bloom.then_some(s.scene.settings.bloom);
-            let work = std::thread::spawn(move || image_bytes(format, image, w, h, bloom.as_ref()));
+            let aovs = match a.aov.is_empty() {
+                true => Vec::new(),
+                false => match aov::render(&tracer, &a.aov, &cancel) {
+                    Some(planes) => planes,
+                    None => return stopped(checkpoint, film, false),
+                },
+            };
+            let work = std::thread::spawn(move || match aovs.is_empty() {
+                true => image_bytes(format, image, w, h, bloom.as_ref()),
+                false => crate::raster::openexr::encode_with(w, h, &image, &aovs),
+            });
             while !work.is_finished() && !interrupt::requested() {
                 std::thread::park_timeout(std::time::Duration::from_millis(20));
             }

@@ -48,6 +48,49 @@ pub(crate) fn encode_noted(
     Ok(bytes.into_inner())
 }
 
+/// [`encode`] with more channels beside R, G and B: `(name, plane)` pairs,
+/// each plane a value per pixel (an EXR orders its channels by name).
+pub(crate) fn encode_with(
+    width: u32,
+    height: u32,
+    img: &[Vec3],
+    more: &[(&str, Vec<f32>)],
+) -> Result<Vec<u8>> {
+    use exr::prelude::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer, LayerAttributes};
+    let n = width as usize * height as usize;
+    if img.len() != n || more.iter().any(|(_, p)| p.len() != n) {
+        bail!("planes of another size than a {width}x{height} image");
+    }
+    let text = |t: &str| {
+        Text::new_or_none(t).ok_or_else(|| anyhow::anyhow!("{t} cannot be an OpenEXR channel"))
+    };
+    let mut list = Vec::new();
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        let plane = img.iter().map(|p| p[c]).collect();
+        list.push(AnyChannel::new(text(name)?, FlatSamples::F32(plane)));
+    }
+    for (name, plane) in more {
+        list.push(AnyChannel::new(
+            text(name)?,
+            FlatSamples::F32(plane.clone()),
+        ));
+    }
+    let channels = AnyChannels::sort(list.into());
+    let layer = Layer::new(
+        (width as usize, height as usize),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        channels,
+    );
+    let image = exr::image::Image::from_layer(layer);
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok(bytes.into_inner())
+}
+
 /// The text attribute `name` of the OpenEXR image at `path` (see
 /// [`encode_noted`]), read from its header alone; `None` where it has none.
 pub(crate) fn note(path: &Path, name: &str) -> Result<Option<String>> {
