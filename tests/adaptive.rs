@@ -107,6 +107,37 @@ fn the_estimate_of_adaptive_images_is_calibrated() {
     }
 }
 
+/// The same with paths traced: one light sample per hit where Whitted's
+/// integrator takes four, the same quadrature, and the estimate is as
+/// calibrated.
+#[test]
+fn the_estimate_of_path_traced_images_is_calibrated() {
+    let (w, h) = (12, 12);
+    let mut s = lit_plane();
+    s.settings.integrator = Some(rayterm::scene::Integrator::Path);
+    s.settings.max_depth = 2;
+    let exact = exact_image_area(&s, w, h);
+    for budget in [2.0, 4.0, 16.0, 64.0, 192.0] {
+        let (mut est, mut truth) = (0.0, 0.0);
+        for seed in 0..6 {
+            let sess = session(&s, w, h, 70 + seed);
+            assert!(sess.plan.path);
+            let t = sess.tracer();
+            let mut p = Progressive::new_adaptive(w, h);
+            while p.film.spp_range().1 < budget {
+                p.pass(&t, &Stop::default(), &|| false).unwrap();
+            }
+            est += p.film.estimated_rel_mse().unwrap();
+            truth += rel_mse(&p.film.image(), &exact);
+        }
+        let r = (est / truth).sqrt();
+        assert!(
+            (0.75..=1.33).contains(&r),
+            "{budget} spp: estimated / true error {r:.3}"
+        );
+    }
+}
+
 /// The same seed gives the same bits on one thread and on two, and every
 /// pixel's samples are the ones a replay of its indices gives.
 #[test]

@@ -340,3 +340,111 @@ fn long_paths_stay_finite() {
     }
     assert!(deepest > 5, "paths end early: {deepest}");
 }
+
+/// `--explain` says which integrator runs and why: the scene file's
+/// `integrator`, overridden by `--integrator`; Phong scenes default to
+/// Whitted's.
+#[test]
+fn the_plan_says_which_integrator_runs_and_why() {
+    let dir = std::env::temp_dir().join(format!("rayterm-path-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("s.toml");
+    std::fs::write(dir.join("q.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    std::fs::write(
+        &scene,
+        "[[mesh]]\nfile = \"q.obj\"\n[render]\nintegrator = \"path\"\n",
+    )
+    .unwrap();
+    let explain = |args: &[&str]| {
+        let out = dir.join("x.png");
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_rayterm"))
+            .args(["render", "--size", "8x8", "--spp", "1", "--explain", "-o"])
+            .arg(&out)
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        err.lines()
+            .find(|l| l.contains("path tracing (indirect light)"))
+            .unwrap_or_else(|| panic!("{err}"))
+            .to_string()
+    };
+    let s = scene.to_str().unwrap();
+    assert!(explain(&[s]).contains("on   on: asked for"));
+    let forced = explain(&[s, "--integrator", "whitted"]);
+    assert!(
+        forced.contains("off  not needed: the Whitted integrator was asked for"),
+        "{forced}"
+    );
+    let cornell = explain(&["cornell"]);
+    assert!(
+        cornell.contains("not needed: Phong materials only"),
+        "{cornell}"
+    );
+    let off = explain(&["cornell", "--integrator", "path", "--no", "indirect"]);
+    assert!(off.contains("off: direct light only"), "{off}");
+}
+
+/// A path-traced render split into parts merges into the single render to
+/// the byte, and one resumed from its checkpoint is the uninterrupted one.
+#[test]
+fn path_traced_parts_and_checkpoints_make_the_single_render() {
+    let dir = std::env::temp_dir().join(format!("rayterm-path-split-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let run = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_rayterm"))
+            .current_dir(&dir)
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    };
+    let base = [
+        "render",
+        "cornell-area",
+        "--integrator",
+        "path",
+        "--size",
+        "24x18",
+    ];
+    let with = |more: &[&'static str]| -> Vec<&'static str> {
+        let mut v = base.to_vec();
+        v.extend_from_slice(more);
+        v
+    };
+    run(&with(&["--spp", "12", "-o", "single.png"]));
+    run(&with(&["--samples", "0..5", "-o", "a.exr"]));
+    run(&with(&["--samples", "5..12", "-o", "b.exr"]));
+    run(&["merge", "b.exr", "a.exr", "-o", "merged.png"]);
+    let read = |f: &str| std::fs::read(dir.join(f)).unwrap();
+    assert!(
+        read("single.png") == read("merged.png"),
+        "the merge differs"
+    );
+    run(&with(&[
+        "--spp",
+        "5",
+        "--checkpoint",
+        "c.exr",
+        "-o",
+        "early.png",
+    ]));
+    run(&with(&[
+        "--spp",
+        "12",
+        "--resume",
+        "c.exr",
+        "-o",
+        "resumed.png",
+    ]));
+    assert!(
+        read("single.png") == read("resumed.png"),
+        "the resumed render differs"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -57,6 +57,10 @@ pub struct TuiBenchArgs {
     /// Passes to measure.
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
     pub passes: u32,
+    /// How light is followed [default: as `tui` would: the scene's, else
+    /// the plan's choice].
+    #[arg(long, value_enum)]
+    pub integrator: Option<crate::scene::Integrator>,
 }
 
 #[derive(Args, Debug)]
@@ -140,7 +144,10 @@ pub fn run(a: BenchArgs) -> Result<ExitCode> {
             let (cols, rows) = t.terminal;
             let cols = u16::try_from(cols).context("--terminal: too many columns")?;
             let rows = u16::try_from(rows).context("--terminal: too many rows")?;
-            let req = SceneRequest::new(&t.scene);
+            let req = SceneRequest {
+                integrator: t.integrator,
+                ..SceneRequest::new(&t.scene)
+            };
             let stats = crate::tui::bench::measure_pass(&req, cols, rows, t.passes)?;
             crate::outln!("{}", serde_json::to_string_pretty(&stats)?)?;
         }

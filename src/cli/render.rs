@@ -100,7 +100,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
             "plan for {}:\n{}{}\n",
             s.scene.name,
             s.plan.explain(),
-            crate::scene::summary::explain(&s.scene)
+            crate::scene::summary::explain(&s.scene, s.plan.path)
         );
     }
     if let Some(spec) = a.debug {

@@ -1285,6 +1285,10 @@ mod tests {
             ("size = [0, 48]", "s.toml:4:8: render.size must be between"),
             ("bloom = { radius = 1000 }", "s.toml:4:20: bloom.radius"),
             ("bloom = { sigma = 0 }", "s.toml:4:19: bloom.sigma"),
+            (
+                "integrator = \"bidirectional\"",
+                "s.toml:4:14: unknown variant",
+            ),
         ] {
             let e = load_err(&format!("{MESH}[render]\n{render}\n"));
             assert!(e.starts_with(at), "{render}: {e}");

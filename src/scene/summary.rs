@@ -65,8 +65,9 @@ fn light(l: &Light) -> String {
     }
 }
 
-/// The materials' shading models and the lights, for `--explain`.
-pub fn explain(scene: &Scene) -> String {
+/// The materials' shading models and the lights, for `--explain`; `paths`
+/// says whether paths are traced (what lights the scene then differs).
+pub fn explain(scene: &Scene, paths: bool) -> String {
     let pbr = scene.materials.iter().filter(|m| m.pbr.is_some()).count();
     let phong = scene.materials.len() - pbr;
     let emissive = scene.materials.iter().filter(|m| m.emissive()).count();
@@ -91,15 +92,25 @@ pub fn explain(scene: &Scene) -> String {
     for l in &scene.lights {
         out += &format!("  {}\n", light(l));
     }
-    out += &format!("ambient: {}\n", value(scene.settings.ambient));
-    out += &format!("environment: {}", environment(&scene.environment));
+    match paths {
+        true => out += "ambient: none (paths find the light it stands in for)\n",
+        false => out += &format!("ambient: {}\n", value(scene.settings.ambient)),
+    }
+    out += &format!("environment: {}", environment(&scene.environment, paths));
     out
 }
 
 /// What rays leaving the scene see, and whether it lights the scene.
-fn environment(e: &Environment) -> String {
+fn environment(e: &Environment, paths: bool) -> String {
     match e {
+        Environment::Color(c) if paths => format!(
+            "background {} (seen by the camera and in mirrors; lights nothing)",
+            value(*c)
+        ),
         Environment::Color(c) => format!("background {} (lights nothing)", value(*c)),
+        Environment::CubeMap(_) if paths => {
+            "cube map (seen and reflected; lights what paths reach it from)".into()
+        }
         Environment::CubeMap(_) => "cube map (seen and reflected; lights nothing)".into(),
         Environment::Light(l) => {
             let what = match (l.color(), l.map()) {
