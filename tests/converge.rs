@@ -241,6 +241,7 @@ fn strategies_are_compared_and_reported() {
         labels,
         [
             "L16 jittered",
+            "path L16 jittered",
             "L1 jittered",
             "L4 jittered",
             "L64 jittered",

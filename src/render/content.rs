@@ -61,10 +61,11 @@ pub fn scene_hash(scene: &Scene, plan: &Plan) -> u64 {
     let mut h = Fnv::new();
     let _ = write!(
         h,
-        "rayterm scene 2 {} {:?} {} {:?} {:?} {:?} {:?} {:?}",
+        "rayterm scene 2 {} {:?} {} {} {:?} {:?} {:?} {:?} {:?}",
         env!("CARGO_PKG_VERSION"),
         plan.features,
         plan.explain(),
+        plan.max_depth,
         scene.settings,
         scene.lights,
         scene.materials,

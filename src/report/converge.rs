@@ -27,7 +27,7 @@ use crate::bvh::Bvh;
 use crate::interrupt;
 use crate::render::{Ended, Film, Plan, Progressive, Stop, Tracer};
 use crate::report::stats::{fit_log_log, log_lerp, median};
-use crate::scene::{Scene, Settings};
+use crate::scene::{Integrator, Scene, Settings};
 use reference::{load_cached, reference_key, save_cached};
 
 /// A rendered reference has this many times the samples of the largest budget...
@@ -75,6 +75,9 @@ pub struct Strategy {
     pub stratify: bool,
     /// Passes after the minimum go to the pixels with the highest error.
     pub adaptive: bool,
+    /// How light is followed: a strategy of another integrator converges
+    /// to its own image, so against the reference its error levels off.
+    pub integrator: Integrator,
 }
 
 /// Which sampled effects the plan runs, so labels name only those.
@@ -83,6 +86,8 @@ pub struct Uses {
     pub area_lights: bool,
     pub glossy: bool,
     pub supersampling: bool,
+    /// The plan's integrator: labels name another.
+    pub integrator: Integrator,
 }
 
 impl Uses {
@@ -91,17 +96,20 @@ impl Uses {
             area_lights: plan.area_sampling && scene.lights.iter().any(|l| l.is_area()),
             glossy: plan.glossy,
             supersampling: plan.supersampling,
+            integrator: plan.integrator,
         }
     }
 }
 
 impl Strategy {
-    pub fn of(s: &Settings) -> Self {
+    /// The strategy of settings `s` rendered under `plan`.
+    pub fn of(s: &Settings, plan: &Plan) -> Self {
         Self {
             light_samples: s.light_samples,
             glossy_samples: s.glossy_samples,
             stratify: s.stratify,
             adaptive: false,
+            integrator: plan.integrator,
         }
     }
 
@@ -109,6 +117,7 @@ impl Strategy {
         s.light_samples = self.light_samples;
         s.glossy_samples = self.glossy_samples;
         s.stratify = self.stratify;
+        s.integrator = Some(self.integrator);
     }
 
     /// E.g. `L16 jittered`: light samples per hit (`L`), glossy directions
@@ -116,6 +125,9 @@ impl Strategy {
     /// where the scene uses them.
     pub fn label(&self, uses: Uses) -> String {
         let mut parts = Vec::new();
+        if self.integrator != uses.integrator {
+            parts.push(self.integrator.to_string());
+        }
         if uses.area_lights {
             parts.push(format!("L{}", self.light_samples));
         }
@@ -144,6 +156,9 @@ impl Strategy {
     /// The command-line options that select this strategy.
     pub fn options(&self, uses: Uses) -> String {
         let mut o = Vec::new();
+        if self.integrator != uses.integrator {
+            o.push(format!("--integrator {}", self.integrator));
+        }
         if uses.area_lights {
             o.push(format!("--light-samples {}", self.light_samples));
         }
@@ -160,10 +175,16 @@ impl Strategy {
     }
 
     /// The strategies worth comparing with `base` on a scene that uses `uses`:
-    /// light samples per hit, glossy samples per hit, independent sampling,
-    /// adaptive sampling.
+    /// the other integrator, light samples per hit, glossy samples per hit,
+    /// independent sampling, adaptive sampling.
     pub fn alternatives(base: Strategy, uses: Uses) -> Vec<Strategy> {
-        let mut out = Vec::new();
+        let mut out = vec![Strategy {
+            integrator: match base.integrator {
+                Integrator::Path => Integrator::Whitted,
+                Integrator::Whitted => Integrator::Path,
+            },
+            ..base
+        }];
         if uses.area_lights {
             out.extend(LIGHT_SAMPLES.iter().map(|&l| Strategy {
                 light_samples: l,
@@ -487,6 +508,9 @@ impl Subject<'_> {
         ));
         let mut scene = self.scene.clone();
         strategy.apply(&mut scene.settings);
+        // The plan of the strategy's integrator, at the study's depth.
+        let plan = Plan::new(&scene, self.plan.features, self.plan.policy)
+            .with_max_depth(self.plan.max_depth);
         let n = cfg.seeds as f64;
         let (mut spp, mut rays, mut mse, mut rel) = (0.0, 0.0, 0.0, 0.0);
         let mut times = Vec::new();
@@ -494,7 +518,7 @@ impl Subject<'_> {
         for i in 0..cfg.seeds {
             let seed = cfg.seed.wrapping_add(i as u64);
             let frame = scene.camera.frame(cfg.width, cfg.height);
-            let tracer = Tracer::new(&scene, self.bvh, self.plan, frame, seed);
+            let tracer = Tracer::new(&scene, self.bvh, &plan, frame, seed);
             let r = run_once(&tracer, budget, strategy.adaptive, passes);
             // A time budget shorter than one sample per pixel measures
             // nothing: an unsampled pixel is not an error of the method.
@@ -671,7 +695,7 @@ impl Subject<'_> {
         let uses = Uses::of(self.scene, self.plan);
         let base = Strategy {
             adaptive: cfg.adaptive,
-            ..Strategy::of(&self.scene.settings)
+            ..Strategy::of(&self.scene.settings, self.plan)
         };
         let mut notes = Vec::new();
         let bar = if cfg.verbose {
@@ -835,6 +859,7 @@ mod tests {
                 glossy_samples: 1,
                 stratify: true,
                 adaptive: false,
+                integrator: Integrator::Whitted,
             },
             label: String::new(),
             points: vec![point(1.0, 0.02 * scale), point(4.0, 0.08 * scale)],
@@ -851,6 +876,7 @@ mod tests {
                 glossy_samples: 1,
                 stratify: true,
                 adaptive: false,
+                integrator: Integrator::Whitted,
             },
             label: "x".into(),
             points: errs
@@ -909,6 +935,7 @@ mod tests {
                 area_lights: true,
                 glossy: false,
                 supersampling: false,
+                integrator: Integrator::Whitted,
             },
             exact: false,
             reference: ReferenceInfo {
@@ -943,17 +970,20 @@ mod tests {
             glossy_samples: 1,
             stratify: true,
             adaptive: false,
+            integrator: Integrator::Whitted,
         };
         let uses = Uses {
             area_lights: true,
             glossy: true,
             supersampling: true,
+            integrator: Integrator::Whitted,
         };
         let alts = Strategy::alternatives(base, uses);
         let labels: Vec<String> = alts.iter().map(|s| s.label(uses)).collect();
         assert_eq!(
             labels,
             [
+                "path L16 G1 jittered",
                 "L1 G1 jittered",
                 "L4 G1 jittered",
                 "L64 G1 jittered",
@@ -967,7 +997,12 @@ mod tests {
             area_lights: false,
             glossy: false,
             supersampling: false,
+            integrator: Integrator::Whitted,
         };
-        assert!(Strategy::alternatives(base, none).is_empty());
+        // Nothing sampled: only the other integrator.
+        let alts = Strategy::alternatives(base, none);
+        assert_eq!(alts.len(), 1);
+        assert_eq!(alts[0].label(none), "path");
+        assert_eq!(alts[0].options(none), "--integrator path");
     }
 }
