@@ -47,6 +47,12 @@ pub enum Command {
     /// the one a single render of all their samples makes, post-processed
     /// the same way.
     Merge(MergeArgs),
+    /// List the files a scene reads, one a line.
+    ///
+    /// The scene file, meshes, material libraries, textures, glTF buffers
+    /// and images, environment maps: what a job on another machine needs
+    /// beside the scene (`parallel --basefile`, rsync, a container).
+    Inputs(InputsArgs),
     /// List the built-in scenes.
     Scenes,
     /// Print the ray tree of one pixel: every ray the renderer traced for it.
@@ -336,6 +342,12 @@ pub struct MergeArgs {
     /// fewer samples, and says so).
     #[arg(long)]
     pub allow_missing: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct InputsArgs {
+    #[command(flatten)]
+    pub scene: SceneOpts,
 }
 
 /// `X,Y`, e.g. `400,300`.

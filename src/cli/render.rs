@@ -80,13 +80,14 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         check_film: false,
         ..a.scene.request()
     })?;
-    out.check_not_input(&s.inputs)?;
+    let inputs = s.input_paths();
+    out.check_not_input(&inputs)?;
     // The film resumed from is work to keep, not to write over.
     if let Some(r) = &a.resume {
         out.check_not_input(std::slice::from_ref(r))?;
     }
     if let Some(c) = &checkpoint {
-        c.check_not_input(&s.inputs)?;
+        c.check_not_input(&inputs)?;
     }
     if a.explain {
         crate::noteln!(
