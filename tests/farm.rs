@@ -1,13 +1,19 @@
-//! A render farm's view: the files a scene reads (`rayterm inputs`).
+//! A render farm's view: progress a log can read, the files a scene reads
+//! (`rayterm inputs`), checkpoints on request and early, and `render
+//! --dry-run`.
 
 mod files;
 
 use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
 
 use files::{rayterm, Dir, Run};
 use glam::Vec3;
 use rayterm::raster::Format;
-use serde_json::json;
+use serde_json::{json, Value};
+
+const SCENE: [&str; 3] = ["cornell-area", "--size", "40x28"];
 
 fn ok(d: &Path, args: &[&str]) -> Run {
     let r = rayterm(d, args);
@@ -22,6 +28,18 @@ fn refused(d: &Path, args: &[&str]) -> String {
     assert_eq!(r.code, Some(1), "{args:?}: {}", r.stderr);
     assert!(!r.stderr.contains("panicked"), "{args:?}: {}", r.stderr);
     r.stderr
+}
+
+fn render(d: &Path, extra: &[&str], out: &str) -> Run {
+    let mut args = vec!["render"];
+    args.extend(SCENE);
+    args.extend(extra);
+    args.extend(["-o", out]);
+    ok(d, &args)
+}
+
+fn bytes(d: &Path, f: &str) -> Vec<u8> {
+    std::fs::read(d.join(f)).unwrap()
 }
 
 /// The lines `rayterm inputs` prints.
@@ -41,6 +59,96 @@ fn png(c: [u8; 3]) -> Vec<u8> {
 
 const OBJ: &str = "mtllib box.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
                    usemtl Wood\nf 1/1 2/2 3/3\n";
+
+#[test]
+fn progress_off_a_terminal_is_lines_or_json() {
+    let d = Dir::new("farm-progress");
+    // Standard error is a file here: lines, from the start to the end.
+    let r = render(&d.0, &["--spp", "8"], "a.png");
+    let lines: Vec<&str> = r.stderr.lines().collect();
+    assert_eq!(
+        lines.first(),
+        Some(&"render: cornell-area at 40x28, 8 spp"),
+        "{}",
+        r.stderr
+    );
+    assert!(
+        lines.last().unwrap().starts_with("progress: done, 8 spp, "),
+        "{}",
+        r.stderr
+    );
+    assert!(r.stdout.contains("-> a.png"));
+    // JSON: every line an object, the first the start, the last the end.
+    let r = render(&d.0, &["--spp", "8", "--progress", "json"], "b.png");
+    let objects: Vec<Value> = r
+        .stderr
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|_| panic!("not JSON: {l}")))
+        .collect();
+    assert_eq!(objects[0]["event"], "start");
+    assert_eq!(objects[0]["total_spp"], 8);
+    assert_eq!(
+        (objects[0]["width"].clone(), objects[0]["height"].clone()),
+        (json!(40), json!(28))
+    );
+    let last = objects.last().unwrap();
+    assert_eq!(
+        (last["event"].as_str(), last["spp"].as_f64()),
+        (Some("done"), Some(8.0))
+    );
+    for o in &objects[1..objects.len() - 1] {
+        assert_eq!(o["event"], "progress", "{o}");
+        let p = o["percent"].as_f64().unwrap();
+        assert!((0.0..=100.0).contains(&p), "{o}");
+    }
+    // None: nothing on standard error.
+    let r = render(&d.0, &["--spp", "8", "--progress", "none"], "c.png");
+    assert_eq!(r.stderr, "");
+    assert!(bytes(&d.0, "a.png") == bytes(&d.0, "c.png"));
+}
+
+/// A resumed render's log says what it resumed from, in words and in
+/// JSON, and the checkpoints it writes.
+#[test]
+fn a_resumed_render_says_where_it_resumed_from() {
+    let d = Dir::new("farm-resume");
+    render(&d.0, &["--spp", "4", "--checkpoint", "c.exr"], "a.png");
+    let r = render(
+        &d.0,
+        &["--spp", "8", "--resume", "c.exr", "--checkpoint", "c.exr"],
+        "b.png",
+    );
+    assert!(
+        r.stderr.starts_with(
+            "render: cornell-area at 40x28, 8 spp; resumed from c.exr, which holds samples 0..4 ("
+        ),
+        "{}",
+        r.stderr
+    );
+    assert!(
+        r.stderr.contains("checkpoint: c.exr holds samples 0.."),
+        "{}",
+        r.stderr
+    );
+    let r = render(
+        &d.0,
+        &[
+            "--spp",
+            "12",
+            "--resume",
+            "c.exr",
+            "--checkpoint",
+            "c.exr",
+            "--progress",
+            "json",
+        ],
+        "c.png",
+    );
+    let start: Value = serde_json::from_str(r.stderr.lines().next().unwrap()).unwrap();
+    assert_eq!(start["resumed_from"]["file"], "c.exr");
+    assert_eq!(start["resumed_from"]["samples"], json!([0, 8]));
+    assert!(r.stderr.contains(r#""event":"checkpoint""#), "{}", r.stderr);
+}
 
 #[test]
 fn inputs_lists_the_files_of_an_obj_with_its_mtl_and_texture() {
@@ -175,4 +283,211 @@ fn inputs_lists_a_gltf_with_its_buffer_and_images() {
             "model/tri.gltf"
         ]
     );
+}
+
+/// Bad checkpoint intervals are refused by name.
+#[test]
+fn checkpoint_intervals_must_be_seconds_above_zero() {
+    let d = Dir::new("farm-every");
+    for bad in ["0", "-1", "nan", "inf", "soon"] {
+        let r = rayterm(
+            &d.0,
+            &[
+                "render",
+                "cornell-area",
+                "--checkpoint",
+                "c.exr",
+                "--checkpoint-every",
+                bad,
+                "-o",
+                "a.png",
+            ],
+        );
+        assert_eq!(r.code, Some(2), "{bad}: {}", r.stderr);
+        assert!(
+            r.stderr.contains("--checkpoint-every"),
+            "{bad}: {}",
+            r.stderr
+        );
+    }
+    let r = rayterm(
+        &d.0,
+        &[
+            "render",
+            "cornell-area",
+            "--checkpoint-every",
+            "3",
+            "-o",
+            "a.png",
+        ],
+    );
+    assert!(r.stderr.contains("--checkpoint"), "{}", r.stderr);
+    assert!(!d.path("c.exr").exists() && !d.path("a.png").exists());
+}
+
+/// The first checkpoint follows the first pass, whatever the interval;
+/// SIGUSR1 asks for another at once; the render ends on SIGTERM with its
+/// film in the checkpoint, which resumes into the uninterrupted render.
+#[test]
+fn sigusr1_writes_a_checkpoint_and_the_first_comes_early() {
+    let d = Dir::new("farm-usr1");
+    let mut args = vec!["--spp", "1000000", "--checkpoint", "c.exr"];
+    args.extend([
+        "--checkpoint-every",
+        "100000",
+        "--progress",
+        "json",
+        "-o",
+        "never.png",
+    ]);
+    let mut child = spawn(&d, &args);
+    let samples = |d: &Dir| -> Option<u32> {
+        let h = rayterm::render::partial::Header::read(&d.path("c.exr")).ok()?;
+        Some(h.range.end)
+    };
+    let wait_for = |what: &str, until: &dyn Fn() -> bool| {
+        let start = Instant::now();
+        while !until() {
+            assert!(start.elapsed() < Duration::from_secs(60), "{what}");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    };
+    wait_for("no first checkpoint", &|| samples(&d).is_some());
+    let first = samples(&d).unwrap();
+    // SAFETY: signalling the child this test started.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGUSR1) }, 0);
+    wait_for("no checkpoint on SIGUSR1", &|| {
+        samples(&d).is_some_and(|n| n > first)
+    });
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "SIGUSR1 ended the render"
+    );
+    // SAFETY: as above.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGTERM) }, 0);
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(128 + libc::SIGTERM), "{err}");
+    let events = err.matches(r#""event":"checkpoint""#).count();
+    assert!(events >= 2, "{err}");
+    let held = samples(&d).unwrap();
+    let spp = (held + 2).to_string();
+    render(&d.0, &["--spp", &spp, "--resume", "c.exr"], "resumed.png");
+    render(&d.0, &["--spp", &spp], "whole.png");
+    assert!(bytes(&d.0, "resumed.png") == bytes(&d.0, "whole.png"));
+}
+
+/// SIGUSR1 to a render with no checkpoint does not end it.
+#[test]
+fn sigusr1_without_a_checkpoint_is_noted() {
+    let d = Dir::new("farm-usr1-none");
+    let mut child = spawn(
+        &d,
+        &["--spp", "1000000", "--progress", "json", "-o", "never.png"],
+    );
+    // Once it renders (its start line is written before the first pass).
+    let mut line = String::new();
+    let mut err = std::io::BufReader::new(child.stderr.take().unwrap());
+    std::io::BufRead::read_line(&mut err, &mut line).unwrap();
+    assert!(line.contains(r#""event":"start""#), "{line}");
+    // SAFETY: signalling the child this test started.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGUSR1) }, 0);
+    let mut rest = String::new();
+    let start = Instant::now();
+    while !rest.contains("SIGUSR1: this render has no --checkpoint") {
+        assert!(start.elapsed() < Duration::from_secs(60), "{rest}");
+        std::io::BufRead::read_line(&mut err, &mut rest).unwrap();
+    }
+    assert!(child.try_wait().unwrap().is_none());
+    // SAFETY: as above.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGTERM) }, 0);
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(128 + libc::SIGTERM));
+    assert!(!d.path("never.png").exists());
+}
+
+/// `rayterm render ARGS` in `d`, its standard error piped.
+fn spawn(d: &Dir, args: &[&str]) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_rayterm"))
+        .arg("render")
+        .args(SCENE)
+        .args(args)
+        .current_dir(&d.0)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// `--dry-run` reports and writes nothing; a checkpointed render needs
+/// more than one that writes an image, as its film keeps statistics.
+#[test]
+fn a_dry_run_estimates_and_renders_nothing() {
+    let d = Dir::new("farm-dry");
+    let figure = |out: &str, row: &str| -> String {
+        out.lines()
+            .find(|l| l.trim_start().starts_with(row))
+            .unwrap_or_else(|| panic!("no {row} in {out}"))
+            .trim_start()[row.len()..]
+            .trim()
+            .to_string()
+    };
+    let plain = ok(
+        &d.0,
+        &[
+            "render",
+            "cornell-area",
+            "--size",
+            "1920x1080",
+            "--spp",
+            "64",
+            "--dry-run",
+            "-o",
+            "a.png",
+        ],
+    );
+    assert!(plain
+        .stdout
+        .starts_with("cornell-area at 1920x1080: a dry run, nothing rendered"));
+    assert_eq!(figure(&plain.stdout, "triangles"), "32 (40 vertices)");
+    assert_eq!(figure(&plain.stdout, "checkpoints"), "none");
+    let ck = ok(
+        &d.0,
+        &[
+            "render",
+            "cornell-area",
+            "--size",
+            "1920x1080",
+            "--spp",
+            "64",
+            "--dry-run",
+            "--checkpoint",
+            "c.exr",
+            "-o",
+            "a.png",
+        ],
+    );
+    let mib = |s: &str| -> f64 {
+        let w: Vec<&str> = s.split_whitespace().collect();
+        let n: f64 = w[1].parse().unwrap();
+        n * match w[2] {
+            "KiB" => 1.0 / 1024.0,
+            "MiB" => 1.0,
+            "GiB" => 1024.0,
+            u => panic!("{u}"),
+        }
+    };
+    let (a, b) = (
+        mib(&figure(&plain.stdout, "peak memory")),
+        mib(&figure(&ck.stdout, "peak memory")),
+    );
+    assert!(b > 4.0 * a, "{a} MiB against {b} MiB");
+    assert!(
+        figure(&ck.stdout, "checkpoints").starts_with("at most 301 MiB a file"),
+        "{}",
+        ck.stdout
+    );
+    assert!(!d.path("a.png").exists() && !d.path("c.exr").exists());
+    assert_eq!(std::fs::read_dir(&d.0).unwrap().count(), 0);
 }

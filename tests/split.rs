@@ -519,7 +519,7 @@ fn a_signal_writes_the_checkpoint() {
     assert!(!d.join("never.png").exists());
     // "interrupted: c.exr holds samples 0..N; continue with --resume c.exr"
     let held = err
-        .split("holds samples 0..")
+        .split("interrupted: c.exr holds samples 0..")
         .nth(1)
         .and_then(|s| s.split(';').next())
         .and_then(|n| n.parse::<u32>().ok())
@@ -777,8 +777,12 @@ fn a_checkpoint_is_claimed_by_one_render_at_a_time() {
     assert!(!d.join(".c.exr.lock").exists());
     assert!(d.join("c.exr").exists());
     std::fs::remove_file(d.join("c.exr")).unwrap();
+    // Killed outright: its first checkpoint, written after the first
+    // pass, keeps its work.
     long(libc::SIGKILL);
     assert!(d.join(".c.exr.lock").exists());
+    assert!(d.join("c.exr").exists());
+    std::fs::remove_file(d.join("c.exr")).unwrap();
     render(&d, &["--spp", "2", "--checkpoint", "c.exr"], "after.png");
     let mut left: Vec<_> = std::fs::read_dir(&d)
         .unwrap()

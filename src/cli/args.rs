@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 
 use super::debug::DebugSpec;
+use super::progress::ProgressMode;
 use crate::render::{Feature, Features, PlanPolicy, SceneRequest, Worst};
 use crate::scene::envlight::EnvRequest;
 use crate::scene::up::Up;
@@ -327,6 +328,29 @@ pub struct RenderArgs {
     /// or error, uniformly.
     #[arg(long, value_name = "FILE.exr", conflicts_with = "debug")]
     pub resume: Option<PathBuf>,
+    /// Seconds between checkpoints [default: 5]; the first is written
+    /// after the first pass, and SIGUSR1 asks for one at the end of the
+    /// pass in flight.
+    #[arg(long, value_name = "SECONDS", requires = "checkpoint", value_parser = parse_seconds,
+          allow_hyphen_values = true)]
+    pub checkpoint_every: Option<f64>,
+    /// Progress on standard error: a bar on a terminal and lines elsewhere
+    /// (auto), a bar, lines (every tenth and every few seconds), json (one
+    /// object a line) or none.
+    #[arg(long, value_enum, value_name = "HOW", default_value = "auto")]
+    pub progress: ProgressMode,
+    /// Print what the render will take (triangles, the BVH, the film, the
+    /// checkpoints, the peak memory) and render nothing.
+    #[arg(long, conflicts_with_all = ["debug", "compare_one_shot"])]
+    pub dry_run: bool,
+}
+
+/// A number of seconds above zero.
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(t) if t > 0.0 && t.is_finite() => Ok(t),
+        _ => Err(format!("'{s}' is not a number of seconds above zero")),
+    }
 }
 
 #[derive(Args, Debug)]

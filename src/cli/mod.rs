@@ -7,6 +7,7 @@ mod debug;
 mod inputs;
 mod inspect;
 mod merge;
+mod progress;
 mod render;
 mod scenes;
 mod stability;
