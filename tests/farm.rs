@@ -1,6 +1,7 @@
 //! A render farm's view: progress a log can read, the files a scene reads
-//! (`rayterm inputs`), checkpoints on request and early, and `render
-//! --dry-run`.
+//! (`rayterm inputs`), parts checked against the scene (`merge --check`),
+//! missing parts named with the commands that render them, staged merges,
+//! checkpoints on request and early, and `render --dry-run`.
 
 mod files;
 
@@ -283,6 +284,230 @@ fn inputs_lists_a_gltf_with_its_buffer_and_images() {
             "model/tri.gltf"
         ]
     );
+}
+
+/// `merge --check SCENE` passes parts of the scene as it loads here, and
+/// names the file that differs, or the one the parts did not read.
+#[test]
+fn merge_check_names_the_input_that_differs() {
+    let d = Dir::new("farm-check");
+    d.write("box.obj", OBJ);
+    d.write("box.mtl", "newmtl Wood\nKd 1 1 1\nmap_Kd wood.png\n");
+    d.write("wood.png", png([200, 120, 40]));
+    let part = |k: &str, out: &str| {
+        ok(
+            &d.0,
+            &[
+                "render", "box.obj", "--size", "24x16", "--spp", "4", "--part", k, "-o", out,
+            ],
+        )
+    };
+    part("1/2", "p1.exr");
+    part("2/2", "p2.exr");
+    let r = ok(
+        &d.0,
+        &[
+            "merge", "--check", "box.obj", "p1.exr", "p2.exr", "-o", "m.png",
+        ],
+    );
+    assert!(
+        r.stderr
+            .contains("check: the parts were rendered from box.obj"),
+        "{}",
+        r.stderr
+    );
+    // Another texture here: named, and nothing written.
+    d.write("wood.png", png([20, 120, 240]));
+    let err = refused(
+        &d.0,
+        &[
+            "merge", "--check", "box.obj", "p1.exr", "p2.exr", "-o", "n.png",
+        ],
+    );
+    assert!(err.contains("wood.png: differs (CRC-32 "), "{err}");
+    assert!(!err.contains("box.mtl:"), "{err}");
+    assert!(!d.path("n.png").exists());
+    // Parts rendered without the MTL (forgotten on the farm).
+    d.write("wood.png", png([200, 120, 40]));
+    std::fs::rename(d.path("box.mtl"), d.path("box.mtl.away")).unwrap();
+    part("1/2", "q1.exr");
+    part("2/2", "q2.exr");
+    std::fs::rename(d.path("box.mtl.away"), d.path("box.mtl")).unwrap();
+    let err = refused(
+        &d.0,
+        &[
+            "merge", "--check", "box.obj", "q1.exr", "q2.exr", "-o", "n.png",
+        ],
+    );
+    assert!(
+        err.contains("box.mtl: read here, not by the parts"),
+        "{err}"
+    );
+    assert!(
+        err.contains("wood.png: read here, not by the parts"),
+        "{err}"
+    );
+    // The options the parts recorded are the ones checked: another size
+    // is no other scene, a missing feature is.
+    let err = refused(
+        &d.0,
+        &[
+            "merge", "--check", "cornell", "p1.exr", "p2.exr", "-o", "n.png",
+        ],
+    );
+    assert!(err.contains("not rendered from cornell"), "{err}");
+    let err = refused(
+        &d.0,
+        &["merge", "--check", "nothing.obj", "p1.exr", "-o", "n.png"],
+    );
+    assert!(err.contains("nothing.obj"), "{err}");
+}
+
+/// Missing parts are named as parts, with commands that render them;
+/// run as printed, they complete the merge.
+#[test]
+fn missing_parts_are_named_with_the_commands_that_render_them() {
+    let d = Dir::new("farm-missing");
+    std::fs::create_dir(d.path("parts")).unwrap();
+    for k in [1, 2] {
+        render(
+            &d.0,
+            &[
+                "--spp",
+                "12",
+                "--part",
+                &format!("{k}/4"),
+                "--progress",
+                "none",
+            ],
+            &format!("parts/part-{k}.exr"),
+        );
+    }
+    let err = refused(
+        &d.0,
+        &[
+            "merge",
+            "parts/part-1.exr",
+            "parts/part-2.exr",
+            "-o",
+            "m.png",
+        ],
+    );
+    assert!(
+        err.contains("parts 3/4 and 4/4 are missing (samples 6..12 of 0..12)"),
+        "{err}"
+    );
+    let commands: Vec<&str> = err
+        .lines()
+        .map(str::trim)
+        .filter(|l| l.starts_with("rayterm render "))
+        .collect();
+    assert_eq!(
+        commands,
+        [
+            "rayterm render cornell-area --size 40x28 --spp 12 --part 3/4 -o parts/part-3.exr",
+            "rayterm render cornell-area --size 40x28 --spp 12 --part 4/4 -o parts/part-4.exr"
+        ],
+        "{err}"
+    );
+    // A preview of what there is says what it lacks.
+    let r = ok(
+        &d.0,
+        &[
+            "merge",
+            "parts/part-1.exr",
+            "parts/part-2.exr",
+            "--allow-missing",
+            "-o",
+            "preview.png",
+        ],
+    );
+    assert!(
+        r.stderr.contains("parts 3/4 and 4/4 are missing"),
+        "{}",
+        r.stderr
+    );
+    for c in commands {
+        let words: Vec<&str> = c.split(' ').skip(1).collect();
+        ok(&d.0, &words);
+    }
+    ok(
+        &d.0,
+        &[
+            "merge",
+            "parts/part-4.exr",
+            "parts/part-1.exr",
+            "parts/part-3.exr",
+            "parts/part-2.exr",
+            "-o",
+            "m.png",
+        ],
+    );
+    render(&d.0, &["--spp", "12"], "single.png");
+    assert!(bytes(&d.0, "m.png") == bytes(&d.0, "single.png"));
+}
+
+/// A merge into a partial film merges again with the other parts into
+/// the single render's image, whichever parts were merged first; parts
+/// with a gap between them make no partial film.
+#[test]
+fn staged_merges_equal_one_render() {
+    let d = Dir::new("farm-staged");
+    for k in 1..=4 {
+        render(
+            &d.0,
+            &["--spp", "12", "--part", &format!("{k}/4")],
+            &format!("p{k}.exr"),
+        );
+    }
+    render(&d.0, &["--spp", "12"], "single.png");
+    render(&d.0, &["--spp", "12"], "single.exr");
+    let r = ok(
+        &d.0,
+        &["merge", "p2.exr", "p1.exr", "--partial", "-o", "s12.exr"],
+    );
+    assert!(
+        r.stdout.contains("into samples 0..6")
+            && r.stdout
+                .contains("still to merge with it: samples 6..12 of 0..12"),
+        "{}",
+        r.stdout
+    );
+    ok(
+        &d.0,
+        &["merge", "p3.exr", "p4.exr", "--partial", "-o", "s34.exr"],
+    );
+    ok(
+        &d.0,
+        &["merge", "s12.exr", "p3.exr", "p4.exr", "-o", "a.png"],
+    );
+    ok(&d.0, &["merge", "s34.exr", "s12.exr", "-o", "b.png"]);
+    ok(
+        &d.0,
+        &["merge", "p1.exr", "s34.exr", "p2.exr", "-o", "c.exr"],
+    );
+    for f in ["a.png", "b.png"] {
+        assert!(bytes(&d.0, f) == bytes(&d.0, "single.png"), "{f}");
+    }
+    assert!(bytes(&d.0, "c.exr") == bytes(&d.0, "single.exr"));
+    // A stage again with a part it holds overlaps; a gap is refused; a
+    // partial film is .exr.
+    let err = refused(&d.0, &["merge", "s12.exr", "p2.exr", "-o", "x.png"]);
+    assert!(err.contains("overlap"), "{err}");
+    let err = refused(
+        &d.0,
+        &["merge", "p1.exr", "p3.exr", "--partial", "-o", "x.exr"],
+    );
+    assert!(
+        err.contains("samples 3..6 are missing between the parts"),
+        "{err}"
+    );
+    let err = refused(
+        &d.0,
+        &["merge", "p1.exr", "p2.exr", "--partial", "-o", "x.png"],
+    );
+    assert!(err.contains("x.png"), "{err}");
+    assert!(!d.path("x.exr").exists() && !d.path("x.png").exists());
 }
 
 /// Bad checkpoint intervals are refused by name.

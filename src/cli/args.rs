@@ -363,9 +363,19 @@ pub struct MergeArgs {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Write the image even when ranges of samples are missing (it has
-    /// fewer samples, and says so).
+    /// fewer samples, and says so): a preview of the parts there are.
     #[arg(long)]
     pub allow_missing: bool,
+    /// Write the merged parts as one partial film (.exr), which merges
+    /// again with the parts still to come into the same image (a staged
+    /// merge); their samples must follow one another.
+    #[arg(long, conflicts_with = "allow_missing")]
+    pub partial: bool,
+    /// Check first that the parts were rendered from this scene as it
+    /// loads here (with the options they record), and say which of its
+    /// files differ where they were not.
+    #[arg(long, value_name = "SCENE", value_parser = scene_spec())]
+    pub check: Option<String>,
 }
 
 #[derive(Args, Debug)]

@@ -120,8 +120,11 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     };
     // What a partial film says of its render, made only where one is read
     // or written: its content hash is a pass over all the scene's data.
-    let mut meta =
-        (split || checkpoint.is_some() || a.resume.is_some()).then(|| Meta::of(&s, total));
+    let mut meta = (split || checkpoint.is_some() || a.resume.is_some()).then(|| Meta {
+        part: a.part,
+        command: shared_options(),
+        ..Meta::of(&s, total)
+    });
     // A render that writes an image reads nothing else from its film; a
     // part of a split render writes the film's statistics.
     let image_only = !split && checkpoint.is_none();
@@ -375,6 +378,41 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The options of this `render` that every part of a split render shares,
+/// as given: all but where it writes, what it resumes, which part it is
+/// and how it reports, which each job has of its own.
+fn shared_options() -> Vec<String> {
+    const OWN_VALUE: [&str; 9] = [
+        "-o",
+        "--output",
+        "--checkpoint",
+        "--resume",
+        "--part",
+        "--samples",
+        "--progress",
+        "--checkpoint-every",
+        "--threads",
+    ];
+    const OWN: [&str; 2] = ["--explain", "--dry-run"];
+    let args: Vec<String> = std::env::args_os()
+        .skip(2)
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect();
+    let mut kept = Vec::new();
+    let mut words = args.into_iter();
+    while let Some(w) = words.next() {
+        let name = w.split_once('=').map_or(w.as_str(), |(n, _)| n);
+        if OWN_VALUE.contains(&name) {
+            if !w.contains('=') {
+                words.next();
+            }
+        } else if !(OWN.contains(&name) || w.starts_with("-o") && w.len() > 2) {
+            kept.push(w);
+        }
+    }
+    kept
 }
 
 /// `render --dry-run`: what the render will take, from the scene as
