@@ -677,9 +677,21 @@ fn the_slurm_scripts_run_their_commands() {
     );
     let log = std::fs::read_to_string(d.join("sbatch.log")).unwrap();
     assert!(
-        log.contains("--array=1-4") && log.contains("--dependency=afterok:4242"),
+        log.contains("--array=1-4")
+            && log.contains("--cpus-per-task=2")
+            && log.contains("--dependency=afterany:4242"),
         "{log}"
     );
+    // The memory asked for is the dry run's estimate of the default
+    // 1920x1080 checkpointed part, and a quarter more: some 900 MB.
+    let mem: u64 = log
+        .split("--mem=")
+        .nth(1)
+        .and_then(|m| m.split('M').next())
+        .and_then(|m| m.parse().ok())
+        .unwrap_or_else(|| panic!("{log}"));
+    assert!((600..2000).contains(&mem), "{log}");
+    assert!(!d.join("estimate.exr").exists() && !d.join("estimate.ckpt.exr").exists());
     let env = [
         ("SCENE", "cornell-area"),
         ("SIZE", "40x28"),
@@ -712,6 +724,19 @@ fn the_slurm_scripts_run_their_commands() {
         !d.join("parts/part-2.ckpt.exr").exists() && d.join("parts/part-2.exr").exists(),
         "{err}"
     );
+    // A part that failed: the merge names it and the command that
+    // renders it, writes a preview of the others, and fails.
+    std::fs::rename(d.join("parts/part-3.exr"), d.join("part-3.away")).unwrap();
+    let out = bash(&d, &script("merge.sbatch"), &env);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("part 3/4 is missing (samples 6..9 of 0..12)")
+            && err.contains("--part 3/4 -o parts/part-3.exr"),
+        "{err}"
+    );
+    assert!(d.join("out.preview.png").exists() && !d.join("out.png").exists());
+    std::fs::rename(d.join("part-3.away"), d.join("parts/part-3.exr")).unwrap();
     let out = bash(&d, &script("merge.sbatch"), &env);
     assert!(
         out.status.success(),
