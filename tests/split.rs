@@ -635,6 +635,9 @@ fn the_readme_split_commands_run_as_written() {
     assert!(out.status.success(), "{whole:?}");
     let target = words[words.iter().position(|w| *w == "-o").unwrap() + 1];
     assert!(bytes(&d, target) == bytes(&d, "whole.png"));
+    // The staged merge gives the merge's image.
+    assert!(lines.iter().any(|l| l.contains("--partial")));
+    assert!(bytes(&d, "staged.png") == bytes(&d, "out.png"));
     std::fs::remove_dir_all(d).unwrap();
 }
 
