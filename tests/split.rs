@@ -176,7 +176,8 @@ fn parts_of_other_renders_overlaps_and_gaps_are_refused() {
     let err = refused(&d, &["merge", "a2.exr", "-o", "m.png"], "m.png");
     assert!(
         err.contains("part 1/2 is missing (samples 0..4 of 0..8)")
-            && err.contains("rayterm render cornell-area --size 40x28 --spp 8 --part 1/2 -o a1.exr")
+            && err
+                .contains("rayterm render cornell-area --size 40x28 --spp 8 --part 1/2 -o a1.exr")
             && err.contains("--allow-missing"),
         "{err}"
     );

@@ -108,7 +108,8 @@ impl Reporter {
         matches!(self.out, Out::Quiet)
     }
 
-    /// The bar's length, when it has one.
+    /// The samples per pixel the render ends at, where fixed (a bar's
+    /// length).
     pub fn length(&self) -> Option<u64> {
         match &self.out {
             Out::Bar(b) => b.length(),
@@ -187,7 +188,7 @@ impl Reporter {
     /// The film now holds `spp` samples per pixel (a fraction within a
     /// pass); a line is printed when one is due.
     pub fn at(&self, spp: f64) {
-        let (percent, left) = self.figures(spp);
+        let (percent, left) = self.figures(spp, self.start.elapsed().as_secs_f64());
         match &self.out {
             Out::Quiet => {}
             Out::Bar(b) => b.set_position(spp as u64),
@@ -297,10 +298,10 @@ impl Reporter {
         }
     }
 
-    /// The percentage done, where a fixed spp or a time says, and the
-    /// seconds a fixed spp leaves at this run's rate.
-    fn figures(&self, spp: f64) -> (Option<f64>, Option<f64>) {
-        let elapsed = self.start.elapsed().as_secs_f64();
+    /// The percentage done `elapsed` seconds into the run, where a fixed
+    /// spp or a time says, and the seconds a fixed spp leaves at this
+    /// run's rate.
+    fn figures(&self, spp: f64, elapsed: f64) -> (Option<f64>, Option<f64>) {
         let by_time = self
             .seconds
             .map(|t| 100.0 * (elapsed / t.max(1e-9)).min(1.0));
@@ -342,12 +343,13 @@ mod tests {
     #[test]
     fn a_fixed_render_reports_its_fraction_and_the_time_left() {
         let r = Reporter::new(ProgressMode::None, &Stop::spp(64), false, 16);
-        let (percent, left) = r.figures(32.0);
-        assert_eq!(percent, Some(50.0));
-        // 16 spp done in this run: 32 more take twice as long.
-        assert!(left.is_some_and(|l| l >= 0.0));
-        assert_eq!(r.figures(16.0).1, None, "nothing done yet, no rate");
-        let timed = Reporter::new(ProgressMode::None, &Stop::seconds(1e9), false, 0);
-        assert_eq!(timed.figures(4.0), (Some(0.0), None));
+        // 16 spp done in this run in 2 s: 32 more take twice as long.
+        assert_eq!(r.figures(32.0, 2.0), (Some(50.0), Some(4.0)));
+        assert_eq!(r.figures(16.0, 2.0).1, None, "nothing done yet, no rate");
+        assert_eq!(r.figures(64.0, 8.0), (Some(100.0), Some(0.0)));
+        // A render to a time is as far along as its time.
+        let timed = Reporter::new(ProgressMode::None, &Stop::seconds(10.0), false, 0);
+        assert_eq!(timed.figures(4.0, 2.5), (Some(25.0), None));
+        assert_eq!(timed.figures(9.0, 12.0).0, Some(100.0));
     }
 }
