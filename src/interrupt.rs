@@ -8,7 +8,8 @@
 //! process too).
 //!
 //! For the TUI, SIGTSTP and SIGCONT too: a stop must wait until the
-//! terminal is given back, and a continued process takes it again.
+//! terminal is given back, and a continued process takes it again. For
+//! `render`, SIGUSR1: write the checkpoint now.
 
 use std::ffi::CString;
 use std::os::unix::ffi::OsStrExt;
@@ -17,7 +18,7 @@ use std::sync::atomic::{AtomicBool, AtomicI32, AtomicPtr, AtomicU64, Ordering};
 use std::sync::{Arc, OnceLock};
 use std::time::{Duration, Instant};
 
-use signal_hook::consts::{SIGCONT, SIGHUP, SIGINT, SIGTERM, SIGTSTP};
+use signal_hook::consts::{SIGCONT, SIGHUP, SIGINT, SIGTERM, SIGTSTP, SIGUSR1};
 
 static FLAG: OnceLock<Arc<AtomicBool>> = OnceLock::new();
 /// The last signal received, for the exit status (128 + signal).
@@ -58,6 +59,23 @@ pub fn flag() -> Arc<AtomicBool> {
         flag
     })
     .clone()
+}
+
+static CHECKPOINT: OnceLock<Arc<AtomicBool>> = OnceLock::new();
+
+/// Catches SIGUSR1 (once) and returns the flag it sets: a request for a
+/// checkpoint now. Caught by every render, checkpointing or not, since its
+/// default action would end the process (a batch system's warning signal
+/// is often SIGUSR1).
+pub(crate) fn checkpoint_flag() -> Arc<AtomicBool> {
+    CHECKPOINT
+        .get_or_init(|| {
+            let flag = Arc::new(AtomicBool::new(false));
+            // Without the handler the default action stands: nothing better.
+            let _ = signal_hook::flag::register(SIGUSR1, flag.clone());
+            flag
+        })
+        .clone()
 }
 
 /// The monotonic clock, read the async-signal-safe way.

@@ -321,11 +321,19 @@ fn readme_examples_print_what_the_readme_shows() {
             .output()
             .unwrap();
         assert!(out.status.success(), "{cmd}");
-        let printed = format!(
-            "{}{}",
-            String::from_utf8_lossy(&out.stderr),
-            String::from_utf8_lossy(&out.stdout)
-        );
+        // A render's progress lines stand for the bar a terminal shows and
+        // clears, which the examples leave out.
+        let err = String::from_utf8_lossy(&out.stderr);
+        let err: String = err
+            .lines()
+            .filter(|l| {
+                !["render: ", "progress: ", "checkpoint: "]
+                    .iter()
+                    .any(|p| l.starts_with(p))
+            })
+            .map(|l| format!("{l}\n"))
+            .collect();
+        let printed = format!("{err}{}", String::from_utf8_lossy(&out.stdout));
         let got: Vec<String> = printed
             .lines()
             .filter(|l| !l.trim().is_empty())

@@ -175,7 +175,10 @@ fn parts_of_other_renders_overlaps_and_gaps_are_refused() {
     }
     let err = refused(&d, &["merge", "a2.exr", "-o", "m.png"], "m.png");
     assert!(
-        err.contains("samples 0..4 of 0..8 are missing") && err.contains("--allow-missing"),
+        err.contains("part 1/2 is missing (samples 0..4 of 0..8)")
+            && err
+                .contains("rayterm render cornell-area --size 40x28 --spp 8 --part 1/2 -o a1.exr")
+            && err.contains("--allow-missing"),
         "{err}"
     );
     let out = rayterm(&d, &["merge", "a2.exr", "--allow-missing", "-o", "m.png"]);
@@ -519,7 +522,7 @@ fn a_signal_writes_the_checkpoint() {
     assert!(!d.join("never.png").exists());
     // "interrupted: c.exr holds samples 0..N; continue with --resume c.exr"
     let held = err
-        .split("holds samples 0..")
+        .split("interrupted: c.exr holds samples 0..")
         .nth(1)
         .and_then(|s| s.split(';').next())
         .and_then(|n| n.parse::<u32>().ok())
@@ -633,6 +636,9 @@ fn the_readme_split_commands_run_as_written() {
     assert!(out.status.success(), "{whole:?}");
     let target = words[words.iter().position(|w| *w == "-o").unwrap() + 1];
     assert!(bytes(&d, target) == bytes(&d, "whole.png"));
+    // The staged merge gives the merge's image.
+    assert!(lines.iter().any(|l| l.contains("--partial")));
+    assert!(bytes(&d, "staged.png") == bytes(&d, "out.png"));
     std::fs::remove_dir_all(d).unwrap();
 }
 
@@ -675,9 +681,21 @@ fn the_slurm_scripts_run_their_commands() {
     );
     let log = std::fs::read_to_string(d.join("sbatch.log")).unwrap();
     assert!(
-        log.contains("--array=1-4") && log.contains("--dependency=afterok:4242"),
+        log.contains("--array=1-4")
+            && log.contains("--cpus-per-task=2")
+            && log.contains("--dependency=afterany:4242"),
         "{log}"
     );
+    // The memory asked for is the dry run's estimate of the default
+    // 1920x1080 checkpointed part, and a quarter more: some 900 MB.
+    let mem: u64 = log
+        .split("--mem=")
+        .nth(1)
+        .and_then(|m| m.split('M').next())
+        .and_then(|m| m.parse().ok())
+        .unwrap_or_else(|| panic!("{log}"));
+    assert!((600..2000).contains(&mem), "{log}");
+    assert!(!d.join("estimate.exr").exists() && !d.join("estimate.ckpt.exr").exists());
     let env = [
         ("SCENE", "cornell-area"),
         ("SIZE", "40x28"),
@@ -710,6 +728,19 @@ fn the_slurm_scripts_run_their_commands() {
         !d.join("parts/part-2.ckpt.exr").exists() && d.join("parts/part-2.exr").exists(),
         "{err}"
     );
+    // A part that failed: the merge names it and the command that
+    // renders it, writes a preview of the others, and fails.
+    std::fs::rename(d.join("parts/part-3.exr"), d.join("part-3.away")).unwrap();
+    let out = bash(&d, &script("merge.sbatch"), &env);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("part 3/4 is missing (samples 6..9 of 0..12)")
+            && err.contains("--part 3/4 -o parts/part-3.exr"),
+        "{err}"
+    );
+    assert!(d.join("out.preview.png").exists() && !d.join("out.png").exists());
+    std::fs::rename(d.join("part-3.away"), d.join("parts/part-3.exr")).unwrap();
     let out = bash(&d, &script("merge.sbatch"), &env);
     assert!(
         out.status.success(),
@@ -777,8 +808,12 @@ fn a_checkpoint_is_claimed_by_one_render_at_a_time() {
     assert!(!d.join(".c.exr.lock").exists());
     assert!(d.join("c.exr").exists());
     std::fs::remove_file(d.join("c.exr")).unwrap();
+    // Killed outright: its first checkpoint, written after the first
+    // pass, keeps its work.
     long(libc::SIGKILL);
     assert!(d.join(".c.exr.lock").exists());
+    assert!(d.join("c.exr").exists());
+    std::fs::remove_file(d.join("c.exr")).unwrap();
     render(&d, &["--spp", "2", "--checkpoint", "c.exr"], "after.png");
     let mut left: Vec<_> = std::fs::read_dir(&d)
         .unwrap()

@@ -41,6 +41,21 @@ impl Bvh {
         build::sah_cost(&self.nodes, build::LEAF_BLOCK).2
     }
 
+    /// The bytes its arrays hold: what `render --dry-run` reports.
+    pub(crate) fn bytes(&self) -> u64 {
+        fn of<T>(v: &[T]) -> u64 {
+            std::mem::size_of_val(v) as u64
+        }
+        let w = &self.wide;
+        of(&self.nodes)
+            + of(&self.prim)
+            + of(&w.nodes)
+            + of(&w.packets)
+            + of(&w.node_of)
+            + of(&w.leaf_of)
+            + of(&w.slot)
+    }
+
     /// Triangles, as many as the scene has.
     pub fn triangle_count(&self) -> usize {
         self.prim.len()

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 
 use super::debug::DebugSpec;
+use super::progress::ProgressMode;
 use crate::render::{Feature, Features, PlanPolicy, SceneRequest, Worst};
 use crate::scene::envlight::EnvRequest;
 use crate::scene::up::Up;
@@ -47,6 +48,12 @@ pub enum Command {
     /// the one a single render of all their samples makes, post-processed
     /// the same way.
     Merge(MergeArgs),
+    /// List the files a scene reads, one a line.
+    ///
+    /// The scene file, meshes, material libraries, textures, glTF buffers
+    /// and images, environment maps: what a job on another machine needs
+    /// beside the scene (`parallel --basefile`, rsync, a container).
+    Inputs(InputsArgs),
     /// List the built-in scenes.
     Scenes,
     /// Print the ray tree of one pixel: every ray the renderer traced for it.
@@ -336,6 +343,29 @@ pub struct RenderArgs {
     /// or error, uniformly.
     #[arg(long, value_name = "FILE.exr", conflicts_with = "debug")]
     pub resume: Option<PathBuf>,
+    /// Seconds between checkpoints [default: 5]; the first is written
+    /// after the first pass, and SIGUSR1 asks for one at the end of the
+    /// pass in flight.
+    #[arg(long, value_name = "SECONDS", requires = "checkpoint", value_parser = parse_seconds,
+          allow_hyphen_values = true)]
+    pub checkpoint_every: Option<f64>,
+    /// Progress on standard error: a bar on a terminal and lines elsewhere
+    /// (auto), a bar, lines (every tenth and every few seconds), json (one
+    /// object a line) or none.
+    #[arg(long, value_enum, value_name = "HOW", default_value = "auto")]
+    pub progress: ProgressMode,
+    /// Print what the render will take (triangles, the BVH, the film, the
+    /// checkpoints, the peak memory) and render nothing.
+    #[arg(long, conflicts_with_all = ["debug", "compare_one_shot"])]
+    pub dry_run: bool,
+}
+
+/// A number of seconds above zero.
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(t) if t > 0.0 && t.is_finite() => Ok(t),
+        _ => Err(format!("'{s}' is not a number of seconds above zero")),
+    }
 }
 
 #[derive(Args, Debug)]
@@ -348,9 +378,25 @@ pub struct MergeArgs {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Write the image even when ranges of samples are missing (it has
-    /// fewer samples, and says so).
+    /// fewer samples, and says so): a preview of the parts there are.
     #[arg(long)]
     pub allow_missing: bool,
+    /// Write the merged parts as one partial film (.exr), which merges
+    /// again with the parts still to come into the same image (a staged
+    /// merge); their samples must follow one another.
+    #[arg(long, conflicts_with = "allow_missing")]
+    pub partial: bool,
+    /// Check first that the parts were rendered from this scene as it
+    /// loads here (with the options they record), and say which of its
+    /// files differ where they were not.
+    #[arg(long, value_name = "SCENE", value_parser = scene_spec())]
+    pub check: Option<String>,
+}
+
+#[derive(Args, Debug)]
+pub struct InputsArgs {
+    #[command(flatten)]
+    pub scene: SceneOpts,
 }
 
 /// `X,Y`, e.g. `400,300`.

@@ -4,8 +4,10 @@ mod args;
 mod bench;
 mod converge;
 mod debug;
+mod inputs;
 mod inspect;
 mod merge;
+mod progress;
 mod render;
 mod scenes;
 mod stability;
@@ -75,6 +77,7 @@ pub fn main() -> ExitCode {
     let result = match command {
         Command::Render(a) => render::run(a),
         Command::Merge(a) => merge::run(a),
+        Command::Inputs(a) => inputs::run(a),
         Command::Scenes => scenes::run(),
         Command::Inspect(a) => inspect::run(a),
         Command::Converge(a) => converge::run(a),

@@ -22,6 +22,7 @@ use super::film::{Film, Piece, PixelStats, Report, FIXED_MAX, FIXED_ONE};
 use super::Session;
 use crate::geometry::sampling::PIXEL_STRATA;
 use crate::raster::flat_exr::{self, Kind, Layout, Scanlines};
+use crate::scene::source::Input;
 use crate::scene::BloomSettings;
 use crate::words::quoted;
 
@@ -52,6 +53,15 @@ pub struct Meta {
     /// Rays traced and seconds spent rendering the samples held.
     pub rays: u64,
     pub seconds: f64,
+    /// Which of `render --part K/N` it is, where it is one.
+    pub part: Option<(u32, u32)>,
+    /// The options of `render` every part of the render shares (the scene,
+    /// its size, spp, seed and features), as words: what renders a missing
+    /// part, and what `merge --check` opens the scene with.
+    pub command: Vec<String>,
+    /// The files the scene was read from, with their CRC-32s, where
+    /// recorded (not for a list too long for the header).
+    pub inputs: Option<Vec<Input>>,
 }
 
 impl Meta {
@@ -68,6 +78,9 @@ impl Meta {
             triangles: s.scene.geometry.triangle_count() as u64,
             rays: 0,
             seconds: 0.0,
+            part: None,
+            command: Vec::new(),
+            inputs: Some(s.inputs.clone()),
         }
     }
 }
@@ -384,6 +397,24 @@ pub fn encode(f: &Film, meta: &Meta) -> Result<Vec<u8>> {
     if let Some(t) = m.total {
         attributes.push(("rayterm.total".into(), t.to_string()));
     }
+    if let Some((k, n)) = m.part {
+        attributes.push(("rayterm.part".into(), format!("{k}/{n}")));
+    }
+    if !m.command.is_empty() {
+        attributes.push(("rayterm.command".into(), ascii_json(&m.command)));
+    }
+    let inputs = m.inputs.as_ref().map(|list| {
+        let pairs: Vec<(String, String)> = list
+            .iter()
+            .map(|i| (format!("{:08x}", i.crc), i.path.display().to_string()))
+            .collect();
+        ascii_json(&pairs)
+    });
+    // A list longer than a header holds is left out: `merge --check` then
+    // names no file.
+    if let Some(list) = inputs.filter(|l| l.len() <= INPUTS_LIMIT) {
+        attributes.push(("rayterm.inputs".into(), list));
+    }
     attributes.sort();
     let layout = Layout {
         width: f.width,
@@ -421,6 +452,28 @@ pub fn encode(f: &Film, meta: &Meta) -> Result<Vec<u8>> {
     let crc = format!("{:08x}", crc32fast::hash(&bytes));
     bytes[at].copy_from_slice(crc.as_bytes());
     Ok(bytes)
+}
+
+/// The longest list of inputs a header records, in bytes (a header is
+/// read up to 1 MiB).
+const INPUTS_LIMIT: usize = 256 << 10;
+
+/// `value` as JSON in ASCII: attributes are Latin-1, and a path may hold
+/// any character.
+fn ascii_json(value: &impl serde::Serialize) -> String {
+    let json = serde_json::to_string(value).unwrap_or_default();
+    let mut out = String::with_capacity(json.len());
+    for c in json.chars() {
+        match c.is_ascii() {
+            true => out.push(c),
+            false => {
+                for u in c.encode_utf16(&mut [0; 2]) {
+                    out += &format!("\\u{u:04x}");
+                }
+            }
+        }
+    }
+    out
 }
 
 /// Where the checksum's eight digits lie in a file of layout `l`.
@@ -490,6 +543,42 @@ fn header_of(l: &Layout) -> Result<Header> {
         }
     };
     let seconds: f64 = num("seconds", attr("seconds")?)?;
+    let part = match attrs.get("rayterm.part") {
+        None => None,
+        Some(p) => {
+            let kn = p
+                .split_once('/')
+                .and_then(|(k, n)| Some((k.parse::<u32>().ok()?, n.parse::<u32>().ok()?)))
+                .filter(|&(k, n)| (1..=n).contains(&k));
+            Some(kn.ok_or_else(|| anyhow::anyhow!("rayterm.part is not K/N: {p:?}"))?)
+        }
+    };
+    let json = |k: &str| attrs.get(format!("rayterm.{k}").as_str()).copied();
+    let command: Vec<String> = match json("command") {
+        None => Vec::new(),
+        Some(c) => serde_json::from_str(c)
+            .map_err(|_| anyhow::anyhow!("rayterm.command is not a list of words"))?,
+    };
+    let inputs = match json("inputs") {
+        None => None,
+        Some(list) => {
+            let pairs: Vec<(String, String)> = serde_json::from_str(list)
+                .map_err(|_| anyhow::anyhow!("rayterm.inputs is not a list of files"))?;
+            let inputs = pairs
+                .into_iter()
+                .map(|(crc, path)| {
+                    let crc = u32::from_str_radix(&crc, 16).map_err(|_| {
+                        anyhow::anyhow!("rayterm.inputs gives {} as a CRC-32", quoted(&crc))
+                    })?;
+                    Ok(Input {
+                        path: path.into(),
+                        crc,
+                    })
+                })
+                .collect::<Result<Vec<_>>>()?;
+            Some(inputs)
+        }
+    };
     let meta = Meta {
         scene: attr("scene")?.to_string(),
         hash: u64::from_str_radix(attr("hash")?, 16)
@@ -506,6 +595,9 @@ fn header_of(l: &Layout) -> Result<Header> {
         } else {
             bail!("rayterm.seconds is not a duration")
         },
+        part,
+        command,
+        inputs,
     };
     Ok(Header {
         meta,
@@ -868,8 +960,8 @@ pub struct Merged {
     pub report: Report,
 }
 
-/// Reads the planned parts and merges them in range order.
-pub fn merge(plan: &Plan, cancel: &dyn Fn() -> bool) -> Result<Merged> {
+/// Opens the planned parts, checking that none changed since planned.
+fn open_planned(plan: &Plan) -> Result<Vec<Source>> {
     let mut sources = Vec::with_capacity(plan.parts.len());
     for (path, header) in &plan.parts {
         let s = Source::open(path)?;
@@ -878,6 +970,27 @@ pub fn merge(plan: &Plan, cancel: &dyn Fn() -> bool) -> Result<Merged> {
         }
         sources.push(s);
     }
+    Ok(sources)
+}
+
+/// What the merged parts say of their render: the first's meta with the
+/// rays and seconds of them all, and no part number.
+fn merged_meta(sources: &[Source]) -> Result<Meta> {
+    let mut meta = sources[0].header.meta.clone();
+    meta.rays = sources
+        .iter()
+        .try_fold(0u64, |n, s| n.checked_add(s.header.meta.rays))
+        .ok_or_else(|| {
+            anyhow::anyhow!("the parts' rayterm.rays add up to more than 2^64: one is damaged")
+        })?;
+    meta.seconds = sources.iter().map(|s| s.header.meta.seconds).sum();
+    meta.part = None;
+    Ok(meta)
+}
+
+/// Reads the planned parts and merges them in range order.
+pub fn merge(plan: &Plan, cancel: &dyn Fn() -> bool) -> Result<Merged> {
+    let mut sources = open_planned(plan)?;
     let size = sources[0].header.size;
     let mut image = Vec::with_capacity(size.0 as usize * size.1 as usize);
     // The film's estimate, summed in its order: the same figure to the bit.
@@ -888,14 +1001,7 @@ pub fn merge(plan: &Plan, cancel: &dyn Fn() -> bool) -> Result<Merged> {
             rel_mse = rel_mse.zip(p.rel_variance()).map(|(s, v)| s + v);
         }
     })?;
-    let mut meta = sources[0].header.meta.clone();
-    meta.rays = sources
-        .iter()
-        .try_fold(0u64, |n, s| n.checked_add(s.header.meta.rays))
-        .ok_or_else(|| {
-            anyhow::anyhow!("the parts' rayterm.rays add up to more than 2^64: one is damaged")
-        })?;
-    meta.seconds = sources.iter().map(|s| s.header.meta.seconds).sum();
+    let mut meta = merged_meta(&sources)?;
     meta.total = Some(plan.total);
     let range = sources[0].header.range.start..sources[sources.len() - 1].header.range.end;
     let spp = sources.iter().map(|s| s.header.range.len() as u32).sum();
@@ -918,6 +1024,73 @@ pub fn merge(plan: &Plan, cancel: &dyn Fn() -> bool) -> Result<Merged> {
         image,
         report,
     })
+}
+
+/// Merges the planned parts into one partial film, which merges again
+/// with the parts still to come (a staged merge): their samples must
+/// follow one another, since a partial film holds one range.
+pub fn merge_part(plan: &Plan, cancel: &dyn Fn() -> bool) -> Result<Part> {
+    let (start, end) = match (plan.parts.first(), plan.parts.last()) {
+        (Some((_, a)), Some((_, b))) => (a.range.start, b.range.end),
+        _ => bail!("no parts to merge"),
+    };
+    if let Some(gap) = plan
+        .missing
+        .iter()
+        .find(|m| m.start >= start && m.end <= end)
+    {
+        bail!(
+            "samples {}..{} are missing between the parts, and a partial film holds one range \
+             of samples: merge these parts once those samples are rendered",
+            gap.start,
+            gap.end
+        );
+    }
+    let mut sources = open_planned(plan)?;
+    let size = sources[0].header.size;
+    let count = size.0 as u64 * size.1 as u64;
+    crate::memory::check(
+        &format!("a merged {}x{} partial film", size.0, size.1),
+        count * Film::BYTES_PER_PIXEL,
+        None,
+    )?;
+    let mut pixels = Vec::with_capacity(count as usize);
+    let bad = gather(&mut sources, cancel, |band| pixels.extend_from_slice(band))?;
+    let mut meta = merged_meta(&sources)?;
+    meta.total = sources.iter().find_map(|s| s.header.meta.total);
+    for s in sources {
+        s.finish()?;
+    }
+    let header = Header {
+        meta,
+        range: start..end,
+        size,
+    };
+    Ok(Part::of(header, pixels, bad))
+}
+
+impl Plan {
+    /// The parts of `render --part K/N` the missing samples make, where
+    /// they are whole parts: N, and each missing K.
+    pub fn missing_parts(&self) -> Option<(u32, Vec<u32>)> {
+        let n = self
+            .parts
+            .iter()
+            .find_map(|(_, h)| h.meta.part.map(|p| p.1))?;
+        let at = |i: u32| (i as u64 * self.total as u64 / n as u64) as u32;
+        let mut ks = Vec::new();
+        for m in &self.missing {
+            let within: Vec<u32> = (1..=n)
+                .filter(|&k| at(k - 1) < at(k) && at(k - 1) >= m.start && at(k) <= m.end)
+                .collect();
+            let held: u32 = within.iter().map(|&k| at(k) - at(k - 1)).sum();
+            if held != m.end - m.start {
+                return None;
+            }
+            ks.extend(within);
+        }
+        Some((n, ks))
+    }
 }
 
 /// `0..16 and 48..64`.

@@ -11,6 +11,7 @@ use anyhow::{bail, Result};
 use super::plan::{Plan, PlanPolicy};
 use super::{Features, Film, Tracer};
 use crate::bvh::{self, Bvh};
+use crate::scene::source::Input;
 use crate::scene::{self, Builder, Camera, Scene};
 
 /// What to open and how to render it.
@@ -88,13 +89,29 @@ pub struct Session {
     pub height: u32,
     pub seed: u64,
     /// The files the scene was read from, which no output may replace.
-    pub inputs: Vec<PathBuf>,
+    pub inputs: Vec<Input>,
 }
 
 impl Session {
     /// Loads the scene `req` names and prepares it; the load warnings are
     /// returned for the caller to show.
     pub fn open(req: &SceneRequest) -> Result<(Session, Vec<String>)> {
+        let (scene, inputs) = Self::load(req)?;
+        let (w, h) = req
+            .size
+            .unwrap_or((scene.settings.width, scene.settings.height));
+        if req.check_film {
+            check_film(w, h, Film::BYTES_PER_PIXEL)?;
+        }
+        let (mut session, warnings) = Self::with_scene(scene, req);
+        session.inputs = inputs;
+        Ok((session, warnings))
+    }
+
+    /// The scene `req` names, loaded as [`Session::open`] loads it, and the
+    /// files it was read from, with no BVH built: what `rayterm inputs`
+    /// lists. Its warnings are the scene's.
+    pub fn load(req: &SceneRequest) -> Result<(Scene, Vec<Input>)> {
         let how = scene::Opening {
             camera: req.camera.clone(),
             allow_outside: req.allow_outside,
@@ -111,15 +128,12 @@ impl Session {
             }
             bail!(msg);
         }
-        let (w, h) = req
-            .size
-            .unwrap_or((scene.settings.width, scene.settings.height));
-        if req.check_film {
-            check_film(w, h, Film::BYTES_PER_PIXEL)?;
-        }
-        let (mut session, warnings) = Self::with_scene(scene, req);
-        session.inputs = inputs;
-        Ok((session, warnings))
+        Ok((scene, inputs))
+    }
+
+    /// The paths of the files the scene was read from.
+    pub fn input_paths(&self) -> Vec<PathBuf> {
+        self.inputs.iter().map(|i| i.path.clone()).collect()
     }
 
     /// Prepares a scene already in memory (built in code, or loaded another

@@ -26,7 +26,7 @@ pub mod summary;
 pub mod texture;
 pub mod up;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use glam::{Vec2, Vec3};
@@ -338,7 +338,7 @@ pub struct Opening {
 }
 
 /// As [`load`], opened as `how` says, with the files read.
-pub fn load_reading(spec: &str, how: &Opening) -> Result<(Scene, Vec<PathBuf>)> {
+pub fn load_reading(spec: &str, how: &Opening) -> Result<(Scene, Vec<source::Input>)> {
     let (mut scene, read) = load_any(spec, how)?;
     scene.warnings = fold_repeats(std::mem::take(&mut scene.warnings));
     Ok((scene, read))
@@ -388,7 +388,7 @@ fn without_line(w: &str) -> String {
 }
 
 /// The scene `spec` names, opened as `how` says, with the files read.
-fn load_any(spec: &str, how: &Opening) -> Result<(Scene, Vec<PathBuf>)> {
+fn load_any(spec: &str, how: &Opening) -> Result<(Scene, Vec<source::Input>)> {
     let Some(env) = &how.env else {
         return load_named(spec, how);
     };
@@ -404,7 +404,7 @@ fn load_any(spec: &str, how: &Opening) -> Result<(Scene, Vec<PathBuf>)> {
 }
 
 /// [`load_any`] but for the environment light asked for.
-fn load_named(spec: &str, how: &Opening) -> Result<(Scene, Vec<PathBuf>)> {
+fn load_named(spec: &str, how: &Opening) -> Result<(Scene, Vec<source::Input>)> {
     let camera = how.camera.as_deref();
     if let Some(scene) = builtin::load(spec)? {
         if let Some(name) = camera {

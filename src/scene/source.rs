@@ -496,11 +496,20 @@ fn outside_of(base: &Path, target: &Path) -> Option<Outside> {
     })
 }
 
+/// A file a scene was read from, and the CRC-32 of what was read: what
+/// `rayterm inputs` lists, and what partial films record so that `merge
+/// --check` can say which file differs.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Input {
+    pub path: PathBuf,
+    pub crc: u32,
+}
+
 /// The file system, through [`read_file`], remembering the files it read
-/// (so that no output can overwrite one of them).
+/// (so that no output can overwrite one of them) with their checksums.
 #[derive(Default)]
 pub struct Disk {
-    read: std::sync::Mutex<Vec<PathBuf>>,
+    read: std::sync::Mutex<Vec<Input>>,
     /// Whether glTF files may name files outside their folder.
     allow_outside: bool,
 }
@@ -515,17 +524,26 @@ impl Disk {
         }
     }
 
-    /// The files read so far.
-    pub fn files(self) -> Vec<PathBuf> {
-        self.read.into_inner().unwrap_or_else(|e| e.into_inner())
+    /// The files read so far, each once, in the order first read.
+    pub fn files(self) -> Vec<Input> {
+        let mut read = self.read.into_inner().unwrap_or_else(|e| e.into_inner());
+        let mut seen = std::collections::HashSet::new();
+        read.retain(|i| seen.insert(i.path.clone()));
+        read
     }
 }
 
 impl Source for Disk {
     fn read(&self, path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
         let bytes = read_file(path, kind)?;
+        // A pass over bytes just read, at memory speed: far less than
+        // parsing them.
+        let crc = crc32fast::hash(&bytes);
         if let Ok(mut r) = self.read.lock() {
-            r.push(path.to_path_buf());
+            r.push(Input {
+                path: path.to_path_buf(),
+                crc,
+            });
         }
         Ok(bytes)
     }
