@@ -110,6 +110,7 @@ pub fn run(
         let ask = Ask {
             graphics: graphics != GraphicsArg::Symbols,
             colour: color.is_none() && detected != ColorMode::Truecolor,
+            tmux: tmux.is_some(),
             passthrough: tmux == Some(true),
         };
         let screen = terminal.backend_mut();

@@ -34,6 +34,9 @@ const DA1: &[u8] = b"\x1b[c";
 pub struct Ask {
     pub graphics: bool,
     pub colour: bool,
+    /// Inside tmux: tmux takes an unwrapped kitty query (an APC string)
+    /// for the pane's title, so it goes only through passthrough, if at all.
+    pub tmux: bool,
     /// Inside tmux with passthrough: the graphics queries go through it.
     pub passthrough: bool,
 }
@@ -51,7 +54,9 @@ impl Ask {
                 if self.passthrough {
                     q.extend(passthrough(query));
                 }
-                q.extend_from_slice(query);
+                if !(self.tmux && query == KITTY_QUERY) {
+                    q.extend_from_slice(query);
+                }
             }
         }
         if self.colour {
@@ -289,6 +294,26 @@ mod tests {
             None,
         );
         assert!(m.is_none() && said.contains("answered no query"), "{said}");
+    }
+
+    #[test]
+    fn inside_tmux_the_kitty_query_goes_only_through_passthrough() {
+        let apc = |q: &[u8]| q.windows(2).filter(|w| w == b"\x1b_").count();
+        let bare = Ask {
+            graphics: true,
+            ..Ask::default()
+        };
+        assert_eq!(apc(&bare.queries()), 1);
+        let tmux = Ask { tmux: true, ..bare };
+        assert_eq!(apc(&tmux.queries()), 0);
+        let through = Ask {
+            passthrough: true,
+            ..tmux
+        };
+        let q = through.queries();
+        // The one there is wrapped: its ESC doubled.
+        assert_eq!(apc(&q), 1);
+        assert!(q.windows(3).any(|w| w == b"\x1b\x1b_"));
     }
 
     #[test]
