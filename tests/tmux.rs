@@ -1,6 +1,9 @@
 //! The TUI inside tmux, driven as a user would (`send-keys`) and read back
 //! from the pane (`capture-pane`): it leaves the pane's title alone, with
-//! and without passthrough. Skips, saying so, where tmux is not installed.
+//! and without passthrough; the hint on its colours is whole in a narrow
+//! terminal; defaults come from the environment and the config file, and a
+//! bad file is named with its line. Skips, saying so, where tmux is not
+//! installed.
 
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
@@ -25,15 +28,7 @@ impl Tmux {
             socket: format!("rayterm-test-{name}-{}", std::process::id()),
         };
         let size = [cols.to_string(), rows.to_string()];
-        let out = t.run(&[
-            "new-session",
-            "-d",
-            "-x",
-            &size[0],
-            "-y",
-            &size[1],
-            "sh",
-        ]);
+        let out = t.run(&["new-session", "-d", "-x", &size[0], "-y", &size[1], "sh"]);
         assert!(out.status.success(), "tmux: {out:?}");
         Some(t)
     }
@@ -85,16 +80,22 @@ impl Drop for Tmux {
 }
 
 /// Runs the TUI in the pane until it has drawn, and quits it with `q`
-/// (the shell's echo of the line, quoted, does not say it ended).
-fn run_and_quit(t: &Tmux, args: &str) {
+/// (the shell's echo of the line, quoted, does not say it ended); returns
+/// the screen it drew. `env` goes before the command.
+fn run_and_quit(t: &Tmux, env: &str, args: &str) -> String {
     t.type_line(&format!(
-        "{} tui {args}; echo rayterm-\"ended\"",
+        "{env} {} tui {args}; echo rayterm-\"ended\"",
         env!("CARGO_BIN_EXE_rayterm")
     ));
     t.wait_for("Render");
+    let screen = t.screen();
     t.run(&["send-keys", "-t", "0", "q"]);
     t.wait_for("rayterm-ended");
+    screen
 }
+
+/// No truecolor from the environment: tmux's own terminfo entry has none.
+const NO_TRUECOLOR: &str = "env -u COLORTERM TERM=screen-256color";
 
 #[test]
 fn the_pane_title_stays_as_it_was() {
@@ -106,7 +107,59 @@ fn the_pane_title_stays_as_it_was() {
     // they go through, wrapped, to the (here absent) outer terminal.
     for passthrough in ["off", "on"] {
         t.run(&["set-option", "-g", "allow-passthrough", passthrough]);
-        run_and_quit(&t, "cornell");
+        run_and_quit(&t, "", "cornell");
         assert_eq!(t.title(), before, "allow-passthrough {passthrough}");
     }
+}
+
+#[test]
+fn the_colour_hint_is_whole_at_80_columns() {
+    let Some(t) = Tmux::start("hint", 80, 24) else {
+        return;
+    };
+    // Over ssh, in a terminal (tmux, without a client) that says nothing
+    // of 24-bit colour.
+    let screen = run_and_quit(&t, &format!("SSH_TTY=/dev/pts/9 {NO_TRUECOLOR}"), "cornell");
+    let lines: Vec<&str> = screen.lines().collect();
+    let bottom = lines[lines.len().saturating_sub(3)..].join(" ");
+    let bottom = bottom.split_whitespace().collect::<Vec<_>>().join(" ");
+    let hint = "256 colours: no answer on 24-bit colour, and ssh does not pass COLORTERM on; \
+                for 24-bit: --color truecolor or RAYTERM_COLOR=truecolor";
+    assert!(bottom.contains(hint), "{screen}");
+}
+
+#[test]
+fn defaults_come_from_the_environment_and_the_config_file() {
+    let Some(t) = Tmux::start("config", 120, 36) else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("rayterm-tmux-config-{}", std::process::id()));
+    let file = dir.join("rayterm").join("config.toml");
+    std::fs::create_dir_all(file.parent().unwrap()).unwrap();
+    std::fs::write(&file, "symbols = \"quad\"\ncolor = \"256\"\n").unwrap();
+    let xdg = format!("XDG_CONFIG_HOME={}", dir.display());
+    let title = |screen: &str| screen.lines().next().unwrap_or("").to_string();
+    // The file's choices, the variable over the file, the option over both.
+    let screen = run_and_quit(&t, &format!("{xdg} {NO_TRUECOLOR}"), "cornell");
+    assert!(title(&screen).contains("quadrants · 256 colours"), "{screen}");
+    let screen = run_and_quit(&t, &format!("{xdg} RAYTERM_COLOR=16"), "cornell");
+    assert!(title(&screen).contains("quadrants · 16 colours"), "{screen}");
+    let screen = run_and_quit(
+        &t,
+        &format!("{xdg} RAYTERM_COLOR=16"),
+        "cornell --symbols sextant --color truecolor",
+    );
+    assert!(title(&screen).contains("sextants · truecolor"), "{screen}");
+    // A bad value: the file and the line, before the screen changes.
+    std::fs::write(&file, "color = \"256\"\nsymbols = \"braille\"\n").unwrap();
+    t.run(&["send-keys", "-t", "0", "clear", "Enter"]);
+    t.type_line(&format!(
+        "{xdg} {} tui cornell; echo rayterm-\"ended\"",
+        env!("CARGO_BIN_EXE_rayterm")
+    ));
+    t.wait_for("rayterm-ended");
+    let said = format!("{}:2: \"braille\" is not one of", file.display());
+    let screen = t.screen().split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(screen.contains(&said), "{screen}");
+    std::fs::remove_dir_all(&dir).unwrap();
 }
