@@ -71,7 +71,29 @@ impl Tmux {
             std::thread::sleep(Duration::from_millis(50));
         }
     }
+
+    /// Clears the screen, and waits until it is.
+    fn clear(&self) {
+        self.type_line("clear");
+        let end = Instant::now() + PATIENCE;
+        while self.screen().contains(ENDED) {
+            assert!(Instant::now() < end, "no clear:\n{}", self.screen());
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+
+    /// Types a command line that ends by saying so, on a clear screen, and
+    /// waits for that.
+    fn run_to_end(&self, line: &str) {
+        self.clear();
+        self.type_line(&format!("{line}; echo rayterm-\"ended\""));
+        self.wait_for(ENDED);
+    }
 }
+
+/// What the shell prints after a command (its echo of the line, quoted,
+/// does not say it).
+const ENDED: &str = "rayterm-ended";
 
 impl Drop for Tmux {
     fn drop(&mut self) {
@@ -79,10 +101,10 @@ impl Drop for Tmux {
     }
 }
 
-/// Runs the TUI in the pane until it has drawn, and quits it with `q`
-/// (the shell's echo of the line, quoted, does not say it ended); returns
-/// the screen it drew. `env` goes before the command.
+/// Runs the TUI in the pane until it has drawn, and quits it with `q`;
+/// returns the screen it drew. `env` goes before the command.
 fn run_and_quit(t: &Tmux, env: &str, args: &str) -> String {
+    t.clear();
     t.type_line(&format!(
         "{env} {} tui {args}; echo rayterm-\"ended\"",
         env!("CARGO_BIN_EXE_rayterm")
@@ -90,7 +112,7 @@ fn run_and_quit(t: &Tmux, env: &str, args: &str) -> String {
     t.wait_for("Render");
     let screen = t.screen();
     t.run(&["send-keys", "-t", "0", "q"]);
-    t.wait_for("rayterm-ended");
+    t.wait_for(ENDED);
     screen
 }
 
@@ -141,9 +163,15 @@ fn defaults_come_from_the_environment_and_the_config_file() {
     let title = |screen: &str| screen.lines().next().unwrap_or("").to_string();
     // The file's choices, the variable over the file, the option over both.
     let screen = run_and_quit(&t, &format!("{xdg} {NO_TRUECOLOR}"), "cornell");
-    assert!(title(&screen).contains("quadrants · 256 colours"), "{screen}");
+    assert!(
+        title(&screen).contains("quadrants · 256 colours"),
+        "{screen}"
+    );
     let screen = run_and_quit(&t, &format!("{xdg} RAYTERM_COLOR=16"), "cornell");
-    assert!(title(&screen).contains("quadrants · 16 colours"), "{screen}");
+    assert!(
+        title(&screen).contains("quadrants · 16 colours"),
+        "{screen}"
+    );
     let screen = run_and_quit(
         &t,
         &format!("{xdg} RAYTERM_COLOR=16"),
@@ -152,12 +180,10 @@ fn defaults_come_from_the_environment_and_the_config_file() {
     assert!(title(&screen).contains("sextants · truecolor"), "{screen}");
     // A bad value: the file and the line, before the screen changes.
     std::fs::write(&file, "color = \"256\"\nsymbols = \"braille\"\n").unwrap();
-    t.run(&["send-keys", "-t", "0", "clear", "Enter"]);
-    t.type_line(&format!(
-        "{xdg} {} tui cornell; echo rayterm-\"ended\"",
+    t.run_to_end(&format!(
+        "{xdg} {} tui cornell",
         env!("CARGO_BIN_EXE_rayterm")
     ));
-    t.wait_for("rayterm-ended");
     let said = format!("{}:2: \"braille\" is not one of", file.display());
     let screen = t.screen().split_whitespace().collect::<Vec<_>>().join(" ");
     assert!(screen.contains(&said), "{screen}");
