@@ -179,9 +179,9 @@ fn mix(p: [u8; 3], a: [u8; 3], b: [u8; 3]) -> (f32, f32, f32) {
 fn best_pair16(c: [u8; 3]) -> (u8, u8) {
     let nearest = (0..16).min_by_key(|&i| dist(c, ANSI16[i].1)).unwrap_or(0);
     let mut best = ((dist(c, ANSI16[nearest].1) as f32).sqrt(), nearest, nearest);
-    for a in 0..16 {
-        for b in a + 1..16 {
-            let (r, off, len2) = mix(c, ANSI16[a].1, ANSI16[b].1);
+    for (a, (_, ca)) in ANSI16.iter().enumerate() {
+        for (b, (_, cb)) in ANSI16.iter().enumerate().skip(a + 1) {
+            let (r, off, len2) = mix(c, *ca, *cb);
             let cost = off.sqrt() + NOISE16 * (r * (1.0 - r) * len2).sqrt();
             if cost < best.0 {
                 best = (cost, a, b);
