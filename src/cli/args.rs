@@ -495,22 +495,26 @@ pub struct ConvergeArgs {
 pub struct TuiArgs {
     #[command(flatten)]
     pub scene: SceneOpts,
-    /// Colours (default: truecolor when COLORTERM or the terminfo entry of
-    /// TERM says so, else 256 with dithering).
+    /// Colours (default: RAYTERM_COLOR, else `color` in
+    /// ~/.config/rayterm/config.toml, else truecolor when the terminal says
+    /// it has 24-bit colour, or when it does not answer and COLORTERM or
+    /// the terminfo entry of TERM says so, else 256 with dithering).
     #[arg(long, value_enum)]
     pub color: Option<ColorMode>,
     /// Block symbols for the viewport: half blocks (1x2 pixels per cell,
     /// every terminal), quadrants (2x2), sextants (2x3, Unicode 13) or
-    /// octants (2x4, Unicode 16; fonts are newer).
-    #[arg(long, value_enum, default_value = "half")]
-    pub symbols: Symbols,
+    /// octants (2x4, Unicode 16; fonts are newer) [default: RAYTERM_SYMBOLS,
+    /// else `symbols` in the config file, else half].
+    #[arg(long, value_enum)]
+    pub symbols: Option<Symbols>,
     /// Pixel graphics for the viewport: ask the terminal (auto, within a
     /// second; block symbols when it has no protocol, or inside tmux
     /// without allow-passthrough), a protocol, or block symbols only. A
     /// protocol named here is used even where the terminal does not claim
-    /// it (the status line says so).
-    #[arg(long, value_enum, default_value = "auto")]
-    pub graphics: GraphicsArg,
+    /// it (the status line says so) [default: RAYTERM_GRAPHICS, else
+    /// `graphics` in the config file, else auto].
+    #[arg(long, value_enum)]
+    pub graphics: Option<GraphicsArg>,
     /// A converged image of the scene (OpenEXR .exr or Radiance .hdr, e.g.
     /// from `rayterm render --spp 1024 -o ref.exr`, best at a whole multiple
     /// of the view's size): the true error is shown beside the estimate

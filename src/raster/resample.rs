@@ -38,7 +38,16 @@ const EDGE: f64 = 1e-6;
 
 /// Takes `reference` (`rw` x `rh`, row-major from the top) onto a `vw` x
 /// `vh` view of the same camera.
-pub fn resample(rw: u32, rh: u32, reference: &[Vec3], vw: u32, vh: u32) -> Resampled {
+/// Its pixels are `pixel_aspect` times as wide as they are tall (1 but in
+/// the TUI's block symbols).
+pub fn resample(
+    rw: u32,
+    rh: u32,
+    reference: &[Vec3],
+    vw: u32,
+    vh: u32,
+    pixel_aspect: f64,
+) -> Resampled {
     let none = Resampled {
         pixels: Vec::new(),
         coverage: 0.0,
@@ -47,7 +56,7 @@ pub fn resample(rw: u32, rh: u32, reference: &[Vec3], vw: u32, vh: u32) -> Resam
     if rw == 0 || rh == 0 || vw == 0 || vh == 0 || reference.len() != (rw * rh) as usize {
         return none;
     }
-    let (ar, av) = (rw as f64 / rh as f64, vw as f64 / vh as f64);
+    let (ar, av) = (rw as f64 / rh as f64, vw as f64 / vh as f64 * pixel_aspect);
     // View column `i` spans screen x in [(2i/vw - 1) av, ...]; in reference
     // pixels that is (sx / ar + 1) rw / 2.
     let to_ref_x = |i: f64| ((2.0 * i / vw as f64 - 1.0) * av / ar + 1.0) * 0.5 * rw as f64;
@@ -99,7 +108,7 @@ mod tests {
     #[test]
     fn the_same_size_is_the_identity() {
         let img = ramp(7, 5);
-        let r = resample(7, 5, &img, 7, 5);
+        let r = resample(7, 5, &img, 7, 5, 1.0);
         assert!(r.exact && r.coverage == 1.0);
         let back: Vec<Vec3> = r.pixels.iter().map(|p| p.1).collect();
         assert_eq!(back, img);
@@ -108,7 +117,7 @@ mod tests {
     #[test]
     fn a_whole_multiple_averages_blocks_exactly() {
         let img = ramp(8, 6);
-        let r = resample(8, 6, &img, 4, 3);
+        let r = resample(8, 6, &img, 4, 3, 1.0);
         assert!(r.exact && r.coverage == 1.0);
         // View pixel (1, 2) is reference pixels x 2..4, y 4..6.
         let (i, v) = r.pixels[2 * 4 + 1];
@@ -122,7 +131,7 @@ mod tests {
         // alike, so only the columns' weights show).
         let row = [Vec3::ONE, Vec3::splat(2.0), Vec3::splat(4.0)];
         let img: Vec<Vec3> = (0..3).flat_map(|_| row).collect();
-        let r = resample(3, 3, &img, 2, 2);
+        let r = resample(3, 3, &img, 2, 2, 1.0);
         assert_eq!(r.coverage, 1.0);
         assert!(!r.exact);
         assert!((r.pixels[0].1.x - (1.0 + 0.5 * 2.0) / 1.5).abs() < 1e-6);
@@ -135,20 +144,24 @@ mod tests {
         // its middle half sees the reference, one reference pixel per view
         // pixel.
         let img = ramp(4, 4);
-        let r = resample(4, 4, &img, 8, 4);
+        let r = resample(4, 4, &img, 8, 4, 1.0);
         assert!(r.exact);
         assert_eq!(r.coverage, 0.5);
         let cols: Vec<u32> = r.pixels.iter().filter(|p| p.0 < 8).map(|p| p.0).collect();
         assert_eq!(cols, vec![2, 3, 4, 5]);
         assert_eq!(r.pixels[0].1, img[0]);
         // A narrower view sits inside the reference's middle columns.
-        let r = resample(8, 4, &ramp(8, 4), 4, 4);
+        let r = resample(8, 4, &ramp(8, 4), 4, 4, 1.0);
         assert!(r.exact && r.coverage == 1.0);
         assert_eq!(r.pixels[0].1.x, 2.0);
+        // Pixels twice as wide as tall: 4x4 of them see all of it.
+        let r = resample(8, 4, &ramp(8, 4), 4, 4, 2.0);
+        assert!(r.exact && r.coverage == 1.0);
+        assert_eq!(r.pixels[0].1.x, 0.5);
     }
 
     #[test]
     fn a_reference_of_the_wrong_length_covers_nothing() {
-        assert_eq!(resample(4, 4, &ramp(3, 3), 4, 4).coverage, 0.0);
+        assert_eq!(resample(4, 4, &ramp(3, 3), 4, 4, 1.0).coverage, 0.0);
     }
 }

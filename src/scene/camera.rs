@@ -155,6 +155,14 @@ impl CameraFrame {
         }
     }
 
+    /// The frame for pixels shown `pixel_aspect` times as wide as they are
+    /// tall (a terminal cell's sub-pixels): the view keeps its proportions
+    /// on screen, its height seeing the same field.
+    pub fn stretched(mut self, pixel_aspect: f64) -> Self {
+        self.aspect *= pixel_aspect;
+        self
+    }
+
     /// The image size in pixels this frame was made for.
     pub fn size(&self) -> (u32, u32) {
         self.size

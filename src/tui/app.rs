@@ -27,7 +27,7 @@ use super::worker::{self, Msg, PixelRequest, Reference, Snapshot, Truth, View, W
 use crate::bvh::debug::HeatMeasure;
 use crate::inspect::overlay::{PixelView, VIEWS};
 use crate::render::debug_view::{DebugView, FilmView};
-use crate::render::{Decision, Feature, Features, Plan, Session, Worst};
+use crate::render::{Decision, Feature, Features, Plan, Session, Tracer, Worst};
 use crate::report::converge::load_reference;
 use crate::scene::{Builder, Projection};
 use crate::words;
@@ -134,6 +134,10 @@ pub struct App {
     /// protocol shows it.
     pub symbols: Symbols,
     pub pixels: Option<PixelMode>,
+    /// A cell's size in screen pixels: what the terminal said, else 8x16.
+    pub cell: (u32, u32),
+    /// A view pixel's width over its height on screen, as last sent.
+    view_aspect: f64,
     pub link: RenderLink,
     /// The viewport's size in pixels, from the layout.
     pub view_size: (u32, u32),
@@ -223,6 +227,8 @@ impl App {
             color,
             symbols: Symbols::Half,
             pixels: None,
+            cell: (8, 16),
+            view_aspect: 1.0,
             link: RenderLink::new(worker),
             view_size: (0, 0),
             inspector: Inspector::default(),
@@ -315,7 +321,7 @@ impl App {
         self.layout = Layout::compute(area, self);
         let l = self.layout;
         if !l.too_small {
-            self.set_view_size(l.view_size());
+            self.set_view_size(l.view_size(), self.pixel_aspect());
             self.inspector.height = l.debug_text.height.max(1) as usize;
             self.inspector.width = l.debug_text.width as usize;
         }
@@ -329,12 +335,22 @@ impl App {
         }
     }
 
-    fn set_view_size(&mut self, size: (u32, u32)) {
-        if self.view_size != size {
+    fn set_view_size(&mut self, size: (u32, u32), aspect: f64) {
+        if self.view_size != size || self.view_aspect != aspect {
             self.inspector.rescale(self.view_size, size);
             self.view_size = size;
+            self.view_aspect = aspect;
             self.send_view();
         }
+    }
+
+    /// A view pixel's width over its height on screen: the cell's over the
+    /// grid of pixels in it, so that every symbol set and pixel protocol
+    /// shows the scene in the same proportions.
+    pub fn pixel_aspect(&self) -> f64 {
+        let (cw, ch) = self.pixels.map_or(self.cell, |m| m.cell);
+        let (gx, gy) = self.layout.grid;
+        (cw as f64 * gy as f64) / (ch.max(1) as f64 * gx.max(1) as f64)
     }
 
     fn send_view(&mut self) {
@@ -343,6 +359,7 @@ impl App {
             plan: self.plan.clone(),
             width: self.view_size.0,
             height: self.view_size.1,
+            pixel_aspect: self.view_aspect,
         });
     }
 
@@ -369,9 +386,10 @@ impl App {
     /// worker renders with, and takes its values before and after bloom
     /// from the newest pass.
     fn refresh_inspector(&mut self) {
-        let tracer = self
-            .session
-            .tracer_for(&self.plan, &self.camera.camera, self.view_size);
+        let (w, h) = self.view_size;
+        let s = &self.session;
+        let frame = self.camera.camera.frame(w, h).stretched(self.view_aspect);
+        let tracer = Tracer::new(&s.scene, &s.bvh, &self.plan, frame, s.seed);
         let frame = self
             .link
             .full_frame()

@@ -84,6 +84,7 @@ pub fn measure_pass(req: &SceneRequest, cols: u16, rows: u16, passes: u32) -> Re
             plan: s.plan.clone(),
             width,
             height,
+            pixel_aspect: 1.0,
         }),
     ));
     let mut term = counting_terminal(cols, rows)?;

@@ -13,6 +13,7 @@ pub mod app;
 pub mod bench;
 pub mod camera;
 pub mod color;
+pub mod config;
 pub mod export;
 pub mod graphics;
 pub mod inspector;
@@ -63,12 +64,14 @@ const POLL_IDLE: Duration = Duration::from_millis(100);
 /// How long leaving waits for the terminal's last answers.
 const LEAVE_WAIT: Duration = Duration::from_secs(1);
 
-/// Opens the TUI on the scene; returns when the user quits.
+/// Opens the TUI on the scene; returns when the user quits. Colours,
+/// symbols and graphics not given here come from the configuration file
+/// and the environment (`config`), else from asking the terminal.
 pub fn run(
     req: &SceneRequest,
     color: Option<ColorMode>,
-    symbols: Symbols,
-    graphics: GraphicsArg,
+    symbols: Option<Symbols>,
+    graphics: Option<GraphicsArg>,
     reference: Option<&Path>,
 ) -> Result<ExitCode> {
     if !io::stdout().is_terminal() {
@@ -82,6 +85,11 @@ pub fn run(
              not; `rayterm render` writes images without one"
         );
     }
+    let var = |v: &str| std::env::var(v).ok();
+    let defaults = config::load(config::path(var).as_deref(), var)?;
+    let color = color.or(defaults.color);
+    let symbols = symbols.or(defaults.symbols).unwrap_or_default();
+    let graphics = graphics.or(defaults.graphics).unwrap_or_default();
     if io::stderr().is_terminal() {
         // Large scenes take seconds to load; say so before the screen changes.
         crate::cli::say("rayterm", &format!("loading {}...", req.spec));
@@ -90,8 +98,13 @@ pub fn run(
     for w in &warnings {
         crate::cli::say("warning", w);
     }
-    let (detected, hint) = term::detect_colour(|v| std::env::var(v).ok());
-    let mut app = App::new(session, warnings, color.unwrap_or(detected), reference)?;
+    // The colours are decided once the terminal has answered.
+    let mut app = App::new(
+        session,
+        warnings,
+        color.unwrap_or(ColorMode::Palette256),
+        reference,
+    )?;
     app.export_size = req.size;
     app.symbols = symbols;
     // SIGTERM, SIGHUP and an outside SIGINT quit like `q`: the loop sees the
@@ -106,31 +119,45 @@ pub fn run(
             .and_then(Terminal::new)
             .context("cannot set up the terminal")?;
         // What the terminal can do, asked before the first frame.
-        let tmux = detect::tmux_passthrough();
+        let tmux = detect::tmux();
         let ask = Ask {
             graphics: graphics != GraphicsArg::Symbols,
-            colour: color.is_none() && detected != ColorMode::Truecolor,
-            passthrough: tmux == Some(true),
+            colour: color.is_none(),
+            tmux: tmux.is_some(),
+            passthrough: tmux.is_some_and(|t| t.passthrough),
         };
         let screen = terminal.backend_mut();
         let (answers, kept) = detect::ask(ask, |b| screen.send(b), &reader, tmux.is_some(), quits)?;
-        if color.is_none() && answers.rgb {
-            app.color = ColorMode::Truecolor;
-        }
+        let hint = match color {
+            Some(_) => None,
+            None => {
+                let (mode, hint) = term::choose_colour(answers.rgb, tmux.and_then(|t| t.rgb), var);
+                app.color = mode;
+                hint
+            }
+        };
         let size = terminal.size()?;
         let (pixels, said) = detect::choose(
             graphics,
             &answers,
             cell_from_ioctl(),
             (size.width, size.height),
-            |v| std::env::var(v).ok(),
-            tmux,
+            var,
+            tmux.map(|t| t.passthrough),
         );
         app.pixels = pixels;
-        let mut said = vec![app.status.clone(), said];
-        if color.is_none() && app.color != ColorMode::Truecolor {
-            said.extend(hint.map(String::from));
+        if let Some(cell) =
+            detect::cell_size(&answers, cell_from_ioctl(), (size.width, size.height))
+        {
+            app.cell = cell;
         }
+        // The colours' hint first: the status line wraps, and it is the
+        // one to keep whole.
+        let colour_hint = hint.filter(|_| app.pixels.is_none());
+        let mut said: Vec<String> = colour_hint
+            .into_iter()
+            .chain([app.status.clone(), said])
+            .collect();
         said.retain(|s| !s.is_empty());
         app.say(said.join(" · "));
         let mut out = Output::default();

@@ -722,3 +722,75 @@ fn kitty_and_sixel_frames_decode_to_the_viewport_picture() {
         }
     }
 }
+
+/// The teapot's width over its height on screen, from the second moments
+/// of its bright pixels (weighted by how bright, so that the antialiased
+/// edge counts in part), each pixel `px` screen pixels in size.
+fn teapot_proportions(app: &App, px: (f64, f64)) -> f64 {
+    let frame = app.link.current_frame().unwrap();
+    let (mut n, mut sx, mut sy, mut sxx, mut syy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for y in 0..frame.height {
+        for x in 0..frame.width {
+            let c = color::srgb(frame.image[(y * frame.width + x) as usize]);
+            let l = c.iter().map(|&v| v as f64).sum::<f64>() / 3.0;
+            let w = ((l - 165.0) / 30.0).clamp(0.0, 1.0);
+            let (fx, fy) = ((x as f64 + 0.5) * px.0, (y as f64 + 0.5) * px.1);
+            n += w;
+            (sx, sy) = (sx + w * fx, sy + w * fy);
+            (sxx, syy) = (sxx + w * fx * fx, syy + w * fy * fy);
+        }
+    }
+    assert!(n > 100.0, "{n} teapot pixels");
+    let var = |s: f64, ss: f64| ss / n - (s / n).powi(2);
+    (var(sx, sxx) / var(sy, syy)).sqrt()
+}
+
+#[test]
+fn every_symbol_set_keeps_the_proportions_of_pixel_graphics() {
+    use super::graphics::{PixelMode, Protocol};
+    // Cells of 7x15 pixels: neither 1:2 nor a whole grid of any symbols.
+    let cell = (7, 15);
+    let mut measured = Vec::new();
+    let modes = [
+        Some(Symbols::Half),
+        Some(Symbols::Quad),
+        Some(Symbols::Sextant),
+        Some(Symbols::Octant),
+        None,
+    ];
+    for symbols in modes {
+        let mut app = app("teapot", &[]);
+        app.cell = cell;
+        match symbols {
+            Some(s) => app.symbols = s,
+            None => {
+                app.pixels = Some(PixelMode {
+                    protocol: Protocol::Kitty,
+                    cell,
+                    colours: 256,
+                    passthrough: false,
+                })
+            }
+        }
+        let mut t = terminal(240, 72);
+        settle(&mut t, &mut app);
+        // Samples enough for smooth edges.
+        while app.link.current_frame().unwrap().spp < 16 {
+            app.link.frame = None;
+            assert!(app.wait_frame(WAIT).unwrap());
+        }
+        let (gx, gy) = app.layout.grid;
+        let px = (cell.0 as f64 / gx as f64, cell.1 as f64 / gy as f64);
+        let p = teapot_proportions(&app, px);
+        let name = symbols.map_or("pixel graphics", Symbols::name);
+        eprintln!("{name}: teapot width/height {p:.3} on screen");
+        measured.push((name, p));
+    }
+    let (_, pixels) = measured[measured.len() - 1];
+    for (name, p) in &measured {
+        assert!(
+            (p / pixels - 1.0).abs() < 0.03,
+            "{name}: {p:.3} against {pixels:.3} in pixel graphics"
+        );
+    }
+}

@@ -25,6 +25,7 @@ use crate::render::overlay::{legend_line, Layer};
 use crate::render::progressive::MAX_PASS_SPP;
 use crate::render::recorder::WorkCounter;
 use crate::render::{post, Plan, Progressive, Stop, Tracer, WorstPixels};
+use crate::scene::camera::CameraFrame;
 use crate::scene::{Builder, Camera, Scene};
 
 /// A full pass of one sample per pixel slower than this is preceded by a
@@ -50,11 +51,18 @@ pub struct View {
     pub plan: Plan,
     pub width: u32,
     pub height: u32,
+    /// A pixel's width over its height on screen.
+    pub pixel_aspect: f64,
 }
 
 impl View {
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
+    }
+
+    /// The camera's frame for `w x h` pixels of this view's shape.
+    pub fn frame(&self, (w, h): (u32, u32)) -> CameraFrame {
+        self.camera.frame(w, h).stretched(self.pixel_aspect)
     }
 }
 
@@ -323,7 +331,8 @@ impl Worker {
                 // and error are its own, so the film is still sound.)
                 let same_film = self.film.film.spp > 0
                     && self.view.as_ref().is_some_and(|old| {
-                        (old.camera, old.size()) == (view.camera, view.size())
+                        (old.camera, old.size(), old.pixel_aspect)
+                            == (view.camera, view.size(), view.pixel_aspect)
                             && old.plan.same_film(&view.plan)
                     });
                 self.view = Some(view);
@@ -388,7 +397,14 @@ impl Worker {
             (Some(r), Some(v)) if v.camera != r.camera => Truth::CameraMoved,
             (Some(r), Some(v)) if !v.plan.same_film(&r.plan) => Truth::FeaturesChanged,
             (Some(r), Some(v)) => {
-                let m = resample(r.width, r.height, &r.image, v.width, v.height);
+                let m = resample(
+                    r.width,
+                    r.height,
+                    &r.image,
+                    v.width,
+                    v.height,
+                    v.pixel_aspect,
+                );
                 if m.pixels.is_empty() {
                     Truth::NoOverlap
                 } else {
@@ -437,7 +453,7 @@ impl Worker {
             &self.scene,
             &self.bvh,
             &view.plan,
-            view.camera.frame(w, h),
+            view.frame((w, h)),
             self.seed,
         )
     }
@@ -509,7 +525,7 @@ impl Worker {
             &self.scene,
             &self.bvh,
             &view.plan,
-            view.camera.frame(view.width, view.height),
+            view.frame(view.size()),
             self.seed,
         );
         self.film.growing = true;
@@ -781,6 +797,7 @@ mod tests {
             plan: s.plan_for(features),
             width: 16,
             height: 12,
+            pixel_aspect: 1.0,
         }
     }
 

@@ -19,8 +19,22 @@ use super::{iterm2, kitty, passthrough, sixel, PixelMode, Protocol};
 
 /// Cell rows per band.
 pub const BAND_ROWS: u16 = 2;
-/// Kitty image ids of the bands start here.
+/// Kitty image ids of the bands start here: two per band, used in turn, so
+/// that a band's new image is complete before its old one is deleted (one
+/// id replaced in place shows nothing until the new image has arrived).
 const KITTY_ID: u32 = 0x5254_0000;
+
+/// Kitty id `turn` (0 or 1) of band `b`.
+fn kitty_id(b: usize, turn: bool) -> u32 {
+    KITTY_ID + 2 * b as u32 + turn as u32
+}
+
+/// Deletes both of band `b`'s kitty images.
+fn kitty_delete(mode: &PixelMode, b: usize) -> Vec<u8> {
+    let mut out = wrap(mode, &kitty::delete(kitty_id(b, false)));
+    out.extend(wrap(mode, &kitty::delete(kitty_id(b, true))));
+    out
+}
 
 /// A picture for the viewport: sRGB pixels, `w x h`, over the cells `area`.
 pub struct Picture<'a> {
@@ -44,6 +58,8 @@ pub struct Bands {
     /// Per band, deleted while pieces were still queued: one of them may
     /// show it again, so it is deleted again with the next picture.
     late: Vec<bool>,
+    /// Per band, which of its two kitty ids the newest image has.
+    turn: Vec<bool>,
     layout: Option<Frame>,
     /// The most bands any layout had: kitty ids in use up to there.
     most: usize,
@@ -61,6 +77,8 @@ pub struct Plan {
 struct Job {
     band: usize,
     epoch: u64,
+    /// The kitty id of the band's image.
+    turn: bool,
     /// Where the band goes on the screen (0-based), and its cells.
     at: (u16, u16),
     cells: (u16, u16),
@@ -96,9 +114,13 @@ impl Plan {
             .into_iter()
             .map(|job| {
                 let (w, h) = (job.w, job.h);
-                let id = KITTY_ID + job.band as u32;
+                let id = kitty_id(job.band, job.turn);
                 let image = match (mode.protocol, &palette) {
-                    (Protocol::Kitty, _) => kitty::encode(&job.px, w, h, job.cells, id),
+                    (Protocol::Kitty, _) => {
+                        let mut image = kitty::encode(&job.px, w, h, job.cells, id);
+                        image.extend(kitty::delete(kitty_id(job.band, !job.turn)));
+                        image
+                    }
                     (Protocol::Iterm2, _) => iterm2::encode(&job.px, w, h, job.cells),
                     (Protocol::Sixel, Some(palette)) => {
                         // Sixel pixels are the terminal's: scale to the cells.
@@ -179,7 +201,7 @@ impl Bands {
             let top = area.y + b as u16 * BAND_ROWS;
             let bottom = (top + BAND_ROWS).min(area.y + area.height);
             if self.sent[b].is_some() && (top..bottom).any(&covered) && self.off(b) {
-                out.push(wrap(mode, &kitty::delete(KITTY_ID + b as u32)));
+                out.push(kitty_delete(mode, b));
                 self.late[b] = queued;
             }
         }
@@ -206,6 +228,7 @@ impl Bands {
             self.sent = vec![None; count];
             self.epoch = vec![0; count];
             self.late = vec![false; count];
+            self.turn = vec![false; count];
             self.most = self.most.max(count);
         }
         let mut plan = Plan {
@@ -223,7 +246,7 @@ impl Bands {
             if (area.y + top..area.y + top + rows).any(&covered) {
                 let late = std::mem::take(&mut self.late[b]);
                 if (self.off(b) || late) && mode.protocol == Protocol::Kitty {
-                    now.push(wrap(mode, &kitty::delete(KITTY_ID + b as u32)));
+                    now.push(kitty_delete(mode, b));
                 }
                 continue;
             }
@@ -238,9 +261,11 @@ impl Bands {
                 continue;
             }
             self.sent[b] = Some(hash);
+            self.turn[b] = !self.turn[b];
             plan.jobs.push(Job {
                 band: b,
                 epoch: self.epoch[b],
+                turn: self.turn[b],
                 at: (area.x, area.y + top),
                 cells: (area.width, rows),
                 w: pic.w as usize,
@@ -312,9 +337,7 @@ impl Bands {
 
     fn delete(mode: &PixelMode, bands: std::ops::Range<usize>) -> Vec<Vec<u8>> {
         match mode.protocol {
-            Protocol::Kitty => bands
-                .map(|b| wrap(mode, &kitty::delete(KITTY_ID + b as u32)))
-                .collect(),
+            Protocol::Kitty => bands.map(|b| kitty_delete(mode, b)).collect(),
             _ => Vec::new(),
         }
     }
@@ -405,18 +428,22 @@ mod tests {
         };
         let pieces = bands.update(&m, &pic2, |_| false);
         assert_eq!(pieces.len(), 1);
-        // Pixel row 30 is in cell row 3, band 1, screen row 2 + 2.
+        // Pixel row 30 is in cell row 3, band 1, screen row 2 + 2. Its new
+        // image has the band's other id, and the old one is deleted after
+        // it has arrived.
         assert!(pieces[0].starts_with(b"\x1b[5;4H"));
+        assert_eq!(kitty::decode(&pieces[0])[0].0, kitty_id(1, false));
+        assert!(pieces[0].ends_with(&kitty::delete(kitty_id(1, true))));
         // Text over row 3 (band 0): its image is deleted, then sent again
         // when the text is gone.
         let pieces = bands.update(&m, &pic2, |r| r == 3);
-        assert_eq!(pieces, vec![kitty::delete(KITTY_ID)]);
+        assert_eq!(pieces, vec![kitty_delete(&m, 0)]);
         assert_eq!(bands.update(&m, &pic2, |_| false).len(), 1);
         // A popup over rows 5-8 (bands 1-3): deleted at once, without a
         // picture; deleted again with the next one when pieces were still
         // queued (one of them may show a band again).
         let over = |r: u16| (5..=8).contains(&r);
-        let deletes: Vec<_> = (1..4).map(|b| kitty::delete(KITTY_ID + b)).collect();
+        let deletes: Vec<_> = (1..4).map(|b| kitty_delete(&m, b)).collect();
         assert_eq!(bands.uncover(&m, true, over), deletes);
         assert!(bands.uncover(&m, true, over).is_empty());
         assert_eq!(bands.update(&m, &pic2, over), deletes);

@@ -1,7 +1,9 @@
 //! What the terminal can do, asked at startup: the kitty graphics protocol
 //! (a query image, `a=q`), sixel (DA1 lists 4) and its colour registers
 //! (XTSMGRAPHICS), a cell's size in pixels (`CSI 16t`, else the window
-//! size ioctl), and 24-bit colour (XTGETTCAP `RGB`/`Tc`). DA1 goes last:
+//! size ioctl), and 24-bit colour (XTGETTCAP `RGB`/`Tc`, and an RGB
+//! background set and read back with DECRQSS, which terminals that keep
+//! only 256 colours answer with a palette index). DA1 goes last:
 //! every terminal answers it, so its answer ends the wait, which is short
 //! when nothing answers at all.
 
@@ -25,8 +27,9 @@ const KITTY_QUERY: &[u8] = b"\x1b_Gi=31,s=1,v=1,a=q,t=d,f=24;AAAA\x1b\\";
 const CELL_SIZE: &[u8] = b"\x1b[16t";
 const WINDOW_PIXELS: &[u8] = b"\x1b[14t";
 const REGISTERS: &[u8] = b"\x1b[?1;1;0S";
-/// XTGETTCAP for `RGB` and `Tc`, hex-encoded.
-const TRUECOLOR: &[u8] = b"\x1bP+q524742;5463\x1b\\";
+/// XTGETTCAP for `RGB` and `Tc`, hex-encoded; then background RGB 1,2,3
+/// set, read back (DECRQSS for SGR) and reset.
+const TRUECOLOR: &[u8] = b"\x1bP+q524742;5463\x1b\\\x1b[48;2;1;2;3m\x1bP$qm\x1b\\\x1b[m";
 const DA1: &[u8] = b"\x1b[c";
 
 /// What to ask.
@@ -34,6 +37,9 @@ const DA1: &[u8] = b"\x1b[c";
 pub struct Ask {
     pub graphics: bool,
     pub colour: bool,
+    /// Inside tmux: tmux takes an unwrapped kitty query (an APC string)
+    /// for the pane's title, so it goes only through passthrough, if at all.
+    pub tmux: bool,
     /// Inside tmux with passthrough: the graphics queries go through it.
     pub passthrough: bool,
 }
@@ -43,14 +49,20 @@ impl Ask {
         self.graphics || self.colour
     }
 
-    /// The queries, DA1 last.
+    /// The queries, DA1 last. The cell's size is asked whatever is asked:
+    /// block symbols keep the picture's proportions with it too.
     pub fn queries(&self) -> Vec<u8> {
         let mut q = Vec::new();
-        if self.graphics {
-            for query in [KITTY_QUERY, CELL_SIZE, WINDOW_PIXELS, REGISTERS] {
-                if self.passthrough {
-                    q.extend(passthrough(query));
-                }
+        let asked: &[&[u8]] = if self.graphics {
+            &[KITTY_QUERY, CELL_SIZE, WINDOW_PIXELS, REGISTERS]
+        } else {
+            &[CELL_SIZE, WINDOW_PIXELS]
+        };
+        for &query in asked {
+            if self.passthrough {
+                q.extend(passthrough(query));
+            }
+            if !(self.tmux && query == KITTY_QUERY) {
                 q.extend_from_slice(query);
             }
         }
@@ -73,7 +85,8 @@ pub struct Answers {
     /// A cell's size (width, height) in pixels, and the text area's.
     pub cell: Option<(u32, u32)>,
     pub window: Option<(u32, u32)>,
-    pub rgb: bool,
+    /// Whether the terminal shows 24-bit colour, where it said.
+    pub rgb: Option<bool>,
 }
 
 impl Answers {
@@ -91,11 +104,39 @@ impl Answers {
                 self.window = Some((*w as u32, *h as u32))
             }
             Reply::ColourRegisters(n) if *n > 0 => self.registers = Some(*n as usize),
-            Reply::Dcs(text) => self.rgb |= text.starts_with("1+r"),
+            Reply::Dcs(text) => {
+                let said = if text.starts_with("1+r") {
+                    Some(true)
+                } else {
+                    text.strip_prefix("1$r").map(keeps_rgb)
+                };
+                if let Some(said) = said {
+                    self.rgb = Some(said || self.rgb == Some(true));
+                }
+            }
             _ => {}
         }
         false
     }
+}
+
+/// Whether the SGR settings a DECRQSS answer lists (`0;48:2::1:2:3m`,
+/// `48;2;1;2;3m`; a terminal of 256 colours says `48;5;16m`) keep the RGB
+/// background set before it.
+fn keeps_rgb(sgr: &str) -> bool {
+    let params: Vec<&str> = sgr.trim_end_matches('m').split([';', ':']).collect();
+    params.windows(2).enumerate().any(|(i, w)| {
+        w == ["48", "2"] && {
+            // The colour space, empty or given, may come before the values.
+            let rest: Vec<&str> = params[i + 2..]
+                .iter()
+                .copied()
+                .filter(|p| !p.is_empty())
+                .take(4)
+                .collect();
+            rest.starts_with(&["1", "2", "3"]) || rest.starts_with(&["0", "1", "2", "3"])
+        }
+    })
 }
 
 /// Sends the queries with `send` and collects the answers from `reader`
@@ -185,16 +226,7 @@ pub fn choose(
             ),
         );
     }
-    let from_window = answers
-        .window
-        .map(|(w, h)| (w / cols_rows.0.max(1) as u32, h / cols_rows.1.max(1) as u32));
-    // A size no font has is garbage (it would make images of gigapixels).
-    let sane = |&(w, h): &(u32, u32)| CELL_PX.contains(&w) && CELL_PX.contains(&h);
-    let measured = answers
-        .cell
-        .filter(sane)
-        .or(cell_ioctl.filter(sane))
-        .or(from_window.filter(sane));
+    let measured = cell_size(answers, cell_ioctl, cols_rows);
     let cell = measured.unwrap_or((8, 16));
     let colours = answers.registers.unwrap_or(256).min(256);
     let mut said = format!("{}, cells {}x{} px", protocol.name(), cell.0, cell.1);
@@ -226,16 +258,56 @@ pub fn choose(
     )
 }
 
-/// Inside tmux: whether `allow-passthrough` is on.
-pub fn tmux_passthrough() -> Option<bool> {
+/// What tmux says of itself and of the terminal it runs in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Tmux {
+    /// `allow-passthrough` is on.
+    pub passthrough: bool,
+    /// Whether the terminal it runs in has 24-bit colour (its `RGB`
+    /// feature), when a client is attached.
+    pub rgb: Option<bool>,
+}
+
+/// A cell's size in pixels: the terminal's answer, else the window size
+/// ioctl's, else the window's pixels over its cells; sizes no font has are
+/// garbage (they would make images of gigapixels) and skipped.
+pub fn cell_size(
+    answers: &Answers,
+    cell_ioctl: Option<(u32, u32)>,
+    cols_rows: (u16, u16),
+) -> Option<(u32, u32)> {
+    let from_window = answers
+        .window
+        .map(|(w, h)| (w / cols_rows.0.max(1) as u32, h / cols_rows.1.max(1) as u32));
+    let sane = |&(w, h): &(u32, u32)| CELL_PX.contains(&w) && CELL_PX.contains(&h);
+    answers
+        .cell
+        .filter(sane)
+        .or(cell_ioctl.filter(sane))
+        .or(from_window.filter(sane))
+}
+
+/// Inside tmux, what it says (one `tmux` command).
+pub fn tmux() -> Option<Tmux> {
     std::env::var_os("TMUX")?;
     let out = std::process::Command::new("tmux")
-        .args(["show-options", "-Apv", "allow-passthrough"])
+        .args(["show-options", "-Apv", "allow-passthrough", ";"])
+        .args(["display-message", "-p", "features:#{client_termfeatures}"])
         .stderr(std::process::Stdio::null())
         .output()
         .ok()?;
-    let v = String::from_utf8_lossy(&out.stdout);
-    Some(v.lines().any(|l| matches!(l.trim(), "on" | "all")))
+    Some(parse_tmux(&String::from_utf8_lossy(&out.stdout)))
+}
+
+fn parse_tmux(text: &str) -> Tmux {
+    let features = text
+        .lines()
+        .find_map(|l| l.strip_prefix("features:"))
+        .filter(|f| !f.trim().is_empty());
+    Tmux {
+        passthrough: text.lines().any(|l| matches!(l.trim(), "on" | "all")),
+        rgb: features.map(|f| f.split(',').any(|f| f.trim() == "RGB")),
+    }
 }
 
 #[cfg(test)]
@@ -261,7 +333,7 @@ mod tests {
     fn kitty_sixel_and_nothing_are_told_apart() {
         // kitty: the query image is accepted, cells 9x18.
         let a = answers(b"\x1b_Gi=31;OK\x1b\\\x1b[6;18;9t\x1bP1+r524742=38\x1b\\\x1b[?62;22c");
-        assert!(a.answered && a.kitty && a.rgb && !a.sixel);
+        assert!(a.answered && a.kitty && a.rgb == Some(true) && !a.sixel);
         let (m, said) = choose(GraphicsArg::Auto, &a, None, (80, 24), none, None);
         let m = m.unwrap();
         assert_eq!((m.protocol, m.cell), (Protocol::Kitty, (9, 18)));
@@ -289,6 +361,65 @@ mod tests {
             None,
         );
         assert!(m.is_none() && said.contains("answered no query"), "{said}");
+    }
+
+    #[test]
+    fn the_terminal_says_whether_it_keeps_24_bit_colour() {
+        // xterm with direct colour, kitty, and a terminal that mapped the
+        // colour to its palette; XTGETTCAP's yes wins.
+        for (reply, rgb) in [
+            (&b"\x1bP1$r0;48:2::1:2:3m\x1b\\"[..], Some(true)),
+            (b"\x1bP1$r48;2;1;2;3m\x1b\\", Some(true)),
+            (b"\x1bP1$r0;48;5;16m\x1b\\", Some(false)),
+            (b"\x1bP1+r524742=38\x1b\\\x1bP1$r48;5;16m\x1b\\", Some(true)),
+            // Not understood: nothing said.
+            (b"\x1bP0$r\x1b\\\x1bP0+r524742\x1b\\", None),
+        ] {
+            let mut bytes = reply.to_vec();
+            bytes.extend_from_slice(b"\x1b[?62c");
+            assert_eq!(
+                answers(&bytes).rgb,
+                rgb,
+                "{}",
+                String::from_utf8_lossy(reply)
+            );
+        }
+    }
+
+    #[test]
+    fn tmux_says_passthrough_and_rgb() {
+        let t = parse_tmux("on\nfeatures:256,RGB,title,clipboard\n");
+        assert_eq!(
+            t,
+            Tmux {
+                passthrough: true,
+                rgb: Some(true)
+            }
+        );
+        let t = parse_tmux("off\nfeatures:256,title\n");
+        assert_eq!((t.passthrough, t.rgb), (false, Some(false)));
+        // No client attached: nothing known of the terminal.
+        assert_eq!(parse_tmux("off\nfeatures:\n").rgb, None);
+    }
+
+    #[test]
+    fn inside_tmux_the_kitty_query_goes_only_through_passthrough() {
+        let apc = |q: &[u8]| q.windows(2).filter(|w| w == b"\x1b_").count();
+        let bare = Ask {
+            graphics: true,
+            ..Ask::default()
+        };
+        assert_eq!(apc(&bare.queries()), 1);
+        let tmux = Ask { tmux: true, ..bare };
+        assert_eq!(apc(&tmux.queries()), 0);
+        let through = Ask {
+            passthrough: true,
+            ..tmux
+        };
+        let q = through.queries();
+        // The one there is wrapped: its ESC doubled.
+        assert_eq!(apc(&q), 1);
+        assert!(q.windows(3).any(|w| w == b"\x1b\x1b_"));
     }
 
     #[test]

@@ -12,24 +12,44 @@ pub mod terminfo;
 
 use super::color::ColorMode;
 
-/// Said in the status line when the colours may be fewer than the
-/// terminal has: ssh does not pass `COLORTERM` on.
-pub const SSH_HINT: &str =
-    "256 colours: over SSH COLORTERM is not passed on; if your terminal has 24-bit colour, start with --color truecolor";
-
-/// The colour mode the environment (`var` reads a variable) suggests:
-/// `COLORTERM`, then the terminfo entry of `TERM` (`RGB`, `Tc`, or a
-/// `-direct` name); with a hint when over SSH nothing said truecolor.
-pub fn detect_colour(var: impl Fn(&str) -> Option<String>) -> (ColorMode, Option<&'static str>) {
+/// The colour mode: what the terminal said (`answer`: XTGETTCAP or
+/// DECRQSS), else what tmux knows of the terminal it runs in (`tmux_rgb`),
+/// else the environment (`var` reads a variable): `COLORTERM`, then the
+/// terminfo entry of `TERM` (`RGB`, `Tc`, or a `-direct` name). With fewer
+/// than 24 bits, why, and how to ask for more, for the status line.
+pub fn choose_colour(
+    answer: Option<bool>,
+    tmux_rgb: Option<bool>,
+    var: impl Fn(&str) -> Option<String>,
+) -> (ColorMode, Option<String>) {
+    let said = answer.or(tmux_rgb);
     let colorterm = var("COLORTERM");
     let rgb = var("TERM")
         .is_some_and(|t| t.ends_with("-direct") || terminfo::truecolor(&t).unwrap_or(false));
-    let mode = ColorMode::detect(colorterm.as_deref(), rgb);
-    let ssh = ["SSH_CONNECTION", "SSH_CLIENT", "SSH_TTY"]
-        .iter()
-        .any(|v| var(v).is_some());
-    let hint = (ssh && colorterm.is_none() && mode != ColorMode::Truecolor).then_some(SSH_HINT);
-    (mode, hint)
+    let mode = match said {
+        Some(true) => ColorMode::Truecolor,
+        Some(false) => ColorMode::Palette256,
+        None => ColorMode::detect(colorterm.as_deref(), rgb),
+    };
+    if mode == ColorMode::Truecolor {
+        return (mode, None);
+    }
+    let why = match (answer, tmux_rgb) {
+        (Some(false), _) => "the terminal says it keeps no 24-bit colour",
+        (None, Some(false)) => "tmux says its terminal has no RGB",
+        _ if ["SSH_CONNECTION", "SSH_CLIENT", "SSH_TTY"]
+            .iter()
+            .any(|v| var(v).is_some()) =>
+        {
+            "no answer on 24-bit colour, and ssh does not pass COLORTERM on"
+        }
+        _ => "no answer on 24-bit colour, nor COLORTERM",
+    };
+    let hint = format!(
+        "{}: {why}; for 24-bit: --color truecolor or RAYTERM_COLOR=truecolor",
+        mode.name()
+    );
+    (mode, Some(hint))
 }
 
 #[cfg(test)]
@@ -46,20 +66,46 @@ mod tests {
     }
 
     #[test]
-    fn ssh_without_colorterm_gets_a_hint() {
+    fn the_terminal_is_believed_before_the_environment() {
         let ssh = [
             ("SSH_CONNECTION", "1.2.3.4 5 6.7.8.9 22"),
             ("TERM", "dumb-nowhere"),
         ];
+        // Asked over ssh, the terminal says it has 24-bit colour.
         assert_eq!(
-            detect_colour(env(&ssh)),
-            (ColorMode::Palette256, Some(SSH_HINT))
+            choose_colour(Some(true), None, env(&ssh)),
+            (ColorMode::Truecolor, None)
         );
+        // No answer: the environment decides, and the hint says why.
+        let (mode, hint) = choose_colour(None, None, env(&ssh));
+        assert_eq!(mode, ColorMode::Palette256);
+        assert!(hint.unwrap().contains("ssh does not pass COLORTERM"));
         let local = [("TERM", "dumb-nowhere")];
-        assert_eq!(detect_colour(env(&local)), (ColorMode::Palette256, None));
+        let (mode, hint) = choose_colour(None, None, env(&local));
+        assert_eq!(mode, ColorMode::Palette256);
+        assert!(hint.unwrap().contains("nor COLORTERM"));
         let told = [("SSH_TTY", "/dev/pts/1"), ("COLORTERM", "truecolor")];
-        assert_eq!(detect_colour(env(&told)), (ColorMode::Truecolor, None));
+        assert_eq!(
+            choose_colour(None, None, env(&told)),
+            (ColorMode::Truecolor, None)
+        );
         let direct = [("SSH_TTY", "/dev/pts/1"), ("TERM", "xterm-direct")];
-        assert_eq!(detect_colour(env(&direct)), (ColorMode::Truecolor, None));
+        assert_eq!(
+            choose_colour(None, None, env(&direct)).0,
+            ColorMode::Truecolor
+        );
+        // A terminal that answers no wins over COLORTERM; inside tmux, tmux
+        // knows its terminal.
+        let (mode, hint) = choose_colour(Some(false), Some(true), env(&told));
+        assert_eq!(mode, ColorMode::Palette256);
+        assert!(hint.unwrap().contains("the terminal says"));
+        assert_eq!(
+            choose_colour(None, Some(true), env(&local)).0,
+            ColorMode::Truecolor
+        );
+        assert_eq!(
+            choose_colour(None, Some(false), env(&told)).0,
+            ColorMode::Palette256
+        );
     }
 }

@@ -182,6 +182,12 @@ impl<W: Write> Screen<W> {
         if self.shown[i].as_ref() == Some(cell) {
             return 0;
         }
+        // The picture's image is sent over it: writing a blank would erase
+        // it there (and show the terminal's background until it comes).
+        if is_hole(cell) {
+            self.shown[i] = Some(cell.clone());
+            return 0;
+        }
         let width = cell.symbol().width();
         let covered = if width > 1 && (i % w) + 1 < w { 1 } else { 0 };
         if width > 0 {
@@ -216,6 +222,21 @@ impl<W: Write> Screen<W> {
         self.control.extend_from_slice(b"\x1b[0m\x1b[H\x1b[2J");
         Ok(())
     }
+}
+
+/// Makes `cell` a hole: a place the viewport's image shows through, which
+/// the screen never writes. Blank cells are written, so that a popup over
+/// a sixel picture hides it.
+pub fn make_hole(cell: &mut Cell) {
+    cell.reset();
+    cell.modifier = Modifier::HIDDEN;
+}
+
+fn is_hole(cell: &Cell) -> bool {
+    cell.modifier == Modifier::HIDDEN
+        && cell.symbol() == " "
+        && cell.fg == Color::Reset
+        && cell.bg == Color::Reset
 }
 
 /// Whether the terminal may not know how wide `symbol` is: octants came
@@ -449,6 +470,37 @@ mod tests {
         let s = t.backend_mut();
         s.pump(usize::MAX).unwrap();
         String::from_utf8(std::mem::take(s.writer())).unwrap()
+    }
+
+    #[test]
+    fn holes_are_never_written_and_blanks_over_them_are() {
+        let mut t = screen(6, 1);
+        let holes = |t: &mut Terminal<Screen<Vec<u8>>>, popup: Option<&str>| {
+            t.draw(|f| {
+                let b = f.buffer_mut();
+                for x in 0..6 {
+                    make_hole(&mut b[(x, 0)]);
+                }
+                // A popup clears the cells under it first.
+                if let Some(p) = popup {
+                    for x in 1..1 + p.len() as u16 {
+                        b[(x, 0)].reset();
+                    }
+                    b.set_string(1, 0, p, Style::new());
+                }
+            })
+            .unwrap();
+        };
+        holes(&mut t, None);
+        out(&mut t);
+        // A popup's blanks erase the picture under them, its text too.
+        holes(&mut t, Some("a  b"));
+        assert_eq!(out(&mut t), "\x1b[1;2H\x1b[0ma  b\x1b[0m");
+        // Closed: nothing is written (no blank flashes before the image
+        // comes back), and the row holds no text.
+        holes(&mut t, None);
+        assert_eq!(out(&mut t), "");
+        assert!(!t.backend().row_has_text(0, Rect::new(0, 0, 6, 1)));
     }
 
     #[test]

@@ -11,15 +11,22 @@ use crate::tui::keys;
 use crate::tui::layout::{MIN_SIZE, POPUP_HINT};
 use crate::tui::popup::Popup;
 
-pub fn status(f: &mut Frame, area: Rect, app: &App) {
+/// The status line; a message longer than the line wraps onto the hint
+/// bar's row below while it lasts (true then), cut only beyond that.
+pub fn status(f: &mut Frame, area: Rect, hints: Rect, app: &App) -> bool {
     let text = match app.jobs.export_progress() {
         Some(p) => format!("{p} · {}", app.status_line()),
         None => app.status_line(),
     };
+    let wraps = text.chars().count() > area.width as usize;
+    let area = if wraps { area.union(hints) } else { area };
     f.render_widget(
-        Paragraph::new(text).style(Style::new().bg(Color::DarkGray).fg(Color::White)),
+        Paragraph::new(text)
+            .wrap(Wrap { trim: true })
+            .style(Style::new().bg(Color::DarkGray).fg(Color::White)),
         area,
     );
+    wraps
 }
 
 /// As many whole hints as fit, in the key table's order (help and quit

@@ -27,8 +27,9 @@ pub fn draw(f: &mut Frame, app: &App) {
         panels::feature_lines(app, l.features.width, l.wrap_features),
     );
     panels::render(f, l.render, app);
-    bars::status(f, l.status, app);
-    bars::hints(f, l.hints, app);
+    if !bars::status(f, l.status, l.hints, app) {
+        bars::hints(f, l.hints, app);
+    }
     if let Some(p) = &app.popup {
         bars::popup(f, l.popup(p), p);
     }

@@ -11,6 +11,7 @@ use ratatui::Frame;
 use crate::tui::app::App;
 use crate::tui::color::{self, ColorMode};
 use crate::tui::graphics::symbols::{self, Symbols};
+use crate::tui::term::screen::make_hole;
 use crate::tui::worker::Snapshot;
 
 /// Colour of the marks around the selected pixel.
@@ -101,9 +102,18 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App) {
     }
     title.push(' ');
     f.render_widget(Block::new().borders(Borders::TOP).title(title), area);
-    // With a pixel protocol the cells stay blank: the event loop sends the
+    // With a pixel protocol the cells are holes: the event loop sends the
     // picture as images over them.
-    if app.pixels.is_none() {
+    if app.pixels.is_some() {
+        let buf = f.buffer_mut();
+        for y in inner.top()..inner.bottom() {
+            for x in inner.left()..inner.right() {
+                if let Some(c) = buf.cell_mut((x, y)) {
+                    make_hole(c);
+                }
+            }
+        }
+    } else {
         symbols::paint(
             f.buffer_mut(),
             inner,
