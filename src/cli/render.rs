@@ -184,7 +184,12 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     }
     // A resumed film was checked as it was read.
     if a.resume.is_none() {
-        let bytes = p.bytes_per_pixel(s.plan.deterministic, &stop);
+        let aovs = if a.aov.is_empty() {
+            0
+        } else {
+            aov::BYTES_PER_PIXEL
+        };
+        let bytes = p.bytes_per_pixel(s.plan.deterministic, &stop) + aovs;
         check_film(s.width, s.height, bytes)?;
     }
     let interrupted = interrupt::flag();
@@ -278,6 +283,12 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     }
     if let Some(meta) = &mut meta {
         (meta.rays, meta.seconds) = (p.rays, p.seconds);
+        // A render its --time ended has spent it all, though its passes'
+        // own times leave out the checkpoints written between them: a
+        // resume of it adds nothing.
+        if let (Ended::Time, Some(t)) = (outcome.ended, a.time) {
+            meta.seconds = meta.seconds.max(t);
+        }
     }
     let checkpoint = checkpoint.as_ref().zip(meta.as_ref());
     if outcome.ended == Ended::Cancelled {
@@ -306,7 +317,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
             };
             let work = std::thread::spawn(move || match aovs.is_empty() {
                 true => image_bytes(format, image, w, h, bloom.as_ref()),
-                false => crate::raster::openexr::encode_with(w, h, &image, &aovs),
+                false => crate::raster::openexr::encode_with(w, h, &image, aovs),
             });
             while !work.is_finished() && !interrupt::requested() {
                 std::thread::park_timeout(std::time::Duration::from_millis(20));

@@ -54,7 +54,7 @@ pub(crate) fn encode_with(
     width: u32,
     height: u32,
     img: &[Vec3],
-    more: &[(&str, Vec<f32>)],
+    more: Vec<(&str, Vec<f32>)>,
 ) -> Result<Vec<u8>> {
     use exr::prelude::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer, LayerAttributes};
     let n = width as usize * height as usize;

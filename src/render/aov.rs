@@ -38,6 +38,11 @@ impl Aov {
     }
 }
 
+/// Memory the variables take a pixel while they are made and written: a
+/// pixel's first hit (28 bytes), its planes (7 channels of f32) and the
+/// picture's three, and room for the encoded file.
+pub const BYTES_PER_PIXEL: u64 = 28 + 28 + 12 + 40;
+
 /// The samples of a pixel averaged for its variables (its first ones:
 /// jittered over the pixel where supersampling runs).
 pub const AOV_SAMPLES: u32 = 8;
