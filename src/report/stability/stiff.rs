@@ -303,5 +303,31 @@ pub fn stiff_shading(o: &Options) -> Result<Vec<Row>> {
         &inside,
         Some((misses, format!(", {misses} camera rays escaped"))),
     );
+    // Paths of up to 64 bounces in the closed box around the light, the
+    // camera in with it: Russian roulette ends them, and no sample may be
+    // non-finite or negative. (Their light adds up over bounces, past the
+    // bound of one Whitted bounce, so that is not checked here.)
+    let mut long = stage(30.0, light, 1.0, true)?;
+    long.settings.integrator = Some(crate::scene::Integrator::Path);
+    long.settings.max_depth = crate::scene::MAX_DEPTH;
+    long.camera = Camera {
+        eye: light + Vec3::new(0.2, -0.2, 0.2),
+        target: light + Vec3::new(-0.3, -0.4, -0.1),
+        up: Vec3::Y,
+        projection: Projection::perspective(90.0),
+    };
+    let f = render(&long, w, h, 4, None);
+    let negative = f.image().iter().filter(|c| c.min_element() < 0.0).count() as u64;
+    let samples = f.width as u64 * f.height as u64 * f.spp as u64;
+    rows.push(Row::zero(
+        "stiff: long paths",
+        f.bad_count + negative,
+        format!(
+            "{} of {samples} samples non-finite, {negative} pixels negative (paths of up to {} \
+             bounces in a closed box)",
+            f.bad_count,
+            crate::scene::MAX_DEPTH
+        ),
+    ));
     Ok(rows)
 }
