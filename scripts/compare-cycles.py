@@ -50,6 +50,9 @@ environment light, which the Cycles render would not have):
     g_glow         a glowing sphere (emissive (1, 0.7, 0.4) x 6) beside a grey
                    sphere on the floor, in a black world: the emitter is the
                    only light
+    h_textured     a sphere with a checker base colour texture, a
+                   metallic-roughness texture (metal squares, roughness bands)
+                   and a normal map of bumps, under a point light
 
 Matching the two renderers
 --------------------------
@@ -237,8 +240,17 @@ class Gltf:
         self.doc["accessors"].append(acc)
         return len(self.doc["accessors"]) - 1
 
+    def texture(self, rgb):
+        """An embedded PNG texture of an (h, w, 3) uint8 array."""
+        view = self._view(png_bytes(rgb), None)
+        del self.doc["bufferViews"][view]["target"]
+        self.doc.setdefault("images", []).append({"bufferView": view, "mimeType": "image/png"})
+        self.doc.setdefault("textures", []).append({"source": len(self.doc["images"]) - 1})
+        return len(self.doc["textures"]) - 1
+
     def material(self, name, base=(0.8, 0.8, 0.8), metallic=0.0, roughness=1.0,
-                 emissive=None, emissive_strength=None):
+                 emissive=None, emissive_strength=None, base_tex=None, mr_tex=None,
+                 normal_tex=None):
         m = {
             "name": name,
             "pbrMetallicRoughness": {
@@ -247,6 +259,12 @@ class Gltf:
                 "roughnessFactor": roughness,
             },
         }
+        if base_tex is not None:
+            m["pbrMetallicRoughness"]["baseColorTexture"] = {"index": base_tex}
+        if mr_tex is not None:
+            m["pbrMetallicRoughness"]["metallicRoughnessTexture"] = {"index": mr_tex}
+        if normal_tex is not None:
+            m["normalTexture"] = {"index": normal_tex}
         if emissive is not None:
             m["emissiveFactor"] = list(emissive)
         if emissive_strength is not None:
@@ -258,12 +276,15 @@ class Gltf:
         self.doc["materials"].append(m)
         return len(self.doc["materials"]) - 1
 
-    def mesh(self, name, positions, normals, indices, material):
+    def mesh(self, name, positions, normals, indices, material, uvs=None):
         p = self._accessor(positions, "VEC3", 3)
         n = self._accessor(normals, "VEC3", 3)
         i = self._accessor(indices, "SCALAR", 1)
+        attributes = {"POSITION": p, "NORMAL": n}
+        if uvs is not None:
+            attributes["TEXCOORD_0"] = self._accessor(uvs, "VEC2", 2)
         self.doc["meshes"].append(
-            {"name": name, "primitives": [{"attributes": {"POSITION": p, "NORMAL": n},
+            {"name": name, "primitives": [{"attributes": attributes,
                                            "indices": i, "material": material}]}
         )
         return len(self.doc["meshes"]) - 1
@@ -280,7 +301,7 @@ class Gltf:
         return len(self.doc["nodes"]) - 1
 
     def sphere(self, name, center, radius, material, segments=64, rings=32):
-        pos, nor, idx = [], [], []
+        pos, nor, idx, uv = [], [], [], []
         for j in range(rings + 1):
             theta = math.pi * j / rings
             for i in range(segments + 1):
@@ -288,6 +309,7 @@ class Gltf:
                 n = [math.sin(theta) * math.cos(phi), math.cos(theta), -math.sin(theta) * math.sin(phi)]
                 nor.append(n)
                 pos.append([radius * c for c in n])
+                uv.append([i / segments, j / rings])
         w = segments + 1
         for j in range(rings):
             for i in range(segments):
@@ -296,7 +318,7 @@ class Gltf:
                     idx += [a, c, b]
                 if j != rings - 1:
                     idx += [b, c, d]
-        m = self.mesh(name, pos, nor, idx, material)
+        m = self.mesh(name, pos, nor, idx, material, uv)
         self.spheres.append((name, center, radius))
         return self.node(name, translation=center, mesh=m)
 
@@ -455,6 +477,35 @@ def scene_g():
     return g
 
 
+def scene_h():
+    """A textured sphere on the floor under a point light of 250 cd: a
+    checker base colour (sRGB), a metallic-roughness texture (metal
+    squares of the checker, roughness in bands from 0.25 to 0.85) and a
+    normal map of bumps (tangent space, from the texture coordinates)."""
+    g = Gltf()
+    floor(g)
+    n = 256
+    y, x = np.mgrid[0:n, 0:n] / n
+    checker = ((np.floor(x * 8) + np.floor(y * 4)) % 2).astype(bool)
+    base = np.where(checker[..., None], [230, 200, 120], [60, 110, 180]).astype(np.uint8)
+    rough = 0.25 + 0.6 * np.floor(y * 6) / 5
+    mr = np.zeros((n, n, 3), dtype=np.uint8)
+    mr[..., 1] = (rough * 255).astype(np.uint8)
+    mr[..., 2] = np.where(checker, 255, 0)
+    # Bumps: the slope of sin(2 pi 16 u) sin(2 pi 8 v) as tangent-space normals.
+    du = 0.35 * np.cos(2 * np.pi * 16 * x) * np.sin(2 * np.pi * 8 * y)
+    dv = 0.35 * np.sin(2 * np.pi * 16 * x) * np.cos(2 * np.pi * 8 * y)
+    nrm = np.stack([-du, -dv, np.ones_like(du)], -1)
+    nrm /= np.linalg.norm(nrm, axis=-1, keepdims=True)
+    normal = ((nrm * 0.5 + 0.5) * 255 + 0.5).astype(np.uint8)
+    m = g.material("textured", base=(1.0, 1.0, 1.0), metallic=1.0, roughness=1.0,
+                   base_tex=g.texture(base), mr_tex=g.texture(mr), normal_tex=g.texture(normal))
+    g.sphere("sphere", (0.0, 0.7, 0.0), 0.7, m)
+    g.camera("cam", (0.0, 1.8, 4.0), (0.0, 0.6, 0.0), 0.7, ASPECT)
+    g.light("key", "point", 250.0, position=(-1.5, 3.5, 2.5))
+    return g
+
+
 SCENES = {
     "a_spheres": scene_a,
     "b_diffuse": scene_b,
@@ -463,6 +514,7 @@ SCENES = {
     "e_emissive": scene_e,
     "f_sky": scene_f,
     "g_glow": scene_g,
+    "h_textured": scene_h,
 }
 
 # The world each scene is lit by besides its lights: a constant linear
@@ -480,8 +532,21 @@ WORLD = {
 
 
 def render_rayterm(binary, glb, exr, size, spp, extra=()):
-    cmd = [binary, "render", glb, "-o", exr, "--size", size, "--spp", str(spp), "--no", "bloom", *extra]
+    cmd = [binary, "render", glb, "-o", exr, "--size", size, "--spp", str(spp), "--no", "bloom",
+           "--progress", "none", *extra]
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+
+
+def png_bytes(rgb):
+    """An 8-bit RGB PNG of an (h, w, 3) uint8 array."""
+    h, w, _ = rgb.shape
+    raw = b"".join(b"\0" + rgb[y].tobytes() for y in range(h))
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
 
 
 def glb_json(glb):
