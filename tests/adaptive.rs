@@ -79,6 +79,23 @@ fn the_adaptive_image_converges_to_the_quadrature() {
     }
 }
 
+/// Over six seeds from `seed`, the film's estimated relative error over
+/// the one measured against `exact`, at a mean of `budget` spp.
+fn estimated_over_true(s: &Scene, w: u32, h: u32, seed: u64, budget: f64, exact: &[Vec3]) -> f64 {
+    let (mut est, mut truth) = (0.0, 0.0);
+    for k in 0..6 {
+        let sess = session(s, w, h, seed + k);
+        let t = sess.tracer();
+        let mut p = Progressive::new_adaptive(w, h);
+        while p.film.spp_range().1 < budget {
+            p.pass(&t, &Stop::default(), &|| false).unwrap();
+        }
+        est += p.film.estimated_rel_mse().unwrap();
+        truth += rel_mse(&p.film.image(), exact);
+    }
+    (est / truth).sqrt()
+}
+
 /// Over six seeds the film's estimate of its relative error against the
 /// error measured from the quadrature: within 0.75 to 1.33 at mean budgets
 /// from 4 spp (every pixel's first quarter) to 192 (adaptive from 4).
@@ -88,18 +105,7 @@ fn the_estimate_of_adaptive_images_is_calibrated() {
     let s = lit_plane();
     let exact = exact_image_area(&s, w, h);
     for budget in [4.0, 8.0, 16.0, 48.0, 96.0, 192.0] {
-        let (mut est, mut truth) = (0.0, 0.0);
-        for seed in 0..6 {
-            let sess = session(&s, w, h, 40 + seed);
-            let t = sess.tracer();
-            let mut p = Progressive::new_adaptive(w, h);
-            while p.film.spp_range().1 < budget {
-                p.pass(&t, &Stop::default(), &|| false).unwrap();
-            }
-            est += p.film.estimated_rel_mse().unwrap();
-            truth += rel_mse(&p.film.image(), &exact);
-        }
-        let r = (est / truth).sqrt();
+        let r = estimated_over_true(&s, w, h, 40, budget, &exact);
         assert!(
             (0.75..=1.33).contains(&r),
             "{budget} spp: estimated / true error {r:.3}"
@@ -118,19 +124,8 @@ fn the_estimate_of_path_traced_images_is_calibrated() {
     s.settings.max_depth = 2;
     let exact = exact_image_area(&s, w, h);
     for budget in [2.0, 4.0, 16.0, 64.0, 192.0] {
-        let (mut est, mut truth) = (0.0, 0.0);
-        for seed in 0..6 {
-            let sess = session(&s, w, h, 70 + seed);
-            assert!(sess.plan.path);
-            let t = sess.tracer();
-            let mut p = Progressive::new_adaptive(w, h);
-            while p.film.spp_range().1 < budget {
-                p.pass(&t, &Stop::default(), &|| false).unwrap();
-            }
-            est += p.film.estimated_rel_mse().unwrap();
-            truth += rel_mse(&p.film.image(), &exact);
-        }
-        let r = (est / truth).sqrt();
+        assert!(session(&s, w, h, 70).plan.path);
+        let r = estimated_over_true(&s, w, h, 70, budget, &exact);
         assert!(
             (0.75..=1.33).contains(&r),
             "{budget} spp: estimated / true error {r:.3}"

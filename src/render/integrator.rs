@@ -650,6 +650,13 @@ impl<'a> Tracer<'a> {
         color
     }
 
+    /// The mesh and triangle a shadow ray was blocked by, as the ray tree
+    /// names them.
+    pub(super) fn occluder(&self, t: u32) -> (String, u32) {
+        let mesh = self.scene.geometry.tri_mesh[t as usize];
+        (self.scene.meshes[mesh as usize].name.clone(), t)
+    }
+
     /// The light a metallic-roughness surface gives off at texture
     /// coordinates `uv` (where the plan reads textures), as emission has it.
     pub(super) fn emitted(&self, pbr: &crate::scene::material::Pbr, uv: Option<Vec2>) -> Vec3 {
@@ -759,16 +766,12 @@ impl<'a> Tracer<'a> {
                 sum += d;
             }
             if R::ACTIVE {
-                let geo = &self.scene.geometry;
                 rec.light_sample(LightSample {
                     point: s.p + l,
                     color: e.radiance,
                     shadow_ray,
                     visible,
-                    occluder: occluder.map(|t| {
-                        let mesh = &self.scene.meshes[geo.tri_mesh[t as usize] as usize];
-                        (mesh.name.clone(), t)
-                    }),
+                    occluder: occluder.map(|t| self.occluder(t)),
                     diffuse: d,
                     specular: Vec3::ZERO,
                     mis: None,
@@ -846,20 +849,12 @@ impl<'a> Tracer<'a> {
             }
         }
         if R::ACTIVE {
-            let geo = &self.scene.geometry;
             rec.light_sample(LightSample {
                 point: lp,
                 color: lc,
                 shadow_ray,
                 visible,
-                occluder: occluder.map(|t| {
-                    (
-                        self.scene.meshes[geo.tri_mesh[t as usize] as usize]
-                            .name
-                            .clone(),
-                        t,
-                    )
-                }),
+                occluder: occluder.map(|t| self.occluder(t)),
                 diffuse: d,
                 specular: sp,
                 mis: None,

@@ -180,16 +180,12 @@ impl Tracer<'_> {
         mis: Option<Mis>,
     ) {
         if R::ACTIVE {
-            let geo = &self.scene.geometry;
             rec.light_sample(LightSample {
                 point,
                 color,
                 shadow_ray,
                 visible,
-                occluder: occluder.map(|t| {
-                    let mesh = &self.scene.meshes[geo.tri_mesh[t as usize] as usize];
-                    (mesh.name.clone(), t)
-                }),
+                occluder: occluder.map(|t| self.occluder(t)),
                 diffuse: value,
                 specular: Vec3::ZERO,
                 mis,
