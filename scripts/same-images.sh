@@ -10,7 +10,10 @@ set -euo pipefail
 old=${1:?usage: same-images.sh OLD_BINARY NEW_BINARY [WORK_DIR]}
 new=${2:?usage: same-images.sh OLD_BINARY NEW_BINARY [WORK_DIR]}
 work=${3:-$(mktemp -d)}
-mkdir -p "$work/old" "$work/new"
+mkdir -p "$work/old" "$work/new" "$work/bin-old" "$work/bin-new"
+# The same file name for both, since help texts print it.
+cp "$old" "$work/bin-old/rayterm" && old=$work/bin-old/rayterm
+cp "$new" "$work/bin-new/rayterm" && new=$work/bin-new/rayterm
 
 # name|arguments (the output file name is NAME with its extension)
 cases=(
@@ -81,6 +84,7 @@ done
 
 same=0
 for f in "$work"/old/*; do
+  [ -f "$f" ] || continue
   b=$(basename "$f")
   case $b in *.err) continue ;; esac
   if cmp -s "$f" "$work/new/$b"; then
