@@ -21,6 +21,16 @@ pub fn note(args: fmt::Arguments) {
     let _ = io::stderr().lock().write_fmt(args);
 }
 
+/// `text` on stderr after `prefix`, its control characters but newline
+/// and tab made printable: errors and warnings quote paths from the command
+/// line and names from files.
+pub fn say(prefix: &str, text: &str) {
+    note(format_args!(
+        "{prefix}: {}\n",
+        crate::words::printable_but(text, "\n\t")
+    ));
+}
+
 /// `print!` through [`out`]: evaluates to its `Result`.
 #[macro_export]
 macro_rules! out {

@@ -5,6 +5,7 @@
 //! `render::post`; the CLI, the TUI, the inspector and the reports consume it.
 
 pub mod bvh;
+pub mod choice;
 pub mod cli;
 pub mod console;
 pub mod geometry;
@@ -17,3 +18,6 @@ pub mod report;
 pub mod scene;
 pub mod tui;
 pub mod words;
+
+#[cfg(test)]
+mod layers;

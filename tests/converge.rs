@@ -9,10 +9,9 @@ use common::*;
 use exact::*;
 use glam::Vec3;
 use rayterm::bvh::{self, Bvh};
+use rayterm::raster::reference::load_reference;
 use rayterm::render::{Feature, Features, Plan, PlanPolicy};
-use rayterm::report::converge::{
-    load_reference, rmse, Budget, Config, ReferenceSource, Study, Subject,
-};
+use rayterm::report::converge::{rmse, Budget, Config, ReferenceSource, Study, Subject};
 use rayterm::report::stats::fit_log_log;
 use rayterm::scene::{self, Builder, Light, Scene};
 use std::path::PathBuf;
@@ -28,7 +27,6 @@ fn config(w: u32, h: u32, budgets: &[u32], reference: ReferenceSource) -> Config
         adaptive: false,
         reference,
         target: 0.01,
-        verbose: false,
     }
 }
 
@@ -40,7 +38,7 @@ fn study(s: &Scene, features: Features, cfg: &Config) -> Study {
         bvh: &bvh,
         plan: &plan,
     }
-    .study(cfg)
+    .study(cfg, &())
     .expect("study runs")
 }
 

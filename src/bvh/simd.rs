@@ -2,20 +2,31 @@
 //! run time, or a narrower one asked for to compare the two on the same
 //! machine (`rayterm bench rays --simd`).
 
+use crate::choice::Choice;
+
 /// The kernels of a walk, narrowest first.
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, clap::ValueEnum,
-)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Simd {
-    /// Four lanes of SSE (or whatever the target has), on any CPU.
     #[default]
     Portable,
-    /// Eight lanes of AVX.
     Avx,
-    /// The AVX kernels compiled for AVX-512 (F, VL, DQ, BW): 32 vector
-    /// registers, eight lanes.
     Avx512,
+}
+
+impl Choice for Simd {
+    const ALL: &'static [Self] = &[Simd::Portable, Simd::Avx, Simd::Avx512];
+
+    fn choice(self) -> (&'static str, &'static str) {
+        let help = match self {
+            Simd::Portable => "Four lanes of SSE (or whatever the target has), on any CPU",
+            Simd::Avx => "Eight lanes of AVX",
+            Simd::Avx512 => {
+                "The AVX kernels compiled for AVX-512 (F, VL, DQ, BW): 32 vector registers, eight lanes"
+            }
+        };
+        (self.name(), help)
+    }
 }
 
 impl Simd {

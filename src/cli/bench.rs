@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
 use super::args::{parse_size, parse_threads};
+use super::progress::ReportBar;
 use crate::bvh::Simd;
 use crate::render::SceneRequest;
 use crate::report::{bench, scaling, workload};
@@ -132,7 +133,7 @@ pub fn run(a: BenchArgs) -> Result<ExitCode> {
                 scenes: a.scenes,
                 ..Default::default()
             };
-            let r = bench::run(&o, rayon::current_num_threads())?;
+            let r = bench::run(&o, rayon::current_num_threads(), &ReportBar::new())?;
             if a.json {
                 crate::outln!("{}", serde_json::to_string_pretty(&r)?)?;
             } else {
@@ -157,7 +158,7 @@ pub fn run(a: BenchArgs) -> Result<ExitCode> {
                 builder: s.builder,
                 ..Default::default()
             };
-            let r = scaling::run(&o, rayon::current_num_threads())?;
+            let r = scaling::run(&o, rayon::current_num_threads(), &ReportBar::new())?;
             if s.json {
                 crate::outln!("{}", serde_json::to_string_pretty(&r)?)?;
             } else {

@@ -76,7 +76,6 @@ pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
         adaptive: a.adaptive,
         reference,
         target: a.target,
-        verbose: true,
     };
     let subject = Subject {
         scene: &p.scene,
@@ -86,7 +85,7 @@ pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
     // Ctrl-C, SIGTERM or SIGHUP cut the runs short; what they measured is
     // then not the study asked for, so nothing is printed or written.
     crate::interrupt::flag();
-    let study = subject.study(&cfg);
+    let study = subject.study(&cfg, &super::progress::ReportBar::new());
     if crate::interrupt::requested() {
         crate::noteln!("interrupted: nothing written");
         return Ok(ExitCode::from(crate::interrupt::exit_code()));

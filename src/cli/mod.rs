@@ -2,6 +2,7 @@
 
 mod args;
 mod bench;
+mod choices;
 mod converge;
 mod debug;
 mod inputs;
@@ -125,12 +126,7 @@ fn load_scene(spec: &str) -> Result<Scene> {
     Ok(scene)
 }
 
-/// `text` on stderr after `prefix`, its control characters but newline
-/// and tab made printable: errors and warnings quote paths from the command
-/// line and names from files.
-pub fn say(prefix: &str, text: &str) {
-    crate::noteln!("{prefix}: {}", crate::words::printable_but(text, "\n\t"));
-}
+pub use crate::console::say;
 
 /// The reader of our output went away (`rayterm inspect ... | head`): not a failure.
 fn is_broken_pipe(e: &anyhow::Error) -> bool {

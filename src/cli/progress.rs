@@ -14,6 +14,7 @@ use serde_json::json;
 
 use super::render::duration;
 use crate::render::Stop;
+use crate::report;
 
 /// `--progress`: how a render reports on standard error.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -333,6 +334,47 @@ fn bar(stop: &Stop, exact: bool) -> ProgressBar {
             ProgressStyle::with_template("{spinner} {pos} spp  {elapsed}  {msg}")
                 .unwrap_or_else(|_| ProgressStyle::default_spinner()),
         ),
+    }
+}
+
+/// A report's progress ([`report::Progress`]) as indicatif draws it: a bar
+/// when the steps are known, else a spinner with the time so far.
+pub struct ReportBar(ProgressBar);
+
+impl ReportBar {
+    pub fn new() -> Self {
+        ReportBar(ProgressBar::hidden())
+    }
+}
+
+impl report::Progress for ReportBar {
+    fn begin(&self, steps: Option<u64>) {
+        let style = match steps {
+            Some(n) => {
+                self.0.set_length(n);
+                ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}")
+            }
+            None => ProgressStyle::with_template("{spinner} {elapsed} {msg}"),
+        };
+        self.0
+            .set_style(style.unwrap_or_else(|_| ProgressStyle::default_bar()));
+        self.0
+            .set_draw_target(indicatif::ProgressDrawTarget::stderr());
+        if steps.is_none() {
+            self.0.enable_steady_tick(Duration::from_millis(200));
+        }
+    }
+
+    fn doing(&self, what: &str) {
+        self.0.set_message(what.to_string());
+    }
+
+    fn step(&self) {
+        self.0.inc(1);
+    }
+
+    fn end(&self) {
+        self.0.finish_and_clear();
     }
 }
 

@@ -14,6 +14,7 @@ pub mod metrics;
 pub mod openexr;
 pub mod output;
 pub mod png;
+pub mod reference;
 pub mod resample;
 mod temporary;
 

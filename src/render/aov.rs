@@ -13,18 +13,32 @@ use super::Tracer;
 use crate::geometry::Ray;
 
 /// One output variable.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Aov {
-    /// The surface's colour: a Phong material's diffuse colour, a
-    /// metallic-roughness one's base colour, textures and vertex colours
-    /// applied; black where the ray leaves the scene.
     Albedo,
-    /// The shading normal in world space (after normal maps), each
-    /// component -1 to 1; zero where the ray leaves the scene.
     Normal,
-    /// The distance from the eye along the ray; infinite where the ray
-    /// leaves the scene.
     Depth,
+}
+
+impl crate::choice::Choice for Aov {
+    const ALL: &'static [Self] = &[Aov::Albedo, Aov::Normal, Aov::Depth];
+
+    fn choice(self) -> (&'static str, &'static str) {
+        match self {
+            Aov::Albedo => (
+                "albedo",
+                "The surface's colour: a Phong material's diffuse colour, a metallic-roughness one's base colour, textures and vertex colours applied; black where the ray leaves the scene",
+            ),
+            Aov::Normal => (
+                "normal",
+                "The shading normal in world space (after normal maps), each component -1 to 1; zero where the ray leaves the scene",
+            ),
+            Aov::Depth => (
+                "depth",
+                "The distance from the eye along the ray; infinite where the ray leaves the scene",
+            ),
+        }
+    }
 }
 
 impl Aov {

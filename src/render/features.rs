@@ -3,38 +3,58 @@
 
 use serde::Serialize;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, clap::ValueEnum)]
+use crate::choice::Choice;
+
+/// A feature; [`Choice::choice`] says what each is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Feature {
-    /// Shadow rays toward every light.
     Shadows,
-    /// Mirror reflection for materials with ks > 0.
     Reflections,
-    /// Barycentric interpolation of vertex normals.
     SmoothNormals,
-    /// Texture lookups for map_Kd.
     Textures,
-    /// Bilinear texture filtering (nearest otherwise).
     Bilinear,
-    /// Sampling over the area of segment and parallelogram lights (their centre otherwise).
     SoftShadows,
-    /// Jittered sub-pixel positions.
     Supersampling,
-    /// Reflections sampled from the Phong lobe for materials with Ns below the glossy threshold.
     Glossy,
-    /// The cube map or environment light for rays that leave the scene.
     Environment,
-    /// Glow around bright pixels.
     Bloom,
-    /// The BVH (brute force over every triangle otherwise).
     Bvh,
-    /// Normal maps of metallic-roughness materials.
     NormalMaps,
-    /// Light emitted by materials.
     Emission,
-    /// Light arriving after bounces off other surfaces (path tracing;
-    /// direct light only when off).
     Indirect,
+}
+
+impl Choice for Feature {
+    const ALL: &'static [Self] = &Feature::ALL;
+
+    fn choice(self) -> (&'static str, &'static str) {
+        let help = match self {
+            Feature::Shadows => "Shadow rays toward every light",
+            Feature::Reflections => "Mirror reflection for materials with ks > 0",
+            Feature::SmoothNormals => "Barycentric interpolation of vertex normals",
+            Feature::Textures => "Texture lookups for map_Kd",
+            Feature::Bilinear => "Bilinear texture filtering (nearest otherwise)",
+            Feature::SoftShadows => {
+                "Sampling over the area of segment and parallelogram lights (their centre otherwise)"
+            }
+            Feature::Supersampling => "Jittered sub-pixel positions",
+            Feature::Glossy => {
+                "Reflections sampled from the Phong lobe for materials with Ns below the glossy threshold"
+            }
+            Feature::Environment => {
+                "The cube map or environment light for rays that leave the scene"
+            }
+            Feature::Bloom => "Glow around bright pixels",
+            Feature::Bvh => "The BVH (brute force over every triangle otherwise)",
+            Feature::NormalMaps => "Normal maps of metallic-roughness materials",
+            Feature::Emission => "Light emitted by materials",
+            Feature::Indirect => {
+                "Light arriving after bounces off other surfaces (path tracing; direct light only when off)"
+            }
+        };
+        (self.name(), help)
+    }
 }
 
 impl Feature {

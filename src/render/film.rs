@@ -1213,14 +1213,23 @@ pub struct Report {
 }
 
 /// What makes a pixel the worst of a film.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Worst {
-    /// The first pixel with a NaN or infinite sample.
     Nan,
-    /// The pixel whose samples vary most.
     Variance,
-    /// The brightest pixel.
     Brightest,
+}
+
+impl crate::choice::Choice for Worst {
+    const ALL: &'static [Self] = &[Worst::Nan, Worst::Variance, Worst::Brightest];
+
+    fn choice(self) -> (&'static str, &'static str) {
+        match self {
+            Worst::Nan => ("nan", "The first pixel with a NaN or infinite sample"),
+            Worst::Variance => ("variance", "The pixel whose samples vary most"),
+            Worst::Brightest => ("brightest", "The brightest pixel"),
+        }
+    }
 }
 
 /// A pixel and the sample of it worth replaying.

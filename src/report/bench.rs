@@ -6,12 +6,11 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Result;
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::Serialize;
 
 use super::stats::median;
-use super::Machine;
+use super::{Machine, Progress};
 use crate::bvh::{self, Bvh};
 use crate::render::{
     Feature, Features, Film, Plan, PlanPolicy, Progressive, RayCounter, Stop, Tracer,
@@ -117,7 +116,7 @@ pub fn frame_features() -> Features {
 }
 
 /// Runs the table on the current rayon pool.
-pub fn run(o: &BenchOptions, threads: usize) -> Result<BenchReport> {
+pub fn run(o: &BenchOptions, threads: usize, progress: &dyn Progress) -> Result<BenchReport> {
     // Each scene's frame is a film of full statistics.
     crate::render::session::check_film(o.width, o.height, Film::BYTES_PER_PIXEL)?;
     let mut notes = Vec::new();
@@ -135,23 +134,20 @@ pub fn run(o: &BenchOptions, threads: usize) -> Result<BenchReport> {
     } else {
         o.scenes.clone()
     };
-    let bar = ProgressBar::new(specs.len() as u64).with_style(
-        ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    progress.begin(Some(specs.len() as u64));
     let mut scenes = Vec::new();
     let mut plan = None;
     for spec in &specs {
-        bar.set_message(spec.clone());
+        progress.doing(spec);
         let scene = scene::load(spec)?;
-        scenes.push(scene_row(spec, &scene, o, &bar));
+        scenes.push(scene_row(spec, &scene, o, progress));
         if spec == "cornell" {
-            bar.set_message("cornell: plan against --no-plan");
+            progress.doing("cornell: plan against --no-plan");
             plan = Some(plan_row(&scene, o));
         }
-        bar.inc(1);
+        progress.step();
     }
-    bar.finish_and_clear();
+    progress.end();
     Ok(BenchReport {
         machine: Machine::current(threads),
         frame: format!(
@@ -179,13 +175,13 @@ fn shared_objs(dir: &Path) -> Vec<String> {
     v
 }
 
-fn scene_row(spec: &str, scene: &Scene, o: &BenchOptions, bar: &ProgressBar) -> SceneRow {
+fn scene_row(spec: &str, scene: &Scene, o: &BenchOptions, progress: &dyn Progress) -> SceneRow {
     let plan = Plan::new(scene, frame_features(), PlanPolicy::Prune);
     let reps = o.reps.max(1);
     let mut builds = Vec::new();
     let mut last = None;
     for builder in [Builder::Median, Builder::Sah] {
-        bar.set_message(format!("{spec}: {builder} build"));
+        progress.doing(&format!("{spec}: {builder} build"));
         let mut ms = Vec::new();
         let mut bvh = None;
         for _ in 0..reps {
@@ -194,7 +190,7 @@ fn scene_row(spec: &str, scene: &Scene, o: &BenchOptions, bar: &ProgressBar) -> 
             bvh = Some(b);
         }
         let Some(bvh) = bvh else { continue };
-        bar.set_message(format!("{spec}: {builder} render"));
+        progress.doing(&format!("{spec}: {builder} render"));
         let (render_ms, rays) = frame_ms(scene, &bvh, &plan, o, reps);
         let s = &bvh.stats;
         builds.push(BuildRow {
@@ -214,13 +210,13 @@ fn scene_row(spec: &str, scene: &Scene, o: &BenchOptions, bar: &ProgressBar) -> 
     let tris = scene.geometry.triangle_count();
     let sah_vs_full_sweep = match &last {
         Some(bvh) if tris <= FULL_SWEEP_MAX => {
-            bar.set_message(format!("{spec}: full-sweep SAH reference"));
+            progress.doing(&format!("{spec}: full-sweep SAH reference"));
             let sweep = bvh::build_full_sweep(&scene.geometry);
             Some(bvh.packet_sah_cost() / sweep.packet_sah_cost().max(f64::MIN_POSITIVE))
         }
         _ => None,
     };
-    bar.set_message(format!("{spec}: brute force"));
+    progress.doing(&format!("{spec}: brute force"));
     let brute_force = match last {
         Some(bvh) => brute(scene, &bvh, o),
         None => Brute::Skipped { estimated_s: 0.0 },

@@ -16,17 +16,17 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use glam::Vec3;
-use indicatif::{ProgressBar, ProgressStyle};
 
 pub use crate::raster::metrics::{luminance, rel_mse, rel_mse_on, rmse};
 pub use crate::raster::resample::{resample, Resampled};
 pub use plot::draw as plot;
-pub use reference::{default_cache_dir, format_floor, load_reference, save_reference};
+pub use reference::{default_cache_dir, format_floor, save_reference};
 
 use crate::bvh::Bvh;
 use crate::interrupt;
 use crate::render::{Ended, Film, Plan, Progressive, Stop, Tracer};
 use crate::report::stats::{fit_log_log, log_lerp, median};
+use crate::report::Progress;
 use crate::scene::{Integrator, Scene, Settings};
 use reference::{load_cached, reference_key, save_cached};
 
@@ -404,8 +404,6 @@ pub struct Config {
     pub reference: ReferenceSource,
     /// The relative error the conclusion is about.
     pub target: f64,
-    /// Progress on stderr.
-    pub verbose: bool,
 }
 
 #[derive(Clone, Debug)]
@@ -500,9 +498,9 @@ impl Subject<'_> {
         cfg: &Config,
         reference: &[Vec3],
         passes: &mut u64,
-        bar: &ProgressBar,
+        progress: &dyn Progress,
     ) -> Option<Point> {
-        bar.set_message(format!(
+        progress.doing(&format!(
             "{}: {budget}",
             strategy.label(Uses::of(self.scene, self.plan))
         ));
@@ -548,7 +546,7 @@ impl Subject<'_> {
         &self,
         cfg: &Config,
         notes: &mut Vec<String>,
-        bar: &ProgressBar,
+        progress: &dyn Progress,
     ) -> Result<(Vec<Vec3>, ReferenceInfo)> {
         let (w, h) = (cfg.width, cfg.height);
         match &cfg.reference {
@@ -567,7 +565,7 @@ impl Subject<'_> {
                 let loaded = crate::raster::read_linear(path)
                     .with_context(|| format!("cannot load the reference {}", path.display()))?;
                 let (rw, rh, img) = (loaded.width, loaded.height, loaded.pixels);
-                reference::check_finite(path, rw, &img)?;
+                crate::raster::reference::check_finite(path, rw, &img)?;
                 if (rw, rh) != (w, h) {
                     bail!(
                         "reference {} is {rw}x{rh} but the study renders {w}x{h}: pass --size {rw}x{rh}",
@@ -644,7 +642,7 @@ impl Subject<'_> {
                     &tracer,
                     &Stop::spp(spp),
                     &interrupt::requested,
-                    |film, _| bar.set_message(format!("reference: {}/{spp} spp", film.spp)),
+                    |film, _| progress.doing(&format!("reference: {}/{spp} spp", film.spp)),
                 );
                 // A cut reference must not be cached as a whole one.
                 if o.ended == Ended::Cancelled {
@@ -685,7 +683,7 @@ impl Subject<'_> {
     }
 
     /// Runs the study described by `cfg`.
-    pub fn study(&self, cfg: &Config) -> Result<Study> {
+    pub fn study(&self, cfg: &Config, progress: &dyn Progress) -> Result<Study> {
         if cfg.budgets.is_empty() {
             bail!("no budgets to measure");
         }
@@ -698,15 +696,7 @@ impl Subject<'_> {
             ..Strategy::of(&self.scene.settings, self.plan)
         };
         let mut notes = Vec::new();
-        let bar = if cfg.verbose {
-            let b = ProgressBar::new_spinner().with_style(
-                ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("valid template"),
-            );
-            b.enable_steady_tick(std::time::Duration::from_millis(200));
-            b
-        } else {
-            ProgressBar::hidden()
-        };
+        progress.begin(None);
         let mut passes = 0;
         let mut study = Study {
             scene: self.scene.name.clone(),
@@ -740,7 +730,7 @@ impl Subject<'_> {
                         seconds: 0.0,
                     },
                 ),
-                _ => self.reference(cfg, &mut notes, &bar)?,
+                _ => self.reference(cfg, &mut notes, progress)?,
             };
             study.reference = info;
             study.series.push(Series {
@@ -756,12 +746,12 @@ impl Subject<'_> {
                     est_rel_mse: Some(0.0),
                 }],
             });
-            bar.finish_and_clear();
+            progress.end();
             study.passes = passes;
             study.notes = notes;
             return Ok(study);
         }
-        let (reference, info) = self.reference(cfg, &mut notes, &bar)?;
+        let (reference, info) = self.reference(cfg, &mut notes, progress)?;
         study.reference = info;
         let mut main = Series {
             strategy: base,
@@ -769,7 +759,7 @@ impl Subject<'_> {
             points: Vec::new(),
         };
         for &b in &cfg.budgets {
-            match self.measure(base, b, cfg, &reference, &mut passes, &bar) {
+            match self.measure(base, b, cfg, &reference, &mut passes, progress) {
                 Some(p) => main.points.push(p),
                 None => notes.push(format!(
                     "{b} is too short for one sample per pixel here; not measured"
@@ -805,16 +795,14 @@ impl Subject<'_> {
                     points: Vec::new(),
                 };
                 if matches!(cfg.budgets[0], Budget::Seconds(_)) {
-                    series.points.extend(
-                        cfg.budgets.iter().filter_map(|&b| {
-                            self.measure(s, b, cfg, &reference, &mut passes, &bar)
-                        }),
-                    );
+                    series.points.extend(cfg.budgets.iter().filter_map(|&b| {
+                        self.measure(s, b, cfg, &reference, &mut passes, progress)
+                    }));
                 } else {
                     // Double the spp until the run takes as long as the scene's largest budget.
                     let mut n = 1;
                     while let Some(p) =
-                        self.measure(s, Budget::Spp(n), cfg, &reference, &mut passes, &bar)
+                        self.measure(s, Budget::Spp(n), cfg, &reference, &mut passes, progress)
                     {
                         let done = p.seconds >= t_max || n >= MAX_COMPARE_SPP;
                         series.points.push(p);
@@ -827,7 +815,7 @@ impl Subject<'_> {
                 study.series.push(series);
             }
         }
-        bar.finish_and_clear();
+        progress.end();
         study.passes = passes;
         study.notes = notes;
         Ok(study)

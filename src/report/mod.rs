@@ -14,6 +14,21 @@ use serde::Serialize;
 
 use crate::bvh::Simd;
 
+/// How a long report says what it is doing: the CLI shows it (a bar, or a
+/// spinner when the steps are not known ahead); `&()` shows nothing.
+pub trait Progress: Sync {
+    /// The work has `steps` steps; `None` when not known ahead.
+    fn begin(&self, _steps: Option<u64>) {}
+    /// What it is doing now.
+    fn doing(&self, _what: &str) {}
+    /// One more step done.
+    fn step(&self) {}
+    /// Done: whatever was shown goes away.
+    fn end(&self) {}
+}
+
+impl Progress for () {}
+
 /// The machine a figure was measured on.
 #[derive(Clone, Debug, Serialize)]
 pub struct Machine {

@@ -5,12 +5,11 @@
 use std::time::Instant;
 
 use anyhow::Result;
-use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use super::stats::{fit_line, median};
 use super::workload::{self, Frame, Workload};
-use super::Machine;
+use super::{Machine, Progress};
 use crate::bvh::{self, TraversalStats};
 use crate::scene::{self, Builder, Geometry};
 
@@ -91,20 +90,17 @@ fn mesh_bytes(g: &Geometry) -> usize {
 }
 
 /// Runs the sizes from `o.min_n` to `o.max_n` on the current rayon pool.
-pub fn run(o: &ScalingOptions, threads: usize) -> Result<ScalingReport> {
+pub fn run(o: &ScalingOptions, threads: usize, progress: &dyn Progress) -> Result<ScalingReport> {
     let mut sizes = Vec::new();
     let mut n = o.min_n.max(1);
     while n <= o.max_n.min(1024) {
         sizes.push(n);
         n *= 2;
     }
-    let bar = ProgressBar::new(sizes.len() as u64).with_style(
-        ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    progress.begin(Some(sizes.len() as u64));
     let mut rows = Vec::new();
     for &n in &sizes {
-        bar.set_message(format!("teapot:{n}"));
+        progress.doing(&format!("teapot:{n}"));
         let g = teapot(n)?;
         let tris = g.triangle_count();
         // Fewer repetitions for the big sizes keep the run to a minute or two.
@@ -158,9 +154,9 @@ pub fn run(o: &ScalingOptions, threads: usize) -> Result<ScalingReport> {
             bvh_bytes_per_tri: b.memory_bytes() as f64 / tris.max(1) as f64,
             mesh_bytes_per_tri: mesh_bytes(&g) as f64 / tris.max(1) as f64,
         });
-        bar.inc(1);
+        progress.step();
     }
-    bar.finish_and_clear();
+    progress.end();
     let ln_n: Vec<f64> = rows.iter().map(|r| (r.triangles as f64).ln()).collect();
     let ln_b: Vec<f64> = rows.iter().map(|r| r.build_ms.ln()).collect();
     let log2_n: Vec<f64> = rows.iter().map(|r| (r.triangles as f64).log2()).collect();

@@ -39,6 +39,7 @@ pub use material::{Material, Pbr};
 pub use reach::check_reach;
 pub use texture::{CubeMap, Texture, Wrap};
 
+use crate::choice::Choice;
 use crate::geometry::Aabb;
 
 /// All triangles of a scene in one indexed soup.
@@ -108,53 +109,59 @@ pub enum Environment {
 }
 
 /// How light is followed from the camera.
-#[derive(
-    Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize, clap::ValueEnum,
-)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Integrator {
-    /// Whitted ray tracing: direct light, mirror and glossy reflection.
     Whitted,
-    /// Path tracing: light arriving by any number of bounces.
     Path,
+}
+
+impl Choice for Integrator {
+    const ALL: &'static [Self] = &[Integrator::Whitted, Integrator::Path];
+
+    fn choice(self) -> (&'static str, &'static str) {
+        match self {
+            Integrator::Whitted => (
+                "whitted",
+                "Whitted ray tracing: direct light, mirror and glossy reflection",
+            ),
+            Integrator::Path => (
+                "path",
+                "Path tracing: light arriving by any number of bounces",
+            ),
+        }
+    }
 }
 
 impl std::fmt::Display for Integrator {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Integrator::Whitted => "whitted",
-            Integrator::Path => "path",
-        })
+        f.write_str(self.choice().0)
     }
 }
 
 /// Which BVH builder to use.
-#[derive(
-    Clone,
-    Copy,
-    Debug,
-    Default,
-    PartialEq,
-    Eq,
-    serde::Deserialize,
-    serde::Serialize,
-    clap::ValueEnum,
-)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Builder {
-    /// Binned surface area heuristic.
     #[default]
     Sah,
-    /// Object median on the largest axis.
     Median,
+}
+
+impl Choice for Builder {
+    const ALL: &'static [Self] = &[Builder::Sah, Builder::Median];
+
+    fn choice(self) -> (&'static str, &'static str) {
+        match self {
+            Builder::Sah => ("sah", "Binned surface area heuristic"),
+            Builder::Median => ("median", "Object median on the largest axis"),
+        }
+    }
 }
 
 impl std::fmt::Display for Builder {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Builder::Sah => "sah",
-            Builder::Median => "median",
-        })
+        f.write_str(self.choice().0)
     }
 }
 

@@ -26,9 +26,9 @@ use super::term::output::Figures;
 use super::worker::{self, Msg, PixelRequest, Reference, Snapshot, Truth, View, Worker};
 use crate::bvh::debug::HeatMeasure;
 use crate::inspect::overlay::{PixelView, VIEWS};
+use crate::raster::reference::load_reference;
 use crate::render::debug_view::{DebugView, FilmView};
 use crate::render::{Decision, Feature, Features, Plan, Session, Tracer, Worst};
-use crate::report::converge::load_reference;
 use crate::scene::{Builder, Projection};
 use crate::words;
 

@@ -11,17 +11,30 @@ use rayon::prelude::*;
 
 use crate::render::post::encode_srgb;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ColorMode {
-    /// 24-bit colour.
     Truecolor,
-    /// The xterm 256-colour palette (6x6x6 cube and grey ramp), with
-    /// ordered dithering.
-    #[value(name = "256")]
     Palette256,
-    /// The 16 ANSI colours, with ordered dithering.
-    #[value(name = "16")]
     Ansi16,
+}
+
+impl crate::choice::Choice for ColorMode {
+    const ALL: &'static [Self] = &[
+        ColorMode::Truecolor,
+        ColorMode::Palette256,
+        ColorMode::Ansi16,
+    ];
+
+    fn choice(self) -> (&'static str, &'static str) {
+        match self {
+            ColorMode::Truecolor => ("truecolor", "24-bit colour"),
+            ColorMode::Palette256 => (
+                "256",
+                "The xterm 256-colour palette (6x6x6 cube and grey ramp), with ordered dithering",
+            ),
+            ColorMode::Ansi16 => ("16", "The 16 ANSI colours, with ordered dithering"),
+        }
+    }
 }
 
 impl ColorMode {

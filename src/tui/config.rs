@@ -6,12 +6,12 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, Context, Result};
-use clap::ValueEnum;
 use serde::Deserialize;
 
 use super::color::ColorMode;
 use super::graphics::symbols::Symbols;
 use super::graphics::GraphicsArg;
+use crate::choice::{self, Choice};
 use crate::words::{clip_quotes, quoted};
 
 /// The defaults found; `None` where nothing was said.
@@ -77,7 +77,7 @@ fn parse(path: &Path, text: &str) -> Result<Defaults> {
             None => anyhow!("{}: {msg}", path.display()),
         }
     })?;
-    fn field<T: ValueEnum>(
+    fn field<T: Choice>(
         v: Option<toml::Spanned<String>>,
         at: impl Fn(usize) -> String,
     ) -> Result<Option<T>> {
@@ -92,13 +92,13 @@ fn parse(path: &Path, text: &str) -> Result<Defaults> {
 }
 
 /// A value as the command line takes it, or what the choices are.
-fn value<T: ValueEnum>(v: &str) -> Result<T, String> {
-    T::from_str(v.trim(), true).map_err(|_| {
-        let names: Vec<String> = T::value_variants()
-            .iter()
-            .filter_map(|c| c.to_possible_value().map(|p| p.get_name().to_string()))
-            .collect();
-        format!("\"{}\" is not one of {}", quoted(v), names.join(", "))
+fn value<T: Choice>(v: &str) -> Result<T, String> {
+    choice::parse(v).ok_or_else(|| {
+        format!(
+            "\"{}\" is not one of {}",
+            quoted(v),
+            choice::names::<T>().join(", ")
+        )
     })
 }
 

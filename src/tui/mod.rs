@@ -92,11 +92,11 @@ pub fn run(
     let graphics = graphics.or(defaults.graphics).unwrap_or_default();
     if io::stderr().is_terminal() {
         // Large scenes take seconds to load; say so before the screen changes.
-        crate::cli::say("rayterm", &format!("loading {}...", req.spec));
+        crate::console::say("rayterm", &format!("loading {}...", req.spec));
     }
     let (session, warnings) = Session::open(req)?;
     for w in &warnings {
-        crate::cli::say("warning", w);
+        crate::console::say("warning", w);
     }
     // The colours are decided once the terminal has answered.
     let mut app = App::new(

@@ -6,7 +6,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use glam::Vec3;
 
 use super::luminance;
@@ -15,35 +15,6 @@ use crate::render::content::{self, Fnv};
 use crate::render::film::LUMA;
 use crate::render::Plan;
 use crate::scene::Scene;
-
-/// Loads a linear reference image (.exr or .hdr by its extension),
-/// row-major from the top.
-/// Every pixel must be finite (see [`check_finite`]).
-pub fn load_reference(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
-    let img = raster::read_linear(path)
-        .with_context(|| format!("cannot load the reference {}", path.display()))?;
-    check_finite(path, img.width, &img.pixels)?;
-    Ok((img.width, img.height, img.pixels))
-}
-
-/// Refuses a reference read from `path` (`width` pixels a row) with a
-/// pixel that is NaN or infinite: every error measured against it would
-/// be NaN.
-pub(super) fn check_finite(path: &Path, width: u32, pixels: &[Vec3]) -> Result<()> {
-    match pixels.iter().position(|p| !p.is_finite()) {
-        Some(i) => {
-            let w = width.max(1) as usize;
-            anyhow::bail!(
-                "cannot use the reference {}: pixel ({}, {}) is {}; a reference must be finite",
-                path.display(),
-                i % w,
-                i / w,
-                pixels[i]
-            )
-        }
-        None => Ok(()),
-    }
-}
 
 /// Saves a linear image atomically, as OpenEXR or .hdr by its extension.
 pub fn save_reference(path: &Path, width: u32, height: u32, img: &[Vec3]) -> Result<()> {
@@ -77,7 +48,7 @@ pub(super) fn load_cached(path: &Path, key: u64, width: u32, height: u32) -> Res
             held.map_or("missing".into(), |k| crate::words::quoted(&k))
         );
     }
-    let (w, h, img) = load_reference(path)?;
+    let (w, h, img) = raster::reference::load_reference(path)?;
     if (w, h) != (width, height) {
         anyhow::bail!("it is {w}x{h}, the study {width}x{height}");
     }

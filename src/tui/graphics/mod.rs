@@ -12,19 +12,43 @@ pub mod sixel;
 pub mod symbols;
 
 /// What `--graphics` asks for.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum GraphicsArg {
-    /// Ask the terminal; block symbols when it has no pixel protocol.
     #[default]
     Auto,
-    /// The kitty graphics protocol (kitty, Ghostty, WezTerm, Konsole).
     Kitty,
-    /// Sixel (xterm -ti vt340, foot, mlterm, WezTerm, Windows Terminal).
     Sixel,
-    /// iTerm2 inline images (iTerm2, WezTerm).
     Iterm2,
-    /// Block symbols (`--symbols`) only.
     Symbols,
+}
+
+impl crate::choice::Choice for GraphicsArg {
+    const ALL: &'static [Self] = &[
+        GraphicsArg::Auto,
+        GraphicsArg::Kitty,
+        GraphicsArg::Sixel,
+        GraphicsArg::Iterm2,
+        GraphicsArg::Symbols,
+    ];
+
+    fn choice(self) -> (&'static str, &'static str) {
+        match self {
+            GraphicsArg::Auto => (
+                "auto",
+                "Ask the terminal; block symbols when it has no pixel protocol",
+            ),
+            GraphicsArg::Kitty => (
+                "kitty",
+                "The kitty graphics protocol (kitty, Ghostty, WezTerm, Konsole)",
+            ),
+            GraphicsArg::Sixel => (
+                "sixel",
+                "Sixel (xterm -ti vt340, foot, mlterm, WezTerm, Windows Terminal)",
+            ),
+            GraphicsArg::Iterm2 => ("iterm2", "iTerm2 inline images (iTerm2, WezTerm)"),
+            GraphicsArg::Symbols => ("symbols", "Block symbols (`--symbols`) only"),
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

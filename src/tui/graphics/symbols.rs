@@ -11,17 +11,34 @@ use ratatui::style::Color;
 
 use crate::tui::color::{to_color, ColorMode};
 
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Symbols {
-    /// Upper half blocks: 1x2 pixels per cell; every terminal has them.
     #[default]
     Half,
-    /// Quadrants: 2x2 pixels per cell.
     Quad,
-    /// Sextants (Unicode 13): 2x3 pixels per cell.
     Sextant,
-    /// Octants (Unicode 16): 2x4 pixels per cell.
     Octant,
+}
+
+impl crate::choice::Choice for Symbols {
+    const ALL: &'static [Self] = &[
+        Symbols::Half,
+        Symbols::Quad,
+        Symbols::Sextant,
+        Symbols::Octant,
+    ];
+
+    fn choice(self) -> (&'static str, &'static str) {
+        match self {
+            Symbols::Half => (
+                "half",
+                "Upper half blocks: 1x2 pixels per cell; every terminal has them",
+            ),
+            Symbols::Quad => ("quad", "Quadrants: 2x2 pixels per cell"),
+            Symbols::Sextant => ("sextant", "Sextants (Unicode 13): 2x3 pixels per cell"),
+            Symbols::Octant => ("octant", "Octants (Unicode 16): 2x4 pixels per cell"),
+        }
+    }
 }
 
 impl Symbols {
