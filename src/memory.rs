@@ -189,9 +189,9 @@ fn cgroup_room(cgroups: &str, root: &Path) -> Option<u64> {
 /// written until used, and a film of millions of pixels faults in a few
 /// hundred pages rather than a hundred thousand.
 ///
-/// # Safety
-/// All-zero bytes must be a valid `T`.
-pub unsafe fn zeroed<T>(n: usize) -> Vec<T> {
+/// All-zero bytes are a valid `T`: the compiler checks that through
+/// `Zeroable`, derived field by field.
+pub fn zeroed<T: bytemuck::Zeroable>(n: usize) -> Vec<T> {
     assert!(
         std::mem::size_of::<T>() > 0,
         "zero-sized values need no memory"
@@ -202,12 +202,15 @@ pub unsafe fn zeroed<T>(n: usize) -> Vec<T> {
     if n == 0 {
         return Vec::new();
     }
-    let ptr = std::alloc::alloc_zeroed(layout);
+    // SAFETY: the layout has a non-zero size (n > 0, T not zero-sized).
+    let ptr = unsafe { std::alloc::alloc_zeroed(layout) };
     if ptr.is_null() {
         std::alloc::handle_alloc_error(layout);
     }
     advise_huge(ptr, layout.size());
-    Vec::from_raw_parts(ptr as *mut T, n, n)
+    // SAFETY: the memory was allocated by the global allocator for exactly
+    // `n` values of `T`, and zero bytes are a `T` (`Zeroable`).
+    unsafe { Vec::from_raw_parts(ptr as *mut T, n, n) }
 }
 
 /// An empty vector with room for `n` values, in fresh memory the kernel may

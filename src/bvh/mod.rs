@@ -12,6 +12,7 @@ mod wide;
 pub use build::{build, build_full_sweep};
 pub use node::Node;
 pub use packet::PACKET_RAYS;
+use simd::Detected;
 pub use simd::Simd;
 pub use stats::{BuildStats, TraversalStats};
 pub use traverse::{Hit, WalkLog};
@@ -78,13 +79,13 @@ impl Bvh {
 
     /// The SIMD kernels the walks use.
     pub fn simd(&self) -> Simd {
-        self.wide.simd
+        self.wide.simd.level()
     }
 
-    /// Walks with at most `most`'s kernels from now on: to compare them with
-    /// the widest on the same machine.
+    /// Walks with `most`'s kernels from now on, or the widest this CPU has
+    /// if narrower: to compare them with the widest on the same machine.
     pub fn cap_simd(&mut self, most: Simd) {
-        self.wide.simd = self.wide.simd.min(most);
+        self.wide.simd = Detected::at_most(most);
     }
 
     /// Bytes held by the tree and its triangle packets.

@@ -35,9 +35,9 @@ use std::mem::MaybeUninit;
 use glam::{Vec3, Vec4};
 
 #[cfg(target_arch = "x86_64")]
-use super::traverse::slab_hits_avx;
+use super::simd::Avx;
 #[cfg(target_arch = "x86_64")]
-use super::traverse::Avx;
+use super::traverse::slab_hits_avx;
 use super::traverse::{closer, Kernels, Portable, FAR_SCALE, MAX_TFAR, STACK};
 use super::wide::{leaf_packets, LeafTest, Node8, Packet, LEAF, PACKET, WIDTH};
 use super::{Bvh, Hit, Simd, TraversalStats};
@@ -618,15 +618,17 @@ impl Bvh {
             hi,
             neg: hi.map(|x| x < 0.0),
         };
-        match self.wide.simd {
-            // SAFETY: `wide.simd` is at most what this CPU has.
-            #[cfg(target_arch = "x86_64")]
-            Simd::Avx512 => unsafe { self.group_avx512(rays, lanes, &f, l, found) },
-            // SAFETY: as above.
-            #[cfg(target_arch = "x86_64")]
-            Simd::Avx => unsafe { self.group_avx(rays, lanes, &f, l, found) },
-            _ => self.group_with(rays, lanes, &f, l, found, &Portable),
+        #[cfg(target_arch = "x86_64")]
+        if let Some(k) = self.wide.simd.avx() {
+            return if self.wide.simd.level() == Simd::Avx512 {
+                // SAFETY: the level was detected: this CPU has AVX-512.
+                unsafe { self.group_avx512(rays, lanes, &f, l, found, k) }
+            } else {
+                // SAFETY: `k` exists: this CPU has AVX.
+                unsafe { self.group_avx(rays, lanes, &f, l, found, k) }
+            };
         }
+        self.group_with(rays, lanes, &f, l, found, &Portable)
     }
 
     /// The AVX kernels compiled for AVX-512, as the single-ray walk's
@@ -640,8 +642,9 @@ impl Bvh {
         f: &Frustum,
         l: &mut Lanes,
         found: &mut F,
+        k: Avx,
     ) {
-        self.group_with(rays, lanes, f, l, found, &Avx(()));
+        self.group_with(rays, lanes, f, l, found, &k);
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -653,8 +656,9 @@ impl Bvh {
         f: &Frustum,
         l: &mut Lanes,
         found: &mut F,
+        k: Avx,
     ) {
-        self.group_with(rays, lanes, f, l, found, &Avx(()));
+        self.group_with(rays, lanes, f, l, found, &k);
     }
 
     #[inline(always)]
@@ -919,7 +923,7 @@ mod tests {
         let ways = [LeafTest::Chosen, LeafTest::ByRay, LeafTest::ByTriangle];
         let stack = b.wide.stack;
         for (simd, way) in kernels().into_iter().flat_map(|k| ways.map(|w| (k, w))) {
-            b.wide.simd = simd;
+            b.cap_simd(simd);
             b.wide.leaf_test = way;
             let mut got = vec![None; rays.len()];
             let mut blocked = vec![false; rays.len()];

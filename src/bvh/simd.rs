@@ -74,3 +74,33 @@ impl std::fmt::Display for Simd {
         f.write_str(self.name())
     }
 }
+
+/// A level this CPU runs: made only from [`Simd::detect`], so a walk may
+/// call the kernels compiled for it. The default is the portable level,
+/// which every CPU runs.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Detected(Simd);
+
+impl Detected {
+    /// The widest level this CPU runs, or `most` if narrower.
+    pub(super) fn at_most(most: Simd) -> Self {
+        Detected(Simd::detect().min(most))
+    }
+
+    pub(super) fn level(self) -> Simd {
+        self.0
+    }
+
+    /// The AVX kernels, where this level has them.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    pub(super) fn avx(self) -> Option<Avx> {
+        (self.0 >= Simd::Avx).then_some(Avx(()))
+    }
+}
+
+/// The AVX kernels (eight lanes at a time): made only by [`Detected::avx`],
+/// so one exists only where the CPU has AVX.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+pub(super) struct Avx(());

@@ -7,6 +7,8 @@ use std::mem::MaybeUninit;
 
 use glam::{Vec3A, Vec4};
 
+#[cfg(target_arch = "x86_64")]
+use super::simd::Avx;
 use super::wide::{leaf_packets, Node8, Packet, LEAF, PACKET, WIDTH};
 use super::{Bvh, Simd, TraversalStats};
 use crate::geometry::triangle::{intersect, intersect8, RayShear, TriHit8};
@@ -215,10 +217,6 @@ impl Kernels for Portable {
     }
 }
 
-/// Eight lanes at a time; made only where the CPU has AVX.
-#[cfg(target_arch = "x86_64")]
-pub(super) struct Avx(pub(super) ());
-
 #[cfg(target_arch = "x86_64")]
 impl Kernels for Avx {
     #[inline(always)]
@@ -406,15 +404,17 @@ impl Bvh {
         if self.wide.nodes.is_empty() {
             return;
         }
-        match self.wide.simd {
-            // SAFETY: `wide.simd` is at most what this CPU has.
-            #[cfg(target_arch = "x86_64")]
-            Simd::Avx512 => unsafe { self.traverse_avx512::<ANY, STATS>(ray, st, on_hit) },
-            // SAFETY: as above.
-            #[cfg(target_arch = "x86_64")]
-            Simd::Avx => unsafe { self.traverse_avx::<ANY, STATS>(ray, st, on_hit) },
-            _ => self.traverse_with::<ANY, STATS, _>(ray, st, on_hit, &Portable),
+        #[cfg(target_arch = "x86_64")]
+        if let Some(k) = self.wide.simd.avx() {
+            return if self.wide.simd.level() == Simd::Avx512 {
+                // SAFETY: the level was detected: this CPU has AVX-512.
+                unsafe { self.traverse_avx512::<ANY, STATS>(ray, st, on_hit, k) }
+            } else {
+                // SAFETY: `k` exists: this CPU has AVX.
+                unsafe { self.traverse_avx::<ANY, STATS>(ray, st, on_hit, k) }
+            };
         }
+        self.traverse_with::<ANY, STATS, _>(ray, st, on_hit, &Portable)
     }
 
     /// The traversal with the AVX kernels, compiled for AVX-512 (F, VL, DQ,
@@ -432,8 +432,9 @@ impl Bvh {
         ray: &Ray,
         st: &mut impl Tally,
         on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
+        k: Avx,
     ) {
-        self.traverse_with::<ANY, STATS, _>(ray, st, on_hit, &Avx(()));
+        self.traverse_with::<ANY, STATS, _>(ray, st, on_hit, &k);
     }
 
     /// The traversal compiled for AVX: eight boxes or eight triangles per
@@ -446,8 +447,9 @@ impl Bvh {
         ray: &Ray,
         st: &mut impl Tally,
         on_hit: impl FnMut(&TriHit8, &[u32; PACKET]) -> f32,
+        k: Avx,
     ) {
-        self.traverse_with::<ANY, STATS, _>(ray, st, on_hit, &Avx(()));
+        self.traverse_with::<ANY, STATS, _>(ray, st, on_hit, &k);
     }
 
     #[inline(always)]
@@ -819,7 +821,7 @@ mod tests {
             rays.push(Ray::segment(o, d, tmax));
         }
         let mut st = TraversalStats::default();
-        b.wide.simd = Simd::Portable;
+        b.cap_simd(Simd::Portable);
         let want: Vec<_> = rays
             .iter()
             .map(|r| {
@@ -836,7 +838,7 @@ mod tests {
             // A tree deeper than the machine stack holds walks on the heap.
             b.wide.stack = if heap { STACK + 1 } else { stack };
             for &level in &levels {
-                b.wide.simd = level;
+                b.cap_simd(level);
                 for (r, (hit, any)) in rays.iter().zip(&want) {
                     let got = b.intersect::<false>(r, &mut st);
                     assert_eq!(got.map(|h| h.t.to_bits()), hit.map(|h| h.t.to_bits()));

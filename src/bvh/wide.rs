@@ -8,6 +8,7 @@ use std::mem::MaybeUninit;
 
 use rayon::prelude::*;
 
+use super::simd::Detected;
 use super::{Node, Simd};
 use crate::memory;
 
@@ -88,7 +89,7 @@ pub(crate) struct Wide {
     /// answer: each node on it pushes at most all but one of its slots.
     pub stack: usize,
     /// The kernels the walks use: the widest this CPU has, unless capped.
-    pub simd: Simd,
+    pub(super) simd: Detected,
     /// How packets test a leaf's triangles (chosen per leaf, except in
     /// tests that take each way on the same rays).
     pub leaf_test: LeafTest,
@@ -122,12 +123,11 @@ impl Wide {
             nodes: memory::room(bin.len() / 2 + 1),
             packets: memory::room(total),
             stack: 0,
-            simd: Simd::detect(),
+            simd: Detected::at_most(Simd::Avx512),
             leaf_test: LeafTest::Chosen,
             node_of: Vec::with_capacity(bin.len() / 2 + 1),
             leaf_of: Vec::with_capacity(total),
-            // SAFETY: zero bytes are a u32.
-            slot: unsafe { memory::zeroed(count) },
+            slot: memory::zeroed(count),
         };
         let mut packets = std::mem::take(&mut w.packets);
         rayon::scope(|s| {

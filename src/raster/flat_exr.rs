@@ -20,7 +20,7 @@ pub enum Kind {
 
 /// What an image holds besides its samples.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Layout {
+pub struct ExrHeader {
     pub width: u32,
     pub height: u32,
     /// In the order the file stores them: sorted by name, byte by byte.
@@ -29,7 +29,7 @@ pub struct Layout {
     pub attributes: Vec<(String, String, Range<usize>)>,
 }
 
-impl Layout {
+impl ExrHeader {
     /// Bytes of one scanline's samples.
     pub fn row_bytes(&self) -> usize {
         4 * self.width as usize * self.channels.len()
@@ -52,7 +52,7 @@ const MAX_NAME: usize = 31;
 /// samples appended by `row(y, out)`: channel after channel in `l`'s order,
 /// `width` little-endian samples each. Text is stored as Latin-1, other
 /// characters as `?`.
-pub fn encode(l: &Layout, mut row: impl FnMut(u32, &mut Vec<u8>)) -> Result<Vec<u8>> {
+pub fn encode(l: &ExrHeader, mut row: impl FnMut(u32, &mut Vec<u8>)) -> Result<Vec<u8>> {
     let names = l.channels.iter().map(|(n, _)| n);
     if !names.clone().zip(names.skip(1)).all(|(a, b)| a < b) {
         bail!("channels must be sorted by name, each once");
@@ -136,7 +136,7 @@ const HEADER_LIMIT: u64 = 1 << 20;
 /// scanline's chunk where the writer puts it (one after another, in
 /// order), so that a band is one read.
 pub struct Scanlines {
-    pub layout: Layout,
+    pub layout: ExrHeader,
     path: PathBuf,
     /// The header and offset table, as the file stores them.
     pub head: Vec<u8>,
@@ -241,7 +241,7 @@ fn le_u64(b: &[u8], at: usize) -> Result<u64> {
 }
 
 /// The layout a header gives, and where the header ends.
-pub fn header(b: &[u8]) -> Result<(Layout, usize)> {
+pub fn header(b: &[u8]) -> Result<(ExrHeader, usize)> {
     if b.get(0..4) != Some(&MAGIC[..]) {
         bail!("no OpenEXR magic number");
     }
@@ -261,7 +261,7 @@ pub fn header(b: &[u8]) -> Result<(Layout, usize)> {
         *at += len + 1;
         Ok(latin1(&rest[..len]))
     };
-    let mut l = Layout::default();
+    let mut l = ExrHeader::default();
     let (mut window, mut compression, mut channels) = (None, None, None);
     loop {
         let name = text(&mut at)?;
@@ -349,8 +349,8 @@ fn chlist(v: &[u8]) -> Result<Vec<(String, Kind)>> {
 mod tests {
     use super::*;
 
-    fn layout() -> Layout {
-        Layout {
+    fn layout() -> ExrHeader {
+        ExrHeader {
             width: 3,
             height: 2,
             channels: vec![("B".into(), Kind::F32), ("n".into(), Kind::U32)],

@@ -66,7 +66,7 @@ const NO_STATISTICS: &str =
 /// contrasts and of the incomplete blocks' terms), and the blocks a range
 /// boundary cuts are kept as pieces (`head`, `tail`) that the neighbouring
 /// range completes.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Zeroable)]
 pub struct PixelStats {
     /// Sum of the samples per channel, in units of 1 / [`FIXED_ONE`].
     pub sum: [i128; 3],
@@ -114,7 +114,7 @@ const RUN: usize = 16;
 
 /// Part of a block of strata: its index, samples, luminance sum and
 /// checkerboard difference (black minus white).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Zeroable)]
 pub struct Piece {
     pub block: u32,
     pub n: u32,
@@ -244,9 +244,7 @@ impl PixelStats {
     /// `n` pixels with no samples, without writing them: see
     /// [`crate::memory::zeroed`].
     pub fn zeroed(n: usize) -> Vec<PixelStats> {
-        // SAFETY: every field is an integer or a float (of which 0.0 is
-        // all zero bits), so all-zero bytes are the default pixel.
-        unsafe { crate::memory::zeroed(n) }
+        crate::memory::zeroed(n)
     }
 
     /// A pixel of the one sample `c` (sample 0, not jittered), or of none
@@ -555,7 +553,7 @@ impl PixelStats {
 
 /// What a film that is read only for its image and error estimate keeps
 /// of a pixel (see [`Film::summarise`]): 24 bytes where statistics are 176.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Zeroable)]
 pub struct PixelSummary {
     /// [`PixelStats::mean`], as the image takes it.
     mean: Vec3,
@@ -929,8 +927,7 @@ impl Film {
     /// value (none), and marks a row it leaves out
     /// ([`Samples::skipped`]).
     pub(crate) fn new_exact(width: u32, height: u32) -> Self {
-        // SAFETY: a Vec3 of zero bytes is black.
-        let samples = unsafe { crate::memory::zeroed(width as usize * height as usize) };
+        let samples = crate::memory::zeroed(width as usize * height as usize);
         let pixels = Pixels::Exact {
             samples,
             stats: OnceLock::new(),
@@ -964,7 +961,7 @@ impl Film {
         let n = self.width as usize * self.height as usize;
         // SAFETY: a summary of zero bytes is that of a pixel with no
         // sample, which a pass writes over.
-        self.pixels = Pixels::Summary(unsafe { crate::memory::zeroed(n) });
+        self.pixels = Pixels::Summary(crate::memory::zeroed(n));
     }
 
     /// A blank film made summarised (see [`Film::summarise`]) for a render

@@ -21,7 +21,7 @@ use glam::Vec3;
 use super::film::{Film, Piece, PixelStats, Report, FIXED_MAX, FIXED_ONE};
 use super::Session;
 use crate::geometry::sampling::PIXEL_STRATA;
-use crate::raster::flat_exr::{self, Kind, Layout, Scanlines};
+use crate::raster::flat_exr::{self, ExrHeader, Kind, Scanlines};
 use crate::scene::source::Input;
 use crate::scene::BloomSettings;
 use crate::words::quoted;
@@ -416,7 +416,7 @@ pub fn encode(f: &Film, meta: &Meta) -> Result<Vec<u8>> {
         attributes.push(("rayterm.inputs".into(), list));
     }
     attributes.sort();
-    let layout = Layout {
+    let layout = ExrHeader {
         width: f.width,
         height: f.height,
         channels: columns
@@ -477,7 +477,7 @@ fn ascii_json(value: &impl serde::Serialize) -> String {
 }
 
 /// Where the checksum's eight digits lie in a file of layout `l`.
-fn sealed_at(l: &Layout) -> Result<Range<usize>> {
+fn sealed_at(l: &ExrHeader) -> Result<Range<usize>> {
     match l.attributes.iter().find(|(k, _, _)| k == CHECKSUM) {
         Some((_, _, at)) if at.len() == UNSEALED.len() => Ok(at.clone()),
         _ => bail!("no {CHECKSUM} attribute of eight hex digits"),
@@ -485,7 +485,7 @@ fn sealed_at(l: &Layout) -> Result<Range<usize>> {
 }
 
 /// The header of a partial film of layout `l`.
-fn header_of(l: &Layout) -> Result<Header> {
+fn header_of(l: &ExrHeader) -> Result<Header> {
     let attrs: HashMap<&str, &str> = l
         .attributes
         .iter()
@@ -650,7 +650,7 @@ impl Source {
 
     /// What the layout `l` of a film says, checked before any checksum is
     /// (see [`unusable`]).
-    fn read_layout(l: &Layout) -> Result<Said> {
+    fn read_layout(l: &ExrHeader) -> Result<Said> {
         let header = header_of(l)?;
         let at = sealed_at(l)?;
         let field = |name: &str| FIELDS.iter().position(|f| *f == name);

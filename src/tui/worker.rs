@@ -38,8 +38,9 @@ const COARSE_ABOVE_MS: f64 = 20.0;
 const PASS_MS: f64 = 125.0;
 /// Coarse passes render every `COARSE`-th pixel in each direction.
 const COARSE: u32 = 4;
-/// Accumulation stops here; the image no longer visibly changes.
-pub const MAX_SPP: u32 = 1024;
+/// A view stops accumulating here: the image no longer visibly changes
+/// (`scene::MAX_SPP` is the most any render takes).
+pub const VIEW_SPP: u32 = 1024;
 /// A pixel counts as converged in the Render panel below this estimated
 /// relative error (the default target of `rayterm converge`).
 pub const CONVERGED_BELOW: f64 = 0.01;
@@ -419,7 +420,7 @@ impl Worker {
     }
 
     fn stop() -> Stop {
-        Stop::spp(MAX_SPP)
+        Stop::spp(VIEW_SPP)
     }
 
     /// Whether the overlay asked for is not yet drawn for this view.

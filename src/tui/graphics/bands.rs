@@ -4,7 +4,7 @@
 //! of output of its own, so that output is paced between bands.
 //!
 //! Choosing the bands ([`Bands::plan`]) is cheap and happens in the event
-//! loop; encoding them ([`Plan::encode`]) is not, and happens on the
+//! loop; encoding them ([`Batch::encode`]) is not, and happens on the
 //! encoder's thread. Pieces that come back for bands changed meanwhile
 //! (text over them, the screen cleared, another layout) are dropped by
 //! [`Bands::accept`] and the bands planned again.
@@ -67,7 +67,7 @@ pub struct Bands {
 
 /// Bands to encode: each with its pixels, and for sixel the whole picture
 /// the palette is made for.
-pub struct Plan {
+pub struct Batch {
     mode: PixelMode,
     layout: Frame,
     jobs: Vec<Job>,
@@ -96,7 +96,7 @@ pub struct Piece {
     bytes: Vec<u8>,
 }
 
-impl Plan {
+impl Batch {
     pub fn is_empty(&self) -> bool {
         self.jobs.is_empty()
     }
@@ -217,7 +217,7 @@ impl Bands {
         mode: &PixelMode,
         pic: &Picture,
         covered: impl Fn(u16) -> bool,
-    ) -> (Vec<Vec<u8>>, Plan) {
+    ) -> (Vec<Vec<u8>>, Batch) {
         let mut now = Vec::new();
         let area = pic.area;
         let layout = (area, pic.w, pic.h);
@@ -231,7 +231,7 @@ impl Bands {
             self.turn = vec![false; count];
             self.most = self.most.max(count);
         }
-        let mut plan = Plan {
+        let mut plan = Batch {
             mode: *mode,
             layout,
             jobs: Vec::new(),

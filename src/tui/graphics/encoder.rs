@@ -5,10 +5,10 @@
 use std::sync::mpsc::{channel, Receiver, Sender};
 use std::thread;
 
-use super::bands::{Piece, Plan};
+use super::bands::{Batch, Piece};
 
 pub struct Encoder {
-    tx: Sender<Plan>,
+    tx: Sender<Batch>,
     rx: Receiver<Vec<Piece>>,
     busy: bool,
 }
@@ -16,7 +16,7 @@ pub struct Encoder {
 impl Encoder {
     /// Starts the thread; it ends when the encoder is dropped.
     pub fn spawn() -> std::io::Result<Encoder> {
-        let (tx, jobs) = channel::<Plan>();
+        let (tx, jobs) = channel::<Batch>();
         let (done, rx) = channel();
         thread::Builder::new()
             .name("encoder".into())
@@ -40,7 +40,7 @@ impl Encoder {
     }
 
     /// Hands `plan` to the thread.
-    pub fn start(&mut self, plan: Plan) {
+    pub fn start(&mut self, plan: Batch) {
         self.busy = self.tx.send(plan).is_ok();
     }
 
