@@ -2,6 +2,7 @@
 
 pub mod build;
 pub mod debug;
+mod kernels;
 pub mod node;
 mod packet;
 mod simd;

@@ -34,17 +34,15 @@ use std::mem::MaybeUninit;
 
 use glam::{Vec3, Vec4};
 
+use super::kernels::FAR_SCALE;
+use super::kernels::{PacketKernels, Portable};
 #[cfg(target_arch = "x86_64")]
 use super::simd::Avx;
-#[cfg(target_arch = "x86_64")]
-use super::traverse::slab_hits_avx;
-use super::traverse::{closer, Kernels, Portable, FAR_SCALE, MAX_TFAR, STACK};
-use super::wide::{leaf_packets, LeafTest, Node8, Packet, LEAF, PACKET, WIDTH};
+use super::traverse::{closer, STACK};
+use super::wide::{leaf_packets, LeafTest, LEAF, PACKET};
 use super::{Bvh, Hit, Simd, TraversalStats};
 use crate::geometry::ray::PARALLEL;
-#[cfg(target_arch = "x86_64")]
-use crate::geometry::triangle::lanes8_avx;
-use crate::geometry::triangle::{lanes4, RayShear, TriHit8};
+use crate::geometry::triangle::{RayShear, TriHit8};
 use crate::geometry::Ray;
 
 /// The most rays one packet holds: an 8x8 tile of camera rays.
@@ -53,10 +51,10 @@ pub const PACKET_RAYS: usize = 64;
 /// The rays of one group, one lane each, in the layout the kernels load
 /// eight at a time: directions, their reciprocals and the current `tmax`.
 #[repr(C, align(32))]
-struct Lanes {
-    dir: [[f32; PACKET_RAYS]; 3],
-    inv: [[f32; PACKET_RAYS]; 3],
-    tmax: [f32; PACKET_RAYS],
+pub(super) struct Lanes {
+    pub(super) dir: [[f32; PACKET_RAYS]; 3],
+    pub(super) inv: [[f32; PACKET_RAYS]; 3],
+    pub(super) tmax: [f32; PACKET_RAYS],
 }
 
 impl Lanes {
@@ -73,9 +71,9 @@ impl Lanes {
 /// when they are all sheared onto the same axes `k` and in f32: then a
 /// leaf's triangle can be tested against eight of them at once.
 #[repr(C, align(32))]
-struct Shears {
-    k: [usize; 3],
-    s: [[f32; PACKET_RAYS]; 3],
+pub(super) struct Shears {
+    pub(super) k: [usize; 3],
+    pub(super) s: [[f32; PACKET_RAYS]; 3],
 }
 
 impl Shears {
@@ -124,271 +122,11 @@ impl Shears {
 /// A group's frustum: the shared origin and, per axis, the range of the
 /// rays' reciprocal directions, all of one sign.
 #[derive(Clone, Copy)]
-struct Frustum {
-    o: [f32; 3],
-    lo: [f32; 3],
-    hi: [f32; 3],
-    neg: [bool; 3],
-}
-
-/// Indices in `Node8::b` of the near and far planes of axis `a`.
-#[inline(always)]
-fn planes(f: &Frustum, a: usize) -> (usize, usize) {
-    let n = f.neg[a] as usize;
-    (2 * a + n, 2 * a + 1 - n)
-}
-
-/// The frustum's eight-box test: bit `i` set when some ray of the group may
-/// hit child `i`'s box within `(0, tmax)`, and the least entry distance.
-#[inline(always)]
-fn frustum_boxes(f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
-    let mut mask = 0;
-    let mut tnear = [0.0; WIDTH];
-    for half in 0..WIDTH / 4 {
-        let lanes = half * 4..half * 4 + 4;
-        let slab = |a: usize| {
-            let o = Vec4::splat(f.o[a]);
-            let (lo, hi) = (Vec4::splat(f.lo[a]), Vec4::splat(f.hi[a]));
-            let (i, j) = planes(f, a);
-            let dn = Vec4::from_slice(&n.b[i][lanes.clone()]) - o;
-            let df = Vec4::from_slice(&n.b[j][lanes.clone()]) - o;
-            ((dn * lo).min(dn * hi), (df * lo).max(df * hi))
-        };
-        let (nx, fx) = slab(0);
-        let (ny, fy) = slab(1);
-        let (nz, fz) = slab(2);
-        // NaN (a NaN bound) is passed over as in the single-ray test.
-        let tn = nz.max(ny.max(nx.max(Vec4::ZERO)));
-        let tf = fz.min(fy.min(fx.min(Vec4::splat(tmax.min(MAX_TFAR))))) * Vec4::splat(FAR_SCALE);
-        mask |= tn.cmple(tf).bitmask() << (4 * half);
-        tn.write_to_slice(&mut tnear[lanes]);
-    }
-    (mask, tnear)
-}
-
-/// The single-ray box test of child `slot` of `n` for the rays in `active`,
-/// four at a time: bit `i` set when ray `i` hits it.
-#[inline(always)]
-fn rays_box(f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
-    let d = |a: usize| {
-        let (i, j) = planes(f, a);
-        (
-            Vec4::splat(n.b[i][slot] - f.o[a]),
-            Vec4::splat(n.b[j][slot] - f.o[a]),
-        )
-    };
-    let (dx, dy, dz) = (d(0), d(1), d(2));
-    let mut hit = 0;
-    for b in (0..PACKET_RAYS / 4).filter(|b| active & (0xf << (4 * b)) != 0) {
-        let r = 4 * b..4 * b + 4;
-        let inv = |a: usize| Vec4::from_slice(&l.inv[a][r.clone()]);
-        let (ix, iy, iz) = (inv(0), inv(1), inv(2));
-        let tn = (dz.0 * iz).max((dy.0 * iy).max((dx.0 * ix).max(Vec4::ZERO)));
-        let tmax = Vec4::from_slice(&l.tmax[r.clone()]).min(Vec4::splat(MAX_TFAR));
-        let tf = (dz.1 * iz).min((dy.1 * iy).min((dx.1 * ix).min(tmax))) * Vec4::splat(FAR_SCALE);
-        hit |= (tn.cmple(tf).bitmask() as u64) << (4 * b);
-    }
-    hit & active
-}
-
-/// [`frustum_boxes`] with AVX.
-///
-/// # Safety
-/// The CPU must support AVX.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-unsafe fn frustum_boxes_avx(f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
-    use std::arch::x86_64::*;
-    macro_rules! slab {
-        ($a:expr) => {{
-            let o = _mm256_set1_ps(f.o[$a]);
-            let (lo, hi) = (_mm256_set1_ps(f.lo[$a]), _mm256_set1_ps(f.hi[$a]));
-            let (i, j) = planes(f, $a);
-            let dn = _mm256_sub_ps(_mm256_load_ps(n.b[i].as_ptr()), o);
-            let df = _mm256_sub_ps(_mm256_load_ps(n.b[j].as_ptr()), o);
-            (
-                _mm256_min_ps(_mm256_mul_ps(dn, lo), _mm256_mul_ps(dn, hi)),
-                _mm256_max_ps(_mm256_mul_ps(df, lo), _mm256_mul_ps(df, hi)),
-            )
-        }};
-    }
-    let (nx, fx) = slab!(0);
-    let (ny, fy) = slab!(1);
-    let (nz, fz) = slab!(2);
-    slab_hits_avx([nx, ny, nz], [fx, fy, fz], tmax)
-}
-
-/// [`rays_box`] with AVX, eight rays at a time.
-///
-/// # Safety
-/// The CPU must support AVX.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-unsafe fn rays_box_avx(f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
-    use std::arch::x86_64::*;
-    macro_rules! d {
-        ($a:expr) => {{
-            let (i, j) = planes(f, $a);
-            (
-                _mm256_set1_ps(n.b[i][slot] - f.o[$a]),
-                _mm256_set1_ps(n.b[j][slot] - f.o[$a]),
-            )
-        }};
-    }
-    let (dx, dy, dz) = (d!(0), d!(1), d!(2));
-    let (zero, maxt, scale) = (
-        _mm256_setzero_ps(),
-        _mm256_set1_ps(MAX_TFAR),
-        _mm256_set1_ps(FAR_SCALE),
-    );
-    let mut hit = 0;
-    let mut blocks = active;
-    while blocks != 0 {
-        let b = blocks.trailing_zeros() as usize / 8;
-        blocks &= !(0xff << (8 * b));
-        let r = 8 * b;
-        // `Lanes` is 32-byte aligned and each row holds 64 f32.
-        let ix = _mm256_load_ps(l.inv[0].as_ptr().add(r));
-        let iy = _mm256_load_ps(l.inv[1].as_ptr().add(r));
-        let iz = _mm256_load_ps(l.inv[2].as_ptr().add(r));
-        let tn = _mm256_max_ps(
-            _mm256_mul_ps(dz.0, iz),
-            _mm256_max_ps(
-                _mm256_mul_ps(dy.0, iy),
-                _mm256_max_ps(_mm256_mul_ps(dx.0, ix), zero),
-            ),
-        );
-        let tmax = _mm256_min_ps(_mm256_load_ps(l.tmax.as_ptr().add(r)), maxt);
-        let tf = _mm256_mul_ps(
-            _mm256_min_ps(
-                _mm256_mul_ps(dz.1, iz),
-                _mm256_min_ps(
-                    _mm256_mul_ps(dy.1, iy),
-                    _mm256_min_ps(_mm256_mul_ps(dx.1, ix), tmax),
-                ),
-            ),
-            scale,
-        );
-        let m = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u64;
-        hit |= m << r;
-    }
-    hit & active
-}
-
-/// The kernels of a packet walk, beside those of the single-ray walk.
-trait PacketKernels: Kernels {
-    fn frustum(&self, f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]);
-    fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64;
-    /// Triangle `j` of `p` against rays `8b..8b + 8` of the group, each
-    /// computing what [`Kernels::triangles`] computes for that ray.
-    fn rays_triangle<const UV: bool>(
-        &self,
-        t: (&Packet, usize),
-        o: &[f32; 3],
-        sh: &Shears,
-        l: &Lanes,
-        b: usize,
-    ) -> TriHit8;
-}
-
-impl PacketKernels for Portable {
-    #[inline(always)]
-    fn frustum(&self, f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
-        frustum_boxes(f, n, tmax)
-    }
-
-    #[inline(always)]
-    fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
-        rays_box(f, l, n, slot, active)
-    }
-
-    #[inline(always)]
-    fn rays_triangle<const UV: bool>(
-        &self,
-        (p, j): (&Packet, usize),
-        o: &[f32; 3],
-        sh: &Shears,
-        l: &Lanes,
-        b: usize,
-    ) -> TriHit8 {
-        let mut h = TriHit8::NONE;
-        let tri = p.p.map(|v| v.map(|a| Vec4::splat(a[j])));
-        for half in 0..2 {
-            let r = 8 * b + 4 * half..8 * b + 4 * half + 4;
-            let at = 4 * half..4 * half + 4;
-            let r4 = lanes4(
-                sh.k,
-                sh.k.map(|a| Vec4::splat(o[a])),
-                sh.s.each_ref().map(|s| Vec4::from_slice(&s[r.clone()])),
-                sh.k.map(|a| Vec4::from_slice(&l.inv[a][r.clone()])),
-                &tri,
-                Vec4::from_slice(&l.tmax[r.clone()]),
-            );
-            h.mask |= r4.mask << (4 * half);
-            r4.t.write_to_slice(&mut h.t[at.clone()]);
-            r4.u.write_to_slice(&mut h.u[at.clone()]);
-            r4.v.write_to_slice(&mut h.v[at]);
-        }
-        h
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl PacketKernels for Avx {
-    #[inline(always)]
-    fn frustum(&self, f: &Frustum, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
-        // SAFETY: an `Avx` exists only where the CPU has AVX.
-        unsafe { frustum_boxes_avx(f, n, tmax) }
-    }
-
-    #[inline(always)]
-    fn rays_box(&self, f: &Frustum, l: &Lanes, n: &Node8, slot: usize, active: u64) -> u64 {
-        // SAFETY: as above.
-        unsafe { rays_box_avx(f, l, n, slot, active) }
-    }
-
-    #[inline(always)]
-    fn rays_triangle<const UV: bool>(
-        &self,
-        (p, j): (&Packet, usize),
-        o: &[f32; 3],
-        sh: &Shears,
-        l: &Lanes,
-        b: usize,
-    ) -> TriHit8 {
-        use std::arch::x86_64::*;
-        let [kx, ky, kz] = sh.k;
-        let r = 8 * b;
-        // Macros, not closures, as in `intersect8_avx`.
-        macro_rules! ld {
-            ($s:expr) => {
-                _mm256_loadu_ps($s.as_ptr().add(r))
-            };
-        }
-        macro_rules! v {
-            ($v:expr) => {
-                [
-                    _mm256_set1_ps(p.p[$v][kx][j]),
-                    _mm256_set1_ps(p.p[$v][ky][j]),
-                    _mm256_set1_ps(p.p[$v][kz][j]),
-                ]
-            };
-        }
-        // SAFETY: as above; every row of `Shears` and `Lanes` holds 64 f32.
-        unsafe {
-            lanes8_avx::<UV, true>(
-                [v!(0), v!(1), v!(2)],
-                [
-                    _mm256_set1_ps(o[kx]),
-                    _mm256_set1_ps(o[ky]),
-                    _mm256_set1_ps(o[kz]),
-                ],
-                [ld!(sh.s[0]), ld!(sh.s[1]), ld!(sh.s[2])],
-                [ld!(l.inv[kx]), ld!(l.inv[ky]), ld!(l.inv[kz])],
-                ld!(l.tmax),
-            )
-        }
-    }
+pub(super) struct Frustum {
+    pub(super) o: [f32; 3],
+    pub(super) lo: [f32; 3],
+    pub(super) hi: [f32; 3],
+    pub(super) neg: [bool; 3],
 }
 
 /// What a packet walk finds for each ray of its group.
@@ -900,6 +638,10 @@ impl Bvh {
 #[cfg(test)]
 mod tests {
     use super::*;
+    #[cfg(target_arch = "x86_64")]
+    use crate::bvh::kernels::avx::{frustum_boxes_avx, rays_box_avx};
+    use crate::bvh::kernels::portable::{frustum_boxes, rays_box};
+    use crate::bvh::wide::{Node8, WIDTH};
     use crate::geometry::sampling::Rng;
     use crate::report::stability::soup;
     use crate::scene::{self, Builder};
@@ -1183,7 +925,7 @@ mod tests {
     /// kernel.
     #[test]
     fn frustum_test_is_conservative_and_ray_tests_are_the_single_ray_test() {
-        use super::super::traverse::BoxRay;
+        use crate::bvh::kernels::BoxRay;
         let mut r = Rng::for_sample(5, 5, 5);
         let mut f = |s: f32| (r.next_f32() * 2.0 - 1.0) * s;
         for k in 0..3000 {
@@ -1233,7 +975,7 @@ mod tests {
                 let mut want = 0u64;
                 for (i, ray) in rays.iter().enumerate() {
                     let br = BoxRay::new(ray);
-                    let (m, tn) = super::super::traverse::hit_boxes(&br, &node, ray.tmax);
+                    let (m, tn) = super::super::kernels::portable::hit_boxes(&br, &node, ray.tmax);
                     if m & (1 << slot) != 0 {
                         want |= 1 << i;
                         assert!(

@@ -5,14 +5,13 @@
 
 use std::mem::MaybeUninit;
 
-use glam::{Vec3A, Vec4};
-
+use super::kernels::{BoxRay, Kernels, Portable, FAR_SCALE};
 #[cfg(target_arch = "x86_64")]
 use super::simd::Avx;
-use super::wide::{leaf_packets, Node8, Packet, LEAF, PACKET, WIDTH};
+use super::wide::{leaf_packets, LEAF, PACKET};
 use super::{Bvh, Simd, TraversalStats};
-use crate::geometry::triangle::{intersect, intersect8, RayShear, TriHit8};
-use crate::geometry::{gamma, Ray};
+use crate::geometry::triangle::{intersect, RayShear, TriHit8};
+use crate::geometry::Ray;
 
 /// A closest hit: distance, barycentrics of vertices 1 and 2, and the
 /// triangle's index in the scene geometry. Aligned to 16 bytes, so that an
@@ -39,197 +38,12 @@ pub struct Hit {
 /// leaf, so the walk only goes down the tree.
 pub(super) const STACK: usize = 256;
 
-/// Widening of the far slab distance, as in [`crate::geometry::Aabb::hit`].
-pub(super) const FAR_SCALE: f32 = 1.0 + 2.0 * gamma(3);
-/// Exit distances are capped below infinity so that an entry distance of
-/// infinity (a ray with no direction at all) never counts as a hit, as in
-/// `Aabb::hit`.
-pub(super) const MAX_TFAR: f32 = f32::MAX / 2.0;
-
 /// Whether `hit` replaces `best`: nearer, or as near and of a lower scene
 /// triangle index. A ray through a shared edge or vertex then picks the
 /// same triangle whatever the tree or the order of the tests.
 #[inline(always)]
 pub(super) fn closer(hit: &Hit, best: Option<&Hit>) -> bool {
     best.is_none_or(|b| hit.t < b.t || (hit.t == b.t && hit.prim < b.prim))
-}
-
-/// A ray's constants for the slab tests.
-#[derive(Clone, Copy)]
-pub(super) struct BoxRay {
-    /// Kept in registers: built as arrays, they cost a store-forwarding
-    /// stall on every ray when the splats read them back.
-    o: Vec3A,
-    inv: Vec3A,
-    /// Whether the ray runs toward -axis: the near plane of axis `a` is then
-    /// `Node8::b[2a + 1]` (max), else `b[2a]` (min). Kept as a bool so the
-    /// index is provably in bounds.
-    neg: [bool; 3],
-}
-
-impl BoxRay {
-    #[inline(always)]
-    pub(super) fn new(ray: &Ray) -> Self {
-        let inv = ray.inv_dir();
-
-        BoxRay {
-            o: ray.origin.into(),
-            inv,
-            neg: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
-        }
-    }
-}
-
-/// Indices in `Node8::b` of the near and far planes of axis `a`.
-#[inline(always)]
-fn planes(r: &BoxRay, a: usize) -> (usize, usize) {
-    let n = r.neg[a] as usize;
-    (2 * a + n, 2 * a + 1 - n)
-}
-
-/// Component `a` of `v`; a constant `a` folds to a register lane.
-#[inline(always)]
-fn lane(v: Vec3A, a: usize) -> f32 {
-    match a {
-        0 => v.x,
-        1 => v.y,
-        _ => v.z,
-    }
-}
-
-/// Bit `i` set when child `i`'s box is hit within `(0, tmax)`, and the entry
-/// distances: the test of `Aabb::hit`, four boxes at a time.
-#[inline(always)]
-pub(super) fn hit_boxes(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
-    let mut mask = 0;
-    let mut tnear = [0.0; WIDTH];
-    for half in 0..WIDTH / 4 {
-        let lanes = half * 4..half * 4 + 4;
-        let slab = |a: usize| {
-            let (o, inv) = (Vec4::splat(lane(r.o, a)), Vec4::splat(lane(r.inv, a)));
-            let (i, j) = planes(r, a);
-            let near = (Vec4::from_slice(&n.b[i][lanes.clone()]) - o) * inv;
-            let far = (Vec4::from_slice(&n.b[j][lanes.clone()]) - o) * inv;
-            (near, far)
-        };
-        let (nx, fx) = slab(0);
-        let (ny, fy) = slab(1);
-        let (nz, fz) = slab(2);
-        // maxps/minps return the second operand when either is NaN: with the
-        // running value second, the NaN of `0 * inf` (an origin on a slab
-        // plane of a parallel ray) is passed over, as in `Aabb::hit`.
-        let tn = nz.max(ny.max(nx.max(Vec4::ZERO)));
-        let tf = fz.min(fy.min(fx.min(Vec4::splat(tmax.min(MAX_TFAR))))) * Vec4::splat(FAR_SCALE);
-        mask |= tn.cmple(tf).bitmask() << (4 * half);
-        tn.write_to_slice(&mut tnear[lanes]);
-    }
-    (mask, tnear)
-}
-
-/// The same test on all eight boxes at once with AVX (not a
-/// `#[target_feature]` function so that it can be forced inline).
-///
-/// # Safety
-/// The CPU must support AVX.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-unsafe fn hit_boxes_avx(r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
-    use std::arch::x86_64::*;
-    // Macros, not closures: a closure here would be compiled on its own,
-    // without AVX, and called.
-    // `Node8` is 32-byte aligned and each plane is eight f32 at the start of
-    // a 32-byte row.
-    macro_rules! slab {
-        ($a:expr) => {{
-            let (o, inv) = (
-                _mm256_set1_ps(lane(r.o, $a)),
-                _mm256_set1_ps(lane(r.inv, $a)),
-            );
-            let (i, j) = planes(r, $a);
-            let near = _mm256_load_ps(n.b[i].as_ptr());
-            let far = _mm256_load_ps(n.b[j].as_ptr());
-            (
-                _mm256_mul_ps(_mm256_sub_ps(near, o), inv),
-                _mm256_mul_ps(_mm256_sub_ps(far, o), inv),
-            )
-        }};
-    }
-    let (nx, fx) = slab!(0);
-    let (ny, fy) = slab!(1);
-    let (nz, fz) = slab!(2);
-    slab_hits_avx([nx, ny, nz], [fx, fy, fz], tmax)
-}
-
-/// Eight boxes' hits from their slabs' entry (`near`) and exit (`far`)
-/// distances per axis: entered no later than left (the exit widened by
-/// [`FAR_SCALE`]) and within `[0, tmax]`; with the entry distances.
-///
-/// # Safety
-/// The CPU must support AVX.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-pub(super) unsafe fn slab_hits_avx(
-    near: [std::arch::x86_64::__m256; 3],
-    far: [std::arch::x86_64::__m256; 3],
-    tmax: f32,
-) -> (u32, [f32; WIDTH]) {
-    use std::arch::x86_64::*;
-    let tn = _mm256_max_ps(
-        near[2],
-        _mm256_max_ps(near[1], _mm256_max_ps(near[0], _mm256_setzero_ps())),
-    );
-    let tf = _mm256_mul_ps(
-        _mm256_min_ps(
-            far[2],
-            _mm256_min_ps(
-                far[1],
-                _mm256_min_ps(far[0], _mm256_set1_ps(tmax.min(MAX_TFAR))),
-            ),
-        ),
-        _mm256_set1_ps(FAR_SCALE),
-    );
-    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
-    let mut tnear = [0.0; WIDTH];
-    _mm256_storeu_ps(tnear.as_mut_ptr(), tn);
-    (mask, tnear)
-}
-
-/// The SIMD kernels of the walk: the eight-box test and the eight-triangle
-/// test. Static dispatch with forced inlining, so the walk compiled for AVX
-/// holds the AVX kernels inline.
-pub(super) trait Kernels {
-    fn boxes(&self, r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]);
-    fn triangles<const UV: bool>(&self, s: &RayShear, p: &Packet, tmax: f32) -> TriHit8;
-}
-
-/// Four lanes at a time, on any CPU.
-pub(super) struct Portable;
-
-impl Kernels for Portable {
-    #[inline(always)]
-    fn boxes(&self, r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
-        hit_boxes(r, n, tmax)
-    }
-
-    #[inline(always)]
-    fn triangles<const UV: bool>(&self, s: &RayShear, p: &Packet, tmax: f32) -> TriHit8 {
-        intersect8::<UV>(s, &p.p, tmax)
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl Kernels for Avx {
-    #[inline(always)]
-    fn boxes(&self, r: &BoxRay, n: &Node8, tmax: f32) -> (u32, [f32; WIDTH]) {
-        // SAFETY: an `Avx` exists only where the CPU has AVX.
-        unsafe { hit_boxes_avx(r, n, tmax) }
-    }
-
-    #[inline(always)]
-    fn triangles<const UV: bool>(&self, s: &RayShear, p: &Packet, tmax: f32) -> TriHit8 {
-        // SAFETY: as above.
-        unsafe { crate::geometry::triangle::intersect8_avx::<UV>(s, &p.p, tmax) }
-    }
 }
 
 /// What a walk reports when `STATS` is on: the counts of
@@ -636,6 +450,10 @@ impl Bvh {
 #[cfg(test)]
 mod tests {
     use super::*;
+    #[cfg(target_arch = "x86_64")]
+    use crate::bvh::kernels::avx::hit_boxes_avx;
+    use crate::bvh::kernels::portable::hit_boxes;
+    use crate::bvh::wide::{Node8, WIDTH};
     use crate::scene::{self, Builder};
 
     /// Both eight-box tests agree with `Aabb::hit` lane by lane, bit for bit,
