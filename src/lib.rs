@@ -16,4 +16,5 @@ pub mod render;
 pub mod report;
 pub mod scene;
 pub mod tui;
+pub mod viz;
 pub mod words;
