@@ -17,6 +17,7 @@ pub mod render;
 pub mod report;
 pub mod scene;
 pub mod tui;
+pub mod viz;
 pub mod words;
 
 #[cfg(test)]

@@ -8,15 +8,16 @@ use std::path::Path;
 use std::process::Command;
 
 use glam::Vec3;
-use rayterm::inspect::overlay::{
-    self, draw, tree_rays, PixelView, INTERPOLATED, OFF_PATH, ON_PATH, TRIANGLE, VERTEX_NORMAL,
-};
-use rayterm::inspect::{inspect_pixel, PixelTree, RayNode};
-use rayterm::render::debug_view::{bloom_view, BRIGHT, GLOW};
-use rayterm::render::overlay::Layer;
+use rayterm::inspect::{inspect_pixel, tree_rays, PixelTree, RayNode};
 use rayterm::render::recorder::RayKind;
 use rayterm::render::{SceneRequest, Session, Tracer};
 use rayterm::scene::BloomSettings;
+use rayterm::viz::bloom::{bloom_view, BRIGHT, GLOW};
+use rayterm::viz::draw::Layer;
+use rayterm::viz::pixel::{
+    self as overlay, draw, INTERPOLATED, OFF_PATH, ON_PATH, TRIANGLE, VERTEX_NORMAL,
+};
+use rayterm::viz::View;
 
 fn session(spec: &str) -> Session {
     Session::open(&SceneRequest::new(spec)).unwrap().0
@@ -44,7 +45,7 @@ fn near(layer: &Layer, (x, y): (f64, f64), r: i64, c: Vec3) -> bool {
 /// The legend of `view` over a pixel of cornell, which has no vertex
 /// normals, no environment, no texture coordinates and no glossy surface:
 /// the view must draw nothing.
-fn blank_on_cornell(view: PixelView) -> String {
+fn blank_on_cornell(view: View) -> String {
     let c = session("cornell");
     let t = tracer(&c, 64, 64);
     let o = draw(&t, &inspect_pixel(&t, 32, 40, 0), view, None, 1).unwrap();
@@ -98,7 +99,7 @@ fn traversal_boxes_are_the_walk_green_on_the_path_to_the_hit_red_elsewhere() {
         let visited: HashSet<u32> = log.visited.iter().copied().collect();
         assert_eq!(visited.len(), log.visited.len(), "each node once");
         assert!(visited.contains(&0) && visited.contains(path.last().unwrap()));
-        let o = draw(&t, &tree, PixelView::Traversal, None, 1).unwrap();
+        let o = draw(&t, &tree, View::Traversal, None, 1).unwrap();
         let on = log.visited.iter().filter(|n| path.contains(n)).count();
         let off = log.visited.len() - on;
         let legend = overlay_text(&o.legend);
@@ -167,7 +168,7 @@ fn traversal_of_a_shadow_ray_and_of_a_ray_that_misses() {
     let log = s.bvh.walk_log(&shadow.ray(), true);
     let (_, sample) = shadow.shadow.unwrap();
     assert_eq!(log.found, sample.occluder.as_ref().map(|o| o.1));
-    let o = draw(&t, &tree, PixelView::Traversal, Some(i), 1).unwrap();
+    let o = draw(&t, &tree, View::Traversal, Some(i), 1).unwrap();
     assert!(overlay_text(&o.legend).contains("shadow ray"));
     assert!(!o.layer.is_blank());
     // A camera ray into the sky hits nothing: no green box, the ray red.
@@ -175,12 +176,12 @@ fn traversal_of_a_shadow_ray_and_of_a_ray_that_misses() {
     let t = tracer(&env, 64, 36);
     let tree = inspect_pixel(&t, 32, 1, 0);
     assert!(tree.root.miss.is_some());
-    let o = draw(&t, &tree, PixelView::Traversal, None, 1).unwrap();
+    let o = draw(&t, &tree, View::Traversal, None, 1).unwrap();
     assert_eq!(count(&o.layer, ON_PATH), 0);
     assert!(overlay_text(&o.legend).contains("hits nothing"));
     // A ray number past the tree is an error naming the rays there are.
     let n = tree_rays(&tree).len();
-    let e = draw(&t, &tree, PixelView::Traversal, Some(n), 1)
+    let e = draw(&t, &tree, View::Traversal, Some(n), 1)
         .err()
         .unwrap()
         .to_string();
@@ -188,7 +189,7 @@ fn traversal_of_a_shadow_ray_and_of_a_ray_that_misses() {
 }
 
 fn overlay_text(legend: &[(Option<Vec3>, String)]) -> String {
-    rayterm::render::overlay::legend_line(&legend.to_vec())
+    rayterm::viz::draw::legend_line(&legend.to_vec())
 }
 
 #[test]
@@ -203,7 +204,7 @@ fn normals_are_drawn_where_the_tree_puts_them_and_not_on_flat_meshes() {
             .is_some_and(|h| h.vertex_normals.is_some() && h.mesh == "sphere_red")
     });
     let hit = tree.root.hit.as_ref().unwrap();
-    let o = draw(&t, &tree, PixelView::Normals, None, 1).unwrap();
+    let o = draw(&t, &tree, View::Normals, None, 1).unwrap();
     assert!(count(&o.layer, VERTEX_NORMAL) > 0);
     assert!(count(&o.layer, INTERPOLATED) > 0);
     // The green normal starts at the hit point and runs along the tree's
@@ -239,7 +240,7 @@ fn normals_are_drawn_where_the_tree_puts_them_and_not_on_flat_meshes() {
     }
     assert!(red >= 2, "{red} vertex normals seen");
     // Cornell's boxes are flat-shaded: nothing drawn, and the legend says why.
-    assert!(blank_on_cornell(PixelView::Normals).contains("flat-shaded"));
+    assert!(blank_on_cornell(View::Normals).contains("flat-shaded"));
 }
 
 #[test]
@@ -251,14 +252,14 @@ fn environment_ray_is_drawn_in_the_colour_the_tree_found_and_its_face_named() {
             && tr.root.miss.as_ref().unwrap().color != Vec3::ZERO
     });
     let miss = tree.root.miss.as_ref().unwrap();
-    let o = draw(&t, &tree, PixelView::Environment, None, 1).unwrap();
+    let o = draw(&t, &tree, View::Environment, None, 1).unwrap();
     assert!(count(&o.layer, miss.color) > 0);
     let face = miss.face.as_ref().unwrap();
     assert!(overlay_text(&o.legend).contains(&format!("face {face}")));
     // The face's name is written on the picture, in white.
     assert!(count(&o.layer, overlay::MARK) > 0);
     // Cornell is closed: no ray misses, nothing drawn.
-    blank_on_cornell(PixelView::Environment);
+    blank_on_cornell(View::Environment);
 }
 
 #[test]
@@ -268,7 +269,7 @@ fn texture_outlines_the_texels_the_lookup_reads_and_nothing_without_uv() {
     let tree = find(&t, |tr| {
         tr.root.hit.as_ref().is_some_and(|h| h.texel.is_some())
     });
-    let o = draw(&t, &tree, PixelView::Texture, None, 1).unwrap();
+    let o = draw(&t, &tree, View::Texture, None, 1).unwrap();
     let legend = overlay_text(&o.legend);
     assert!(legend.contains("four texels bilinear"), "{legend}");
     assert!(count(&o.layer, overlay::MARK) > 20, "no outline");
@@ -276,7 +277,7 @@ fn texture_outlines_the_texels_the_lookup_reads_and_nothing_without_uv() {
     let tex = &s.scene.textures[0];
     assert!(tex.texels.iter().any(|c| count(&o.layer, *c) > 4));
     // Cornell has no texture coordinates: nothing drawn, and why.
-    assert!(blank_on_cornell(PixelView::Texture).contains("no texture coordinates"));
+    assert!(blank_on_cornell(View::Texture).contains("no texture coordinates"));
 }
 
 #[test]
@@ -285,7 +286,7 @@ fn glossy_rays_are_drawn_in_their_contributions_with_the_lobe_axis() {
     let t = tracer(&s, 160, 120);
     let glossy = |n: &RayNode| n.children.iter().any(|c| c.kind == RayKind::Glossy);
     let tree = find(&t, |tr| glossy(&tr.root));
-    let o = draw(&t, &tree, PixelView::Glossy, None, 1).unwrap();
+    let o = draw(&t, &tree, View::Glossy, None, 1).unwrap();
     let lobe: Vec<&RayNode> = tree
         .root
         .children
@@ -311,7 +312,7 @@ fn glossy_rays_are_drawn_in_their_contributions_with_the_lobe_axis() {
     let rays = if n == 1 { "ray" } else { "rays" };
     assert!(legend.contains(&format!("{n} glossy {rays},")), "{legend}");
     // Cornell has no glossy surface.
-    blank_on_cornell(PixelView::Glossy);
+    blank_on_cornell(View::Glossy);
 }
 
 #[test]
@@ -324,7 +325,7 @@ fn rays_in_colour_use_the_contributions_and_lights_show_their_samples() {
             .iter()
             .any(|l| l.samples.iter().filter(|s| s.shadow_ray.is_some()).count() > 4)
     });
-    let o = draw(&t, &tree, PixelView::Lights, None, 1).unwrap();
+    let o = draw(&t, &tree, View::Lights, None, 1).unwrap();
     let samples: Vec<_> = all_nodes(&tree.root)
         .into_iter()
         .flat_map(|n| n.lights.iter().flat_map(|l| &l.samples))
@@ -337,8 +338,8 @@ fn rays_in_colour_use_the_contributions_and_lights_show_their_samples() {
     assert!(overlay_text(&o.legend).contains(&format!("{} points", samples.len())));
     // Rays by colour: the camera ray's colour is what it adds to the pixel,
     // the by-kind view draws the kind's colour instead.
-    let by_colour = draw(&t, &tree, PixelView::Colour, None, 1).unwrap();
-    let by_kind = draw(&t, &tree, PixelView::Rays, None, 1).unwrap();
+    let by_colour = draw(&t, &tree, View::Colour, None, 1).unwrap();
+    let by_kind = draw(&t, &tree, View::Rays, None, 1).unwrap();
     assert!(count(&by_kind.layer, overlay::kind_color(RayKind::Camera)) > 0);
     assert!(count(&by_colour.layer, overlay::kind_color(RayKind::Camera)) == 0);
     assert!(
@@ -355,7 +356,7 @@ fn sample_zoom_places_each_sample_in_its_stratum_in_its_colour() {
     let t = tracer(&s, 96, 96);
     let spp = 16;
     let tree = inspect_pixel(&t, 20, 70, 0);
-    let o = draw(&t, &tree, PixelView::Samples, None, spp).unwrap();
+    let o = draw(&t, &tree, View::Samples, None, spp).unwrap();
     let mut strata = HashSet::new();
     for k in 0..spp {
         let tk = inspect_pixel(&t, 20, 70, k);

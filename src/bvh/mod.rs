@@ -1,7 +1,6 @@
 //! Bounding volume hierarchy: builders, node layout, traversal, statistics.
 
 pub mod build;
-pub mod debug;
 mod kernels;
 pub mod node;
 mod packet;

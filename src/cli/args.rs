@@ -4,7 +4,6 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
-use super::debug::DebugSpec;
 use super::progress::ProgressMode;
 use crate::render::{Feature, Features, PlanPolicy, SceneRequest, Worst};
 use crate::scene::envlight::EnvRequest;
@@ -13,6 +12,7 @@ use crate::scene::{Builder, Integrator, MAX_DEPTH};
 use crate::tui::color::ColorMode;
 use crate::tui::graphics::symbols::Symbols;
 use crate::tui::graphics::GraphicsArg;
+use crate::viz::DebugSpec;
 
 #[derive(Parser, Debug)]
 #[command(

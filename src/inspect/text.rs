@@ -31,7 +31,7 @@ pub struct TreeLine {
     /// Set on a foldable list's summary line: its id and whether it is open.
     pub fold: Option<(usize, bool)>,
     /// Set on a ray's line and a shadow ray's: its number in
-    /// [`super::overlay::tree_rays`], for the overlays of one ray.
+    /// [`super::tree_rays`], for the overlays of one ray.
     pub ray: Option<usize>,
 }
 

@@ -24,12 +24,10 @@ use super::link::RenderLink;
 use super::popup::{self, Popup};
 use super::term::output::Figures;
 use super::worker::{self, Msg, PixelRequest, Reference, Snapshot, Truth, View, Worker};
-use crate::bvh::debug::HeatMeasure;
-use crate::inspect::overlay::{PixelView, VIEWS};
 use crate::raster::reference::load_reference;
-use crate::render::debug_view::{DebugView, FilmView};
 use crate::render::{Decision, Feature, Features, Plan, Session, Tracer, Worst};
 use crate::scene::{Builder, Projection};
+use crate::viz::{self, image_views, PIXEL_VIEWS};
 use crate::words;
 
 /// How long a status message stays before the status line shows the
@@ -38,86 +36,6 @@ const MESSAGE_LIFE: Duration = Duration::from_secs(8);
 
 /// How often the progress of a slow pass is redrawn.
 const PROGRESS_EVERY: Duration = Duration::from_millis(250);
-
-/// BVH visualisation over the viewport.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Overlay {
-    Off,
-    /// Outlines of the boxes at level `App::level`.
-    Level,
-    /// Outlines of the leaf boxes.
-    Leaves,
-    /// Each pixel coloured by the nodes its camera ray visited.
-    HeatNodes,
-    /// Each pixel coloured by the triangle tests of its camera ray.
-    HeatTests,
-    /// What bloom does: the pixels over its threshold and their glow.
-    Bloom,
-    /// Samples per pixel.
-    Spp,
-    /// Estimated relative error per pixel.
-    Error,
-}
-
-impl Overlay {
-    fn next(self) -> Self {
-        match self {
-            Overlay::Off => Overlay::Level,
-            Overlay::Level => Overlay::Leaves,
-            Overlay::Leaves => Overlay::HeatNodes,
-            Overlay::HeatNodes => Overlay::HeatTests,
-            Overlay::HeatTests => Overlay::Bloom,
-            Overlay::Bloom => Overlay::Spp,
-            Overlay::Spp => Overlay::Error,
-            Overlay::Error => Overlay::Off,
-        }
-    }
-}
-
-/// The BVH overlay chosen: which view, and the level for box outlines.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct BvhOverlay {
-    pub mode: Overlay,
-    pub level: usize,
-}
-
-impl BvhOverlay {
-    /// The debug view the worker draws for it (bloom's is drawn into
-    /// each pass instead).
-    pub fn view(&self) -> Option<DebugView> {
-        match self.mode {
-            Overlay::Off | Overlay::Bloom | Overlay::Spp | Overlay::Error => None,
-            Overlay::Level => Some(DebugView::Level(self.level)),
-            Overlay::Leaves => Some(DebugView::Leaves),
-            Overlay::HeatNodes => Some(DebugView::Heat(HeatMeasure::NodesVisited)),
-            Overlay::HeatTests => Some(DebugView::Heat(HeatMeasure::TriangleTests)),
-        }
-    }
-
-    pub fn name(&self) -> String {
-        match self.mode {
-            Overlay::Off => "off".into(),
-            Overlay::Level => format!("boxes of level {}", self.level),
-            Overlay::Leaves => "leaf boxes".into(),
-            Overlay::HeatNodes => "heat map of nodes visited".into(),
-            Overlay::HeatTests => "heat map of triangle tests".into(),
-            Overlay::Bloom => "bloom: the pixels over its threshold and their glow".into(),
-            Overlay::Spp => "samples per pixel".into(),
-            Overlay::Error => "estimated relative error per pixel".into(),
-        }
-    }
-
-    /// The view of the film the worker draws into each pass for it, in
-    /// place of the picture.
-    pub fn film_view(&self) -> Option<FilmView> {
-        match self.mode {
-            Overlay::Bloom => Some(FilmView::Bloom),
-            Overlay::Spp => Some(FilmView::Spp),
-            Overlay::Error => Some(FilmView::Error),
-            _ => None,
-        }
-    }
-}
 
 pub struct App {
     /// The scene, its BVH (kept in step with the worker's) and seed; its
@@ -143,8 +61,12 @@ pub struct App {
     pub view_size: (u32, u32),
     pub inspector: Inspector,
     /// The selected pixel's overlay drawn into the view (`o` cycles them).
-    pub pixel_view: Option<PixelView>,
-    pub overlay: BvhOverlay,
+    pub pixel_view: Option<viz::View>,
+    /// The view of the whole image over the viewport or in its place (`g`
+    /// cycles them).
+    pub image_view: Option<viz::View>,
+    /// The BVH level whose boxes `g` shows (`.` and `,` change it).
+    pub level: usize,
     /// The newest message for the status line, and when it was said; it
     /// gives way to the state line after [`MESSAGE_LIFE`].
     pub status: String,
@@ -233,10 +155,8 @@ impl App {
             view_size: (0, 0),
             inspector: Inspector::default(),
             pixel_view: None,
-            overlay: BvhOverlay {
-                mode: Overlay::Off,
-                level: 0,
-            },
+            image_view: None,
+            level: 0,
             status,
             status_at: Instant::now(),
             popup: None,
@@ -541,17 +461,8 @@ impl App {
             }
             Action::Worst(w) => self.jump_to_worst(w),
             Action::PixelOverlay => {
-                let i = self
-                    .pixel_view
-                    .and_then(|v| VIEWS.iter().position(|&o| o == v));
-                self.pixel_view = match i {
-                    None => Some(VIEWS[0]),
-                    Some(i) => VIEWS.get(i + 1).copied(),
-                };
-                let name = match self.pixel_view {
-                    None => "off",
-                    Some(v) => pixel_view_name(v),
-                };
+                self.pixel_view = viz::View::next(&PIXEL_VIEWS, self.pixel_view);
+                let name = self.pixel_view.map_or("off".into(), viz::View::title);
                 self.say(match (self.pixel_view, self.inspector.selected) {
                     (Some(_), None) => {
                         format!("pixel overlay: {name}: select a pixel (v, or click) to see it")
@@ -563,13 +474,13 @@ impl App {
                 });
             }
             Action::Overlay => {
-                self.overlay.mode = self.overlay.mode.next();
+                self.image_view = viz::View::next(&image_views(self.level), self.image_view);
                 self.overlay_changed();
             }
             Action::Level(d) => {
                 let max = self.session.bvh.stats.depth.saturating_sub(1) as i64;
-                self.overlay.level = (self.overlay.level as i64 + d as i64).clamp(0, max) as usize;
-                self.overlay.mode = Overlay::Level;
+                self.level = (self.level as i64 + d as i64).clamp(0, max) as usize;
+                self.image_view = Some(viz::View::Level(self.level));
                 self.overlay_changed();
             }
             Action::SavePng => self.save_png(),
@@ -610,9 +521,9 @@ impl App {
     }
 
     fn overlay_changed(&mut self) {
-        self.link.set_overlay(self.overlay.view());
-        self.link.set_film_view(self.overlay.film_view());
-        self.say(format!("view overlay: {}", self.overlay.name()));
+        self.link.set_image_view(self.image_view);
+        let name = self.image_view.map_or("off".into(), viz::View::title);
+        self.say(format!("view overlay: {name}"));
     }
 
     /// The decision the Features panel shows for `f`.
@@ -740,7 +651,7 @@ impl App {
                 self.session.bvh = b;
                 self.link.rebuilding = false;
                 let depth = self.session.bvh.stats.depth;
-                self.overlay.level = self.overlay.level.min(depth.saturating_sub(1));
+                self.level = self.level.min(depth.saturating_sub(1));
                 true
             }
             Msg::Overlay(o) => {
@@ -753,7 +664,7 @@ impl App {
             Msg::Pixel(p) => {
                 // The title may cut the legend short: the status line has
                 // the whole width.
-                let name = pixel_view_name(p.request.view);
+                let name = p.request.view.title();
                 match &p.layer {
                     Err(e) => self.say(format!("pixel overlay: {e}")),
                     Ok((_, legend)) if p.generation == self.link.generation() => {
@@ -839,20 +750,5 @@ impl App {
     /// Whether nothing more will change on screen without input.
     pub fn idle(&self) -> bool {
         self.current_frame().is_some_and(|f| f.done) && !self.jobs.busy()
-    }
-}
-
-/// How the status line names a pixel overlay.
-fn pixel_view_name(v: PixelView) -> &'static str {
-    match v {
-        PixelView::Rays => "rays by kind",
-        PixelView::Colour => "rays in the colour they add",
-        PixelView::Lights => "points sampled on lights",
-        PixelView::Traversal => "BVH traversal",
-        PixelView::Normals => "normals",
-        PixelView::Texture => "texel footprint",
-        PixelView::Environment => "environment lookup",
-        PixelView::Glossy => "glossy rays and lobe",
-        PixelView::Samples => "zoom of the pixel's samples",
     }
 }

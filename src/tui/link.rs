@@ -8,9 +8,8 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Result};
 
 use super::worker::{self, Cmd, Msg, OverlayFrame, PixelFrame, PixelRequest, Snapshot, View};
-use crate::render::debug_view::DebugView;
-use crate::render::debug_view::FilmView;
 use crate::scene::Builder;
+use crate::viz;
 
 pub struct RenderLink {
     worker: worker::Handle,
@@ -64,15 +63,11 @@ impl RenderLink {
         self.worker.send(Cmd::Builder(self.generation, builder));
     }
 
-    /// Keeps `view` drawn over every view (none: no overlay).
-    pub fn set_overlay(&mut self, view: Option<DebugView>) {
+    /// Keeps `view` of the whole image drawn over every view or into
+    /// every pass (none: no view).
+    pub fn set_image_view(&mut self, view: Option<viz::View>) {
         self.overlay = None;
-        self.worker.send(Cmd::Overlay(view));
-    }
-
-    /// Draws a view of the film into every pass from now on, or stops.
-    pub fn set_film_view(&mut self, v: Option<FilmView>) {
-        self.worker.send(Cmd::FilmView(v));
+        self.worker.send(Cmd::ImageView(view));
     }
 
     /// Keeps the selected pixel's overlay `p` drawn (none: no overlay);

@@ -213,7 +213,7 @@ fn rays_are_drawn_into_the_view() {
 
 #[test]
 fn pixel_overlays_cycle_and_show_the_ray_at_the_debug_cursor() {
-    use crate::inspect::overlay::{PixelView, VIEWS};
+    use crate::viz::{View, PIXEL_VIEWS as VIEWS};
     let mut app = app("cornell", &[]);
     let mut t = terminal(220, 40);
     settle(&mut t, &mut app);
@@ -228,7 +228,7 @@ fn pixel_overlays_cycle_and_show_the_ray_at_the_debug_cursor() {
         app.handle_key(Key::Char('o'));
         assert_eq!(app.pixel_view, Some(*v));
     }
-    assert_eq!(app.pixel_view, Some(PixelView::Traversal));
+    assert_eq!(app.pixel_view, Some(View::Traversal));
     // Above the first ray line the camera ray's walk is shown.
     assert_eq!(app.inspector.cursor_ray(), None);
     let s = settle_pixel(&mut t, &mut app);
@@ -246,7 +246,7 @@ fn pixel_overlays_cycle_and_show_the_ray_at_the_debug_cursor() {
     for _ in 4..VIEWS.len() {
         app.handle_key(Key::Char('o'));
     }
-    assert_eq!(app.pixel_view, Some(PixelView::Samples));
+    assert_eq!(app.pixel_view, Some(View::Samples));
     assert_eq!(app.pixel_request().unwrap().ray, None);
     app.handle_key(Key::Char('o'));
     assert_eq!(app.pixel_view, None);
@@ -257,7 +257,9 @@ fn pixel_overlays_cycle_and_show_the_ray_at_the_debug_cursor() {
 /// draws, and gives the screen's text.
 fn settle_film_view(t: &mut Terminal<TestBackend>, app: &mut App) -> String {
     let end = std::time::Instant::now() + WAIT;
-    let want = app.overlay.film_view();
+    let want = app
+        .image_view
+        .filter(|v| v.source() == crate::viz::Source::Film);
     while app
         .link
         .current_frame()
@@ -276,28 +278,28 @@ fn settle_film_view(t: &mut Terminal<TestBackend>, app: &mut App) -> String {
 
 #[test]
 fn bloom_samples_and_error_are_the_last_view_overlays() {
-    use super::app::Overlay;
+    use crate::viz::View;
     let mut app = app("cornell", &[]);
     let mut t = terminal(240, 40);
     settle(&mut t, &mut app);
     for _ in 0..5 {
         app.handle_key(Key::Char('g'));
     }
-    assert_eq!(app.overlay.mode, Overlay::Bloom);
+    assert_eq!(app.image_view, Some(View::Bloom));
     // The worker draws each into the next pass it sends.
     let s = settle_film_view(&mut t, &mut app);
     assert!(s.contains("over the threshold (luminance > 1)"), "{s}");
     assert!(s.contains("kernel 25x25"), "{s}");
     app.handle_key(Key::Char('g'));
-    assert_eq!(app.overlay.mode, Overlay::Spp);
+    assert_eq!(app.image_view, Some(View::Spp));
     let s = settle_film_view(&mut t, &mut app);
     assert!(s.contains("samples per pixel"), "{s}");
     app.handle_key(Key::Char('g'));
-    assert_eq!(app.overlay.mode, Overlay::Error);
+    assert_eq!(app.image_view, Some(View::Error));
     let s = settle_film_view(&mut t, &mut app);
     assert!(s.contains("estimated relative error per pixel"), "{s}");
     app.handle_key(Key::Char('g'));
-    assert_eq!(app.overlay.mode, Overlay::Off);
+    assert_eq!(app.image_view, None);
 }
 
 /// Settles, then waits for the worker's pixel overlay and draws again.

@@ -16,17 +16,16 @@ use glam::Vec3;
 
 use crate::bvh::{self, Bvh};
 use crate::inspect::inspect_pixel;
-use crate::inspect::overlay::{self, PixelView};
 use crate::interrupt::Running;
 use crate::raster::metrics::rel_mse_on;
 use crate::raster::resample::resample;
-use crate::render::debug_view::{self, DebugView, FilmView};
-use crate::render::overlay::{legend_line, Layer};
 use crate::render::progressive::MAX_PASS_SPP;
 use crate::render::recorder::WorkCounter;
 use crate::render::{post, Plan, Progressive, Stop, Tracer, WorstPixels};
 use crate::scene::camera::CameraFrame;
 use crate::scene::{Builder, Camera, Scene};
+use crate::viz::draw::{legend_line, Layer};
+use crate::viz::{self, pixel, Source};
 
 /// A full pass of one sample per pixel slower than this is preceded by a
 /// quarter-resolution pass when the view changes.
@@ -73,13 +72,12 @@ pub enum Cmd {
     /// Rebuild the BVH with this builder, then render the current view as
     /// generation `u64`.
     Builder(u64, Builder),
-    /// Keep this BVH view drawn over every view (none: no overlay).
-    Overlay(Option<DebugView>),
+    /// Keep this view of the whole image: a BVH view drawn over every
+    /// view, a film view drawn into every pass (`Snapshot::film_view`);
+    /// none: neither.
+    ImageView(Option<viz::View>),
     /// Keep the selected pixel's overlay drawn (none: no overlay).
     Pixel(Option<PixelRequest>),
-    /// Draw a view of the film into every pass (`Snapshot::film_view`), or
-    /// stop.
-    FilmView(Option<FilmView>),
     Quit,
 }
 
@@ -99,7 +97,7 @@ pub struct PixelRequest {
     pub x: u32,
     pub y: u32,
     pub sample: u32,
-    pub view: PixelView,
+    pub view: viz::View,
     pub ray: Option<usize>,
     pub spp: u32,
 }
@@ -115,7 +113,7 @@ pub struct PixelFrame {
 /// A BVH view drawn for one view of the scene.
 pub struct OverlayFrame {
     pub generation: u64,
-    pub view: DebugView,
+    pub view: viz::View,
     /// The layer, or why it cannot be drawn.
     pub layer: Result<(Layer, String), String>,
 }
@@ -206,9 +204,9 @@ pub struct Snapshot {
     pub image: Vec<Vec3>,
     /// The mean before bloom, when bloom ran.
     pub pre_bloom: Option<Vec<Vec3>>,
-    /// With a film view on: the pass as `debug_view` draws it (bloom,
+    /// With a film view on: the pass as `viz::film_view` draws it (bloom,
     /// samples or error per pixel), and its legend in one line.
-    pub film_view: Option<(FilmView, Vec<Vec3>, String)>,
+    pub film_view: Option<(viz::View, Vec<Vec3>, String)>,
     /// A quarter-resolution preview, not yet a sample of the film.
     pub coarse: bool,
     pub spp: u32,
@@ -277,12 +275,12 @@ pub struct Worker {
     /// The film is unchanged but the view's generation is new: show it again.
     resend: bool,
     /// The BVH view to draw, and the generation it was last drawn for.
-    overlay: Option<DebugView>,
-    overlay_drawn: Option<(u64, DebugView)>,
+    overlay: Option<viz::View>,
+    overlay_drawn: Option<(u64, viz::View)>,
     /// The pixel overlay to draw, and the generation it was last drawn for.
     pixel: Option<PixelRequest>,
     pixel_drawn: Option<(u64, PixelRequest)>,
-    film_view: Option<FilmView>,
+    film_view: Option<viz::View>,
 }
 
 impl Worker {
@@ -351,20 +349,17 @@ impl Worker {
                 self.restart();
                 Some(Msg::Bvh(self.bvh.clone()))
             }
-            Cmd::Overlay(o) => {
-                self.overlay = o;
+            Cmd::ImageView(v) => {
+                self.overlay = v.filter(|v| v.source() == Source::Bvh);
                 self.overlay_drawn = None;
+                self.film_view = v.filter(|v| v.source() == Source::Film);
+                // The film is the same: shown again, with or without it.
+                self.resend = self.film.film.spp > 0;
                 None
             }
             Cmd::Pixel(p) => {
                 self.pixel = p;
                 self.pixel_drawn = None;
-                None
-            }
-            Cmd::FilmView(v) => {
-                self.film_view = v;
-                // The film is the same: shown again, with or without it.
-                self.resend = self.film.film.spp > 0;
                 None
             }
             Cmd::Quit => None,
@@ -424,7 +419,7 @@ impl Worker {
     }
 
     /// Whether the overlay asked for is not yet drawn for this view.
-    fn overlay_due(&self) -> Option<DebugView> {
+    fn overlay_due(&self) -> Option<viz::View> {
         let o = self.overlay?;
         (self.overlay_drawn != Some((self.generation, o))).then_some(o)
     }
@@ -485,8 +480,8 @@ impl Worker {
         }
         if let Some(o) = self.overlay_due() {
             self.overlay_drawn = Some((self.generation, o));
-            let layer = debug_view::layer(&self.tracer(&view, view.size()), o)
-                .map_err(|e| format!("{e:#}"));
+            let layer =
+                viz::layer(&self.tracer(&view, view.size()), o).map_err(|e| format!("{e:#}"));
             return Some(Msg::Overlay(Box::new(OverlayFrame {
                 generation: self.generation,
                 view: o,
@@ -504,7 +499,7 @@ impl Worker {
                 if cancel() {
                     return None;
                 }
-                overlay::draw(&t, &tree, p.view, p.ray, p.spp)
+                pixel::draw(&t, &tree, p.view, p.ray, p.spp)
                     .map(|o| (o.layer, legend_line(&o.legend)))
                     .map_err(|e| format!("{e:#}"))
             } else {
@@ -591,21 +586,18 @@ impl Worker {
     /// `true_error` that image's error against the reference.
     fn snapshot(&self, view: &View, mean: Vec<Vec3>, true_error: Option<f64>) -> Snapshot {
         let film = &self.film.film;
-        let film_view = self.film_view.map(|v| {
-            let (image, legend) = match v {
-                FilmView::Bloom => {
-                    let s = &self.scene.settings.bloom;
-                    let (image, mut legend) =
-                        debug_view::bloom_view(&mean, view.width, view.height, s);
-                    if !view.plan.bloom {
-                        legend.push((None, "bloom is off in this plan".into()));
-                    }
-                    (image, legend)
-                }
-                FilmView::Spp => debug_view::spp_view(film),
-                FilmView::Error => debug_view::error_view(film),
-            };
-            (v, image, legend_line(&legend))
+        // Only views of the film are kept in `film_view`: none fails.
+        let film_view = self.film_view.and_then(|v| {
+            let (image, legend) = viz::film_view(
+                v,
+                film,
+                &mean,
+                view.size(),
+                &self.scene.settings.bloom,
+                (view.plan.bloom, "this"),
+            )
+            .ok()?;
+            Some((v, image, legend_line(&legend)))
         });
         let shown = post::display(
             mean,
@@ -957,7 +949,7 @@ mod tests {
     #[test]
     fn overlays_are_drawn_once_per_view() {
         let mut w = worker(Features::all());
-        w.apply(Cmd::Overlay(Some(DebugView::Leaves)));
+        w.apply(Cmd::ImageView(Some(viz::View::Leaves)));
         let mut overlays = 0;
         for _ in 0..6 {
             if let Some(Msg::Overlay(o)) = w.step(&|| false) {

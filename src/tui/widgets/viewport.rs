@@ -35,7 +35,7 @@ pub fn picture(app: &App) -> Option<ViewPicture> {
     // A film view (bloom, samples or error per pixel) replaces the
     // picture: it shows the pass itself.
     let mut img = match &frame.film_view {
-        Some((v, view, legend)) if app.overlay.film_view() == Some(*v) => {
+        Some((v, view, legend)) if app.image_view == Some(*v) => {
             note = Some(legend.clone());
             view.clone()
         }

@@ -1,9 +1,9 @@
-//! Drawing world-space lines and boxes, and a heat-map legend, onto a
-//! [`Canvas`]: the BVH views and the selected pixel's rays, at any size.
+//! The views' drawing kit over [`Canvas`]'s primitives: world-space
+//! segments and boxes projected through the camera and clipped, at any
+//! size, and legends (swatches and lines of text).
 
 use glam::Vec3;
 
-use crate::bvh::debug::heat_color;
 use crate::geometry::Aabb;
 use crate::raster::canvas::{text_width, Canvas, GLYPH};
 use crate::scene::camera::CameraFrame;
@@ -22,7 +22,13 @@ const NEAR: f64 = 1e-6;
 
 /// Draws the world-space segment `a`–`b` one pixel wide. The part behind the
 /// camera is cut away before projecting, and the rest is clipped to the image.
-pub fn draw_segment<P: Copy>(c: &mut Canvas<P>, frame: &CameraFrame, a: Vec3, b: Vec3, color: P) {
+pub(crate) fn draw_segment<P: Copy>(
+    c: &mut Canvas<P>,
+    frame: &CameraFrame,
+    a: Vec3,
+    b: Vec3,
+    color: P,
+) {
     let Some((p, q)) = frame.project_clip(a, b, NEAR) else {
         return;
     };
@@ -41,7 +47,7 @@ pub fn draw_segment<P: Copy>(c: &mut Canvas<P>, frame: &CameraFrame, a: Vec3, b:
 }
 
 /// Draws the 12 edges of `b`.
-pub fn draw_box<P: Copy>(c: &mut Canvas<P>, frame: &CameraFrame, b: &Aabb, color: P) {
+pub(crate) fn draw_box<P: Copy>(c: &mut Canvas<P>, frame: &CameraFrame, b: &Aabb, color: P) {
     if b.is_empty() {
         return;
     }
@@ -62,39 +68,9 @@ pub fn draw_box<P: Copy>(c: &mut Canvas<P>, frame: &CameraFrame, b: &Aabb, color
     }
 }
 
-/// Draws a vertical colour bar for a `0..=max` heat map at the right edge,
-/// labelled with 0 at the bottom and `max` at the top.
-pub fn legend(c: &mut Layer, max: u32) {
-    let (w, h) = (c.width as i32, c.height as i32);
-    if w < 16 || h < 16 {
-        return;
-    }
-    let scale = (h / 320).max(1);
-    let bar_w = (w / 40).max(3);
-    let margin = (w / 80).max(2);
-    let (top, bottom) = (h / 8, h - h / 8);
-    let x0 = w - margin - bar_w;
-    c.rect(x0 - 1, top - 1, x0 + bar_w, bottom, Some(Vec3::ZERO));
-    let span = (bottom - top - 1).max(1);
-    for y in top..bottom {
-        // The top row is `max`, the bottom row 0.
-        let t = (bottom - 1 - y) as f64 / span as f64;
-        let col = heat_color((t * max as f64).round() as u32, max);
-        c.rect(x0, y, x0 + bar_w - 1, y, Some(col));
-    }
-    let mut label = |text: &str, y: i32| {
-        let tw = text_width(text, scale);
-        let x = (x0 + bar_w - tw).max(0);
-        c.rect(x - 1, y - 1, x + tw, y + GLYPH * scale, Some(Vec3::ZERO));
-        c.text(x, y, text, Some(Vec3::ONE), scale);
-    };
-    label(&max.to_string(), (top - GLYPH * scale - 2).max(0));
-    label("0", bottom + 2);
-}
-
 /// Writes the legend in the top left corner of `layer` (bottom left with
 /// `bottom`): a swatch and a line of text per entry, on black.
-pub fn draw_legend(layer: &mut Layer, legend: &Legend, bottom: bool) {
+pub(crate) fn draw_legend(layer: &mut Layer, legend: &Legend, bottom: bool) {
     let scale = (layer.height as i32 / 400).max(1);
     let line = (GLYPH + 4) * scale;
     let pad = 4 * scale;
@@ -131,7 +107,7 @@ pub fn legend_line(legend: &Legend) -> String {
 }
 
 /// Clips segment `p`–`q` to `[0, w] x [0, h]` (Liang–Barsky).
-pub fn clip_to_rect(
+pub(crate) fn clip_to_rect(
     p: (f64, f64),
     q: (f64, f64),
     w: f64,
@@ -275,21 +251,5 @@ mod tests {
         // The inside of the back face is not filled.
         let c = f.project(Vec3::new(0.0, 0.0, -6.0)).unwrap();
         assert_eq!(img.get(c.0 as u32, c.1 as u32), Some(Vec3::ZERO));
-    }
-
-    #[test]
-    fn legend_runs_from_dark_at_the_bottom_to_bright_at_the_top() {
-        let (w, h) = (200u32, 160u32);
-        let mut layer: Layer = Canvas::new(w, h, None);
-        legend(&mut layer, 42);
-        let col = w - (w / 80).max(2) - 1;
-        let at = |y: u32| layer.get(col, y).flatten();
-        assert_eq!(at(h / 8), Some(heat_color(42, 42)));
-        assert_eq!(at(h - h / 8 - 1), Some(heat_color(0, 42)));
-        // The left half of the image is untouched.
-        assert!(layer
-            .pixels
-            .chunks(w as usize)
-            .all(|row| row[..(w / 2) as usize].iter().all(Option::is_none)));
     }
 }
