@@ -12,7 +12,8 @@
 //! samples times the pixel's mean rays per sample.
 
 use rayon::prelude::*;
-use rayterm::render::film::{LUMA, REL_EPS};
+use rayterm::color::LUMA;
+use rayterm::render::film::REL_EPS;
 use rayterm::render::{Progressive, RayCounter, SceneRequest, Session, Stop, MIN_SPP};
 
 fn main() -> anyhow::Result<()> {

@@ -12,6 +12,7 @@ const LEVELS: &[(&str, u8)] = &[
     ("words", 0),
     ("interrupt", 0),
     ("choice", 0),
+    ("color", 0),
     ("console", 1),
     ("raster", 1),
     ("scene", 2),

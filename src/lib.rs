@@ -7,6 +7,7 @@
 pub mod bvh;
 pub mod choice;
 pub mod cli;
+pub mod color;
 pub mod console;
 pub mod geometry;
 pub mod inspect;

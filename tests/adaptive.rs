@@ -7,7 +7,7 @@ mod exact;
 
 use exact::*;
 use glam::Vec3;
-use rayterm::render::film::LUMA;
+use rayterm::color::LUMA;
 use rayterm::render::{Feature, Features, Film, Progressive, SceneRequest, Session, Stop};
 use rayterm::report::converge::rel_mse;
 use rayterm::scene::Scene;

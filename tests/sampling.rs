@@ -36,7 +36,7 @@ fn converged_area_lights_match_quadrature_within_four_standard_errors() {
         let exact = exact_image(&s, w, h);
         let r = render_lights(&s, w, h, 128, 16, true);
         for (i, (px, e)) in r.film.pixels().iter().zip(&exact).enumerate() {
-            let got = px.mean.dot(rayterm::render::film::LUMA.as_dvec3());
+            let got = px.mean.dot(rayterm::color::LUMA.as_dvec3());
             let se = px.std_error();
             assert!(se > 0.0, "{} pixel {i}: no variance", light.kind());
             assert!(
@@ -68,7 +68,7 @@ fn standard_error_is_calibrated() {
         .iter()
         .zip(&exact)
         .filter(|(px, e)| {
-            let got = px.mean.dot(rayterm::render::film::LUMA.as_dvec3());
+            let got = px.mean.dot(rayterm::color::LUMA.as_dvec3());
             (got - lum(**e)).abs() <= 2.0 * px.std_error()
         })
         .count();

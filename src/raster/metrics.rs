@@ -3,18 +3,11 @@
 
 use glam::Vec3;
 
-/// Rec. 709 luminance weights.
-pub const LUMA: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
+use crate::color::luminance;
 
 /// Offset in relative errors (`x^2 + REL_EPS` below the squared error) so
 /// that black pixels do not dominate them.
 pub const REL_EPS: f64 = 0.01;
-
-/// Luminance of a linear colour.
-#[inline]
-pub fn luminance(c: Vec3) -> f64 {
-    c.as_dvec3().dot(LUMA.as_dvec3())
-}
 
 fn mean_over<F: Fn(f64, f64) -> f64>(img: &[Vec3], reference: &[Vec3], f: F) -> f64 {
     assert_eq!(

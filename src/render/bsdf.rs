@@ -80,7 +80,7 @@ enum Model {
 }
 
 fn luminance(c: Vec3) -> f32 {
-    c.dot(Vec3::new(0.2126, 0.7152, 0.0722)).max(0.0)
+    c.dot(crate::color::LUMA).max(0.0)
 }
 
 /// The share of samples given to the specular lobe, from what each lobe

@@ -48,7 +48,8 @@ use glam::{DVec3, Vec3};
 
 use crate::geometry::sampling::{quadrant_is_black, PIXEL_GRID, PIXEL_STRATA, QUARTER};
 
-pub use crate::raster::metrics::{LUMA, REL_EPS};
+use crate::color::LUMA;
+pub use crate::raster::metrics::REL_EPS;
 
 /// How many non-finite samples are listed individually.
 const MAX_LISTED: usize = 1000;

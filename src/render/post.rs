@@ -3,8 +3,8 @@
 
 use glam::Vec3;
 
-use super::film::LUMA;
 use super::Plan;
+use crate::color::{encode_srgb, LUMA};
 use crate::scene::BloomSettings;
 
 /// A film's mean as it is shown: after bloom when the plan runs it.
@@ -114,22 +114,6 @@ pub fn glow(img: &[Vec3], width: usize, height: usize, s: &BloomSettings) -> Opt
     Some(Glow { bright, glow })
 }
 
-/// Linear value to 8-bit sRGB, clamped.
-#[inline]
-pub fn encode_srgb(x: f32) -> u8 {
-    let x = if x.is_finite() {
-        x.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let s = if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    };
-    (s * 255.0 + 0.5) as u8
-}
-
 pub fn to_rgb8(img: &[Vec3], width: u32, height: u32) -> image::RgbImage {
     let mut out = image::RgbImage::new(width, height);
     for (p, c) in out.pixels_mut().zip(img) {
@@ -157,14 +141,5 @@ mod tests {
         assert!(bloom(&mut img, 9, 9, &BloomSettings::default()));
         assert!(img[39].x > 0.0 && img[31].x > 0.0);
         assert!((img[39].x - img[41].x).abs() < 1e-6);
-    }
-
-    #[test]
-    fn srgb_endpoints() {
-        assert_eq!(encode_srgb(0.0), 0);
-        assert_eq!(encode_srgb(1.0), 255);
-        assert_eq!(encode_srgb(2.0), 255);
-        assert_eq!(encode_srgb(f32::NAN), 0);
-        assert_eq!(encode_srgb(0.214_041_14), 128);
     }
 }

@@ -5,11 +5,8 @@
 
 use std::sync::OnceLock;
 
-use glam::Vec3;
 use ratatui::style::Color;
 use rayon::prelude::*;
-
-use crate::render::post::encode_srgb;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ColorMode {
@@ -55,11 +52,6 @@ impl ColorMode {
             ColorMode::Ansi16 => "16 colours",
         }
     }
-}
-
-/// Linear colour to 8-bit sRGB.
-pub fn srgb(c: Vec3) -> [u8; 3] {
-    [encode_srgb(c.x), encode_srgb(c.y), encode_srgb(c.z)]
 }
 
 /// Weights of the channels in sRGB distances, for the eye's sensitivity
@@ -330,21 +322,16 @@ pub fn shown(c: Color) -> Option<[u8; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::color::{encode_srgb, srgb, srgb_to_linear, LUMA};
+    use glam::Vec3;
 
     /// CIELAB (D65) of an sRGB colour: distances in it follow perceived
     /// differences, which keeps hues right where the cube is coarse.
     fn lab(c: [u8; 3]) -> [f32; 3] {
-        let lin = |v: u8| {
-            let v = v as f32 / 255.0;
-            if v <= 0.040_45 {
-                v / 12.92
-            } else {
-                ((v + 0.055) / 1.055).powf(2.4)
-            }
-        };
+        let lin = |v: u8| srgb_to_linear(v as f32 / 255.0);
         let [r, g, b] = c.map(lin);
         let x = (0.4124 * r + 0.3576 * g + 0.1805 * b) / 0.9505;
-        let y = 0.2126 * r + 0.7152 * g + 0.0722 * b;
+        let y = LUMA.dot(Vec3::new(r, g, b));
         let z = (0.0193 * r + 0.1192 * g + 0.9505 * b) / 1.089;
         let f = |t: f32| {
             if t > 0.008_856 {
@@ -444,7 +431,7 @@ mod tests {
     /// Mean CIELAB ΔE between `a` and `b` after both are averaged over 4x4
     /// blocks in linear light, as the eye averages neighbouring pixels.
     fn blurred_delta_e(a: &[[u8; 3]], b: &[[u8; 3]], w: usize, rows: usize) -> f32 {
-        let lin = |v: u8| crate::scene::texture::srgb_to_linear(v as f32 / 255.0);
+        let lin = |v: u8| srgb_to_linear(v as f32 / 255.0);
         let mean = |img: &[[u8; 3]], bx: usize, by: usize| {
             let mut s = [0f32; 3];
             for y in by * 4..by * 4 + 4 {

@@ -8,7 +8,7 @@ use ratatui::style::Color;
 use ratatui::Terminal;
 
 use super::app::App;
-use super::color::{self, ColorMode};
+use super::color::ColorMode;
 use super::graphics::symbols::{self, Symbols};
 use super::keys::Key;
 use crate::render::{post, Feature, Features, PlanPolicy, Progressive, SceneRequest, Session};
@@ -89,7 +89,7 @@ fn a_frame_shows_every_panel() {
         assert!(["▀", "▄", " "].contains(&cell.symbol()), "{cell:?}");
         let shown = symbols::shown_cell(Symbols::Half, cell.symbol(), cell.fg, cell.bg).unwrap();
         let px = |y: u32| {
-            color::srgb(frame.image[(y * frame.width + cx as u32) as usize]).map(f32::from)
+            crate::color::srgb(frame.image[(y * frame.width + cx as u32) as usize]).map(f32::from)
         };
         assert_eq!(
             shown,
@@ -573,7 +573,7 @@ fn octants_show_four_times_the_pixels_and_selection_follows() {
             let px: Vec<[f32; 3]> = (0..8)
                 .map(|j| {
                     let (x, y) = (2 * cx as u32 + j % 2, 4 * cy as u32 + j / 2);
-                    color::srgb(frame.image[(y * frame.width + x) as usize]).map(f32::from)
+                    crate::color::srgb(frame.image[(y * frame.width + x) as usize]).map(f32::from)
                 })
                 .collect();
             let fit = symbols::fit(&px, Symbols::Octant);
@@ -733,7 +733,7 @@ fn teapot_proportions(app: &App, px: (f64, f64)) -> f64 {
     let (mut n, mut sx, mut sy, mut sxx, mut syy) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for y in 0..frame.height {
         for x in 0..frame.width {
-            let c = color::srgb(frame.image[(y * frame.width + x) as usize]);
+            let c = crate::color::srgb(frame.image[(y * frame.width + x) as usize]);
             let l = c.iter().map(|&v| v as f64).sum::<f64>() / 3.0;
             let w = ((l - 165.0) / 30.0).clamp(0.0, 1.0);
             let (fx, fy) = ((x as f64 + 0.5) * px.0, (y as f64 + 0.5) * px.1);

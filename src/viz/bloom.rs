@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::draw::Legend;
-use crate::render::film::LUMA;
+use crate::color::LUMA;
 use crate::render::post;
 use crate::scene::BloomSettings;
 

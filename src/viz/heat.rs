@@ -104,18 +104,10 @@ pub(crate) fn heat_color(value: u32, max: u32) -> Vec3 {
     let c = |k: usize| Vec3::from(VIRIDIS[k].map(|b| b as f32 / 255.0));
     let s = c(i).lerp(c(i + 1), f);
     Vec3::new(
-        srgb_to_linear(s.x),
-        srgb_to_linear(s.y),
-        srgb_to_linear(s.z),
+        crate::color::srgb_to_linear(s.x),
+        crate::color::srgb_to_linear(s.y),
+        crate::color::srgb_to_linear(s.z),
     )
-}
-
-fn srgb_to_linear(s: f32) -> f32 {
-    if s <= 0.04045 {
-        s / 12.92
-    } else {
-        ((s + 0.055) / 1.055).powf(2.4)
-    }
 }
 
 /// Steps of the colour scale of the film maps.
@@ -188,7 +180,7 @@ mod tests {
 
     #[test]
     fn heat_colour_runs_dark_to_bright_and_clamps() {
-        let lum = |c: Vec3| c.dot(crate::render::film::LUMA);
+        let lum = |c: Vec3| c.dot(crate::color::LUMA);
         let steps: Vec<f32> = (0..=10).map(|v| lum(heat_color(v, 10))).collect();
         assert!(steps.windows(2).all(|w| w[0] < w[1]), "{steps:?}");
         assert_eq!(heat_color(0, 0), heat_color(0, 10));

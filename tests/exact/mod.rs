@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use glam::{DVec3, Vec3};
-use rayterm::render::film::LUMA;
+use rayterm::color::LUMA;
 use rayterm::render::{Feature, Features};
 use rayterm::scene::{Camera, Light, Projection, Scene};
 

@@ -17,7 +17,8 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use glam::Vec3;
 
-pub use crate::raster::metrics::{luminance, rel_mse, rel_mse_on, rmse};
+pub use crate::color::luminance;
+pub use crate::raster::metrics::{rel_mse, rel_mse_on, rmse};
 pub use crate::raster::resample::{resample, Resampled};
 pub use plot::draw as plot;
 pub use reference::{default_cache_dir, format_floor, save_reference};

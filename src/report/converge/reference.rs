@@ -10,9 +10,9 @@ use anyhow::Result;
 use glam::Vec3;
 
 use super::luminance;
+use crate::color::LUMA;
 use crate::raster::{self, Linear};
 use crate::render::content::{self, Fnv};
-use crate::render::film::LUMA;
 use crate::render::Plan;
 use crate::scene::Scene;
 

@@ -575,7 +575,7 @@ mod tests {
         shown
             .image
             .iter()
-            .map(|c| crate::tui::color::srgb(*c).map(f32::from))
+            .map(|c| crate::color::srgb(*c).map(f32::from))
             .collect()
     }
 

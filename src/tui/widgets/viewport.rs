@@ -9,7 +9,7 @@ use ratatui::widgets::{Block, Borders, Paragraph};
 use ratatui::Frame;
 
 use crate::tui::app::App;
-use crate::tui::color::{self, ColorMode};
+use crate::tui::color::ColorMode;
 use crate::tui::graphics::symbols::{self, Symbols};
 use crate::tui::term::screen::make_hole;
 use crate::tui::worker::Snapshot;
@@ -69,7 +69,7 @@ pub fn picture(app: &App) -> Option<ViewPicture> {
             }
         }
     }
-    let mut px: Vec<[u8; 3]> = img.iter().map(|c| color::srgb(*c)).collect();
+    let mut px: Vec<[u8; 3]> = img.iter().map(|c| crate::color::srgb(*c)).collect();
     if let (true, Some(s)) = (current, app.inspector.selected) {
         mark(&mut px, w, h, s.x, s.y);
     }
@@ -127,7 +127,7 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App) {
 
 /// Paints a snapshot as the viewport does, without overlays (for the benchmark).
 pub fn paint_view(buf: &mut Buffer, area: Rect, s: &Snapshot, mode: ColorMode) {
-    let px: Vec<[u8; 3]> = s.image.iter().map(|c| color::srgb(*c)).collect();
+    let px: Vec<[u8; 3]> = s.image.iter().map(|c| crate::color::srgb(*c)).collect();
     symbols::paint(buf, area, &px, (s.width, s.height), Symbols::Half, mode);
 }
 
