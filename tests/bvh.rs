@@ -120,8 +120,15 @@ fn the_tree_is_the_same_on_any_number_of_threads() {
 
 #[test]
 fn binned_sah_is_within_five_percent_of_a_full_sweep() {
-    let scenes = ["cornell", "teapot:6", "mirrors"]
-        .map(|n| (n.to_string(), scene::load(n).unwrap().geometry));
+    let scenes = ["cornell", "teapot:6", "mirrors"].map(|n| {
+        (
+            n.to_string(),
+            scene::load::open(n, &Default::default())
+                .unwrap()
+                .scene
+                .geometry,
+        )
+    });
     for (name, g) in scenes
         .into_iter()
         .chain([("soup".to_string(), random_soup(4000, 11))])
@@ -173,7 +180,7 @@ fn empty_geometry_never_hits() {
 
 /// Rays from inside a closed mesh never escape: the watertight test leaves no cracks.
 fn no_escapes(spec: &str, centre: Vec3, rays: u32) {
-    let s = scene::load(spec).unwrap();
+    let s = scene::load::open(spec, &Default::default()).unwrap().scene;
     let b = bvh::build(&s.geometry, Builder::Sah);
     let mut r = Rng::for_sample(5, 5, 5);
     let mut escapes = 0;

@@ -20,9 +20,9 @@ use rayterm::geometry::offset::{geometric_normal, hit_point, offset_origin};
 use rayterm::geometry::triangle::{intersect, RayShear};
 use rayterm::geometry::Ray;
 use rayterm::report::stability::{grazing, soup};
-use rayterm::scene::file::{load_with, Overrides};
-use rayterm::scene::obj::{self, Parts, Placement};
-use rayterm::scene::source::Memory;
+use rayterm::scene::load::obj::{self, Parts, Placement};
+use rayterm::scene::load::source::Memory;
+use rayterm::scene::load::{self, Opening};
 use rayterm::scene::Builder;
 
 fn coord() -> impl Strategy<Value = f32> {
@@ -281,6 +281,15 @@ fn load_obj(text: impl Into<Vec<u8>>) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), Stri
     Ok((parts.geometry.positions, parts.geometry.indices))
 }
 
+/// Opens the scene file `s.toml` of `src`.
+fn open_toml(src: &Memory) -> anyhow::Result<rayterm::scene::Scene> {
+    let how = Opening {
+        source: Some(src),
+        ..Default::default()
+    };
+    load::open("s.toml", &how).map(|o| o.scene)
+}
+
 /// A small mesh as OBJ text: vertices written with `write`, then faces
 /// (triangles and quads, some with relative indices).
 fn obj_text(points: &[Vec3], write: impl Fn(usize, Vec3) -> String) -> String {
@@ -414,7 +423,7 @@ proptest! {
         let src = Memory::default()
             .with("s.toml", "[[mesh]]\nfile = \"m.obj\"\n")
             .with("m.obj", far_text);
-        let far = load_with(&src, std::path::Path::new("s.toml"), Overrides::default());
+        let far = open_toml(&src);
         match (near, far) {
             (Ok((np, ni)), Ok(scene)) => {
                 let fp = &scene.geometry.positions;
@@ -438,7 +447,7 @@ proptest! {
         let src = Memory::default()
             .with("s.toml", text)
             .with("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-        let r = load_with(&src, std::path::Path::new("s.toml"), Overrides::default());
+        let r = open_toml(&src);
         if n == 3 {
             prop_assert!(r.is_ok());
         } else {

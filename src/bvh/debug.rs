@@ -146,7 +146,9 @@ mod tests {
     use crate::scene::{self, Builder};
 
     fn teapot() -> Bvh {
-        let s = scene::load("teapot:4").unwrap();
+        let s = scene::load::open("teapot:4", &Default::default())
+            .unwrap()
+            .scene;
         super::super::build(&s.geometry, Builder::Sah)
     }
 

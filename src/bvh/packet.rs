@@ -1001,7 +1001,7 @@ mod tests {
     }
 
     fn camera_tiles_and_shadow_rays(scene: &str) {
-        let s = scene::load(scene).unwrap();
+        let s = scene::load::open(scene, &Default::default()).unwrap().scene;
         let (w, h) = (60, 44);
         let frame = s.camera.frame(w, h);
         for builder in [Builder::Sah, Builder::Median] {
@@ -1048,7 +1048,9 @@ mod tests {
     /// into its octants, rays of one packet pointing opposite ways.
     #[test]
     fn random_rays_in_all_directions_find_what_single_rays_find() {
-        let s = scene::load("teapot:3").unwrap();
+        let s = scene::load::open("teapot:3", &Default::default())
+            .unwrap()
+            .scene;
         let mut b = super::super::build(&s.geometry, Builder::Sah);
         let bounds = s.geometry.bounds();
         let mut r = Rng::for_sample(7, 0, 22);

@@ -797,7 +797,9 @@ mod tests {
         if !levels.contains(&Simd::Avx512) {
             eprintln!("note: this CPU has no AVX-512: its walk is not tested here");
         }
-        let s = scene::load("teapot:4").unwrap();
+        let s = scene::load::open("teapot:4", &Default::default())
+            .unwrap()
+            .scene;
         let mut b = super::super::build(&s.geometry, Builder::Sah);
         let frame = s.camera.frame(48, 32);
         let mut rays: Vec<Ray> = (0..48 * 32)
@@ -853,7 +855,9 @@ mod tests {
     /// walk.
     #[test]
     fn deep_walk_agrees_with_the_usual_walk() {
-        let s = scene::load("teapot:4").unwrap();
+        let s = scene::load::open("teapot:4", &Default::default())
+            .unwrap()
+            .scene;
         let b = super::super::build(&s.geometry, Builder::Sah);
         let frame = s.camera.frame(48, 32);
         let mut hits = 0;

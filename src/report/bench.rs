@@ -143,7 +143,7 @@ pub fn run(o: &BenchOptions, threads: usize) -> Result<BenchReport> {
     let mut plan = None;
     for spec in &specs {
         bar.set_message(spec.clone());
-        let scene = scene::load(spec)?;
+        let scene = scene::load::open(spec, &Default::default())?.scene;
         scenes.push(scene_row(spec, &scene, o, &bar));
         if spec == "cornell" {
             bar.set_message("cornell: plan against --no-plan");

@@ -93,7 +93,10 @@ impl Default for Options {
 /// Runs every case on `scene_spec` (the scale and offset cases use it; the
 /// others use their own geometry) and returns the rows in table order.
 pub fn run_battery(scene_spec: &str, o: &Options) -> Result<Vec<Row>> {
-    run_battery_on(&crate::scene::load(scene_spec)?, o)
+    run_battery_on(
+        &crate::scene::load::open(scene_spec, &Default::default())?.scene,
+        o,
+    )
 }
 
 /// Peak memory of the battery per pixel of its images, and more per worker

@@ -20,8 +20,9 @@ use super::{soup, Options, Row};
 use crate::bvh::{self, Bvh, TraversalStats};
 use crate::geometry::sampling::Rng;
 use crate::geometry::Ray;
-use crate::scene::obj::{self, Parts, Placement};
-use crate::scene::{builtin, Builder};
+use crate::scene::load::builtin;
+use crate::scene::load::obj::{self, Parts, Placement};
+use crate::scene::Builder;
 
 /// Rays shot and rays that hit nothing.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -99,7 +100,7 @@ pub fn sphere() -> Result<Vec<[Vec3; 3]>> {
 
 /// The teapot of `teapot:N`, without its floor.
 pub fn teapot(segments: u32) -> Result<Vec<[Vec3; 3]>> {
-    let s = crate::scene::load(&format!("teapot:{segments}"))?;
+    let s = crate::scene::load::open(&format!("teapot:{segments}"), &Default::default())?.scene;
     let mesh = s
         .meshes
         .iter()

@@ -12,7 +12,7 @@ use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::{Element, Kind, Role, Scalar};
-use crate::scene::numbers::{self, ABSURD};
+use crate::scene::load::numbers::{self, ABSURD};
 use crate::scene::texture::srgb_to_linear;
 
 /// Records a core takes at a time, at least.

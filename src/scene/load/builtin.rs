@@ -8,7 +8,7 @@ use anyhow::{bail, Context, Result};
 
 use super::file::{load_with, Overrides};
 use super::source::Embedded;
-use super::Scene;
+use crate::scene::Scene;
 
 macro_rules! embed {
     ($($p:literal),* $(,)?) => {
