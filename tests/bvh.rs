@@ -10,21 +10,13 @@ use rayterm::scene::{self, Builder, Geometry};
 
 fn random_soup(n: usize, seed: u64) -> Geometry {
     let mut r = Rng::for_sample(0, 0, seed);
-    let mut g = Geometry::default();
-    for i in 0..n {
-        let c = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 10.0;
-        for _ in 0..3 {
-            g.positions
-                .push(c + (Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) - 0.5) * 0.8);
-            g.normals.push(Vec3::ZERO);
-            g.uvs.push(glam::Vec2::ZERO);
-        }
-        let b = 3 * i as u32;
-        g.indices.push([b, b + 1, b + 2]);
-        g.tri_material.push(0);
-        g.tri_mesh.push(0);
-    }
-    g
+    let tris: Vec<[Vec3; 3]> = (0..n)
+        .map(|_| {
+            let c = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 10.0;
+            [(); 3].map(|_| c + (Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) - 0.5) * 0.8)
+        })
+        .collect();
+    Geometry::from_triangles(&tris)
 }
 
 fn check_invariants(g: &Geometry, b: &Bvh) {

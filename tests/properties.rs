@@ -19,11 +19,11 @@ use rayterm::bvh::{self, Simd};
 use rayterm::geometry::offset::{geometric_normal, hit_point, offset_origin};
 use rayterm::geometry::triangle::{intersect, RayShear};
 use rayterm::geometry::Ray;
-use rayterm::report::stability::{grazing, soup};
+use rayterm::report::stability::grazing;
 use rayterm::scene::load::obj::{self, Parts, Placement};
 use rayterm::scene::load::source::Memory;
 use rayterm::scene::load::{self, Opening};
-use rayterm::scene::Builder;
+use rayterm::scene::{Builder, Geometry};
 
 fn coord() -> impl Strategy<Value = f32> {
     prop_oneof![
@@ -175,7 +175,7 @@ proptest! {
             })
             .collect();
         rays.extend(free.iter().map(|(o, d)| Ray::new(*o, *d)));
-        let g = soup(&tris);
+        let g = Geometry::from_triangles(&tris);
         for builder in [Builder::Sah, Builder::Median] {
             let b = bvh::build(&g, builder);
             let anc = grazing::ancestors(&b);
@@ -221,7 +221,7 @@ proptest! {
                 Ray::segment(o, target - o, if k % 3 == 0 { tmax } else { f32::INFINITY })
             })
             .collect();
-        let g = soup(&tris);
+        let g = Geometry::from_triangles(&tris);
         for builder in [Builder::Sah, Builder::Median] {
             let mut b = bvh::build(&g, builder);
             // Every SIMD level this CPU has, widest first (each cap narrows).
@@ -257,7 +257,7 @@ proptest! {
         let dir = Vec3::from_array(dir);
         let mut origin = Vec3::new(o.0 as f32, o.1 as f32, o.2 as f32);
         origin[k] = if dir[k] > 0.0 { -1.0 } else { 4.0 };
-        let g = soup(&grazing::lattice());
+        let g = Geometry::from_triangles(&grazing::lattice());
         for builder in [Builder::Sah, Builder::Median] {
             let b = bvh::build(&g, builder);
             let r = grazing::check_rays(&b, &grazing::ancestors(&b), &[Ray::new(origin, dir)]);

@@ -13,8 +13,8 @@ use rayterm::report::stability::scale::{
 };
 use rayterm::report::stability::topology::{Crossing, Topology};
 use rayterm::report::stability::watertight::{aimed_rays, random_rays, sphere, teapot};
-use rayterm::report::stability::{self as st, grazing, hygiene, soup, Options, Row};
-use rayterm::scene::{self, Builder};
+use rayterm::report::stability::{self as st, grazing, hygiene, Options, Row};
+use rayterm::scene::{self, Builder, Geometry};
 
 fn small() -> Options {
     Options {
@@ -180,12 +180,12 @@ fn watertight_rows_pass() {
 #[test]
 fn a_hole_lets_rays_escape() {
     let mut tris = sphere().unwrap();
-    let closed = bvh::build(&soup(&tris), Builder::Sah);
+    let closed = bvh::build(&Geometry::from_triangles(&tris), Builder::Sah);
     let mut rng = Rng::for_sample(0, 0, 9);
     let rays = random_rays(Vec3::new(0.01, -0.02, 0.03), 20_000, &mut rng);
     assert_eq!(st::escapes(&closed, &rays).escaped, 0);
     tris.swap_remove(700);
-    let holed = bvh::build(&soup(&tris), Builder::Sah);
+    let holed = bvh::build(&Geometry::from_triangles(&tris), Builder::Sah);
     assert!(st::escapes(&holed, &rays).escaped > 0);
 }
 
@@ -211,7 +211,7 @@ fn aimed_rays_graze_edges_and_vertices() {
     // watertight BVH, and a naive intersector loses some of them.
     let tris = sphere().unwrap();
     let topo = Topology::new(tris.clone());
-    let b = bvh::build(&soup(&tris), Builder::Sah);
+    let b = bvh::build(&Geometry::from_triangles(&tris), Builder::Sah);
     let mut rng = Rng::for_sample(0, 0, 4);
     let inside = [Vec3::new(0.01, -0.02, 0.03)];
     for kind in [Crossing::Vertex, Crossing::Edge] {
@@ -234,7 +234,7 @@ fn a_hole_in_the_teapot_is_not_taken_for_its_lid_gap() {
     let mut rng = Rng::for_sample(0, 0, 6);
     let rays = random_rays(inside, 20_000, &mut rng);
     let elsewhere = |pot: &[[Vec3; 3]]| {
-        let b = bvh::build(&soup(pot), Builder::Sah);
+        let b = bvh::build(&Geometry::from_triangles(pot), Builder::Sah);
         rays.iter()
             .filter(|r| b.intersect_brute(r).is_none() && !through_lid_gap(r))
             .count()
@@ -292,7 +292,7 @@ fn lattice_rays() -> Vec<Ray> {
 
 #[test]
 fn a_shrunken_box_loses_grazing_hits() {
-    let g = soup(&grazing::lattice());
+    let g = Geometry::from_triangles(&grazing::lattice());
     let rays = lattice_rays();
     for builder in [Builder::Sah, Builder::Median] {
         let mut b: Bvh = bvh::build(&g, builder);

@@ -634,7 +634,7 @@ impl Bvh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{self, Builder};
+    use crate::scene::{self, Builder, Geometry};
 
     /// Both eight-box tests agree with `Aabb::hit` lane by lane, bit for bit,
     /// grazing rays and rays starting inside a box included; empty slots
@@ -720,7 +720,6 @@ mod tests {
     /// the BVH agrees with brute force.
     #[test]
     fn any_float_in_the_tree_or_the_ray_is_walked_safely() {
-        use crate::report::stability::soup;
         use glam::Vec3;
         let (inf, nan) = (f32::INFINITY, f32::NAN);
         let mut tris = vec![
@@ -765,7 +764,7 @@ mod tests {
         ];
         let mut hits = 0;
         for builder in [Builder::Sah, Builder::Median] {
-            let b = super::super::build(&soup(&tris), builder);
+            let b = super::super::build(&Geometry::from_triangles(&tris), builder);
             let mut st = TraversalStats::default();
             for o in origins {
                 for d in dirs {

@@ -44,6 +44,23 @@ pub struct Geometry {
 }
 
 impl Geometry {
+    /// A triangle soup: three corners of their own per triangle, no
+    /// normals or UVs, one material and one mesh (the BVH's and the
+    /// stability battery's test scenes).
+    pub fn from_triangles(tris: &[[Vec3; 3]]) -> Self {
+        let mut g = Geometry::default();
+        for (i, t) in tris.iter().enumerate() {
+            g.positions.extend_from_slice(t);
+            g.normals.extend([Vec3::ZERO; 3]);
+            g.uvs.extend([Vec2::ZERO; 3]);
+            let b = 3 * i as u32;
+            g.indices.push([b, b + 1, b + 2]);
+            g.tri_material.push(0);
+            g.tri_mesh.push(0);
+        }
+        g
+    }
+
     pub fn triangle(&self, i: usize) -> [Vec3; 3] {
         self.indices[i].map(|v| self.positions[v as usize])
     }
