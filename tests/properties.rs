@@ -452,7 +452,11 @@ proptest! {
             prop_assert!(r.is_ok());
         } else {
             let e = format!("{:#}", r.expect_err("wrong length"));
-            prop_assert!(e.starts_with("s.toml:6:12: invalid length"), "{}", e);
+            prop_assert!(
+                e.starts_with("loading scene 's.toml': s.toml:6:12: invalid length"),
+                "{}",
+                e
+            );
         }
     }
 }

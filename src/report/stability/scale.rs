@@ -548,7 +548,7 @@ pub fn transform_rows(scene: &Scene, t: Transform, reference: &Probed, o: &Optio
         ),
     ));
     if let Some(unit) = &unit {
-        // As `scene::load` would hand it to the renderer: recentred
+        // As `scene::load::open` would hand it to the renderer: recentred
         // when far from the origin.
         let mut shown = moved.clone();
         let recentred = shown.recentre().is_some();

@@ -72,7 +72,7 @@ pub const SCENES: &[(&str, &str)] = &[
 ];
 
 /// Loads a built-in scene; `Ok(None)` when `spec` names none.
-pub fn load(spec: &str) -> Result<Option<Scene>> {
+pub(crate) fn load(spec: &str) -> Result<Option<Scene>> {
     let (name, arg) = match spec.split_once(':') {
         Some((n, a)) => (n, Some(a)),
         None => (spec, None),

@@ -151,7 +151,7 @@ fn read_placed(
 /// workload's auto camera and point light (none where `env_given`: the
 /// environment light the caller puts in lights it); moved next to the
 /// origin (and scaled) in f64 when far or huge ([`Frame`]).
-pub fn load_bare_from(
+pub(crate) fn load_bare_from(
     src: &dyn Source,
     path: &Path,
     format: Format,
