@@ -17,10 +17,15 @@ use rayterm::scene::{self, Builder, Geometry};
 fn meshes() -> Vec<(String, Geometry)> {
     let mut v = vec![(
         "teapot:16".to_string(),
-        scene::load("teapot:16").unwrap().geometry,
+        scene::load::open("teapot:16", &Default::default())
+            .unwrap()
+            .scene
+            .geometry,
     )];
     let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/meshes/bunny.obj");
-    match scene::load(bunny.to_str().unwrap_or_default()) {
+    match scene::load::open(bunny.to_str().unwrap_or_default(), &Default::default())
+        .map(|o| o.scene)
+    {
         Ok(s) => v.push(("bunny".to_string(), s.geometry)),
         Err(_) => eprintln!("bunny skipped: ../shared/data/meshes/bunny.obj not found"),
     }

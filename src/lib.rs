@@ -1,6 +1,6 @@
 //! rayterm: a ray tracer that lives in the terminal.
 //!
-//! Data flows `scene::load` → `bvh::build` → `render::Plan` →
+//! Data flows `scene::load::open` → `bvh::build` → `render::Plan` →
 //! `render::Tracer::sample` (generic over a recorder) → `render::Film` →
 //! `render::post`; the CLI, the TUI, the inspector and the reports consume it.
 

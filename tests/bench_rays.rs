@@ -89,7 +89,7 @@ fn brute_force(g: &Geometry, w: &Workload) -> Checksum {
 }
 
 fn check_against_brute_force(spec: &str, width: u32, height: u32) {
-    let s = scene::load(spec).unwrap();
+    let s = scene::load::open(spec, &Default::default()).unwrap().scene;
     let g = &s.geometry;
     let w = Workload::auto(&g.bounds(), width, height);
     let want = brute_force(g, &w);
@@ -127,7 +127,9 @@ fn checksum_matches_brute_force_on_a_tessellated_teapot() {
 /// short at two edges), and the report says how it made and traced them.
 #[test]
 fn rays_made_first_or_traced_in_packets_are_the_same_rays() {
-    let s = scene::load("teapot:3").unwrap();
+    let s = scene::load::open("teapot:3", &Default::default())
+        .unwrap()
+        .scene;
     let g = &s.geometry;
     let w = Workload::auto(&g.bounds(), 62, 45);
     let want = brute_force(g, &w);
@@ -178,7 +180,9 @@ fn rays_made_first_or_traced_in_packets_are_the_same_rays() {
 
 #[test]
 fn shadow_rays_start_at_the_light_and_stop_short_of_the_hit() {
-    let s = scene::load("cornell").unwrap();
+    let s = scene::load::open("cornell", &Default::default())
+        .unwrap()
+        .scene;
     let w = Workload::auto(&s.geometry.bounds(), 64, 48);
     let p = w.primary(32, 24);
     let sh = w.shadow(&p, 2.0);
@@ -253,7 +257,9 @@ fn checksum_agrees_with_the_embree_harness_on_shared_meshes() {
             eprintln!("skipping {name}: not in {}", dir.display());
             continue;
         }
-        let s = scene::load(path.to_str().unwrap()).unwrap();
+        let s = scene::load::open(path.to_str().unwrap(), &Default::default())
+            .unwrap()
+            .scene;
         let w = Workload::auto(&s.geometry.bounds(), 1024, 768);
         let got = with_bvh(&s.geometry, &w, Builder::Sah, 2);
         assert!(near(got.hits, hits), "{name}: hits {} vs {hits}", got.hits);
@@ -327,7 +333,9 @@ fn diffuse_rays_are_the_harness_rays_bit_for_bit() {
         eprintln!("skipping: bunny.obj not in {}", dir.display());
         return;
     }
-    let s = scene::load(path.to_str().unwrap()).unwrap();
+    let s = scene::load::open(path.to_str().unwrap(), &Default::default())
+        .unwrap()
+        .scene;
     let w = Workload::auto(&s.geometry.bounds(), 1024, 768);
     for &(pixel, tri, t, origin, dir) in DUMPED {
         let p = w.primary(pixel % 1024, pixel / 1024);

@@ -10,21 +10,13 @@ use rayterm::scene::{self, Builder, Geometry};
 
 fn random_soup(n: usize, seed: u64) -> Geometry {
     let mut r = Rng::for_sample(0, 0, seed);
-    let mut g = Geometry::default();
-    for i in 0..n {
-        let c = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 10.0;
-        for _ in 0..3 {
-            g.positions
-                .push(c + (Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) - 0.5) * 0.8);
-            g.normals.push(Vec3::ZERO);
-            g.uvs.push(glam::Vec2::ZERO);
-        }
-        let b = 3 * i as u32;
-        g.indices.push([b, b + 1, b + 2]);
-        g.tri_material.push(0);
-        g.tri_mesh.push(0);
-    }
-    g
+    let tris: Vec<[Vec3; 3]> = (0..n)
+        .map(|_| {
+            let c = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 10.0;
+            [(); 3].map(|_| c + (Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) - 0.5) * 0.8)
+        })
+        .collect();
+    Geometry::from_triangles(&tris)
 }
 
 fn check_invariants(g: &Geometry, b: &Bvh) {
@@ -120,8 +112,15 @@ fn the_tree_is_the_same_on_any_number_of_threads() {
 
 #[test]
 fn binned_sah_is_within_five_percent_of_a_full_sweep() {
-    let scenes = ["cornell", "teapot:6", "mirrors"]
-        .map(|n| (n.to_string(), scene::load(n).unwrap().geometry));
+    let scenes = ["cornell", "teapot:6", "mirrors"].map(|n| {
+        (
+            n.to_string(),
+            scene::load::open(n, &Default::default())
+                .unwrap()
+                .scene
+                .geometry,
+        )
+    });
     for (name, g) in scenes
         .into_iter()
         .chain([("soup".to_string(), random_soup(4000, 11))])
@@ -173,7 +172,7 @@ fn empty_geometry_never_hits() {
 
 /// Rays from inside a closed mesh never escape: the watertight test leaves no cracks.
 fn no_escapes(spec: &str, centre: Vec3, rays: u32) {
-    let s = scene::load(spec).unwrap();
+    let s = scene::load::open(spec, &Default::default()).unwrap().scene;
     let b = bvh::build(&s.geometry, Builder::Sah);
     let mut r = Rng::for_sample(5, 5, 5);
     let mut escapes = 0;

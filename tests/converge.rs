@@ -123,7 +123,7 @@ fn estimate_is_within_a_factor_of_two_with_jittered_light_samples() {
 
 #[test]
 fn deterministic_scene_is_exact_after_one_pass() -> anyhow::Result<()> {
-    let s = scene::load("cornell")?;
+    let s = scene::load::open("cornell", &Default::default())?.scene;
     let features = Features::all().without(&[Feature::Supersampling]);
     let (w, h) = (24, 24);
     let render_cfg = config(

@@ -175,17 +175,21 @@ fn stl_ascii(p: &[[f32; 3]], t: &[[u32; 3]]) -> String {
 
 fn load(spec: &str) -> Result<Scene, String> {
     let s = spec.to_string();
-    within_deadline(spec, move || scene::load(&s).map_err(|e| format!("{e:#}")))
+    within_deadline(spec, move || {
+        scene::load::open(&s, &Default::default())
+            .map(|o| o.scene)
+            .map_err(|e| format!("{e:#}"))
+    })
 }
 
 /// As [`load`], with the file's up axis given.
 fn load_up(spec: &str, up: &str) -> Result<Scene, String> {
-    let how = scene::Opening {
+    let how = scene::load::Opening {
         up: Some(up.parse().unwrap()),
         ..Default::default()
     };
-    scene::load_reading(spec, &how)
-        .map(|(s, _)| s)
+    scene::load::open(spec, &how)
+        .map(|o| o.scene)
         .map_err(|e| format!("{e:#}"))
 }
 
@@ -767,11 +771,11 @@ fn a_gltf_camera_is_chosen_by_name_or_number() {
     let d = Dir::new("formats-gltf-camera");
     let (json, bin) = gltf_parts(serde_json::json!({}));
     let file = d.write("scene.glb", glb(&json, &bin));
-    let through = |camera: &str| scene::Opening {
+    let through = |camera: &str| scene::load::Opening {
         camera: Some(camera.into()),
         ..Default::default()
     };
-    let with = |camera: &str| scene::load_reading(&file, &through(camera)).map(|(s, _)| s.camera);
+    let with = |camera: &str| scene::load::open(&file, &through(camera)).map(|o| o.scene.camera);
     let near = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
     for name in ["Side", "SideCam", "2"] {
         let c = with(name).unwrap();
@@ -798,7 +802,7 @@ fn a_gltf_camera_is_chosen_by_name_or_number() {
     for spec in ["cornell", obj.as_str(), toml.as_str()] {
         let e = format!(
             "{:#}",
-            scene::load_reading(spec, &through("Side")).unwrap_err()
+            scene::load::open(spec, &through("Side")).unwrap_err()
         );
         assert!(e.contains("--camera Side"), "{e}");
     }

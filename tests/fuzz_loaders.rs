@@ -16,12 +16,12 @@ use std::time::Duration;
 use glam::DAffine3;
 use proptest::prelude::*;
 use proptest::sample::Index;
-use rayterm::scene::file::{load_with, Overrides};
 use rayterm::scene::frame::Frame;
-use rayterm::scene::mesh::{self, Format};
-use rayterm::scene::obj::{self, Parts, Placement};
-use rayterm::scene::source::{self, Memory};
-use rayterm::scene::{bezier, Geometry, Light};
+use rayterm::scene::load::mesh::{self, Format};
+use rayterm::scene::load::obj::{self, Parts, Placement};
+use rayterm::scene::load::source::{self, Memory};
+use rayterm::scene::load::{self, bezier, Opening};
+use rayterm::scene::{Geometry, Light};
 
 /// Far more than any of these loads takes; only a hang reaches it.
 const BUDGET: Duration = Duration::from_secs(20);
@@ -288,11 +288,12 @@ fn mutate_bytes(mut b: Vec<u8>, edits: &[(Index, u8)], cut: Option<Index>) -> Ve
 
 fn load_toml(text: Vec<u8>) -> Result<(), TestCaseError> {
     let scene = within_budget("TOML", move || {
-        load_with(
-            &files(("s.toml", text)),
-            Path::new("s.toml"),
-            Overrides::default(),
-        )
+        let src = files(("s.toml", text));
+        let how = Opening {
+            source: Some(&src),
+            ..Default::default()
+        };
+        load::open("s.toml", &how).map(|o| o.scene)
     })?;
     if let Ok(s) = scene {
         finite_geometry(&s.geometry)?;
@@ -752,12 +753,18 @@ fn scenes_with_non_finite_numbers_never_load() {
             "[[mesh]]\nfile = \"m.obj\"\n[[light]]\ntype = \"point\"\n\
              position = {position}\ncolor = {color}\n"
         );
-        let r = load_with(
-            &files(("s.toml", text.into_bytes())),
-            Path::new("s.toml"),
-            Overrides::default(),
+        let src = files(("s.toml", text.into_bytes()));
+        let how = Opening {
+            source: Some(&src),
+            ..Default::default()
+        };
+        let e = format!(
+            "{:#}",
+            load::open("s.toml", &how).expect_err("must not load")
         );
-        let e = format!("{:#}", r.expect_err("must not load"));
-        assert!(e.contains("finite") && e.starts_with("s.toml:"), "{e}");
+        assert!(
+            e.contains("finite") && e.starts_with("loading scene 's.toml': s.toml:"),
+            "{e}"
+        );
     }
 }

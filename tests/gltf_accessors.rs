@@ -14,7 +14,11 @@ use serde_json::{json, Value};
 
 fn load(spec: &str) -> Result<Scene, String> {
     let s = spec.to_string();
-    within_deadline(spec, move || scene::load(&s).map_err(|e| format!("{e:#}")))
+    within_deadline(spec, move || {
+        scene::load::open(&s, &Default::default())
+            .map(|o| o.scene)
+            .map_err(|e| format!("{e:#}"))
+    })
 }
 
 /// A buffer being filled, and the views of what was put in it.

@@ -13,7 +13,11 @@ use serde_json::{json, Value};
 
 fn load(spec: &str) -> Result<Scene, String> {
     let s = spec.to_string();
-    within_deadline(spec, move || scene::load(&s).map_err(|e| format!("{e:#}")))
+    within_deadline(spec, move || {
+        scene::load::open(&s, &Default::default())
+            .map(|o| o.scene)
+            .map_err(|e| format!("{e:#}"))
+    })
 }
 
 /// Deterministic: one pass is exact.
@@ -537,11 +541,11 @@ fn an_orthographic_camera_shows_equal_things_equally_large_at_any_depth() {
     // 8 pixels a unit: each sphere's disc is about pi * 8^2 pixels.
     assert!((180..=220).contains(&near_px), "{near_px}");
     assert_eq!(near_px, far_px);
-    let through = scene::Opening {
+    let through = scene::load::Opening {
         camera: Some("Persp".into()),
         ..Default::default()
     };
-    let (p, _) = scene::load_reading(&file, &through).unwrap();
+    let p = scene::load::open(&file, &through).unwrap().scene;
     let (_, near_px, far_px) = covered(&p);
     // At distances 10 and 16: about (16 / 10)^2 = 2.56 times the pixels.
     assert!(near_px as f64 > 2.0 * far_px as f64, "{near_px} {far_px}");

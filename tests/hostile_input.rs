@@ -21,7 +21,11 @@ const CHECKER: &[u8] = include_bytes!("../data/meshes/checker.png");
 /// Loads `spec` as the command line would, with a deadline.
 fn load(spec: &str) -> Result<Scene, String> {
     let s = spec.to_string();
-    within_deadline(spec, move || scene::load(&s).map_err(|e| format!("{e:#}")))
+    within_deadline(spec, move || {
+        scene::load::open(&s, &Default::default())
+            .map(|o| o.scene)
+            .map_err(|e| format!("{e:#}"))
+    })
 }
 
 /// The load fails, and its message holds every one of `parts`.

@@ -8,7 +8,7 @@ use std::process::Command;
 use rayterm::inspect::{inspect_pixel, PixelTree, RayNode};
 use rayterm::render::recorder::RayKind;
 use rayterm::render::{Progressive, SceneRequest, Session, Tracer};
-use rayterm::scene::builtin::SCENES;
+use rayterm::scene::load::builtin::SCENES;
 use serde_json::Value;
 
 const SEED: u64 = 7;

@@ -11,8 +11,8 @@ use std::path::Path;
 use files::{rayterm, Dir};
 use glam::{DVec3, Vec3};
 use rayterm::render::Features;
-use rayterm::scene::file::{load_with, Overrides};
-use rayterm::scene::source::Memory;
+use rayterm::scene::load::source::Memory;
+use rayterm::scene::load::{self, Opening};
 use rayterm::scene::{Builder, Scene};
 
 const CHECKER: &[u8] = include_bytes!("../data/meshes/checker.png");
@@ -208,7 +208,7 @@ fn built_in_scenes_load_from_any_directory() {
         d.0.clone(),
         root.join("cornell.toml").to_str().unwrap().to_string(),
     )];
-    for (name, _) in rayterm::scene::builtin::SCENES {
+    for (name, _) in rayterm::scene::load::builtin::SCENES {
         runs.push((root.clone(), format!("{name}.toml")));
     }
     runs.push((root.clone(), "./cornell.toml".to_string()));
@@ -274,7 +274,11 @@ fn far_sphere(offset: DVec3, in_obj: bool) -> Scene {
         e.x, e.y, e.z, t.x, t.y, t.z, l.x, l.y, l.z
     );
     let src = Memory::default().with("s.toml", toml).with("s.obj", obj);
-    load_with(&src, Path::new("s.toml"), Overrides::default()).unwrap()
+    let how = Opening {
+        source: Some(&src),
+        ..Default::default()
+    };
+    load::open("s.toml", &how).unwrap().scene
 }
 
 /// Mean absolute difference relative to the mean of `a`.

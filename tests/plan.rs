@@ -20,7 +20,7 @@ const TABLE: &[(&str, bool, bool, bool, bool, bool, bool)] = &[
 #[test]
 fn plan_of_each_builtin_follows_the_rules() {
     for &(name, tex, smooth, refl, glossy, area, env) in TABLE {
-        let s = scene::load(name).unwrap();
+        let s = scene::load::open(name, &Default::default()).unwrap().scene;
         let p = Plan::new(&s, Features::all(), PlanPolicy::Prune);
         assert_eq!(p.textures, tex, "{name} textures");
         assert_eq!(p.smooth_normals, smooth, "{name} smooth normals");
@@ -49,7 +49,9 @@ fn plan_of_each_builtin_follows_the_rules() {
 
 #[test]
 fn toggled_off_features_are_off_whatever_the_scene() {
-    let s = scene::load("cube-textured").unwrap();
+    let s = scene::load::open("cube-textured", &Default::default())
+        .unwrap()
+        .scene;
     let p = Plan::new(
         &s,
         Features::all().without(&[Feature::Textures]),
@@ -68,7 +70,7 @@ fn toggled_off_features_are_off_whatever_the_scene() {
 fn plan_on_and_off_give_identical_deterministic_images() {
     let f = Features::all().without(&[Feature::Supersampling, Feature::Bloom]);
     for name in ["cornell", "teapot", "cube-textured", "env"] {
-        let s = scene::load(name).unwrap();
+        let s = scene::load::open(name, &Default::default()).unwrap().scene;
         let bvh = rayterm::bvh::build(&s.geometry, Builder::Sah);
         let with = render_with(&s, &bvh, &Plan::new(&s, f, PlanPolicy::Prune), 48, 36, 1, 1);
         let without = render_with(
@@ -92,7 +94,9 @@ fn plan_on_and_off_give_identical_deterministic_images() {
 
 #[test]
 fn plan_on_and_off_agree_on_sampled_scenes() {
-    let s = scene::load("cornell-area").unwrap();
+    let s = scene::load::open("cornell-area", &Default::default())
+        .unwrap()
+        .scene;
     let bvh = rayterm::bvh::build(&s.geometry, Builder::Sah);
     let f = Features::all().without(&[Feature::Bloom]);
     let a = render_with(&s, &bvh, &Plan::new(&s, f, PlanPolicy::Prune), 24, 24, 8, 1);

@@ -19,11 +19,11 @@ use rayterm::bvh::{self, Simd};
 use rayterm::geometry::offset::{geometric_normal, hit_point, offset_origin};
 use rayterm::geometry::triangle::{intersect, RayShear};
 use rayterm::geometry::Ray;
-use rayterm::report::stability::{grazing, soup};
-use rayterm::scene::file::{load_with, Overrides};
-use rayterm::scene::obj::{self, Parts, Placement};
-use rayterm::scene::source::Memory;
-use rayterm::scene::Builder;
+use rayterm::report::stability::grazing;
+use rayterm::scene::load::obj::{self, Parts, Placement};
+use rayterm::scene::load::source::Memory;
+use rayterm::scene::load::{self, Opening};
+use rayterm::scene::{Builder, Geometry};
 
 fn coord() -> impl Strategy<Value = f32> {
     prop_oneof![
@@ -175,7 +175,7 @@ proptest! {
             })
             .collect();
         rays.extend(free.iter().map(|(o, d)| Ray::new(*o, *d)));
-        let g = soup(&tris);
+        let g = Geometry::from_triangles(&tris);
         for builder in [Builder::Sah, Builder::Median] {
             let b = bvh::build(&g, builder);
             let anc = grazing::ancestors(&b);
@@ -221,7 +221,7 @@ proptest! {
                 Ray::segment(o, target - o, if k % 3 == 0 { tmax } else { f32::INFINITY })
             })
             .collect();
-        let g = soup(&tris);
+        let g = Geometry::from_triangles(&tris);
         for builder in [Builder::Sah, Builder::Median] {
             let mut b = bvh::build(&g, builder);
             // Every SIMD level this CPU has, widest first (each cap narrows).
@@ -257,7 +257,7 @@ proptest! {
         let dir = Vec3::from_array(dir);
         let mut origin = Vec3::new(o.0 as f32, o.1 as f32, o.2 as f32);
         origin[k] = if dir[k] > 0.0 { -1.0 } else { 4.0 };
-        let g = soup(&grazing::lattice());
+        let g = Geometry::from_triangles(&grazing::lattice());
         for builder in [Builder::Sah, Builder::Median] {
             let b = bvh::build(&g, builder);
             let r = grazing::check_rays(&b, &grazing::ancestors(&b), &[Ray::new(origin, dir)]);
@@ -279,6 +279,15 @@ fn load_obj(text: impl Into<Vec<u8>>) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), Stri
     )
     .map_err(|e| format!("{e:#}"))?;
     Ok((parts.geometry.positions, parts.geometry.indices))
+}
+
+/// Opens the scene file `s.toml` of `src`.
+fn open_toml(src: &Memory) -> anyhow::Result<rayterm::scene::Scene> {
+    let how = Opening {
+        source: Some(src),
+        ..Default::default()
+    };
+    load::open("s.toml", &how).map(|o| o.scene)
 }
 
 /// A small mesh as OBJ text: vertices written with `write`, then faces
@@ -414,7 +423,7 @@ proptest! {
         let src = Memory::default()
             .with("s.toml", "[[mesh]]\nfile = \"m.obj\"\n")
             .with("m.obj", far_text);
-        let far = load_with(&src, std::path::Path::new("s.toml"), Overrides::default());
+        let far = open_toml(&src);
         match (near, far) {
             (Ok((np, ni)), Ok(scene)) => {
                 let fp = &scene.geometry.positions;
@@ -438,12 +447,16 @@ proptest! {
         let src = Memory::default()
             .with("s.toml", text)
             .with("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-        let r = load_with(&src, std::path::Path::new("s.toml"), Overrides::default());
+        let r = open_toml(&src);
         if n == 3 {
             prop_assert!(r.is_ok());
         } else {
             let e = format!("{:#}", r.expect_err("wrong length"));
-            prop_assert!(e.starts_with("s.toml:6:12: invalid length"), "{}", e);
+            prop_assert!(
+                e.starts_with("loading scene 's.toml': s.toml:6:12: invalid length"),
+                "{}",
+                e
+            );
         }
     }
 }

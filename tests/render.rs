@@ -31,7 +31,9 @@ fn differing(a: &image::RgbImage, b: &image::RgbImage, tol: u8) -> f64 {
 
 #[test]
 fn cornell_matches_golden_image() {
-    let s = scene::load("cornell").unwrap();
+    let s = scene::load::open("cornell", &Default::default())
+        .unwrap()
+        .scene;
     let r = render(&s, 160, 160, 1, exact(), Builder::Sah, 1);
     let got = rgb8(&r.image, 160, 160);
     let golden_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/cornell-160.png");
@@ -52,7 +54,7 @@ fn cornell_matches_golden_image() {
 #[test]
 fn both_builders_give_the_same_image() {
     for spec in ["cornell", "teapot:6", "mirrors"] {
-        let s = scene::load(spec).unwrap();
+        let s = scene::load::open(spec, &Default::default()).unwrap().scene;
         let a = rgb8(
             &render(&s, 96, 72, 1, exact(), Builder::Sah, 3).image,
             96,
@@ -92,7 +94,7 @@ fn both_builders_give_the_same_image() {
 fn camera_ray_packets_give_the_image_single_rays_give() {
     let jittered = Features::all().without(&[Feature::Bloom]);
     for spec in ["cornell", "teapot:6", "mirrors", "cube-textured"] {
-        let s = scene::load(spec).unwrap();
+        let s = scene::load::open(spec, &Default::default()).unwrap().scene;
         let bvh = rayterm::bvh::build(&s.geometry, Builder::Sah);
         for (features, spp) in [(exact(), 1), (jittered, 3)] {
             let plan = Plan::new(&s, features, PlanPolicy::Prune);
@@ -138,7 +140,9 @@ fn differing_in_flat_regions(a: &image::RgbImage, b: &image::RgbImage, tol: u8) 
 
 #[test]
 fn no_acne_or_leaks_at_any_scale() {
-    let base = scene::load("cornell").unwrap();
+    let base = scene::load::open("cornell", &Default::default())
+        .unwrap()
+        .scene;
     let reference = rgb8(
         &render(&base, 120, 120, 1, exact(), Builder::Sah, 1).image,
         120,
@@ -167,7 +171,9 @@ fn no_acne_or_leaks_at_any_scale() {
 
 #[test]
 fn textures_change_the_textured_cube() {
-    let s = scene::load("cube-textured").unwrap();
+    let s = scene::load::open("cube-textured", &Default::default())
+        .unwrap()
+        .scene;
     assert!(s.has_textures());
     let on = render(&s, 64, 48, 1, exact(), Builder::Sah, 1).image;
     let off = render(
@@ -190,8 +196,8 @@ fn textures_change_the_textured_cube() {
 
 #[test]
 fn every_builtin_scene_loads_and_renders_finite() {
-    for (name, _) in scene::builtin::SCENES {
-        let s = scene::load(name).unwrap();
+    for (name, _) in scene::load::builtin::SCENES {
+        let s = scene::load::open(name, &Default::default()).unwrap().scene;
         assert!(s.geometry.triangle_count() > 0, "{name}");
         let r = render(&s, 32, 24, 2, Features::all(), Builder::Sah, 1);
         assert_eq!(r.film.bad_count, 0, "{name} has NaN samples");
@@ -201,11 +207,23 @@ fn every_builtin_scene_loads_and_renders_finite() {
         );
     }
     assert_eq!(
-        scene::load("cornell").unwrap().geometry.triangle_count(),
+        scene::load::open("cornell", &Default::default())
+            .unwrap()
+            .scene
+            .geometry
+            .triangle_count(),
         32
     );
-    let t4 = scene::load("teapot:4").unwrap().geometry.triangle_count();
-    let t8 = scene::load("teapot:8").unwrap().geometry.triangle_count();
+    let t4 = scene::load::open("teapot:4", &Default::default())
+        .unwrap()
+        .scene
+        .geometry
+        .triangle_count();
+    let t8 = scene::load::open("teapot:8", &Default::default())
+        .unwrap()
+        .scene
+        .geometry
+        .triangle_count();
     assert!(t8 > 3 * t4 && t4 > 900, "teapot:4 {t4}, teapot:8 {t8}");
 }
 

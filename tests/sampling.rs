@@ -107,7 +107,7 @@ fn jittered_light_samples_beat_independent_ones_at_equal_count() {
 
 /// The film of `spec` rendered in a pool of `threads` threads.
 fn film_with_threads(spec: &str, threads: usize) -> anyhow::Result<Vec<(u64, u64, u32)>> {
-    let s = scene::load(spec)?;
+    let s = scene::load::open(spec, &Default::default())?.scene;
     let bvh = bvh::build(&s.geometry, s.settings.builder);
     let plan = Plan::new(&s, Features::all(), PlanPolicy::Prune);
     let pool = rayon::ThreadPoolBuilder::new()
@@ -231,7 +231,9 @@ fn environment_light_samples_estimate_its_integral() {
     std::fs::write(dir.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
     let toml = "[[mesh]]\nfile = \"tri.obj\"\n[environment]\nmap = \"sky.hdr\"\nrotate = 30\n";
     std::fs::write(dir.join("s.toml"), toml).unwrap();
-    let s = scene::load(dir.join("s.toml").to_str().unwrap()).unwrap();
+    let s = scene::load::open(dir.join("s.toml").to_str().unwrap(), &Default::default())
+        .unwrap()
+        .scene;
     std::fs::remove_dir_all(&dir).ok();
     let scene::Environment::Light(env) = &s.environment else {
         panic!("no environment light: {:?}", s.environment);

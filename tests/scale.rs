@@ -117,7 +117,11 @@ fn the_monkey_keeps_its_shadows_at_1e_minus_5() -> anyhow::Result<()> {
     let Some(dir) = shared_meshes() else {
         return Ok(());
     };
-    let mut s = rayterm::scene::load(&dir.join("monkey.obj").to_string_lossy())?;
+    let mut s = rayterm::scene::load::open(
+        &dir.join("monkey.obj").to_string_lossy(),
+        &Default::default(),
+    )?
+    .scene;
     s.settings.ambient = Vec3::splat(0.1);
     let (w, h) = (64, 64);
     let unit = probe(&s, w, h);
@@ -175,7 +179,7 @@ fn a_huge_obj_renders_like_a_small_one() -> anyhow::Result<()> {
             &path,
             format!("v 0 0 0\nv {size} 0 0\nv 0 {size} 0\nf 1 2 3\n"),
         )?;
-        rayterm::scene::load(&path.to_string_lossy())
+        rayterm::scene::load::open(&path.to_string_lossy(), &Default::default()).map(|o| o.scene)
     };
     let (w, h) = (32, 32);
     let small = probe(&load("1")?, w, h);

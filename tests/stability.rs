@@ -13,8 +13,8 @@ use rayterm::report::stability::scale::{
 };
 use rayterm::report::stability::topology::{Crossing, Topology};
 use rayterm::report::stability::watertight::{aimed_rays, random_rays, sphere, teapot};
-use rayterm::report::stability::{self as st, grazing, hygiene, soup, Options, Row};
-use rayterm::scene::{self, Builder};
+use rayterm::report::stability::{self as st, grazing, hygiene, Options, Row};
+use rayterm::scene::{self, Builder, Geometry};
 
 fn small() -> Options {
     Options {
@@ -34,7 +34,9 @@ fn all_pass(rows: &[Row]) {
 
 #[test]
 fn scale_and_offset_rows_pass() {
-    let scene = scene::load("cornell").unwrap();
+    let scene = scene::load::open("cornell", &Default::default())
+        .unwrap()
+        .scene;
     let rows = st::scale_offset(&scene, &small()).unwrap();
     all_pass(&rows);
     // Acne, shadows and leaks for every transform, and an image row for all but the identity.
@@ -45,7 +47,9 @@ fn scale_and_offset_rows_pass() {
 fn scale_cases_measure_something() {
     // The probe sees shadow rays from lit surfaces at every scale, and a
     // transformed render that is plainly the same picture.
-    let base = scene::load("cornell").unwrap();
+    let base = scene::load::open("cornell", &Default::default())
+        .unwrap()
+        .scene;
     let b = bvh::build(&base.geometry, Builder::Sah);
     let reference = probe_render(&base, &b, 24, 24, 1);
     assert!(reference.lit > 24 * 24 / 2, "{}", reference.lit);
@@ -122,7 +126,9 @@ fn far_shadow_edges_move_within_their_error_bound_at_high_resolution() {
     // edge of the short box's shadow by 2 pixels at 1024x1024. Counted
     // against its 8 neighbours, 18 umbra pixels were lost; the allowance is
     // the origins' error bound in pixels, 1 at the default size.
-    let scene = scene::load("cornell").unwrap();
+    let scene = scene::load::open("cornell", &Default::default())
+        .unwrap()
+        .scene;
     let t = Transform::new(1.0, 1e4);
     let moved = place(&scene, t).0;
     assert_eq!(shadow_edge_allowance(&moved, 96, 96), 1);
@@ -145,7 +151,9 @@ fn far_shadow_edges_move_within_their_error_bound_at_high_resolution() {
 
 #[test]
 fn own_surface_is_the_triangle_or_its_plane() {
-    let s = scene::load("cornell").unwrap();
+    let s = scene::load::open("cornell", &Default::default())
+        .unwrap()
+        .scene;
     let g = &s.geometry;
     // Triangles 0 and 1 are the two halves of the floor, 2 and 3 the
     // ceiling, 10.. the short box, 30 and 31 the light panel under the ceiling.
@@ -172,12 +180,12 @@ fn watertight_rows_pass() {
 #[test]
 fn a_hole_lets_rays_escape() {
     let mut tris = sphere().unwrap();
-    let closed = bvh::build(&soup(&tris), Builder::Sah);
+    let closed = bvh::build(&Geometry::from_triangles(&tris), Builder::Sah);
     let mut rng = Rng::for_sample(0, 0, 9);
     let rays = random_rays(Vec3::new(0.01, -0.02, 0.03), 20_000, &mut rng);
     assert_eq!(st::escapes(&closed, &rays).escaped, 0);
     tris.swap_remove(700);
-    let holed = bvh::build(&soup(&tris), Builder::Sah);
+    let holed = bvh::build(&Geometry::from_triangles(&tris), Builder::Sah);
     assert!(st::escapes(&holed, &rays).escaped > 0);
 }
 
@@ -203,7 +211,7 @@ fn aimed_rays_graze_edges_and_vertices() {
     // watertight BVH, and a naive intersector loses some of them.
     let tris = sphere().unwrap();
     let topo = Topology::new(tris.clone());
-    let b = bvh::build(&soup(&tris), Builder::Sah);
+    let b = bvh::build(&Geometry::from_triangles(&tris), Builder::Sah);
     let mut rng = Rng::for_sample(0, 0, 4);
     let inside = [Vec3::new(0.01, -0.02, 0.03)];
     for kind in [Crossing::Vertex, Crossing::Edge] {
@@ -226,7 +234,7 @@ fn a_hole_in_the_teapot_is_not_taken_for_its_lid_gap() {
     let mut rng = Rng::for_sample(0, 0, 6);
     let rays = random_rays(inside, 20_000, &mut rng);
     let elsewhere = |pot: &[[Vec3; 3]]| {
-        let b = bvh::build(&soup(pot), Builder::Sah);
+        let b = bvh::build(&Geometry::from_triangles(pot), Builder::Sah);
         rays.iter()
             .filter(|r| b.intersect_brute(r).is_none() && !through_lid_gap(r))
             .count()
@@ -284,7 +292,7 @@ fn lattice_rays() -> Vec<Ray> {
 
 #[test]
 fn a_shrunken_box_loses_grazing_hits() {
-    let g = soup(&grazing::lattice());
+    let g = Geometry::from_triangles(&grazing::lattice());
     let rays = lattice_rays();
     for builder in [Builder::Sah, Builder::Median] {
         let mut b: Bvh = bvh::build(&g, builder);
@@ -357,7 +365,7 @@ fn hygiene_rows_pass_and_probes_can_fail() {
     for (name, src, entry, expect) in hygiene::probes() {
         assert!(hygiene::check(&src, entry, expect).is_ok(), "{name}");
         // The same expectation on a clean file fails.
-        let clean = rayterm::scene::source::Memory::default()
+        let clean = rayterm::scene::load::source::Memory::default()
             .with("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
         if entry == "m.obj" {
             assert!(hygiene::check(&clean, entry, expect).is_err(), "{name}");
@@ -367,7 +375,9 @@ fn hygiene_rows_pass_and_probes_can_fail() {
 
 #[test]
 fn far_scenes_are_recentred_exactly() {
-    let base = scene::load("cornell").unwrap();
+    let base = scene::load::open("cornell", &Default::default())
+        .unwrap()
+        .scene;
     let mut far = base.clone();
     let off = Vec3::new(1e6, -5e5, 7.5e5);
     far.transform(1.0, off);

@@ -18,7 +18,11 @@ const CHECKER: &[u8] = include_bytes!("../data/meshes/checker.png");
 
 fn load(spec: &str) -> Result<Scene, String> {
     let s = spec.to_string();
-    within_deadline(spec, move || scene::load(&s).map_err(|e| format!("{e:#}")))
+    within_deadline(spec, move || {
+        scene::load::open(&s, &Default::default())
+            .map(|o| o.scene)
+            .map_err(|e| format!("{e:#}"))
+    })
 }
 
 /// The load succeeds, with exactly the warnings `want`.

@@ -643,8 +643,7 @@ mod tests {
     use crate::bvh::kernels::portable::{frustum_boxes, rays_box};
     use crate::bvh::wide::{Node8, WIDTH};
     use crate::geometry::sampling::Rng;
-    use crate::report::stability::soup;
-    use crate::scene::{self, Builder};
+    use crate::scene::{self, Builder, Geometry};
     use glam::Vec3;
 
     /// The kernels this CPU can run, saying which it cannot.
@@ -730,7 +729,7 @@ mod tests {
                 Ray::new(o, t[0] * w[0] + t[1] * w[1] + t[2] * w[2] - o)
             })
             .collect();
-        let mut b = super::super::build(&soup(&tris), Builder::Median);
+        let mut b = super::super::build(&Geometry::from_triangles(&tris), Builder::Median);
         agree(&mut b, &rays);
         let hit = b.intersect::<false>(&rays[59], &mut TraversalStats::default());
         assert_eq!(hit.map(|h| (h.t, h.prim)), Some((1.0, 7)));
@@ -747,7 +746,7 @@ mod tests {
     }
 
     fn camera_tiles_and_shadow_rays(scene: &str) {
-        let s = scene::load(scene).unwrap();
+        let s = scene::load::open(scene, &Default::default()).unwrap().scene;
         let (w, h) = (60, 44);
         let frame = s.camera.frame(w, h);
         for builder in [Builder::Sah, Builder::Median] {
@@ -794,7 +793,9 @@ mod tests {
     /// into its octants, rays of one packet pointing opposite ways.
     #[test]
     fn random_rays_in_all_directions_find_what_single_rays_find() {
-        let s = scene::load("teapot:3").unwrap();
+        let s = scene::load::open("teapot:3", &Default::default())
+            .unwrap()
+            .scene;
         let mut b = super::super::build(&s.geometry, Builder::Sah);
         let bounds = s.geometry.bounds();
         let mut r = Rng::for_sample(7, 0, 22);
@@ -834,7 +835,7 @@ mod tests {
             tris.push([p, p + Vec3::X, p + Vec3::Y]);
             tris.push([p + Vec3::X, p + Vec3::Y, p + Vec3::new(1.0, 1.0, 0.0)]);
         }
-        let mut b = super::super::build(&soup(&tris), Builder::Sah);
+        let mut b = super::super::build(&Geometry::from_triangles(&tris), Builder::Sah);
         let o = Vec3::new(4.5, 2.5, 9.0);
         let mut rays = Vec::new();
         let mut r = Rng::for_sample(1, 2, 3);
@@ -882,7 +883,7 @@ mod tests {
         agree(&mut b, &[]);
         assert!(hits > 100, "{hits} hits");
         // A tree over nothing: every ray misses.
-        let mut empty = super::super::build(&soup(&[]), Builder::Sah);
+        let mut empty = super::super::build(&Geometry::from_triangles(&[]), Builder::Sah);
         assert_eq!(agree(&mut empty, &rays[..PACKET_RAYS]), 0);
     }
 
@@ -907,7 +908,7 @@ mod tests {
                 tris.push([p(-1.0, -1.0), p(1.0, 1.0), p(-1.0, 1.0)]);
             }
         }
-        let mut b = super::super::build(&soup(&tris), Builder::Sah);
+        let mut b = super::super::build(&Geometry::from_triangles(&tris), Builder::Sah);
         let o = c(0.1, 0.2, 0.3);
         let rays: Vec<Ray> = (0..PACKET_RAYS)
             .map(|i| {

@@ -454,7 +454,7 @@ mod tests {
     use crate::bvh::kernels::avx::hit_boxes_avx;
     use crate::bvh::kernels::portable::hit_boxes;
     use crate::bvh::wide::{Node8, WIDTH};
-    use crate::scene::{self, Builder};
+    use crate::scene::{self, Builder, Geometry};
 
     /// Both eight-box tests agree with `Aabb::hit` lane by lane, bit for bit,
     /// grazing rays and rays starting inside a box included; empty slots
@@ -540,7 +540,6 @@ mod tests {
     /// the BVH agrees with brute force.
     #[test]
     fn any_float_in_the_tree_or_the_ray_is_walked_safely() {
-        use crate::report::stability::soup;
         use glam::Vec3;
         let (inf, nan) = (f32::INFINITY, f32::NAN);
         let mut tris = vec![
@@ -585,7 +584,7 @@ mod tests {
         ];
         let mut hits = 0;
         for builder in [Builder::Sah, Builder::Median] {
-            let b = super::super::build(&soup(&tris), builder);
+            let b = super::super::build(&Geometry::from_triangles(&tris), builder);
             let mut st = TraversalStats::default();
             for o in origins {
                 for d in dirs {
@@ -617,7 +616,9 @@ mod tests {
         if !levels.contains(&Simd::Avx512) {
             eprintln!("note: this CPU has no AVX-512: its walk is not tested here");
         }
-        let s = scene::load("teapot:4").unwrap();
+        let s = scene::load::open("teapot:4", &Default::default())
+            .unwrap()
+            .scene;
         let mut b = super::super::build(&s.geometry, Builder::Sah);
         let frame = s.camera.frame(48, 32);
         let mut rays: Vec<Ray> = (0..48 * 32)
@@ -673,7 +674,9 @@ mod tests {
     /// walk.
     #[test]
     fn deep_walk_agrees_with_the_usual_walk() {
-        let s = scene::load("teapot:4").unwrap();
+        let s = scene::load::open("teapot:4", &Default::default())
+            .unwrap()
+            .scene;
         let b = super::super::build(&s.geometry, Builder::Sah);
         let frame = s.camera.frame(48, 32);
         let mut hits = 0;

@@ -6,8 +6,7 @@ use clap::{Args, Parser, Subcommand};
 
 use super::progress::ProgressMode;
 use crate::render::{Feature, Features, PlanPolicy, SceneRequest, Worst};
-use crate::scene::envlight::EnvRequest;
-use crate::scene::up::Up;
+use crate::scene::load::{up::Up, EnvRequest};
 use crate::scene::{Builder, Integrator, MAX_DEPTH};
 use crate::tui::color::ColorMode;
 use crate::tui::graphics::symbols::Symbols;

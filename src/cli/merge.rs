@@ -383,9 +383,9 @@ fn check(spec: &str, plan: &Plan) -> Result<()> {
 
 /// The input of `list` with the file name of `path`, where only one has it.
 fn same_name<'a>(
-    list: &'a [crate::scene::source::Input],
+    list: &'a [crate::scene::load::source::Input],
     path: &Path,
-) -> Option<&'a crate::scene::source::Input> {
+) -> Option<&'a crate::scene::load::source::Input> {
     let name = path.file_name()?;
     let mut hits = list.iter().filter(|i| i.path.file_name() == Some(name));
     match (hits.next(), hits.next()) {

@@ -119,7 +119,7 @@ fn open_request(req: &SceneRequest) -> Result<Session> {
 /// Loads a scene for its geometry alone (no BVH, no plan), with its load
 /// warnings on stderr.
 fn load_scene(spec: &str) -> Result<Scene> {
-    let mut scene = crate::scene::load(spec)?;
+    let mut scene = crate::scene::load::open(spec, &Default::default())?.scene;
     for w in std::mem::take(&mut scene.warnings) {
         say("warning", &w);
     }

@@ -347,7 +347,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         (Ended::Spp, None, Some(t)) if a.spp.is_none() => {
             format!(
                 " (stopped at the --max-spp cap of {cap} before the --time of {} s)",
-                crate::scene::numbers::show(t)
+                crate::scene::show::show(t)
             )
         }
         _ => String::new(),

@@ -4,7 +4,7 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 
-use crate::scene::{builtin::SCENES, load};
+use crate::scene::load::{self, builtin::SCENES};
 
 pub fn run() -> Result<ExitCode> {
     crate::outln!(
@@ -14,7 +14,7 @@ pub fn run() -> Result<ExitCode> {
         "lights"
     )?;
     for (name, description) in SCENES {
-        let s = load(name)?;
+        let s = load::open(name, &Default::default())?.scene;
         crate::outln!(
             "{:<14} {:>9} {:>7}  {description}",
             name,

@@ -22,7 +22,7 @@ use super::film::{Film, Piece, PixelStats, Report, FIXED_MAX, FIXED_ONE};
 use super::Session;
 use crate::geometry::sampling::PIXEL_STRATA;
 use crate::raster::flat_exr::{self, ExrHeader, Kind, Scanlines};
-use crate::scene::source::Input;
+use crate::scene::load::source::Input;
 use crate::scene::BloomSettings;
 use crate::words::quoted;
 

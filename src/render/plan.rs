@@ -439,7 +439,9 @@ mod tests {
 
     #[test]
     fn refinements_need_what_they_refine() {
-        let s = scene::load("cube-textured").unwrap();
+        let s = scene::load::open("cube-textured", &Default::default())
+            .unwrap()
+            .scene;
         let p = Plan::new(
             &s,
             Features::all().without(&[Feature::Textures]),
@@ -455,7 +457,9 @@ mod tests {
 
     #[test]
     fn everything_runs_what_pruning_leaves_out() {
-        let s = scene::load("cornell").unwrap();
+        let s = scene::load::open("cornell", &Default::default())
+            .unwrap()
+            .scene;
         let pruned = Plan::new(&s, Features::all(), PlanPolicy::Prune);
         let all = Plan::new(&s, Features::all(), PlanPolicy::Everything);
         assert_eq!(
@@ -468,7 +472,9 @@ mod tests {
 
     #[test]
     fn bloom_and_bvh_keep_the_film() {
-        let s = scene::load("cornell").unwrap();
+        let s = scene::load::open("cornell", &Default::default())
+            .unwrap()
+            .scene;
         let p = Plan::new(&s, Features::all(), PlanPolicy::Prune);
         let q = Plan::new(
             &s,
@@ -485,7 +491,9 @@ mod tests {
 
     #[test]
     fn explain_has_a_header_and_a_row_per_stage() {
-        let s = scene::load("cornell").unwrap();
+        let s = scene::load::open("cornell", &Default::default())
+            .unwrap()
+            .scene;
         let text = Plan::new(&s, Features::all(), PlanPolicy::Prune).explain();
         let lines: Vec<&str> = text.lines().collect();
         assert!(lines[0].contains("stage") && lines[0].contains("why"));

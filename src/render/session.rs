@@ -11,7 +11,7 @@ use anyhow::{bail, Result};
 use super::plan::{Plan, PlanPolicy};
 use super::{Features, Film, Tracer};
 use crate::bvh::{self, Bvh};
-use crate::scene::source::Input;
+use crate::scene::load::{self, source::Input, Opened};
 use crate::scene::{self, Builder, Camera, Scene};
 
 /// What to open and how to render it.
@@ -41,9 +41,9 @@ pub struct SceneRequest {
     /// Whether glTF files may name files outside their folder.
     pub allow_outside: bool,
     /// A mesh file's up axis, where not its format's.
-    pub up: Option<crate::scene::up::Up>,
+    pub up: Option<crate::scene::load::up::Up>,
     /// An environment light in place of the scene's environment.
-    pub env: Option<crate::scene::envlight::EnvRequest>,
+    pub env: Option<crate::scene::load::EnvRequest>,
     /// Whether opening refuses an image size whose film of statistics
     /// would not fit in memory; off for a caller that checks the film it
     /// makes, which may keep far less ([`Progressive::bytes_per_pixel`]).
@@ -112,13 +112,14 @@ impl Session {
     /// files it was read from, with no BVH built: what `rayterm inputs`
     /// lists. Its warnings are the scene's.
     pub fn load(req: &SceneRequest) -> Result<(Scene, Vec<Input>)> {
-        let how = scene::Opening {
+        let how = load::Opening {
             camera: req.camera.clone(),
             allow_outside: req.allow_outside,
             up: req.up,
             env: req.env.clone(),
+            source: None,
         };
-        let (scene, inputs) = scene::load_reading(&req.spec, &how)?;
+        let Opened { scene, inputs } = load::open(&req.spec, &how)?;
         if let Err(e) = scene::check_reach(&scene) {
             // The load's warnings (a rescale, say) may be why, and would
             // otherwise never be shown.

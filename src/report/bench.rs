@@ -139,7 +139,7 @@ pub fn run(o: &BenchOptions, threads: usize, progress: &dyn Progress) -> Result<
     let mut plan = None;
     for spec in &specs {
         progress.doing(spec);
-        let scene = scene::load(spec)?;
+        let scene = scene::load::open(spec, &Default::default())?.scene;
         scenes.push(scene_row(spec, &scene, o, progress));
         if spec == "cornell" {
             progress.doing("cornell: plan against --no-plan");

@@ -69,7 +69,9 @@ pub struct ScalingReport {
 /// The teapot's own triangles at `n` segments per patch edge (the scene's
 /// floor left out, so the auto camera frames the teapot).
 pub fn teapot(n: u32) -> Result<Geometry> {
-    let mut g = scene::load(&format!("teapot:{n}"))?.geometry;
+    let mut g = scene::load::open(&format!("teapot:{n}"), &Default::default())?
+        .scene
+        .geometry;
     let keep: Vec<bool> = g.tri_mesh.iter().map(|&m| m == 0).collect();
     let mut k = keep.iter();
     g.indices.retain(|_| *k.next().unwrap_or(&false));

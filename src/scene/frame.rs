@@ -10,7 +10,7 @@
 
 use glam::{DVec3, Vec3};
 
-use super::numbers::{show, show3};
+use super::show::{show, show3};
 
 /// A scene whose centre is farther from the origin than this many times its
 /// size is moved next to the origin.

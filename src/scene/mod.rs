@@ -1,34 +1,19 @@
-//! Scenes: geometry, materials, textures, lights, camera and environment,
-//! loaded from built-in names, TOML scene files or bare mesh files (OBJ,
-//! PLY, STL, glTF).
+//! The scene model: geometry, materials, textures, lights, camera,
+//! environment and render settings, as the renderer reads them. Built from
+//! files by [`load`], which this model never calls.
 
-pub mod bezier;
-pub mod builtin;
 pub mod camera;
 pub mod emitters;
 pub mod envlight;
-pub mod file;
 pub mod frame;
-pub mod gltf;
 pub mod light;
+pub mod load;
 pub mod material;
-pub mod mesh;
-pub mod mtl;
-pub mod numbers;
-pub mod obj;
-pub mod parts;
-pub mod ply;
-mod polygon;
 mod reach;
-pub mod source;
-pub mod stl;
+pub(crate) mod show;
 pub mod summary;
 pub mod texture;
-pub mod up;
 
-use std::path::Path;
-
-use anyhow::{bail, Context, Result};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
@@ -60,6 +45,23 @@ pub struct Geometry {
 }
 
 impl Geometry {
+    /// A triangle soup: three corners of their own per triangle, no
+    /// normals or UVs, one material and one mesh (the BVH's and the
+    /// stability battery's test scenes).
+    pub fn from_triangles(tris: &[[Vec3; 3]]) -> Self {
+        let mut g = Geometry::default();
+        for (i, t) in tris.iter().enumerate() {
+            g.positions.extend_from_slice(t);
+            g.normals.extend([Vec3::ZERO; 3]);
+            g.uvs.extend([Vec2::ZERO; 3]);
+            let b = 3 * i as u32;
+            g.indices.push([b, b + 1, b + 2]);
+            g.tri_material.push(0);
+            g.tri_mesh.push(0);
+        }
+        g
+    }
+
     pub fn triangle(&self, i: usize) -> [Vec3; 3] {
         self.indices[i].map(|v| self.positions[v as usize])
     }
@@ -319,151 +321,4 @@ impl Scene {
             .push(frame::far_warning(shift.as_dvec3(), min, max));
         Some(shift)
     }
-}
-
-/// Loads `spec`: a built-in name (`cornell`, `teapot:32`, ...), a `.toml` scene
-/// file or a bare mesh file ([`mesh::Format`]); far-away and huge scenes are moved and scaled in
-/// f64 as they load ([`frame::Frame`]).
-pub fn load(spec: &str) -> Result<Scene> {
-    load_reading(spec, &Opening::default()).map(|(scene, _)| scene)
-}
-
-/// How a scene named on the command line is opened.
-#[derive(Clone, Debug, Default)]
-pub struct Opening {
-    /// The camera to look through, where the file names its cameras
-    /// (glTF).
-    pub camera: Option<String>,
-    /// Whether glTF files may name files outside their folder.
-    pub allow_outside: bool,
-    /// A bare mesh file's up axis, where not its format's
-    /// ([`mesh::Format::up`]).
-    pub up: Option<up::Up>,
-    /// An environment light in place of the scene's environment, whatever
-    /// the scene.
-    pub env: Option<envlight::EnvRequest>,
-}
-
-/// As [`load`], opened as `how` says, with the files read.
-pub fn load_reading(spec: &str, how: &Opening) -> Result<(Scene, Vec<source::Input>)> {
-    let (mut scene, read) = load_any(spec, how)?;
-    scene.warnings = fold_repeats(std::mem::take(&mut scene.warnings));
-    Ok((scene, read))
-}
-
-/// Each warning once, in the order first given, with how many more came
-/// alike (the same but for the line they name): a file that repeats a
-/// fault (ten thousand `mtllib` lines naming a missing file) says so in
-/// one line.
-fn fold_repeats(warnings: Vec<String>) -> Vec<String> {
-    let mut seen: std::collections::HashMap<String, usize> = Default::default();
-    let mut order: Vec<(String, usize)> = Vec::new();
-    for w in warnings {
-        match seen.entry(without_line(&w)) {
-            std::collections::hash_map::Entry::Occupied(e) => order[*e.get()].1 += 1,
-            std::collections::hash_map::Entry::Vacant(e) => {
-                e.insert(order.len());
-                order.push((w, 0));
-            }
-        }
-    }
-    order
-        .into_iter()
-        .map(|(w, more)| match more {
-            0 => w,
-            n => format!("{w} (and {n} more like it)"),
-        })
-        .collect()
-}
-
-/// `w` with the first `:LINE:` it holds (a place, `file:LINE: ...`) made
-/// `:#:`.
-fn without_line(w: &str) -> String {
-    let b = w.as_bytes();
-    let mut i = 0;
-    while let Some(at) = w[i..].find(':').map(|k| i + k) {
-        let digits = b[at + 1..]
-            .iter()
-            .take_while(|c| c.is_ascii_digit())
-            .count();
-        if digits > 0 && b.get(at + 1 + digits) == Some(&b':') {
-            return format!("{}:#{}", &w[..at], &w[at + 1 + digits..]);
-        }
-        i = at + 1;
-    }
-    w.to_string()
-}
-
-/// The scene `spec` names, opened as `how` says, with the files read.
-fn load_any(spec: &str, how: &Opening) -> Result<(Scene, Vec<source::Input>)> {
-    let Some(env) = &how.env else {
-        return load_named(spec, how);
-    };
-    // The command line's own mistakes before a long load.
-    let disk = source::Disk::new(how.allow_outside);
-    let mut warnings = Vec::new();
-    let light = env.light(&disk, &mut warnings)?;
-    let (mut scene, mut read) = load_named(spec, how)?;
-    scene.environment = Environment::Light(Box::new(light));
-    scene.warnings.extend(warnings);
-    read.extend(disk.files());
-    Ok((scene, read))
-}
-
-/// [`load_any`] but for the environment light asked for.
-fn load_named(spec: &str, how: &Opening) -> Result<(Scene, Vec<source::Input>)> {
-    let camera = how.camera.as_deref();
-    if let Some(scene) = builtin::load(spec)? {
-        if let Some(name) = camera {
-            bail!("--camera {name}: the built-in scene {spec} has one camera, no named ones");
-        }
-        if let Some(up) = how.up {
-            bail!("--up {up}: applies to mesh files; {spec} is a built-in scene");
-        }
-        return Ok((scene, Vec::new()));
-    }
-    let path = Path::new(spec);
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    let disk = source::Disk::new(how.allow_outside);
-    match ext.as_deref() {
-        Some("toml") if camera.is_some() => bail!(
-            "--camera {}: {spec} is a scene file: its [camera] is the one used",
-            camera.unwrap_or_default()
-        ),
-        Some("toml") if how.up.is_some() => bail!(
-            "--up {}: {spec} is a scene file: give each [[mesh]] its own `up`",
-            how.up.unwrap_or(up::Up::Y)
-        ),
-        Some("toml") => file::load_with(&disk, path, file::Overrides::default()),
-        _ if mesh::Format::of(path).is_some() => {
-            let format = mesh::Format::of(path).unwrap_or(mesh::Format::Obj);
-            mesh::load_bare_from(&disk, path, format, camera, how.up, how.env.is_some())
-        }
-        _ if !path.exists() => {
-            bail!("unknown scene '{spec}': not a built-in (see `rayterm scenes`) and no such file")
-        }
-        _ => match std::fs::metadata(path) {
-            Ok(m) if !m.is_file() => bail!(
-                "{spec}: not a regular file ({}); a scene is a built-in name, a .toml scene \
-                 file or a {} mesh",
-                source::file_type_name(&m),
-                mesh::EXTENSIONS
-            ),
-            _ => {
-                bail!(
-                    "{spec}: a scene must be a built-in name, a .toml scene file or a {} mesh",
-                    mesh::EXTENSIONS
-                )
-            }
-        },
-    }
-    .map(|mut scene| {
-        // Summaries print it; a mesh's name is its file's, from the command line.
-        scene.name = crate::words::quoted(&scene.name);
-        (scene, disk.files())
-    })
-    .with_context(|| format!("loading scene '{spec}'"))
 }

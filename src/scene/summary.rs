@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::{Environment, Light, Scene};
-use crate::scene::numbers::show3;
+use crate::scene::show::show3;
 
 /// A light's colour or intensity, three channels or one where they agree.
 fn value(v: Vec3) -> String {

@@ -1,6 +1,7 @@
 //! Textures (linear RGB, repeat, clamped or mirrored wrapping, nearest or
 //! bilinear lookup) and cube maps in the OpenGL face convention.
 
+use crate::color::srgb_to_linear;
 use std::sync::Arc;
 
 use anyhow::{bail, Result};
@@ -78,15 +79,6 @@ pub enum Encoding {
     #[default]
     Srgb,
     Linear,
-}
-
-/// sRGB transfer function, decoded to linear.
-pub fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
 }
 
 /// Most memory one texture may take to decode and store (12 bytes a texel

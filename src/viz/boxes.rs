@@ -107,7 +107,9 @@ mod tests {
     use crate::viz::View;
 
     fn teapot() -> Bvh {
-        let s = scene::load("teapot:4").unwrap();
+        let s = scene::load::open("teapot:4", &Default::default())
+            .unwrap()
+            .scene;
         crate::bvh::build(&s.geometry, Builder::Sah)
     }
 

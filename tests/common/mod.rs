@@ -4,7 +4,7 @@
 use glam::{Vec2, Vec3};
 use rayterm::bvh::Bvh;
 use rayterm::render::{Features, Film, Plan, Progressive, SceneRequest, Session, Tracer};
-use rayterm::scene::obj::{MeshData, Parts, Placement};
+use rayterm::scene::load::obj::{MeshData, Parts, Placement};
 use rayterm::scene::{Builder, Camera, Environment, Light, Material, Projection, Scene, Settings};
 
 /// Positions, triangles and material of one mesh.

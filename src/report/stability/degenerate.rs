@@ -11,8 +11,8 @@ use glam::{Vec2, Vec3};
 
 use super::stiff::render;
 use super::{Options, Row};
-use crate::scene::obj::{self, Parts, Placement};
-use crate::scene::source::Memory;
+use crate::scene::load::obj::{self, Parts, Placement};
+use crate::scene::load::source::Memory;
 use crate::scene::{Camera, Environment, Geometry, Light, MeshInfo, Projection, Scene, Settings};
 
 /// An OBJ of good, degenerate and nearly degenerate triangles; the comments

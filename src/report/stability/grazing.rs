@@ -8,12 +8,12 @@ use anyhow::Result;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
-use super::{soup, Options, Row};
+use super::{Options, Row};
 use crate::bvh::{self, Bvh, TraversalStats};
 use crate::geometry::sampling::Rng;
 use crate::geometry::triangle::{intersect, RayShear};
 use crate::geometry::Ray;
-use crate::scene::Builder;
+use crate::scene::{Builder, Geometry};
 
 /// Components a grazing direction is made of: zeros of both signs and
 /// magnitudes at, below and far below 1e-30 (the last one subnormal).
@@ -325,7 +325,7 @@ pub fn grazing(o: &Options) -> Result<Vec<Row>> {
     let mut tris = lattice();
     let slant = slanted(&mut rng, 24);
     tris.extend_from_slice(&slant);
-    let g = soup(&tris);
+    let g = Geometry::from_triangles(&tris);
     let mut rays = lattice_rays(o.rays / 2, &mut rng);
     rays.extend(plane_rays(&slant, o.rays / 2, &mut rng));
     let mut total = Grazing::default();

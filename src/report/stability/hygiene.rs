@@ -10,9 +10,9 @@ use std::path::Path;
 use anyhow::Result;
 
 use super::Row;
-use crate::scene::file::{load_with, Overrides};
-use crate::scene::obj::{self, Parts, Placement};
-use crate::scene::source::Memory;
+use crate::scene::load::obj::{self, Parts, Placement};
+use crate::scene::load::source::Memory;
+use crate::scene::load::{self, Opening};
 
 /// What a probe must produce: an error or a warning containing the text.
 #[derive(Clone, Copy, Debug)]
@@ -147,8 +147,12 @@ pub fn probes() -> Vec<(&'static str, Memory, &'static str, Expect)> {
 fn outcome(src: &Memory, entry: &str) -> (Option<String>, Vec<String>) {
     let path = Path::new(entry);
     if entry.ends_with(".toml") {
-        match load_with(src, path, Overrides::default()) {
-            Ok(s) => (None, s.warnings),
+        let how = Opening {
+            source: Some(src),
+            ..Default::default()
+        };
+        match load::open(entry, &how) {
+            Ok(o) => (None, o.scene.warnings),
             Err(e) => (Some(format!("{e:#}")), Vec::new()),
         }
     } else {

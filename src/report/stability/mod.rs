@@ -16,10 +16,7 @@ pub mod watertight;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use glam::Vec3;
 use serde::Serialize;
-
-use crate::scene::Geometry;
 
 pub use degenerate::degenerate;
 pub use grazing::grazing;
@@ -93,7 +90,10 @@ impl Default for Options {
 /// Runs every case on `scene_spec` (the scale and offset cases use it; the
 /// others use their own geometry) and returns the rows in table order.
 pub fn run_battery(scene_spec: &str, o: &Options) -> Result<Vec<Row>> {
-    run_battery_on(&crate::scene::load(scene_spec)?, o)
+    run_battery_on(
+        &crate::scene::load::open(scene_spec, &Default::default())?.scene,
+        o,
+    )
 }
 
 /// Peak memory of the battery per pixel of its images, and more per worker
@@ -125,21 +125,6 @@ pub fn run_battery_on(scene: &crate::scene::Scene, o: &Options) -> Result<Vec<Ro
     rows.extend(reintersection(o).context("reintersection cases")?);
     rows.extend(hygiene().context("input hygiene cases")?);
     Ok(rows)
-}
-
-/// A triangle soup as scene geometry (no normals or UVs, one material).
-pub fn soup(tris: &[[Vec3; 3]]) -> Geometry {
-    let mut g = Geometry::default();
-    for (i, t) in tris.iter().enumerate() {
-        g.positions.extend_from_slice(t);
-        g.normals.extend([Vec3::ZERO; 3]);
-        g.uvs.extend([glam::Vec2::ZERO; 3]);
-        let b = 3 * i as u32;
-        g.indices.push([b, b + 1, b + 2]);
-        g.tri_material.push(0);
-        g.tri_mesh.push(0);
-    }
-    g
 }
 
 /// A figure as the table prints it: counts as integers, others with four

@@ -9,13 +9,13 @@ use anyhow::Result;
 use glam::{DVec3, Vec3};
 
 use super::watertight::sphere;
-use super::{soup, Options, Row};
+use super::{Options, Row};
 use crate::bvh::{self, TraversalStats};
 use crate::geometry::offset::{geometric_normal, hit_point, offset_origin};
 use crate::geometry::sampling::Rng;
 use crate::geometry::triangle::{intersect, RayShear};
 use crate::geometry::Ray;
-use crate::scene::Builder;
+use crate::scene::{Builder, Geometry};
 
 /// Directions spawned from each hit.
 const SPAWNED: u32 = 4;
@@ -112,7 +112,7 @@ pub fn sphere_mesh(n: u32, scale: f32, offset: Vec3, seed: u64) -> Result<Rehits
         .into_iter()
         .map(|t| t.map(|p| p * scale + offset))
         .collect();
-    let b = bvh::build(&soup(&tris), Builder::Sah);
+    let b = bvh::build(&Geometry::from_triangles(&tris), Builder::Sah);
     let mut rng = Rng::for_sample(1, 4, seed);
     let mut total = Rehits::default();
     for _ in 0..n {

@@ -548,7 +548,7 @@ pub fn transform_rows(scene: &Scene, t: Transform, reference: &Probed, o: &Optio
         ),
     ));
     if let Some(unit) = &unit {
-        // As `scene::load` would hand it to the renderer: recentred
+        // As `scene::load::open` would hand it to the renderer: recentred
         // when far from the origin.
         let mut shown = moved.clone();
         let recentred = shown.recentre().is_some();
@@ -600,7 +600,9 @@ mod tests {
 
     #[test]
     fn far_cases_are_placed_in_f64_and_moved_back() {
-        let scene = crate::scene::load("cornell").unwrap();
+        let scene = crate::scene::load::open("cornell", &Default::default())
+            .unwrap()
+            .scene;
         let t = Transform::new(1.0, 1e7).recentred();
         let (near, shift) = place(&scene, t);
         // Cornell is 2 across: its centre lands near (2e7, -1e7, 1.5e7),

@@ -13,10 +13,9 @@ use glam::Vec3;
 use super::{format_figure, Options, Row};
 use crate::bvh::{self, TraversalStats};
 use crate::render::{Features, Film, Progressive, SceneRequest, Session};
-use crate::scene::obj::{self, MeshData, Parts, Placement};
-use crate::scene::{
-    builtin, Builder, Camera, Environment, Light, Material, Projection, Scene, Settings,
-};
+use crate::scene::load::builtin;
+use crate::scene::load::obj::{self, MeshData, Parts, Placement};
+use crate::scene::{Builder, Camera, Environment, Light, Material, Projection, Scene, Settings};
 use glam::Affine3A;
 
 /// Renders `spp` passes with every feature (or `features`) on.

@@ -16,12 +16,13 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::topology::{aimed, Crossing, Topology};
-use super::{soup, Options, Row};
+use super::{Options, Row};
 use crate::bvh::{self, Bvh, TraversalStats};
 use crate::geometry::sampling::Rng;
 use crate::geometry::Ray;
-use crate::scene::obj::{self, Parts, Placement};
-use crate::scene::{builtin, Builder};
+use crate::scene::load::builtin;
+use crate::scene::load::obj::{self, Parts, Placement};
+use crate::scene::{Builder, Geometry};
 
 /// Rays shot and rays that hit nothing.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -99,7 +100,7 @@ pub fn sphere() -> Result<Vec<[Vec3; 3]>> {
 
 /// The teapot of `teapot:N`, without its floor.
 pub fn teapot(segments: u32) -> Result<Vec<[Vec3; 3]>> {
-    let s = crate::scene::load(&format!("teapot:{segments}"))?;
+    let s = crate::scene::load::open(&format!("teapot:{segments}"), &Default::default())?.scene;
     let mesh = s
         .meshes
         .iter()
@@ -151,7 +152,7 @@ pub fn watertight(o: &Options) -> Result<Vec<Row>> {
 
     let sphere = sphere()?;
     let topo = Topology::new(sphere.clone());
-    let bvh = bvh::build(&soup(&sphere), Builder::Sah);
+    let bvh = bvh::build(&Geometry::from_triangles(&sphere), Builder::Sah);
     let per_origin = o.rays / SPHERE_INSIDE.len() as u32;
     let random: Vec<Ray> = SPHERE_INSIDE
         .iter()
@@ -179,7 +180,7 @@ pub fn watertight(o: &Options) -> Result<Vec<Row>> {
     let off = Vec3::new(1e6, -5e5, 7.5e5);
     let far: Vec<[Vec3; 3]> = sphere.iter().map(|t| t.map(|p| p + off)).collect();
     let far_topo = Topology::new(far.clone());
-    let far_bvh = bvh::build(&soup(&far), Builder::Sah);
+    let far_bvh = bvh::build(&Geometry::from_triangles(&far), Builder::Sah);
     let far_inside = SPHERE_INSIDE.map(|p| p + off);
     let mut e = Escapes::default();
     for &p in &far_inside {
@@ -198,7 +199,7 @@ pub fn watertight(o: &Options) -> Result<Vec<Row>> {
     let n = o.teapot_segments;
     let pot = teapot(n)?;
     let topo = Topology::new(pot.clone());
-    let bvh = bvh::build(&soup(&pot), Builder::Sah);
+    let bvh = bvh::build(&Geometry::from_triangles(&pot), Builder::Sah);
     let per_origin = o.rays / TEAPOT_INSIDE.len() as u32;
     // Random directions from inside: the data leaves a gap under the lid,
     // so rays leaving through it are counted apart; any other escape is a crack.

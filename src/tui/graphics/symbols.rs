@@ -621,7 +621,7 @@ mod tests {
     #[test]
     fn finer_symbols_beat_half_blocks_on_every_scene() {
         let (cols, rows) = (60u32, 20u32);
-        for (scene, _) in crate::scene::builtin::SCENES {
+        for (scene, _) in crate::scene::load::builtin::SCENES {
             for symbols in [Symbols::Quad, Symbols::Sextant, Symbols::Octant] {
                 let (gx, gy) = symbols.grid();
                 let (w, h) = (cols * gx, rows * gy);

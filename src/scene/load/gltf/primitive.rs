@@ -9,8 +9,9 @@ use anyhow::{anyhow, bail, Result};
 use glam::{DAffine3, DVec3, Vec2, Vec3};
 
 use super::Reader;
-use crate::scene::numbers::{self, show3};
-use crate::scene::parts::{place_normals, place_positions, Parts, Placed};
+use crate::scene::load::numbers;
+use crate::scene::load::parts::{place_normals, place_positions, Parts, Placed};
+use crate::scene::show::show3;
 
 /// What a primitive's accessors hold, checked: every index in range and
 /// every number finite.
@@ -86,7 +87,7 @@ impl Reader<'_> {
     /// `value` as read from accessor `a`, or nothing of it where its
     /// buffer lies outside the glTF's folder ([`Outside`]).
     ///
-    /// [`Outside`]: crate::scene::source::Outside
+    /// [`Outside`]: crate::scene::load::source::Outside
     pub(super) fn shown(&self, a: Option<&::gltf::Accessor>, value: String) -> String {
         let b = a.and_then(|a| self.buffer_of(a));
         match b.and_then(|b| self.foreign.get(b)?.as_ref()) {

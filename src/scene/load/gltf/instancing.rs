@@ -9,7 +9,7 @@ use anyhow::{anyhow, bail, Result};
 use glam::{DAffine3, DQuat, DVec3};
 
 use super::Reader;
-use crate::scene::numbers::show3;
+use crate::scene::show::show3;
 
 /// The extension's name, as a node's `extensions` holds it.
 const NAME: &str = "EXT_mesh_gpu_instancing";

@@ -15,7 +15,7 @@ use glam::{DVec3, Vec2};
 
 use super::{Face, Faces, NONE};
 use crate::memory;
-use crate::scene::numbers::{self, Absurd};
+use crate::scene::load::numbers::{self, Absurd};
 use crate::words::quoted;
 
 /// Pieces are cut after about this many bytes.

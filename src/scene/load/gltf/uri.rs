@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use base64::Engine;
 
-use crate::scene::source::{resolve, Outside, Source};
+use crate::scene::load::source::{resolve, Outside, Source};
 use crate::words::{path as shown, quoted};
 
 /// The bytes a URI holds itself (a `data:` URI's base64 payload), or why it

@@ -17,8 +17,9 @@ use std::path::Path;
 use anyhow::{anyhow, bail, Result};
 use glam::{DAffine3, DVec3};
 
-use super::numbers::{self, show3, Absurd};
+use super::numbers::{self, Absurd};
 use super::parts::{mesh_fits, place_positions, Placed};
+use crate::scene::show::show3;
 
 /// Bytes of a binary triangle: normal, three vertices, attribute count.
 const TRIANGLE: u64 = 50;

@@ -10,7 +10,7 @@ use std::collections::HashMap;
 use glam::{DVec3, Vec2, Vec3};
 
 use super::{Element, PlyMesh, Role};
-use crate::scene::polygon::{quad_is_fan, Triangulator};
+use crate::scene::load::polygon::{quad_is_fan, Triangulator};
 
 /// What the face element gives each face beyond its vertices.
 #[derive(Clone, Copy, Default)]

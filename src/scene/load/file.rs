@@ -19,17 +19,19 @@ use toml::Spanned;
 
 use crate::memory;
 
-use super::frame::Frame;
+use super::bezier;
 use super::mesh;
 use super::numbers::{self, ABSURD};
 use super::obj::{Parts, Placed};
 use super::parts::bounds;
-use super::source::{resolve, Disk, Kind, Source};
-use super::texture::{Encoding, FACE_NAMES};
+use super::source::{resolve, Kind, Source};
 use super::up::Up;
-use super::{
-    bezier, BloomSettings, Builder, Camera, CubeMap, EnvLight, Environment, Light, Material,
-    Projection, Scene, Settings,
+use crate::scene::frame::Frame;
+use crate::scene::show::{show, show3};
+use crate::scene::texture::{Encoding, FACE_NAMES};
+use crate::scene::{
+    BloomSettings, Builder, Camera, CubeMap, EnvLight, Environment, Light, Material, Projection,
+    Scene, Settings,
 };
 use crate::words::{clip_quotes, printable, quoted};
 
@@ -43,7 +45,7 @@ impl TryFrom<f64> for Num {
     type Error = String;
     fn try_from(x: f64) -> Result<Self, String> {
         match numbers::unusable(x) {
-            Some(why) => Err(format!("{} {why}", numbers::show(x))),
+            Some(why) => Err(format!("{} {why}", show(x))),
             None => Ok(Num(x)),
         }
     }
@@ -282,7 +284,7 @@ struct RenderSpec {
     size: Option<Spanned<Exact<u32, 2>>>,
     spp: Option<Spanned<u32>>,
     max_depth: Option<Spanned<u32>>,
-    integrator: Option<super::Integrator>,
+    integrator: Option<crate::scene::Integrator>,
     builder: Option<Builder>,
     ambient: Option<Rgb>,
     light_samples: Option<Spanned<u32>>,
@@ -340,10 +342,6 @@ fn parse(path: &Path, text: &str) -> Result<SceneFile> {
     })
 }
 
-pub fn load_path(path: &Path) -> Result<Scene> {
-    load_with(&Disk::default(), path, Overrides::default())
-}
-
 /// Largest segment count accepted for Bézier meshes.
 const MAX_SEGMENTS: u32 = bezier::MAX_SEGMENTS;
 
@@ -376,7 +374,7 @@ impl Locator<'_> {
     /// Warns on a colour with a negative or absurd component.
     fn colour(&self, c: &Rgb, what: &str, warnings: &mut Vec<String>) -> Vec3 {
         let v = rgb(c);
-        let [x, y, z] = v.to_array().map(|c| numbers::show(c as f64));
+        let [x, y, z] = v.to_array().map(|c| show(c as f64));
         let shown = format!("{what} [{x}, {y}, {z}]");
         warnings.extend(self.odd_colours(c.span(), &shown, &[v]));
         v
@@ -481,7 +479,7 @@ fn patches(
             bail!(
                 "{}: once placed, the surface reaches {}, which {why}",
                 mesh_path.display(),
-                numbers::show3(q)
+                show3(q)
             );
         }
         positions.push(q);
@@ -616,7 +614,7 @@ pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> 
             parts.warnings.push(format!(
                 "{here}: mesh {shown}: coordinates reach {} once placed; beyond {ABSURD:e} \
                  they are almost certainly a mistake",
-                numbers::show(reach),
+                show(reach),
             ));
         }
     }
@@ -935,15 +933,14 @@ fn load_cube(
             .read(&p, Kind::Image)
             .map_err(anyhow::Error::from)
             .and_then(|bytes| {
-                super::Texture::decode(&crate::words::path(&p), &bytes, Encoding::Srgb).map_err(
-                    |e| {
+                crate::scene::Texture::decode(&crate::words::path(&p), &bytes, Encoding::Srgb)
+                    .map_err(|e| {
                         anyhow!(
                             "{}: {}",
                             crate::words::path(&p),
                             clip_quotes(&format!("{e:#}"))
                         )
-                    },
-                )
+                    })
             });
         let read = match &outside {
             Some(o) => o.quiet(Kind::Image, read, warnings, usize::MAX),
@@ -951,7 +948,7 @@ fn load_cube(
         };
         faces.push(read.with_context(|| what.clone())?);
     }
-    let faces: [super::Texture; 6] = faces
+    let faces: [crate::scene::Texture; 6] = faces
         .try_into()
         .map_err(|_| anyhow!("six faces expected"))?;
     Ok(CubeMap { faces })
@@ -980,7 +977,7 @@ fn environment_from(
             Some(s) if s.get_ref().0 < 0.0 => bail!(
                 "{}: environment strength must be 0 or more, not {}",
                 loc.at(s.span()),
-                numbers::show(s.get_ref().0)
+                show(s.get_ref().0)
             ),
             Some(s) => s.get_ref().f32(),
             None => 1.0,
@@ -1067,7 +1064,7 @@ fn map_from(
         warnings.push(o.warning(&here, "environment map", written));
     }
     let before = warnings.len();
-    let read = EnvLight::load(src, &p, warnings);
+    let read = super::envmap::read(src, &p, warnings);
     let read = match &outside {
         Some(o) => o.quiet(Kind::Image, read, warnings, before),
         None => read,
@@ -1094,10 +1091,10 @@ fn settings_from(
         (s.width, s.height) = (w, h);
     }
     if let Some(v) = &r.spp {
-        s.spp = loc.range(v, 1..=super::MAX_SPP, "render.spp")?;
+        s.spp = loc.range(v, 1..=crate::scene::MAX_SPP, "render.spp")?;
     }
     if let Some(v) = &r.max_depth {
-        s.max_depth = loc.range(v, 0..=super::MAX_DEPTH, "render.max_depth")?;
+        s.max_depth = loc.range(v, 0..=crate::scene::MAX_DEPTH, "render.max_depth")?;
     }
     s.builder = r.builder.unwrap_or(s.builder);
     s.integrator = r.integrator.or(s.integrator);
@@ -1161,7 +1158,7 @@ mod tests {
     }
 
     fn load_text(text: &str) -> Result<Scene> {
-        let src = crate::scene::source::Memory::default()
+        let src = crate::scene::load::source::Memory::default()
             .with("s.toml", text)
             .with("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
         load_with(&src, Path::new("s.toml"), Overrides::default())

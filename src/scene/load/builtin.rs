@@ -8,7 +8,7 @@ use anyhow::{bail, Context, Result};
 
 use super::file::{load_with, Overrides};
 use super::source::Embedded;
-use super::Scene;
+use crate::scene::Scene;
 
 macro_rules! embed {
     ($($p:literal),* $(,)?) => {
@@ -72,7 +72,7 @@ pub const SCENES: &[(&str, &str)] = &[
 ];
 
 /// Loads a built-in scene; `Ok(None)` when `spec` names none.
-pub fn load(spec: &str) -> Result<Option<Scene>> {
+pub(crate) fn load(spec: &str) -> Result<Option<Scene>> {
     let (name, arg) = match spec.split_once(':') {
         Some((n, a)) => (n, Some(a)),
         None => (spec, None),

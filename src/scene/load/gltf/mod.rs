@@ -38,8 +38,8 @@ use glam::{DAffine3, DMat4, DVec3, Vec3};
 
 use super::parts::{mesh_fits, Parts, Placed};
 use super::source::{Kind, Outside, Source};
-use super::texture::{Encoding, Texture, Wrap};
-use super::{Material, Pbr, Projection};
+use crate::scene::texture::{Encoding, Texture, Wrap};
+use crate::scene::{Material, Pbr, Projection};
 use check::{check_lights, check_transform, check_trees, check_values, Broken};
 use primitive::{Decoded, Key};
 use uri::inline_uri;

@@ -12,8 +12,8 @@ use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::{Element, Kind, Role, Scalar};
-use crate::scene::numbers::{self, ABSURD};
-use crate::scene::texture::srgb_to_linear;
+use crate::color::srgb_to_linear;
+use crate::scene::load::numbers::{self, ABSURD};
 
 /// Records a core takes at a time, at least.
 const RUN: usize = 1 << 14;

@@ -460,7 +460,7 @@ mod tests {
     use super::*;
     use std::collections::HashMap;
 
-    const TEAPOT: &str = include_str!("../../data/teapot.bpt");
+    const TEAPOT: &str = include_str!("../../../data/teapot.bpt");
 
     fn teapot() -> Vec<Patch> {
         parse_bpt(TEAPOT).expect("data/teapot.bpt parses")

@@ -7,14 +7,14 @@ use std::path::Path;
 use anyhow::{bail, Result};
 use glam::{DAffine3, Vec3};
 
-use super::frame::Frame;
 use super::gltf::{self, FileCamera, FileLight};
-use super::light::Cone;
 use super::obj;
 use super::parts::{Parts, Placed};
 use super::source::{Kind, Source};
 use super::up::Up;
-use super::{Camera, EnvLight, Environment, Light, Material, Scene, Settings};
+use crate::scene::frame::Frame;
+use crate::scene::light::Cone;
+use crate::scene::{Camera, EnvLight, Environment, Light, Material, Scene, Settings};
 
 /// The key light of a glTF file without lights, in Phong units (π times
 /// this in lux), and the radiance of its sky: a white matte surface
@@ -151,7 +151,7 @@ fn read_placed(
 /// workload's auto camera and point light (none where `env_given`: the
 /// environment light the caller puts in lights it); moved next to the
 /// origin (and scaled) in f64 when far or huge ([`Frame`]).
-pub fn load_bare_from(
+pub(crate) fn load_bare_from(
     src: &dyn Source,
     path: &Path,
     format: Format,

@@ -10,11 +10,11 @@ use anyhow::Result;
 use glam::{Affine3A, DAffine3, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::frame::Frame;
 use super::source::{resolve, Kind, Outside, Source};
-use super::texture::Encoding;
-use super::{Geometry, Material, MeshInfo, Texture};
 use crate::memory;
+use crate::scene::frame::Frame;
+use crate::scene::texture::Encoding;
+use crate::scene::{Geometry, Material, MeshInfo, Texture};
 
 /// Mesh placement for meshes built in code.
 #[derive(Clone, Copy, Debug)]

@@ -47,7 +47,7 @@ impl Kind {
     /// an OBJ may hold tens of millions of triangles (1 GiB of text is about
     /// 20 million), and so may binary meshes (2 GiB is 40 million triangles
     /// of binary STL, 100 million of binary PLY); an encoded image is bounded here and its decoded size
-    /// by the texture budget ([`super::texture::TEXTURE_BUDGET`]).
+    /// by the texture budget ([`crate::scene::texture::TEXTURE_BUDGET`]).
     pub const fn limit(self) -> u64 {
         match self {
             Kind::Scene => 16 * MIB,

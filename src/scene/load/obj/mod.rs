@@ -29,15 +29,17 @@ use anyhow::{anyhow, bail, Context, Result};
 use glam::{DAffine3, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::frame::Frame;
 use super::mtl::{self, MtlMaterial};
-use super::numbers::{self, show3, Absurd};
+use super::numbers::{self, Absurd};
 use super::parts::mesh_fits;
 use super::polygon::Triangulator;
 use super::source::{resolve, text_lossy, Kind, ReadError, Source};
-use super::texture::{srgb_to_linear, Wrap};
-use super::Material;
+use crate::color::srgb_to_linear;
 use crate::memory;
+use crate::scene::frame::Frame;
+use crate::scene::show::show3;
+use crate::scene::texture::Wrap;
+use crate::scene::Material;
 use piece::{Budget, Out, Piece, Switch, Tally, Unusable};
 
 pub use super::numbers::ABSURD;
@@ -846,7 +848,7 @@ pub fn load_into(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::source::Memory;
+    use crate::scene::load::source::Memory;
 
     fn load(files: Vec<(&'static str, String)>) -> Result<Parts> {
         let src = files

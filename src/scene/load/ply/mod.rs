@@ -22,10 +22,11 @@ use std::path::Path;
 use anyhow::{anyhow, bail, Result};
 use glam::{DAffine3, DVec3, Vec2, Vec3};
 
-use super::numbers::{self, show3, ABSURD};
+use super::numbers::{self, ABSURD};
 use super::parts::{mesh_fits, place_normals, place_positions, Placed};
-use super::texture::srgb_to_linear;
+use crate::color::srgb_to_linear;
 use crate::memory;
+use crate::scene::show::{show, show3};
 use crate::words::quoted;
 use faces::Faces;
 
@@ -767,7 +768,7 @@ fn body_from<R: Values>(
                             continue;
                         }
                         if let Some(why) = numbers::unusable(x) {
-                            return Err(fail(r, name, format!("{} {why}", numbers::show(x))));
+                            return Err(fail(r, name, format!("{} {why}", show(x))));
                         }
                         match role {
                             Role::Position(k) => {
@@ -795,7 +796,7 @@ fn body_from<R: Values>(
                             for _ in 0..n {
                                 let x = r.float(item).map_err(|m| fail(r, name, m))?;
                                 if let Some(why) = numbers::unusable(x) {
-                                    let shown = numbers::show(x);
+                                    let shown = show(x);
                                     return Err(fail(r, name, format!("{shown} {why}")));
                                 }
                                 face_uvs.push(x as f32);
@@ -935,7 +936,7 @@ fn body_from<R: Values>(
             "{}: vertex {i}: absurd value {}{more}: beyond {ABSURD:e} shading and shadows \
              lose all precision",
             path.display(),
-            numbers::show(x)
+            show(x)
         ));
     }
     m.normals = (!normals.is_empty()).then_some(normals);
