@@ -1,5 +1,4 @@
 //! Small scenes built in code, and helpers to render them.
-#![allow(dead_code)]
 
 use glam::{Vec2, Vec3};
 use rayterm::bvh::Bvh;
