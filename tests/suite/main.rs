@@ -1,14 +1,14 @@
-//! The integration tests that can share a process, as one test binary:
-//! one module per subject, run on parallel threads like the tests of any
-//! one file. One binary links the library once where a binary per file
-//! linked it some thirty times, which was most of an edit-test cycle.
+//! The integration tests that can share a process, as one test binary: one
+//! module per subject, run on parallel threads like the tests of any one
+//! file. One binary builds and links against the library once where a
+//! binary per file did so 26 times (CONTRIBUTING.md has the figures).
 //!
 //! A new test file goes here, as a module below. Only a test that cannot
 //! share a process gets a binary of its own in `tests/`: one that drives a
 //! real or pseudo-terminal, changes process-wide state (environment
 //! variables, the current directory, signal handlers) or must be alone.
-//! Tests here run at the same time: each writes under a folder of its own
-//! (`files::Dir`, named for the test) and starts its own processes.
+//! Tests here run at the same time: each writes under a temporary folder
+//! named for it and the process, and signals only processes it started.
 
 // Helpers shared by the modules below.
 mod campaign;
