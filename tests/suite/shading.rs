@@ -1,8 +1,6 @@
 //! Whitted shading against hand-computed values: Phong, shadows, reflection.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use glam::Vec3;
 use rayterm::render::{Feature, Features};
 use rayterm::scene::{Builder, Light};

@@ -1,7 +1,6 @@
 //! Area lights over a plane with no occluder, whose pixel values are known
 //! by quadrature: the shading integral is computed here in f64 from the
 //! light's definition, independently of the renderer's sampling code.
-#![allow(dead_code)]
 
 use glam::{DVec3, Vec3};
 use rayterm::color::LUMA;

@@ -4,10 +4,9 @@
 //! shade; every format opens bare, from the command line and as a
 //! `[[mesh]]`; malformed files say which file and where.
 
-mod common;
-mod files;
+use crate::common;
 
-use files::{rayterm, within_deadline, Dir};
+use crate::files::{rayterm, within_deadline, Dir};
 use glam::Vec3;
 use rayterm::render::{Feature, Features};
 use rayterm::scene::{self, Builder, Projection, Scene};

@@ -1,9 +1,7 @@
 //! The scene plan: what each built-in scene needs, and that leaving stages
 //! out never changes the image.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use rayterm::render::{Feature, Features, Plan, PlanPolicy};
 use rayterm::scene::{self, Builder};
 

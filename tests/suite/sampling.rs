@@ -3,11 +3,8 @@
 //! across thread counts, glossy reflection's mirror limit, and an
 //! environment light's importance sampling by quadrature.
 
-mod common;
-mod exact;
-
-use common::*;
-use exact::*;
+use crate::common::*;
+use crate::exact::*;
 use glam::{DVec3, Vec3};
 use rayterm::bvh;
 use rayterm::render::{Feature, Features, Plan, PlanPolicy};

@@ -1,7 +1,6 @@
 //! Files on disk for loader tests: a temporary folder removed on drop,
 //! special files (FIFOs, symbolic links), and the binary run with a
 //! deadline, so that a regression shows as a failure and never as a hang.
-#![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};

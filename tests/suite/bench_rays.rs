@@ -4,7 +4,7 @@
 //! for bit as the Embree harness makes them, and its reference checksums on
 //! the shared meshes.
 
-mod common;
+use crate::common;
 
 use rayterm::bvh::{self, Simd, TraversalStats};
 use rayterm::geometry::triangle::{intersect, RayShear};

@@ -1,7 +1,5 @@
 //! BVH invariants, agreement with brute force, watertightness.
 
-mod common;
-
 use glam::Vec3;
 use rayterm::bvh::{self, Bvh, TraversalStats};
 use rayterm::geometry::sampling::Rng;

@@ -1,11 +1,9 @@
 //! End-to-end rendering: golden image, builders, scale invariance, CLI.
 
-mod common;
-
 use std::path::Path;
 use std::process::Command;
 
-use common::*;
+use crate::common::*;
 use glam::Vec3;
 use rayterm::render::{post, Feature, Features, Plan, PlanPolicy};
 use rayterm::scene::{self, Builder};

@@ -19,7 +19,7 @@ use proptest::test_runner::{
     Config, FailurePersistence, FileFailurePersistence, PersistedSeed, RngSeed,
 };
 
-/// The regressions file beside each test file: `tests/NAME.proptest-regressions`.
+/// The regressions file beside each test file: `tests/suite/NAME.proptest-regressions`.
 const FILE: FileFailurePersistence = FileFailurePersistence::WithSource("proptest-regressions");
 
 /// The seed of the default cases. Changing it changes which cases run.

@@ -8,13 +8,11 @@
 //! message naming it: through the loader with a deadline, and through the
 //! binary, which exits 1 without a panic.
 
-mod files;
-
-use files::{rayterm, within_deadline, Dir};
+use crate::files::{rayterm, within_deadline, Dir};
 use glam::Vec3;
 use rayterm::scene::{self, Scene, Wrap};
 
-const CHECKER: &[u8] = include_bytes!("../data/meshes/checker.png");
+const CHECKER: &[u8] = include_bytes!("../../data/meshes/checker.png");
 
 fn load(spec: &str) -> Result<Scene, String> {
     let s = spec.to_string();

@@ -4,9 +4,7 @@
 //! and scaled as asked; what cannot be light is refused, naming the file
 //! or value, with no output written.
 
-mod files;
-
-use files::{rayterm, Dir};
+use crate::files::{rayterm, Dir};
 use glam::Vec3;
 
 /// A 16x8 map whose colour depends on the way it looks: grey along -X (the

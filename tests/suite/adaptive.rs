@@ -2,10 +2,7 @@
 //! quadrature, the error estimate against the true error, the same image on
 //! any thread count, and samples spent where the noise is.
 
-mod common;
-mod exact;
-
-use exact::*;
+use crate::exact::*;
 use glam::Vec3;
 use rayterm::color::LUMA;
 use rayterm::render::{Feature, Features, Film, Progressive, SceneRequest, Session, Stop};

@@ -11,7 +11,7 @@
 //! it does near it; TOML arrays of the wrong length are errors at their
 //! position.
 
-mod campaign;
+use crate::campaign;
 
 use glam::Vec3;
 use proptest::prelude::*;

@@ -2,11 +2,8 @@
 //! film's error estimate on a scene whose exact image comes from quadrature,
 //! deterministic scenes, the reference cache and the command's outputs.
 
-mod common;
-mod exact;
-
-use common::*;
-use exact::*;
+use crate::common::*;
+use crate::exact::*;
 use glam::Vec3;
 use rayterm::bvh::{self, Bvh};
 use rayterm::raster::reference::load_reference;

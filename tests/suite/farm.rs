@@ -3,13 +3,11 @@
 //! missing parts named with the commands that render them, staged merges,
 //! checkpoints on request and early, and `render --dry-run`.
 
-mod files;
-
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use files::{rayterm, Dir, Run};
+use crate::files::{rayterm, Dir, Run};
 use glam::Vec3;
 use rayterm::raster::Format;
 use serde_json::{json, Value};

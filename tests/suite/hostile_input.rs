@@ -10,13 +10,11 @@
 //! built binary with a deadline, and asserts either a clear error naming the
 //! file (and line where there is one) or a correct scene; none may panic.
 
-mod files;
-
-use files::{rayterm, rayterm_within, within_deadline, Dir};
+use crate::files::{rayterm, rayterm_within, within_deadline, Dir};
 use rayterm::scene::{self, Scene};
 
 const TRI: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-const CHECKER: &[u8] = include_bytes!("../data/meshes/checker.png");
+const CHECKER: &[u8] = include_bytes!("../../data/meshes/checker.png");
 
 /// Loads `spec` as the command line would, with a deadline.
 fn load(spec: &str) -> Result<Scene, String> {

@@ -5,9 +5,7 @@
 //! tests/files/gltfpack), required extensions rayterm does not read, and
 //! Draco. Each opens, or is refused with a message that says why.
 
-mod files;
-
-use files::{within_deadline, Dir};
+use crate::files::{within_deadline, Dir};
 use glam::{Vec2, Vec3};
 use rayterm::scene::{self, Scene};
 use serde_json::{json, Value};

@@ -4,9 +4,7 @@
 //! off, multiple importance sampling's densities agreeing both ways, and
 //! long paths that stay finite.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use glam::Vec3;
 use rayterm::inspect::tree::{inspect_pixel, RayNode};
 use rayterm::render::{Feature, Features, RayCounter, SceneRequest, Session};

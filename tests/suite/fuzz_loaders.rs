@@ -7,7 +7,7 @@
 //! a time budget, with an error or a scene, never a panic; a scene that
 //! loads holds only finite numbers and valid indices.
 
-mod campaign;
+use crate::campaign;
 
 use std::path::Path;
 use std::sync::mpsc::{self, RecvTimeoutError};
@@ -60,14 +60,14 @@ fn finite_geometry(g: &Geometry) -> Result<(), TestCaseError> {
     Ok(())
 }
 
-const CORNELL_OBJ: &str = include_str!("../data/meshes/cornell.obj");
-const CORNELL_MTL: &str = include_str!("../data/meshes/cornell.mtl");
-const CUBE_OBJ: &str = include_str!("../data/meshes/cube.obj");
-const TEAPOT_BPT: &str = include_str!("../data/teapot.bpt");
+const CORNELL_OBJ: &str = include_str!("../../data/meshes/cornell.obj");
+const CORNELL_MTL: &str = include_str!("../../data/meshes/cornell.mtl");
+const CUBE_OBJ: &str = include_str!("../../data/meshes/cube.obj");
+const TEAPOT_BPT: &str = include_str!("../../data/teapot.bpt");
 const SCENES: [&str; 3] = [
-    include_str!("../data/cornell.toml"),
-    include_str!("../data/teapot.toml"),
-    include_str!("../data/cube-textured.toml"),
+    include_str!("../../data/cornell.toml"),
+    include_str!("../../data/teapot.toml"),
+    include_str!("../../data/cube-textured.toml"),
 ];
 
 /// One patch, for scene files that name `p.bpt`.

@@ -3,9 +3,7 @@
 //! scenes, when the triangle test's bound on the rounding error of `t`
 //! mixed units).
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use glam::Vec3;
 use rayterm::bvh;
 use rayterm::report::stability::scale::{image_difference, interior_lost, probe_render, Probed};

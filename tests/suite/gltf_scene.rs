@@ -2,10 +2,10 @@
 //! by `KHR_animation_pointer`, `EXT_mesh_gpu_instancing`, orthographic
 //! cameras (and the scene file's), WebP textures and KTX2 ones.
 
-mod common;
-mod files;
+use crate::common;
+use crate::files;
 
-use files::{rayterm, within_deadline, Dir};
+use crate::files::{rayterm, within_deadline, Dir};
 use glam::Vec3;
 use rayterm::render::{Feature, Features, Plan, PlanPolicy};
 use rayterm::scene::{self, Builder, Projection, Scene};

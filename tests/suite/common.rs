@@ -1,7 +1,6 @@
 //! Small scenes built in code, and helpers to render them.
-#![allow(dead_code)]
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use rayterm::bvh::Bvh;
 use rayterm::render::{Features, Film, Plan, Progressive, SceneRequest, Session, Tracer};
 use rayterm::scene::load::obj::{MeshData, Parts, Placement};
@@ -117,10 +116,6 @@ pub fn render_with(
     let film = Progressive::render(&tracer, spp);
     let image = film.image();
     Rendered { film, image }
-}
-
-pub fn uv(x: f32, y: f32) -> Vec2 {
-    Vec2::new(x, y)
 }
 
 /// Directory of the shared test meshes, when present beside the project.

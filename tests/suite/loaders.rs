@@ -3,20 +3,19 @@
 //! the scene is named, and a mesh far from the origin renders as it does at
 //! the origin (coordinates are read and moved in f64 before rounding).
 
-mod common;
-mod files;
+use crate::common;
 
 use std::path::Path;
 
-use files::{rayterm, Dir};
+use crate::files::{rayterm, Dir};
 use glam::{DVec3, Vec3};
 use rayterm::render::Features;
 use rayterm::scene::load::source::Memory;
 use rayterm::scene::load::{self, Opening};
 use rayterm::scene::{Builder, Scene};
 
-const CHECKER: &[u8] = include_bytes!("../data/meshes/checker.png");
-const SPHERE: &str = include_str!("../data/meshes/sphere.obj");
+const CHECKER: &[u8] = include_bytes!("../../data/meshes/checker.png");
+const SPHERE: &str = include_str!("../../data/meshes/sphere.obj");
 
 /// A scene in `scenes/` whose OBJ, MTL, texture and patch file sit beside
 /// that folder, all reached through `../`.
