@@ -1014,7 +1014,10 @@ impl Film {
         let pixels = match &mut self.pixels {
             Pixels::Stats(p) => Samples::Stats(p),
             Pixels::Exact { samples, stats } => {
-                // Statistics made before more samples came in are stale.
+                // Its job gives it one pass of one sample (again, where
+                // that pass was cut short), never more.
+                assert!(self.spp == 0, "an exact film holds one sample a pixel");
+                // Statistics made before the samples came in are stale.
                 stats.take();
                 Samples::Exact(samples)
             }

@@ -207,11 +207,6 @@ impl Progressive {
         self.seconds
     }
 
-    /// When the passes end.
-    pub fn stop(&self) -> &Stop {
-        &self.stop
-    }
-
     /// Samples per pixel the next pass gives at most.
     pub fn samples_per_pass(&self) -> u32 {
         self.samples_per_pass
