@@ -13,8 +13,9 @@
 
 use rayon::prelude::*;
 use rayterm::color::LUMA;
+use rayterm::interrupt::Cancel;
 use rayterm::render::film::REL_EPS;
-use rayterm::render::{Progressive, RayCounter, SceneRequest, Session, Stop, MIN_SPP};
+use rayterm::render::{Job, RayCounter, SceneRequest, Session, Stop, MIN_SPP};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -56,11 +57,11 @@ fn main() -> anyhow::Result<()> {
         println!("uniform {k:2} spp: relMSE {err:.3e}, {rays:.1} rays/px");
     }
     // The film's own weights, made after its first quarter.
-    let mut p = Progressive::new_adaptive(t.width, t.height);
-    while p.film.spp < MIN_SPP {
-        p.pass(&t, &Stop::default(), &|| false);
+    let mut p = Job::of(&t, Stop::default()).adaptive(true).start();
+    while p.film().spp < MIN_SPP {
+        p.pass(&t, Cancel::Never);
     }
-    let weights = p.film.adaptive.map(|a| a.weight).unwrap_or_default();
+    let weights = p.into_film().adaptive.map(|a| a.weight).unwrap_or_default();
     let known: Vec<f64> = pixels
         .iter()
         .map(|p| (4.0 * p.err[0] / p.rays.max(1.0)).sqrt())

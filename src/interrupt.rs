@@ -193,10 +193,45 @@ fn exit_now(sig: i32) -> ! {
     }
 }
 
-/// The error of work a signal cut short; its callers write nothing.
+/// The error of work stopped on request (a signal, or a caller's
+/// [`Cancel`]); its callers write nothing.
 #[derive(Debug, thiserror::Error)]
 #[error("interrupted")]
 pub struct Interrupted;
+
+/// Whether long work should stop: the one way every layer is asked to.
+/// Work that can take long takes one as a parameter and polls it where it
+/// may stop; only the commands (`cli/`, `tui/`) choose which, so nothing
+/// below them reads the signal flag on its own.
+#[derive(Clone, Copy, Default)]
+pub enum Cancel<'a> {
+    /// Never stops: tests, tools, work too short to stop.
+    #[default]
+    Never,
+    /// Stops once the caller's closure says so (a newer view, a deadline).
+    When(&'a (dyn Fn() -> bool + Sync)),
+    /// Stops once a signal asked the process to ([`requested`]).
+    Signal,
+}
+
+impl Cancel<'_> {
+    /// Whether the work should stop now.
+    pub fn is_set(self) -> bool {
+        match self {
+            Cancel::Never => false,
+            Cancel::When(f) => f(),
+            Cancel::Signal => requested(),
+        }
+    }
+
+    /// [`Cancel::is_set`] as the error of work stopped on request.
+    pub fn check(self) -> Result<(), Interrupted> {
+        match self.is_set() {
+            true => Err(Interrupted),
+            false => Ok(()),
+        }
+    }
+}
 
 /// Whether a signal asked the process to stop.
 pub fn requested() -> bool {

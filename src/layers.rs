@@ -138,6 +138,40 @@ fn layers_name_only_what_is_below_them() {
     );
 }
 
+/// What reads the process's signal flag; only the commands choose to stop
+/// on a signal, and hand the rest an `interrupt::Cancel`.
+const SIGNAL_READS: &[&str] = &["interrupt::requested", "interrupt::flag", "Cancel::Signal"];
+
+#[test]
+fn only_the_commands_read_the_signal_flag() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    sources(&src, &mut files);
+    files.sort();
+    let mut wrong = Vec::new();
+    for f in &files {
+        let rel = f.strip_prefix(&src).unwrap();
+        let top = rel.components().next().unwrap().as_os_str();
+        if ["cli", "tui", "main.rs", "interrupt.rs", "layers.rs"]
+            .map(std::ffi::OsStr::new)
+            .contains(&top)
+        {
+            continue;
+        }
+        let text = std::fs::read_to_string(f).unwrap();
+        for (n, line) in text.lines().enumerate() {
+            if SIGNAL_READS.iter().any(|r| code(line).contains(r)) {
+                wrong.push(format!("src/{}:{}", rel.display(), n + 1));
+            }
+        }
+    }
+    assert!(
+        wrong.is_empty(),
+        "the signal flag read below the commands (take a Cancel):\n{}",
+        wrong.join("\n")
+    );
+}
+
 #[test]
 fn the_checks_see_what_they_look_for() {
     assert_eq!(

@@ -85,7 +85,8 @@ pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
     // Ctrl-C, SIGTERM or SIGHUP cut the runs short; what they measured is
     // then not the study asked for, so nothing is printed or written.
     crate::interrupt::flag();
-    let study = subject.study(&cfg, &super::progress::ReportBar::new());
+    let bar = super::progress::ReportBar::new();
+    let study = subject.study(&cfg, &bar, crate::interrupt::Cancel::Signal);
     if crate::interrupt::requested() {
         crate::noteln!("interrupted: nothing written");
         return Ok(ExitCode::from(crate::interrupt::exit_code()));

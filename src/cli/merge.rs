@@ -11,7 +11,7 @@ use clap::Parser;
 
 use super::args::{Cli, Command, MergeArgs};
 use super::render::{image_bytes, summary};
-use crate::interrupt;
+use crate::interrupt::{self, Cancel};
 use crate::raster::{Format, Output};
 use crate::render::partial::{self, ranges_text, Meta, Plan};
 use crate::render::SceneRequest;
@@ -23,8 +23,8 @@ pub fn run(a: MergeArgs) -> Result<ExitCode> {
         false => Format::RENDERS,
     };
     let out = Output::check(&a.output, &a.parts, formats)?;
-    let interrupted = interrupt::flag();
-    let cancel = || interrupted.load(std::sync::atomic::Ordering::Relaxed);
+    interrupt::flag();
+    let cancel = Cancel::Signal;
     let start = Instant::now();
     let plan = partial::plan(&a.parts)?;
     if let Some(spec) = &a.check {
@@ -46,17 +46,17 @@ pub fn run(a: MergeArgs) -> Result<ExitCode> {
         );
     }
     if a.partial {
-        return staged(&plan, &out, &cancel, start);
+        return staged(&plan, &out, cancel, start);
     }
-    let merged = partial::merge(&plan, &cancel);
-    if cancel() {
+    let merged = partial::merge(&plan, cancel);
+    if cancel.is_set() {
         crate::noteln!("interrupted: nothing written");
         return Ok(ExitCode::from(interrupt::exit_code()));
     }
     let merged = merged?;
     let (meta, (width, height)) = (&merged.meta, merged.size);
     let bytes = image_bytes(out.format, merged.image, width, height, meta.bloom.as_ref())?;
-    if !write(&out, &bytes, &cancel)? {
+    if !write(&out, &bytes, cancel)? {
         return Ok(ExitCode::from(interrupt::exit_code()));
     }
     let head = format!(
@@ -84,14 +84,9 @@ pub fn run(a: MergeArgs) -> Result<ExitCode> {
 }
 
 /// `merge --partial`: the parts as one partial film.
-fn staged(
-    plan: &Plan,
-    out: &Output,
-    cancel: &dyn Fn() -> bool,
-    start: Instant,
-) -> Result<ExitCode> {
+fn staged(plan: &Plan, out: &Output, cancel: Cancel, start: Instant) -> Result<ExitCode> {
     let part = partial::merge_part(plan, cancel);
-    if cancel() {
+    if cancel.is_set() {
         crate::noteln!("interrupted: nothing written");
         return Ok(ExitCode::from(interrupt::exit_code()));
     }
@@ -118,11 +113,11 @@ fn staged(
 
 /// Writes `bytes` to `out`, unless a signal came: then says so and
 /// returns false.
-fn write(out: &Output, bytes: &[u8], cancel: &dyn Fn() -> bool) -> Result<bool> {
-    let written = match cancel() {
-        true => Err(interrupt::Interrupted.into()),
-        false => out.write_result(bytes),
-    };
+fn write(out: &Output, bytes: &[u8], cancel: Cancel) -> Result<bool> {
+    let written = cancel
+        .check()
+        .map_err(anyhow::Error::from)
+        .and_then(|()| out.write_result(bytes, cancel));
     match written {
         Err(e) if e.is::<interrupt::Interrupted>() => {
             crate::noteln!("interrupted: nothing written");

@@ -15,13 +15,13 @@ use glam::Vec3;
 use super::args::{RenderArgs, MAX_SPP};
 use super::open_request;
 use super::progress::{Begin, Reporter};
-use crate::interrupt;
+use crate::interrupt::{self, Cancel};
 use crate::raster::claim::Claim;
 use crate::raster::{png, Format, Output};
 use crate::render::aov;
 use crate::render::partial::{self, Meta, Part};
 use crate::render::session::check_film;
-use crate::render::{post, Ended, Film, Progressive, Report, SceneRequest, Session, Stop};
+use crate::render::{post, Ended, Film, Job, Needs, Report, SceneRequest, Session, Stop};
 use crate::scene::BloomSettings;
 use crate::words;
 
@@ -133,70 +133,74 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         ..Meta::of(&s, total)
     });
     // A render that writes an image reads nothing else from its film; a
-    // part of a split render writes the film's statistics.
-    let image_only = !split && checkpoint.is_none();
-    let mut p = match (&a.resume, &meta) {
-        (Some(path), Some(meta)) => resumed(path, &s, meta, range.as_ref().map(|r| &r.0), &stop)?,
-        _ => {
-            // Most such renders keep their film summarised: made so, one too
-            // large for statistics never allocates them. Either is checked
-            // before it is allocated (under an address space limit even
-            // untouched memory counts), a summary again below.
-            let film = match image_only {
-                true => {
-                    check_film(s.width, s.height, Film::SUMMARY_BYTES_PER_PIXEL)?;
-                    Film::new_summary(s.width, s.height)
-                }
-                false => {
-                    check_film(s.width, s.height, Film::BYTES_PER_PIXEL)?;
-                    Film::new(s.width, s.height)
-                }
-            };
-            let mut p = Progressive::resume(film);
-            p.film.start = range.as_ref().map_or(0, |r| r.0.start);
-            p
-        }
+    // part of a split render writes the film's statistics, a checkpointed
+    // one those of whole passes.
+    let needs = match (checkpoint.is_some(), split) {
+        (true, _) => Needs::WholePasses,
+        (false, true) => Needs::Statistics,
+        (false, false) => Needs::Image,
     };
-    let (rays_before, seconds_before) = (p.rays, p.seconds);
+    let part = match (&a.resume, &meta) {
+        (Some(path), Some(meta)) => Some(resumed(
+            path,
+            &s,
+            meta,
+            range.as_ref().map(|r| &r.0),
+            &stop,
+        )?),
+        _ => None,
+    };
+    let (rays_before, seconds_before) = part
+        .as_ref()
+        .map_or((0, 0.0), |p| (p.meta.rays, p.meta.seconds));
     // --time is the whole render's: a resumed one has spent some of it.
     let stop = Stop {
         seconds: stop.seconds.map(|t| (t - seconds_before).max(0.0)),
         ..stop
     };
-    // Adaptive where a time or an error ends the render, except into
-    // partial films, which are uniform.
-    p.adaptive = !a.uniform
-        && (stop.seconds.is_some() || stop.error.is_some())
-        && checkpoint.is_none()
-        && a.resume.is_none();
-    p.whole_passes = checkpoint.is_some();
-    p.image_only = image_only;
-    // A checkpointed render keeps passes short, since a pass cut short is
-    // undone.
+    // The readout follows the rows of a pass as they finish.
+    let rows = Arc::new(AtomicU32::new(0));
+    let job = Job::new(s.width, s.height, &s.plan, stop)
+        .samples_from(range.as_ref().map_or(0, |r| r.0.start))
+        .needs(needs)
+        // Adaptive where a time or an error ends the render, except into
+        // partial films, which are uniform.
+        .adaptive(
+            !a.uniform
+                && (stop.seconds.is_some() || stop.error.is_some())
+                && checkpoint.is_none()
+                && a.resume.is_none(),
+        )
+        .passes_for_stop()
+        .rows_done(rows.clone());
+    let job = match part {
+        Some(part) => job.resume(part.film, rays_before, seconds_before),
+        None => job,
+    };
     let fixed = stop.seconds.is_none() && stop.error.is_none();
-    if fixed && checkpoint.is_none() {
-        p.fixed_spp_passes(stop.spp, s.plan.deterministic);
-    }
-    // Until a time or an error, passes grow, except between checkpoints.
-    p.growing = !fixed && checkpoint.is_none();
-    if a.dry_run {
-        return dry_run(&s, &p, &stop, checkpoint.is_some(), split);
-    }
-    // A resumed film was checked as it was read.
+    // A resumed film was checked as it was read; a new one is checked
+    // before it is allocated (under an address space limit even untouched
+    // memory counts), dry run or not, and again with the AOVs' planes.
     if a.resume.is_none() {
-        let aovs = if a.aov.is_empty() {
-            0
-        } else {
-            aov::BYTES_PER_PIXEL
-        };
-        let bytes = p.bytes_per_pixel(s.plan.deterministic, &stop) + aovs;
-        check_film(s.width, s.height, bytes)?;
+        check_film(s.width, s.height, job.bytes_per_pixel())?;
     }
-    let interrupted = interrupt::flag();
+    if a.dry_run {
+        return dry_run(&s, &job, checkpoint.is_some(), split);
+    }
+    if a.resume.is_none() && !a.aov.is_empty() {
+        check_film(
+            s.width,
+            s.height,
+            job.bytes_per_pixel() + aov::BYTES_PER_PIXEL,
+        )?;
+    }
+    let mut p = job.start();
+    interrupt::flag();
+    let cancel = Cancel::Signal;
     let asked = interrupt::checkpoint_flag();
     let tracer = s.tracer();
-    let held = p.film.start..p.film.start + p.film.spp;
-    let report = Reporter::new(a.progress, &stop, s.plan.deterministic, p.film.spp);
+    let held = p.film().start..p.film().start + p.film().spp;
+    let report = Reporter::new(a.progress, &stop, s.plan.deterministic, p.film().spp);
     report.begin(&Begin {
         scene: &s.scene.name,
         size: (s.width, s.height),
@@ -208,19 +212,15 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
             .map(|path| (path, held.clone(), seconds_before)),
     });
     let start = Instant::now();
-    let cancel = || interrupted.load(Ordering::Relaxed);
     let every = a.checkpoint_every.unwrap_or(CHECKPOINT_SECONDS);
     // The first checkpoint follows the first pass: a render killed before
     // the interval loses no more than that pass.
     let mut last_checkpoint = None::<Instant>;
     let mut work = (rays_before, seconds_before);
     let mut failed = None;
-    // The readout follows the rows of a pass as they finish.
-    let rows = Arc::new(AtomicU32::new(0));
-    p.rows_done = Some(rows.clone());
     // Samples per pixel done, as f64 bits: an adaptive film's mean.
-    let done_spp = AtomicU64::new((p.film.spp as f64).to_bits());
-    let pass_spp = p.samples_per_pass;
+    let done_spp = AtomicU64::new((p.film().spp as f64).to_bits());
+    let pass_spp = p.samples_per_pass();
     let finished = AtomicBool::new(false);
     let ticker = || {
         while !finished.load(Ordering::Relaxed) {
@@ -239,7 +239,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     let mut warned_usr1 = false;
     let outcome = std::thread::scope(|scope| {
         let tick = (!report.quiet()).then(|| scope.spawn(ticker));
-        let outcome = p.run(&tracer, &stop, &cancel, |film, pass| {
+        let outcome = p.run(&tracer, cancel, |film, pass| {
             // Rows count the next pass's from here.
             rows.store(0, Ordering::Relaxed);
             let spp = film.spp_range().1;
@@ -282,7 +282,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
         return Err(e);
     }
     if let Some(meta) = &mut meta {
-        (meta.rays, meta.seconds) = (p.rays, p.seconds);
+        (meta.rays, meta.seconds) = (p.rays(), p.seconds());
         // A render its --time ended has spent it all, though its passes'
         // own times leave out the checkpoints written between them: a
         // resume of it adds nothing.
@@ -293,13 +293,13 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     let checkpoint = checkpoint.as_ref().zip(meta.as_ref());
     if outcome.ended == Ended::Cancelled {
         report.abandon();
-        return stopped(checkpoint, &p.film, true);
+        return stopped(checkpoint, p.film(), true);
     }
-    report.finish(p.film.spp_range().1);
+    report.finish(p.film().spp_range().1);
     if let Some((c, meta)) = checkpoint {
-        write_part(c, &p.film, meta)?;
+        write_part(c, p.film(), meta)?;
     }
-    let film = &p.film;
+    let film = p.film();
     let bytes = match &meta {
         Some(meta) if split => partial::encode(film, meta)?,
         _ => {
@@ -310,7 +310,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
             let bloom = s.plan.bloom.then_some(s.scene.settings.bloom);
             let aovs = match a.aov.is_empty() {
                 true => Vec::new(),
-                false => match aov::render(&tracer, &a.aov, &cancel) {
+                false => match aov::render(&tracer, &a.aov, cancel) {
                     Some(planes) => planes,
                     None => return stopped(checkpoint, film, false),
                 },
@@ -319,7 +319,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
                 true => image_bytes(format, image, w, h, bloom.as_ref()),
                 false => crate::raster::openexr::encode_with(w, h, &image, aovs),
             });
-            while !work.is_finished() && !interrupt::requested() {
+            while !work.is_finished() && !cancel.is_set() {
                 std::thread::park_timeout(std::time::Duration::from_millis(20));
             }
             if !work.is_finished() {
@@ -329,10 +329,10 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
                 .map_err(|_| anyhow::anyhow!("making the image failed"))??
         }
     };
-    if interrupt::requested() {
+    if cancel.is_set() {
         return stopped(checkpoint, film, false);
     }
-    match out.write_result(&bytes) {
+    match out.write_result(&bytes, cancel) {
         Err(e) if e.is::<interrupt::Interrupted>() => return stopped(checkpoint, film, false),
         written => written?,
     }
@@ -368,9 +368,9 @@ pub fn run(a: RenderArgs) -> Result<ExitCode> {
     // film's and this run's (which may have had nothing left to do).
     let (head, rays, ms) = match a.resume {
         Some(_) => (
-            format!("{head} ({} in all)", duration(p.seconds * 1e3)),
-            p.rays,
-            p.seconds * 1e3,
+            format!("{head} ({} in all)", duration(p.seconds() * 1e3)),
+            p.rays(),
+            p.seconds() * 1e3,
         ),
         None => (head, outcome.rays, render_ms),
     };
@@ -445,13 +445,7 @@ fn shared_options() -> Vec<String> {
 
 /// `render --dry-run`: what the render will take, from the scene as
 /// loaded and built and the film as it will be, and nothing rendered.
-fn dry_run(
-    s: &Session,
-    p: &Progressive,
-    stop: &Stop,
-    checkpoint: bool,
-    split: bool,
-) -> Result<ExitCode> {
+fn dry_run(s: &Session, job: &Job, checkpoint: bool, split: bool) -> Result<ExitCode> {
     use crate::memory::{bytes, mesh_bytes};
     let g = &s.scene.geometry;
     let (tris, verts) = (g.triangle_count() as u64, g.positions.len() as u64);
@@ -464,13 +458,17 @@ fn dry_run(
         crate::scene::Environment::Color(_) => {}
     }
     let texels: u64 = textures.iter().map(|t| t.texels.len() as u64 * 12).sum();
-    let per_pixel = p.bytes_per_pixel(s.plan.deterministic, stop);
+    let per_pixel = job.bytes_per_pixel();
     let film = per_pixel * pixels;
     // A checkpointing pass keeps each row's statistics as they were
     // before it, to undo a pass cut short; a partial film is encoded
     // whole in memory before it is written.
     let stats = std::mem::size_of::<crate::render::film::PixelStats>() as u64;
-    let undo = if p.whole_passes { stats * pixels } else { 0 };
+    let undo = if job.whole_passes() {
+        stats * pixels
+    } else {
+        0
+    };
     let encoded = if checkpoint || split {
         PARTIAL_BYTES * pixels
     } else {
@@ -672,14 +670,14 @@ fn sample_range(a: &RenderArgs, s: &Session) -> Result<Option<(Range<u32>, Optio
     Ok(Some(range))
 }
 
-/// The driver continuing a checkpoint of this render.
+/// The checkpoint of this render to continue.
 fn resumed(
     path: &std::path::Path,
     s: &Session,
     meta: &Meta,
     range: Option<&Range<u32>>,
     stop: &Stop,
-) -> Result<Progressive> {
+) -> Result<Part> {
     let part = Part::read(path)?;
     part.header()
         .check_same(meta, (s.width, s.height), &words::path(path), "this render")?;
@@ -701,9 +699,7 @@ fn resumed(
             part.film.spp
         );
     }
-    let mut p = Progressive::resume(part.film);
-    (p.rays, p.seconds) = (part.meta.rays, part.meta.seconds);
-    Ok(p)
+    Ok(part)
 }
 
 /// The stop the options ask for; `None` means the scene's spp.

@@ -13,6 +13,7 @@ use anyhow::{bail, Result};
 use glam::Vec3;
 
 use super::temporary;
+use crate::interrupt::{Cancel, Interrupted};
 
 /// The image formats `rayterm render -o` writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -165,7 +166,7 @@ impl Output {
     /// Writes `bytes`: atomically through a temporary file beside a regular
     /// target (removed on any failure), or in place into a device or FIFO.
     pub fn write(&self, bytes: &[u8]) -> Result<()> {
-        self.write_unless(bytes, &|| false)
+        self.write_result(bytes, Cancel::Never)
     }
 
     /// Whether the output is written in place (a device, a FIFO, a
@@ -191,15 +192,11 @@ impl Output {
         }
     }
 
-    /// [`Output::write`] for a command's result: a signal that arrives
-    /// while a regular file is written leaves it as it was, and the error
-    /// is [`Interrupted`](crate::interrupt::Interrupted). A device or FIFO
-    /// is written all the same: what it took cannot be taken back.
-    pub fn write_result(&self, bytes: &[u8]) -> Result<()> {
-        self.write_unless(bytes, &crate::interrupt::requested)
-    }
-
-    fn write_unless(&self, bytes: &[u8], stop: &dyn Fn() -> bool) -> Result<()> {
+    /// [`Output::write`] for a command's result: a `cancel` set while a
+    /// regular file is written leaves it as it was, and the error is
+    /// [`Interrupted`]. A device or FIFO is written all the same: what it
+    /// took cannot be taken back.
+    pub fn write_result(&self, bytes: &[u8], cancel: Cancel) -> Result<()> {
         let path = &self.path;
         if let Some(mut f) = self.device.as_ref() {
             return f
@@ -218,7 +215,7 @@ impl Output {
                 f.set_permissions(m.permissions())?;
             }
             f.sync_all()?;
-            if stop() {
+            if cancel.is_set() {
                 return Ok(false);
             }
             fs::rename(&tmp, path).map(|()| true)
@@ -229,7 +226,7 @@ impl Output {
         crate::interrupt::writing(None);
         match written {
             Ok(true) => Ok(()),
-            Ok(false) => Err(crate::interrupt::Interrupted.into()),
+            Ok(false) => Err(Interrupted.into()),
             Err(e) => {
                 bail!("cannot write {}: {}", path.display(), reason(&e))
             }
@@ -358,15 +355,17 @@ mod tests {
         let target = d.join("x.png");
         fs::write(&target, b"old").unwrap();
         let out = Output::check(&target, &[], &[Format::Png]).unwrap();
-        let e = out.write_unless(b"new", &|| true).unwrap_err();
-        assert!(e.is::<crate::interrupt::Interrupted>(), "{e}");
+        let e = out
+            .write_result(b"new", Cancel::When(&|| true))
+            .unwrap_err();
+        assert!(e.is::<Interrupted>(), "{e}");
         let names: Vec<_> = fs::read_dir(&d)
             .unwrap()
             .map(|e| e.unwrap().file_name())
             .collect();
         assert_eq!(names, ["x.png"]);
         assert_eq!(fs::read(&target).unwrap(), b"old");
-        out.write_unless(b"new", &|| false).unwrap();
+        out.write(b"new").unwrap();
         assert_eq!(fs::read(&target).unwrap(), b"new");
         fs::remove_dir_all(d).unwrap();
     }

@@ -11,6 +11,7 @@ use rayon::prelude::*;
 use super::recorder::{HitInfo, Recorder};
 use super::Tracer;
 use crate::geometry::Ray;
+use crate::interrupt::Cancel;
 
 /// One output variable.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -100,7 +101,7 @@ impl Recorder for FirstHit {
 pub fn render(
     tracer: &Tracer,
     which: &[Aov],
-    cancel: &(dyn Fn() -> bool + Sync),
+    cancel: Cancel,
 ) -> Option<Vec<(&'static str, Vec<f32>)>> {
     // Only the first hit matters: no bounces after it.
     let plan = tracer.plan.clone().with_max_depth(0);
@@ -110,7 +111,7 @@ pub fn render(
     let rows: Vec<Option<Vec<(Vec3, Vec3, f32)>>> = (0..h)
         .into_par_iter()
         .map(|y| {
-            if cancel() {
+            if cancel.is_set() {
                 return None;
             }
             let row = (0..w)

@@ -553,7 +553,7 @@ impl PixelStats {
 }
 
 /// What a film that is read only for its image and error estimate keeps
-/// of a pixel (see [`Film::summarise`]): 24 bytes where statistics are 176.
+/// of a pixel (see [`Film::new_summary`]): 24 bytes where statistics are 176.
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Zeroable)]
 pub struct PixelSummary {
     /// [`PixelStats::mean`], as the image takes it.
@@ -841,8 +841,6 @@ pub struct Film {
     pub adaptive: Option<Allocation>,
     pub bad_count: u64,
     pub bad: Vec<BadSample>,
-    /// Whether a pass or a caller has had the pixels to change.
-    sampled: bool,
 }
 
 /// What a film holds of its pixels.
@@ -862,7 +860,7 @@ enum Pixels {
     /// Each pixel's mean and error term, all a render that writes an image
     /// reads of its film: made by a pass that gives a blank film all its
     /// samples, each pixel's statistics kept on the stack while it is
-    /// sampled (see [`Film::summarise`]).
+    /// sampled (see [`Film::new_summary`]).
     Summary(Vec<PixelSummary>),
 }
 
@@ -902,7 +900,7 @@ impl Film {
     /// made from), and the linear, bloomed and displayed copies of the
     /// image made from them.
     pub const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelStats>() as u64 + 12 + IMAGES;
-    /// The same for a summarised film ([`Film::summarise`]).
+    /// The same for a summarised film ([`Film::new_summary`]).
     pub const SUMMARY_BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelSummary>() as u64 + IMAGES;
     /// The same for a lean film ([`Film::new_exact`]).
     pub const EXACT_BYTES_PER_PIXEL: u64 = 12 + IMAGES;
@@ -915,10 +913,7 @@ impl Film {
     /// A film of `pixels`' statistics.
     pub fn of_stats(width: u32, height: u32, pixels: Vec<PixelStats>) -> Self {
         assert_eq!(pixels.len(), width as usize * height as usize);
-        Self {
-            sampled: true,
-            ..Self::with(width, height, Pixels::Stats(pixels))
-        }
+        Self::with(width, height, Pixels::Stats(pixels))
     }
 
     /// A lean film for the one pass of an exact render, which only keeps
@@ -946,40 +941,22 @@ impl Film {
             adaptive: None,
             bad_count: 0,
             bad: Vec::new(),
-            sampled: false,
         }
     }
 
-    /// Makes this blank film a summarised one, which keeps of each pixel
-    /// only its mean and its term of the error estimate, 24 bytes a pixel
-    /// where statistics are 176: for a render whose one pass gives every
-    /// pixel all its samples, and whose film is then read for nothing but
+    /// A blank summarised film, which keeps of each pixel only its mean
+    /// and its term of the error estimate, 24 bytes a pixel where
+    /// statistics are 176: for a render whose one pass gives every pixel
+    /// all its samples, and whose film is then read for nothing but
     /// [`Film::image`], [`Film::mean`] and [`Film::report`] (a render to an
-    /// image file). Its statistics are never made; asking for them
-    /// ([`Film::pixels`]) or for another pass is a bug and panics.
-    pub(crate) fn summarise(&mut self) {
-        assert!(self.is_blank(), "only a blank film is summarised");
-        let n = self.width as usize * self.height as usize;
+    /// image file; its [`Job`](super::Job) decides). Its statistics are
+    /// never made; asking for them ([`Film::pixels`]) or for another pass
+    /// is a bug and panics.
+    pub fn new_summary(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
         // SAFETY: a summary of zero bytes is that of a pixel with no
         // sample, which a pass writes over.
-        self.pixels = Pixels::Summary(crate::memory::zeroed(n));
-    }
-
-    /// A blank film made summarised (see [`Film::summarise`]) for a render
-    /// that will most likely keep it so: one too large for statistics then
-    /// never allocates them. Should its first pass not give it all its
-    /// samples, the pass gives it statistics ([`Film::unsummarise`]).
-    pub fn new_summary(width: u32, height: u32) -> Self {
-        let mut film = Self::with(width, height, Pixels::Summary(Vec::new()));
-        film.summarise();
-        film
-    }
-
-    /// Gives a blank summarised film statistics.
-    pub(crate) fn unsummarise(&mut self) {
-        assert!(self.is_blank(), "only a blank film is given statistics");
-        let n = self.width as usize * self.height as usize;
-        self.pixels = Pixels::Stats(PixelStats::zeroed(n));
+        Self::with(width, height, Pixels::Summary(crate::memory::zeroed(n)))
     }
 
     /// The number of pixels.
@@ -1002,7 +979,7 @@ impl Film {
     }
 
     /// Each pixel's statistics (made from the samples on first use for a
-    /// lean film; a summarised film has none, see [`Film::summarise`]).
+    /// lean film; a summarised film has none, see [`Film::new_summary`]).
     pub fn pixels(&self) -> &[PixelStats] {
         match &self.pixels {
             Pixels::Stats(p) => p,
@@ -1014,7 +991,6 @@ impl Film {
     /// Each pixel's statistics, to change: a lean film becomes a film of
     /// statistics.
     pub fn pixels_mut(&mut self) -> &mut [PixelStats] {
-        self.sampled = true;
         if let Pixels::Exact { samples, stats } = &mut self.pixels {
             let p = stats.take().unwrap_or_else(|| Pixels::exact_stats(samples));
             self.pixels = Pixels::Stats(p);
@@ -1029,11 +1005,13 @@ impl Film {
     /// What a pass samples into: a lean film's samples or each pixel's
     /// statistics, and an adaptive film's sample counts.
     pub(crate) fn sample_into(&mut self) -> (Samples<'_>, Option<Counts<'_>>) {
-        self.sampled = true;
         let pixels = match &mut self.pixels {
             Pixels::Stats(p) => Samples::Stats(p),
             Pixels::Exact { samples, stats } => {
-                // Statistics made before more samples came in are stale.
+                // Its job gives it one pass of one sample (again, where
+                // that pass was cut short), never more.
+                assert!(self.spp == 0, "an exact film holds one sample a pixel");
+                // Statistics made before the samples came in are stale.
                 stats.take();
                 Samples::Exact(samples)
             }
@@ -1048,11 +1026,6 @@ impl Film {
             .as_mut()
             .map(|a| (&mut a.spp[..], &mut a.rays[..]));
         (pixels, counts)
-    }
-
-    /// Whether nothing was ever sampled into this film.
-    pub(crate) fn is_blank(&self) -> bool {
-        !self.sampled
     }
 
     /// An empty film whose pixels each keep their own sample count.
@@ -1720,8 +1693,7 @@ mod tests {
         // A pixel with one sample leaves the error unknown, and a film
         // whose pixels all rest on whole blocks is meaningful.
         for n in [1, 16] {
-            let mut films = [Film::new(2, 1), Film::new(2, 1)];
-            films[1].summarise();
+            let mut films = [Film::new(2, 1), Film::new_summary(2, 1)];
             for f in &mut films {
                 let mut pixels = f.sample_into().0;
                 let row: Vec<Sampled> = (0..2)
@@ -1772,8 +1744,8 @@ mod tests {
             samples.push(row);
         }
         for batch in [1, 7, 32, 1000] {
-            let mut films = [Film::new(w as u32, h as u32), Film::new(w as u32, h as u32)];
-            films[1].summarise();
+            let (w32, h32) = (w as u32, h as u32);
+            let mut films = [Film::new(w32, h32), Film::new_summary(w32, h32)];
             for f in &mut films {
                 for (mut pixels, row) in f.sample_into().0.rows(w).into_iter().zip(&samples) {
                     for b in row.chunks(batch) {
@@ -1818,9 +1790,7 @@ mod tests {
     #[test]
     #[should_panic(expected = "keeps no statistics")]
     fn a_summarised_film_gives_no_statistics() {
-        let mut f = Film::new(2, 2);
-        f.summarise();
-        f.pixels();
+        Film::new_summary(2, 2).pixels();
     }
 
     #[test]

@@ -17,6 +17,7 @@ use crate::bvh::{Bvh, Hit};
 use crate::geometry::offset::{geometric_normal, hit_point, offset_origin, SHADOW_EPSILON};
 use crate::geometry::sampling::{jittered, phong_lobe, Rng, Run, PIXEL_GRID};
 use crate::geometry::Ray;
+use crate::interrupt::Cancel;
 use crate::scene::camera::CameraFrame;
 use crate::scene::envlight::LATLONG;
 use crate::scene::light::{Arriving, From};
@@ -112,7 +113,7 @@ pub struct Tracer<'a> {
     /// thousands of hits, each with thousands of light samples, so the
     /// rows between which a pass polls could be minutes apart; a sample cut
     /// short is never kept (see `progressive::sample_rows`).
-    pub cancel: Option<&'a (dyn Fn() -> bool + Sync)>,
+    pub cancel: Cancel<'a>,
 }
 
 /// The mirror direction of `dir` about the shading normal `n`, or about the
@@ -224,14 +225,14 @@ impl<'a> Tracer<'a> {
             seed,
             max_depth: plan.max_depth,
             max_paths: MAX_PATHS,
-            cancel: None,
+            cancel: Cancel::Never,
         }
     }
 
     /// Whether [`Tracer::cancel`] says stop.
     #[inline]
     pub(super) fn cancelled(&self) -> bool {
-        self.cancel.is_some_and(|c| c())
+        self.cancel.is_set()
     }
 
     /// The sub-pixel stratum of sample `k` of pixel `(x, y)` when pixel

@@ -21,6 +21,7 @@ use glam::Vec3;
 use super::film::{Film, Piece, PixelStats, Report, FIXED_MAX, FIXED_ONE};
 use super::Session;
 use crate::geometry::sampling::PIXEL_STRATA;
+use crate::interrupt::Cancel;
 use crate::raster::flat_exr::{self, ExrHeader, Kind, Scanlines};
 use crate::scene::load::source::Input;
 use crate::scene::BloomSettings;
@@ -113,7 +114,7 @@ impl Part {
         let header = source.header.clone();
         let mut sources = [source];
         let mut pixels = Vec::new();
-        let bad = gather(&mut sources, &|| false, |band| {
+        let bad = gather(&mut sources, Cancel::Never, |band| {
             pixels.extend_from_slice(band)
         })?;
         let [source] = sources;
@@ -816,7 +817,7 @@ fn unusable(image: &Scanlines, e: anyhow::Error) -> anyhow::Error {
 /// finite.
 fn gather(
     sources: &mut [Source],
-    cancel: &dyn Fn() -> bool,
+    cancel: Cancel,
     mut done: impl FnMut(&[PixelStats]),
 ) -> Result<u64> {
     let Some(first) = sources.first() else {
@@ -828,9 +829,7 @@ fn gather(
     let mut buf = Vec::new();
     let mut bad = 0;
     for y in (0..h).step_by(band as usize) {
-        if cancel() {
-            return Err(crate::interrupt::Interrupted.into());
-        }
+        cancel.check()?;
         let rows = y..(y + band).min(h);
         let px = &mut pixels[..rows.len() * w];
         px.fill(PixelStats::default());
@@ -989,7 +988,7 @@ fn merged_meta(sources: &[Source]) -> Result<Meta> {
 }
 
 /// Reads the planned parts and merges them in range order.
-pub fn merge(plan: &Plan, cancel: &dyn Fn() -> bool) -> Result<Merged> {
+pub fn merge(plan: &Plan, cancel: Cancel) -> Result<Merged> {
     let mut sources = open_planned(plan)?;
     let size = sources[0].header.size;
     let mut image = Vec::with_capacity(size.0 as usize * size.1 as usize);
@@ -1029,7 +1028,7 @@ pub fn merge(plan: &Plan, cancel: &dyn Fn() -> bool) -> Result<Merged> {
 /// Merges the planned parts into one partial film, which merges again
 /// with the parts still to come (a staged merge): their samples must
 /// follow one another, since a partial film holds one range.
-pub fn merge_part(plan: &Plan, cancel: &dyn Fn() -> bool) -> Result<Part> {
+pub fn merge_part(plan: &Plan, cancel: Cancel) -> Result<Part> {
     let (start, end) = match (plan.parts.first(), plan.parts.last()) {
         (Some((_, a)), Some((_, b))) => (a.range.start, b.range.end),
         _ => bail!("no parts to merge"),

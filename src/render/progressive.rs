@@ -3,8 +3,12 @@
 //! `inspect`, the debug views, the benchmarks, the stability battery, the
 //! TUI's worker and the tests all drive films through [`Progressive`].
 //!
+//! What the passes are for (the stop, the samples, what is read of the
+//! film) is a [`Job`]'s, decided before the first: it makes the film, and
+//! nothing here changes how the film keeps its pixels.
+//!
 //! A uniform pass gives every pixel the same sample indices. An adaptive
-//! one ([`Progressive::adaptive`]), once every pixel has [`MIN_SPP`], raises
+//! one ([`Job::adaptive`]), once every pixel has [`MIN_SPP`], raises
 //! the mean spp and shares the samples in proportion to each pixel's
 //! weight, predicted once from its neighbours' first quarters
 //! ([`Allocation::weigh`]); each pixel's next sample index is its own
@@ -21,7 +25,9 @@ use rayon::prelude::*;
 
 use super::film::{Allocation, BadSample, Film, PixelStats, Sampled, Samples};
 use super::integrator::Placed;
+use super::job::Job;
 use crate::geometry::sampling::{Run, PIXEL_STRATA, QUARTER};
+use crate::interrupt::Cancel;
 
 /// Samples every pixel of an adaptive film gets before any decision: one
 /// quarter of a block, a sample in each quadrant of the pixel, which also
@@ -97,32 +103,24 @@ pub struct Outcome {
     pub seconds: f64,
 }
 
-/// A film and the passes that made it.
+/// A film and the passes that made it, as its [`Job`] decided them.
 #[derive(Clone, Debug)]
 pub struct Progressive {
-    pub film: Film,
+    film: Film,
     /// Rays traced and seconds spent in passes so far.
-    pub rays: u64,
-    pub seconds: f64,
+    rays: u64,
+    seconds: f64,
+    stop: Stop,
     /// Samples per pixel a pass adds (fewer when the stop leaves fewer);
     /// more than one keeps the per-pass overhead small on tiny images.
-    pub samples_per_pass: u32,
+    samples_per_pass: u32,
     /// Counts the rows each pass finishes, for a progress readout.
-    pub rows_done: Option<Arc<AtomicU32>>,
-    /// Whether passes after [`MIN_SPP`] go to the pixels with the highest
-    /// predicted error (set before the first pass; a scene where nothing is
-    /// sampled stays uniform).
-    pub adaptive: bool,
+    rows_done: Option<Arc<AtomicU32>>,
     /// Whether a uniform pass cut short (cancelled, or at the deadline) is
     /// undone, so that the film holds whole passes only: every pixel the
     /// same samples, as a checkpoint must. Each row is copied before it is
     /// sampled, which needs the film's statistics twice over.
-    pub whole_passes: bool,
-    /// Whether nothing but the image and the error estimate is read from
-    /// the film once the run ends (a render to an image file): a pass that
-    /// gives a blank film all the stop's samples then keeps only those
-    /// ([`Film::summarise`]), and no pass may follow it.
-    pub image_only: bool,
+    whole_passes: bool,
     /// Whether passes grow: after each pass, `samples_per_pass` becomes the
     /// film's mean samples per pixel (so the film doubles with each pass),
     /// at most `pass_cap`. The first passes stay short, for an early
@@ -131,37 +129,31 @@ pub struct Progressive {
     /// (the image, the error estimate, the adaptive weights) over more
     /// samples. One sample per pixel per pass ran at half the rays per
     /// second of a one-pass render.
-    pub growing: bool,
+    growing: bool,
     /// The most samples per pixel a growing pass gives: at most
     /// [`MAX_PASS_SPP`], less where a caller wants passes short (the TUI).
-    pub pass_cap: u32,
+    pass_cap: u32,
+}
+
+/// No film yet: 0 x 0 pixels, before the first job.
+impl Default for Progressive {
+    fn default() -> Self {
+        Self::of(
+            Film::new(0, 0),
+            (0, 0.0),
+            Stop::default(),
+            1,
+            None,
+            false,
+            false,
+        )
+    }
 }
 
 /// The most samples per pixel a render read only for its image takes in
-/// one pass (see [`Progressive::fixed_spp_passes`]): beyond, a row would
-/// keep a cancel waiting too long.
+/// one pass (see [`Job::passes_for_stop`]): beyond, a row would keep a
+/// cancel waiting too long.
 pub const ONE_PASS_SPP: u32 = 256;
-
-/// How a pass keeps a film's pixels.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Layout {
-    /// Each pixel's one sample ([`Film::new_exact`]).
-    Exact,
-    /// Each pixel's mean and error term ([`Film::summarise`]).
-    Summary,
-    /// Each pixel's statistics.
-    Stats,
-}
-
-impl Layout {
-    fn bytes_per_pixel(self) -> u64 {
-        match self {
-            Layout::Exact => Film::EXACT_BYTES_PER_PIXEL,
-            Layout::Summary => Film::SUMMARY_BYTES_PER_PIXEL,
-            Layout::Stats => Film::BYTES_PER_PIXEL,
-        }
-    }
-}
 
 /// What a pass gives the pixels.
 enum Give {
@@ -172,59 +164,70 @@ enum Give {
 }
 
 impl Progressive {
-    pub fn new(width: u32, height: u32) -> Self {
-        Self::resume(Film::new(width, height))
-    }
-
-    /// Passes into `film`, blank or with samples already.
-    pub fn resume(film: Film) -> Self {
+    /// The passes of `job`, into the film it made.
+    pub(super) fn of(
+        film: Film,
+        (rays, seconds): (u64, f64),
+        stop: Stop,
+        samples_per_pass: u32,
+        rows_done: Option<Arc<AtomicU32>>,
+        whole_passes: bool,
+        growing: bool,
+    ) -> Self {
         Self {
             film,
-            rays: 0,
-            seconds: 0.0,
-            samples_per_pass: 1,
-            rows_done: None,
-            adaptive: false,
-            whole_passes: false,
-            image_only: false,
-            growing: false,
+            rays,
+            seconds,
+            stop,
+            samples_per_pass,
+            rows_done,
+            whole_passes,
+            growing,
             pass_cap: MAX_PASS_SPP,
         }
     }
 
-    /// Sizes the passes of a render to a fixed `spp` (all the samples a
-    /// pixel gets, or unbounded): a block of strata per pass, the same
-    /// samples as passes of one (a sample depends only on its pixel, index
-    /// and seed) with each pixel's statistics brought through the cache
-    /// once a block rather than once a sample. One read only for its image
-    /// ([`Progressive::image_only`]) takes all its samples in one pass up to
-    /// [`ONE_PASS_SPP`], so that its film keeps no statistics. An exact
-    /// render's one pass stays one sample.
-    pub fn fixed_spp_passes(&mut self, spp: Option<u32>, deterministic: bool) {
-        if deterministic {
-            return;
-        }
-        self.samples_per_pass = match spp {
-            Some(n) if self.image_only && n <= ONE_PASS_SPP => n.max(PIXEL_STRATA),
-            _ => PIXEL_STRATA,
-        };
+    /// The film so far.
+    pub fn film(&self) -> &Film {
+        &self.film
     }
 
-    /// An empty film whose passes are adaptive after [`MIN_SPP`].
-    pub fn new_adaptive(width: u32, height: u32) -> Self {
-        Self {
-            adaptive: true,
-            ..Self::new(width, height)
-        }
+    /// The film, once its passes are done.
+    pub fn into_film(self) -> Film {
+        self.film
+    }
+
+    /// Rays traced in passes so far (a resumed film's included).
+    pub fn rays(&self) -> u64 {
+        self.rays
+    }
+
+    /// Seconds spent in passes so far (a resumed film's included).
+    pub fn seconds(&self) -> f64 {
+        self.seconds
+    }
+
+    /// Samples per pixel the next pass gives at most.
+    pub fn samples_per_pass(&self) -> u32 {
+        self.samples_per_pass
+    }
+
+    /// Caps the samples per pixel of the growing passes from here
+    /// ([`Job::growing`]): the TUI keeps each pass within a frame's time at
+    /// the last pass's pace.
+    pub fn cap_passes(&mut self, cap: u32) {
+        self.pass_cap = cap;
     }
 
     /// What the next pass gives each pixel; `None` when no pixel needs more.
-    fn give(&self, stop: &Stop) -> Option<Give> {
-        let cap = stop.spp.unwrap_or(u32::MAX);
+    fn give(&self) -> Option<Give> {
+        let cap = self.stop.spp.unwrap_or(u32::MAX);
         let f = &self.film;
         let Some(a) = &f.adaptive else {
-            let left = cap.saturating_sub(f.spp);
-            return Some(Give::All(self.samples_per_pass.clamp(1, left.max(1))));
+            return Some(Give::All(uniform_pass(
+                self.samples_per_pass,
+                cap.saturating_sub(f.spp),
+            )));
         };
         if f.spp < MIN_SPP.min(cap) {
             let upto = MIN_SPP
@@ -255,55 +258,10 @@ impl Progressive {
         }
     }
 
-    /// How the pass that gives `give` keeps the film's pixels.
-    fn layout(&self, deterministic: bool, give: &Give, stop: &Stop) -> Layout {
-        let f = &self.film;
-        let plain = f.is_blank() && f.adaptive.is_none() && !self.whole_passes;
-        if !plain {
-            return Layout::Stats;
-        }
-        // The one pass of an exact render keeps each pixel's sample and no
-        // statistics; a film that gets anything more keeps statistics.
-        if deterministic && matches!(give, Give::All(1)) && f.start == 0 {
-            return Layout::Exact;
-        }
-        // Else the statistics of a pass that is all a film gets serve only
-        // its image and error: each pixel's are summarised once it is
-        // sampled.
-        match give {
-            Give::All(n) if self.image_only && stop.spp.is_some_and(|s| *n >= s) => Layout::Summary,
-            _ => Layout::Stats,
-        }
-    }
-
-    /// Bytes a pixel of this film will take once the render that `stop`
-    /// ends has made it (the film and the images made from it), before its
-    /// first pass: what a caller checks against the memory available.
-    pub fn bytes_per_pixel(&self, deterministic: bool, stop: &Stop) -> u64 {
-        let f = &self.film;
-        let adaptive = f.adaptive.is_some() || self.becomes_adaptive(deterministic);
-        match self.give(stop) {
-            Some(g) if !adaptive => self.layout(deterministic, &g, stop).bytes_per_pixel(),
-            _ => Film::BYTES_PER_PIXEL,
-        }
-    }
-
-    /// Whether the next pass makes this film an adaptive one.
-    fn becomes_adaptive(&self, deterministic: bool) -> bool {
-        let f = &self.film;
-        self.adaptive && !deterministic && f.adaptive.is_none() && f.spp == 0
-    }
-
     /// Runs one pass of up to `samples_per_pass` samples (never past the
     /// stop's spp); `None` when `cancel` stopped it between rows.
-    pub fn pass(
-        &mut self,
-        tracer: &Tracer,
-        stop: &Stop,
-        cancel: &(dyn Fn() -> bool + Sync),
-    ) -> Option<PassStats> {
-        self.pass_with::<RayCounter>(tracer, stop, cancel)
-            .map(|(p, _)| p)
+    pub fn pass(&mut self, tracer: &Tracer, cancel: Cancel) -> Option<PassStats> {
+        self.pass_with::<RayCounter>(tracer, cancel).map(|(p, _)| p)
     }
 
     /// As [`Progressive::pass`], with any counting recorder, whose counts of
@@ -311,15 +269,10 @@ impl Progressive {
     pub fn pass_with<R: Recorder + Default + Send + Merge>(
         &mut self,
         tracer: &Tracer,
-        stop: &Stop,
-        cancel: &(dyn Fn() -> bool + Sync),
+        cancel: Cancel,
     ) -> Option<(PassStats, R)> {
         let start = Instant::now();
-        if self.becomes_adaptive(tracer.plan.deterministic) {
-            let f = &self.film;
-            self.film = Film::new_adaptive(f.width, f.height);
-        }
-        let give = self.give(stop);
+        let give = self.give();
         let (samples, pixels) = match &give {
             Some(Give::All(n)) => (*n, self.film.pixels_len() as u64),
             Some(Give::Each(g)) => (
@@ -334,10 +287,7 @@ impl Progressive {
         let rows = self.rows_done.as_deref();
         let whole = self.whole_passes;
         let rec: R = match &give {
-            Some(g) => {
-                let layout = self.layout(tracer.plan.deterministic, g, stop);
-                sample_rows(tracer, &mut self.film, g, cancel, rows, whole, layout)
-            }
+            Some(g) => sample_rows(tracer, &mut self.film, g, cancel, rows, whole),
             None => R::default(),
         };
         let ms = start.elapsed().as_secs_f64() * 1e3;
@@ -354,13 +304,13 @@ impl Progressive {
             rays,
             ms,
         };
-        (!cancel()).then_some((stats, rec))
+        (!cancel.is_set()).then_some((stats, rec))
     }
 
-    /// Which limit of `stop` the film has reached, if any; `elapsed` is the
-    /// time the render has taken so far.
-    pub fn finished(&self, plan: &Plan, stop: &Stop, elapsed: f64) -> Option<Ended> {
-        let f = &self.film;
+    /// Which limit of the stop the film has reached, if any; `elapsed` is
+    /// the time the render has taken so far.
+    pub fn finished(&self, plan: &Plan, elapsed: f64) -> Option<Ended> {
+        let (f, stop) = (&self.film, &self.stop);
         if plan.deterministic && f.spp >= 1 {
             return Some(Ended::Exact);
         }
@@ -390,19 +340,18 @@ impl Progressive {
         None
     }
 
-    /// Adds passes until `stop` (or `cancel`); `on_pass` sees the film
+    /// Adds passes until the stop (or `cancel`); `on_pass` sees the film
     /// after each finished pass.
     pub fn run(
         &mut self,
         tracer: &Tracer,
-        stop: &Stop,
-        cancel: &(dyn Fn() -> bool + Sync),
+        cancel: Cancel,
         mut on_pass: impl FnMut(&Film, &PassStats),
     ) -> Outcome {
         let start = Instant::now();
         let (rays, seconds) = (self.rays, self.seconds);
         // A time too long for the clock is no deadline at all.
-        let deadline = stop.seconds.and_then(|t| {
+        let deadline = self.stop.seconds.and_then(|t| {
             std::time::Duration::try_from_secs_f64(t)
                 .ok()
                 .and_then(|d| start.checked_add(d))
@@ -410,14 +359,14 @@ impl Progressive {
         let past = || deadline.is_some_and(|d| Instant::now() >= d);
         let mut passes = 0;
         let ended = loop {
-            if let Some(e) = self.finished(tracer.plan, stop, start.elapsed().as_secs_f64()) {
+            if let Some(e) = self.finished(tracer.plan, start.elapsed().as_secs_f64()) {
                 break e;
             }
             // The deadline never cuts the first pass (see `finished`).
             let first = self.film.spp == 0;
-            let stop_rows = || cancel() || (!first && past());
-            let pass = self.pass(tracer, stop, &stop_rows);
-            if cancel() {
+            let stop_rows = || cancel.is_set() || (!first && past());
+            let pass = self.pass(tracer, Cancel::When(&stop_rows));
+            if cancel.is_set() {
                 break Ended::Cancelled;
             }
             passes += 1;
@@ -436,7 +385,7 @@ impl Progressive {
 
     /// Traces every sample the film holds again, in one pass into a
     /// scratch film that keeps what a one-shot render to an image keeps
-    /// (each pixel's mean and error, [`Layout::Summary`]), each pixel's
+    /// (each pixel's mean and error, [`Film::new_summary`]), each pixel's
     /// samples together, as `render --spp N` traces them: the rate the
     /// passes that took them are measured against. The samples, and so the
     /// rays, are the same; only the passes differ.
@@ -448,15 +397,7 @@ impl Progressive {
         };
         let mut scratch = Film::new_summary(f.width, f.height);
         let start = Instant::now();
-        let rec: RayCounter = sample_rows(
-            tracer,
-            &mut scratch,
-            &give,
-            &|| false,
-            None,
-            false,
-            Layout::Summary,
-        );
+        let rec: RayCounter = sample_rows(tracer, &mut scratch, &give, Cancel::Never, None, false);
         PassStats {
             samples: f.spp_range().2,
             pixels: f.pixels_len() as u64,
@@ -467,10 +408,16 @@ impl Progressive {
 
     /// Runs to `spp` samples per pixel, uncancellable: for tests and tools.
     pub fn render(tracer: &Tracer, spp: u32) -> Film {
-        let mut p = Progressive::new(tracer.width, tracer.height);
-        p.run(tracer, &Stop::spp(spp), &|| false, |_, _| {});
+        let mut p = Job::of(tracer, Stop::spp(spp)).start();
+        p.run(tracer, Cancel::Never, |_, _| {});
         p.film
     }
+}
+
+/// The samples per pixel a uniform pass gives, of `per_pass` asked and
+/// `left` before the stop's spp: at least one.
+pub(super) fn uniform_pass(per_pass: u32, left: u32) -> u32 {
+    per_pass.clamp(1, left.max(1))
 }
 
 /// Each pixel's sample count for a film of at least `mean` samples per
@@ -555,7 +502,7 @@ const CAMERA_BATCH: usize = crate::bvh::PACKET_RAYS;
 /// (`mirrors`); see BENCHMARKS.md.
 pub const PACKET_SAMPLES: u32 = PIXEL_STRATA;
 
-/// The most samples per pixel a growing pass gives ([`Progressive::growing`]):
+/// The most samples per pixel a growing pass gives ([`Job::growing`]):
 /// enough to fill a packet with one pixel's samples.
 pub const MAX_PASS_SPP: u32 = crate::bvh::PACKET_RAYS as u32;
 
@@ -568,38 +515,25 @@ struct Row<'a> {
     rays: Option<&'a mut [u32]>,
 }
 
-/// Adds what `give` says to the pixels of `film`, rows in parallel;
-/// `cancel` is polled between rows and `rows_done` counts finished rows.
-/// With `whole`, a pass cut short leaves a uniform film as it was; the film
-/// is first made to keep its pixels as `layout` says.
-#[allow(clippy::too_many_arguments)]
+/// Adds what `give` says to the pixels of `film`, kept as the film keeps
+/// them, rows in parallel; `cancel` is polled between rows and `rows_done`
+/// counts finished rows. With `whole`, a pass cut short leaves a uniform
+/// film as it was.
 fn sample_rows<R: Recorder + Default + Send + Merge>(
     tracer: &Tracer,
     film: &mut Film,
     give: &Give,
-    cancel: &(dyn Fn() -> bool + Sync),
+    cancel: Cancel,
     rows_done: Option<&AtomicU32>,
     whole: bool,
-    layout: Layout,
 ) -> R {
     let whole = whole && film.adaptive.is_none();
     let tracer = &Tracer {
-        cancel: Some(cancel),
+        cancel,
         ..tracer.clone()
     };
     let w = (film.width as usize).max(1);
     let first = film.start + film.spp;
-    match layout {
-        Layout::Exact if !film.is_exact() => *film = Film::new_exact(film.width, film.height),
-        Layout::Summary if !film.is_summary() => film.summarise(),
-        // A film made summarised (`Film::new_summary`) that gets more than
-        // one pass.
-        Layout::Stats if film.is_summary() => film.unsummarise(),
-        Layout::Stats if film.is_exact() => {
-            film.pixels_mut();
-        }
-        _ => {}
-    }
     let (pixels, spp) = film.sample_into();
     let rows: Vec<Row> = match spp {
         None => pixels
@@ -644,7 +578,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
         .map(|mut row| {
             let mut rec = R::default();
             let mut bad = Vec::new();
-            if cancel() {
+            if cancel.is_set() {
                 row.pixels.skipped();
                 return (rec, bad, false, Vec::new());
             }
@@ -722,7 +656,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             let mut cut = false;
             for x in 0..width {
                 let (k0, n) = give_of(x);
-                if (n > 1 || x % 64 == 0) && cancel() {
+                if (n > 1 || x % 64 == 0) && cancel.is_set() {
                     cut = true;
                     break;
                 }
@@ -736,7 +670,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             if !cut {
                 trace(&mut placed);
             }
-            if cut || cancel() {
+            if cut || cancel.is_set() {
                 match &mut row.pixels {
                     Samples::Stats(p) => p.copy_from_slice(&before),
                     other => other.skipped(),
@@ -827,7 +761,7 @@ impl Merge for WorkCounter {
 mod tests {
     use super::*;
     use crate::render::session::{SceneRequest, Session};
-    use crate::render::Feature;
+    use crate::render::{Feature, Needs};
 
     fn session(off: &[Feature]) -> Session {
         session_of("cornell-area", off)
@@ -844,10 +778,9 @@ mod tests {
     fn runs_to_the_spp_in_passes_of_the_asked_size() {
         let s = session(&[]);
         let t = s.tracer();
-        let mut p = Progressive::new(12, 8);
-        p.samples_per_pass = 3;
+        let mut p = Job::of(&t, Stop::spp(7)).passes_of(3).start();
         let mut seen = Vec::new();
-        let o = p.run(&t, &Stop::spp(7), &|| false, |f, pass| {
+        let o = p.run(&t, Cancel::Never, |f, pass| {
             seen.push((f.spp, pass.samples))
         });
         assert_eq!(seen, [(3, 3), (6, 3), (7, 1)]);
@@ -858,13 +791,14 @@ mod tests {
     #[test]
     fn exact_scenes_stop_after_one_pass() {
         let s = session(&[Feature::Supersampling, Feature::SoftShadows]);
-        let mut p = Progressive::new(12, 8);
-        let o = p.run(&s.tracer(), &Stop::spp(50), &|| false, |_, _| {});
+        let t = s.tracer();
+        let mut p = Job::of(&t, Stop::spp(50)).start();
+        let o = p.run(&t, Cancel::Never, |_, _| {});
         assert_eq!((o.ended, p.film.spp), (Ended::Exact, 1));
     }
 
     /// The lean film of an exact render holds what a film of statistics
-    /// would, and becomes one when a pass adds more.
+    /// would.
     #[test]
     fn an_exact_render_keeps_its_samples_and_nothing_is_lost() {
         let s = session(&[Feature::Supersampling, Feature::SoftShadows]);
@@ -872,21 +806,14 @@ mod tests {
         let lean = Progressive::render(&t, 1);
         assert!(lean.is_exact());
         // A checkpointed render keeps statistics from the start.
-        let mut full = Progressive::new(12, 8);
-        full.whole_passes = true;
-        full.run(&t, &Stop::spp(1), &|| false, |_, _| {});
+        let mut full = Job::of(&t, Stop::spp(1)).needs(Needs::WholePasses).start();
+        full.run(&t, Cancel::Never, |_, _| {});
         assert!(!full.film.is_exact());
         assert_eq!(lean.image(), full.film.image());
         assert_eq!(lean.report(), full.film.report());
         let stats = |f: &Film| format!("{:?}", f.pixels());
         assert_eq!(stats(&lean), stats(&full.film));
         assert_eq!(lean.mean(5, 3), full.film.mean(5, 3));
-        let mut more = Progressive::resume(lean);
-        more.pass(&t, &Stop::spp(2), &|| false);
-        full.pass(&t, &Stop::spp(2), &|| false);
-        assert!(!more.film.is_exact());
-        assert!(more.film.pixels().iter().all(|p| p.n == 2));
-        assert_eq!(stats(&more.film), stats(&full.film));
     }
 
     /// Rows a cancelled exact pass leaves out hold no sample, the others
@@ -895,11 +822,10 @@ mod tests {
     fn rows_an_exact_pass_leaves_out_have_no_sample() {
         let s = session(&[Feature::Supersampling, Feature::SoftShadows]);
         let t = s.tracer();
-        let mut p = Progressive::new(12, 8);
         let done = std::sync::Arc::new(AtomicU32::new(0));
-        p.rows_done = Some(done.clone());
+        let mut p = Job::of(&t, Stop::spp(1)).rows_done(done.clone()).start();
         let cancel = || done.load(Ordering::Relaxed) >= 2;
-        assert!(p.pass(&t, &Stop::spp(1), &cancel).is_none());
+        assert!(p.pass(&t, Cancel::When(&cancel)).is_none());
         assert!(p.film.is_exact());
         let rows: Vec<u32> = p.film.pixels().chunks(12).map(|row| row[0].n).collect();
         for (row, &n) in p.film.pixels().chunks(12).zip(&rows) {
@@ -914,15 +840,18 @@ mod tests {
     fn time_and_cancel_end_a_run() {
         let s = session(&[]);
         let t = s.tracer();
-        let mut p = Progressive::new(12, 8);
-        let o = p.run(&t, &Stop::seconds(0.05), &|| false, |_, _| {});
+        let mut p = Job::of(&t, Stop::seconds(0.05)).start();
+        let o = p.run(&t, Cancel::Never, |_, _| {});
         assert_eq!(o.ended, Ended::Time);
         assert!(o.seconds < 1.0, "{}", o.seconds);
-        let o = p.run(&t, &Stop::default(), &|| true, |_, _| {});
+        let mut p = Job::of(&t, Stop::default())
+            .resume(p.into_film(), 0, 0.0)
+            .start();
+        let o = p.run(&t, Cancel::When(&|| true), |_, _| {});
         assert_eq!(o.ended, Ended::Cancelled);
         // A time too short for anything still gives one full pass.
-        let mut p = Progressive::new(12, 8);
-        let o = p.run(&t, &Stop::seconds(1e-12), &|| false, |_, _| {});
+        let mut p = Job::of(&t, Stop::seconds(1e-12)).start();
+        let o = p.run(&t, Cancel::Never, |_, _| {});
         assert_eq!((o.ended, o.passes, p.film.spp), (Ended::Time, 1, 1));
         assert!(p.film.pixels().iter().all(|px| px.n == 1));
     }
@@ -934,15 +863,14 @@ mod tests {
     fn adaptive_passes_fill_up_to_the_cap() {
         let s = session(&[]);
         let t = s.tracer();
-        let mut p = Progressive::new_adaptive(12, 8);
-        p.samples_per_pass = 16;
         let stop = Stop {
             spp: Some(42),
             seconds: Some(1e9),
             error: None,
         };
+        let mut p = Job::of(&t, stop).adaptive(true).passes_of(16).start();
         let mut means = Vec::new();
-        let o = p.run(&t, &stop, &|| false, |f, _| means.push(f.spp_range().1));
+        let o = p.run(&t, Cancel::Never, |f, _| means.push(f.spp_range().1));
         assert_eq!(o.ended, Ended::Spp);
         assert_eq!(p.film.spp_range(), (42, 42.0, 42));
         assert!(
@@ -958,18 +886,14 @@ mod tests {
         let s = session(&[]);
         let t = s.tracer();
         for adaptive in [false, true] {
-            let mut p = match adaptive {
-                true => Progressive::new_adaptive(12, 8),
-                false => Progressive::new(12, 8),
-            };
-            p.growing = true;
             let stop = Stop {
                 spp: Some(4096),
                 seconds: Some(1e9),
                 error: None,
             };
+            let mut p = Job::of(&t, stop).adaptive(adaptive).growing().start();
             for _ in 0..6 {
-                p.pass(&t, &stop, &|| false).unwrap();
+                p.pass(&t, Cancel::Never).unwrap();
             }
             let (lo, _, hi) = p.film.spp_range();
             assert_eq!(lo < hi, adaptive);
@@ -1059,20 +983,16 @@ mod tests {
             let s = session(off);
             let t = s.tracer();
             for (spp, per_pass) in [(1, 1), (3, 16), (16, 16), (16, 4), (21, 16)] {
-                // As `render` makes them: summarised before the first pass
-                // when read only for the image.
-                let run = |image_only: bool| {
-                    let mut p = Progressive::resume(match image_only {
-                        true => Film::new_summary(12, 8),
-                        false => Film::new(12, 8),
-                    });
-                    p.samples_per_pass = per_pass;
-                    p.image_only = image_only;
-                    let o = p.run(&t, &Stop::spp(spp), &|| false, |_, _| {});
+                let run = |needs: Needs| {
+                    let mut p = Job::of(&t, Stop::spp(spp))
+                        .passes_of(per_pass)
+                        .needs(needs)
+                        .start();
+                    let o = p.run(&t, Cancel::Never, |_, _| {});
                     (p.film, o.rays)
                 };
-                let (full, rays) = run(false);
-                let (only, only_rays) = run(true);
+                let (full, rays) = run(Needs::Statistics);
+                let (only, only_rays) = run(Needs::Image);
                 let what = format!("{off:?} {spp} spp in passes of {per_pass}");
                 assert!(!full.is_summary(), "{what}");
                 assert_eq!(only.is_summary(), per_pass >= spp, "{what}");
@@ -1106,20 +1026,19 @@ mod tests {
             let s = session_of(spec, off);
             let t = s.tracer();
             for stop in [Stop::spp(1), Stop::spp(16), Stop::spp(40), error] {
-                for flags in 0..8 {
-                    let (image_only, adaptive, whole) =
-                        (flags & 1 != 0, flags & 2 != 0, flags & 4 != 0);
-                    let mut p = Progressive::resume(match image_only {
-                        true => Film::new_summary(12, 8),
-                        false => Film::new(12, 8),
-                    });
-                    p.samples_per_pass = 16;
-                    (p.image_only, p.adaptive, p.whole_passes) = (image_only, adaptive, whole);
-                    let bytes = p.bytes_per_pixel(t.plan.deterministic, &stop);
-                    p.run(&t, &stop, &|| false, |_, _| {});
-                    let what = format!("{spec} {stop:?} image only {image_only}, adaptive {adaptive}, whole passes {whole}");
-                    assert_eq!(bytes, kept(&p.film), "{what}");
-                    seen.insert(bytes);
+                for needs in [Needs::Statistics, Needs::Image, Needs::WholePasses] {
+                    for adaptive in [false, true] {
+                        let job = Job::of(&t, stop)
+                            .passes_of(16)
+                            .needs(needs)
+                            .adaptive(adaptive);
+                        let bytes = job.bytes_per_pixel();
+                        let mut p = job.start();
+                        p.run(&t, Cancel::Never, |_, _| {});
+                        let what = format!("{spec} {stop:?} {needs:?}, adaptive {adaptive}");
+                        assert_eq!(bytes, kept(&p.film), "{what}");
+                        seen.insert(bytes);
+                    }
                 }
             }
         }
@@ -1131,9 +1050,8 @@ mod tests {
         let s = session(&[]);
         let t = s.tracer();
         let one = Progressive::render(&t, 6);
-        let mut p = Progressive::new(12, 8);
-        p.samples_per_pass = 4;
-        p.run(&t, &Stop::spp(6), &|| false, |_, _| {});
+        let mut p = Job::of(&t, Stop::spp(6)).passes_of(4).start();
+        p.run(&t, Cancel::Never, |_, _| {});
         assert_eq!(one.image(), p.film.image());
     }
 }

@@ -46,9 +46,9 @@ pub struct SceneRequest {
     pub env: Option<crate::scene::load::EnvRequest>,
     /// Whether opening refuses an image size whose film of statistics
     /// would not fit in memory; off for a caller that checks the film it
-    /// makes, which may keep far less ([`Progressive::bytes_per_pixel`]).
+    /// makes, which may keep far less ([`Job::bytes_per_pixel`]).
     ///
-    /// [`Progressive::bytes_per_pixel`]: super::Progressive::bytes_per_pixel
+    /// [`Job::bytes_per_pixel`]: super::Job::bytes_per_pixel
     pub check_film: bool,
 }
 

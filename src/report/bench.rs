@@ -12,9 +12,8 @@ use serde::Serialize;
 use super::stats::median;
 use super::{Machine, Progress};
 use crate::bvh::{self, Bvh};
-use crate::render::{
-    Feature, Features, Film, Plan, PlanPolicy, Progressive, RayCounter, Stop, Tracer,
-};
+use crate::interrupt::Cancel;
+use crate::render::{Feature, Features, Film, Job, Plan, PlanPolicy, RayCounter, Stop, Tracer};
 use crate::scene::{self, Builder, Scene};
 
 /// Meshes up to this size get the full-sweep SAH reference (it is O(n log² n)).
@@ -236,8 +235,8 @@ fn frame_ms(scene: &Scene, bvh: &Bvh, plan: &Plan, o: &BenchOptions, reps: usize
     let mut ms = Vec::new();
     let mut rays = 0;
     for _ in 0..reps {
-        let mut p = Progressive::new(o.width, o.height);
-        if let Some(pass) = p.pass(&tracer, &Stop::spp(1), &|| false) {
+        let mut p = Job::of(&tracer, Stop::spp(1)).start();
+        if let Some(pass) = p.pass(&tracer, Cancel::Never) {
             ms.push(pass.ms);
             rays = pass.rays;
         }

@@ -30,7 +30,7 @@ pub struct TuiPassStats {
     /// The first pass, which also counts BVH work for the panel.
     pub first_pass_ms: f64,
     /// Render time of the later passes, which grow as the worker's do
-    /// ([`Progressive::growing`](crate::render::Progressive)).
+    /// ([`Job::growing`](crate::render::Job::growing)).
     pub pass_ms_mean: f64,
     pub pass_ms_median: f64,
     pub pass_ms_min: f64,
@@ -94,7 +94,7 @@ pub fn measure_pass(req: &SceneRequest, cols: u16, rows: u16, passes: u32) -> Re
     let (mut rays, mut spp_mean) = (Vec::new(), 0.0);
     while (pass_ms.len() as u32) < passes {
         let start = Instant::now();
-        let s = match worker.step(&|| false) {
+        let s = match worker.step(crate::interrupt::Cancel::Never) {
             Some(Msg::Frame(s)) => s,
             Some(_) => continue,
             None => break,

@@ -10,8 +10,10 @@ use std::thread::JoinHandle;
 
 use anyhow::{bail, Context, Result};
 
+use crate::interrupt::Cancel;
 use crate::raster::output;
-use crate::render::{post, Ended, Film, Plan, Progressive, Session, Stop};
+use crate::render::Job as RenderJob;
+use crate::render::{post, Ended, Needs, Plan, Session, Stop};
 use crate::scene::Camera;
 
 /// What to export: the session's scene with its seed, seen from `camera`
@@ -80,20 +82,20 @@ impl Job {
         };
         // Read for nothing but its image: as `rayterm render` makes one.
         let size = r.size;
-        let mut p = Progressive::resume(Film::new_summary(size.0, size.1));
-        p.image_only = true;
-        p.fixed_spp_passes(Some(target_spp), r.plan.deterministic);
         let rows = Arc::new(AtomicU32::new(0));
-        p.rows_done = Some(rows.clone());
-        let pass_spp = p.samples_per_pass;
+        let job = RenderJob::new(size.0, size.1, &r.plan, Stop::spp(target_spp))
+            .needs(Needs::Image)
+            .passes_for_stop()
+            .rows_done(rows.clone());
+        let pass_spp = job.samples_per_pass();
         let done_spp = Arc::new(AtomicU32::new(0));
         let cancel = Arc::new(AtomicBool::new(false));
         let (tx, result) = mpsc::channel();
-        let (done, stop) = (done_spp.clone(), cancel.clone());
+        let (done, stop, counted) = (done_spp.clone(), cancel.clone(), rows.clone());
         let thread = std::thread::Builder::new()
             .name("rayterm-export".into())
             .spawn(move || {
-                let _ = tx.send(render(&r, p, target_spp, &done, &stop));
+                let _ = tx.send(render(&r, job, counted, &done, &stop));
             })
             .context("cannot start the export thread")?;
         Ok(Job {
@@ -141,8 +143,8 @@ impl Drop for Job {
 
 fn render(
     r: &Request,
-    mut p: Progressive,
-    spp: u32,
+    job: RenderJob,
+    rows: Arc<AtomicU32>,
     done: &AtomicU32,
     stop: &AtomicBool,
 ) -> Result<Saved> {
@@ -150,23 +152,21 @@ fn render(
     let (w, h) = r.size;
     let tracer = s.tracer_for(&r.plan, &r.camera, r.size);
     let cancel = || stop.load(Ordering::Relaxed);
-    let rows = p.rows_done.clone();
-    let o = p.run(&tracer, &Stop::spp(spp), &cancel, |film, _| {
+    let mut p = job.start();
+    let o = p.run(&tracer, Cancel::When(&cancel), |film, _| {
         // Rows count the next pass's from here.
-        if let Some(rows) = &rows {
-            rows.store(0, Ordering::Relaxed);
-        }
+        rows.store(0, Ordering::Relaxed);
         done.store(film.spp, Ordering::Relaxed)
     });
     if o.ended == Ended::Cancelled {
         bail!("export cancelled");
     }
-    let shown = post::display(p.film.image(), w, h, &r.plan, &s.scene.settings.bloom);
+    let shown = post::display(p.film().image(), w, h, &r.plan, &s.scene.settings.bloom);
     let path = output::fresh_name(&r.dir, &format!("rayterm-{}", stem(&s.scene.name)));
     crate::raster::write_png(&path, &post::to_rgb8(&shown.image, w, h))?;
     Ok(Saved {
         path,
-        spp: p.film.spp,
+        spp: p.film().spp,
         seconds: o.seconds,
     })
 }
@@ -242,7 +242,7 @@ mod tests {
             assert_eq!((saved.spp, job.done_spp()), (spp, spp));
             let png = image::open(&saved.path).unwrap().into_rgb8();
             std::fs::remove_file(&saved.path).unwrap();
-            let film = Progressive::render(&session.tracer(), spp);
+            let film = crate::render::Progressive::render(&session.tracer(), spp);
             let s = &session.scene.settings;
             let shown = post::display(film.image(), size.0, size.1, &session.plan, &s.bloom);
             assert_eq!(

@@ -5,6 +5,7 @@ use std::collections::HashSet;
 use std::time::{Duration, Instant};
 
 use crate::inspect::{inspect_pixel, lines, LineKind, PixelTree, TreeLine};
+use crate::interrupt::Cancel;
 use crate::render::post::Displayed;
 use crate::render::Tracer;
 
@@ -95,7 +96,7 @@ impl Inspector {
                     let start = Instant::now();
                     let late = || start.elapsed() > TREE_WAIT;
                     let t = Tracer {
-                        cancel: Some(&late),
+                        cancel: Cancel::When(&late),
                         ..tracer.clone()
                     };
                     let tree = inspect_pixel(&t, s.x, s.y, s.sample);

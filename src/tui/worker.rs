@@ -16,12 +16,12 @@ use glam::Vec3;
 
 use crate::bvh::{self, Bvh};
 use crate::inspect::inspect_pixel;
-use crate::interrupt::Running;
+use crate::interrupt::{Cancel, Running};
 use crate::raster::metrics::rel_mse_on;
 use crate::raster::resample::resample;
 use crate::render::progressive::MAX_PASS_SPP;
 use crate::render::recorder::WorkCounter;
-use crate::render::{post, Plan, Progressive, Stop, Tracer, WorstPixels};
+use crate::render::{post, Job, Plan, Progressive, Stop, Tracer, WorstPixels};
 use crate::scene::camera::CameraFrame;
 use crate::scene::{Builder, Camera, Scene};
 use crate::viz::draw::{legend_line, Layer};
@@ -30,7 +30,7 @@ use crate::viz::{self, pixel, Source};
 /// A full pass of one sample per pixel slower than this is preceded by a
 /// quarter-resolution pass when the view changes.
 const COARSE_ABOVE_MS: f64 = 20.0;
-/// Passes grow ([`Progressive::growing`]) while one would take at most
+/// Passes grow ([`Job::growing`]) while one would take at most
 /// this long at the last full pass's pace: long enough to trace a pixel's
 /// samples in packets where the scene is quick, short enough to show the
 /// picture improve several times a second.
@@ -296,7 +296,7 @@ impl Worker {
             seed,
             generation: 0,
             view: None,
-            film: Progressive::new(0, 0),
+            film: Progressive::default(),
             coarse_pending: false,
             started: Running::now(),
             history: Vec::new(),
@@ -328,7 +328,7 @@ impl Worker {
                 // samples: the film is only shown again. (A pass cancelled
                 // halfway leaves some rows a sample short; each pixel's mean
                 // and error are its own, so the film is still sound.)
-                let same_film = self.film.film.spp > 0
+                let same_film = self.film.film().spp > 0
                     && self.view.as_ref().is_some_and(|old| {
                         (old.camera, old.size(), old.pixel_aspect)
                             == (view.camera, view.size(), view.pixel_aspect)
@@ -354,7 +354,7 @@ impl Worker {
                 self.overlay_drawn = None;
                 self.film_view = v.filter(|v| v.source() == Source::Film);
                 // The film is the same: shown again, with or without it.
-                self.resend = self.film.film.spp > 0;
+                self.resend = self.film.film().spp > 0;
                 None
             }
             Cmd::Pixel(p) => {
@@ -369,8 +369,14 @@ impl Worker {
     fn restart(&mut self) {
         let (w, h) = self.view.as_ref().map_or((0, 0), View::size);
         // Adaptive after the first quarter block (docs/adaptive.md).
-        self.film = Progressive::new_adaptive(w, h);
-        self.film.rows_done = Some(self.progress.rows_done.clone());
+        self.film = match &self.view {
+            Some(v) => Job::new(w, h, &v.plan, Self::stop())
+                .adaptive(true)
+                .growing()
+                .rows_done(self.progress.rows_done.clone())
+                .start(),
+            None => Progressive::default(),
+        };
         // A pass is slow when the last one was, or when it is the first
         // without the BVH (brute force is orders of magnitude slower).
         let bvh = self.view.as_ref().is_some_and(|v| v.plan.bvh);
@@ -439,7 +445,7 @@ impl Worker {
         match &self.view {
             None => true,
             Some(v) if v.width == 0 || v.height == 0 => true,
-            Some(v) => self.film.finished(&v.plan, &Self::stop(), 0.0).is_some(),
+            Some(v) => self.film.finished(&v.plan, 0.0).is_some(),
         }
     }
 
@@ -459,19 +465,19 @@ impl Worker {
     /// view.
     pub fn retrace(&self) -> Option<crate::render::PassStats> {
         let view = self.view.as_ref()?;
-        let f = &self.film.film;
+        let f = self.film.film();
         Some(self.film.retrace(&self.tracer(view, (f.width, f.height))))
     }
 
     /// Does the next piece of work: shows a kept film again, draws the
     /// overlay, or runs a pass; `None` when idle or cancelled.
-    pub fn step(&mut self, cancel: &(dyn Fn() -> bool + Sync)) -> Option<Msg> {
+    pub fn step(&mut self, cancel: Cancel) -> Option<Msg> {
         if self.idle() {
             return None;
         }
         let view = self.view.clone()?;
         if std::mem::take(&mut self.resend) {
-            let mean = self.film.film.image();
+            let mean = self.film.film().image();
             let truth = self.true_error(&mean);
             return Some(Msg::Frame(Box::new(self.snapshot(&view, mean, truth))));
         }
@@ -493,10 +499,10 @@ impl Worker {
             let mut t = self.tracer(&view, view.size());
             // One sample's tree can take seconds: a quit or a new view stops
             // it, and a tree cut short is never shown.
-            t.cancel = Some(cancel);
+            t.cancel = cancel;
             let layer = if p.x < view.width && p.y < view.height {
                 let tree = inspect_pixel(&t, p.x, p.y, p.sample);
-                if cancel() {
+                if cancel.is_set() {
                     return None;
                 }
                 pixel::draw(&t, &tree, p.view, p.ray, p.spp)
@@ -516,7 +522,7 @@ impl Worker {
     }
 
     /// One sample more for every pixel of the view.
-    fn full_pass(&mut self, view: &View, cancel: &(dyn Fn() -> bool + Sync)) -> Option<Snapshot> {
+    fn full_pass(&mut self, view: &View, cancel: Cancel) -> Option<Snapshot> {
         let t = Tracer::new(
             &self.scene,
             &self.bvh,
@@ -524,15 +530,12 @@ impl Worker {
             view.frame(view.size()),
             self.seed,
         );
-        self.film.growing = true;
-        self.film.pass_cap = self.pass_cap(view.plan.bvh);
-        let before = self.film.film.spp_range().1;
+        self.film.cap_passes(self.pass_cap(view.plan.bvh));
+        let before = self.film.film().spp_range().1;
         // The first pass of a view counts BVH work for the panel; later ones
         // take the fast path.
-        let pass = if self.film.film.spp == 0 && view.plan.bvh {
-            let (pass, work) = self
-                .film
-                .pass_with::<WorkCounter>(&t, &Self::stop(), cancel)?;
+        let pass = if self.film.film().spp == 0 && view.plan.bvh {
+            let (pass, work) = self.film.pass_with::<WorkCounter>(&t, cancel)?;
             let n = pass.rays.max(1) as f64;
             self.per_ray = Some(PerRay {
                 nodes: work.work.nodes_visited as f64 / n,
@@ -540,21 +543,21 @@ impl Worker {
             });
             pass
         } else {
-            let pass = self.film.pass(&t, &Self::stop(), cancel);
+            let pass = self.film.pass(&t, cancel);
             self.progress.end();
             pass?
         };
         self.last_full = Some(LastPass {
             ms: pass.ms,
-            ms_per_spp: pass.ms / (self.film.film.spp_range().1 - before).max(1.0),
+            ms_per_spp: pass.ms / (self.film.film().spp_range().1 - before).max(1.0),
             bvh: view.plan.bvh,
         });
         self.last_mrays = pass.mrays_per_s();
         let elapsed = self.started.elapsed().as_secs_f64();
-        if let Some(error) = self.film.film.relative_error().filter(|&e| e > 0.0) {
+        if let Some(error) = self.film.film().relative_error().filter(|&e| e > 0.0) {
             self.history.push((elapsed, error));
         }
-        let mean = self.film.film.image();
+        let mean = self.film.film().image();
         let truth = self.true_error(&mean);
         if let Some(e) = truth {
             self.true_history.push((elapsed, e));
@@ -585,7 +588,7 @@ impl Worker {
     /// The film as it stands, for the app; `mean` is its image and
     /// `true_error` that image's error against the reference.
     fn snapshot(&self, view: &View, mean: Vec<Vec3>, true_error: Option<f64>) -> Snapshot {
-        let film = &self.film.film;
+        let film = self.film.film();
         // Only views of the film are kept in `film_view`: none fails.
         let film_view = self.film_view.and_then(|v| {
             let (image, legend) = viz::film_view(
@@ -634,16 +637,17 @@ impl Worker {
     }
 
     /// One sample of every `COARSE`-th pixel, upscaled to the view.
-    fn coarse(&self, view: &View, cancel: &(dyn Fn() -> bool + Sync)) -> Option<Snapshot> {
+    fn coarse(&self, view: &View, cancel: Cancel) -> Option<Snapshot> {
         let (cw, ch) = (view.width.div_ceil(COARSE), view.height.div_ceil(COARSE));
         let t = self.tracer(view, (cw, ch));
-        let mut small = Progressive::new(cw, ch);
-        small.rows_done = Some(self.progress.rows_done.clone());
+        let mut small = Job::of(&t, Stop::spp(1))
+            .rows_done(self.progress.rows_done.clone())
+            .start();
         self.progress.begin(self.generation, ch);
-        let pass = small.pass(&t, &Stop::spp(1), cancel);
+        let pass = small.pass(&t, cancel);
         self.progress.end();
         let pass = pass?;
-        let small = small.film.image();
+        let small = small.film().image();
         let mut image = Vec::with_capacity((view.width * view.height) as usize);
         for y in 0..view.height {
             for x in 0..view.width {
@@ -767,7 +771,7 @@ fn run(mut w: Worker, rx: Receiver<Cmd>, tx: Sender<Msg>, latest: Arc<AtomicU64>
         }
         let generation = w.generation;
         let cancel = || latest.load(Ordering::Relaxed) != generation;
-        if let Some(m) = w.step(&cancel) {
+        if let Some(m) = w.step(Cancel::When(&cancel)) {
             if tx.send(m).is_err() {
                 return;
             }
@@ -804,7 +808,7 @@ mod tests {
     /// The next frame the worker sends; `None` once it is idle.
     fn next_frame(w: &mut Worker) -> Option<Box<Snapshot>> {
         loop {
-            match w.step(&|| false)? {
+            match w.step(Cancel::Never)? {
                 Msg::Frame(s) => return Some(s),
                 _ => continue,
             }
@@ -952,7 +956,7 @@ mod tests {
         w.apply(Cmd::ImageView(Some(viz::View::Leaves)));
         let mut overlays = 0;
         for _ in 0..6 {
-            if let Some(Msg::Overlay(o)) = w.step(&|| false) {
+            if let Some(Msg::Overlay(o)) = w.step(Cancel::Never) {
                 let (layer, summary) = o.layer.unwrap();
                 assert_eq!((o.generation, layer.width, layer.height), (1, 16, 12));
                 assert!(!layer.is_blank() && summary.contains("leaf boxes"));
@@ -965,7 +969,7 @@ mod tests {
     #[test]
     fn cancelled_passes_send_nothing() {
         let mut w = worker(Features::all());
-        assert!(w.step(&|| true).is_none());
+        assert!(w.step(Cancel::When(&|| true)).is_none());
     }
 
     #[test]

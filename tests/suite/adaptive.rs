@@ -5,7 +5,8 @@
 use crate::exact::*;
 use glam::Vec3;
 use rayterm::color::LUMA;
-use rayterm::render::{Feature, Features, Film, Progressive, SceneRequest, Session, Stop};
+use rayterm::interrupt::Cancel;
+use rayterm::render::{Feature, Features, Film, Job, Progressive, SceneRequest, Session, Stop};
 use rayterm::report::converge::rel_mse;
 use rayterm::scene::Scene;
 
@@ -19,9 +20,9 @@ fn session(s: &Scene, w: u32, h: u32, seed: u64) -> Session {
 
 fn adaptive(s: &Session, stop: &Stop) -> Film {
     let t = s.tracer();
-    let mut p = Progressive::new_adaptive(t.width, t.height);
-    p.run(&t, stop, &|| false, |_, _| {});
-    p.film
+    let mut p = Job::of(&t, *stop).adaptive(true).start();
+    p.run(&t, Cancel::Never, |_, _| {});
+    p.into_film()
 }
 
 fn lum(c: Vec3) -> f64 {
@@ -83,12 +84,12 @@ fn estimated_over_true(s: &Scene, w: u32, h: u32, seed: u64, budget: f64, exact:
     for k in 0..6 {
         let sess = session(s, w, h, seed + k);
         let t = sess.tracer();
-        let mut p = Progressive::new_adaptive(w, h);
-        while p.film.spp_range().1 < budget {
-            p.pass(&t, &Stop::default(), &|| false).unwrap();
+        let mut p = Job::of(&t, Stop::default()).adaptive(true).start();
+        while p.film().spp_range().1 < budget {
+            p.pass(&t, Cancel::Never).unwrap();
         }
-        est += p.film.estimated_rel_mse().unwrap();
-        truth += rel_mse(&p.film.image(), exact);
+        est += p.film().estimated_rel_mse().unwrap();
+        truth += rel_mse(&p.film().image(), exact);
     }
     (est / truth).sqrt()
 }

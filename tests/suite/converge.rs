@@ -6,6 +6,7 @@ use crate::common::*;
 use crate::exact::*;
 use glam::Vec3;
 use rayterm::bvh::{self, Bvh};
+use rayterm::interrupt::Cancel;
 use rayterm::raster::reference::load_reference;
 use rayterm::render::{Feature, Features, Plan, PlanPolicy};
 use rayterm::report::converge::{rmse, Budget, Config, ReferenceSource, Study, Subject};
@@ -35,7 +36,7 @@ fn study(s: &Scene, features: Features, cfg: &Config) -> Study {
         bvh: &bvh,
         plan: &plan,
     }
-    .study(cfg, &())
+    .study(cfg, &(), Cancel::Never)
     .expect("study runs")
 }
 

@@ -24,8 +24,8 @@ pub use plot::draw as plot;
 pub use reference::{default_cache_dir, format_floor, save_reference};
 
 use crate::bvh::Bvh;
-use crate::interrupt;
-use crate::render::{Ended, Film, Plan, Progressive, Stop, Tracer};
+use crate::interrupt::{Cancel, Interrupted};
+use crate::render::{Ended, Film, Job, Plan, Stop, Tracer};
 use crate::report::stats::{fit_log_log, log_lerp, median};
 use crate::report::Progress;
 use crate::scene::{Integrator, Scene, Settings};
@@ -446,28 +446,34 @@ struct Run {
 /// Renders one independent run: passes of one sample (adaptive: of a block
 /// to the noisiest pixels after the minimum) until the budget is met; an
 /// adaptive spp budget is the mean over pixels, with no cap on any one.
-fn run_once(tracer: &Tracer, budget: Budget, adaptive: bool, passes: &mut u64) -> Run {
-    let mut p = Progressive::new(tracer.width, tracer.height);
-    p.adaptive = adaptive;
+fn run_once(
+    tracer: &Tracer,
+    budget: Budget,
+    adaptive: bool,
+    passes: &mut u64,
+    cancel: Cancel,
+) -> Run {
+    let stop = match budget {
+        Budget::Spp(_) if adaptive && !tracer.plan.deterministic => Stop::default(),
+        Budget::Spp(n) => Stop::spp(n),
+        Budget::Seconds(t) => Stop::seconds(t),
+    };
+    let mut p = Job::of(tracer, stop).adaptive(adaptive).start();
     let mut overran = false;
     match budget {
         Budget::Spp(n) if adaptive && !tracer.plan.deterministic => {
-            while p.film.spp_range().1 < n as f64 {
+            while p.film().spp_range().1 < n as f64 {
                 *passes += 1;
-                let pass = p.pass(tracer, &Stop::default(), &interrupt::requested);
+                let pass = p.pass(tracer, cancel);
                 if pass.is_none_or(|s| s.pixels == 0) {
                     break;
                 }
             }
         }
         _ => {
-            let stop = match budget {
-                Budget::Spp(n) => Stop::spp(n),
-                Budget::Seconds(t) => Stop::seconds(t),
-            };
             let mut first = None;
             *passes += p
-                .run(tracer, &stop, &interrupt::requested, |_, pass| {
+                .run(tracer, cancel, |_, pass| {
                     first.get_or_insert(pass.ms / 1e3);
                 })
                 .passes as u64;
@@ -477,9 +483,9 @@ fn run_once(tracer: &Tracer, budget: Budget, adaptive: bool, passes: &mut u64) -
         }
     }
     Run {
-        seconds: p.seconds,
-        rays: p.rays,
-        film: p.film,
+        seconds: p.seconds(),
+        rays: p.rays(),
+        film: p.into_film(),
         overran,
     }
 }
@@ -492,6 +498,7 @@ pub struct Subject<'a> {
 }
 
 impl Subject<'_> {
+    #[allow(clippy::too_many_arguments)]
     fn measure(
         &self,
         strategy: Strategy,
@@ -500,6 +507,7 @@ impl Subject<'_> {
         reference: &[Vec3],
         passes: &mut u64,
         progress: &dyn Progress,
+        cancel: Cancel,
     ) -> Option<Point> {
         progress.doing(&format!(
             "{}: {budget}",
@@ -518,7 +526,7 @@ impl Subject<'_> {
             let seed = cfg.seed.wrapping_add(i as u64);
             let frame = scene.camera.frame(cfg.width, cfg.height);
             let tracer = Tracer::new(&scene, self.bvh, &plan, frame, seed);
-            let r = run_once(&tracer, budget, strategy.adaptive, passes);
+            let r = run_once(&tracer, budget, strategy.adaptive, passes, cancel);
             // A time budget shorter than one sample per pixel measures
             // nothing: an unsampled pixel is not an error of the method.
             if r.overran || r.film.spp_range().0 == 0 {
@@ -548,6 +556,7 @@ impl Subject<'_> {
         cfg: &Config,
         notes: &mut Vec<String>,
         progress: &dyn Progress,
+        cancel: Cancel,
     ) -> Result<(Vec<Vec3>, ReferenceInfo)> {
         let (w, h) = (cfg.width, cfg.height);
         match &cfg.reference {
@@ -636,21 +645,17 @@ impl Subject<'_> {
                 }
                 let frame = self.scene.camera.frame(w, h);
                 let tracer = Tracer::new(self.scene, self.bvh, self.plan, frame, seed);
-                let mut p = Progressive::new(w, h);
                 // Several samples per pass keep the pass overhead small.
-                p.samples_per_pass = 8;
-                let o = p.run(
-                    &tracer,
-                    &Stop::spp(spp),
-                    &interrupt::requested,
-                    |film, _| progress.doing(&format!("reference: {}/{spp} spp", film.spp)),
-                );
+                let mut p = Job::of(&tracer, Stop::spp(spp)).passes_of(8).start();
+                let o = p.run(&tracer, cancel, |film, _| {
+                    progress.doing(&format!("reference: {}/{spp} spp", film.spp))
+                });
                 // A cut reference must not be cached as a whole one.
                 if o.ended == Ended::Cancelled {
-                    bail!(interrupt::Interrupted);
+                    bail!(Interrupted);
                 }
                 let seconds = o.seconds;
-                let img = p.film.image();
+                let img = p.film().image();
                 let cached = |f: &std::path::Path| -> Result<()> {
                     if let Some(dir) = f.parent() {
                         if dir.exists() && !dir.is_dir() {
@@ -683,8 +688,8 @@ impl Subject<'_> {
         }
     }
 
-    /// Runs the study described by `cfg`.
-    pub fn study(&self, cfg: &Config, progress: &dyn Progress) -> Result<Study> {
+    /// Runs the study described by `cfg`, until `cancel` says stop.
+    pub fn study(&self, cfg: &Config, progress: &dyn Progress, cancel: Cancel) -> Result<Study> {
         if cfg.budgets.is_empty() {
             bail!("no budgets to measure");
         }
@@ -720,7 +725,7 @@ impl Subject<'_> {
             // One pass is the answer: it is its own reference unless one is given.
             let frame = self.scene.camera.frame(cfg.width, cfg.height);
             let tracer = Tracer::new(self.scene, self.bvh, self.plan, frame, cfg.seed);
-            let r = run_once(&tracer, Budget::Spp(1), false, &mut passes);
+            let r = run_once(&tracer, Budget::Spp(1), false, &mut passes, cancel);
             let img = r.film.image();
             let (reference, info) = match cfg.reference {
                 ReferenceSource::Render { .. } => (
@@ -731,7 +736,7 @@ impl Subject<'_> {
                         seconds: 0.0,
                     },
                 ),
-                _ => self.reference(cfg, &mut notes, progress)?,
+                _ => self.reference(cfg, &mut notes, progress, cancel)?,
             };
             study.reference = info;
             study.series.push(Series {
@@ -752,7 +757,7 @@ impl Subject<'_> {
             study.notes = notes;
             return Ok(study);
         }
-        let (reference, info) = self.reference(cfg, &mut notes, progress)?;
+        let (reference, info) = self.reference(cfg, &mut notes, progress, cancel)?;
         study.reference = info;
         let mut main = Series {
             strategy: base,
@@ -760,7 +765,7 @@ impl Subject<'_> {
             points: Vec::new(),
         };
         for &b in &cfg.budgets {
-            match self.measure(base, b, cfg, &reference, &mut passes, progress) {
+            match self.measure(base, b, cfg, &reference, &mut passes, progress, cancel) {
                 Some(p) => main.points.push(p),
                 None => notes.push(format!(
                     "{b} is too short for one sample per pixel here; not measured"
@@ -797,14 +802,20 @@ impl Subject<'_> {
                 };
                 if matches!(cfg.budgets[0], Budget::Seconds(_)) {
                     series.points.extend(cfg.budgets.iter().filter_map(|&b| {
-                        self.measure(s, b, cfg, &reference, &mut passes, progress)
+                        self.measure(s, b, cfg, &reference, &mut passes, progress, cancel)
                     }));
                 } else {
                     // Double the spp until the run takes as long as the scene's largest budget.
                     let mut n = 1;
-                    while let Some(p) =
-                        self.measure(s, Budget::Spp(n), cfg, &reference, &mut passes, progress)
-                    {
+                    while let Some(p) = self.measure(
+                        s,
+                        Budget::Spp(n),
+                        cfg,
+                        &reference,
+                        &mut passes,
+                        progress,
+                        cancel,
+                    ) {
                         let done = p.seconds >= t_max || n >= MAX_COMPARE_SPP;
                         series.points.push(p);
                         if done {
