@@ -13,7 +13,7 @@ use super::args::{Cli, Command, MergeArgs};
 use super::render::{image_bytes, summary};
 use crate::interrupt::{self, Cancel};
 use crate::raster::{Format, Output};
-use crate::render::partial::{self, ranges_text, Meta, Plan};
+use crate::render::partial::{self, ranges_text, MergePlan, Meta};
 use crate::render::SceneRequest;
 use crate::words;
 
@@ -84,7 +84,7 @@ pub fn run(a: MergeArgs) -> Result<ExitCode> {
 }
 
 /// `merge --partial`: the parts as one partial film.
-fn staged(plan: &Plan, out: &Output, cancel: Cancel, start: Instant) -> Result<ExitCode> {
+fn staged(plan: &MergePlan, out: &Output, cancel: Cancel, start: Instant) -> Result<ExitCode> {
     let part = partial::merge_part(plan, cancel);
     if cancel.is_set() {
         crate::noteln!("interrupted: nothing written");
@@ -139,7 +139,7 @@ fn say(out: &Output, line: &str) -> Result<ExitCode> {
 
 /// What is missing: `parts 3/4 and 4/4 are missing (samples 6..12 of
 /// 0..12)`, or the samples where they are not whole parts.
-fn missing(plan: &Plan) -> String {
+fn missing(plan: &MergePlan) -> String {
     match absent(plan) {
         (Some(parts), samples) => format!("{parts} missing ({samples})"),
         (None, samples) => format!("{samples} are missing"),
@@ -148,7 +148,7 @@ fn missing(plan: &Plan) -> String {
 
 /// The missing parts (`parts 3/4 and 4/4 are`) where they are whole
 /// parts, and the missing samples (`samples 6..12 of 0..12`).
-fn absent(plan: &Plan) -> (Option<String>, String) {
+fn absent(plan: &MergePlan) -> (Option<String>, String) {
     let samples = format!(
         "samples {} of 0..{}",
         ranges_text(&plan.missing),
@@ -175,7 +175,7 @@ fn listed(w: &[String]) -> String {
 
 /// The commands that render what is missing, from the options the parts
 /// recorded: one a line.
-fn to_render(plan: &Plan) -> String {
+fn to_render(plan: &MergePlan) -> String {
     let first = &plan.parts[0];
     let options = &first.1.meta.command;
     if options.is_empty() {
@@ -238,7 +238,7 @@ fn command(options: &[String], extra: &[&str], out: &Path) -> String {
 /// The file part K/N goes to: a present part's name with its own K made
 /// this one where the name holds it once (`part-2.exr` for `part-3.exr`),
 /// else `part-K.exr` beside it.
-fn part_name(plan: &Plan, k: u32) -> PathBuf {
+fn part_name(plan: &MergePlan, k: u32) -> PathBuf {
     let (path, h) = plan
         .parts
         .iter()
@@ -285,7 +285,7 @@ fn shell_word(w: &str) -> String {
 /// `merge --check SCENE`: refuses parts not rendered from the scene as it
 /// loads here, with the options the parts recorded, saying which of its
 /// files differ where the parts recorded them.
-fn check(spec: &str, plan: &Plan) -> Result<()> {
+fn check(spec: &str, plan: &MergePlan) -> Result<()> {
     let (path, first) = &plan.parts[0];
     let there = &first.meta;
     let recorded = options(&there.command);

@@ -2,7 +2,7 @@
 //! the first: its size and plan, when it stops, the samples it starts from
 //! (a sample range, or a resumed film), what is read of its film, whether
 //! its passes are adaptive and how large they are. From that the job
-//! chooses how the film keeps its pixels ([`Layout`]) and makes it, so the
+//! chooses how the film keeps its pixels ([`Storage`]) and makes it, so the
 //! memory it checks ([`Job::bytes_per_pixel`]) is what it allocates, and
 //! no pass ever changes it; [`Job::start`] hands the film to the one
 //! progressive loop ([`Progressive`]).
@@ -41,7 +41,7 @@ enum Passes {
 
 /// How a film keeps its pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Layout {
+enum Storage {
     /// Each pixel's one sample ([`Film::new_exact`]).
     Exact,
     /// Each pixel's mean and error term ([`Film::new_summary`]).
@@ -198,25 +198,25 @@ impl Job {
     /// pass of an exact render, each pixel's sample; a pass that is all a
     /// film read only for its image gets, each pixel's mean and error (its
     /// statistics on the stack while it is sampled); else statistics.
-    fn layout(&self) -> Layout {
+    fn layout(&self) -> Storage {
         if let Some((f, ..)) = &self.resumed {
             return match (f.is_exact(), f.is_summary()) {
-                (true, _) => Layout::Exact,
-                (_, true) => Layout::Summary,
-                _ => Layout::Stats,
+                (true, _) => Storage::Exact,
+                (_, true) => Storage::Summary,
+                _ => Storage::Stats,
             };
         }
         if self.makes_adaptive() || self.whole_passes() {
-            return Layout::Stats;
+            return Storage::Stats;
         }
         let spp = self.stop.spp;
         let first = uniform_pass(self.samples_per_pass(), spp.unwrap_or(u32::MAX));
         if self.deterministic && first == 1 && self.start == 0 {
-            Layout::Exact
+            Storage::Exact
         } else if self.needs == Needs::Image && spp.is_some_and(|s| first >= s) {
-            Layout::Summary
+            Storage::Summary
         } else {
-            Layout::Stats
+            Storage::Stats
         }
     }
 
@@ -225,9 +225,9 @@ impl Job {
     /// [`Job::start`] allocates it.
     pub fn bytes_per_pixel(&self) -> u64 {
         match self.layout() {
-            Layout::Exact => Film::EXACT_BYTES_PER_PIXEL,
-            Layout::Summary => Film::SUMMARY_BYTES_PER_PIXEL,
-            Layout::Stats => Film::BYTES_PER_PIXEL,
+            Storage::Exact => Film::EXACT_BYTES_PER_PIXEL,
+            Storage::Summary => Film::SUMMARY_BYTES_PER_PIXEL,
+            Storage::Stats => Film::BYTES_PER_PIXEL,
         }
     }
 
@@ -241,10 +241,10 @@ impl Job {
             Some((film, rays, seconds)) => (film, (rays, seconds)),
             None => {
                 let mut film = match layout {
-                    Layout::Exact => Film::new_exact(w, h),
-                    Layout::Summary => Film::new_summary(w, h),
-                    Layout::Stats if adaptive => Film::new_adaptive(w, h),
-                    Layout::Stats => Film::new(w, h),
+                    Storage::Exact => Film::new_exact(w, h),
+                    Storage::Summary => Film::new_summary(w, h),
+                    Storage::Stats if adaptive => Film::new_adaptive(w, h),
+                    Storage::Stats => Film::new(w, h),
                 };
                 film.start = self.start;
                 (film, (0, 0.0))

@@ -878,7 +878,7 @@ fn plausible(p: &PixelStats, spp: u32, start: u32, end: u32) -> bool {
 
 /// The parts of one render, checked from their headers and put in range
 /// order, with the render's total and the ranges no part holds.
-pub struct Plan {
+pub struct MergePlan {
     pub parts: Vec<(PathBuf, Header)>,
     pub total: u32,
     pub missing: Vec<Range<u32>>,
@@ -887,7 +887,7 @@ pub struct Plan {
 /// Reads the headers of `paths` and checks that they come from one render
 /// and do not overlap. Missing ranges are returned; the caller decides
 /// whether they may be.
-pub fn plan(paths: &[PathBuf]) -> Result<Plan> {
+pub fn plan(paths: &[PathBuf]) -> Result<MergePlan> {
     let mut parts = Vec::with_capacity(paths.len());
     for p in paths {
         parts.push((p.clone(), Header::read(p)?));
@@ -941,7 +941,7 @@ pub fn plan(paths: &[PathBuf]) -> Result<Plan> {
     if total > at {
         missing.push(at..total);
     }
-    Ok(Plan {
+    Ok(MergePlan {
         parts,
         total,
         missing,
@@ -960,7 +960,7 @@ pub struct Merged {
 }
 
 /// Opens the planned parts, checking that none changed since planned.
-fn open_planned(plan: &Plan) -> Result<Vec<Source>> {
+fn open_planned(plan: &MergePlan) -> Result<Vec<Source>> {
     let mut sources = Vec::with_capacity(plan.parts.len());
     for (path, header) in &plan.parts {
         let s = Source::open(path)?;
@@ -988,7 +988,7 @@ fn merged_meta(sources: &[Source]) -> Result<Meta> {
 }
 
 /// Reads the planned parts and merges them in range order.
-pub fn merge(plan: &Plan, cancel: Cancel) -> Result<Merged> {
+pub fn merge(plan: &MergePlan, cancel: Cancel) -> Result<Merged> {
     let mut sources = open_planned(plan)?;
     let size = sources[0].header.size;
     let mut image = Vec::with_capacity(size.0 as usize * size.1 as usize);
@@ -1028,7 +1028,7 @@ pub fn merge(plan: &Plan, cancel: Cancel) -> Result<Merged> {
 /// Merges the planned parts into one partial film, which merges again
 /// with the parts still to come (a staged merge): their samples must
 /// follow one another, since a partial film holds one range.
-pub fn merge_part(plan: &Plan, cancel: Cancel) -> Result<Part> {
+pub fn merge_part(plan: &MergePlan, cancel: Cancel) -> Result<Part> {
     let (start, end) = match (plan.parts.first(), plan.parts.last()) {
         (Some((_, a)), Some((_, b))) => (a.range.start, b.range.end),
         _ => bail!("no parts to merge"),
@@ -1068,7 +1068,7 @@ pub fn merge_part(plan: &Plan, cancel: Cancel) -> Result<Part> {
     Ok(Part::of(header, pixels, bad))
 }
 
-impl Plan {
+impl MergePlan {
     /// The parts of `render --part K/N` the missing samples make, where
     /// they are whole parts: N, and each missing K.
     pub fn missing_parts(&self) -> Option<(u32, Vec<u32>)> {
