@@ -928,10 +928,15 @@ mod tests {
     fn bloom_and_bvh_toggles_keep_the_samples() {
         let s = session("cornell");
         let mut w = worker(Features::all());
-        // Passes of one sample each, before adaptive ones begin.
-        for _ in 0..2 {
-            full(&mut w);
-        }
+        // Passes of one sample each, before adaptive ones begin; the second
+        // at a pace that lets the next grow, however busy the machine.
+        full(&mut w);
+        w.last_full = Some(LastPass {
+            ms: 1.0,
+            ms_per_spp: 1.0,
+            bvh: true,
+        });
+        full(&mut w);
         let plain = view(&s, Features::all().without(&[Feature::Bloom, Feature::Bvh]));
         w.apply(Cmd::View(2, Box::new(plain.clone())));
         let f = next_frame(&mut w).unwrap();
