@@ -12,7 +12,6 @@ use ratatui::crossterm::event::{Event, MouseButton, MouseEventKind};
 use ratatui::layout::Rect;
 
 use super::camera::CameraControl;
-use super::choice::RenderChoice;
 use super::color::ColorMode;
 use super::display::Display;
 use super::inspector::Inspector;
@@ -24,6 +23,7 @@ use super::meter::Meter;
 use super::overlays::Overlays;
 use super::popup::{self, Popup};
 use super::reference::ReferenceImage;
+use super::render_choice::RenderChoice;
 use super::status::Status;
 use super::term::output::Figures;
 use super::worker::{self, Msg, PixelRequest, Snapshot, View, Worker};

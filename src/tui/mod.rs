@@ -1,18 +1,19 @@
 //! The terminal UI: explore a scene with a progressively rendered viewport,
 //! BVH, feature and render panels, and the selected pixel's ray tree.
 //!
-//! `app` holds the state and actions, split into `camera`, `link` (to the
-//! render `worker` on its own thread), `inspector` (the ray-tree pane),
-//! `jobs` (PNG `export`, the stability battery) and `popup`; `keys` is the
-//! one key table, `layout` places everything before each draw, `widgets`
-//! draw (and only draw), `graphics` turns the viewport's pixels into cells
-//! in the colours of `color`, `term` writes to the terminal, and `bench`
-//! measures the pass time and terminal bandwidth.
+//! `app` holds the state and actions, split into `render_choice` (features,
+//! plan, builder), `camera`, `display` (how the viewport reaches the screen),
+//! `link` (to the render `worker` on its own thread), `inspector` (the
+//! ray-tree pane), `overlays`, `status` (the status line), `jobs` (PNG
+//! `export`, the stability battery), `popup`, `meter` (the output's rates)
+//! and `reference`; `keys` is the one key table, `layout` places everything
+//! before each draw, `widgets` draw (and only draw), `graphics` turns the
+//! viewport's pixels into cells in the colours of `color`, `term` writes to
+//! the terminal, and `bench` measures the pass time and terminal bandwidth.
 
 pub mod app;
 pub mod bench;
 pub mod camera;
-mod choice;
 pub mod color;
 pub mod config;
 pub mod display;
@@ -27,6 +28,7 @@ mod meter;
 mod overlays;
 pub mod popup;
 mod reference;
+mod render_choice;
 mod status;
 pub mod term;
 pub mod widgets;
