@@ -113,7 +113,7 @@ fn expected(protocol: Protocol, cell: (u32, u32)) -> Expected {
     };
     let (session, warnings) = Session::open(&req).unwrap();
     let mut app = App::new(session, warnings, ColorMode::Truecolor, None).unwrap();
-    app.pixels = Some(PixelMode {
+    app.display.pixels = Some(PixelMode {
         protocol,
         cell,
         colours: 256,
@@ -126,7 +126,7 @@ fn expected(protocol: Protocol, cell: (u32, u32)) -> Expected {
         "one pass is the whole picture"
     );
     let pic = rayterm::tui::widgets::picture(&app).unwrap();
-    let area = app.layout.image;
+    let area = app.display.layout.image;
     // Within the budget the picture has the cells' pixels.
     assert_eq!(
         (pic.w, pic.h),

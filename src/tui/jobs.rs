@@ -1,6 +1,7 @@
 //! Work the TUI runs in the background besides rendering: PNG exports and
 //! the stability battery. Each reports back through [`Jobs::poll`].
 
+use std::path::PathBuf;
 use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::sync::Arc;
 
@@ -8,11 +9,16 @@ use anyhow::Result;
 
 use super::export;
 use super::popup::Popup;
+use crate::render::{Plan, Session};
 use crate::report::stability;
-use crate::scene::Scene;
+use crate::scene::{Camera, Scene};
 
-#[derive(Default)]
 pub struct Jobs {
+    /// Where PNG exports go: the directory the TUI was started in.
+    pub(crate) export_dir: PathBuf,
+    /// The export size `--size` asked for; otherwise exports take the
+    /// view's shape at the scene's size.
+    pub(crate) export_size: Option<(u32, u32)>,
     export: Option<export::Job>,
     /// The stability battery's result, while it runs.
     stability: Option<Receiver<Result<Vec<stability::Row>>>>,
@@ -25,11 +31,36 @@ pub struct Finished {
 }
 
 impl Jobs {
-    /// Starts an export unless one is running; the status line's text.
-    pub fn export(&mut self, r: export::Request) -> String {
+    pub(crate) fn new() -> Jobs {
+        Jobs {
+            export_dir: std::env::current_dir().unwrap_or_else(|_| PathBuf::from(".")),
+            export_size: None,
+            export: None,
+            stability: None,
+        }
+    }
+
+    /// Starts exporting what `camera` sees of `session` with `plan`, in the
+    /// shape of a `view_size` view, unless an export is running; the status
+    /// line's text.
+    pub(crate) fn export(
+        &mut self,
+        session: &Session,
+        camera: Camera,
+        plan: &Plan,
+        view_size: (u32, u32),
+    ) -> String {
         if self.export.is_some() {
             return "an export is already running".into();
         }
+        let scene_size = (session.width, session.height);
+        let r = export::Request {
+            session: session.clone(),
+            camera,
+            plan: plan.clone(),
+            size: export::size_for(view_size, self.export_size, scene_size),
+            dir: self.export_dir.clone(),
+        };
         match export::Job::start(r) {
             Ok(job) => {
                 let s = format!(

@@ -70,9 +70,9 @@ impl Layout {
         .areas(left);
         let titled = Block::new().borders(Borders::TOP);
         l.image = titled.inner(l.view);
-        l.grid = match &app.pixels {
+        l.grid = match &app.display.pixels {
             Some(m) => m.grid(l.image.width, l.image.height),
-            None => app.symbols.grid(),
+            None => app.display.symbols.grid(),
         };
         l.debug_text = titled.inner(l.debug);
         // Reasons get lines of their own when that leaves the render panel

@@ -1,19 +1,22 @@
 //! The terminal UI: explore a scene with a progressively rendered viewport,
 //! BVH, feature and render panels, and the selected pixel's ray tree.
 //!
-//! `app` holds the state and actions, split into `camera`, `link` (to the
-//! render `worker` on its own thread), `inspector` (the ray-tree pane),
-//! `jobs` (PNG `export`, the stability battery) and `popup`; `keys` is the
-//! one key table, `layout` places everything before each draw, `widgets`
-//! draw (and only draw), `graphics` turns the viewport's pixels into cells
-//! in the colours of `color`, `term` writes to the terminal, and `bench`
-//! measures the pass time and terminal bandwidth.
+//! `app` holds the state and actions, split into `render_choice` (features,
+//! plan, builder), `camera`, `display` (how the viewport reaches the screen),
+//! `link` (to the render `worker` on its own thread), `inspector` (the
+//! ray-tree pane), `overlays`, `status` (the status line), `jobs` (PNG
+//! `export`, the stability battery), `popup`, `meter` (the output's rates)
+//! and `reference`; `keys` is the one key table, `layout` places everything
+//! before each draw, `widgets` draw (and only draw), `graphics` turns the
+//! viewport's pixels into cells in the colours of `color`, `term` writes to
+//! the terminal, and `bench` measures the pass time and terminal bandwidth.
 
 pub mod app;
 pub mod bench;
 pub mod camera;
 pub mod color;
 pub mod config;
+pub mod display;
 pub mod export;
 pub mod graphics;
 pub mod inspector;
@@ -21,7 +24,12 @@ pub mod jobs;
 pub mod keys;
 pub mod layout;
 pub mod link;
+mod meter;
+mod overlays;
 pub mod popup;
+mod reference;
+mod render_choice;
+mod status;
 pub mod term;
 pub mod widgets;
 pub mod worker;
@@ -105,8 +113,8 @@ pub fn run(
         color.unwrap_or(ColorMode::Palette256),
         reference,
     )?;
-    app.export_size = req.size;
-    app.symbols = symbols;
+    app.jobs.export_size = req.size;
+    app.display.symbols = symbols;
     // SIGTERM, SIGHUP and an outside SIGINT quit like `q`: the loop sees the
     // flag and the guard below restores the terminal. SIGTSTP suspends like
     // Ctrl-Z.
@@ -132,7 +140,7 @@ pub fn run(
             Some(_) => None,
             None => {
                 let (mode, hint) = term::choose_colour(answers.rgb, tmux.and_then(|t| t.rgb), var);
-                app.color = mode;
+                app.display.color = mode;
                 hint
             }
         };
@@ -145,24 +153,24 @@ pub fn run(
             var,
             tmux.map(|t| t.passthrough),
         );
-        app.pixels = pixels;
+        app.display.pixels = pixels;
         if let Some(cell) =
             detect::cell_size(&answers, cell_from_ioctl(), (size.width, size.height))
         {
-            app.cell = cell;
+            app.display.cell = cell;
         }
         // The colours' hint first: the status line wraps, and it is the
         // one to keep whole.
-        let colour_hint = hint.filter(|_| app.pixels.is_none());
+        let colour_hint = hint.filter(|_| app.display.pixels.is_none());
         let mut said: Vec<String> = colour_hint
             .into_iter()
-            .chain([app.status.clone(), said])
+            .chain([app.status.message().to_string(), said])
             .collect();
         said.retain(|s| !s.is_empty());
         app.say(said.join(" · "));
         let mut out = Output::default();
         out.start(terminal.backend_mut(), Instant::now())?;
-        let mut images = match app.pixels {
+        let mut images = match app.display.pixels {
             Some(_) => Some(Images::new()?),
             None => None,
         };
@@ -174,7 +182,7 @@ pub fn run(
             images.as_mut(),
             kept,
         );
-        let pictures = app.pixels.zip(images.as_mut());
+        let pictures = app.display.pixels.zip(images.as_mut());
         leave(terminal.backend_mut(), &reader, &mut out, pictures);
         result
     });
@@ -267,14 +275,14 @@ fn event_loop<W: Write>(
         dirty |= app.note_output(out.figures());
         if dirty && last_draw.elapsed() >= FRAME {
             draw(terminal, app)?;
-            match app.pixels {
+            match app.display.pixels {
                 Some(_) => picture_due = true,
                 None => out.drawn(terminal.backend(), shown(app)),
             }
             last_draw = Instant::now();
             dirty = false;
         }
-        if let (Some(mode), Some(images)) = (app.pixels, images.as_mut()) {
+        if let (Some(mode), Some(images)) = (app.display.pixels, images.as_mut()) {
             images.step(terminal.backend_mut(), app, out, &mode, &mut picture_due);
         }
         out.pump(terminal.backend_mut(), Instant::now())?;
@@ -314,7 +322,12 @@ fn event_loop<W: Write>(
         if std::mem::take(&mut app.suspend) | crate::interrupt::stop_requested() {
             if !crate::interrupt::catch_stops() {
                 app.say("no suspending: rayterm was started with SIGTSTP ignored (no job control)");
-            } else if !suspend(terminal, reader, out, app.pixels.zip(images.as_deref_mut()))? {
+            } else if !suspend(
+                terminal,
+                reader,
+                out,
+                app.display.pixels.zip(images.as_deref_mut()),
+            )? {
                 return Ok(());
             }
             dirty = true;
@@ -396,7 +409,7 @@ impl Images {
         mode: &PixelMode,
         due: &mut bool,
     ) {
-        let area = app.layout.image;
+        let area = app.display.layout.image;
         // Text written over sixel or iTerm2 images erased them there.
         let (rows, cleared) = screen.take_touched();
         if cleared {

@@ -23,7 +23,7 @@ fn app(spec: &str, off: &[Feature]) -> App {
     };
     let (session, warnings) = Session::open(&req).unwrap();
     let mut app = App::new(session, warnings, ColorMode::Truecolor, None).unwrap();
-    app.export_size = req.size;
+    app.jobs.export_size = req.size;
     app
 }
 
@@ -78,7 +78,7 @@ fn a_frame_shows_every_panel() {
     assert!(s.contains("wide nodes"), "{s}");
     // The viewport is half blocks: each cell shows its two pixels.
     let b = t.backend().buffer();
-    let v = app.layout.image;
+    let v = app.display.layout.image;
     let frame = app.link.current_frame().unwrap();
     for (cx, cy) in [
         (v.width / 2, v.height / 2),
@@ -97,7 +97,10 @@ fn a_frame_shows_every_panel() {
             "{cell:?}"
         );
     }
-    assert_eq!(app.view_size, (v.width as u32, 2 * v.height as u32));
+    assert_eq!(
+        app.display.view_size(),
+        (v.width as u32, 2 * v.height as u32)
+    );
 }
 
 #[test]
@@ -127,9 +130,11 @@ fn toggling_a_feature_changes_the_features_panel() {
         "a feature the scene does not need changes nothing"
     );
     assert!(
-        app.status.contains("not needed: no textures in scene"),
-        "{}",
         app.status
+            .message()
+            .contains("not needed: no textures in scene"),
+        "{}",
+        app.status.message()
     );
 }
 
@@ -142,7 +147,7 @@ fn selecting_a_pixel_fills_the_debug_pane() {
     app.handle_key(Key::Char('v'));
     let s = settle(&mut t, &mut app);
     assert!(s.contains("camera ray"), "{s}");
-    let (w, h) = app.view_size;
+    let (w, h) = app.display.view_size();
     assert!(s.contains(&format!("pixel ({}, {})", w / 2, h / 2)), "{s}");
     // In select mode the arrows move the cursor, not the camera.
     let g = app.generation();
@@ -162,7 +167,7 @@ fn folds_open_and_close() {
     let mut app = app("cornell-area", &[]);
     let mut t = terminal(120, 40);
     settle(&mut t, &mut app);
-    let (w, h) = app.view_size;
+    let (w, h) = app.display.view_size();
     app.select(w / 2, h * 7 / 8, 0);
     let lines = app.inspector.lines().to_vec();
     let folded = lines.len();
@@ -181,7 +186,7 @@ fn rays_are_drawn_into_the_view() {
     let mut app = app("cornell", &[]);
     let mut t = terminal(100, 30);
     settle(&mut t, &mut app);
-    let (w, h) = app.view_size;
+    let (w, h) = app.display.view_size();
     // A pixel whose shadow ray was traced (lit by the light or blocked).
     let has_shadow_ray = |app: &mut App| {
         let tree = app.inspector.tree().unwrap();
@@ -217,7 +222,7 @@ fn pixel_overlays_cycle_and_show_the_ray_at_the_debug_cursor() {
     let mut app = app("cornell", &[]);
     let mut t = terminal(220, 40);
     settle(&mut t, &mut app);
-    let (w, h) = app.view_size;
+    let (w, h) = app.display.view_size();
     // A pixel with a shadow ray: ray 1 of its tree.
     let found = (0..h).rev().step_by(2).any(|y| {
         app.select(w / 3, y, 0);
@@ -226,9 +231,9 @@ fn pixel_overlays_cycle_and_show_the_ray_at_the_debug_cursor() {
     assert!(found, "no pixel with a shadow ray");
     for v in &VIEWS[..4] {
         app.handle_key(Key::Char('o'));
-        assert_eq!(app.pixel_view, Some(*v));
+        assert_eq!(app.overlays.pixel, Some(*v));
     }
-    assert_eq!(app.pixel_view, Some(View::Traversal));
+    assert_eq!(app.overlays.pixel, Some(View::Traversal));
     // Above the first ray line the camera ray's walk is shown.
     assert_eq!(app.inspector.cursor_ray(), None);
     let s = settle_pixel(&mut t, &mut app);
@@ -246,10 +251,10 @@ fn pixel_overlays_cycle_and_show_the_ray_at_the_debug_cursor() {
     for _ in 4..VIEWS.len() {
         app.handle_key(Key::Char('o'));
     }
-    assert_eq!(app.pixel_view, Some(View::Samples));
+    assert_eq!(app.overlays.pixel, Some(View::Samples));
     assert_eq!(app.pixel_request().unwrap().ray, None);
     app.handle_key(Key::Char('o'));
-    assert_eq!(app.pixel_view, None);
+    assert_eq!(app.overlays.pixel, None);
     assert_eq!(app.pixel_request(), None);
 }
 
@@ -258,7 +263,8 @@ fn pixel_overlays_cycle_and_show_the_ray_at_the_debug_cursor() {
 fn settle_film_view(t: &mut Terminal<TestBackend>, app: &mut App) -> String {
     let end = std::time::Instant::now() + WAIT;
     let want = app
-        .image_view
+        .overlays
+        .image
         .filter(|v| v.source() == crate::viz::Source::Film);
     while app
         .link
@@ -285,21 +291,21 @@ fn bloom_samples_and_error_are_the_last_view_overlays() {
     for _ in 0..5 {
         app.handle_key(Key::Char('g'));
     }
-    assert_eq!(app.image_view, Some(View::Bloom));
+    assert_eq!(app.overlays.image, Some(View::Bloom));
     // The worker draws each into the next pass it sends.
     let s = settle_film_view(&mut t, &mut app);
     assert!(s.contains("over the threshold (luminance > 1)"), "{s}");
     assert!(s.contains("kernel 25x25"), "{s}");
     app.handle_key(Key::Char('g'));
-    assert_eq!(app.image_view, Some(View::Spp));
+    assert_eq!(app.overlays.image, Some(View::Spp));
     let s = settle_film_view(&mut t, &mut app);
     assert!(s.contains("samples per pixel"), "{s}");
     app.handle_key(Key::Char('g'));
-    assert_eq!(app.image_view, Some(View::Error));
+    assert_eq!(app.overlays.image, Some(View::Error));
     let s = settle_film_view(&mut t, &mut app);
     assert!(s.contains("estimated relative error per pixel"), "{s}");
     app.handle_key(Key::Char('g'));
-    assert_eq!(app.image_view, None);
+    assert_eq!(app.overlays.image, None);
 }
 
 /// Settles, then waits for the worker's pixel overlay and draws again.
@@ -370,9 +376,11 @@ fn the_builder_switch_rebuilds() {
     let s = settle(&mut t, &mut app);
     assert!(s.contains("BVH: median"), "{s}");
     assert!(
-        app.status.contains("rebuilt with the median builder"),
-        "{}",
         app.status
+            .message()
+            .contains("rebuilt with the median builder"),
+        "{}",
+        app.status.message()
     );
 }
 
@@ -382,9 +390,13 @@ fn worst_pixel_keys_select_a_pixel() {
     let mut t = terminal(100, 30);
     settle(&mut t, &mut app);
     app.handle_key(Key::Char('B'));
-    assert!(app.inspector.selected.is_some(), "{}", app.status);
+    assert!(app.inspector.selected.is_some(), "{}", app.status.message());
     app.handle_key(Key::Char('n'));
-    assert!(app.status.contains("no pixel had a NaN"), "{}", app.status);
+    assert!(
+        app.status.message().contains("no pixel had a NaN"),
+        "{}",
+        app.status.message()
+    );
 }
 
 #[test]
@@ -392,7 +404,7 @@ fn export_writes_a_png_in_the_background() {
     let dir = std::env::temp_dir().join(format!("rayterm-tui-export-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let mut app = app("cornell", &[]);
-    app.export_dir = dir.clone();
+    app.jobs.export_dir = dir.clone();
     let mut t = terminal(100, 30);
     settle(&mut t, &mut app);
     app.handle_key(Key::Char('p'));
@@ -401,11 +413,15 @@ fn export_writes_a_png_in_the_background() {
         std::thread::sleep(Duration::from_millis(10));
         app.poll().unwrap();
     }
-    assert!(app.status.starts_with("saved "), "{}", app.status);
+    assert!(
+        app.status.message().starts_with("saved "),
+        "{}",
+        app.status.message()
+    );
     let path = dir.join("rayterm-cornell-001.png");
     let img = image::open(&path).unwrap();
     assert_eq!((img.width(), img.height()), (24, 16));
-    assert!(app.status.contains(&path.display().to_string()));
+    assert!(app.status.message().contains(&path.display().to_string()));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -415,7 +431,7 @@ fn a_click_selects_the_pixel_under_it() {
     let mut app = app("cornell", &[]);
     let mut t = terminal(100, 30);
     settle(&mut t, &mut app);
-    let v = app.layout.image;
+    let v = app.display.layout.image;
     let click = |column, row| {
         Event::Mouse(MouseEvent {
             kind: MouseEventKind::Down(MouseButton::Left),
@@ -441,31 +457,37 @@ fn no_plan_runs_every_enabled_stage_in_the_view_and_its_export() {
     };
     let (session, warnings) = Session::open(&req).unwrap();
     let mut app = App::new(session, warnings, ColorMode::Truecolor, None).unwrap();
-    app.export_size = req.size;
+    app.jobs.export_size = req.size;
     let mut t = terminal(100, 30);
     let s = settle(&mut t, &mut app);
     // Cornell has no textures, glossy materials or environment map, yet
     // with --no-plan their stages run, and the panel says so.
-    assert!(app.plan.textures && app.plan.glossy && app.plan.environment);
+    assert!(
+        app.choice.plan().textures && app.choice.plan().glossy && app.choice.plan().environment
+    );
     assert!(
         line_with(&s, "textures").contains("textures       on"),
         "{s}"
     );
     app.handle_key(Key::Char('1'));
     assert!(
-        app.plan.textures && !app.plan.shadows,
+        app.choice.plan().textures && !app.choice.plan().shadows,
         "toggles keep the policy"
     );
     let dir = std::env::temp_dir().join(format!("rayterm-tui-noplan-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    app.export_dir = dir.clone();
+    app.jobs.export_dir = dir.clone();
     app.handle_key(Key::Char('p'));
     let end = std::time::Instant::now() + WAIT;
     while app.jobs.export_progress().is_some() && std::time::Instant::now() < end {
         std::thread::sleep(Duration::from_millis(10));
         app.poll().unwrap();
     }
-    assert!(app.status.starts_with("saved "), "{}", app.status);
+    assert!(
+        app.status.message().starts_with("saved "),
+        "{}",
+        app.status.message()
+    );
     // The export rendered the view's plan: every stage but the shadows.
     let req = SceneRequest {
         features: Features::all().without(&[Feature::Shadows]),
@@ -487,7 +509,7 @@ fn the_pixel_before_and_after_bloom_is_the_films_as_inspect_gives_it() {
     let mut app = app("cornell-area", &[]);
     let mut t = terminal(100, 30);
     settle(&mut t, &mut app);
-    let (w, h) = app.view_size;
+    let (w, h) = app.display.view_size();
     app.select(w / 2, h / 3, 0);
     let tree = app.inspector.tree().unwrap().clone();
     let spp = tree
@@ -555,11 +577,14 @@ fn sixteen_colours_are_written_as_ansi_codes() {
 #[test]
 fn octants_show_four_times_the_pixels_and_selection_follows() {
     let mut app = app("cornell", &[]);
-    app.symbols = Symbols::Octant;
+    app.display.symbols = Symbols::Octant;
     let mut t = terminal(100, 30);
     settle(&mut t, &mut app);
-    let v = app.layout.image;
-    assert_eq!(app.view_size, (2 * v.width as u32, 4 * v.height as u32));
+    let v = app.display.layout.image;
+    assert_eq!(
+        app.display.view_size(),
+        (2 * v.width as u32, 4 * v.height as u32)
+    );
     // Every cell shows the least-squares fit of its 2x4 pixels.
     let frame = app.link.current_frame().unwrap();
     let b = t.backend().buffer();
@@ -649,13 +674,13 @@ fn kitty_and_sixel_frames_decode_to_the_viewport_picture() {
             colours: 256,
             passthrough: false,
         };
-        app.pixels = Some(mode);
+        app.display.pixels = Some(mode);
         let mut t = terminal(100, 30);
         settle(&mut t, &mut app);
-        let area = app.layout.image;
+        let area = app.display.layout.image;
         // The view is rendered at the cells' pixel size.
         assert_eq!(
-            app.view_size,
+            app.display.view_size(),
             (6 * area.width as u32, 12 * area.height as u32)
         );
         // The cells under the picture stay blank for the images.
@@ -762,11 +787,11 @@ fn every_symbol_set_keeps_the_proportions_of_pixel_graphics() {
     ];
     for symbols in modes {
         let mut app = app("teapot", &[]);
-        app.cell = cell;
+        app.display.cell = cell;
         match symbols {
-            Some(s) => app.symbols = s,
+            Some(s) => app.display.symbols = s,
             None => {
-                app.pixels = Some(PixelMode {
+                app.display.pixels = Some(PixelMode {
                     protocol: Protocol::Kitty,
                     cell,
                     colours: 256,
@@ -781,7 +806,7 @@ fn every_symbol_set_keeps_the_proportions_of_pixel_graphics() {
             app.link.frame = None;
             assert!(app.wait_frame(WAIT).unwrap());
         }
-        let (gx, gy) = app.layout.grid;
+        let (gx, gy) = app.display.layout.grid;
         let px = (cell.0 as f64 / gx as f64, cell.1 as f64 / gy as f64);
         let p = teapot_proportions(&app, px);
         let name = symbols.map_or("pixel graphics", Symbols::name);

@@ -13,7 +13,7 @@ use super::app::App;
 pub use viewport::{paint_view, picture};
 
 pub fn draw(f: &mut Frame, app: &App) {
-    let l = &app.layout;
+    let l = &app.display.layout;
     if l.too_small {
         bars::too_small(f, l.area);
         return;

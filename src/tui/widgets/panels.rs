@@ -25,13 +25,13 @@ fn panel(title: String) -> Block<'static> {
 pub fn bvh(f: &mut Frame, area: Rect, app: &App) {
     let s = &app.session.bvh.stats;
     let title = if app.link.rebuilding {
-        format!(" BVH: rebuilding with {}... ", app.builder)
+        format!(" BVH: rebuilding with {}... ", app.choice.builder())
     } else {
         format!(" BVH: {}, {} triangles ", s.builder, s.triangles)
     };
     let room = area.width as usize;
     let per_ray = match app.current_frame().and_then(|f| f.per_ray) {
-        Some(p) if app.plan.bvh => {
+        Some(p) if app.choice.plan().bvh => {
             let long = format!(
                 "per ray: {:.1} wide nodes, {:.1} triangle tests",
                 p.nodes, p.triangle_tests
@@ -45,7 +45,7 @@ pub fn bvh(f: &mut Frame, area: Rect, app: &App) {
                 )
             }
         }
-        _ if !app.plan.bvh => "per ray: BVH off (brute force)".into(),
+        _ if !app.choice.plan().bvh => "per ray: BVH off (brute force)".into(),
         _ => "per ray: measuring...".into(),
     };
     let text = vec![
@@ -135,10 +135,10 @@ pub fn features(f: &mut Frame, area: Rect, lines: Vec<Line<'static>>) {
 fn output_lines(app: &App) -> Vec<Line<'static>> {
     let mut v = vec![Line::from(format!(
         "terminal {}B/s · {:.1} frames/s",
-        si(app.bytes_per_sec),
-        app.frames_per_sec
+        si(app.meter.bytes_per_sec()),
+        app.meter.frames_per_sec()
     ))];
-    let link = app.output.link_rate.map(|r| format!("link {}B/s", si(r)));
+    let link = app.meter.link_rate().map(|r| format!("link {}B/s", si(r)));
     let shown = app
         .view_shown_in()
         .map(|s| format!("view shown in {}", words::ms(s * 1e3)));
@@ -189,7 +189,7 @@ pub fn render(f: &mut Frame, area: Rect, app: &App) {
                 )),
                 Line::from(error),
             ];
-            if app.reference.is_some() {
+            if app.reference.loaded() {
                 v.extend(truth_lines(s));
             }
             v.extend(bytes);

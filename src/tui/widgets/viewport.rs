@@ -35,7 +35,7 @@ pub fn picture(app: &App) -> Option<ViewPicture> {
     // A film view (bloom, samples or error per pixel) replaces the
     // picture: it shows the pass itself.
     let mut img = match &frame.film_view {
-        Some((v, view, legend)) if app.image_view == Some(*v) => {
+        Some((v, view, legend)) if app.overlays.image == Some(*v) => {
             note = Some(legend.clone());
             view.clone()
         }
@@ -43,7 +43,7 @@ pub fn picture(app: &App) -> Option<ViewPicture> {
     };
     // Overlays and marks follow the current camera and size, so they wait
     // for a pass of that view.
-    let current = app.link.current_frame().is_some() && (w, h) == app.view_size;
+    let current = app.link.current_frame().is_some() && (w, h) == app.display.view_size();
     if current {
         if let Some(o) = app.link.current_overlay() {
             match &o.layer {
@@ -77,14 +77,20 @@ pub fn picture(app: &App) -> Option<ViewPicture> {
 }
 
 pub fn draw(f: &mut Frame, area: Rect, app: &App) {
-    let inner = app.layout.image;
-    let shown = match &app.pixels {
+    let inner = app.display.layout.image;
+    let shown = match &app.display.pixels {
         Some(m) => m.protocol.name().to_string(),
-        None => format!("{} · {}", app.symbols.name(), app.color.name()),
+        None => format!(
+            "{} · {}",
+            app.display.symbols.name(),
+            app.display.color.name()
+        ),
     };
     let mut title = format!(
         " {} · {}x{} px · {shown}",
-        app.session.scene.name, app.view_size.0, app.view_size.1,
+        app.session.scene.name,
+        app.display.view_size().0,
+        app.display.view_size().1,
     );
     if app.inspector.select_mode {
         title += " · SELECT";
@@ -104,7 +110,7 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App) {
     f.render_widget(Block::new().borders(Borders::TOP).title(title), area);
     // With a pixel protocol the cells are holes: the event loop sends the
     // picture as images over them.
-    if app.pixels.is_some() {
+    if app.display.pixels.is_some() {
         let buf = f.buffer_mut();
         for y in inner.top()..inner.bottom() {
             for x in inner.left()..inner.right() {
@@ -119,8 +125,8 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App) {
             inner,
             &pic.px,
             (pic.w, pic.h),
-            app.symbols,
-            app.color,
+            app.display.symbols,
+            app.display.color,
         );
     }
 }

@@ -1,0 +1,67 @@
+//! How the viewport reaches the screen: the colours, the block symbols or
+//! the pixel protocol, the cell's size, and the layout with the view size
+//! it gives.
+
+use super::color::ColorMode;
+use super::graphics::symbols::Symbols;
+use super::graphics::PixelMode;
+use super::layout::Layout;
+
+/// The viewport's way to the screen and the view size it gives.
+pub struct Display {
+    pub color: ColorMode,
+    /// The block symbols the viewport is drawn with, unless a pixel
+    /// protocol shows it.
+    pub symbols: Symbols,
+    pub pixels: Option<PixelMode>,
+    /// A cell's size in screen pixels: what the terminal said, else 8x16.
+    pub cell: (u32, u32),
+    /// The layout of the last update.
+    pub layout: Layout,
+    /// The viewport's size in pixels, from the layout.
+    view_size: (u32, u32),
+    /// A view pixel's width over its height on screen, as last sent.
+    view_aspect: f64,
+}
+
+impl Display {
+    pub(crate) fn new(color: ColorMode) -> Display {
+        Display {
+            color,
+            symbols: Symbols::Half,
+            pixels: None,
+            cell: (8, 16),
+            layout: Layout::default(),
+            view_size: (0, 0),
+            view_aspect: 1.0,
+        }
+    }
+
+    pub(crate) fn view_size(&self) -> (u32, u32) {
+        self.view_size
+    }
+
+    pub(crate) fn view_aspect(&self) -> f64 {
+        self.view_aspect
+    }
+
+    /// A view pixel's width over its height on screen: the cell's over the
+    /// grid of pixels in it, so that every symbol set and pixel protocol
+    /// shows the scene in the same proportions.
+    fn pixel_aspect(&self) -> f64 {
+        let (cw, ch) = self.pixels.map_or(self.cell, |m| m.cell);
+        let (gx, gy) = self.layout.grid;
+        (cw as f64 * gy as f64) / (ch.max(1) as f64 * gx.max(1) as f64)
+    }
+
+    /// Takes the view's size and aspect from the layout; the size before
+    /// when either changed (the view must be rendered again).
+    pub(crate) fn fit_view(&mut self) -> Option<(u32, u32)> {
+        let (size, aspect) = (self.layout.view_size(), self.pixel_aspect());
+        if self.view_size == size && self.view_aspect == aspect {
+            return None;
+        }
+        self.view_aspect = aspect;
+        Some(std::mem::replace(&mut self.view_size, size))
+    }
+}
