@@ -13,13 +13,18 @@ pub(crate) const GLYPH: i32 = 8;
 pub struct Canvas<P> {
     pub(crate) width: u32,
     pub(crate) height: u32,
-    /// Row-major, from the top.
-    pub pixels: Vec<P>,
+    /// Row-major, from the top; `width * height` of them.
+    pub(crate) pixels: Vec<P>,
     /// Pixels outside this box are not drawn: (x0, y0, x1, y1), inclusive.
     pub(crate) clip: (i32, i32, i32, i32),
 }
 
 impl<P: Copy> Canvas<P> {
+    /// Row-major, from the top.
+    pub fn pixels(&self) -> &[P] {
+        &self.pixels
+    }
+
     /// A canvas filled with `background`.
     pub(crate) fn new(width: u32, height: u32, background: P) -> Self {
         Self::from_pixels(

@@ -106,8 +106,15 @@ impl Linear {
 pub struct Image {
     pub(crate) width: u32,
     pub(crate) height: u32,
-    pub pixels: Vec<Vec3>,
+    /// `width * height` of them.
+    pub(crate) pixels: Vec<Vec3>,
     pub(crate) format: Linear,
+}
+
+impl Image {
+    pub fn pixels(&self) -> &[Vec3] {
+        &self.pixels
+    }
 }
 
 /// Reads a linear image, in the format its extension names.
