@@ -4,7 +4,7 @@
 //! layers below read them without knowing that parser exists.
 
 /// A closed set of named values.
-pub trait Choice: Copy + PartialEq + 'static {
+pub(crate) trait Choice: Copy + PartialEq + 'static {
     /// Every value, in the order they are offered.
     const ALL: &'static [Self];
 
@@ -13,7 +13,7 @@ pub trait Choice: Copy + PartialEq + 'static {
 }
 
 /// The value named `s`, ignoring ASCII case and the spaces around it.
-pub fn parse<T: Choice>(s: &str) -> Option<T> {
+pub(crate) fn parse<T: Choice>(s: &str) -> Option<T> {
     let s = s.trim();
     T::ALL
         .iter()
@@ -22,7 +22,7 @@ pub fn parse<T: Choice>(s: &str) -> Option<T> {
 }
 
 /// Every value's name, in order.
-pub fn names<T: Choice>() -> Vec<&'static str> {
+pub(crate) fn names<T: Choice>() -> Vec<&'static str> {
     T::ALL.iter().map(|c| c.choice().0).collect()
 }
 

@@ -8,7 +8,7 @@ pub const LUMA: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
 
 /// The same weights as f64 literals, not [`LUMA`] widened (which differs
 /// in the last bits): what an environment map's sampling weighs texels by.
-pub const LUMA_F64: DVec3 = DVec3::new(0.2126, 0.7152, 0.0722);
+pub(crate) const LUMA_F64: DVec3 = DVec3::new(0.2126, 0.7152, 0.0722);
 
 /// Luminance of a linear colour, in f64 (of [`LUMA`]'s weights).
 #[inline]
@@ -18,7 +18,7 @@ pub fn luminance(c: Vec3) -> f64 {
 
 /// The sRGB transfer function, decoded to linear.
 #[inline]
-pub fn srgb_to_linear(c: f32) -> f32 {
+pub(crate) fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 {
         c / 12.92
     } else {
@@ -28,7 +28,7 @@ pub fn srgb_to_linear(c: f32) -> f32 {
 
 /// A linear value to 8-bit sRGB, clamped (what is not finite is black).
 #[inline]
-pub fn encode_srgb(x: f32) -> u8 {
+pub(crate) fn encode_srgb(x: f32) -> u8 {
     let x = if x.is_finite() {
         x.clamp(0.0, 1.0)
     } else {
@@ -43,7 +43,7 @@ pub fn encode_srgb(x: f32) -> u8 {
 }
 
 /// A linear colour to 8-bit sRGB.
-pub fn srgb(c: Vec3) -> [u8; 3] {
+pub(crate) fn srgb(c: Vec3) -> [u8; 3] {
     [encode_srgb(c.x), encode_srgb(c.y), encode_srgb(c.z)]
 }
 

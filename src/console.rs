@@ -8,7 +8,7 @@ use std::fmt;
 use std::io::{self, Write};
 
 /// Writes to standard output, flushed, or says why it cannot.
-pub fn out(args: fmt::Arguments) -> anyhow::Result<()> {
+pub(crate) fn out(args: fmt::Arguments) -> anyhow::Result<()> {
     let mut o = io::stdout().lock();
     // The I/O error stays in the chain: a reader gone away is no failure.
     o.write_fmt(args)
@@ -17,7 +17,7 @@ pub fn out(args: fmt::Arguments) -> anyhow::Result<()> {
 }
 
 /// Writes to standard error, if it can.
-pub fn note(args: fmt::Arguments) {
+pub(crate) fn note(args: fmt::Arguments) {
     let _ = io::stderr().lock().write_fmt(args);
 }
 

@@ -18,7 +18,7 @@ use anyhow::{bail, Result};
 /// bytes measured (`/usr/bin/time rayterm render teapot:256`: tessellation,
 /// scene arrays, BVH build; 182 for a 2-million-triangle OBJ grid), rounded
 /// up.
-pub const BYTES_PER_TRIANGLE: u64 = 200;
+pub(crate) const BYTES_PER_TRIANGLE: u64 = 200;
 
 /// Peak memory per vertex beyond one a triangle (which
 /// [`BYTES_PER_TRIANGLE`] counts: meshes have about half as many vertices
@@ -30,7 +30,7 @@ pub const BYTES_PER_TRIANGLE: u64 = 200;
 pub(crate) const BYTES_PER_VERTEX: u64 = 72;
 
 /// The budget where `/proc/meminfo` cannot be read.
-pub const FALLBACK: u64 = 16 << 30;
+pub(crate) const FALLBACK: u64 = 16 << 30;
 
 /// Memory a mesh of `vertices` and `triangles` takes, loaded, built and
 /// rendered.
@@ -46,7 +46,7 @@ pub(crate) fn mesh_bytes(vertices: u64, triangles: u64) -> u64 {
 /// built. Each mesh is checked against the room the others leave, so the
 /// scene as a whole fits before anything of it is built.
 #[derive(Debug, Default)]
-pub struct Budget {
+pub(crate) struct Budget {
     available: Option<u64>,
     taken: u64,
 }
@@ -68,7 +68,7 @@ impl Budget {
 /// Memory available for new allocations, in bytes: the system's, or the
 /// room the control group's limit or the address space limit leaves where
 /// that is less.
-pub fn available() -> u64 {
+pub(crate) fn available() -> u64 {
     let system = std::fs::read_to_string("/proc/meminfo")
         .ok()
         .and_then(|s| {
@@ -191,7 +191,7 @@ fn cgroup_room(cgroups: &str, root: &Path) -> Option<u64> {
 ///
 /// All-zero bytes are a valid `T`: the compiler checks that through
 /// `Zeroable`, derived field by field.
-pub fn zeroed<T: bytemuck::Zeroable>(n: usize) -> Vec<T> {
+pub(crate) fn zeroed<T: bytemuck::Zeroable>(n: usize) -> Vec<T> {
     assert!(
         std::mem::size_of::<T>() > 0,
         "zero-sized values need no memory"
@@ -217,7 +217,7 @@ pub fn zeroed<T: bytemuck::Zeroable>(n: usize) -> Vec<T> {
 /// back with 2 MiB pages: a large array filled once (a BVH's nodes, its
 /// triangle packets) then faults in a few pages rather than thousands,
 /// which on a virtual machine cost more than writing the values.
-pub fn room<T>(n: usize) -> Vec<T> {
+pub(crate) fn room<T>(n: usize) -> Vec<T> {
     let Ok(layout) = std::alloc::Layout::array::<T>(n) else {
         panic!("{n} values cannot be held in memory");
     };
@@ -260,7 +260,7 @@ fn advise_huge(ptr: *mut u8, size: usize) {
 
 /// Refuses `needed` bytes for `what` when more than the memory available
 /// (or than `cap`, a documented limit of its own, when given).
-pub fn check(what: &str, needed: u64, cap: Option<(u64, &str)>) -> Result<()> {
+pub(crate) fn check(what: &str, needed: u64, cap: Option<(u64, &str)>) -> Result<()> {
     if let Some((cap, name)) = cap {
         if needed > cap {
             bail!(
@@ -282,7 +282,7 @@ pub fn check(what: &str, needed: u64, cap: Option<(u64, &str)>) -> Result<()> {
 }
 
 /// A byte count in binary units, three significant digits: `1.5 GiB`.
-pub fn bytes(n: u64) -> String {
+pub(crate) fn bytes(n: u64) -> String {
     const UNITS: [&str; 6] = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB"];
     let mut x = n as f64;
     let mut unit = 0;

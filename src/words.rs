@@ -7,13 +7,13 @@ use std::path::Path;
 /// names and values read from files, and paths given on the command line,
 /// go through this before a message holds them (an escape sequence in one
 /// would reach the terminal).
-pub fn printable(s: &str) -> String {
+pub(crate) fn printable(s: &str) -> String {
     printable_but(s, "")
 }
 
 /// `s` with control characters other than those in `kept` replaced by
 /// U+FFFD.
-pub fn printable_but(s: &str, kept: &str) -> String {
+pub(crate) fn printable_but(s: &str, kept: &str) -> String {
     s.chars()
         .map(|c| match c.is_control() && !kept.contains(c) {
             true => '\u{fffd}',
@@ -60,19 +60,19 @@ pub(crate) fn clip_quotes(msg: &str) -> String {
 
 /// A path as messages and summaries print it: [`Path::display`] prints
 /// control characters as they are.
-pub fn path(p: &Path) -> String {
+pub(crate) fn path(p: &Path) -> String {
     quoted(&p.display().to_string())
 }
 
 /// `1 light`, `3 lights`; `plural` is the word for any count but one.
-pub fn count(n: impl Into<u64>, one: &str, plural: &str) -> String {
+pub(crate) fn count(n: impl Into<u64>, one: &str, plural: &str) -> String {
     let n = n.into();
     format!("{n} {}", if n == 1 { one } else { plural })
 }
 
 /// `n` with an SI prefix and three significant digits: `950`, `1.23k`,
 /// `45.6M`.
-pub fn si(x: f64) -> String {
+pub(crate) fn si(x: f64) -> String {
     let (v, unit) = match x.abs() {
         a if a >= 1e9 => (x / 1e9, "G"),
         a if a >= 1e6 => (x / 1e6, "M"),
@@ -88,12 +88,12 @@ pub fn si(x: f64) -> String {
 }
 
 /// A rate of rays: `12.3 Mrays/s`, `456 krays/s`, `87 rays/s`.
-pub fn rays_per_s(rays_per_s: f64) -> String {
+pub(crate) fn rays_per_s(rays_per_s: f64) -> String {
     format!("{}rays/s", spaced(si(rays_per_s)))
 }
 
 /// Milliseconds to three significant digits: `0.05 ms`, `12.3 ms`, `1.23 s`.
-pub fn ms(ms: f64) -> String {
+pub(crate) fn ms(ms: f64) -> String {
     match ms {
         m if m >= 1e3 => format!("{} s", significant(m / 1e3)),
         m => format!("{} ms", significant(m)),
@@ -101,7 +101,7 @@ pub fn ms(ms: f64) -> String {
 }
 
 /// Three significant digits, without an exponent for ordinary values.
-pub fn significant(x: f64) -> String {
+pub(crate) fn significant(x: f64) -> String {
     match x.abs() {
         a if a >= 100.0 || a == 0.0 => format!("{x:.0}"),
         a if a >= 10.0 => format!("{x:.1}"),
@@ -125,7 +125,7 @@ fn spaced(s: String) -> String {
 /// Why a film's error is not known yet, after `spp` samples in its
 /// sparest pixel: too few samples, or a pixel kept fewer than two finite
 /// ones (the others NaN or infinite, dropped).
-pub fn error_unknown(spp: u32) -> &'static str {
+pub(crate) fn error_unknown(spp: u32) -> &'static str {
     if spp < 2 {
         "error unknown until 2 spp"
     } else {

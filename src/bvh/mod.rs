@@ -1,21 +1,21 @@
 //! Bounding volume hierarchy: builders, node layout, traversal, statistics.
 
-pub mod build;
+pub(crate) mod build;
 mod kernels;
-pub mod node;
+pub(crate) mod node;
 mod packet;
 mod simd;
-pub mod stats;
-pub mod traverse;
+pub(crate) mod stats;
+pub(crate) mod traverse;
 mod wide;
 
 pub use build::{build, build_full_sweep};
-pub use node::Node;
-pub use packet::PACKET_RAYS;
+pub(crate) use node::Node;
+pub(crate) use packet::PACKET_RAYS;
 use simd::Detected;
 pub use simd::Simd;
 pub use stats::{BuildStats, TraversalStats};
-pub use traverse::{Hit, WalkLog};
+pub(crate) use traverse::Hit;
 
 /// A BVH over the triangles of a scene.
 ///
@@ -89,7 +89,7 @@ impl Bvh {
     }
 
     /// Bytes held by the tree and its triangle packets.
-    pub fn memory_bytes(&self) -> usize {
+    pub(crate) fn memory_bytes(&self) -> usize {
         std::mem::size_of_val(&self.nodes[..])
             + std::mem::size_of_val(&self.prim[..])
             + self.wide.memory_bytes()

@@ -28,9 +28,4 @@ impl Node {
             max: Vec3::from(self.max),
         }
     }
-
-    pub fn set_bounds(&mut self, b: &Aabb) {
-        self.min = b.min.to_array();
-        self.max = b.max.to_array();
-    }
 }

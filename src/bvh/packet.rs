@@ -46,7 +46,7 @@ use crate::geometry::triangle::{RayShear, TriHit8};
 use crate::geometry::Ray;
 
 /// The most rays one packet holds: an 8x8 tile of camera rays.
-pub const PACKET_RAYS: usize = 64;
+pub(crate) const PACKET_RAYS: usize = 64;
 
 /// The rays of one group, one lane each, in the layout the kernels load
 /// eight at a time: directions, their reciprocals and the current `tmax`.

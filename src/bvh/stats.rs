@@ -4,21 +4,21 @@ use serde::Serialize;
 
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct BuildStats {
-    pub builder: String,
+    pub(crate) builder: String,
     pub triangles: usize,
-    pub nodes: usize,
-    pub leaves: usize,
+    pub(crate) nodes: usize,
+    pub(crate) leaves: usize,
     /// Levels of the tree (a single leaf has depth 1).
     pub depth: usize,
-    pub max_leaf: usize,
-    pub mean_leaf: f64,
+    pub(crate) max_leaf: usize,
+    pub(crate) mean_leaf: f64,
     /// Expected cost of a random ray, with node traversal and triangle test costing 1 each.
     pub sah_cost: f64,
-    pub build_ms: f64,
+    pub(crate) build_ms: f64,
 }
 
 impl BuildStats {
-    pub fn triangles_per_second(&self) -> f64 {
+    pub(crate) fn triangles_per_second(&self) -> f64 {
         self.triangles as f64 / (self.build_ms.max(1e-6) * 1e-3)
     }
 }
@@ -30,10 +30,10 @@ impl BuildStats {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
 pub struct TraversalStats {
     pub nodes_visited: u32,
-    pub boxes_hit: u32,
-    pub boxes_missed: u32,
+    pub(crate) boxes_hit: u32,
+    pub(crate) boxes_missed: u32,
     pub leaves: u32,
-    pub triangle_tests: u32,
+    pub(crate) triangle_tests: u32,
 }
 
 impl std::ops::AddAssign for TraversalStats {

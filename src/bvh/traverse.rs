@@ -24,8 +24,8 @@ use crate::geometry::Ray;
 #[repr(align(16))]
 pub struct Hit {
     pub t: f32,
-    pub u: f32,
-    pub v: f32,
+    pub(crate) u: f32,
+    pub(crate) v: f32,
     pub prim: u32,
 }
 

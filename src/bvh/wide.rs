@@ -26,11 +26,11 @@ pub(crate) struct Node8 {
     /// Min x, max x, min y, max y, min z, max z of the children, one lane
     /// each; an empty slot has min = +inf and max = -inf, which no finite
     /// ray hits.
-    pub b: [[f32; WIDTH]; 6],
+    pub(crate) b: [[f32; WIDTH]; 6],
     /// An empty slot's child is [`EMPTY_LEAF`]: should a ray with NaN or
     /// infinite coordinates "hit" it, it finds nothing there, and no slot
     /// ever leads back up the tree.
-    pub child: [u32; WIDTH],
+    pub(crate) child: [u32; WIDTH],
 }
 
 /// The leaf of empty slots: packet 0, which holds no triangle.
@@ -44,14 +44,14 @@ pub(crate) const PACKET: usize = 8;
 #[repr(C, align(32))]
 pub(crate) struct Packet {
     /// `p[vertex][axis][lane]`, one lane per triangle; padding lanes are NaN.
-    pub p: [[[f32; PACKET]; 3]; 3],
+    pub(crate) p: [[[f32; PACKET]; 3]; 3],
     /// Leaf-order index of each lane's triangle.
-    pub idx: [u32; PACKET],
+    pub(crate) idx: [u32; PACKET],
 }
 
 impl Packet {
     /// Lanes holding a triangle.
-    pub fn lanes(&self) -> u32 {
+    pub(crate) fn lanes(&self) -> u32 {
         self.p[0][0].iter().filter(|x| !x.is_nan()).count() as u32
     }
 }
@@ -83,23 +83,23 @@ type Run = (u32, u32);
 
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Wide {
-    pub nodes: Vec<Node8>,
-    pub packets: Vec<Packet>,
+    pub(crate) nodes: Vec<Node8>,
+    pub(crate) packets: Vec<Packet>,
     /// Stack entries the deepest path can need, whatever the box tests
     /// answer: each node on it pushes at most all but one of its slots.
-    pub stack: usize,
+    pub(crate) stack: usize,
     /// The kernels the walks use: the widest this CPU has, unless capped.
     pub(super) simd: Detected,
     /// How packets test a leaf's triangles (chosen per leaf, except in
     /// tests that take each way on the same rays).
-    pub leaf_test: LeafTest,
+    pub(crate) leaf_test: LeafTest,
     /// The binary node whose box each wide node is, and the binary leaf of
     /// each packet (`u32::MAX` for the empty packet): what a logged walk
     /// reports in the binary tree's terms.
-    pub node_of: Vec<u32>,
-    pub leaf_of: Vec<u32>,
+    pub(crate) node_of: Vec<u32>,
+    pub(crate) leaf_of: Vec<u32>,
     /// Where each triangle (in leaf order) lies: `packet << PACKET_BITS | lane`.
-    pub slot: Vec<u32>,
+    pub(crate) slot: Vec<u32>,
 }
 
 impl Wide {
@@ -112,7 +112,7 @@ impl Wide {
     /// where the time goes (a scattered read of every vertex), are filled
     /// on the rayon pool in batches as the walk hands them out, so other
     /// threads fill while the walk goes on.
-    pub fn collapse(bin: &[Node], count: usize, tri: impl Tri) -> Wide {
+    pub(crate) fn collapse(bin: &[Node], count: usize, tri: impl Tri) -> Wide {
         let total = 1 + bin
             .par_iter()
             .with_min_len(4096)
@@ -249,14 +249,14 @@ impl Wide {
 
     /// The triangle at leaf-order position `i`.
     #[inline]
-    pub fn triangle(&self, i: usize) -> [[f32; 3]; 3] {
+    pub(crate) fn triangle(&self, i: usize) -> [[f32; 3]; 3] {
         let s = self.slot[i];
         let p = &self.packets[(s >> PACKET_BITS) as usize];
         let lane = (s & ((1 << PACKET_BITS) - 1)) as usize;
         p.p.map(|v| v.map(|axis| axis[lane]))
     }
 
-    pub fn memory_bytes(&self) -> usize {
+    pub(crate) fn memory_bytes(&self) -> usize {
         std::mem::size_of_val(&self.nodes[..])
             + std::mem::size_of_val(&self.packets[..])
             + std::mem::size_of_val(&self.node_of[..])

@@ -16,7 +16,7 @@ impl Default for Aabb {
 
 impl Aabb {
     /// The empty box: growing it by any point gives that point.
-    pub const EMPTY: Aabb = Aabb {
+    pub(crate) const EMPTY: Aabb = Aabb {
         min: Vec3::splat(f32::INFINITY),
         max: Vec3::splat(f32::NEG_INFINITY),
     };
@@ -26,7 +26,7 @@ impl Aabb {
     }
 
     #[inline]
-    pub fn grow(self, p: Vec3) -> Self {
+    pub(crate) fn grow(self, p: Vec3) -> Self {
         Self {
             min: self.min.min(p),
             max: self.max.max(p),
@@ -34,14 +34,14 @@ impl Aabb {
     }
 
     #[inline]
-    pub fn union(self, o: Aabb) -> Self {
+    pub(crate) fn union(self, o: Aabb) -> Self {
         Self {
             min: self.min.min(o.min),
             max: self.max.max(o.max),
         }
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
     }
 
@@ -49,13 +49,13 @@ impl Aabb {
         (self.max - self.min).max(Vec3::ZERO)
     }
 
-    pub fn center(&self) -> Vec3 {
+    pub(crate) fn center(&self) -> Vec3 {
         (self.min + self.max) * 0.5
     }
 
     /// Surface area; 0 for an empty box so empty bins cost nothing in the SAH.
     #[inline]
-    pub fn area(&self) -> f32 {
+    pub(crate) fn area(&self) -> f32 {
         if self.is_empty() {
             return 0.0;
         }

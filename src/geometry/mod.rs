@@ -14,12 +14,12 @@ pub use ray::Ray;
 /// ray, the camera's view), which overflows beyond about 1.8e19 for the
 /// difference of two points; this leaves room for sums of three squares.
 /// The triangle test itself works far beyond it (in f64 where needed).
-pub const MAX_COORDINATE: f32 = 1e18;
+pub(crate) const MAX_COORDINATE: f32 = 1e18;
 
 /// pbrt's γₙ = n u / (1 - n u), with u the unit roundoff: the relative error
 /// bound of n chained floating-point operations.
 #[inline(always)]
-pub const fn gamma(n: i32) -> f32 {
+pub(crate) const fn gamma(n: i32) -> f32 {
     let nu = n as f32 * f32::EPSILON * 0.5;
     nu / (1.0 - nu)
 }

@@ -56,7 +56,7 @@ pub fn offset_origin(p: Vec3, err: Vec3, ng: Vec3, w: Vec3) -> Vec3 {
 
 /// Fraction of a shadow segment kept before its end, so the segment stops
 /// short of the surface that holds the light sample.
-pub const SHADOW_EPSILON: f32 = 1e-4;
+pub(crate) const SHADOW_EPSILON: f32 = 1e-4;
 
 #[cfg(test)]
 mod tests {

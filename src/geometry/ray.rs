@@ -45,10 +45,10 @@ impl Ray {
 /// reciprocal (or the triangle test seeing a slope the box test does not)
 /// lets the two disagree on rays that graze a plane near the origin, and
 /// then the BVH misses hits that brute force finds.
-pub const PARALLEL: f32 = 1e-30;
+pub(crate) const PARALLEL: f32 = 1e-30;
 
 /// `d` with components below [`PARALLEL`] replaced by zeros of their sign.
 #[inline(always)]
-pub fn flush(d: Vec3) -> Vec3 {
+pub(crate) fn flush(d: Vec3) -> Vec3 {
     Vec3::select(d.abs().cmplt(Vec3::splat(PARALLEL)), d * 0.0, d)
 }

@@ -28,7 +28,7 @@ impl Rng {
 
     /// A stream for a sample that draws nothing (every sample of an exact
     /// render): fixed, where seeding one per sample would cost a few hashes.
-    pub const fn unseeded() -> Self {
+    pub(crate) const fn unseeded() -> Self {
         Rng { state: 0, inc: 1 }
     }
 
@@ -59,13 +59,13 @@ impl Rng {
 /// What [`Rng::for_sample`] draws from the pixel and seed alone, made once
 /// for a run of the pixel's samples.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct PixelStreams {
+pub(crate) struct PixelStreams {
     key: u64,
     inc: u64,
 }
 
 impl PixelStreams {
-    pub fn new(pixel: u64, seed: u64) -> Self {
+    pub(crate) fn new(pixel: u64, seed: u64) -> Self {
         let key = mix64(pixel ^ mix64(seed.wrapping_add(0x9e37_79b9_7f4a_7c15)));
         PixelStreams {
             key,
@@ -75,7 +75,7 @@ impl PixelStreams {
 
     /// The stream of sample `sample`.
     #[inline]
-    pub fn sample(&self, sample: u64) -> Rng {
+    pub(crate) fn sample(&self, sample: u64) -> Rng {
         let b = mix64(sample.wrapping_add(self.key));
         let mut r = Rng {
             state: 0,
@@ -89,13 +89,13 @@ impl PixelStreams {
 }
 
 /// Sub-pixel strata per side when pixel samples are jittered.
-pub const PIXEL_GRID: u32 = 4;
+pub(crate) const PIXEL_GRID: u32 = 4;
 /// Strata per pixel: each run of this many consecutive samples of a pixel
 /// (a block) visits every stratum once.
-pub const PIXEL_STRATA: u32 = PIXEL_GRID * PIXEL_GRID;
+pub(crate) const PIXEL_STRATA: u32 = PIXEL_GRID * PIXEL_GRID;
 
 /// Samples in a quarter of a block: one in each quadrant of the pixel.
-pub const QUARTER: u32 = PIXEL_STRATA / 4;
+pub(crate) const QUARTER: u32 = PIXEL_STRATA / 4;
 
 /// The stratum (`i + PIXEL_GRID * j`) of sample `k` of `pixel`: each block
 /// of [`PIXEL_STRATA`] samples visits the strata once, and each quarter of
@@ -103,9 +103,10 @@ pub const QUARTER: u32 = PIXEL_STRATA / 4;
 /// random orders per pixel and block. So any prefix is spread over the
 /// pixel, and the first four samples already stratify it 2x2, which is what
 /// lets a pixel's error be estimated from four samples (`render::film`).
-/// The integrator places samples by it and the film's error estimate reads
-/// it.
-pub fn pixel_stratum(pixel: u64, k: u32, seed: u64) -> u32 {
+/// The integrator and the film's error estimate read it through [`Run`];
+/// this one-sample form is the definition the tests hold `Run` to.
+#[cfg(test)]
+pub(crate) fn pixel_stratum(pixel: u64, k: u32, seed: u64) -> u32 {
     stratum_of(block_order(pixel, k / PIXEL_STRATA, seed), k % PIXEL_STRATA)
 }
 
@@ -138,14 +139,14 @@ impl Run {
 
     /// [`Rng::for_sample`].
     #[inline]
-    pub fn rng(&mut self, pixel: u64, k: u32, seed: u64) -> Rng {
+    pub(crate) fn rng(&mut self, pixel: u64, k: u32, seed: u64) -> Rng {
         self.at(pixel, seed);
         self.streams.sample(k as u64)
     }
 
     /// [`pixel_stratum`].
     #[inline]
-    pub fn stratum(&mut self, pixel: u64, k: u32, seed: u64) -> u32 {
+    pub(crate) fn stratum(&mut self, pixel: u64, k: u32, seed: u64) -> u32 {
         self.at(pixel, seed);
         let (block, i) = (k / PIXEL_STRATA, k % PIXEL_STRATA);
         if self.block != Some(block) {
@@ -247,56 +248,20 @@ const PERMUTATIONS_OF_4: [[u8; 4]; 24] = {
 
 /// The colour of stratum `s` on a checkerboard of the pixel's quadrants:
 /// black (`true`) top-left and bottom-right.
-pub fn quadrant_is_black(s: u32) -> bool {
+pub(crate) fn quadrant_is_black(s: u32) -> bool {
     let half = PIXEL_GRID / 2;
     ((s % PIXEL_GRID) / half + (s / PIXEL_GRID) / half).is_multiple_of(2)
 }
 
 /// Stratum `k` of an `n x n` grid, jittered with `r`, in [0, 1)^2.
 #[inline]
-pub fn jittered(k: u32, n: u32, r: Vec2) -> Vec2 {
+pub(crate) fn jittered(k: u32, n: u32, r: Vec2) -> Vec2 {
     let (i, j) = (k % n, k / n);
     ((Vec2::new(i as f32, j as f32) + r) / n as f32).min(Vec2::splat(1.0 - f32::EPSILON))
 }
 
-/// Element `i` of a pseudo-random permutation of `0..len` chosen by `seed`
-/// (Kensler, "Correlated Multi-Jittered Sampling", 2013): visits every
-/// stratum once per `len` samples, in an order with no structure.
-pub fn permute(mut i: u32, len: u32, seed: u32) -> u32 {
-    let p = seed;
-    let mut w = len.wrapping_sub(1);
-    w |= w >> 1;
-    w |= w >> 2;
-    w |= w >> 4;
-    w |= w >> 8;
-    w |= w >> 16;
-    loop {
-        i ^= p;
-        i = i.wrapping_mul(0xe170_893d);
-        i ^= p >> 16;
-        i ^= (i & w) >> 4;
-        i ^= p >> 8;
-        i = i.wrapping_mul(0x0929_eb3f);
-        i ^= p >> 23;
-        i ^= (i & w) >> 1;
-        i = i.wrapping_mul(1 | p >> 27);
-        i = i.wrapping_mul(0x6935_fa69);
-        i ^= (i & w) >> 11;
-        i = i.wrapping_mul(0x74dc_b303);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0x9e50_1cc3);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0xc860_a3df);
-        i &= w;
-        i ^= i >> 5;
-        if i < len {
-            return (i.wrapping_add(p)) % len;
-        }
-    }
-}
-
 /// Orthonormal basis around a unit vector (Duff et al., JCGT 2017).
-pub fn onb(n: Vec3) -> (Vec3, Vec3) {
+pub(crate) fn onb(n: Vec3) -> (Vec3, Vec3) {
     let sign = 1.0f32.copysign(n.z);
     let a = -1.0 / (sign + n.z);
     let b = n.x * n.y * a;
@@ -308,7 +273,7 @@ pub fn onb(n: Vec3) -> (Vec3, Vec3) {
 
 /// Direction from the normalised Phong lobe `(n+1)/(2π) cos^n α` around `axis`.
 /// Returns the direction and its pdf.
-pub fn phong_lobe(axis: Vec3, exponent: f32, r: Vec2) -> (Vec3, f32) {
+pub(crate) fn phong_lobe(axis: Vec3, exponent: f32, r: Vec2) -> (Vec3, f32) {
     let cos_a = r.x.powf(1.0 / (exponent + 1.0));
     let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
     let phi = std::f32::consts::TAU * r.y;
@@ -347,19 +312,6 @@ mod tests {
         let mut r = Rng::for_sample(1, 2, 3);
         let m: f64 = (0..100_000).map(|_| r.next_f32() as f64).sum::<f64>() / 100_000.0;
         assert!((m - 0.5).abs() < 0.005);
-    }
-
-    #[test]
-    fn permute_is_a_permutation() {
-        for seed in [0u32, 1, 0xdead_beef, 12345] {
-            let mut seen: Vec<u32> = (0..16).map(|i| permute(i, 16, seed)).collect();
-            seen.sort_unstable();
-            assert_eq!(seen, (0..16).collect::<Vec<_>>());
-        }
-        assert_ne!(
-            (0..16).map(|i| permute(i, 16, 1)).collect::<Vec<_>>(),
-            (0..16).map(|i| permute(i, 16, 2)).collect::<Vec<_>>()
-        );
     }
 
     /// A run gives each sample the stratum `pixel_stratum` gives it, one

@@ -42,25 +42,25 @@ use super::gamma;
 /// directions at least 1/4 long (camera and reflection rays are unit
 /// vectors) and for triangles within a shadow ray's segment (others lie
 /// beyond its end and are rejected whatever their `t`).
-pub const F32_REACH: f32 = (1u64 << 39) as f32;
+pub(crate) const F32_REACH: f32 = (1u64 << 39) as f32;
 
 /// Per-ray constants of the shear transform, computed once per ray.
 #[derive(Clone, Copy, Debug)]
 pub struct RayShear {
-    pub origin: [f32; 3],
-    pub kx: usize,
-    pub ky: usize,
-    pub kz: usize,
-    pub sx: f32,
-    pub sy: f32,
-    pub sz: f32,
+    pub(crate) origin: [f32; 3],
+    pub(crate) kx: usize,
+    pub(crate) ky: usize,
+    pub(crate) kz: usize,
+    pub(crate) sx: f32,
+    pub(crate) sy: f32,
+    pub(crate) sz: f32,
     /// The reciprocal direction on the axes `kx`, `ky`, `kz` (the last is
     /// `sz`), as [`Ray::inv_dir`](super::Ray::inv_dir) makes it: where the
     /// ray enters a triangle's box ([`box_entry`]).
-    pub inv: [f32; 3],
+    pub(crate) inv: [f32; 3],
     /// The ray may meet coordinates beyond [`F32_REACH`] of its origin:
     /// every test of it runs in f64.
-    pub wide: bool,
+    pub(crate) wide: bool,
 }
 
 impl RayShear {
@@ -76,7 +76,7 @@ impl RayShear {
     /// [`PARALLEL`](super::ray::PARALLEL) count as zero, as in the box
     /// test, so the two agree on grazing rays.
     #[inline]
-    pub fn within(origin: Vec3, dir: Vec3, reach: f32) -> Self {
+    pub(crate) fn within(origin: Vec3, dir: Vec3, reach: f32) -> Self {
         let dir = super::ray::flush(dir);
         let [kx, ky, kz] = Self::axes(dir);
         let d = dir.to_array();
@@ -101,7 +101,7 @@ impl RayShear {
     /// onto: `kz` its largest component's, `kx` and `ky` the others in an
     /// order that keeps a triangle's winding.
     #[inline]
-    pub fn axes(dir: Vec3) -> [usize; 3] {
+    pub(crate) fn axes(dir: Vec3) -> [usize; 3] {
         let a = dir.abs();
         let kz = if a.x > a.y {
             if a.x > a.z {
@@ -127,7 +127,7 @@ impl RayShear {
     /// for every ray from one origin. NaN (a broken origin or bound) takes
     /// the f64 path too.
     #[inline]
-    pub fn needs_f64(origin: Vec3, reach: f32) -> bool {
+    pub(crate) fn needs_f64(origin: Vec3, reach: f32) -> bool {
         (origin.abs().max_element() + reach)
             .partial_cmp(&F32_REACH)
             .is_none_or(|o| o.is_gt())
@@ -297,7 +297,7 @@ const fn gamma64(n: i32) -> f64 {
 /// packet tests call it lane by lane.
 #[cold]
 #[inline(never)]
-pub fn intersect_wide(s: &RayShear, p: [&[f32; 3]; 3], tmax: f32) -> Option<TriHit> {
+pub(crate) fn intersect_wide(s: &RayShear, p: [&[f32; 3]; 3], tmax: f32) -> Option<TriHit> {
     let (kx, ky, kz) = (s.kx, s.ky, s.kz);
     let o = s.origin.map(f64::from);
     let [a, b, c] = p.map(|p| {
@@ -379,18 +379,18 @@ fn wide_lanes<const N: usize>(
 /// [`RayShear`] with every constant splatted across four lanes, for
 /// [`intersect4`].
 #[derive(Clone, Copy, Debug)]
-pub struct RayShear4 {
-    pub k: [usize; 3],
-    pub o: [Vec4; 3],
-    pub s: [Vec4; 3],
-    pub inv: [Vec4; 3],
+pub(crate) struct RayShear4 {
+    pub(crate) k: [usize; 3],
+    pub(crate) o: [Vec4; 3],
+    pub(crate) s: [Vec4; 3],
+    pub(crate) inv: [Vec4; 3],
     /// The ray itself, for [`RayShear::wide`] rays.
-    pub ray: RayShear,
+    pub(crate) ray: RayShear,
 }
 
 impl RayShear4 {
     #[inline(always)]
-    pub fn new(s: &RayShear) -> Self {
+    pub(crate) fn new(s: &RayShear) -> Self {
         let k = [s.kx, s.ky, s.kz];
         RayShear4 {
             ray: *s,
@@ -408,11 +408,11 @@ impl RayShear4 {
 
 /// Four results of [`intersect4`]: `mask` has bit `i` set when lane `i` hit.
 #[derive(Clone, Copy, Debug)]
-pub struct TriHit4 {
-    pub mask: u32,
-    pub t: Vec4,
-    pub u: Vec4,
-    pub v: Vec4,
+pub(crate) struct TriHit4 {
+    pub(crate) mask: u32,
+    pub(crate) t: Vec4,
+    pub(crate) u: Vec4,
+    pub(crate) v: Vec4,
 }
 
 /// [`intersect`] on four triangles at once: `p[vertex][axis]` holds one
@@ -421,7 +421,7 @@ pub struct TriHit4 {
 /// agree bit for bit, watertightness and the conservative t bound included.
 /// Lanes with NaN coordinates (padding) never hit.
 #[inline(always)]
-pub fn intersect4(r: &RayShear4, p: &[[Vec4; 3]; 3], tmax: f32) -> TriHit4 {
+pub(crate) fn intersect4(r: &RayShear4, p: &[[Vec4; 3]; 3], tmax: f32) -> TriHit4 {
     if r.ray.wide {
         let h = wide_lanes(&r.ray, &p.map(|v| v.map(|a| a.to_array())), tmax);
         let get = |f: fn(&TriHit) -> f32, none: f32| {
@@ -442,7 +442,7 @@ pub fn intersect4(r: &RayShear4, p: &[[Vec4; 3]; 3], tmax: f32) -> TriHit4 {
 /// one in all), its own triangle and its own `tmax`: eight rays against one
 /// triangle compute the same as one ray against eight.
 #[inline(always)]
-pub fn lanes4(
+pub(crate) fn lanes4(
     [kx, ky, kz]: [usize; 3],
     [ox, oy, oz]: [Vec4; 3],
     [sx, sy, sz]: [Vec4; 3],
@@ -538,15 +538,15 @@ pub fn lanes4(
 /// when asked for (any-hit traversal needs none).
 #[derive(Clone, Copy, Debug)]
 pub struct TriHit8 {
-    pub mask: u32,
-    pub t: [f32; 8],
-    pub u: [f32; 8],
-    pub v: [f32; 8],
+    pub(crate) mask: u32,
+    pub(crate) t: [f32; 8],
+    pub(crate) u: [f32; 8],
+    pub(crate) v: [f32; 8],
 }
 
 impl TriHit8 {
     /// No lane hit.
-    pub const NONE: TriHit8 = TriHit8 {
+    pub(crate) const NONE: TriHit8 = TriHit8 {
         mask: 0,
         t: [f32::INFINITY; 8],
         u: [0.0; 8],
@@ -558,7 +558,7 @@ impl TriHit8 {
     /// packet to packet, and the closest-hit walk mispredicted about two of
     /// them per ray that hits, as simulated (BENCHMARKS.md).
     #[inline(always)]
-    pub fn lanes(&self) -> impl Iterator<Item = usize> {
+    pub(crate) fn lanes(&self) -> impl Iterator<Item = usize> {
         let mut m = self.mask;
         std::iter::from_fn(move || {
             (m != 0).then(|| {

@@ -1,7 +1,7 @@
 //! The ray-tree inspector: a [`Recorder`](crate::render::Recorder) that turns
 //! the integrator's hooks into a tree, and its text and JSON forms.
 
-pub mod rays;
+pub(crate) mod rays;
 pub mod text;
 pub mod tree;
 

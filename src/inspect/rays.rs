@@ -19,7 +19,7 @@ pub(crate) fn kind_name(k: RayKind) -> &'static str {
 
 /// One ray of a tree: a traced ray, or a shadow ray of one of its hits.
 pub struct TreeRay<'a> {
-    pub node: &'a RayNode,
+    pub(crate) node: &'a RayNode,
     /// Set for a shadow ray: the light and the sample.
     pub shadow: Option<(usize, &'a LightSample)>,
 }
@@ -33,7 +33,7 @@ impl TreeRay<'_> {
         }
     }
 
-    pub fn label(&self) -> String {
+    pub(crate) fn label(&self) -> String {
         match self.shadow {
             Some((light, s)) => format!(
                 "shadow ray to light {light}, {}",

@@ -8,7 +8,7 @@ use crate::bvh::TraversalStats;
 use crate::render::recorder::{LightSample, RayKind};
 
 /// Lists longer than this fold unless expanded.
-pub const FOLD_AT: usize = 4;
+pub(crate) const FOLD_AT: usize = 4;
 
 /// What a line describes, so the TUI can colour it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -25,11 +25,11 @@ pub enum LineKind {
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct TreeLine {
-    pub depth: usize,
+    pub(crate) depth: usize,
     pub kind: LineKind,
     pub text: String,
     /// Set on a foldable list's summary line: its id and whether it is open.
-    pub fold: Option<(usize, bool)>,
+    pub(crate) fold: Option<(usize, bool)>,
     /// Set on a ray's line and a shadow ray's: its number in
     /// [`super::tree_rays`], for the overlays of one ray.
     pub ray: Option<usize>,

@@ -15,7 +15,7 @@ use crate::render::Tracer;
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct RayNode {
     pub kind: RayKind,
-    pub origin: Vec3,
+    pub(crate) origin: Vec3,
     pub dir: Vec3,
     /// Factor of this ray's radiance in the pixel colour.
     pub weight: Vec3,
@@ -25,7 +25,7 @@ pub struct RayNode {
     pub lights: Vec<LightNode>,
     /// On a path: the hit's own light, and how the path went on.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub emission: Option<Emission>,
+    pub(crate) emission: Option<Emission>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bounce: Option<Bounce>,
     pub children: Vec<RayNode>,
@@ -38,25 +38,25 @@ pub struct RayNode {
 /// One light's part in shading a hit.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct LightNode {
-    pub index: usize,
+    pub(crate) index: usize,
     pub kind: String,
     pub samples: Vec<LightSample>,
     /// BVH work of this light's shadow rays, summed.
-    pub bvh: TraversalStats,
-    pub diffuse: Vec3,
-    pub specular: Vec3,
+    pub(crate) bvh: TraversalStats,
+    pub(crate) diffuse: Vec3,
+    pub(crate) specular: Vec3,
 }
 
 /// The tree of one sample of one pixel.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct PixelTree {
-    pub scene: String,
-    pub width: u32,
-    pub height: u32,
-    pub x: u32,
-    pub y: u32,
-    pub sample: u32,
-    pub seed: u64,
+    pub(crate) scene: String,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) x: u32,
+    pub(crate) y: u32,
+    pub(crate) sample: u32,
+    pub(crate) seed: u64,
     /// Where in the pixel the camera ray passes (0..1 on each axis).
     pub offset: Vec2,
     /// The sample's sub-pixel stratum (`i + 4 j` of a 4x4 grid) when
@@ -66,9 +66,9 @@ pub struct PixelTree {
     pub color: Vec3,
     /// When bloom runs: the pixel's value in the image it belongs to,
     /// rendered at `pixel_spp` samples per pixel, before and after bloom.
-    pub pixel_before_bloom: Option<Vec3>,
-    pub pixel_after_bloom: Option<Vec3>,
-    pub pixel_spp: Option<u32>,
+    pub(crate) pixel_before_bloom: Option<Vec3>,
+    pub(crate) pixel_after_bloom: Option<Vec3>,
+    pub(crate) pixel_spp: Option<u32>,
     pub root: RayNode,
     /// Light samples traced but not listed: a tree lists at most
     /// [`LISTED_LIGHT_SAMPLES`] (the rest still count in their lights'
@@ -96,7 +96,7 @@ pub struct TreeRecorder {
 }
 
 impl TreeRecorder {
-    pub fn into_root(self) -> Option<RayNode> {
+    pub(crate) fn into_root(self) -> Option<RayNode> {
         self.done
     }
 
@@ -246,7 +246,7 @@ impl PixelTree {
     /// Takes the pixel's values before and after bloom from the image it
     /// belongs to (`shown`, made from a film of `spp` samples per pixel);
     /// nothing when bloom did not run.
-    pub fn set_pixel(&mut self, shown: &Displayed, spp: u32) {
+    pub(crate) fn set_pixel(&mut self, shown: &Displayed, spp: u32) {
         let i = (self.y * self.width + self.x) as usize;
         if let (Some(before), Some(after)) = (
             shown.before_bloom.as_ref().and_then(|b| b.get(i)),

@@ -4,24 +4,29 @@
 //! overlays transparent layers (`Option<Vec3>`) with the same code.
 
 /// On and off lengths of a dash pattern, in pixels along the line.
-pub type Dash = Option<(u32, u32)>;
+pub(crate) type Dash = Option<(u32, u32)>;
 
 /// Width and height of a glyph of [`Canvas::text`] at scale 1.
-pub const GLYPH: i32 = 8;
+pub(crate) const GLYPH: i32 = 8;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Canvas<P> {
-    pub width: u32,
-    pub height: u32,
-    /// Row-major, from the top.
-    pub pixels: Vec<P>,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    /// Row-major, from the top; `width * height` of them.
+    pub(crate) pixels: Vec<P>,
     /// Pixels outside this box are not drawn: (x0, y0, x1, y1), inclusive.
-    pub clip: (i32, i32, i32, i32),
+    pub(crate) clip: (i32, i32, i32, i32),
 }
 
 impl<P: Copy> Canvas<P> {
+    /// Row-major, from the top.
+    pub fn pixels(&self) -> &[P] {
+        &self.pixels
+    }
+
     /// A canvas filled with `background`.
-    pub fn new(width: u32, height: u32, background: P) -> Self {
+    pub(crate) fn new(width: u32, height: u32, background: P) -> Self {
         Self::from_pixels(
             width,
             height,
@@ -30,7 +35,7 @@ impl<P: Copy> Canvas<P> {
     }
 
     /// A canvas over existing pixels (`width * height` of them).
-    pub fn from_pixels(width: u32, height: u32, pixels: Vec<P>) -> Self {
+    pub(crate) fn from_pixels(width: u32, height: u32, pixels: Vec<P>) -> Self {
         debug_assert_eq!(pixels.len(), width as usize * height as usize);
         Self {
             width,
@@ -41,11 +46,11 @@ impl<P: Copy> Canvas<P> {
     }
 
     /// Clips further drawing to the whole canvas again.
-    pub fn unclip(&mut self) {
+    pub(crate) fn unclip(&mut self) {
         self.clip = (0, 0, self.width as i32 - 1, self.height as i32 - 1);
     }
 
-    pub fn put(&mut self, x: i32, y: i32, c: P) {
+    pub(crate) fn put(&mut self, x: i32, y: i32, c: P) {
         let (x0, y0, x1, y1) = self.clip;
         let inside = (x0..=x1).contains(&x) && (y0..=y1).contains(&y);
         if inside && x < self.width as i32 && y < self.height as i32 && x >= 0 && y >= 0 {
@@ -59,7 +64,7 @@ impl<P: Copy> Canvas<P> {
     }
 
     /// The filled rectangle with corners `(x0, y0)` and `(x1, y1)`, inclusive.
-    pub fn rect(&mut self, x0: i32, y0: i32, x1: i32, y1: i32, c: P) {
+    pub(crate) fn rect(&mut self, x0: i32, y0: i32, x1: i32, y1: i32, c: P) {
         for y in y0.max(self.clip.1)..=y1.min(self.clip.3) {
             for x in x0.max(self.clip.0)..=x1.min(self.clip.2) {
                 self.put(x, y, c);
@@ -69,7 +74,7 @@ impl<P: Copy> Canvas<P> {
 
     /// A line `width` pixels thick from `a` to `b`, stepping along its major
     /// axis with rounding, optionally dashed.
-    pub fn line(&mut self, a: (f64, f64), b: (f64, f64), c: P, width: i32, dash: Dash) {
+    pub(crate) fn line(&mut self, a: (f64, f64), b: (f64, f64), c: P, width: i32, dash: Dash) {
         if ![a.0, a.1, b.0, b.1].iter().all(|v| v.is_finite()) {
             return;
         }
@@ -92,7 +97,7 @@ impl<P: Copy> Canvas<P> {
 
     /// Text with its top-left corner at `(x, y)`, each font pixel `scale`
     /// pixels wide; characters outside ASCII draw as blanks.
-    pub fn text(&mut self, x: i32, y: i32, s: &str, c: P, scale: i32) {
+    pub(crate) fn text(&mut self, x: i32, y: i32, s: &str, c: P, scale: i32) {
         for (i, ch) in s.chars().enumerate() {
             let glyph = if ch.is_ascii() {
                 font8x8::legacy::BASIC_LEGACY[ch as usize]
@@ -113,13 +118,13 @@ impl<P: Copy> Canvas<P> {
 }
 
 /// Pixels `s` takes across in [`Canvas::text`] at `scale`.
-pub fn text_width(s: &str, scale: i32) -> i32 {
+pub(crate) fn text_width(s: &str, scale: i32) -> i32 {
     s.chars().count() as i32 * GLYPH * scale
 }
 
 impl<P: Copy> Canvas<Option<P>> {
     /// Paints the drawn pixels of this layer over `under` (same size).
-    pub fn over(&self, under: &mut [P]) {
+    pub(crate) fn over(&self, under: &mut [P]) {
         for (u, p) in under.iter_mut().zip(&self.pixels) {
             if let Some(p) = p {
                 *u = *p;

@@ -13,29 +13,29 @@ use anyhow::{bail, Context, Result};
 
 /// A channel's sample type, as OpenEXR numbers them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Kind {
+pub(crate) enum Kind {
     U32 = 0,
     F32 = 2,
 }
 
 /// What an image holds besides its samples.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct ExrHeader {
-    pub width: u32,
-    pub height: u32,
+pub(crate) struct ExrHeader {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
     /// In the order the file stores them: sorted by name, byte by byte.
-    pub channels: Vec<(String, Kind)>,
+    pub(crate) channels: Vec<(String, Kind)>,
     /// The text attributes, each with where its value lies in the file.
-    pub attributes: Vec<(String, String, Range<usize>)>,
+    pub(crate) attributes: Vec<(String, String, Range<usize>)>,
 }
 
 impl ExrHeader {
     /// Bytes of one scanline's samples.
-    pub fn row_bytes(&self) -> usize {
+    pub(crate) fn row_bytes(&self) -> usize {
         4 * self.width as usize * self.channels.len()
     }
 
-    pub fn attribute(&self, name: &str) -> Option<&str> {
+    pub(crate) fn attribute(&self, name: &str) -> Option<&str> {
         self.attributes
             .iter()
             .find(|(k, _, _)| k == name)
@@ -52,7 +52,7 @@ const MAX_NAME: usize = 31;
 /// samples appended by `row(y, out)`: channel after channel in `l`'s order,
 /// `width` little-endian samples each. Text is stored as Latin-1, other
 /// characters as `?`.
-pub fn encode(l: &ExrHeader, mut row: impl FnMut(u32, &mut Vec<u8>)) -> Result<Vec<u8>> {
+pub(crate) fn encode(l: &ExrHeader, mut row: impl FnMut(u32, &mut Vec<u8>)) -> Result<Vec<u8>> {
     let names = l.channels.iter().map(|(n, _)| n);
     if !names.clone().zip(names.skip(1)).all(|(a, b)| a < b) {
         bail!("channels must be sorted by name, each once");
@@ -135,18 +135,21 @@ const HEADER_LIMIT: u64 = 1 << 20;
 /// and offset table checked, the file of the size they promise, each
 /// scanline's chunk where the writer puts it (one after another, in
 /// order), so that a band is one read.
-pub struct Scanlines {
-    pub layout: ExrHeader,
+pub(crate) struct Scanlines {
+    pub(crate) layout: ExrHeader,
     path: PathBuf,
     /// The header and offset table, as the file stores them.
-    pub head: Vec<u8>,
+    pub(crate) head: Vec<u8>,
 }
 
 impl Scanlines {
     /// Opens the image at `path`; `admit` sees its size and channel count
     /// before anything else is read and may refuse them. Every error names
     /// the file.
-    pub fn open(path: &Path, admit: &dyn Fn(u32, u32, usize) -> Result<()>) -> Result<Scanlines> {
+    pub(crate) fn open(
+        path: &Path,
+        admit: &dyn Fn(u32, u32, usize) -> Result<()>,
+    ) -> Result<Scanlines> {
         let mut file = super::open(path)?;
         let mut head = Vec::new();
         (&mut file)
@@ -182,19 +185,19 @@ impl Scanlines {
         })
     }
 
-    pub fn path(&self) -> &Path {
+    pub(crate) fn path(&self) -> &Path {
         &self.path
     }
 
     /// Bytes of one scanline's chunk: its line number and size, then its
     /// samples.
-    pub fn chunk(&self) -> usize {
+    pub(crate) fn chunk(&self) -> usize {
         8 + self.layout.row_bytes()
     }
 
     /// Reads the chunks of scanlines `rows` into `buf`, one after another,
     /// checking that each says it is the scanline it should be.
-    pub fn read(&self, rows: Range<u32>, buf: &mut Vec<u8>) -> Result<()> {
+    pub(crate) fn read(&self, rows: Range<u32>, buf: &mut Vec<u8>) -> Result<()> {
         use std::os::unix::fs::FileExt;
         let chunk = self.chunk();
         buf.resize(rows.len() * chunk, 0);
@@ -241,7 +244,7 @@ fn le_u64(b: &[u8], at: usize) -> Result<u64> {
 }
 
 /// The layout a header gives, and where the header ends.
-pub fn header(b: &[u8]) -> Result<(ExrHeader, usize)> {
+pub(crate) fn header(b: &[u8]) -> Result<(ExrHeader, usize)> {
     if b.get(0..4) != Some(&MAGIC[..]) {
         bail!("no OpenEXR magic number");
     }

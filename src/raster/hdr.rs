@@ -17,7 +17,7 @@ const MAX: f64 = 255.0 * (1u128 << 119) as f64;
 /// `c` rounded to the nearest value RGBE can hold (negative and NaN
 /// channels to 0, values beyond its range to its largest): the encoder
 /// truncates, so it gets values it stores exactly.
-pub fn quantise(c: Vec3) -> Vec3 {
+pub(crate) fn quantise(c: Vec3) -> Vec3 {
     let c = c
         .as_dvec3()
         .to_array()
@@ -45,7 +45,7 @@ fn exp2(e: i32) -> f64 {
 }
 
 /// The rounding step of a stored pixel: `2^(e-8)` for its largest channel.
-pub fn step(c: Vec3) -> f32 {
+pub(crate) fn step(c: Vec3) -> f32 {
     let q = quantise(c);
     let mx = q.max_element() as f64;
     if mx == 0.0 {
@@ -56,7 +56,7 @@ pub fn step(c: Vec3) -> f32 {
 }
 
 /// `img` encoded as Radiance HDR, each pixel rounded to nearest.
-pub fn encode(width: u32, height: u32, img: &[Vec3]) -> Result<Vec<u8>> {
+pub(crate) fn encode(width: u32, height: u32, img: &[Vec3]) -> Result<Vec<u8>> {
     let px: Vec<Rgb<f32>> = img.iter().map(|&c| Rgb(quantise(c).to_array())).collect();
     let mut bytes = Vec::new();
     HdrEncoder::new(&mut bytes)
@@ -67,7 +67,7 @@ pub fn encode(width: u32, height: u32, img: &[Vec3]) -> Result<Vec<u8>> {
 
 /// Reads a Radiance HDR image, refusing sizes beyond
 /// [`super::MAX_DECODED_BYTES`] before decoding.
-pub fn read(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
+pub(crate) fn read(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
     // The image crate's errors repeat their source in their message; one
     // line without the chain reads better.
     let flat = |e: image::ImageError| match e {
@@ -98,7 +98,8 @@ pub fn read(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
 }
 
 /// The image as a trip through a `.hdr` file leaves it.
-pub fn round_trip(img: &[Vec3]) -> Vec<Vec3> {
+#[cfg(test)]
+pub(crate) fn round_trip(img: &[Vec3]) -> Vec<Vec3> {
     img.iter().map(|&c| quantise(c)).collect()
 }
 

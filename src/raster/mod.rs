@@ -6,16 +6,16 @@
 //! [`Output`] (regular files replaced atomically, devices written in place),
 //! and every read checks the size an image declares before decoding it.
 
-pub mod canvas;
+pub(crate) mod canvas;
 pub(crate) mod claim;
-pub mod flat_exr;
-pub mod hdr;
+pub(crate) mod flat_exr;
+pub(crate) mod hdr;
 pub mod metrics;
 pub mod openexr;
-pub mod output;
+pub(crate) mod output;
 pub mod png;
 pub mod reference;
-pub mod resample;
+pub(crate) mod resample;
 mod temporary;
 
 use std::path::Path;
@@ -29,11 +29,11 @@ pub use output::{Format, Output};
 
 /// The most memory a decoded image may take (1 GiB): a header declaring more
 /// is refused before anything is allocated.
-pub const MAX_DECODED_BYTES: u64 = 1 << 30;
+pub(crate) const MAX_DECODED_BYTES: u64 = 1 << 30;
 
 /// Refuses a `width x height` image of `bytes_per_pixel` decoded bytes per
 /// pixel beyond [`MAX_DECODED_BYTES`], naming `path` and the memory needed.
-pub fn check_size(path: &Path, width: u32, height: u32, bytes_per_pixel: u64) -> Result<()> {
+pub(crate) fn check_size(path: &Path, width: u32, height: u32, bytes_per_pixel: u64) -> Result<()> {
     let need = width as u64 * height as u64 * bytes_per_pixel;
     if need > MAX_DECODED_BYTES {
         bail!(
@@ -89,7 +89,7 @@ pub enum Linear {
 
 impl Linear {
     /// The format an output or input path names by its extension.
-    pub fn of(path: &Path) -> Option<Linear> {
+    pub(crate) fn of(path: &Path) -> Option<Linear> {
         let ext = path.extension()?.to_str()?;
         if ext.eq_ignore_ascii_case("exr") {
             Some(Linear::Exr)
@@ -104,10 +104,17 @@ impl Linear {
 /// A linear image, row-major from the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
-    pub width: u32,
-    pub height: u32,
-    pub pixels: Vec<Vec3>,
-    pub format: Linear,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    /// `width * height` of them.
+    pub(crate) pixels: Vec<Vec3>,
+    pub(crate) format: Linear,
+}
+
+impl Image {
+    pub fn pixels(&self) -> &[Vec3] {
+        &self.pixels
+    }
 }
 
 /// Reads a linear image, in the format its extension names.
@@ -143,7 +150,7 @@ pub fn write_linear(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Re
 }
 
 /// Writes a picture as PNG.
-pub fn write_png(path: &Path, img: &image::RgbImage) -> Result<()> {
+pub(crate) fn write_png(path: &Path, img: &image::RgbImage) -> Result<()> {
     Output::check(path, &[], &[Format::Png])?.write(&png::encode(img)?)
 }
 

@@ -113,7 +113,7 @@ pub(crate) fn note(path: &Path, name: &str) -> Result<Option<String>> {
 
 /// Reads the R, G and B channels of an OpenEXR image's first layer as f32,
 /// refusing sizes beyond [`super::MAX_DECODED_BYTES`] before decoding.
-pub fn read(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
+pub(crate) fn read(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
     let err = |e: exr::error::Error| {
         let e = crate::words::clip_quotes(&e.to_string());
         anyhow::anyhow!("{}: {e}", path.display())

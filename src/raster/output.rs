@@ -30,7 +30,7 @@ pub enum Format {
 
 impl Format {
     /// What a render writes.
-    pub const RENDERS: &'static [Format] = &[Format::Png, Format::Exr, Format::Hdr];
+    pub(crate) const RENDERS: &'static [Format] = &[Format::Png, Format::Exr, Format::Hdr];
 
     fn describe(self) -> &'static str {
         match self {
@@ -41,7 +41,7 @@ impl Format {
         }
     }
 
-    pub fn of(path: &Path) -> Option<Format> {
+    pub(crate) fn of(path: &Path) -> Option<Format> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         match ext.as_str() {
             "png" => Some(Format::Png),
@@ -64,8 +64,8 @@ impl Format {
 
 #[derive(Debug)]
 pub struct Output {
-    pub path: PathBuf,
-    pub format: Format,
+    pub(crate) path: PathBuf,
+    pub(crate) format: Format,
     /// A device or FIFO is opened when checked and kept open: a FIFO's
     /// reader would see the end of its input if it were closed.
     device: Option<fs::File>,
@@ -75,7 +75,7 @@ impl Output {
     /// Checks `path` as an output in one of the `accepted` formats (by its
     /// extension; a device or FIFO without one gets the first) of a command
     /// whose inputs are `inputs`.
-    pub fn check(path: &Path, inputs: &[PathBuf], accepted: &[Format]) -> Result<Output> {
+    pub(crate) fn check(path: &Path, inputs: &[PathBuf], accepted: &[Format]) -> Result<Output> {
         let shown = path.display();
         let mut device = None;
         // `x.png/` names a directory whatever is there: the file's name
@@ -143,7 +143,7 @@ impl Output {
 
     /// Refuses an output that is one of `inputs` (the same file under any
     /// name).
-    pub fn check_not_input(&self, inputs: &[PathBuf]) -> Result<()> {
+    pub(crate) fn check_not_input(&self, inputs: &[PathBuf]) -> Result<()> {
         let Ok(m) = fs::metadata(&self.path) else {
             return Ok(());
         };
@@ -165,7 +165,7 @@ impl Output {
 impl Output {
     /// Writes `bytes`: atomically through a temporary file beside a regular
     /// target (removed on any failure), or in place into a device or FIFO.
-    pub fn write(&self, bytes: &[u8]) -> Result<()> {
+    pub(crate) fn write(&self, bytes: &[u8]) -> Result<()> {
         self.write_result(bytes, Cancel::Never)
     }
 
@@ -178,7 +178,7 @@ impl Output {
     /// Whether the image goes where standard output goes (`-o
     /// /dev/stdout`): what a command would print there then goes to
     /// standard error, so as not to follow the image into its stream.
-    pub fn is_stdout(&self) -> bool {
+    pub(crate) fn is_stdout(&self) -> bool {
         use std::os::fd::AsFd;
         let Some(f) = &self.device else {
             return false;
@@ -196,7 +196,7 @@ impl Output {
     /// regular file is written leaves it as it was, and the error is
     /// [`Interrupted`]. A device or FIFO is written all the same: what it
     /// took cannot be taken back.
-    pub fn write_result(&self, bytes: &[u8], cancel: Cancel) -> Result<()> {
+    pub(crate) fn write_result(&self, bytes: &[u8], cancel: Cancel) -> Result<()> {
         let path = &self.path;
         if let Some(mut f) = self.device.as_ref() {
             return f
@@ -319,7 +319,7 @@ fn check_directory(path: &Path) -> Result<()> {
 }
 
 /// `stem-NNN.png` for the first number not taken yet, in `dir`.
-pub fn fresh_name(dir: &Path, stem: &str) -> PathBuf {
+pub(crate) fn fresh_name(dir: &Path, stem: &str) -> PathBuf {
     (1..)
         .map(|n| dir.join(format!("{stem}-{n:03}.png")))
         // Not `exists`, which follows links: a dangling link's name is
@@ -329,7 +329,7 @@ pub fn fresh_name(dir: &Path, stem: &str) -> PathBuf {
 }
 
 /// An I/O error in words, without the OS error number.
-pub fn reason(e: &std::io::Error) -> String {
+pub(crate) fn reason(e: &std::io::Error) -> String {
     let s = e.to_string();
     match s.find(" (os error") {
         Some(i) => s[..i].to_lowercase(),

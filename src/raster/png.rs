@@ -3,7 +3,7 @@
 use anyhow::Result;
 
 /// `img` encoded as PNG.
-pub fn encode(img: &image::RgbImage) -> Result<Vec<u8>> {
+pub(crate) fn encode(img: &image::RgbImage) -> Result<Vec<u8>> {
     let mut bytes = Vec::new();
     img.write_to(
         &mut std::io::Cursor::new(&mut bytes),

@@ -19,7 +19,7 @@ pub fn load_reference(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
 /// Refuses a reference read from `path` (`width` pixels a row) with a
 /// pixel that is NaN or infinite: every error measured against it would
 /// be NaN.
-pub fn check_finite(path: &Path, width: u32, pixels: &[Vec3]) -> Result<()> {
+pub(crate) fn check_finite(path: &Path, width: u32, pixels: &[Vec3]) -> Result<()> {
     match pixels.iter().position(|p| !p.is_finite()) {
         Some(i) => {
             let w = width.max(1) as usize;

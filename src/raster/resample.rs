@@ -15,11 +15,11 @@ use glam::Vec3;
 pub struct Resampled {
     /// `(view pixel index, reference value)` for each view pixel wholly
     /// inside the reference's field of view.
-    pub pixels: Vec<(u32, Vec3)>,
+    pub(crate) pixels: Vec<(u32, Vec3)>,
     /// The share of the view's pixels in `pixels`.
-    pub coverage: f64,
+    pub(crate) coverage: f64,
     /// Every compared view pixel is a whole block of reference pixels.
-    pub exact: bool,
+    pub(crate) exact: bool,
 }
 
 /// Overlaps of the view interval `[a, b)` (in reference pixels) with each

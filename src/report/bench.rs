@@ -20,17 +20,17 @@ use crate::scene::{self, Builder, Scene};
 const FULL_SWEEP_MAX: usize = 300_000;
 
 /// Built-in scenes in the table, before the shared meshes.
-pub const BUILTIN: &[&str] = &["cornell", "teapot", "mirrors"];
+pub(crate) const BUILTIN: &[&str] = &["cornell", "teapot", "mirrors"];
 
 #[derive(Clone, Debug)]
-pub struct BenchOptions {
-    pub width: u32,
-    pub height: u32,
-    pub reps: usize,
+pub(crate) struct BenchOptions {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) reps: usize,
     /// Brute-force frames estimated to take longer than this are skipped.
-    pub brute_limit_s: f64,
+    pub(crate) brute_limit_s: f64,
     /// Scenes to measure; the built-ins and the shared meshes when empty.
-    pub scenes: Vec<String>,
+    pub(crate) scenes: Vec<String>,
 }
 
 impl Default for BenchOptions {
@@ -46,44 +46,44 @@ impl Default for BenchOptions {
 }
 
 #[derive(Clone, Debug, Serialize)]
-pub struct BenchReport {
-    pub machine: Machine,
-    pub frame: String,
-    pub reps: usize,
-    pub scenes: Vec<SceneRow>,
+pub(crate) struct BenchReport {
+    pub(crate) machine: Machine,
+    pub(crate) frame: String,
+    pub(crate) reps: usize,
+    pub(crate) scenes: Vec<SceneRow>,
     /// The plan against `--no-plan` on `cornell`.
-    pub plan: Option<PlanRow>,
-    pub notes: Vec<String>,
+    pub(crate) plan: Option<PlanRow>,
+    pub(crate) notes: Vec<String>,
 }
 
 #[derive(Clone, Debug, Serialize)]
-pub struct SceneRow {
-    pub scene: String,
-    pub triangles: usize,
-    pub builds: Vec<BuildRow>,
-    pub brute_force: Brute,
+pub(crate) struct SceneRow {
+    pub(crate) scene: String,
+    pub(crate) triangles: usize,
+    pub(crate) builds: Vec<BuildRow>,
+    pub(crate) brute_force: Brute,
     /// SAH cost of the binned SAH tree over that of a full-sweep SAH tree
     /// (both counting leaves in packets of four, the builder's objective).
-    pub sah_vs_full_sweep: Option<f64>,
+    pub(crate) sah_vs_full_sweep: Option<f64>,
 }
 
 #[derive(Clone, Debug, Serialize)]
-pub struct BuildRow {
-    pub builder: String,
-    pub build_ms: f64,
-    pub levels: usize,
-    pub leaves: usize,
-    pub max_leaf: usize,
-    pub mean_leaf: f64,
-    pub sah_cost: f64,
-    pub render_ms: f64,
-    pub rays: u64,
-    pub mrays_s: f64,
+pub(crate) struct BuildRow {
+    pub(crate) builder: String,
+    pub(crate) build_ms: f64,
+    pub(crate) levels: usize,
+    pub(crate) leaves: usize,
+    pub(crate) max_leaf: usize,
+    pub(crate) mean_leaf: f64,
+    pub(crate) sah_cost: f64,
+    pub(crate) render_ms: f64,
+    pub(crate) rays: u64,
+    pub(crate) mrays_s: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
 #[serde(tag = "status", rename_all = "lowercase")]
-pub enum Brute {
+pub(crate) enum Brute {
     Measured {
         render_ms: f64,
         rays: u64,
@@ -95,12 +95,12 @@ pub enum Brute {
 }
 
 #[derive(Clone, Debug, Serialize)]
-pub struct PlanRow {
-    pub scene: String,
-    pub plan_ms: f64,
-    pub no_plan_ms: f64,
+pub(crate) struct PlanRow {
+    pub(crate) scene: String,
+    pub(crate) plan_ms: f64,
+    pub(crate) no_plan_ms: f64,
     /// `no_plan_ms / plan_ms`: how much faster the plan makes the frame.
-    pub speedup: f64,
+    pub(crate) speedup: f64,
 }
 
 /// The frame's features: shadows and reflections, nothing sampled, so every
@@ -115,7 +115,11 @@ pub fn frame_features() -> Features {
 }
 
 /// Runs the table on the current rayon pool.
-pub fn run(o: &BenchOptions, threads: usize, progress: &dyn Progress) -> Result<BenchReport> {
+pub(crate) fn run(
+    o: &BenchOptions,
+    threads: usize,
+    progress: &dyn Progress,
+) -> Result<BenchReport> {
     // Each scene's frame is a film of full statistics.
     crate::render::session::check_film(o.width, o.height, Film::BYTES_PER_PIXEL)?;
     let mut notes = Vec::new();
@@ -300,7 +304,7 @@ fn plan_row(scene: &Scene, o: &BenchOptions) -> PlanRow {
 }
 
 /// The report as a text table.
-pub fn to_text(r: &BenchReport) -> String {
+pub(crate) fn to_text(r: &BenchReport) -> String {
     use std::fmt::Write;
     let mut s = String::new();
     let _ = writeln!(s, "rayterm bench: {}", r.machine);

@@ -31,18 +31,18 @@ impl Progress for () {}
 
 /// The machine a figure was measured on.
 #[derive(Clone, Debug, Serialize)]
-pub struct Machine {
-    pub cpu: String,
+pub(crate) struct Machine {
+    pub(crate) cpu: String,
     /// The SIMD kernels the walks used: the widest the CPU has.
-    pub simd: Simd,
+    pub(crate) simd: Simd,
     /// Threads the measurement used.
-    pub threads: usize,
+    pub(crate) threads: usize,
     /// Logical CPUs of the machine.
-    pub cpus: usize,
+    pub(crate) cpus: usize,
 }
 
 impl Machine {
-    pub fn current(threads: usize) -> Self {
+    pub(crate) fn current(threads: usize) -> Self {
         let cpu = std::fs::read_to_string("/proc/cpuinfo")
             .ok()
             .and_then(|s| {
@@ -78,7 +78,7 @@ impl std::fmt::Display for Machine {
 
 /// The shared test meshes (`../shared/data/meshes`), looked for beside the
 /// current directory, the executable's directories and the crate.
-pub fn shared_meshes_dir() -> Option<PathBuf> {
+pub(crate) fn shared_meshes_dir() -> Option<PathBuf> {
     let rel = Path::new("../shared/data/meshes");
     let mut bases: Vec<PathBuf> = Vec::new();
     if let Ok(cwd) = std::env::current_dir() {

@@ -14,13 +14,13 @@ use crate::bvh::{self, TraversalStats};
 use crate::scene::{self, Builder, Geometry};
 
 #[derive(Clone, Debug)]
-pub struct ScalingOptions {
+pub(crate) struct ScalingOptions {
     /// Segments per patch edge, smallest and largest (doubling in between).
-    pub min_n: u32,
-    pub max_n: u32,
-    pub width: u32,
-    pub height: u32,
-    pub builder: Builder,
+    pub(crate) min_n: u32,
+    pub(crate) max_n: u32,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) builder: Builder,
 }
 
 impl Default for ScalingOptions {
@@ -36,34 +36,34 @@ impl Default for ScalingOptions {
 }
 
 #[derive(Clone, Debug, Serialize)]
-pub struct ScalingRow {
-    pub segments: u32,
-    pub triangles: usize,
-    pub build_ms: f64,
-    pub build_mtris_s: f64,
-    pub levels: usize,
-    pub sah_cost: f64,
-    pub primary_mrays_s: f64,
-    pub shadow_mrays_s: f64,
+pub(crate) struct ScalingRow {
+    pub(crate) segments: u32,
+    pub(crate) triangles: usize,
+    pub(crate) build_ms: f64,
+    pub(crate) build_mtris_s: f64,
+    pub(crate) levels: usize,
+    pub(crate) sah_cost: f64,
+    pub(crate) primary_mrays_s: f64,
+    pub(crate) shadow_mrays_s: f64,
     /// Wall time per primary ray times the threads: the cost of one ray.
-    pub ns_per_ray: f64,
-    pub bvh_bytes_per_tri: f64,
-    pub mesh_bytes_per_tri: f64,
+    pub(crate) ns_per_ray: f64,
+    pub(crate) bvh_bytes_per_tri: f64,
+    pub(crate) mesh_bytes_per_tri: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
-pub struct ScalingReport {
-    pub machine: Machine,
-    pub builder: String,
-    pub rays: String,
-    pub rows: Vec<ScalingRow>,
+pub(crate) struct ScalingReport {
+    pub(crate) machine: Machine,
+    pub(crate) builder: String,
+    pub(crate) rays: String,
+    pub(crate) rows: Vec<ScalingRow>,
     /// Log-log slope of build time against triangles (1 is linear; n log n
     /// over these sizes fits a slope a little above 1).
-    pub build_exponent: Option<f64>,
+    pub(crate) build_exponent: Option<f64>,
     /// Slope of the time per primary ray against log2(triangles): ns per
     /// doubling of the mesh (a BVH makes it grow like log n).
-    pub trace_ns_per_doubling: Option<f64>,
-    pub trace_fit_r2: Option<f64>,
+    pub(crate) trace_ns_per_doubling: Option<f64>,
+    pub(crate) trace_fit_r2: Option<f64>,
 }
 
 /// The teapot's own triangles at `n` segments per patch edge (the scene's
@@ -92,7 +92,11 @@ fn mesh_bytes(g: &Geometry) -> usize {
 }
 
 /// Runs the sizes from `o.min_n` to `o.max_n` on the current rayon pool.
-pub fn run(o: &ScalingOptions, threads: usize, progress: &dyn Progress) -> Result<ScalingReport> {
+pub(crate) fn run(
+    o: &ScalingOptions,
+    threads: usize,
+    progress: &dyn Progress,
+) -> Result<ScalingReport> {
     let mut sizes = Vec::new();
     let mut n = o.min_n.max(1);
     while n <= o.max_n.min(1024) {
@@ -178,7 +182,7 @@ pub fn run(o: &ScalingOptions, threads: usize, progress: &dyn Progress) -> Resul
     })
 }
 
-pub fn to_text(r: &ScalingReport) -> String {
+pub(crate) fn to_text(r: &ScalingReport) -> String {
     use std::fmt::Write;
     let mut s = String::new();
     let _ = writeln!(s, "rayterm bench scaling: {}", r.machine);

@@ -2,7 +2,7 @@
 //! line fits (straight and log-log).
 
 /// Median of `v` (the mean of the middle two for an even count); 0 when empty.
-pub fn median(v: &mut [f64]) -> f64 {
+pub(crate) fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
         return 0.0;
     }
@@ -16,7 +16,7 @@ pub fn median(v: &mut [f64]) -> f64 {
 }
 
 /// Least-squares slope and intercept of `y` against `x`, and the r² of the fit.
-pub fn fit_line(x: &[f64], y: &[f64]) -> Option<(f64, f64, f64)> {
+pub(crate) fn fit_line(x: &[f64], y: &[f64]) -> Option<(f64, f64, f64)> {
     let n = x.len().min(y.len());
     if n < 2 {
         return None;
@@ -51,7 +51,7 @@ pub fn fit_log_log(xy: &[(f64, f64)]) -> Option<(f64, f64)> {
 }
 
 /// `y` at `x` on the straight line through two points in log-log space.
-pub fn log_lerp(x: f64, (x0, y0): (f64, f64), (x1, y1): (f64, f64)) -> f64 {
+pub(crate) fn log_lerp(x: f64, (x0, y0): (f64, f64), (x1, y1): (f64, f64)) -> f64 {
     if (x1 / x0).ln().abs() < 1e-12 {
         return y0;
     }

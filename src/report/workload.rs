@@ -26,7 +26,7 @@ use crate::scene::{Builder, Geometry};
 const ROW_CHUNK: usize = 4;
 
 /// The far end of a shadow ray, just short of the primary hit.
-pub const SHADOW_TMAX: f32 = (1.0 - 1e-4) as f32;
+pub(crate) const SHADOW_TMAX: f32 = (1.0 - 1e-4) as f32;
 
 /// Camera and light of the workload for one mesh and image size.
 #[derive(Clone, Copy, Debug)]
@@ -78,7 +78,7 @@ impl Workload {
 
     /// The offsets of the image's columns ([`CameraFrame::sx`] of their
     /// centres): made once per pass, they save every ray a division.
-    pub fn columns(&self) -> Vec<f64> {
+    pub(crate) fn columns(&self) -> Vec<f64> {
         (0..self.width)
             .map(|x| self.frame.sx(x as f64 + 0.5))
             .collect()
@@ -185,7 +185,7 @@ impl Frame {
 /// rays as [`Workload::primary`] and [`Workload::shadow`], a column's and a
 /// row's offsets computed once each and the camera math done four rays at
 /// a time ([`CameraFrame::rays_through`]).
-pub struct Maker<'a> {
+pub(crate) struct Maker<'a> {
     w: &'a Workload,
     /// [`Workload::columns`].
     cols: &'a [f64],
@@ -199,7 +199,7 @@ pub struct Maker<'a> {
 }
 
 impl<'a> Maker<'a> {
-    pub fn new(w: &'a Workload, cols: &'a [f64]) -> Self {
+    pub(crate) fn new(w: &'a Workload, cols: &'a [f64]) -> Self {
         Maker {
             w,
             cols,
@@ -213,7 +213,7 @@ impl<'a> Maker<'a> {
 
     /// The primary rays of the pixels `xs` x `ys`, rows in order, appended
     /// to `rays`.
-    pub fn primary(&mut self, xs: Range<usize>, ys: Range<usize>, rays: &mut Vec<Ray>) {
+    pub(crate) fn primary(&mut self, xs: Range<usize>, ys: Range<usize>, rays: &mut Vec<Ray>) {
         debug_assert!(self.t.is_empty(), "shadow rays asked for and not made");
         self.sx.clear();
         self.sy.clear();
@@ -228,7 +228,7 @@ impl<'a> Maker<'a> {
     /// Asks for the shadow ray toward the hit at `t` in pixel `(x, y)`;
     /// [`Maker::shadows`] makes it.
     #[inline]
-    pub fn ask_shadow(&mut self, x: usize, y: usize, t: f32) {
+    pub(crate) fn ask_shadow(&mut self, x: usize, y: usize, t: f32) {
         let sy = match self.row {
             Some((row, sy)) if row == y => sy,
             _ => self.w.frame.sy(y as f64 + 0.5),
@@ -242,7 +242,7 @@ impl<'a> Maker<'a> {
     /// The shadow rays asked for since the last call, in that order,
     /// appended to `rays`.
     #[inline(never)]
-    pub fn shadows(&mut self, rays: &mut Vec<Ray>) {
+    pub(crate) fn shadows(&mut self, rays: &mut Vec<Ray>) {
         self.primary.clear();
         self.w
             .frame
@@ -378,14 +378,19 @@ fn shadow_row(w: &Workload, trow: &[f32], y: u32, rays: &mut Vec<Ray>) {
 
 /// Pixels per side of the square tiles whose rays `--packets` traces
 /// together: 64 camera rays of a tile, or the shadow rays of its hits.
-pub const TILE: usize = 8;
+pub(crate) const TILE: usize = 8;
 
 /// [`trace_primary`] in packets: the camera rays of each tile of
 /// [`TILE`] x [`TILE`] pixels (left to right in bands of [`TILE`] rows, the
 /// rays of a tile in pixel order) traced together by
 /// [`Bvh::intersect_packet`]. The checksum is summed per row in pixel order,
 /// as there.
-pub fn trace_primary_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh: &Bvh) -> f64 {
+pub(crate) fn trace_primary_packets(
+    w: &Workload,
+    frame: &mut Frame,
+    source: Rows,
+    bvh: &Bvh,
+) -> f64 {
     let width = w.width as usize;
     let start = Instant::now();
     let cols = w.columns();
@@ -431,7 +436,12 @@ pub fn trace_primary_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh:
 /// [`trace_shadow`] in packets: the shadow rays of each tile's hits (as
 /// [`trace_primary_packets`] tiles the frame, in pixel order within the
 /// tile) traced together by [`Bvh::occluded_packet`].
-pub fn trace_shadow_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh: &Bvh) -> f64 {
+pub(crate) fn trace_shadow_packets(
+    w: &Workload,
+    frame: &mut Frame,
+    source: Rows,
+    bvh: &Bvh,
+) -> f64 {
     let width = w.width as usize;
     let start = Instant::now();
     let cols = w.columns();
@@ -478,7 +488,7 @@ pub fn trace_shadow_packets(w: &Workload, frame: &mut Frame, source: Rows, bvh: 
 }
 
 /// The primary rays of every row, made before they are timed.
-pub fn primary_rays(w: &Workload) -> Vec<Vec<Ray>> {
+pub(crate) fn primary_rays(w: &Workload) -> Vec<Vec<Ray>> {
     (0..w.height)
         .into_par_iter()
         .map(|y| (0..w.width).map(|x| w.primary(x, y)).collect())
@@ -486,7 +496,7 @@ pub fn primary_rays(w: &Workload) -> Vec<Vec<Ray>> {
 }
 
 /// The shadow rays of every row, made before they are timed.
-pub fn shadow_rays(w: &Workload, frame: &Frame) -> Vec<Vec<Ray>> {
+pub(crate) fn shadow_rays(w: &Workload, frame: &Frame) -> Vec<Vec<Ray>> {
     frame
         .t
         .par_chunks(w.width as usize)
@@ -573,29 +583,29 @@ pub struct RaysOptions {
 /// Embree harness print.
 #[derive(Clone, Debug, Serialize)]
 pub struct RaysReport {
-    pub mesh: String,
-    pub triangles: usize,
-    pub width: u32,
-    pub height: u32,
-    pub threads: usize,
-    pub build_ms: f64,
-    pub primary_rays: u64,
+    pub(crate) mesh: String,
+    pub(crate) triangles: usize,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) threads: usize,
+    pub(crate) build_ms: f64,
+    pub(crate) primary_rays: u64,
     pub hits: u64,
     pub sum_t: f64,
-    pub primary_mrays_s: f64,
-    pub shadow_rays: u64,
+    pub(crate) primary_mrays_s: f64,
+    pub(crate) shadow_rays: u64,
     pub occluded: u64,
-    pub shadow_mrays_s: f64,
-    pub diffuse_rays: u64,
+    pub(crate) shadow_mrays_s: f64,
+    pub(crate) diffuse_rays: u64,
     pub diffuse_hits: u64,
     pub diffuse_sum_t: f64,
-    pub diffuse_mrays_s: f64,
-    pub engine: &'static str,
-    pub builder: String,
-    pub workload: &'static str,
-    pub workload_version: u32,
-    pub camera: &'static str,
-    pub reps: usize,
+    pub(crate) diffuse_mrays_s: f64,
+    pub(crate) engine: &'static str,
+    pub(crate) builder: String,
+    pub(crate) workload: &'static str,
+    pub(crate) workload_version: u32,
+    pub(crate) camera: &'static str,
+    pub(crate) reps: usize,
     /// `"timed"`: primary and shadow rays made in the timed loop;
     /// `"untimed"`: made before it, each set traced once untimed first.
     pub ray_generation: &'static str,
@@ -606,9 +616,9 @@ pub struct RaysReport {
     pub diffuse_traversal: &'static str,
     /// The SIMD kernels the walks used.
     pub simd: Simd,
-    pub primary_ms: f64,
-    pub shadow_ms: f64,
-    pub diffuse_ms: f64,
+    pub(crate) primary_ms: f64,
+    pub(crate) shadow_ms: f64,
+    pub(crate) diffuse_ms: f64,
 }
 
 /// Runs the workload `o.reps` times (a fresh build each time) on the current

@@ -33,7 +33,7 @@ impl Projection {
 
     /// Scaled with the scene by `s`: an orthographic view's extent is a
     /// length, a field of view an angle.
-    pub fn scaled(self, s: f32) -> Self {
+    pub(crate) fn scaled(self, s: f32) -> Self {
         match self {
             Projection::Orthographic { half_height } => Projection::Orthographic {
                 half_height: half_height * s,
@@ -45,7 +45,7 @@ impl Projection {
 
 impl Camera {
     /// The workload's auto camera: looks at the box centre from `r * (1.2, 0.8, 2)`.
-    pub fn auto(b: &Aabb) -> Self {
+    pub(crate) fn auto(b: &Aabb) -> Self {
         let c = b.center();
         let r = (b.max - b.min).length() * 0.5;
         Camera {
@@ -57,7 +57,7 @@ impl Camera {
     }
 
     /// The workload's auto light position for a mesh with bounds `b`.
-    pub fn auto_light(b: &Aabb) -> Vec3 {
+    pub(crate) fn auto_light(b: &Aabb) -> Vec3 {
         let c = b.center();
         let r = (b.max - b.min).length() * 0.5;
         c + r * Vec3::new(-1.5, 3.0, 2.0)
@@ -75,7 +75,7 @@ impl Camera {
     }
 
     /// Rotates the eye about the target (yaw about `up`, pitch about the right axis).
-    pub fn orbit(&mut self, yaw: f32, pitch: f32) {
+    pub(crate) fn orbit(&mut self, yaw: f32, pitch: f32) {
         let off = self.eye - self.target;
         let r = off.length();
         let up = self.up.normalize();
@@ -92,7 +92,7 @@ impl Camera {
     }
 
     /// Moves eye and target together in camera space (right, up, forward).
-    pub fn pan(&mut self, right: f32, up: f32, forward: f32) {
+    pub(crate) fn pan(&mut self, right: f32, up: f32, forward: f32) {
         let fwd = (self.target - self.eye).normalize();
         let r = fwd.cross(self.up).normalize();
         let u = r.cross(fwd);
@@ -126,7 +126,7 @@ impl CameraFrame {
     /// The basis from an f64 eye, target and up: the ray workload derives
     /// them in f64 from the mesh bounds, and rounding them to f32 first
     /// would change the rays.
-    pub fn new(
+    pub(crate) fn new(
         eye: DVec3,
         target: DVec3,
         up: DVec3,
@@ -158,13 +158,13 @@ impl CameraFrame {
     /// The frame for pixels shown `pixel_aspect` times as wide as they are
     /// tall (a terminal cell's sub-pixels): the view keeps its proportions
     /// on screen, its height seeing the same field.
-    pub fn stretched(mut self, pixel_aspect: f64) -> Self {
+    pub(crate) fn stretched(mut self, pixel_aspect: f64) -> Self {
         self.aspect *= pixel_aspect;
         self
     }
 
     /// The image size in pixels this frame was made for.
-    pub fn size(&self) -> (u32, u32) {
+    pub(crate) fn size(&self) -> (u32, u32) {
         self.size
     }
 
@@ -177,20 +177,20 @@ impl CameraFrame {
 
     /// The offset along `right` of image column `x` (see [`CameraFrame::ray`]).
     #[inline]
-    pub fn sx(&self, x: f64) -> f64 {
+    pub(crate) fn sx(&self, x: f64) -> f64 {
         (2.0 * x / self.width - 1.0) * self.h * self.aspect
     }
 
     /// The offset along `up` of image row `y`.
     #[inline]
-    pub fn sy(&self, y: f64) -> f64 {
+    pub(crate) fn sy(&self, y: f64) -> f64 {
         (1.0 - 2.0 * y / self.height) * self.h
     }
 
     /// The ray at offsets `sx`, `sy` ([`CameraFrame::sx`], [`CameraFrame::sy`]):
     /// rays of a tile of pixels share theirs per column and per row.
     #[inline]
-    pub fn ray_through(&self, sx: f64, sy: f64) -> Ray {
+    pub(crate) fn ray_through(&self, sx: f64, sy: f64) -> Ray {
         match self.ortho {
             true => Ray::new(
                 (self.eye + sx * self.right + sy * self.upv).as_vec3(),
@@ -208,13 +208,13 @@ impl CameraFrame {
 
     /// The rays at image positions `(x[i], y[i])` ([`CameraFrame::ray`])
     /// appended to `out`.
-    pub fn rays(&self, x: &[f64], y: &[f64], out: &mut Vec<Ray>) {
+    pub(crate) fn rays(&self, x: &[f64], y: &[f64], out: &mut Vec<Ray>) {
         self.batch::<true>(x, y, out)
     }
 
     /// The rays at offsets `(sx[i], sy[i])` ([`CameraFrame::ray_through`])
     /// appended to `out`.
-    pub fn rays_through(&self, sx: &[f64], sy: &[f64], out: &mut Vec<Ray>) {
+    pub(crate) fn rays_through(&self, sx: &[f64], sy: &[f64], out: &mut Vec<Ray>) {
         self.batch::<false>(sx, sy, out)
     }
 
@@ -325,7 +325,12 @@ impl CameraFrame {
     /// part behind the near plane (`depth < near`), or `None` when all of it is
     /// behind. Cutting in 3D first keeps points behind the eye from projecting
     /// through it to the wrong side of the image.
-    pub fn project_clip(&self, a: Vec3, b: Vec3, near: f64) -> Option<((f64, f64), (f64, f64))> {
+    pub(crate) fn project_clip(
+        &self,
+        a: Vec3,
+        b: Vec3,
+        near: f64,
+    ) -> Option<((f64, f64), (f64, f64))> {
         let (a, b) = (a.as_dvec3() - self.eye, b.as_dvec3() - self.eye);
         let (za, zb) = (a.dot(self.fwd), b.dot(self.fwd));
         if za < near && zb < near || !(za.is_finite() && zb.is_finite()) {

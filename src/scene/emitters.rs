@@ -20,11 +20,11 @@ pub struct Emitters {
 
 /// A point drawn on an emitter.
 #[derive(Clone, Copy, Debug)]
-pub struct EmitterPoint {
-    pub prim: u32,
+pub(crate) struct EmitterPoint {
+    pub(crate) prim: u32,
     /// Barycentric `(u, v)` of the point, as a hit gives them.
-    pub uv: Vec2,
-    pub point: Vec3,
+    pub(crate) uv: Vec2,
+    pub(crate) point: Vec3,
 }
 
 /// The weight an emissive material gives its triangles.
@@ -37,7 +37,7 @@ fn strength(scene: &Scene, material: u32) -> f64 {
 
 impl Emitters {
     /// The emissive triangles of `scene`.
-    pub fn of(scene: &Scene) -> Self {
+    pub(crate) fn of(scene: &Scene) -> Self {
         let geo = &scene.geometry;
         let mut out = Emitters::default();
         if !scene.materials.iter().any(|m| m.emissive()) {
@@ -60,18 +60,13 @@ impl Emitters {
         out
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.prims.is_empty()
-    }
-
-    /// How many triangles emit.
-    pub fn len(&self) -> usize {
-        self.prims.len()
     }
 
     /// A point on an emitter, from `pick` (which triangle) and `u` (where
     /// on it), with its density per unit area; `None` when nothing emits.
-    pub fn sample(&self, scene: &Scene, pick: f32, u: Vec2) -> Option<(EmitterPoint, f32)> {
+    pub(crate) fn sample(&self, scene: &Scene, pick: f32, u: Vec2) -> Option<(EmitterPoint, f32)> {
         let target = pick as f64 * self.total;
         let i = self
             .cdf
@@ -97,7 +92,7 @@ impl Emitters {
 
     /// The density per unit area with which [`Emitters::sample`] draws a
     /// point of triangle `prim`.
-    pub fn pdf_area(&self, scene: &Scene, prim: u32) -> f32 {
+    pub(crate) fn pdf_area(&self, scene: &Scene, prim: u32) -> f32 {
         if self.total <= 0.0 {
             return 0.0;
         }

@@ -77,7 +77,7 @@ enum Radiance {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EnvSample {
     /// Unit length: the way a ray leaves the scene to meet the light.
-    pub dir: Vec3,
+    pub(crate) dir: Vec3,
     /// [`EnvLight::eval`] of `dir`.
     pub radiance: Vec3,
     /// Per steradian, as [`EnvLight::pdf`] gives it; 0 for a light that

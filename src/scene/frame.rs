@@ -14,24 +14,24 @@ use super::show::{show, show3};
 
 /// A scene whose centre is farther from the origin than this many times its
 /// size is moved next to the origin.
-pub const FAR: f64 = 1024.0;
+pub(crate) const FAR: f64 = 1024.0;
 
 /// A scene larger than this across (2^40, about 1.1e12) is scaled down: the
 /// triangle test multiplies three coordinates together, and beyond about
 /// 7e12 that product overflows f32.
-pub const HUGE: f64 = (1u64 << 40) as f64;
+pub(crate) const HUGE: f64 = (1u64 << 40) as f64;
 
 /// A scene smaller than this across (2^-40, about 9.1e-13) is scaled up:
 /// products of three coordinates would fall below the smallest normal f32.
-pub const TINY: f64 = 1.0 / HUGE;
+pub(crate) const TINY: f64 = 1.0 / HUGE;
 
 /// The map from file coordinates to render coordinates:
 /// `(p - shift) * scale`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
-    pub shift: DVec3,
+    pub(crate) shift: DVec3,
     /// A power of two.
-    pub scale: f64,
+    pub(crate) scale: f64,
 }
 
 impl Default for Frame {
@@ -43,7 +43,7 @@ impl Default for Frame {
 /// The shift that moves a scene spanning `min..max` next to the origin when
 /// it lies far from it for its size (see [`FAR`]): its centre, on the axes
 /// where the centre is farther out than the size; `None` for a near scene.
-pub fn far_shift(min: DVec3, max: DVec3) -> Option<DVec3> {
+pub(crate) fn far_shift(min: DVec3, max: DVec3) -> Option<DVec3> {
     let c = (min + max) * 0.5;
     let size = (max - min).max_element();
     if !c.is_finite() || !size.is_finite() || c.abs().max_element() <= FAR * size {
@@ -58,7 +58,7 @@ pub fn far_shift(min: DVec3, max: DVec3) -> Option<DVec3> {
 
 /// The warning for a scene moved by `shift`: where it was and how coarse
 /// f32 positions are out there.
-pub fn far_warning(shift: DVec3, min: DVec3, max: DVec3) -> String {
+pub(crate) fn far_warning(shift: DVec3, min: DVec3, max: DVec3) -> String {
     let c = (min + max) * 0.5;
     let size = (max - min).max_element();
     let far = c.abs().max_element() as f32;
@@ -82,7 +82,7 @@ impl Frame {
     /// The frame for a scene whose geometry spans `min..max`, and the
     /// warnings that say what it does; the identity for an empty or near,
     /// not huge scene.
-    pub fn fit(min: DVec3, max: DVec3) -> (Frame, Vec<String>) {
+    pub(crate) fn fit(min: DVec3, max: DVec3) -> (Frame, Vec<String>) {
         let mut frame = Frame::IDENTITY;
         let mut warnings = Vec::new();
         if !(min.is_finite() && max.is_finite()) || min.cmpgt(max).any() {
@@ -112,11 +112,11 @@ impl Frame {
         (frame, warnings)
     }
 
-    pub fn point(&self, p: DVec3) -> Vec3 {
+    pub(crate) fn point(&self, p: DVec3) -> Vec3 {
         ((p - self.shift) * self.scale).as_vec3()
     }
 
-    pub fn vector(&self, v: DVec3) -> Vec3 {
+    pub(crate) fn vector(&self, v: DVec3) -> Vec3 {
         (v * self.scale).as_vec3()
     }
 }

@@ -53,7 +53,7 @@ pub struct Cone {
 
 impl Cone {
     /// The share of the intensity sent along `dir` (unit, from the light).
-    pub fn falloff(&self, dir: Vec3) -> f32 {
+    pub(crate) fn falloff(&self, dir: Vec3) -> f32 {
         let scale = 1.0 / (self.cos_inner - self.cos_outer).max(1e-3);
         let t = ((dir.dot(self.axis) - self.cos_outer) * scale).clamp(0.0, 1.0);
         t * t
@@ -63,19 +63,19 @@ impl Cone {
 /// Light arriving at a shading point from one point of a light (or from
 /// a direction).
 #[derive(Clone, Copy, Debug)]
-pub struct Arriving {
+pub(crate) struct Arriving {
     /// The light's point, or, for a directional light, where the unit
     /// vector toward it points from the origin.
-    pub from: From,
+    pub(crate) from: From,
     /// Phong units (the colour a white Phong surface facing it shows) or,
     /// where `physical`, the illuminance in lux of a surface facing it.
-    pub value: Vec3,
-    pub physical: bool,
+    pub(crate) value: Vec3,
+    pub(crate) physical: bool,
 }
 
 /// Where light comes from.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum From {
+pub(crate) enum From {
     Point(Vec3),
     /// The unit direction toward a light at infinity.
     Direction(Vec3),
@@ -93,7 +93,7 @@ impl Light {
         }
     }
 
-    pub fn is_area(&self) -> bool {
+    pub(crate) fn is_area(&self) -> bool {
         matches!(self, Light::Segment { .. } | Light::Parallelogram { .. })
     }
 
@@ -101,7 +101,7 @@ impl Light {
     /// [`Light::point_at`]); a photometric light's falls off with
     /// distance, range and cone.
     #[inline(always)]
-    pub fn arriving(&self, p: Vec3, s: Vec2) -> Arriving {
+    pub(crate) fn arriving(&self, p: Vec3, s: Vec2) -> Arriving {
         match self {
             Light::Photometric {
                 position,
@@ -133,7 +133,7 @@ impl Light {
     /// was stored in an 8-byte and a 4-byte move and read back across both,
     /// a load the store buffer cannot forward.
     #[inline(always)]
-    pub fn point_at(&self, s: Vec2) -> (Vec3, Vec3) {
+    pub(crate) fn point_at(&self, s: Vec2) -> (Vec3, Vec3) {
         match self {
             Light::Point { position, color } => (*position, *color),
             Light::Photometric {
@@ -166,7 +166,7 @@ impl Light {
         }
     }
 
-    pub fn transform(&mut self, scale: f32, offset: Vec3) {
+    pub(crate) fn transform(&mut self, scale: f32, offset: Vec3) {
         let f = |p: &mut Vec3| *p = *p * scale + offset;
         match self {
             Light::Point { position, .. } => f(position),

@@ -6,11 +6,11 @@ use glam::Vec3;
 /// Shininess at and above which a reflective material is a perfect mirror;
 /// below it, with glossy reflection on, reflections are sampled from the
 /// Phong lobe of exponent `ns`.
-pub const GLOSSY_MAX_NS: f32 = 1000.0;
+pub(crate) const GLOSSY_MAX_NS: f32 = 1000.0;
 
 /// Roughness below which a metallic-roughness material's specular lobe is
 /// a mirror (GGX alpha under [`crate::render::brdf::MIRROR_ALPHA`]).
-pub const MIRROR_ROUGHNESS: f32 = 0.0316;
+pub(crate) const MIRROR_ROUGHNESS: f32 = 0.0316;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
@@ -81,12 +81,12 @@ impl Material {
     /// Whether it reflects the scene in a mirror or glossy lobe: a Phong
     /// material with ks, every metallic-roughness one (even a dielectric
     /// reflects at grazing angles).
-    pub fn reflective(&self) -> bool {
+    pub(crate) fn reflective(&self) -> bool {
         self.pbr.is_some() || self.ks.max_element() > 0.0
     }
 
     /// Whether its reflection is sampled from a lobe rather than a mirror.
-    pub fn glossy(&self) -> bool {
+    pub(crate) fn glossy(&self) -> bool {
         match &self.pbr {
             Some(p) => p.roughness >= MIRROR_ROUGHNESS || p.metallic_roughness.is_some(),
             None => self.reflective() && self.ns < GLOSSY_MAX_NS,

@@ -2,17 +2,17 @@
 //! environment and render settings, as the renderer reads them. Built from
 //! files by [`load`], which this model never calls.
 
-pub mod camera;
-pub mod emitters;
+pub(crate) mod camera;
+pub(crate) mod emitters;
 pub mod envlight;
 pub mod frame;
 pub mod light;
 pub mod load;
-pub mod material;
+pub(crate) mod material;
 mod reach;
 pub(crate) mod show;
-pub mod summary;
-pub mod texture;
+pub(crate) mod summary;
+pub(crate) mod texture;
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -94,7 +94,7 @@ impl Geometry {
 #[derive(Clone, Debug)]
 pub struct MeshInfo {
     pub name: String,
-    pub smooth: bool,
+    pub(crate) smooth: bool,
     pub textured: bool,
     /// Vertex colours multiply the material's diffuse colour.
     pub colored: bool,
@@ -172,13 +172,13 @@ impl std::fmt::Display for Builder {
 pub const MAX_SPP: u32 = 1 << 20;
 
 /// The most bounces a ray tree or path may take.
-pub const MAX_DEPTH: u32 = 64;
+pub(crate) const MAX_DEPTH: u32 = 64;
 
 /// Render defaults a scene can set; the CLI and TUI override them.
 #[derive(Clone, Debug)]
 pub struct Settings {
-    pub width: u32,
-    pub height: u32,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
     pub spp: u32,
     pub max_depth: u32,
     /// The integrator asked for; `None` leaves it to the plan.
@@ -193,15 +193,15 @@ pub struct Settings {
     /// Jittered sub-pixel positions and area-light samples; independent
     /// uniform samples when false, to measure what stratification buys.
     pub stratify: bool,
-    pub bloom: BloomSettings,
+    pub(crate) bloom: BloomSettings,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BloomSettings {
-    pub threshold: f32,
-    pub sigma: f32,
-    pub radius: u32,
-    pub strength: f32,
+    pub(crate) threshold: f32,
+    pub(crate) sigma: f32,
+    pub(crate) radius: u32,
+    pub(crate) strength: f32,
 }
 
 impl Default for BloomSettings {
@@ -268,15 +268,15 @@ impl Scene {
     }
 
     /// The emissive triangles, for light sampling.
-    pub fn emitters(&self) -> &emitters::Emitters {
+    pub(crate) fn emitters(&self) -> &emitters::Emitters {
         self.emitters.get_or_init(|| emitters::Emitters::of(self))
     }
 
-    pub fn has_vertex_normals(&self) -> bool {
+    pub(crate) fn has_vertex_normals(&self) -> bool {
         self.meshes.iter().any(|m| m.smooth)
     }
 
-    pub fn bounds(&self) -> Aabb {
+    pub(crate) fn bounds(&self) -> Aabb {
         self.geometry.bounds()
     }
 

@@ -3,7 +3,7 @@
 
 /// A number as messages show it: plain near 1, in exponent form when very
 /// large or small (`1e45`, not forty-five digits).
-pub fn show(x: f64) -> String {
+pub(crate) fn show(x: f64) -> String {
     let plain = x == 0.0 || (1e-4..1e15).contains(&x.abs());
     let f = x as f32;
     if x == 0.0 || (f32::MIN_POSITIVE as f64..=f32::MAX as f64).contains(&x.abs()) {
@@ -24,7 +24,7 @@ pub fn show(x: f64) -> String {
 }
 
 /// A point as messages show it.
-pub fn show3(p: glam::DVec3) -> String {
+pub(crate) fn show3(p: glam::DVec3) -> String {
     format!("({}, {}, {})", show(p.x), show(p.y), show(p.z))
 }
 

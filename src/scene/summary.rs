@@ -67,7 +67,7 @@ fn light(l: &Light) -> String {
 
 /// The materials' shading models and the lights, for `--explain`; `paths`
 /// says whether paths are traced (what lights the scene then differs).
-pub fn explain(scene: &Scene, paths: bool) -> String {
+pub(crate) fn explain(scene: &Scene, paths: bool) -> String {
     let pbr = scene.materials.iter().filter(|m| m.pbr.is_some()).count();
     let phong = scene.materials.len() - pbr;
     let emissive = scene.materials.iter().filter(|m| m.emissive()).count();

@@ -14,9 +14,9 @@ use crate::memory;
 /// texels: every material of an image (or of a file) holds them once.
 #[derive(Clone, Debug)]
 pub struct Texture {
-    pub name: String,
-    pub width: u32,
-    pub height: u32,
+    pub(crate) name: String,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
     /// Row 0 is the top of the image; values are linear (sRGB decoded).
     pub texels: Arc<Vec<Vec3>>,
     /// How coordinates outside 0..1 wrap, along u and v.
@@ -75,7 +75,7 @@ impl Wrap {
 /// How an image's 8-bit values become linear ones: colours are sRGB
 /// encoded, data (normals, roughness, occlusion) are stored linearly.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum Encoding {
+pub(crate) enum Encoding {
     #[default]
     Srgb,
     Linear,
@@ -85,7 +85,7 @@ pub enum Encoding {
 /// once stored, plus the decoder's buffers): 1.5 GiB, enough for 8192x8192
 /// RGBA or 10000x10000 RGB. Also never more than the memory available
 /// ([`memory::check`]).
-pub const TEXTURE_BUDGET: u64 = 1536 << 20;
+pub(crate) const TEXTURE_BUDGET: u64 = 1536 << 20;
 
 /// A decoder's error as one message: its text already holds its cause,
 /// which an error chain would repeat.
@@ -107,7 +107,7 @@ pub(super) fn image_error(e: image::ImageError) -> anyhow::Error {
 pub(super) const TEXEL_BYTES: u64 = std::mem::size_of::<Vec3>() as u64;
 
 impl Texture {
-    pub fn from_image(name: &str, img: image::DynamicImage, encoding: Encoding) -> Self {
+    pub(crate) fn from_image(name: &str, img: image::DynamicImage, encoding: Encoding) -> Self {
         let rgb = img.into_rgb8();
         let lut: Vec<f32> = (0..256)
             .map(|i| i as f32 / 255.0)
@@ -133,7 +133,7 @@ impl Texture {
     /// Decodes an image file's bytes. An image without pixels, or one that
     /// would take more than [`TEXTURE_BUDGET`] (or the memory available) to
     /// decode and store, is refused before anything large is allocated.
-    pub fn decode(name: &str, bytes: &[u8], encoding: Encoding) -> Result<Self> {
+    pub(crate) fn decode(name: &str, bytes: &[u8], encoding: Encoding) -> Result<Self> {
         // Formats of GPU textures, which the decoder would call unknown.
         for (magic, what) in [
             (&b"\xABKTX 20\xBB\r\n\x1A\n"[..], "KTX2 (Basis Universal)"),
@@ -192,12 +192,12 @@ impl Texture {
         )
     }
 
-    pub fn nearest(&self, uv: Vec2) -> Vec3 {
+    pub(crate) fn nearest(&self, uv: Vec2) -> Vec3 {
         let (x, y) = self.coords(uv);
         self.texel(x as i64, y as i64) * self.tint
     }
 
-    pub fn bilinear(&self, uv: Vec2) -> Vec3 {
+    pub(crate) fn bilinear(&self, uv: Vec2) -> Vec3 {
         let (x, y) = self.coords(uv);
         self.bilinear_px(x, y) * self.tint
     }
@@ -223,16 +223,16 @@ impl Texture {
 }
 
 /// Cube-map faces in the OpenGL order +X, -X, +Y, -Y, +Z, -Z.
-pub const FACE_NAMES: [&str; 6] = ["posx", "negx", "posy", "negy", "posz", "negz"];
+pub(crate) const FACE_NAMES: [&str; 6] = ["posx", "negx", "posy", "negy", "posz", "negz"];
 
 #[derive(Clone, Debug)]
 pub struct CubeMap {
-    pub faces: [Texture; 6],
+    pub(crate) faces: [Texture; 6],
 }
 
 /// Face and (s, t) in [0,1]^2 (t from the top row) for a direction, as in
 /// the OpenGL specification's major-axis table.
-pub fn cube_face_uv(d: Vec3) -> (usize, Vec2) {
+pub(crate) fn cube_face_uv(d: Vec3) -> (usize, Vec2) {
     let a = d.abs();
     let (face, ma, sc, tc) = if a.x >= a.y && a.x >= a.z {
         if d.x >= 0.0 {
@@ -259,7 +259,7 @@ pub fn cube_face_uv(d: Vec3) -> (usize, Vec2) {
 }
 
 impl CubeMap {
-    pub fn lookup(&self, d: Vec3) -> Vec3 {
+    pub(crate) fn lookup(&self, d: Vec3) -> Vec3 {
         let (face, st) = cube_face_uv(d);
         self.faces[face].bilinear_clamped(st.x, st.y)
     }

@@ -13,7 +13,7 @@ pub type Layer = Canvas<Option<Vec3>>;
 
 /// A debug view's legend: per line, a colour swatch (none for plain text)
 /// and what it means.
-pub type Legend = Vec<(Option<Vec3>, String)>;
+pub(crate) type Legend = Vec<(Option<Vec3>, String)>;
 
 /// Distance in front of the eye where segments are cut. Tiny, because the
 /// projection runs in f64 and the 2D clip handles the huge coordinates of

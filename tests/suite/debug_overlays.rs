@@ -28,7 +28,7 @@ fn tracer(s: &Session, w: u32, h: u32) -> Tracer<'_> {
 }
 
 fn count(layer: &Layer, c: Vec3) -> usize {
-    layer.pixels.iter().filter(|p| **p == Some(c)).count()
+    layer.pixels().iter().filter(|p| **p == Some(c)).count()
 }
 
 /// Whether a pixel within `r` of `(x, y)` has colour `c`.
@@ -376,7 +376,7 @@ fn sample_zoom_places_each_sample_in_its_stratum_in_its_colour() {
     // The zoom is across from the pixel (left half, lower half): on the
     // right, at the bottom.
     let zoomed: Vec<u32> = (0..96 * 96)
-        .filter(|&i| o.layer.pixels[i as usize] == Some(overlay::MARK))
+        .filter(|&i| o.layer.pixels()[i as usize] == Some(overlay::MARK))
         .map(|i| i % 96)
         .collect();
     assert!(zoomed.iter().filter(|&&x| x > 48).count() > 40);

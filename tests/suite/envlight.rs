@@ -59,8 +59,8 @@ fn sky_colour(d: &Dir, args: &[&str]) -> Vec3 {
     assert!(r.ok(), "{args:?}: {}", r.stderr);
     let img = rayterm::raster::read_linear(&d.path("out.exr")).unwrap();
     std::fs::remove_file(d.path("out.exr")).unwrap();
-    let first = img.pixels[0];
-    assert!(img.pixels.iter().all(|&p| p == first), "{args:?}");
+    let first = img.pixels()[0];
+    assert!(img.pixels().iter().all(|&p| p == first), "{args:?}");
     first
 }
 

@@ -17,7 +17,7 @@ use crate::scene::{Camera, Environment, Geometry, Light, MeshInfo, Projection, S
 
 /// An OBJ of good, degenerate and nearly degenerate triangles; the comments
 /// say which. [`ZERO_AREA`] of its faces have no area.
-pub const OBJ: &str = "\
+pub(crate) const OBJ: &str = "\
 mtllib d.mtl
 usemtl floor
 v -2 0 -2
@@ -66,7 +66,7 @@ v 0 0.1 -1
 f 21 22 23
 ";
 
-pub const MTL: &str = "\
+pub(crate) const MTL: &str = "\
 newmtl floor
 Kd 0.7 0.7 0.7
 newmtl shiny
@@ -76,10 +76,10 @@ Ns 30
 ";
 
 /// Faces of [`OBJ`] without area.
-pub const ZERO_AREA: u64 = 4;
+pub(crate) const ZERO_AREA: u64 = 4;
 
 /// Zero-area triangles the loader says it skipped, summed over its warnings.
-pub fn reported_degenerate(warnings: &[String]) -> u64 {
+pub(crate) fn reported_degenerate(warnings: &[String]) -> u64 {
     warnings
         .iter()
         .filter_map(|w| {

@@ -69,7 +69,7 @@ pub fn lattice() -> Vec<[Vec3; 3]> {
 }
 
 /// Random triangles of assorted sizes and orientations beside the lattice.
-pub fn slanted(rng: &mut Rng, n: usize) -> Vec<[Vec3; 3]> {
+pub(crate) fn slanted(rng: &mut Rng, n: usize) -> Vec<[Vec3; 3]> {
     let mut r = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
     (0..n)
         .map(|_| {
@@ -105,7 +105,7 @@ pub fn ancestors(b: &Bvh) -> Vec<Vec<u32>> {
 /// Problems found by one set of rays against one BVH.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Grazing {
-    pub rays: u64,
+    pub(crate) rays: u64,
     /// NaN or infinite t or barycentrics on a reported hit.
     pub nan: u64,
     /// Closest hits that differ from brute force, and any-hit answers that
@@ -117,7 +117,7 @@ pub struct Grazing {
     /// Any-hit answers that differ on segments ending exactly at the
     /// closest hit, and boxes that reject a hit only at its exact rounded
     /// `t`: both within the rounding of that `t`, shown for information.
-    pub at_rounding: u64,
+    pub(crate) at_rounding: u64,
 }
 
 impl std::ops::AddAssign for Grazing {
@@ -298,7 +298,7 @@ fn lattice_rays(n: u32, rng: &mut Rng) -> Vec<Ray> {
 
 /// Rays in (or a hair off) the planes of the slanted triangles, through
 /// their vertices, edges and interiors.
-pub fn plane_rays(tris: &[[Vec3; 3]], n: u32, rng: &mut Rng) -> Vec<Ray> {
+pub(crate) fn plane_rays(tris: &[[Vec3; 3]], n: u32, rng: &mut Rng) -> Vec<Ray> {
     let eps = [0.0, -0.0, 1e-30, -1e-30, 1e-7, -1e-7];
     (0..n)
         .map(|_| {

@@ -4,7 +4,7 @@
 //! passes when it is at most its limit, so CI can run the battery and the
 //! TUI can show the same table.
 
-pub mod degenerate;
+pub(crate) mod degenerate;
 pub mod grazing;
 pub mod hygiene;
 pub mod reintersect;
@@ -32,15 +32,15 @@ pub use watertight::{escapes, watertight, Escapes};
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Row {
     pub case: String,
-    pub figure: f64,
-    pub limit: f64,
+    pub(crate) figure: f64,
+    pub(crate) limit: f64,
     pub pass: bool,
     /// What was counted, in words (e.g. "0 of 9216 shadow rays").
     pub detail: String,
 }
 
 impl Row {
-    pub fn at_most(
+    pub(crate) fn at_most(
         case: impl Into<String>,
         figure: f64,
         limit: f64,
@@ -56,7 +56,7 @@ impl Row {
     }
 
     /// A count that must be zero.
-    pub fn zero(case: impl Into<String>, count: u64, detail: impl Into<String>) -> Self {
+    pub(crate) fn zero(case: impl Into<String>, count: u64, detail: impl Into<String>) -> Self {
         Self::at_most(case, count as f64, 0.0, detail)
     }
 }
@@ -104,7 +104,7 @@ const BYTES_PER_PIXEL: u64 = 200;
 const BYTES_PER_PIXEL_THREAD: u64 = 48;
 
 /// As [`run_battery`], on a scene already loaded (the TUI's).
-pub fn run_battery_on(scene: &crate::scene::Scene, o: &Options) -> Result<Vec<Row>> {
+pub(crate) fn run_battery_on(scene: &crate::scene::Scene, o: &Options) -> Result<Vec<Row>> {
     // Below this, pixel centres sit on the scene's symmetry lines and edges
     // fill whole pixels, so image differences measure ties, not precision.
     if o.width < 16 || o.height < 16 {
@@ -129,7 +129,7 @@ pub fn run_battery_on(scene: &crate::scene::Scene, o: &Options) -> Result<Vec<Ro
 
 /// A figure as the table prints it: counts as integers, others with four
 /// significant digits.
-pub fn format_figure(x: f64) -> String {
+pub(crate) fn format_figure(x: f64) -> String {
     if x.is_nan() {
         "NaN".into()
     } else if x == x.trunc() && x.abs() < 1e12 {
@@ -167,7 +167,7 @@ pub fn format_table(rows: &[Row]) -> String {
 
 /// Runs the battery and prints its table (or JSON); the returned flag is
 /// whether every case passed.
-pub fn run_and_print(scene_spec: &str, o: &Options, json: bool) -> Result<bool> {
+pub(crate) fn run_and_print(scene_spec: &str, o: &Options, json: bool) -> Result<bool> {
     let start = Instant::now();
     let rows = run_battery(scene_spec, o)?;
     let failed = rows.iter().filter(|r| !r.pass).count();

@@ -107,7 +107,7 @@ pub fn random_triangles(n: u32, seed: u64) -> Rehits {
 
 /// The sphere mesh at `scale` and `offset`, hit from outside through the
 /// BVH; a spawned ray re-hits when the BVH's closest hit is its own triangle.
-pub fn sphere_mesh(n: u32, scale: f32, offset: Vec3, seed: u64) -> Result<Rehits> {
+pub(crate) fn sphere_mesh(n: u32, scale: f32, offset: Vec3, seed: u64) -> Result<Rehits> {
     let tris: Vec<[Vec3; 3]> = sphere()?
         .into_iter()
         .map(|t| t.map(|p| p * scale + offset))

@@ -28,9 +28,9 @@ use crate::scene::{Builder, Geometry, Light, Scene};
 /// rendered out there, where f32 positions and hit points are coarse.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Transform {
-    pub scale: f32,
-    pub offset: f32,
-    pub recentred: bool,
+    pub(crate) scale: f32,
+    pub(crate) offset: f32,
+    pub(crate) recentred: bool,
 }
 
 impl Transform {
@@ -44,7 +44,7 @@ impl Transform {
 
     /// The same transform, with the scene moved next to the origin before
     /// rounding.
-    pub const fn recentred(self) -> Self {
+    pub(crate) const fn recentred(self) -> Self {
         Self {
             recentred: true,
             ..self
@@ -52,11 +52,11 @@ impl Transform {
     }
 
     /// The move, for a scene `size` across before scaling.
-    pub fn offset_vec(&self, size: f64) -> DVec3 {
+    pub(crate) fn offset_vec(&self, size: f64) -> DVec3 {
         DVec3::new(1.0, -0.5, 0.75) * (self.offset as f64 * self.scale as f64 * size)
     }
 
-    pub fn is_identity(&self) -> bool {
+    pub(crate) fn is_identity(&self) -> bool {
         self.scale == 1.0 && self.offset == 0.0
     }
 
@@ -104,10 +104,10 @@ pub const TRANSFORMS: [Transform; 18] = [
 
 /// Largest fraction of pixels allowed to differ from the reference (see
 /// [`image_difference`]); tiny images are allowed [`IMAGE_LIMIT_PIXELS`].
-pub const IMAGE_LIMIT: f64 = 0.01;
-pub const IMAGE_LIMIT_PIXELS: f64 = 4.0;
+pub(crate) const IMAGE_LIMIT: f64 = 0.01;
+pub(crate) const IMAGE_LIMIT_PIXELS: f64 = 4.0;
 /// A pixel differs when a channel (clamped to [0, 1]) moves by more than this.
-pub const PIXEL_TOLERANCE: f32 = 0.02;
+pub(crate) const PIXEL_TOLERANCE: f32 = 0.02;
 
 /// Watches the integrator: the triangle hit by each open ray (with the
 /// barycentrics of the hit), whether the camera ray hit, whether its hit is

@@ -19,7 +19,7 @@ use crate::scene::{Builder, Camera, Environment, Light, Material, Projection, Sc
 use glam::Affine3A;
 
 /// Renders `spp` passes with every feature (or `features`) on.
-pub fn render(scene: &Scene, w: u32, h: u32, spp: u32, features: Option<Features>) -> Film {
+pub(crate) fn render(scene: &Scene, w: u32, h: u32, spp: u32, features: Option<Features>) -> Film {
     let req = SceneRequest {
         size: Some((w, h)),
         builder: Some(Builder::Sah),
@@ -48,7 +48,7 @@ fn quad(parts: &mut Parts, corners: [Vec3; 4], mat: u32, name: &str) {
 }
 
 /// A closed cube of half-size `r` around `c`, outward counter-clockwise.
-pub fn cube(c: Vec3, r: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+pub(crate) fn cube(c: Vec3, r: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
     let p = (0..8)
         .map(|i| {
             c + r * Vec3::new(

@@ -23,7 +23,7 @@ const MIN_COS: f64 = 0.01;
 
 /// A triangle soup welded by exact vertex position.
 pub struct Topology {
-    pub tris: Vec<[Vec3; 3]>,
+    pub(crate) tris: Vec<[Vec3; 3]>,
     normals: Vec<DVec3>,
     /// Edge (sorted keys) to its triangles, each with whether it walks the
     /// edge from the smaller key to the larger. Ordered maps: random points
@@ -149,7 +149,7 @@ impl Topology {
     /// Points that a ray from `origin` aimed at them must hit (something at
     /// or before the point): all crossing vertices, `per_edge` random points
     /// on every crossing edge, or `count` random interior points.
-    pub fn targets(
+    pub(crate) fn targets(
         &self,
         origin: Vec3,
         kind: Crossing,

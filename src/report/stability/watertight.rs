@@ -27,7 +27,7 @@ use crate::scene::{Builder, Geometry};
 /// Rays shot and rays that hit nothing.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Escapes {
-    pub rays: u64,
+    pub(crate) rays: u64,
     pub escaped: u64,
 }
 

@@ -60,15 +60,15 @@ use glam::{Vec2, Vec3};
 
 /// One bicubic Bézier patch: control points indexed `[row][column]`
 /// (`v` selects the row, `u` the column).
-pub type Patch = [[Vec3; 4]; 4];
+pub(crate) type Patch = [[Vec3; 4]; 4];
 
 /// Largest tessellation level [`tessellate`] honours; larger requests are
 /// clamped.
-pub const MAX_SEGMENTS: u32 = 1024;
+pub(crate) const MAX_SEGMENTS: u32 = 1024;
 
 /// Largest coordinate magnitude [`parse_bpt`] accepts. Keeping coordinates
 /// well inside the `f32` range keeps every evaluation step finite.
-pub const MAX_COORDINATE: f32 = 1.0e15;
+pub(crate) const MAX_COORDINATE: f32 = 1.0e15;
 
 /// Lines one patch takes in a `.bpt` file: the degree line plus 16 points.
 const LINES_PER_PATCH: usize = 17;
@@ -81,9 +81,9 @@ const LINES_PER_PATCH: usize = 17;
 #[error("line {line}: {message}")]
 pub struct BptError {
     /// 1-based line number.
-    pub line: usize,
+    pub(crate) line: usize,
     /// Human-readable description.
-    pub message: String,
+    pub(crate) message: String,
 }
 
 fn error(line: usize, message: impl Into<String>) -> BptError {
@@ -270,7 +270,7 @@ pub struct PatchMesh {
     /// Unit surface normals, `normalize(cross(dS/du, dS/dv))`.
     pub normals: Vec<Vec3>,
     /// The patch parameters `(u, v)` of each vertex, in `[0, 1]`.
-    pub uvs: Vec<Vec2>,
+    pub(crate) uvs: Vec<Vec2>,
     /// Triangles, counter-clockwise around the surface normal.
     pub indices: Vec<[u32; 3]>,
 }

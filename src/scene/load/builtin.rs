@@ -45,7 +45,7 @@ static FILES: &[(&str, &[u8])] = embed![
     "sky/negz.png",
 ];
 
-pub fn files() -> Embedded {
+pub(crate) fn files() -> Embedded {
     Embedded(FILES)
 }
 

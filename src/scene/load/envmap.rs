@@ -46,10 +46,10 @@ pub(crate) fn read(src: &dyn Source, path: &Path, warnings: &mut Vec<String>) ->
 #[derive(Clone, Debug, PartialEq)]
 pub struct EnvRequest {
     /// A map file, a grey level (`0.5`) or a linear colour (`0.2,0.3,0.5`).
-    pub given: String,
-    pub strength: f32,
+    pub(crate) given: String,
+    pub(crate) strength: f32,
     /// Degrees about +Y.
-    pub rotate: f32,
+    pub(crate) rotate: f32,
 }
 
 impl EnvRequest {

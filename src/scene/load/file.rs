@@ -303,9 +303,9 @@ struct BloomSpec {
 
 /// Things a caller can change about a scene file as it loads.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Overrides {
+pub(crate) struct Overrides {
     /// Segments per patch edge for every Bézier mesh (`teapot:N`).
-    pub segments: Option<u32>,
+    pub(crate) segments: Option<u32>,
 }
 
 /// Byte offsets where the lines of `text` start.
@@ -543,7 +543,7 @@ fn named<'a>(written: &'a str, what: &str) -> Result<&'a str> {
     Ok(written)
 }
 
-pub fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> {
+pub(crate) fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> {
     let text = src.read_text(path, Kind::Scene)?;
     let mut f = parse(path, &text)?;
     sanitize(&mut f);
@@ -902,7 +902,7 @@ fn light_from(
 }
 
 /// The generated sky cube map that ships inside the binary.
-pub fn sky() -> Result<CubeMap> {
+pub(crate) fn sky() -> Result<CubeMap> {
     let src = super::builtin::files();
     load_cube(
         &src,

@@ -32,7 +32,7 @@ pub enum Format {
 }
 
 /// The extensions a bare mesh file may have, as messages list them.
-pub const EXTENSIONS: &str = ".obj, .ply, .stl, .gltf or .glb";
+pub(crate) const EXTENSIONS: &str = ".obj, .ply, .stl, .gltf or .glb";
 
 impl Format {
     /// What a file of this format holds, as messages name it.
@@ -48,7 +48,7 @@ impl Format {
     /// The up axis of a file of this format unless told otherwise: Z for
     /// STL (3D printing and CAD are Z-up), Y for the others (glTF's
     /// specification says so; OBJ and PLY writers mostly are).
-    pub fn up(self) -> Up {
+    pub(crate) fn up(self) -> Up {
         match self {
             Format::Stl => Up::Z,
             _ => Up::Y,
@@ -56,7 +56,7 @@ impl Format {
     }
 
     /// The format of `path` by its extension (any case).
-    pub fn of(path: &Path) -> Option<Format> {
+    pub(crate) fn of(path: &Path) -> Option<Format> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         Some(match ext.as_str() {
             "obj" => Format::Obj,

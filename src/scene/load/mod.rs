@@ -17,13 +17,13 @@ mod ply;
 mod polygon;
 pub mod source;
 mod stl;
-pub mod up;
+pub(crate) mod up;
 
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 
-pub use envmap::EnvRequest;
+pub(crate) use envmap::EnvRequest;
 use source::{Disk, Input, Source};
 
 use crate::scene::{Environment, Scene};
@@ -54,7 +54,7 @@ pub struct Opening<'a> {
 pub struct Opened {
     pub scene: Scene,
     /// The files read from disk, for `rayterm inputs` and partial films.
-    pub inputs: Vec<Input>,
+    pub(crate) inputs: Vec<Input>,
 }
 
 /// Opens `spec`: a built-in name (`cornell`, `teapot:32`, ...), a `.toml`

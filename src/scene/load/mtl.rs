@@ -19,17 +19,17 @@ use crate::words::quoted;
 
 /// One `newmtl` block as written.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct MtlMaterial {
-    pub name: String,
-    pub kd: Option<Vec3>,
-    pub ks: Option<Vec3>,
-    pub ns: Option<f32>,
-    pub dissolve: Option<f32>,
+pub(crate) struct MtlMaterial {
+    pub(crate) name: String,
+    pub(crate) kd: Option<Vec3>,
+    pub(crate) ks: Option<Vec3>,
+    pub(crate) ns: Option<f32>,
+    pub(crate) dissolve: Option<f32>,
     /// The `map_Kd` file as written (options removed, escaped spaces
     /// unescaped) and its line.
-    pub map_kd: Option<(String, usize)>,
+    pub(crate) map_kd: Option<(String, usize)>,
     /// `map_Kd -clamp on`: the texture clamped rather than repeated.
-    pub clamp: bool,
+    pub(crate) clamp: bool,
 }
 
 /// What a texture option takes after its name.
@@ -188,7 +188,11 @@ fn numbers(rest: &str, line: usize, absurd: &mut Absurd) -> Result<Vec<f64>, Str
 }
 
 /// Parses an MTL file; warnings are appended to `warnings`.
-pub fn parse(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Vec<MtlMaterial>> {
+pub(crate) fn parse(
+    path: &Path,
+    text: &str,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<MtlMaterial>> {
     let mut materials: Vec<MtlMaterial> = Vec::new();
     let mut ignored = Ignored::default();
     let mut absurd = Absurd::default();

@@ -10,7 +10,7 @@ pub const ABSURD: f64 = 1e18;
 
 /// Why a value cannot be used, or `None` when it can: NaN, infinite, or
 /// beyond the range of f32.
-pub fn unusable(x: f64) -> Option<&'static str> {
+pub(crate) fn unusable(x: f64) -> Option<&'static str> {
     if !x.is_finite() {
         Some("is not a finite number")
     } else if x.abs() > f32::MAX as f64 {
@@ -23,7 +23,7 @@ pub fn unusable(x: f64) -> Option<&'static str> {
 /// Whether `word` is how the C runtimes of Windows print a number that is
 /// not finite (`1.#INF`, `-1.#IND`, `1.#QNAN`, `-nan(ind)`), which Rust
 /// does not read as a number.
-pub fn spelled_not_finite(word: &str) -> bool {
+pub(crate) fn spelled_not_finite(word: &str) -> bool {
     let w = word.trim_start_matches(['-', '+']).to_ascii_lowercase();
     match w.strip_prefix("1.#") {
         Some(kind) => ["inf", "ind", "qnan", "snan"]
@@ -35,7 +35,7 @@ pub fn spelled_not_finite(word: &str) -> bool {
 
 /// Parses one number: an error message (without the location) when it is
 /// not a number or [`unusable`].
-pub fn parse(word: &str) -> Result<f64, String> {
+pub(crate) fn parse(word: &str) -> Result<f64, String> {
     let x: f64 = word
         .parse()
         .map_err(|_| format!("'{}' is not a number", quoted(word)))?;
@@ -47,13 +47,13 @@ pub fn parse(word: &str) -> Result<f64, String> {
 
 /// Counts absurd values ([`ABSURD`]) in one file and says so once.
 #[derive(Default)]
-pub struct Absurd {
+pub(crate) struct Absurd {
     first: Option<(usize, String)>,
     more: usize,
 }
 
 impl Absurd {
-    pub fn check(&mut self, line: usize, x: f64, shown: impl FnOnce() -> String) {
+    pub(crate) fn check(&mut self, line: usize, x: f64, shown: impl FnOnce() -> String) {
         if x.abs() > ABSURD {
             match self.first {
                 None => self.first = Some((line, shown())),
@@ -63,7 +63,7 @@ impl Absurd {
     }
 
     /// Both counts, `self` first (from earlier in the file).
-    pub fn then(mut self, later: Absurd) -> Absurd {
+    pub(crate) fn then(mut self, later: Absurd) -> Absurd {
         match self.first {
             None => self.first = later.first,
             Some(_) => self.more += later.first.is_some() as usize,
@@ -73,7 +73,7 @@ impl Absurd {
     }
 
     /// The warning, if any value was absurd.
-    pub fn warning(self, path: &Path) -> Option<String> {
+    pub(crate) fn warning(self, path: &Path) -> Option<String> {
         let (line, shown) = self.first?;
         let more = match self.more {
             0 => String::new(),

@@ -19,7 +19,7 @@ use crate::scene::{Geometry, Material, MeshInfo, Texture};
 /// Mesh placement for meshes built in code.
 #[derive(Clone, Copy, Debug)]
 pub struct Placement {
-    pub transform: Affine3A,
+    pub(crate) transform: Affine3A,
 }
 
 impl Default for Placement {
@@ -44,7 +44,7 @@ pub struct MeshData<'a> {
 /// every position finite and within the range of f32.
 #[derive(Clone, Debug)]
 pub struct Placed {
-    pub name: String,
+    pub(crate) name: String,
     pub positions: Vec<DVec3>,
     /// Unit normals, already transformed.
     pub normals: Option<Vec<Vec3>>,
@@ -52,13 +52,13 @@ pub struct Placed {
     /// Linear RGB per vertex, multiplying the material's diffuse colour.
     pub colors: Option<Vec<Vec3>>,
     pub indices: Vec<[u32; 3]>,
-    pub material: u32,
+    pub(crate) material: u32,
 }
 
 /// `points` placed by `xf` in f64, in place; the first point that lands
 /// beyond the range of f32 is an error made by `err(index, point, placed,
 /// why)`.
-pub fn place_positions(
+pub(crate) fn place_positions(
     mut points: Vec<DVec3>,
     xf: &DAffine3,
     err: impl Fn(usize, DVec3, DVec3, &str) -> anyhow::Error,
@@ -80,7 +80,7 @@ pub fn place_positions(
 }
 
 /// Normals turned by `xf` (its inverse transpose) and made unit length.
-pub fn place_normals(normals: &[DVec3], xf: &DAffine3) -> Vec<Vec3> {
+pub(crate) fn place_normals(normals: &[DVec3], xf: &DAffine3) -> Vec<Vec3> {
     let nxf = xf.matrix3.inverse().transpose();
     normals
         .iter()
@@ -108,7 +108,7 @@ pub(crate) fn mesh_fits(vertices: u64, triangles: u64, available: u64) -> Result
 }
 
 /// Bounds of the vertices the triangles of `meshes` use (min > max when none).
-pub fn bounds<'a>(meshes: impl IntoIterator<Item = &'a Placed>) -> (DVec3, DVec3) {
+pub(crate) fn bounds<'a>(meshes: impl IntoIterator<Item = &'a Placed>) -> (DVec3, DVec3) {
     let empty = || (DVec3::INFINITY, DVec3::NEG_INFINITY);
     let join = |a: (DVec3, DVec3), b: (DVec3, DVec3)| (a.0.min(b.0), a.1.max(b.1));
     // On every core: min and max are exact in any order, but for the sign
@@ -149,7 +149,7 @@ pub struct Parts {
     pub textures: Vec<Texture>,
     pub warnings: Vec<String>,
     /// The memory the meshes still to come may take.
-    pub budget: memory::Budget,
+    pub(crate) budget: memory::Budget,
     /// Textures read so far, by path and encoding.
     texture_ids: Vec<((PathBuf, Encoding), Option<u32>)>,
 }
@@ -159,7 +159,7 @@ impl Parts {
     /// `None` (with a warning naming `from`, where it was asked for) when
     /// missing, unreadable or too large. One outside `base`'s folder is
     /// read at arm's length ([`Outside`]).
-    pub fn texture(
+    pub(crate) fn texture(
         &mut self,
         src: &dyn Source,
         base: &Path,
@@ -338,7 +338,7 @@ impl Parts {
     }
 
     /// The warnings, as the reason a scene came out without triangles.
-    pub fn why_empty(&self) -> String {
+    pub(crate) fn why_empty(&self) -> String {
         match self.warnings.is_empty() {
             true => String::new(),
             false => format!(" ({})", self.warnings.join("; ")),
@@ -346,7 +346,7 @@ impl Parts {
     }
 
     /// Adds a texture decoded by the caller (one held inside a file).
-    pub fn add_texture(&mut self, t: Texture) -> u32 {
+    pub(crate) fn add_texture(&mut self, t: Texture) -> u32 {
         self.textures.push(t);
         self.textures.len() as u32 - 1
     }

@@ -48,7 +48,7 @@ impl Kind {
     /// 20 million), and so may binary meshes (2 GiB is 40 million triangles
     /// of binary STL, 100 million of binary PLY); an encoded image is bounded here and its decoded size
     /// by the texture budget ([`crate::scene::texture::TEXTURE_BUDGET`]).
-    pub const fn limit(self) -> u64 {
+    pub(crate) const fn limit(self) -> u64 {
         match self {
             Kind::Scene => 16 * MIB,
             Kind::Obj => 1024 * MIB,
@@ -66,7 +66,7 @@ impl Kind {
     }
 
     /// The kind in words, as messages name it.
-    pub const fn noun(self) -> &'static str {
+    pub(crate) const fn noun(self) -> &'static str {
         match self {
             Kind::Scene => "scene file",
             Kind::Obj => "OBJ mesh",
@@ -83,7 +83,7 @@ impl Kind {
 
 /// Why a file could not be read.
 #[derive(Debug)]
-pub enum Cause {
+pub(crate) enum Cause {
     NotFound,
     /// Not a regular file: what it is instead ("a FIFO", "a directory", ...).
     NotRegular(String),
@@ -114,13 +114,13 @@ impl fmt::Display for Cause {
 /// A file that could not be read: which, what it was meant to hold, and why.
 #[derive(Debug)]
 pub struct ReadError {
-    pub path: PathBuf,
-    pub kind: Kind,
-    pub cause: Cause,
+    pub(crate) path: PathBuf,
+    pub(crate) kind: Kind,
+    pub(crate) cause: Cause,
 }
 
 impl ReadError {
-    pub fn new(path: &Path, kind: Kind, cause: Cause) -> Self {
+    pub(crate) fn new(path: &Path, kind: Kind, cause: Cause) -> Self {
         Self {
             path: path.to_path_buf(),
             kind,
@@ -128,7 +128,7 @@ impl ReadError {
         }
     }
 
-    pub fn is_not_found(&self) -> bool {
+    pub(crate) fn is_not_found(&self) -> bool {
         matches!(self.cause, Cause::NotFound)
     }
 }
@@ -162,7 +162,7 @@ impl From<std::io::Error> for Cause {
 }
 
 /// What a non-regular file is, in words.
-pub fn file_type_name(meta: &Metadata) -> &'static str {
+pub(crate) fn file_type_name(meta: &Metadata) -> &'static str {
     let t = meta.file_type();
     if t.is_dir() {
         return "a directory";
@@ -221,7 +221,7 @@ fn open_nonblocking(path: &Path) -> std::io::Result<File> {
 /// opened file again (it may have been replaced in between); the read itself
 /// stops one byte past the limit, so a file growing meanwhile cannot make it
 /// unbounded either.
-pub fn read_file(path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
+pub(crate) fn read_file(path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
     read_limited(path, kind.limit()).map_err(|cause| ReadError::new(path, kind, cause))
 }
 
@@ -409,11 +409,11 @@ pub trait Source: Sync {
 /// or `/proc/self/environ` to have a message show it.
 #[derive(Clone, Debug)]
 pub struct Outside {
-    pub path: PathBuf,
+    pub(crate) path: PathBuf,
     /// Where it resolves, symbolic links followed.
-    pub resolved: PathBuf,
+    pub(crate) resolved: PathBuf,
     /// The folder it lies outside of.
-    pub folder: PathBuf,
+    pub(crate) folder: PathBuf,
 }
 
 impl Outside {
@@ -501,14 +501,14 @@ fn outside_of(base: &Path, target: &Path) -> Option<Outside> {
 /// --check` can say which file differs.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Input {
-    pub path: PathBuf,
-    pub crc: u32,
+    pub(crate) path: PathBuf,
+    pub(crate) crc: u32,
 }
 
 /// The file system, through [`read_file`], remembering the files it read
 /// (so that no output can overwrite one of them) with their checksums.
 #[derive(Default)]
-pub struct Disk {
+pub(crate) struct Disk {
     read: std::sync::Mutex<Vec<Input>>,
     /// Whether glTF files may name files outside their folder.
     allow_outside: bool,
@@ -525,7 +525,7 @@ impl Disk {
     }
 
     /// The files read so far, each once, in the order first read.
-    pub fn files(self) -> Vec<Input> {
+    pub(crate) fn files(self) -> Vec<Input> {
         let mut read = self.read.into_inner().unwrap_or_else(|e| e.into_inner());
         let mut seen = std::collections::HashSet::new();
         read.retain(|i| seen.insert(i.path.clone()));
@@ -558,7 +558,7 @@ impl Source for Disk {
 }
 
 /// Files embedded in the binary, keyed by their path under `data/`.
-pub struct Embedded(pub &'static [(&'static str, &'static [u8])]);
+pub(crate) struct Embedded(pub &'static [(&'static str, &'static [u8])]);
 
 impl Source for Embedded {
     fn read(&self, path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
@@ -574,7 +574,7 @@ impl Source for Embedded {
 /// Removes `.` and resolves `name/..` lexically, keeping the `..` that lead
 /// out of the starting folder: `a/../../b` is `../b`. Only for paths with
 /// no symbolic links in them (embedded and in-memory files).
-pub fn normalize(path: &Path) -> PathBuf {
+pub(crate) fn normalize(path: &Path) -> PathBuf {
     let mut out = PathBuf::new();
     for c in path.components() {
         match c {
@@ -597,7 +597,7 @@ pub fn normalize(path: &Path) -> PathBuf {
 /// file's folder (never to the current directory), with Windows
 /// backslashes accepted. `..` is left for the file system to resolve, as
 /// a shell would, so leading ones are kept and symbolic links followed.
-pub fn resolve(base: &Path, written: &str) -> PathBuf {
+pub(crate) fn resolve(base: &Path, written: &str) -> PathBuf {
     let cleaned = written.trim().trim_matches('"').replace('\\', "/");
     let p = Path::new(&cleaned);
     let joined = if p.is_absolute() {

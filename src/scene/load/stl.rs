@@ -87,7 +87,7 @@ impl Solid {
 /// Reads an STL file's bytes: its meshes placed by `xf` in f64, all with
 /// `material`, refusing triangles that would need more than `available`
 /// bytes.
-pub fn parse(
+pub(crate) fn parse(
     path: &Path,
     bytes: &[u8],
     xf: &DAffine3,

@@ -20,7 +20,7 @@ pub enum Up {
 }
 
 /// The axes `--up` and a `[[mesh]]`'s `up` take, as messages list them.
-pub const UP_AXES: &str = "x, y, z, -x, -y or -z";
+pub(crate) const UP_AXES: &str = "x, y, z, -x, -y or -z";
 
 impl FromStr for Up {
     type Err = String;
@@ -62,7 +62,7 @@ impl Up {
     /// ±Z: Z-up `(x, y, z)` becomes `(x, z, -y)`, as Blender converts) or
     /// about Z (for ±X), a half turn about X for -Y; exact, as each entry
     /// is 0 or ±1.
-    pub fn to_y(self) -> DAffine3 {
+    pub(crate) fn to_y(self) -> DAffine3 {
         let cols = |x: [f64; 3], y: [f64; 3], z: [f64; 3]| {
             DAffine3::from_mat3(DMat3::from_cols(
                 DVec3::from(x),

@@ -34,7 +34,7 @@ pub struct Overlay {
     pub layer: Layer,
     pub legend: Legend,
     /// Where the legend goes to stay clear of the pixel and the zooms.
-    pub legend_bottom: bool,
+    pub(crate) legend_bottom: bool,
     /// The views of colours rays add draw them times this, so that the
     /// brightest shows at full strength (1 when it already does, or for
     /// other views); the legend says so.

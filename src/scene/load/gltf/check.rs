@@ -17,12 +17,12 @@ use super::named;
 /// Those the scene uses are errors, the others warnings.
 #[derive(Default)]
 pub(super) struct Broken {
-    pub cameras: BTreeMap<usize, String>,
-    pub images: BTreeMap<usize, String>,
+    pub(crate) cameras: BTreeMap<usize, String>,
+    pub(crate) images: BTreeMap<usize, String>,
 }
 
 impl Broken {
-    pub fn of(json: &::gltf::json::Root) -> Broken {
+    pub(crate) fn of(json: &::gltf::json::Root) -> Broken {
         use ::gltf::json::camera::Type;
         use ::gltf::json::validation::Checked;
         let mut b = Broken::default();
@@ -50,7 +50,7 @@ impl Broken {
     }
 
     /// The warnings for those left unused (a used one is an error).
-    pub fn unused(&self, path: &Path, json: &::gltf::json::Root) -> Vec<String> {
+    pub(crate) fn unused(&self, path: &Path, json: &::gltf::json::Root) -> Vec<String> {
         let cameras = self.cameras.iter().map(|(&i, why)| {
             let name = named(json.cameras[i].name.as_deref(), i);
             format!("camera {name}: {why}")

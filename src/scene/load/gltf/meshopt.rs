@@ -54,19 +54,19 @@ pub(super) enum Filter {
 /// (`count` elements of `stride` bytes).
 #[derive(Clone, Debug)]
 pub(super) struct Compressed {
-    pub buffer: usize,
-    pub offset: usize,
-    pub length: usize,
-    pub stride: usize,
-    pub count: usize,
-    pub mode: Mode,
-    pub filter: Filter,
+    pub(crate) buffer: usize,
+    pub(crate) offset: usize,
+    pub(crate) length: usize,
+    pub(crate) stride: usize,
+    pub(crate) count: usize,
+    pub(crate) mode: Mode,
+    pub(crate) filter: Filter,
 }
 
 impl Compressed {
     /// The extension object of a view whose `byteLength` is `view_length`
     /// (and `byteStride`, `view_stride`), checked as the extension requires.
-    pub fn parse(
+    pub(crate) fn parse(
         ext: &Value,
         view_length: usize,
         view_stride: Option<usize>,
@@ -154,7 +154,7 @@ impl Compressed {
 
     /// The `count * stride` bytes `src` (the extension's byte range)
     /// encodes.
-    pub fn decode(&self, src: &[u8]) -> Result<Vec<u8>, String> {
+    pub(crate) fn decode(&self, src: &[u8]) -> Result<Vec<u8>, String> {
         let mut out = vec![0u8; self.count * self.stride];
         match self.mode {
             Mode::Attributes => {

@@ -46,20 +46,20 @@ use uri::inline_uri;
 
 /// A camera of the file, placed in f64.
 #[derive(Clone, Debug)]
-pub struct FileCamera {
+pub(crate) struct FileCamera {
     /// The names `--camera` knows it by: its node's and its own.
-    pub names: Vec<String>,
-    pub eye: DVec3,
-    pub forward: DVec3,
-    pub up: DVec3,
+    pub(crate) names: Vec<String>,
+    pub(crate) eye: DVec3,
+    pub(crate) forward: DVec3,
+    pub(crate) up: DVec3,
     /// Its projection; an orthographic one's extent in the file's units
     /// (scaled by its node), which the scene's frame scales in turn.
-    pub projection: Projection,
+    pub(crate) projection: Projection,
 }
 
 /// A light of the file, placed in f64, in its units.
 #[derive(Clone, Copy, Debug)]
-pub enum FileLight {
+pub(crate) enum FileLight {
     /// A point light, or a spot light with its cone.
     Point {
         position: DVec3,
@@ -79,19 +79,19 @@ pub enum FileLight {
 /// A spot light's cone: its axis and the cosines of its inner and outer
 /// angles.
 #[derive(Clone, Copy, Debug)]
-pub struct FileCone {
-    pub axis: DVec3,
-    pub cos_inner: f32,
-    pub cos_outer: f32,
+pub(crate) struct FileCone {
+    pub(crate) axis: DVec3,
+    pub(crate) cos_inner: f32,
+    pub(crate) cos_outer: f32,
 }
 
 /// What a glTF file holds, placed.
-pub struct GltfScene {
-    pub meshes: Vec<Placed>,
+pub(crate) struct GltfScene {
+    pub(crate) meshes: Vec<Placed>,
     /// The usable cameras, in the order the scene's nodes
     /// are visited.
-    pub cameras: Vec<FileCamera>,
-    pub lights: Vec<FileLight>,
+    pub(crate) cameras: Vec<FileCamera>,
+    pub(crate) lights: Vec<FileLight>,
 }
 
 /// Things of the file rayterm cannot show, each listed once with where it
@@ -140,7 +140,7 @@ fn named(name: Option<&str>, index: usize) -> String {
 /// [`crate::render::brdf`]: the base colour as kd, and the alpha of
 /// `BLEND` (and of `MASK`, 0 or 1 by its cutoff) as dissolve. The reader
 /// adds the textures.
-pub fn metallic_roughness(
+pub(crate) fn metallic_roughness(
     base: [f32; 4],
     metallic: f32,
     roughness: f32,
@@ -486,7 +486,7 @@ fn version_1(body: &[u8]) -> bool {
 /// Reads a glTF file: materials and textures go into `parts`; meshes,
 /// the cameras and the lights come back placed by `xf`
 /// in f64. `material` replaces the file's materials when given.
-pub fn load(
+pub(crate) fn load(
     parts: &mut Parts,
     src: &dyn Source,
     path: &Path,

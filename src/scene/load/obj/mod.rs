@@ -74,7 +74,7 @@ struct Group {
 }
 
 /// An OBJ file as read: every index checked, nothing placed yet.
-pub struct ObjFile {
+pub(crate) struct ObjFile {
     path: PathBuf,
     positions: Vec<DVec3>,
     /// The line of each position, for errors found once it is placed.
@@ -98,7 +98,7 @@ impl ObjFile {
     ///
     /// A big file is read in pieces, in parallel ([`piece`]); the result,
     /// errors and warnings included, is the one of a reading from the top.
-    pub fn parse(
+    pub(crate) fn parse(
         path: &Path,
         text: &str,
         warnings: &mut Vec<String>,
@@ -742,7 +742,7 @@ fn convert_material(
 /// textures): materials and textures go into `parts`, the meshes come back
 /// placed by `xf` in f64, for the caller to add once the scene's frame is
 /// known.
-pub fn load_placed(
+pub(crate) fn load_placed(
     parts: &mut Parts,
     src: &dyn Source,
     path: &Path,

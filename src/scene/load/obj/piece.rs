@@ -19,7 +19,7 @@ use crate::scene::load::numbers::{self, Absurd};
 use crate::words::quoted;
 
 /// Pieces are cut after about this many bytes.
-pub const PIECE: usize = 4 << 20;
+pub(crate) const PIECE: usize = 4 << 20;
 
 /// Triangles a piece counts before adding them to the shared count.
 const FLUSH: u64 = 1 << 16;
@@ -29,7 +29,7 @@ const SILENT: &[&str] = &["s", "l", "p"];
 
 /// `text` cut into pieces of about `size` bytes, each ending after a line
 /// that ends a statement (not blank, not continued by `\`).
-pub fn cut(text: &str, size: usize) -> Vec<&str> {
+pub(crate) fn cut(text: &str, size: usize) -> Vec<&str> {
     let mut out = Vec::new();
     let mut rest = text;
     'pieces: while rest.len() > size {
@@ -168,7 +168,7 @@ fn statement(line: &str, plain: Plain) -> Option<(&str, &str)> {
 }
 
 /// The lines of a piece, and its `v`, `vt` and `vn` statements.
-pub fn census(text: &str) -> (usize, [usize; 3]) {
+pub(crate) fn census(text: &str) -> (usize, [usize; 3]) {
     let lines = memchr::memchr_iter(b'\n', text.as_bytes()).count();
     let mut counts = [0; 3];
     let plain = Plain::of(text);
@@ -184,15 +184,15 @@ pub fn census(text: &str) -> (usize, [usize; 3]) {
 }
 
 /// Where a piece's vertices, UVs and normals go: its part of the file's.
-pub struct Out<'a> {
-    pub positions: &'a mut [DVec3],
-    pub position_lines: &'a mut [u32],
-    pub uvs: &'a mut [Vec2],
-    pub normals: &'a mut [DVec3],
+pub(crate) struct Out<'a> {
+    pub(crate) positions: &'a mut [DVec3],
+    pub(crate) position_lines: &'a mut [u32],
+    pub(crate) uvs: &'a mut [Vec2],
+    pub(crate) normals: &'a mut [DVec3],
 }
 
 /// A statement that changes the group, after the piece's first `.0` faces.
-pub enum Switch {
+pub(crate) enum Switch {
     /// `o` or `g`, with its name.
     Object(String),
     /// `usemtl`, with its name and line.
@@ -204,7 +204,7 @@ pub enum Switch {
 /// together, so that a file of a million made-up keywords, or of one
 /// keyword a gigabyte long, costs no more than its lines.
 #[derive(Default)]
-pub struct Ignored {
+pub(crate) struct Ignored {
     /// The keyword's first [`Ignored::LONGEST`] characters, whether it had
     /// more, its first line and its count.
     kinds: Vec<(String, bool, usize, usize)>,
@@ -216,7 +216,7 @@ impl Ignored {
     const KINDS: usize = 16;
     const LONGEST: usize = 32;
 
-    pub fn add(&mut self, keyword: &str, line: usize, count: usize) {
+    pub(crate) fn add(&mut self, keyword: &str, line: usize, count: usize) {
         match keyword.char_indices().nth(Self::LONGEST) {
             Some((cut, _)) => self.add_kind(&keyword[..cut], true, line, count),
             None => self.add_kind(keyword, false, line, count),
@@ -235,7 +235,7 @@ impl Ignored {
     }
 
     /// Adds those of a later piece of the file.
-    pub fn extend(&mut self, later: Ignored) {
+    pub(crate) fn extend(&mut self, later: Ignored) {
         for (word, long, line, count) in later.kinds {
             self.add_kind(&word, long, line, count);
         }
@@ -246,7 +246,7 @@ impl Ignored {
 
     /// `vp (line 1 and 1 more), curv (line 3)`, or `None` when nothing
     /// was ignored.
-    pub fn list(&self) -> Option<String> {
+    pub(crate) fn list(&self) -> Option<String> {
         let lines = |line: usize, count: usize| match count {
             1 => format!("line {line}"),
             c => format!("line {line} and {} more", c - 1),
@@ -272,9 +272,9 @@ impl Ignored {
 
 /// Lines of one kind that a warning counts: the first and how many.
 #[derive(Default)]
-pub struct Tally {
-    pub first: Option<usize>,
-    pub count: usize,
+pub(crate) struct Tally {
+    pub(crate) first: Option<usize>,
+    pub(crate) count: usize,
 }
 
 impl Tally {
@@ -284,7 +284,7 @@ impl Tally {
     }
 
     /// Both counts, `self` first (from earlier in the file).
-    pub fn then(self, later: Tally) -> Tally {
+    pub(crate) fn then(self, later: Tally) -> Tally {
         Tally {
             first: self.first.or(later.first),
             count: self.count + later.count,
@@ -295,9 +295,9 @@ impl Tally {
 /// Vertices holding a number 32-bit floats cannot hold (`inf`, `nan`,
 /// `1e39`): the first one's line and why, and how many.
 #[derive(Default)]
-pub struct Unusable {
-    pub first: Option<(usize, String)>,
-    pub count: usize,
+pub(crate) struct Unusable {
+    pub(crate) first: Option<(usize, String)>,
+    pub(crate) count: usize,
 }
 
 impl Unusable {
@@ -307,7 +307,7 @@ impl Unusable {
     }
 
     /// Both counts, `self` first (from earlier in the file).
-    pub fn then(self, later: Unusable) -> Unusable {
+    pub(crate) fn then(self, later: Unusable) -> Unusable {
         Unusable {
             first: self.first.or(later.first),
             count: self.count + later.count,
@@ -317,35 +317,35 @@ impl Unusable {
 
 /// One piece as read, up to its first error.
 #[derive(Default)]
-pub struct Piece {
-    pub faces: Faces,
+pub(crate) struct Piece {
+    pub(crate) faces: Faces,
     /// The colours of the vertices that have one (`v x y z r g b`), by
     /// their number in the file, as written.
-    pub colors: Vec<(u32, [f32; 3])>,
+    pub(crate) colors: Vec<(u32, [f32; 3])>,
     /// Vertices whose colour is not a finite number: read without one.
-    pub bad_colors: Tally,
+    pub(crate) bad_colors: Tally,
     /// Faces of fewer than three vertices: skipped.
-    pub short_faces: Tally,
+    pub(crate) short_faces: Tally,
     /// Vertices that cannot be placed: NaN, the faces using them skipped.
-    pub unusable: Unusable,
-    pub switches: Vec<(usize, Switch)>,
-    pub libraries: Vec<(String, usize)>,
+    pub(crate) unusable: Unusable,
+    pub(crate) switches: Vec<(usize, Switch)>,
+    pub(crate) libraries: Vec<(String, usize)>,
     /// Warnings with their lines.
-    pub warnings: Vec<(usize, String)>,
-    pub absurd: Absurd,
-    pub ignored: Ignored,
+    pub(crate) warnings: Vec<(usize, String)>,
+    pub(crate) absurd: Absurd,
+    pub(crate) ignored: Ignored,
     /// The first error, where reading stopped.
-    pub error: Option<anyhow::Error>,
+    pub(crate) error: Option<anyhow::Error>,
     /// Reading stopped because the triangles of this piece, or of all the
     /// pieces read so far, would not fit in memory.
-    pub full: bool,
+    pub(crate) full: bool,
 }
 
 /// What the pieces read together share: the memory for triangles and the
 /// triangles read so far.
-pub struct Budget {
-    pub available: u64,
-    pub triangles: AtomicU64,
+pub(crate) struct Budget {
+    pub(crate) available: u64,
+    pub(crate) triangles: AtomicU64,
 }
 
 /// Why reading a piece stopped early.
@@ -377,7 +377,7 @@ struct Reader<'a> {
 
 /// Reads the piece `text`, which starts after line `line` and after the
 /// `counts` vertices, UVs and normals defined before it.
-pub fn read(
+pub(crate) fn read(
     path: &Path,
     text: &str,
     line: usize,

@@ -20,7 +20,7 @@ const RUN: usize = 1 << 14;
 
 /// Scalar `t` at the start of `b`, in the file's byte order.
 #[inline(always)]
-pub fn scalar(b: &[u8], t: Scalar, big: bool) -> f64 {
+pub(crate) fn scalar(b: &[u8], t: Scalar, big: bool) -> f64 {
     macro_rules! read {
         ($ty:ty) => {{
             let a = b[..std::mem::size_of::<$ty>()].try_into().unwrap();
@@ -44,23 +44,28 @@ pub fn scalar(b: &[u8], t: Scalar, big: bool) -> f64 {
 }
 
 /// An element read in bulk.
-pub enum Read {
+pub(crate) enum Read {
     Vertices(Vertices),
     Triangles(Vec<[u32; 3]>),
 }
 
 /// What a vertex element holds; the optional attributes empty where absent.
-pub struct Vertices {
-    pub positions: Vec<DVec3>,
-    pub normals: Vec<DVec3>,
-    pub uvs: Vec<Vec2>,
-    pub colors: Vec<Vec3>,
+pub(crate) struct Vertices {
+    pub(crate) positions: Vec<DVec3>,
+    pub(crate) normals: Vec<DVec3>,
+    pub(crate) uvs: Vec<Vec2>,
+    pub(crate) colors: Vec<Vec3>,
 }
 
 /// The vertex element `e`, whose records start `body`, and the bytes they
 /// take; `None` where the value-by-value reader must read it.
 /// `color_full` is the value of full intensity of its colours.
-pub fn vertices(e: &Element, body: &[u8], big: bool, color_full: f64) -> Option<(Read, usize)> {
+pub(crate) fn vertices(
+    e: &Element,
+    body: &[u8],
+    big: bool,
+    color_full: f64,
+) -> Option<(Read, usize)> {
     let mut fields = Vec::with_capacity(e.props.len());
     let mut stride = 0;
     for p in &e.props {
@@ -180,7 +185,7 @@ fn column<const N: usize, T: Send>(
 /// The face element `e` of one list of vertex indices, every face a
 /// triangle, whose records start `body`, and the bytes they take; `None`
 /// where the value-by-value reader must read it.
-pub fn triangles(
+pub(crate) fn triangles(
     e: &Element,
     body: &[u8],
     big: bool,

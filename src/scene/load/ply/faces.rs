@@ -14,21 +14,21 @@ use crate::scene::load::polygon::{quad_is_fan, Triangulator};
 
 /// What the face element gives each face beyond its vertices.
 #[derive(Clone, Copy, Default)]
-pub struct Given {
-    pub uvs: bool,
-    pub colors: bool,
+pub(crate) struct Given {
+    pub(crate) uvs: bool,
+    pub(crate) colors: bool,
 }
 
 impl Given {
     /// Whether corners get vertices of their own.
-    pub fn any(self) -> bool {
+    pub(crate) fn any(self) -> bool {
         self.uvs || self.colors
     }
 }
 
 /// What the face element `face` gives: `texcoord` lists, and colours
 /// where it has all three.
-pub fn given(face: &Element) -> Given {
+pub(crate) fn given(face: &Element) -> Given {
     let has = |f: fn(Role) -> bool| face.props.iter().filter(|p| f(p.role)).count();
     Given {
         uvs: has(|r| r == Role::FaceUvs) > 0,
@@ -37,7 +37,7 @@ pub fn given(face: &Element) -> Given {
 }
 
 /// The faces read so far.
-pub struct Faces {
+pub(crate) struct Faces {
     given: Given,
     /// Where the faces give corners anything ([`Given`]): the vertex of a
     /// corner by its vertex in the file, UV and colour (as bits), and each
@@ -61,7 +61,7 @@ pub struct Faces {
 }
 
 impl Faces {
-    pub fn new(given: Given) -> Faces {
+    pub(crate) fn new(given: Given) -> Faces {
         Faces {
             given,
             ids: HashMap::new(),
@@ -90,7 +90,7 @@ impl Faces {
     }
 
     /// The vertices the mesh has so far, where corners have their own.
-    pub fn split(&self) -> usize {
+    pub(crate) fn split(&self) -> usize {
         self.from.len()
     }
 
@@ -98,7 +98,7 @@ impl Faces {
     /// numbers a corner) and `color` where the element gives them, to
     /// `triangles`; `positions` are the vertices' where they are read, else
     /// a polygon is a fan until [`Faces::finish`] cuts it.
-    pub fn add(
+    pub(crate) fn add(
         &mut self,
         face: u64,
         corners: &mut [u32],
@@ -162,7 +162,7 @@ impl Faces {
 
     /// The mesh `m`, whose vertices are all read, with its corners' own
     /// vertices and its polygons clipped; warnings naming `file`.
-    pub fn finish(mut self, file: &str, m: &mut PlyMesh, warnings: &mut Vec<String>) {
+    pub(crate) fn finish(mut self, file: &str, m: &mut PlyMesh, warnings: &mut Vec<String>) {
         if let (Some(face), n) = self.odd_uvs {
             let more = match n {
                 1 => String::new(),

@@ -146,19 +146,19 @@ struct Header {
 }
 
 /// What a PLY file holds, in file coordinates.
-pub struct PlyMesh {
-    pub positions: Vec<DVec3>,
-    pub normals: Option<Vec<DVec3>>,
-    pub uvs: Option<Vec<Vec2>>,
-    pub colors: Option<Vec<Vec3>>,
-    pub indices: Vec<[u32; 3]>,
+pub(crate) struct PlyMesh {
+    pub(crate) positions: Vec<DVec3>,
+    pub(crate) normals: Option<Vec<DVec3>>,
+    pub(crate) uvs: Option<Vec<Vec2>>,
+    pub(crate) colors: Option<Vec<Vec3>>,
+    pub(crate) indices: Vec<[u32; 3]>,
     /// `comment TextureFile` as written, with its line.
-    pub texture: Option<(String, usize)>,
+    pub(crate) texture: Option<(String, usize)>,
 }
 
 impl PlyMesh {
     /// The mesh placed by `xf` in f64.
-    pub fn placed(self, path: &Path, xf: &DAffine3, material: u32) -> Result<Placed> {
+    pub(crate) fn placed(self, path: &Path, xf: &DAffine3, material: u32) -> Result<Placed> {
         let positions = place_positions(self.positions, xf, |i, p, q, why| {
             anyhow!(
                 "{}: vertex {i}: {} lands at {} once placed, which {why}",
@@ -581,7 +581,7 @@ fn least_bytes(e: &Element, format: Format) -> u64 {
 
 /// Parses a PLY file's bytes, refusing one that would need more than
 /// `available` bytes ([`memory::mesh_bytes`]) before reading its body.
-pub fn parse(
+pub(crate) fn parse(
     path: &Path,
     bytes: &[u8],
     warnings: &mut Vec<String>,
