@@ -29,7 +29,7 @@ static FIRST: AtomicU64 = AtomicU64::new(0);
 const REPEAT: Duration = Duration::from_millis(300);
 
 /// Installs the handlers (once) and returns the flag they set.
-pub fn flag() -> Arc<AtomicBool> {
+pub(crate) fn flag() -> Arc<AtomicBool> {
     FLAG.get_or_init(|| {
         let flag = Arc::new(AtomicBool::new(false));
         for sig in [SIGINT, SIGTERM, SIGHUP] {
@@ -104,7 +104,7 @@ static HELD: AtomicBool = AtomicBool::new(false);
 /// Notes the terminal's modes before the TUI changes them (called before
 /// raw mode; the modes read the first time stand for every later time),
 /// and the bytes that undo its screen modes.
-pub fn hold_terminal(leave: impl FnOnce() -> Vec<u8>) {
+pub(crate) fn hold_terminal(leave: impl FnOnce() -> Vec<u8>) {
     TERMINAL.get_or_init(|| {
         // The device raw mode is set on: standard input where it is a
         // terminal, else the controlling terminal, opened here and kept
@@ -137,7 +137,7 @@ pub fn hold_terminal(leave: impl FnOnce() -> Vec<u8>) {
 }
 
 /// The terminal is back in its own modes.
-pub fn release_terminal() {
+pub(crate) fn release_terminal() {
     HELD.store(false, Ordering::SeqCst);
 }
 
@@ -148,7 +148,7 @@ static PENDING: AtomicPtr<libc::c_char> = AtomicPtr::new(std::ptr::null_mut());
 /// (`None`), for [`exit_now`] to remove. A name once noted is never
 /// freed: the handler may be reading it on another thread (a few bytes
 /// per output written).
-pub fn writing(tmp: Option<&Path>) {
+pub(crate) fn writing(tmp: Option<&Path>) {
     note(&PENDING, tmp);
 }
 
@@ -157,7 +157,7 @@ static CLAIM: AtomicPtr<libc::c_char> = AtomicPtr::new(std::ptr::null_mut());
 
 /// Notes the lock file of a claim held (`Some`) or given up (`None`), for
 /// [`exit_now`] to remove as [`writing`]'s file.
-pub fn claiming(lock: Option<&Path>) {
+pub(crate) fn claiming(lock: Option<&Path>) {
     note(&CLAIM, lock);
 }
 
@@ -197,7 +197,7 @@ fn exit_now(sig: i32) -> ! {
 /// [`Cancel`]); its callers write nothing.
 #[derive(Debug, thiserror::Error)]
 #[error("interrupted")]
-pub struct Interrupted;
+pub(crate) struct Interrupted;
 
 /// Whether long work should stop: the one way every layer is asked to.
 /// Work that can take long takes one as a parameter and polls it where it
@@ -216,7 +216,7 @@ pub enum Cancel<'a> {
 
 impl Cancel<'_> {
     /// Whether the work should stop now.
-    pub fn is_set(self) -> bool {
+    pub(crate) fn is_set(self) -> bool {
         match self {
             Cancel::Never => false,
             Cancel::When(f) => f(),
@@ -225,7 +225,7 @@ impl Cancel<'_> {
     }
 
     /// [`Cancel::is_set`] as the error of work stopped on request.
-    pub fn check(self) -> Result<(), Interrupted> {
+    pub(crate) fn check(self) -> Result<(), Interrupted> {
         match self.is_set() {
             true => Err(Interrupted),
             false => Ok(()),
@@ -234,13 +234,13 @@ impl Cancel<'_> {
 }
 
 /// Whether a signal asked the process to stop.
-pub fn requested() -> bool {
+pub(crate) fn requested() -> bool {
     FLAG.get().is_some_and(|f| f.load(Ordering::Relaxed))
 }
 
 /// The conventional exit status for the signal received: 128 + its number
 /// (130 for SIGINT); 130 when none was.
-pub fn exit_code() -> u8 {
+pub(crate) fn exit_code() -> u8 {
     match LAST.load(Ordering::SeqCst) {
         0 => 130,
         s => (128 + s) as u8,
@@ -258,7 +258,7 @@ static JOBS: OnceLock<Option<JobControl>> = OnceLock::new();
 /// Catches SIGTSTP and SIGCONT (once), unless SIGTSTP is ignored: whoever
 /// started the process then asked that it never stop. Returns whether the
 /// process may stop.
-pub fn catch_stops() -> bool {
+pub(crate) fn catch_stops() -> bool {
     JOBS.get_or_init(|| {
         // SAFETY: sigaction with a null new action only reads the current
         // one into the zeroed struct.
@@ -280,14 +280,14 @@ pub fn catch_stops() -> bool {
 }
 
 /// Whether a SIGTSTP came since last asked.
-pub fn stop_requested() -> bool {
+pub(crate) fn stop_requested() -> bool {
     JOBS.get()
         .and_then(Option::as_ref)
         .is_some_and(|j| j.stop.swap(false, Ordering::SeqCst))
 }
 
 /// Whether a SIGCONT came since last asked.
-pub fn continued() -> bool {
+pub(crate) fn continued() -> bool {
     JOBS.get()
         .and_then(Option::as_ref)
         .is_some_and(|j| j.cont.swap(false, Ordering::SeqCst))
@@ -299,7 +299,7 @@ pub fn continued() -> bool {
 /// shell reports the job suspended as after any Ctrl-Z, and the kernel
 /// drops the stop of a process group no shell would continue (this then
 /// returns at once).
-pub fn stop() {
+pub(crate) fn stop() {
     let stopped = Instant::now();
     // SAFETY: this process ignores the signal the group is sent (an ignored
     // signal is discarded as it is generated), then takes the default action
@@ -339,7 +339,7 @@ pub struct Running {
 }
 
 impl Running {
-    pub fn now() -> Self {
+    pub(crate) fn now() -> Self {
         Running {
             at: Instant::now(),
             stopped: STOPPED_NS.load(Ordering::Relaxed),
@@ -347,7 +347,7 @@ impl Running {
     }
 
     /// The time since `now`, less any time suspended since.
-    pub fn elapsed(&self) -> Duration {
+    pub(crate) fn elapsed(&self) -> Duration {
         let stopped = STOPPED_NS
             .load(Ordering::Relaxed)
             .saturating_sub(self.stopped);
@@ -359,7 +359,7 @@ impl Running {
 
 /// Lets a closed pipe end the process quietly (status 141), as it does
 /// other Unix tools, instead of failing every later write.
-pub fn default_sigpipe() {
+pub(crate) fn default_sigpipe() {
     // SAFETY: restoring the default disposition of SIGPIPE before any thread
     // is started; nothing else depends on it being ignored.
     unsafe {

@@ -19,14 +19,14 @@ use crate::viz::DebugSpec;
     version,
     about = "A ray tracer that lives in the terminal"
 )]
-pub struct Cli {
+pub(crate) struct Cli {
     /// Without a command, the TUI opens on the Cornell box.
     #[command(subcommand)]
-    pub command: Option<Command>,
+    pub(crate) command: Option<Command>,
 }
 
 impl Cli {
-    pub fn threads(&self) -> Option<usize> {
+    pub(crate) fn threads(&self) -> Option<usize> {
         match &self.command {
             Some(Command::Render(a)) => a.threads.map(|n| n as usize),
             Some(Command::Converge(a)) => a.threads.map(|n| n as usize),
@@ -37,7 +37,7 @@ impl Cli {
 }
 
 #[derive(Subcommand, Debug)]
-pub enum Command {
+pub(crate) enum Command {
     /// Render a scene to a PNG file.
     Render(RenderArgs),
     /// Merge the partial films of a split render into one image.
@@ -74,7 +74,7 @@ pub enum Command {
 
 /// A scene argument as text: names and paths are read as UTF-8, and one
 /// that is not is refused naming it (clap's own error names no argument).
-pub fn scene_spec() -> impl clap::builder::TypedValueParser<Value = String> {
+pub(crate) fn scene_spec() -> impl clap::builder::TypedValueParser<Value = String> {
     use clap::builder::TypedValueParser;
     clap::builder::OsStringValueParser::new().try_map(|s| {
         s.into_string().map_err(|s| {
@@ -87,7 +87,7 @@ pub fn scene_spec() -> impl clap::builder::TypedValueParser<Value = String> {
 }
 
 /// `WxH`, e.g. `1280x720`.
-pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT"))?;
@@ -106,10 +106,10 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 }
 
 /// The most samples per pixel any render takes.
-pub use crate::render::partial::MAX_SPP;
+pub(crate) use crate::render::partial::MAX_SPP;
 
 /// `A..B`: sample indices A to B-1, within 0..MAX_SPP.
-pub fn parse_samples(s: &str) -> Result<std::ops::Range<u32>, String> {
+pub(crate) fn parse_samples(s: &str) -> Result<std::ops::Range<u32>, String> {
     let (a, b) = s
         .split_once("..")
         .ok_or_else(|| format!("'{s}' is not A..B (sample indices A to B-1)"))?;
@@ -128,7 +128,7 @@ pub fn parse_samples(s: &str) -> Result<std::ops::Range<u32>, String> {
 }
 
 /// `K/N`: the K-th of N equal ranges of samples, 1 <= K <= N.
-pub fn parse_part(s: &str) -> Result<(u32, u32), String> {
+pub(crate) fn parse_part(s: &str) -> Result<(u32, u32), String> {
     let (k, n) = s
         .split_once('/')
         .ok_or_else(|| format!("'{s}' is not K/N (part K of N)"))?;
@@ -144,7 +144,7 @@ pub fn parse_part(s: &str) -> Result<(u32, u32), String> {
 
 /// A thread count from 1 to four times the machine's cores: more only
 /// slows the machine down.
-pub fn parse_threads(s: &str) -> Result<u32, String> {
+pub(crate) fn parse_threads(s: &str) -> Result<u32, String> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let max = 4 * cores;
     let n: usize = s
@@ -161,62 +161,62 @@ pub fn parse_threads(s: &str) -> Result<u32, String> {
 
 /// Options shared by every command that renders a scene.
 #[derive(Args, Debug, Clone)]
-pub struct SceneOpts {
+pub(crate) struct SceneOpts {
     /// Built-in name (see `rayterm scenes`), a .toml scene file or a mesh file
     /// (.obj, .ply, .stl, .gltf, .glb).
     #[arg(default_value = "cornell", value_parser = scene_spec())]
-    pub scene: String,
+    pub(crate) scene: String,
     /// Image size, WIDTHxHEIGHT (default: the scene's).
     #[arg(long, value_parser = parse_size)]
-    pub size: Option<(u32, u32)>,
+    pub(crate) size: Option<(u32, u32)>,
     /// BVH builder (default: the scene's, else sah).
     #[arg(long, value_enum)]
-    pub builder: Option<Builder>,
+    pub(crate) builder: Option<Builder>,
     /// Turn a feature off (repeatable).
     #[arg(long = "no", value_enum, value_name = "FEATURE")]
-    pub off: Vec<Feature>,
+    pub(crate) off: Vec<Feature>,
     /// Seed of the random numbers; the same seed gives the same image.
     #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// Run every enabled stage even where the scene does not need it.
     #[arg(long)]
-    pub no_plan: bool,
+    pub(crate) no_plan: bool,
     /// Samples per area light per shading point (default: the scene's).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
-    pub light_samples: Option<u32>,
+    pub(crate) light_samples: Option<u32>,
     /// Glossy reflection directions per glossy hit (default: the scene's).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=256))]
-    pub glossy_samples: Option<u32>,
+    pub(crate) glossy_samples: Option<u32>,
     /// How light is followed [default: the scene file's, else path for
     /// scenes with metallic-roughness (glTF) materials, whitted otherwise].
     #[arg(long, value_enum)]
-    pub integrator: Option<Integrator>,
+    pub(crate) integrator: Option<Integrator>,
     /// The most bounces after the camera ray [default: the scene's, 5].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=MAX_DEPTH as i64))]
-    pub max_depth: Option<u32>,
+    pub(crate) max_depth: Option<u32>,
     /// Independent uniform samples instead of jittered (stratified) ones.
     #[arg(long)]
-    pub independent: bool,
+    pub(crate) independent: bool,
     /// Look through this camera of a glTF file (its node's name, its own
     /// name, or its number from 1) instead of the first.
     #[arg(long, value_name = "NAME")]
-    pub camera: Option<String>,
+    pub(crate) camera: Option<String>,
     /// Let glTF files read files outside their folder (absolute paths,
     /// file: URIs, `..` out of it), which they may not unless told.
     #[arg(long)]
-    pub allow_outside: bool,
+    pub(crate) allow_outside: bool,
     /// A mesh file's up axis (x, y, z, -x, -y, -z), turned to rayterm's +Y:
     /// STL files are Z-up unless told, OBJ, PLY and glTF Y-up.
     #[arg(long, value_name = "AXIS", allow_hyphen_values = true)]
-    pub up: Option<Up>,
+    pub(crate) up: Option<Up>,
     /// An environment light in place of the scene's environment (any
     /// scene): an equirectangular map (.hdr, .exr, .png, .jpg), a grey
     /// level (0.5) or a linear colour (0.2,0.3,0.5).
     #[arg(long, value_name = "MAP|GREY|R,G,B", allow_hyphen_values = true)]
-    pub env: Option<String>,
+    pub(crate) env: Option<String>,
     /// What the environment light is multiplied by [default: 1].
     #[arg(long, value_name = "F", requires = "env", allow_hyphen_values = true)]
-    pub env_strength: Option<f32>,
+    pub(crate) env_strength: Option<f32>,
     /// Degrees the environment light turns about +Y, counter-clockwise
     /// seen from above [default: 0].
     #[arg(
@@ -225,12 +225,12 @@ pub struct SceneOpts {
         requires = "env",
         allow_hyphen_values = true
     )]
-    pub env_rotate: Option<f32>,
+    pub(crate) env_rotate: Option<f32>,
 }
 
 impl SceneOpts {
     /// What these options ask the session for.
-    pub fn request(&self) -> SceneRequest {
+    pub(crate) fn request(&self) -> SceneRequest {
         SceneRequest {
             spec: self.scene.clone(),
             size: self.size,
@@ -262,49 +262,49 @@ impl SceneOpts {
 
 #[derive(Args, Debug)]
 #[command(group(clap::ArgGroup::new("budget").args(["time", "target_error"]).multiple(true)))]
-pub struct RenderArgs {
+pub(crate) struct RenderArgs {
     #[command(flatten)]
-    pub scene: SceneOpts,
+    pub(crate) scene: SceneOpts,
     /// Output: .png (the picture, after bloom), or the linear film before
     /// bloom as .exr (OpenEXR, 32-bit float, exact) or .hdr (Radiance, 8-bit
     /// mantissas): a reference for `converge` and `tui`. Checked before
     /// rendering.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(crate) output: PathBuf,
     /// Samples per pixel (default: the scene's).
     #[arg(long, conflicts_with_all = ["time", "target_error"],
           value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
-    pub spp: Option<u32>,
+    pub(crate) spp: Option<u32>,
     /// Add passes until this many seconds have passed (may be combined with
     /// --target-error: whichever comes first).
     #[arg(long)]
-    pub time: Option<f64>,
+    pub(crate) time: Option<f64>,
     /// Add passes until the estimated relative error is below this (0.01
     /// for 1 %).
     #[arg(long)]
-    pub target_error: Option<f64>,
+    pub(crate) target_error: Option<f64>,
     /// The most samples per pixel --time and --target-error may add
     /// [default: 4096].
     #[arg(long, requires = "budget",
           value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
-    pub max_spp: Option<u32>,
+    pub(crate) max_spp: Option<u32>,
     /// Give every pixel the same samples with --time or --target-error too,
     /// where a sampled scene is otherwise rendered adaptively: after 16 spp,
     /// samples go where the error is (docs/adaptive.md).
     #[arg(long, requires = "budget")]
-    pub uniform: bool,
+    pub(crate) uniform: bool,
     /// Worker threads (default: all cores; at most 4x the cores).
     #[arg(long, value_parser = parse_threads)]
-    pub threads: Option<u32>,
+    pub(crate) threads: Option<u32>,
     /// Print the scene plan (stage, on/off, reason) before rendering.
     #[arg(long)]
-    pub explain: bool,
+    pub(crate) explain: bool,
     /// After the render, trace the samples it took again in one pass, each
     /// pixel's together as `--spp N` would, and print that rate beside the
     /// render's: what its passes cost against a one-shot render of the same
     /// samples (BENCHMARKS.md).
     #[arg(long, conflicts_with_all = ["debug", "part", "checkpoint", "resume"])]
-    pub compare_one_shot: bool,
+    pub(crate) compare_one_shot: bool,
     /// Write a debug view instead: bvh-level:K (boxes of level K over the
     /// image), bvh-leaves, bvh-heat (nodes visited per pixel) or
     /// bvh-heat:tests; bloom (the pixels over the threshold and their glow);
@@ -313,50 +313,50 @@ pub struct RenderArgs {
     /// the ray of traversal, normals, texture and environment); samples:X,Y
     /// (a zoom of the pixel's samples).
     #[arg(long, value_name = "VIEW", conflicts_with_all = ["time", "target_error"])]
-    pub debug: Option<DebugSpec>,
+    pub(crate) debug: Option<DebugSpec>,
     /// Render only sample indices A to B-1 of every pixel and write a
     /// partial film (-o part.exr) for `rayterm merge`.
     #[arg(long, value_name = "A..B", value_parser = parse_samples,
           conflicts_with_all = ["spp", "time", "target_error", "debug"])]
-    pub samples: Option<std::ops::Range<u32>>,
+    pub(crate) samples: Option<std::ops::Range<u32>>,
     /// Render part K of N equal sample ranges of --spp (default: the
     /// scene's) and write a partial film (-o part.exr) for `rayterm merge`.
     /// Parts are uniform.
     #[arg(long, value_name = "K/N", value_parser = parse_part,
           conflicts_with_all = ["samples", "time", "target_error", "debug"])]
-    pub part: Option<(u32, u32)>,
+    pub(crate) part: Option<(u32, u32)>,
     /// Write the film so far to this partial film (.exr) every few seconds,
     /// at the end, and when stopped by Ctrl-C or SIGTERM, atomically. An
     /// existing FILE is only continued (--resume FILE), never replaced.
     /// Partial films are uniform: the render is too.
     #[arg(long, value_name = "FILE.exr", conflicts_with = "debug")]
-    pub checkpoint: Option<PathBuf>,
+    pub(crate) checkpoint: Option<PathBuf>,
     /// Write these beside the picture in the EXR output, as channels
     /// albedo.R/G/B, normal.X/Y/Z and Z: what each pixel's camera rays
     /// first hit (its colour, its normal, its distance).
     #[arg(long, value_enum, value_delimiter = ',', value_name = "albedo,normal,depth",
           conflicts_with_all = ["debug", "samples", "part", "checkpoint", "resume"])]
-    pub aov: Vec<crate::render::aov::Aov>,
+    pub(crate) aov: Vec<crate::render::aov::Aov>,
     /// Continue from a checkpoint (or a part) of this same render: its
     /// samples are kept, and rendering goes on to the requested spp, time
     /// or error, uniformly.
     #[arg(long, value_name = "FILE.exr", conflicts_with = "debug")]
-    pub resume: Option<PathBuf>,
+    pub(crate) resume: Option<PathBuf>,
     /// Seconds between checkpoints [default: 5]; the first is written
     /// after the first pass, and SIGUSR1 asks for one at the end of the
     /// pass in flight.
     #[arg(long, value_name = "SECONDS", requires = "checkpoint", value_parser = parse_seconds,
           allow_hyphen_values = true)]
-    pub checkpoint_every: Option<f64>,
+    pub(crate) checkpoint_every: Option<f64>,
     /// Progress on standard error: a bar on a terminal and lines elsewhere
     /// (auto), a bar, lines (every tenth and every few seconds), json (one
     /// object a line) or none.
     #[arg(long, value_enum, value_name = "HOW", default_value = "auto")]
-    pub progress: ProgressMode,
+    pub(crate) progress: ProgressMode,
     /// Print what the render will take (triangles, the BVH, the film, the
     /// checkpoints, the peak memory) and render nothing.
     #[arg(long, conflicts_with_all = ["debug", "compare_one_shot"])]
-    pub dry_run: bool,
+    pub(crate) dry_run: bool,
 }
 
 /// A number of seconds above zero.
@@ -368,38 +368,38 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
 }
 
 #[derive(Args, Debug)]
-pub struct MergeArgs {
+pub(crate) struct MergeArgs {
     /// Partial films, in any order.
     #[arg(required = true, value_name = "PART")]
-    pub parts: Vec<PathBuf>,
+    pub(crate) parts: Vec<PathBuf>,
     /// Output: .png (the picture, after bloom), .exr or .hdr (the linear
     /// film before bloom), as `render` writes them.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(crate) output: PathBuf,
     /// Write the image even when ranges of samples are missing (it has
     /// fewer samples, and says so): a preview of the parts there are.
     #[arg(long)]
-    pub allow_missing: bool,
+    pub(crate) allow_missing: bool,
     /// Write the merged parts as one partial film (.exr), which merges
     /// again with the parts still to come into the same image (a staged
     /// merge); their samples must follow one another.
     #[arg(long, conflicts_with = "allow_missing")]
-    pub partial: bool,
+    pub(crate) partial: bool,
     /// Check first that the parts were rendered from this scene as it
     /// loads here (with the options they record), and say which of its
     /// files differ where they were not.
     #[arg(long, value_name = "SCENE", value_parser = scene_spec())]
-    pub check: Option<String>,
+    pub(crate) check: Option<String>,
 }
 
 #[derive(Args, Debug)]
-pub struct InputsArgs {
+pub(crate) struct InputsArgs {
     #[command(flatten)]
-    pub scene: SceneOpts,
+    pub(crate) scene: SceneOpts,
 }
 
 /// `X,Y`, e.g. `400,300`.
-pub fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
+pub(crate) fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
     let (x, y) = s
         .split_once(',')
         .ok_or_else(|| format!("'{s}' is not X,Y"))?;
@@ -410,44 +410,44 @@ pub fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
 
 #[derive(Args, Debug)]
 #[command(group(clap::ArgGroup::new("which").args(["pixel", "worst"]).required(true)))]
-pub struct InspectArgs {
+pub(crate) struct InspectArgs {
     #[command(flatten)]
-    pub scene: SceneOpts,
+    pub(crate) scene: SceneOpts,
     /// The pixel, X,Y from the top left.
     #[arg(long, value_parser = parse_pixel, conflicts_with = "worst")]
-    pub pixel: Option<(u32, u32)>,
+    pub(crate) pixel: Option<(u32, u32)>,
     /// Jump to the worst pixel by this measure instead.
     #[arg(long, value_enum)]
-    pub worst: Option<Worst>,
+    pub(crate) worst: Option<Worst>,
     /// Sample index to replay.
     #[arg(long, default_value_t = 0)]
-    pub sample: u32,
+    pub(crate) sample: u32,
     /// Samples per pixel of the image rendered to find the worst pixel
     /// (default 16) and, when bloom runs, for the pixel's value before and
     /// after bloom (default 1).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
-    pub spp: Option<u32>,
+    pub(crate) spp: Option<u32>,
     /// Print JSON (schema in docs/inspect-json.md) instead of text.
     #[arg(long)]
-    pub json: bool,
+    pub(crate) json: bool,
     /// Show every light sample instead of folding long lists.
     #[arg(long)]
-    pub expand: bool,
+    pub(crate) expand: bool,
 }
 
 #[derive(Args, Debug)]
 #[command(mut_arg("size", |a| a.help("Image size, WIDTHxHEIGHT [default: 64x64]")))]
-pub struct ConvergeArgs {
+pub(crate) struct ConvergeArgs {
     #[command(flatten)]
-    pub scene: SceneOpts,
+    pub(crate) scene: SceneOpts,
     /// Reference image (OpenEXR .exr, or Radiance .hdr with its 8-bit
     /// mantissas' floor) instead of a rendered or cached one.
     #[arg(long)]
-    pub reference: Option<PathBuf>,
+    pub(crate) reference: Option<PathBuf>,
     /// Samples per pixel of a rendered reference [default: 64x the largest
     /// --spp budget, at most 1024].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64), conflicts_with = "reference")]
-    pub reference_spp: Option<u32>,
+    pub(crate) reference_spp: Option<u32>,
     /// Budgets in samples per pixel, comma separated.
     #[arg(
         long,
@@ -455,57 +455,57 @@ pub struct ConvergeArgs {
         default_value = "1,2,4,8,16",
         conflicts_with = "times"
     )]
-    pub spp: Vec<u32>,
+    pub(crate) spp: Vec<u32>,
     /// Budgets in seconds instead, comma separated.
     #[arg(long, value_delimiter = ',')]
-    pub times: Vec<f64>,
+    pub(crate) times: Vec<f64>,
     /// Independent runs (seeds) per budget.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=64))]
-    pub seeds: u32,
+    pub(crate) seeds: u32,
     /// Relative error (root relMSE) the conclusion is about.
     #[arg(long, default_value_t = 0.01)]
-    pub target: f64,
+    pub(crate) target: f64,
     /// Only the scene's own settings: no strategy comparison.
     #[arg(long)]
-    pub no_compare: bool,
+    pub(crate) no_compare: bool,
     /// Measure the scene's settings with adaptive sampling (spp budgets are
     /// the mean over pixels).
     #[arg(long)]
-    pub adaptive: bool,
+    pub(crate) adaptive: bool,
     /// Write every measured point as CSV.
     #[arg(long)]
-    pub csv: Option<PathBuf>,
+    pub(crate) csv: Option<PathBuf>,
     /// Write a log-log plot of error against time as PNG.
     #[arg(long)]
-    pub plot: Option<PathBuf>,
+    pub(crate) plot: Option<PathBuf>,
     /// Where rendered references are cached [default: $XDG_CACHE_HOME/rayterm,
     /// else ~/.cache/rayterm].
     #[arg(long)]
-    pub cache_dir: Option<PathBuf>,
+    pub(crate) cache_dir: Option<PathBuf>,
     /// Worker threads (default: all cores; at most 4x the cores).
     #[arg(long, value_parser = parse_threads)]
-    pub threads: Option<u32>,
+    pub(crate) threads: Option<u32>,
 }
 
 #[derive(Args, Debug)]
 #[command(mut_arg("size", |a| {
     a.help("Size of PNG exports (p), WIDTHxHEIGHT (default: the scene's); the view fills the terminal")
 }))]
-pub struct TuiArgs {
+pub(crate) struct TuiArgs {
     #[command(flatten)]
-    pub scene: SceneOpts,
+    pub(crate) scene: SceneOpts,
     /// Colours (default: RAYTERM_COLOR, else `color` in
     /// ~/.config/rayterm/config.toml, else truecolor when the terminal says
     /// it has 24-bit colour, or when it does not answer and COLORTERM or
     /// the terminfo entry of TERM says so, else 256 with dithering).
     #[arg(long, value_enum)]
-    pub color: Option<ColorMode>,
+    pub(crate) color: Option<ColorMode>,
     /// Block symbols for the viewport: half blocks (1x2 pixels per cell,
     /// every terminal), quadrants (2x2), sextants (2x3, Unicode 13) or
     /// octants (2x4, Unicode 16; fonts are newer) [default: RAYTERM_SYMBOLS,
     /// else `symbols` in the config file, else half].
     #[arg(long, value_enum)]
-    pub symbols: Option<Symbols>,
+    pub(crate) symbols: Option<Symbols>,
     /// Pixel graphics for the viewport: ask the terminal (auto, within a
     /// second; block symbols when it has no protocol, or inside tmux
     /// without allow-passthrough), a protocol, or block symbols only. A
@@ -513,26 +513,26 @@ pub struct TuiArgs {
     /// it (the status line says so) [default: RAYTERM_GRAPHICS, else
     /// `graphics` in the config file, else auto].
     #[arg(long, value_enum)]
-    pub graphics: Option<GraphicsArg>,
+    pub(crate) graphics: Option<GraphicsArg>,
     /// A converged image of the scene (OpenEXR .exr or Radiance .hdr, e.g.
     /// from `rayterm render --spp 1024 -o ref.exr`, best at a whole multiple
     /// of the view's size): the true error is shown beside the estimate
     /// while the camera and features are the starting ones.
     #[arg(long, value_name = "FILE.exr")]
-    pub reference: Option<PathBuf>,
+    pub(crate) reference: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
-pub struct StabilityArgs {
+pub(crate) struct StabilityArgs {
     /// Scene for the scale and offset cases.
     #[arg(default_value = "cornell", value_parser = scene_spec())]
-    pub scene: String,
+    pub(crate) scene: String,
     /// Image size of the rendered cases, WIDTHxHEIGHT.
     #[arg(long, value_parser = parse_size, default_value = "96x96")]
-    pub size: (u32, u32),
+    pub(crate) size: (u32, u32),
     /// Print the rows as JSON instead of a table.
     #[arg(long)]
-    pub json: bool,
+    pub(crate) json: bool,
 }
 
 #[cfg(test)]

@@ -15,28 +15,28 @@ use crate::scene::Builder;
 
 #[derive(Args, Debug)]
 #[command(args_conflicts_with_subcommands = true)]
-pub struct BenchArgs {
+pub(crate) struct BenchArgs {
     #[command(subcommand)]
-    pub command: Option<BenchCommand>,
+    pub(crate) command: Option<BenchCommand>,
     /// Print JSON instead of the table.
     #[arg(long)]
-    pub json: bool,
+    pub(crate) json: bool,
     /// Repetitions of every build and frame; medians are reported.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
-    pub reps: u32,
+    pub(crate) reps: u32,
     /// Worker threads (default: all cores; at most 4x the cores).
     #[arg(long, value_parser = parse_threads)]
-    pub threads: Option<u32>,
+    pub(crate) threads: Option<u32>,
     /// Frame size, WIDTHxHEIGHT.
     #[arg(long, value_parser = parse_size, default_value = "800x800")]
-    pub size: (u32, u32),
+    pub(crate) size: (u32, u32),
     /// Measure these scenes instead of the built-ins and the shared meshes (repeatable).
     #[arg(long = "scene", value_name = "SCENE", value_parser = super::args::scene_spec())]
-    pub scenes: Vec<String>,
+    pub(crate) scenes: Vec<String>,
 }
 
 #[derive(Subcommand, Debug)]
-pub enum BenchCommand {
+pub(crate) enum BenchCommand {
     /// The ray workload of BENCHMARKS.md (camera, shadow and diffuse rays) on
     /// one mesh: prints one JSON line, comparable with other ray tracers on the same rays.
     Rays(RaysArgs),
@@ -48,73 +48,73 @@ pub enum BenchCommand {
 }
 
 #[derive(Args, Debug)]
-pub struct TuiBenchArgs {
+pub(crate) struct TuiBenchArgs {
     /// Built-in name, .toml scene file or mesh file (.obj, .ply, .stl, .gltf, .glb).
     #[arg(default_value = "cornell", value_parser = super::args::scene_spec())]
-    pub scene: String,
+    pub(crate) scene: String,
     /// Terminal size, COLUMNSxROWS (two pixels per cell vertically).
     #[arg(long, value_parser = parse_size, default_value = "160x48")]
-    pub terminal: (u32, u32),
+    pub(crate) terminal: (u32, u32),
     /// Passes to measure.
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
-    pub passes: u32,
+    pub(crate) passes: u32,
     /// How light is followed [default: as `tui` would: the scene's, else
     /// the plan's choice].
     #[arg(long, value_enum)]
-    pub integrator: Option<crate::scene::Integrator>,
+    pub(crate) integrator: Option<crate::scene::Integrator>,
 }
 
 #[derive(Args, Debug)]
-pub struct RaysArgs {
+pub(crate) struct RaysArgs {
     /// A mesh file (or any scene: its triangles, with the workload's auto camera).
     #[arg(value_parser = super::args::scene_spec())]
-    pub mesh: String,
+    pub(crate) mesh: String,
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, value_parser = parse_size, default_value = "1024x768")]
-    pub size: (u32, u32),
+    pub(crate) size: (u32, u32),
     /// Threads for the build and the tracing (at most 4x the cores).
     #[arg(long, default_value_t = 1, value_parser = parse_threads)]
-    pub threads: u32,
+    pub(crate) threads: u32,
     #[arg(long, value_enum, default_value_t = Builder::Sah)]
-    pub builder: Builder,
+    pub(crate) builder: Builder,
     /// Fresh builds and traces; medians are reported.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
-    pub reps: u32,
+    pub(crate) reps: u32,
     /// Make the camera and shadow rays before the timer and trace each ray
     /// set once untimed before the timed pass, as the tinybvh harness does
     /// (by default they are made in the timed loop, as the Embree harness
     /// makes them).
     #[arg(long)]
-    pub rays_first: bool,
+    pub(crate) rays_first: bool,
     /// Trace the primary rays in packets of 8x8 pixel tiles and the shadow
     /// rays of each tile's hits together (one origin each: the eye, the
     /// light); diffuse rays one by one.
     #[arg(long)]
-    pub packets: bool,
+    pub(crate) packets: bool,
     /// The SIMD kernels to walk with (default: the widest this CPU has), to
     /// compare them on one machine.
     #[arg(long, value_enum)]
-    pub simd: Option<Simd>,
+    pub(crate) simd: Option<Simd>,
 }
 
 #[derive(Args, Debug)]
-pub struct ScalingArgs {
+pub(crate) struct ScalingArgs {
     /// Largest N of teapot:N (4.2M triangles at 256, 16.8M at 512).
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(4..=1024))]
-    pub max_n: u32,
+    pub(crate) max_n: u32,
     #[arg(long, value_enum, default_value_t = Builder::Sah)]
-    pub builder: Builder,
+    pub(crate) builder: Builder,
     /// Worker threads (default: all cores; at most 4x the cores).
     #[arg(long, value_parser = parse_threads)]
-    pub threads: Option<u32>,
+    pub(crate) threads: Option<u32>,
     /// Print JSON instead of the table.
     #[arg(long)]
-    pub json: bool,
+    pub(crate) json: bool,
 }
 
 impl BenchArgs {
     /// Threads for the global pool; `bench rays` makes its own.
-    pub fn global_threads(&self) -> Option<usize> {
+    pub(crate) fn global_threads(&self) -> Option<usize> {
         match &self.command {
             None => self.threads.map(|n| n as usize),
             Some(BenchCommand::Scaling(a)) => a.threads.map(|n| n as usize),
@@ -123,7 +123,7 @@ impl BenchArgs {
     }
 }
 
-pub fn run(a: BenchArgs) -> Result<ExitCode> {
+pub(crate) fn run(a: BenchArgs) -> Result<ExitCode> {
     match a.command {
         None => {
             let o = bench::BenchOptions {

@@ -18,7 +18,7 @@ const MAX_SECONDS: f64 = 3600.0;
 /// The smallest relative error a conclusion is about.
 const MIN_TARGET: f64 = 1e-6;
 
-pub fn run(a: ConvergeArgs) -> Result<ExitCode> {
+pub(crate) fn run(a: ConvergeArgs) -> Result<ExitCode> {
     // Outputs are checked before the study runs, which can take minutes.
     let inputs: Vec<std::path::PathBuf> = a.reference.iter().cloned().collect();
     let csv = a

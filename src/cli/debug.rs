@@ -16,7 +16,12 @@ use crate::viz::{self, pixel, DebugSpec, Source, View};
 
 /// Draws `spec` and writes it to `out`; `spp` is the samples of the image
 /// under the bloom and pixel views (default: the scene's).
-pub fn run(s: &Session, spec: DebugSpec, spp: Option<u32>, out: &Output) -> Result<ExitCode> {
+pub(crate) fn run(
+    s: &Session,
+    spec: DebugSpec,
+    spp: Option<u32>,
+    out: &Output,
+) -> Result<ExitCode> {
     let start = Instant::now();
     let t = s.tracer();
     let (w, h) = (s.width, s.height);

@@ -9,7 +9,7 @@ use anyhow::Result;
 use super::args::InputsArgs;
 use crate::render::Session;
 
-pub fn run(a: InputsArgs) -> Result<ExitCode> {
+pub(crate) fn run(a: InputsArgs) -> Result<ExitCode> {
     let (scene, inputs) = Session::load(&a.scene.request())?;
     for w in &scene.warnings {
         super::say("warning", w);

@@ -10,7 +10,7 @@ use super::open_scene;
 use crate::inspect::{inspect_pixel, to_text};
 use crate::render::{post, Progressive};
 
-pub fn run(a: InspectArgs) -> Result<ExitCode> {
+pub(crate) fn run(a: InspectArgs) -> Result<ExitCode> {
     let s = open_scene(&a.scene)?;
     let tracer = s.tracer();
     if let Some((x, y)) = a.pixel {

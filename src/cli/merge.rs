@@ -17,7 +17,7 @@ use crate::render::partial::{self, ranges_text, MergePlan, Meta};
 use crate::render::SceneRequest;
 use crate::words;
 
-pub fn run(a: MergeArgs) -> Result<ExitCode> {
+pub(crate) fn run(a: MergeArgs) -> Result<ExitCode> {
     let formats = match a.partial {
         true => &[Format::Exr][..],
         false => Format::RENDERS,

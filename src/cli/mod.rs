@@ -19,7 +19,7 @@ use clap::Parser;
 
 use anyhow::Result;
 
-pub use args::{parse_size, Cli, Command, SceneOpts};
+pub(crate) use args::{Cli, Command, SceneOpts};
 
 use crate::render::{SceneRequest, Session};
 use crate::scene::Scene;
@@ -126,7 +126,7 @@ fn load_scene(spec: &str) -> Result<Scene> {
     Ok(scene)
 }
 
-pub use crate::console::say;
+pub(crate) use crate::console::say;
 
 /// The reader of our output went away (`rayterm inspect ... | head`): not a failure.
 fn is_broken_pipe(e: &anyhow::Error) -> bool {

@@ -18,7 +18,7 @@ use crate::report;
 
 /// `--progress`: how a render reports on standard error.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum ProgressMode {
+pub(crate) enum ProgressMode {
     /// The bar on a terminal, lines elsewhere.
     Auto,
     Bar,
@@ -45,13 +45,13 @@ enum Out {
 
 /// What a render is, said once before its first pass.
 pub(crate) struct Begin<'a> {
-    pub scene: &'a str,
-    pub size: (u32, u32),
+    pub(crate) scene: &'a str,
+    pub(crate) size: (u32, u32),
     /// The samples of a part, and the spp the whole render is to have.
-    pub samples: Option<Range<u32>>,
-    pub total: Option<u32>,
+    pub(crate) samples: Option<Range<u32>>,
+    pub(crate) total: Option<u32>,
     /// The film resumed from, its samples and the seconds they took.
-    pub resumed: Option<(&'a Path, Range<u32>, f64)>,
+    pub(crate) resumed: Option<(&'a Path, Range<u32>, f64)>,
 }
 
 /// A render's progress reporter; its methods may be called from any
@@ -78,7 +78,7 @@ struct State {
 
 impl Reporter {
     /// A reporter for a render to `stop` of a film holding `before` spp.
-    pub fn new(mode: ProgressMode, stop: &Stop, exact: bool, before: u32) -> Reporter {
+    pub(crate) fn new(mode: ProgressMode, stop: &Stop, exact: bool, before: u32) -> Reporter {
         let fixed = stop.seconds.is_none() && stop.error.is_none();
         let mode = match mode {
             ProgressMode::Auto if std::io::stderr().is_terminal() => ProgressMode::Bar,
@@ -105,13 +105,13 @@ impl Reporter {
     }
 
     /// Whether anything is reported.
-    pub fn quiet(&self) -> bool {
+    pub(crate) fn quiet(&self) -> bool {
         matches!(self.out, Out::Quiet)
     }
 
     /// The samples per pixel the render ends at, where fixed (a bar's
     /// length).
-    pub fn length(&self) -> Option<u64> {
+    pub(crate) fn length(&self) -> Option<u64> {
         match &self.out {
             Out::Bar(b) => b.length(),
             _ => self.total.map(|t| t as u64),
@@ -119,7 +119,7 @@ impl Reporter {
     }
 
     /// Says what renders, and where a resumed render resumed from.
-    pub fn begin(&self, b: &Begin) {
+    pub(crate) fn begin(&self, b: &Begin) {
         let (w, h) = b.size;
         match &self.out {
             Out::Quiet => {}
@@ -177,7 +177,7 @@ impl Reporter {
     }
 
     /// The estimate a pass of a render to a time or an error gave.
-    pub fn estimate(&self, text: String, left: Option<f64>) {
+    pub(crate) fn estimate(&self, text: String, left: Option<f64>) {
         if let Out::Bar(b) = &self.out {
             b.set_message(text.clone());
         }
@@ -188,7 +188,7 @@ impl Reporter {
 
     /// The film now holds `spp` samples per pixel (a fraction within a
     /// pass); a line is printed when one is due.
-    pub fn at(&self, spp: f64) {
+    pub(crate) fn at(&self, spp: f64) {
         let (percent, left) = self.figures(spp, self.start.elapsed().as_secs_f64());
         match &self.out {
             Out::Quiet => {}
@@ -245,7 +245,7 @@ impl Reporter {
 
     /// A checkpoint was written: said in JSON each time, in lines when
     /// `tell` (the first, and those SIGUSR1 asked for).
-    pub fn checkpoint(&self, path: &Path, samples: Range<u32>, tell: bool) {
+    pub(crate) fn checkpoint(&self, path: &Path, samples: Range<u32>, tell: bool) {
         match &self.out {
             Out::Json => line(
                 &json!({
@@ -272,7 +272,7 @@ impl Reporter {
     }
 
     /// The render ended with every sample it was to take.
-    pub fn finish(&self, spp: f64) {
+    pub(crate) fn finish(&self, spp: f64) {
         let elapsed = self.start.elapsed().as_secs_f64();
         match &self.out {
             Out::Bar(b) => b.finish_and_clear(),
@@ -293,7 +293,7 @@ impl Reporter {
     }
 
     /// The render stopped short: the bar is left as it is.
-    pub fn abandon(&self) {
+    pub(crate) fn abandon(&self) {
         if let Out::Bar(b) = &self.out {
             b.abandon();
         }
@@ -339,10 +339,10 @@ fn bar(stop: &Stop, exact: bool) -> ProgressBar {
 
 /// A report's progress ([`report::Progress`]) as indicatif draws it: a bar
 /// when the steps are known, else a spinner with the time so far.
-pub struct ReportBar(ProgressBar);
+pub(crate) struct ReportBar(ProgressBar);
 
 impl ReportBar {
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         ReportBar(ProgressBar::hidden())
     }
 }

@@ -25,7 +25,7 @@ use crate::render::{post, Ended, Film, Job, Needs, Report, SceneRequest, Session
 use crate::scene::BloomSettings;
 use crate::words;
 
-pub fn run(a: RenderArgs) -> Result<ExitCode> {
+pub(crate) fn run(a: RenderArgs) -> Result<ExitCode> {
     let stop = stop(&a)?;
     // The scene file is checked now, the files it names once they are read.
     let scene_file: Vec<PathBuf> = std::path::Path::new(&a.scene.scene)
@@ -573,7 +573,7 @@ fn stopped(checkpoint: Option<(&Output, &Meta)>, f: &Film, write: bool) -> Resul
 /// The image file `render` and `merge` write from a film: the linear mean
 /// as it is for .exr and .hdr (what `converge` and the TUI's `--reference`
 /// compare against), the post-processed picture for .png.
-pub fn image_bytes(
+pub(crate) fn image_bytes(
     format: Format,
     image: Vec<Vec3>,
     width: u32,
@@ -595,7 +595,7 @@ pub fn image_bytes(
 /// The line a render or merge ends with: `head`, the samples, speed and
 /// error, and the output.
 #[allow(clippy::too_many_arguments)]
-pub fn summary(
+pub(crate) fn summary(
     head: &str,
     film: &Report,
     split: bool,

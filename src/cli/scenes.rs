@@ -6,7 +6,7 @@ use anyhow::Result;
 
 use crate::scene::load::{self, builtin::SCENES};
 
-pub fn run() -> Result<ExitCode> {
+pub(crate) fn run() -> Result<ExitCode> {
     crate::outln!(
         "{:<14} {:>9} {:>7}  description",
         "name",

@@ -7,7 +7,7 @@ use anyhow::Result;
 use super::args::StabilityArgs;
 use crate::report::stability::{run_and_print, Options};
 
-pub fn run(a: StabilityArgs) -> Result<ExitCode> {
+pub(crate) fn run(a: StabilityArgs) -> Result<ExitCode> {
     let (width, height) = a.size;
     let o = Options {
         width,

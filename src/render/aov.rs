@@ -15,7 +15,7 @@ use crate::interrupt::Cancel;
 
 /// One output variable.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Aov {
+pub(crate) enum Aov {
     Albedo,
     Normal,
     Depth,
@@ -44,7 +44,7 @@ impl crate::choice::Choice for Aov {
 
 impl Aov {
     /// The EXR channels it is written as, in order.
-    pub fn channels(self) -> &'static [&'static str] {
+    pub(crate) fn channels(self) -> &'static [&'static str] {
         match self {
             Aov::Albedo => &["albedo.R", "albedo.G", "albedo.B"],
             Aov::Normal => &["normal.X", "normal.Y", "normal.Z"],
@@ -56,11 +56,11 @@ impl Aov {
 /// Memory the variables take a pixel while they are made and written: a
 /// pixel's first hit (28 bytes), its planes (7 channels of f32) and the
 /// picture's three, and room for the encoded file.
-pub const BYTES_PER_PIXEL: u64 = 28 + 28 + 12 + 40;
+pub(crate) const BYTES_PER_PIXEL: u64 = 28 + 28 + 12 + 40;
 
 /// The samples of a pixel averaged for its variables (its first ones:
 /// jittered over the pixel where supersampling runs).
-pub const AOV_SAMPLES: u32 = 8;
+pub(crate) const AOV_SAMPLES: u32 = 8;
 
 /// The camera ray's first hit, as the variables need it.
 #[derive(Default)]
@@ -98,7 +98,7 @@ impl Recorder for FirstHit {
 /// The variables `which` of every pixel of `tracer`'s image, in the order
 /// of their channels, each a plane of `width * height` values; `None` once
 /// `cancel` says stop.
-pub fn render(
+pub(crate) fn render(
     tracer: &Tracer,
     which: &[Aov],
     cancel: Cancel,

@@ -25,27 +25,27 @@ const DIELECTRIC_F0: f32 = 0.04;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Brdf {
     /// Diffuse albedo: the base colour's dielectric share.
-    pub c_diff: Vec3,
+    pub(crate) c_diff: Vec3,
     /// Reflectance at normal incidence.
-    pub f0: Vec3,
+    pub(crate) f0: Vec3,
     /// GGX alpha: roughness squared.
-    pub alpha: f32,
+    pub(crate) alpha: f32,
 }
 
 /// A light direction's reflected share, split by lobe (each already times
 /// the cosine at the surface).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct Lobes {
-    pub diffuse: Vec3,
-    pub specular: Vec3,
+    pub(crate) diffuse: Vec3,
+    pub(crate) specular: Vec3,
 }
 
 /// A sampled specular direction and its weight: BRDF times cosine over
 /// the direction's density.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Sampled {
-    pub dir: Vec3,
-    pub weight: Vec3,
+    pub(crate) dir: Vec3,
+    pub(crate) weight: Vec3,
 }
 
 /// Schlick's Fresnel.

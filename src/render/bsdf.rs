@@ -23,7 +23,7 @@ use crate::geometry::sampling::{onb, phong_lobe};
 /// The lobe a path's bounce was drawn from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Lobe {
+pub(crate) enum Lobe {
     Diffuse,
     /// A rough specular lobe (GGX or Phong).
     Glossy,
@@ -34,7 +34,7 @@ pub enum Lobe {
 }
 
 impl Lobe {
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Lobe::Diffuse => "diffuse",
             Lobe::Glossy => "glossy",
@@ -47,14 +47,14 @@ impl Lobe {
 /// A drawn direction.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Scattered {
-    pub dir: Vec3,
+    pub(crate) dir: Vec3,
     /// BSDF times cosine over the density (and over the chance of the
     /// lobe): the path's throughput factor.
-    pub weight: Vec3,
+    pub(crate) weight: Vec3,
     /// The density per solid angle of the whole mixture at `dir`; `None`
     /// for a mirror or a pass through, which light sampling cannot reach.
-    pub pdf: Option<f32>,
-    pub lobe: Lobe,
+    pub(crate) pdf: Option<f32>,
+    pub(crate) lobe: Lobe,
 }
 
 /// The specular part of a Phong material.

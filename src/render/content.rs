@@ -12,7 +12,7 @@ use super::Plan;
 use crate::scene::{Environment, Scene};
 
 /// FNV-1a, 64 bit: a hash that stays the same across builds and machines.
-pub struct Fnv(u64);
+pub(crate) struct Fnv(u64);
 
 impl Default for Fnv {
     fn default() -> Self {
@@ -21,11 +21,11 @@ impl Default for Fnv {
 }
 
 impl Fnv {
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Fnv(0xcbf2_9ce4_8422_2325)
     }
 
-    pub fn bytes(&mut self, b: &[u8]) {
+    pub(crate) fn bytes(&mut self, b: &[u8]) {
         for &x in b {
             self.0 = (self.0 ^ x as u64).wrapping_mul(0x100_0000_01b3);
         }
@@ -43,7 +43,7 @@ impl Fnv {
         self.words(v.iter().flat_map(|c| c.to_array().map(f32::to_bits)));
     }
 
-    pub fn finish(&self) -> u64 {
+    pub(crate) fn finish(&self) -> u64 {
         self.0
     }
 }
@@ -57,7 +57,7 @@ impl std::fmt::Write for Fnv {
 
 /// Everything but the image size, the seed and the samples that decides a
 /// film's pixels.
-pub fn scene_hash(scene: &Scene, plan: &Plan) -> u64 {
+pub(crate) fn scene_hash(scene: &Scene, plan: &Plan) -> u64 {
     let mut h = Fnv::new();
     let _ = write!(
         h,

@@ -58,7 +58,7 @@ impl Choice for Feature {
 }
 
 impl Feature {
-    pub const ALL: [Feature; 14] = [
+    pub(crate) const ALL: [Feature; 14] = [
         Feature::Shadows,
         Feature::Reflections,
         Feature::SmoothNormals,
@@ -75,7 +75,7 @@ impl Feature {
         Feature::Indirect,
     ];
 
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Feature::Shadows => "shadows",
             Feature::Reflections => "reflections",
@@ -114,10 +114,6 @@ impl Features {
         Features(Feature::ALL.iter().fold(0, |a, f| a | f.bit()))
     }
 
-    pub fn none() -> Self {
-        Features(0)
-    }
-
     pub fn without(mut self, off: &[Feature]) -> Self {
         for f in off {
             self.set(*f, false);
@@ -125,11 +121,11 @@ impl Features {
         self
     }
 
-    pub fn on(self, f: Feature) -> bool {
+    pub(crate) fn on(self, f: Feature) -> bool {
         self.0 & f.bit() != 0
     }
 
-    pub fn set(&mut self, f: Feature, on: bool) {
+    pub(crate) fn set(&mut self, f: Feature, on: bool) {
         if on {
             self.0 |= f.bit();
         } else {
@@ -137,7 +133,7 @@ impl Features {
         }
     }
 
-    pub fn toggle(&mut self, f: Feature) {
+    pub(crate) fn toggle(&mut self, f: Feature) {
         self.0 ^= f.bit();
     }
 }

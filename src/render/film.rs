@@ -70,44 +70,44 @@ const NO_STATISTICS: &str =
 #[derive(Clone, Copy, Debug, Default, bytemuck::Zeroable)]
 pub struct PixelStats {
     /// Sum of the samples per channel, in units of 1 / [`FIXED_ONE`].
-    pub sum: [i128; 3],
+    pub(crate) sum: [i128; 3],
     /// The mean colour: `sum / n`.
     pub mean: DVec3,
     /// Sum of squared deviations of the luminance (Welford's M2).
     pub m2: f64,
     pub n: u32,
     /// Complete blocks of strata.
-    pub blocks: u32,
+    pub(crate) blocks: u32,
     /// Mean and M2 of the complete blocks' mean luminances.
-    pub block_mean: f64,
-    pub block_m2: f64,
+    pub(crate) block_mean: f64,
+    pub(crate) block_m2: f64,
     /// Sum over complete blocks of `(Σ black - Σ white)² / 16`, each an
     /// estimate of `σ_w²`.
-    pub checker: f64,
+    pub(crate) checker: f64,
     /// Sum of `r (16 - r)` over blocks left incomplete.
-    pub open: u32,
+    pub(crate) open: u32,
     /// The first block seen, while incomplete: the one a range that starts
     /// inside a block shares with the range before it.
-    pub head: Piece,
+    pub(crate) head: Piece,
     /// The block being filled after the first.
-    pub tail: Piece,
+    pub(crate) tail: Piece,
     /// Sum over the first block's complete quarters of the square of their
     /// contrast (black quadrants minus white); NaN once unknowable (a
     /// sample of the first block dropped, or statistics merged or read
     /// from a partial film, which do not keep it).
-    pub quarters: f32,
+    pub(crate) quarters: f32,
     /// The contrast of the quarter being filled.
-    pub quarter: f32,
+    pub(crate) quarter: f32,
 }
 
 /// A sample as a pass adds it to pixel `x` of a row: its index, colour
 /// and sub-pixel stratum when jittered.
 #[derive(Clone, Copy, Debug)]
-pub struct Sampled {
-    pub x: u32,
-    pub k: u32,
-    pub c: Vec3,
-    pub stratum: Option<u32>,
+pub(crate) struct Sampled {
+    pub(crate) x: u32,
+    pub(crate) k: u32,
+    pub(crate) c: Vec3,
+    pub(crate) stratum: Option<u32>,
 }
 
 /// Samples [`PixelStats::add_run`] takes at a time.
@@ -116,11 +116,11 @@ const RUN: usize = 16;
 /// Part of a block of strata: its index, samples, luminance sum and
 /// checkerboard difference (black minus white).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Zeroable)]
-pub struct Piece {
-    pub block: u32,
-    pub n: u32,
-    pub sum: f64,
-    pub diff: f64,
+pub(crate) struct Piece {
+    pub(crate) block: u32,
+    pub(crate) n: u32,
+    pub(crate) sum: f64,
+    pub(crate) diff: f64,
 }
 
 impl Piece {
@@ -142,9 +142,9 @@ impl Piece {
 /// One in the fixed point the colour sums are kept in: 2^64. A sample is
 /// exact from 2^-41 up (below, its bits under 2^-64 are dropped) and
 /// clamped to ±[`FIXED_MAX`], so a million samples cannot overflow.
-pub const FIXED_ONE: f64 = 18_446_744_073_709_551_616.0;
+pub(crate) const FIXED_ONE: f64 = 18_446_744_073_709_551_616.0;
 /// The largest sample magnitude summed (2^41, about 2.2e12).
-pub const FIXED_MAX: f32 = 2_199_023_255_552.0;
+pub(crate) const FIXED_MAX: f32 = 2_199_023_255_552.0;
 
 /// A sample channel in fixed point, and that value as f64 (exact: it has
 /// at most 24 significant bits). The same as
@@ -244,13 +244,13 @@ fn chan(a: (u32, f64, f64), b: (u32, f64, f64)) -> (u32, f64, f64) {
 impl PixelStats {
     /// `n` pixels with no samples, without writing them: see
     /// [`crate::memory::zeroed`].
-    pub fn zeroed(n: usize) -> Vec<PixelStats> {
+    pub(crate) fn zeroed(n: usize) -> Vec<PixelStats> {
         crate::memory::zeroed(n)
     }
 
     /// A pixel of the one sample `c` (sample 0, not jittered), or of none
     /// where `c` is not finite.
-    pub fn of_sample(c: Vec3) -> PixelStats {
+    pub(crate) fn of_sample(c: Vec3) -> PixelStats {
         let mut p = PixelStats::default();
         if c.is_finite() {
             p.add(0, c, None);
@@ -261,7 +261,7 @@ impl PixelStats {
     /// Adds sample `k` with colour `c`, drawn in sub-pixel `stratum` when
     /// pixel samples are jittered.
     #[inline]
-    pub fn add(&mut self, k: u32, c: Vec3, stratum: Option<u32>) {
+    pub(crate) fn add(&mut self, k: u32, c: Vec3, stratum: Option<u32>) {
         self.add_run(&[Sampled {
             x: 0,
             k,
@@ -277,7 +277,7 @@ impl PixelStats {
     /// on one another only through the sums, so those of several samples
     /// overlap where one at a time each waits for the last.
     #[inline]
-    pub fn add_run(&mut self, run: &[Sampled]) {
+    pub(crate) fn add_run(&mut self, run: &[Sampled]) {
         let one_colour = self.n == 0 && self.sum == [0; 3] && is_one_colour(run);
         for run in run.chunks(RUN) {
             let mut lum = [0.0; RUN];
@@ -357,7 +357,7 @@ impl PixelStats {
 
     /// The mean colour the exact sums give.
     #[inline]
-    pub fn mean_of_sum(&self) -> DVec3 {
+    pub(crate) fn mean_of_sum(&self) -> DVec3 {
         mean_of(&self.sum, self.n)
     }
 
@@ -407,7 +407,7 @@ impl PixelStats {
     /// rounding. The `mean` fields are neither read nor updated: set this
     /// pixel's to [`PixelStats::mean_of_sum`] after the last part.
     #[inline]
-    pub fn merge_stats(&mut self, b: &PixelStats) {
+    pub(crate) fn merge_stats(&mut self, b: &PixelStats) {
         if b.n == 0 {
             return;
         }
@@ -474,7 +474,7 @@ impl PixelStats {
     }
 
     /// Sample variance of the luminance.
-    pub fn variance(&self) -> f64 {
+    pub(crate) fn variance(&self) -> f64 {
         if self.n < 2 {
             0.0
         } else {
@@ -524,7 +524,7 @@ impl PixelStats {
 
     /// The estimated variance of the mean luminance over `lum^2 + REL_EPS`:
     /// this pixel's term of [`Film::estimated_rel_mse`].
-    pub fn rel_variance(&self) -> Option<f64> {
+    pub(crate) fn rel_variance(&self) -> Option<f64> {
         let lum = self.mean.dot(LUMA.as_dvec3());
         Some(self.mean_variance()? / (lum * lum + REL_EPS))
     }
@@ -532,7 +532,7 @@ impl PixelStats {
     /// The estimated relative error of the mean: its standard error over
     /// `√(lum² + ε)`, as the film's relMSE counts it; `None` below two
     /// samples.
-    pub fn relative_error(&self) -> Option<f64> {
+    pub(crate) fn relative_error(&self) -> Option<f64> {
         self.rel_variance().map(f64::sqrt)
     }
 
@@ -545,7 +545,7 @@ impl PixelStats {
     /// block of strata when jittered, as many independent samples otherwise
     /// (below that a jittered estimate assumes how the variance splits, and
     /// a few independent ones can all miss a small bright feature).
-    pub fn estimate_is_design_based(&self) -> bool {
+    pub(crate) fn estimate_is_design_based(&self) -> bool {
         let jittered = self.blocks > 0 || self.head.n > 0 || self.tail.n > 0 || self.open > 0;
         self.quartered_variance().is_some()
             || self.n >= PIXEL_STRATA && (self.blocks > 0 || !jittered)
@@ -555,7 +555,7 @@ impl PixelStats {
 /// What a film that is read only for its image and error estimate keeps
 /// of a pixel (see [`Film::new_summary`]): 24 bytes where statistics are 176.
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Zeroable)]
-pub struct PixelSummary {
+pub(crate) struct PixelSummary {
     /// [`PixelStats::mean`], as the image takes it.
     mean: Vec3,
     /// [`PixelSummary::KNOWN`] and [`PixelSummary::DESIGN_BASED`].
@@ -698,10 +698,10 @@ impl<'a> Samples<'a> {
 
 /// A sample that was NaN or infinite.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-pub struct BadSample {
-    pub x: u32,
-    pub y: u32,
-    pub sample: u32,
+pub(crate) struct BadSample {
+    pub(crate) x: u32,
+    pub(crate) y: u32,
+    pub(crate) sample: u32,
 }
 
 /// Where an adaptive film's samples go. Every pixel first gets the same
@@ -720,10 +720,10 @@ pub struct Allocation {
     /// every pixel has its first quarter.
     pub weight: Vec<f32>,
     /// The weights in ascending order, which a pass's share is found from.
-    pub ascending: Vec<f32>,
+    pub(crate) ascending: Vec<f32>,
     /// Rays each pixel's samples traced until the weights were made (then
     /// emptied).
-    pub rays: Vec<u32>,
+    pub(crate) rays: Vec<u32>,
 }
 
 /// How far a pixel's two predictions look: the neighbours within one pixel,
@@ -753,7 +753,7 @@ impl Allocation {
     /// features) and from the 48 within [`WEIGHT_RADIUS`] (broad soft
     /// shadows). A pixel with no estimable neighbour gets the highest
     /// weight, and none less than [`WEIGHT_FLOOR`] of the mean.
-    pub fn weigh(pixels: &[PixelStats], rays: &[u32], width: u32) -> Vec<f32> {
+    pub(crate) fn weigh(pixels: &[PixelStats], rays: &[u32], width: u32) -> Vec<f32> {
         let w = width.max(1) as usize;
         // Relative variance, rays per sample and 1 for an estimable pixel;
         // zeros for one that is not.
@@ -826,8 +826,8 @@ fn box_sums(v: &[[f64; 3]], w: usize, r: usize) -> Vec<[f64; 3]> {
 
 #[derive(Clone, Debug)]
 pub struct Film {
-    pub width: u32,
-    pub height: u32,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
     /// Each pixel's statistics, or an exact film's one sample each.
     pixels: Pixels,
     /// Samples per pixel attempted so far on a uniform film (the next
@@ -836,11 +836,11 @@ pub struct Film {
     pub spp: u32,
     /// The first sample index of a uniform film: 0, except for a part of a
     /// split render (`render --samples A..B`), which starts at A.
-    pub start: u32,
+    pub(crate) start: u32,
     /// Per-pixel counts and weights of an adaptive film.
     pub adaptive: Option<Allocation>,
     pub bad_count: u64,
-    pub bad: Vec<BadSample>,
+    pub(crate) bad: Vec<BadSample>,
 }
 
 /// What a film holds of its pixels.
@@ -899,19 +899,20 @@ impl Film {
     /// film's count, weight and rays, or a lean film's sample they were
     /// made from), and the linear, bloomed and displayed copies of the
     /// image made from them.
-    pub const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelStats>() as u64 + 12 + IMAGES;
+    pub(crate) const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelStats>() as u64 + 12 + IMAGES;
     /// The same for a summarised film ([`Film::new_summary`]).
-    pub const SUMMARY_BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelSummary>() as u64 + IMAGES;
+    pub(crate) const SUMMARY_BYTES_PER_PIXEL: u64 =
+        std::mem::size_of::<PixelSummary>() as u64 + IMAGES;
     /// The same for a lean film ([`Film::new_exact`]).
-    pub const EXACT_BYTES_PER_PIXEL: u64 = 12 + IMAGES;
+    pub(crate) const EXACT_BYTES_PER_PIXEL: u64 = 12 + IMAGES;
 
-    pub fn new(width: u32, height: u32) -> Self {
+    pub(crate) fn new(width: u32, height: u32) -> Self {
         let n = width as usize * height as usize;
         Self::with(width, height, Pixels::Stats(PixelStats::zeroed(n)))
     }
 
     /// A film of `pixels`' statistics.
-    pub fn of_stats(width: u32, height: u32, pixels: Vec<PixelStats>) -> Self {
+    pub(crate) fn of_stats(width: u32, height: u32, pixels: Vec<PixelStats>) -> Self {
         assert_eq!(pixels.len(), width as usize * height as usize);
         Self::with(width, height, Pixels::Stats(pixels))
     }
@@ -952,7 +953,7 @@ impl Film {
     /// image file; its [`Job`](super::Job) decides). Its statistics are
     /// never made; asking for them ([`Film::pixels`]) or for another pass
     /// is a bug and panics.
-    pub fn new_summary(width: u32, height: u32) -> Self {
+    pub(crate) fn new_summary(width: u32, height: u32) -> Self {
         let n = width as usize * height as usize;
         // SAFETY: a summary of zero bytes is that of a pixel with no
         // sample, which a pass writes over.
@@ -960,7 +961,7 @@ impl Film {
     }
 
     /// The number of pixels.
-    pub fn pixels_len(&self) -> usize {
+    pub(crate) fn pixels_len(&self) -> usize {
         match &self.pixels {
             Pixels::Stats(p) => p.len(),
             Pixels::Exact { samples, .. } => samples.len(),
@@ -969,12 +970,12 @@ impl Film {
     }
 
     /// Whether this film keeps only each pixel's mean and error term.
-    pub fn is_summary(&self) -> bool {
+    pub(crate) fn is_summary(&self) -> bool {
         matches!(self.pixels, Pixels::Summary(_))
     }
 
     /// Whether this is a lean film of one sample per pixel.
-    pub fn is_exact(&self) -> bool {
+    pub(crate) fn is_exact(&self) -> bool {
         matches!(self.pixels, Pixels::Exact { .. })
     }
 
@@ -990,7 +991,7 @@ impl Film {
 
     /// Each pixel's statistics, to change: a lean film becomes a film of
     /// statistics.
-    pub fn pixels_mut(&mut self) -> &mut [PixelStats] {
+    pub(crate) fn pixels_mut(&mut self) -> &mut [PixelStats] {
         if let Pixels::Exact { samples, stats } = &mut self.pixels {
             let p = stats.take().unwrap_or_else(|| Pixels::exact_stats(samples));
             self.pixels = Pixels::Stats(p);
@@ -1062,7 +1063,7 @@ impl Film {
 
     /// The fraction of an adaptive film's pixels whose own estimated
     /// relative error is below `target` (`None` on a uniform film).
-    pub fn converged(&self, target: f64) -> Option<f64> {
+    pub(crate) fn converged(&self, target: f64) -> Option<f64> {
         self.adaptive.as_ref()?;
         let n = self.pixels().len().max(1);
         let below = self
@@ -1087,7 +1088,7 @@ impl Film {
         }
     }
 
-    pub fn record_bad(&mut self, b: BadSample) {
+    pub(crate) fn record_bad(&mut self, b: BadSample) {
         self.bad_count += 1;
         if self.bad.len() < MAX_LISTED {
             self.bad.push(b);
@@ -1139,12 +1140,12 @@ impl Film {
     /// The relative error shown everywhere (TUI, `--target-error`,
     /// `converge`): the square root of [`Film::estimated_rel_mse`]; `None`
     /// (unknown) until every pixel has two samples.
-    pub fn relative_error(&self) -> Option<f64> {
+    pub(crate) fn relative_error(&self) -> Option<f64> {
         self.estimated_rel_mse().map(f64::sqrt)
     }
 
     /// What a render's closing line says of this film.
-    pub fn report(&self) -> Report {
+    pub(crate) fn report(&self) -> Report {
         Report {
             spp: self.spp_range(),
             adaptive: self.adaptive.is_some(),
@@ -1157,7 +1158,7 @@ impl Film {
     /// Whether the estimate is firm enough to stop on
     /// (`--target-error`): every pixel's rests on its samples alone
     /// ([`PixelStats::estimate_is_design_based`]: 16 samples).
-    pub fn error_is_meaningful(&self) -> bool {
+    pub(crate) fn error_is_meaningful(&self) -> bool {
         match &self.pixels {
             Pixels::Stats(p) => !p.is_empty() && p.iter().all(PixelStats::estimate_is_design_based),
             Pixels::Summary(p) => {
@@ -1172,15 +1173,15 @@ impl Film {
 /// What a render's or merge's closing line says of its film, which a merge
 /// measures band by band without holding the film.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Report {
+pub(crate) struct Report {
     /// The fewest, mean and most samples per pixel.
-    pub spp: (u32, f64, u32),
-    pub adaptive: bool,
+    pub(crate) spp: (u32, f64, u32),
+    pub(crate) adaptive: bool,
     /// The sample indices every pixel of a uniform film holds.
-    pub samples: Range<u32>,
+    pub(crate) samples: Range<u32>,
     /// [`Film::relative_error`].
-    pub relative_error: Option<f64>,
-    pub bad_count: u64,
+    pub(crate) relative_error: Option<f64>,
+    pub(crate) bad_count: u64,
 }
 
 /// What makes a pixel the worst of a film.
@@ -1204,18 +1205,18 @@ impl crate::choice::Choice for Worst {
 }
 
 /// A pixel and the sample of it worth replaying.
-pub type PixelSample = (u32, u32, u32);
+pub(crate) type PixelSample = (u32, u32, u32);
 
 /// The worst pixel of a film by each measure.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct WorstPixels {
-    pub nan: Option<PixelSample>,
-    pub variance: Option<PixelSample>,
-    pub brightest: Option<PixelSample>,
+    pub(crate) nan: Option<PixelSample>,
+    pub(crate) variance: Option<PixelSample>,
+    pub(crate) brightest: Option<PixelSample>,
 }
 
 impl WorstPixels {
-    pub fn get(&self, w: Worst) -> Option<PixelSample> {
+    pub(crate) fn get(&self, w: Worst) -> Option<PixelSample> {
         match w {
             Worst::Nan => self.nan,
             Worst::Variance => self.variance,
@@ -1228,7 +1229,7 @@ impl Film {
     /// The worst pixel by `w`, with the sample to replay: the first NaN/Inf
     /// sample; the pixel of highest variance (none while no pixel varies);
     /// the brightest pixel (none on an empty film).
-    pub fn worst(&self, w: Worst) -> Option<PixelSample> {
+    pub(crate) fn worst(&self, w: Worst) -> Option<PixelSample> {
         let at = |i: usize| (i as u32 % self.width, i as u32 / self.width, 0);
         let lum = |p: &PixelStats| p.mean.dot(LUMA.as_dvec3());
         let top = |key: &dyn Fn(&PixelStats) -> f64| {
@@ -1248,7 +1249,7 @@ impl Film {
         }
     }
 
-    pub fn worst_pixels(&self) -> WorstPixels {
+    pub(crate) fn worst_pixels(&self) -> WorstPixels {
         WorstPixels {
             nan: self.worst(Worst::Nan),
             variance: self.worst(Worst::Variance),

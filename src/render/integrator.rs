@@ -99,13 +99,13 @@ impl Depth {
 #[derive(Clone)]
 pub struct Tracer<'a> {
     pub scene: &'a Scene,
-    pub bvh: &'a Bvh,
-    pub plan: &'a Plan,
+    pub(crate) bvh: &'a Bvh,
+    pub(crate) plan: &'a Plan,
     pub frame: CameraFrame,
     pub width: u32,
     pub height: u32,
-    pub seed: u64,
-    pub max_depth: u32,
+    pub(crate) seed: u64,
+    pub(crate) max_depth: u32,
     /// The most paths a sample's tree splits into: [`MAX_PATHS`].
     pub max_paths: u32,
     /// Polled before a hit's reflected and transmitted rays: once it says
@@ -113,13 +113,13 @@ pub struct Tracer<'a> {
     /// thousands of hits, each with thousands of light samples, so the
     /// rows between which a pass polls could be minutes apart; a sample cut
     /// short is never kept (see `progressive::sample_rows`).
-    pub cancel: Cancel<'a>,
+    pub(crate) cancel: Cancel<'a>,
 }
 
 /// The mirror direction of `dir` about the shading normal `n`, or about the
 /// geometric normal `ng` where `n` would send it into the surface: the
 /// reflection ray, and the axis of the glossy lobe.
-pub fn mirror(dir: Vec3, n: Vec3, ng: Vec3) -> Vec3 {
+pub(crate) fn mirror(dir: Vec3, n: Vec3, ng: Vec3) -> Vec3 {
     let d = dir.normalize();
     let r = d - 2.0 * d.dot(n) * n;
     if r.dot(ng) <= 0.0 {
@@ -133,11 +133,11 @@ pub fn mirror(dir: Vec3, n: Vec3, ng: Vec3) -> Vec3 {
 /// axis) and sub-pixel stratum when jittered, and the random numbers the
 /// rest of the sample draws.
 #[derive(Clone, Debug)]
-pub struct Placed {
-    pub x: u32,
-    pub y: u32,
-    pub off: Vec2,
-    pub stratum: Option<u32>,
+pub(crate) struct Placed {
+    pub(crate) x: u32,
+    pub(crate) y: u32,
+    pub(crate) off: Vec2,
+    pub(crate) stratum: Option<u32>,
     rng: Rng,
 }
 
@@ -265,7 +265,7 @@ impl<'a> Tracer<'a> {
     /// sample's chain of random numbers they would wait in front of every
     /// ray.
     #[inline(always)]
-    pub fn place(&self, x: u32, y: u32, k: u32, run: &mut Run) -> Placed {
+    pub(crate) fn place(&self, x: u32, y: u32, k: u32, run: &mut Run) -> Placed {
         let pixel = y as u64 * self.width as u64 + x as u64;
         // Nothing an exact render does draws a random number (see
         // `Plan::deterministic`), so its samples need no seeded stream.
@@ -293,7 +293,7 @@ impl<'a> Tracer<'a> {
 
     /// The camera ray of a placed sample.
     #[inline]
-    pub fn camera_ray(&self, s: &Placed) -> Ray {
+    pub(crate) fn camera_ray(&self, s: &Placed) -> Ray {
         let (x, y) = s.position();
         self.frame.ray(x, y)
     }
@@ -301,7 +301,11 @@ impl<'a> Tracer<'a> {
     /// The camera rays of placed samples appended to `out`: those of
     /// [`Tracer::camera_ray`], made several at a time
     /// ([`CameraFrame::rays`](crate::scene::camera::CameraFrame::rays)).
-    pub fn camera_rays<'p>(&self, placed: impl Iterator<Item = &'p Placed>, out: &mut Vec<Ray>) {
+    pub(crate) fn camera_rays<'p>(
+        &self,
+        placed: impl Iterator<Item = &'p Placed>,
+        out: &mut Vec<Ray>,
+    ) {
         const BATCH: usize = 64;
         let (mut x, mut y) = ([0.0; BATCH], [0.0; BATCH]);
         let mut n = 0;
@@ -317,7 +321,7 @@ impl<'a> Tracer<'a> {
     }
 
     /// The colour of the placed sample `s`, whose camera ray is `ray`.
-    pub fn sample_from<R: Recorder>(&self, s: Placed, ray: &Ray, rec: &mut R) -> Vec3 {
+    pub(crate) fn sample_from<R: Recorder>(&self, s: Placed, ray: &Ray, rec: &mut R) -> Vec3 {
         self.camera_sample(s, ray, None, rec)
     }
 
@@ -325,7 +329,7 @@ impl<'a> Tracer<'a> {
     /// ahead (in a packet, [`Bvh::intersect_packet`]): the same shading.
     /// Always inlined, so that a miss costs its caller no call.
     #[inline(always)]
-    pub fn sample_from_hit<R: Recorder>(
+    pub(crate) fn sample_from_hit<R: Recorder>(
         &self,
         s: Placed,
         ray: &Ray,

@@ -17,7 +17,7 @@ use crate::geometry::sampling::PIXEL_STRATA;
 
 /// What is read of a job's film once its passes are done.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Needs {
+pub(crate) enum Needs {
     /// Each pixel's statistics: a part of a split render, tools, tests.
     #[default]
     Statistics,
@@ -69,7 +69,7 @@ pub struct Job {
 impl Job {
     /// A `width` x `height` render of `plan` until `stop`: uniform passes
     /// of one sample into a blank film of statistics, unless told more.
-    pub fn new(width: u32, height: u32, plan: &Plan, stop: Stop) -> Self {
+    pub(crate) fn new(width: u32, height: u32, plan: &Plan, stop: Stop) -> Self {
         Self {
             width,
             height,
@@ -90,19 +90,19 @@ impl Job {
     }
 
     /// Starts at sample index `start` (a part of a split render).
-    pub fn samples_from(self, start: u32) -> Self {
+    pub(crate) fn samples_from(self, start: u32) -> Self {
         Self { start, ..self }
     }
 
     /// Goes on from `film`, whose samples took `rays` and `seconds`.
-    pub fn resume(self, film: Film, rays: u64, seconds: f64) -> Self {
+    pub(crate) fn resume(self, film: Film, rays: u64, seconds: f64) -> Self {
         Self {
             resumed: Some((film, rays, seconds)),
             ..self
         }
     }
 
-    pub fn needs(self, needs: Needs) -> Self {
+    pub(crate) fn needs(self, needs: Needs) -> Self {
         Self { needs, ..self }
     }
 
@@ -114,7 +114,7 @@ impl Job {
     }
 
     /// Passes of `n` samples per pixel.
-    pub fn passes_of(self, n: u32) -> Self {
+    pub(crate) fn passes_of(self, n: u32) -> Self {
         Self {
             passes: Passes::Of(n),
             ..self
@@ -130,7 +130,7 @@ impl Job {
     /// keeps no statistics. To a time or an error, growing passes. Passes of
     /// one sample between checkpoints (a pass cut short is undone), and for
     /// an exact render's one pass.
-    pub fn passes_for_stop(self) -> Self {
+    pub(crate) fn passes_for_stop(self) -> Self {
         Self {
             passes: Passes::ForStop,
             ..self
@@ -138,7 +138,7 @@ impl Job {
     }
 
     /// Passes that grow with the film (see [`Progressive::cap_passes`]).
-    pub fn growing(self) -> Self {
+    pub(crate) fn growing(self) -> Self {
         Self {
             passes: Passes::Growing,
             ..self
@@ -147,7 +147,7 @@ impl Job {
 
     /// Counts the rows each pass finishes in `rows`, for a progress
     /// readout.
-    pub fn rows_done(self, rows: Arc<AtomicU32>) -> Self {
+    pub(crate) fn rows_done(self, rows: Arc<AtomicU32>) -> Self {
         Self {
             rows_done: Some(rows),
             ..self
@@ -160,7 +160,7 @@ impl Job {
     }
 
     /// Samples per pixel the first pass gives at most.
-    pub fn samples_per_pass(&self) -> u32 {
+    pub(crate) fn samples_per_pass(&self) -> u32 {
         match self.passes {
             Passes::Of(n) => n,
             Passes::Growing => 1,
@@ -185,7 +185,7 @@ impl Job {
     }
 
     /// Whether a pass cut short is undone.
-    pub fn whole_passes(&self) -> bool {
+    pub(crate) fn whole_passes(&self) -> bool {
         self.needs == Needs::WholePasses
     }
 
@@ -223,7 +223,7 @@ impl Job {
     /// Bytes a pixel of this job's film takes (the film and the images made
     /// from it): what a caller checks against the memory available before
     /// [`Job::start`] allocates it.
-    pub fn bytes_per_pixel(&self) -> u64 {
+    pub(crate) fn bytes_per_pixel(&self) -> u64 {
         match self.layout() {
             Storage::Exact => Film::EXACT_BYTES_PER_PIXEL,
             Storage::Summary => Film::SUMMARY_BYTES_PER_PIXEL,

@@ -2,27 +2,34 @@
 //! the one shading code path (generic over a [`Recorder`]), the film, the
 //! one progressive loop and the one post-processing step.
 
-pub mod aov;
+pub(crate) mod aov;
 pub(crate) mod brdf;
 pub(crate) mod bsdf;
-pub mod content;
-pub mod features;
+pub(crate) mod content;
+pub(crate) mod features;
 pub mod film;
 pub mod integrator;
-pub mod job;
+pub(crate) mod job;
 pub mod partial;
 mod path;
-pub mod plan;
+pub(crate) mod plan;
 pub mod post;
-pub mod progressive;
+pub(crate) mod progressive;
 pub mod recorder;
-pub mod session;
+pub(crate) mod session;
 
 pub use features::{Feature, Features};
-pub use film::{Film, Report, Worst, WorstPixels};
+pub use film::Film;
+pub(crate) use film::Report;
+pub use film::{Worst, WorstPixels};
 pub use integrator::Tracer;
-pub use job::{Job, Needs};
-pub use plan::{Decision, Plan, PlanPolicy};
-pub use progressive::{Ended, Outcome, PassStats, Progressive, Stop, MIN_SPP};
-pub use recorder::{RayCounter, Recorder};
+pub use job::Job;
+pub(crate) use job::Needs;
+pub use plan::Decision;
+pub use plan::{Plan, PlanPolicy};
+pub(crate) use progressive::Ended;
+pub use progressive::{Outcome, PassStats};
+pub use progressive::{Progressive, Stop, MIN_SPP};
+pub use recorder::RayCounter;
+pub use recorder::Recorder;
 pub use session::{SceneRequest, Session};

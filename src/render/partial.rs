@@ -27,7 +27,7 @@ use crate::scene::load::source::Input;
 use crate::scene::BloomSettings;
 use crate::words::quoted;
 
-pub use crate::scene::MAX_SPP;
+pub(crate) use crate::scene::MAX_SPP;
 
 const KIND: &str = "rayterm partial film 2";
 
@@ -36,38 +36,38 @@ const MAX_SIDE: u32 = 16384;
 
 /// What a partial film says about where it came from.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Meta {
-    pub scene: String,
+pub(crate) struct Meta {
+    pub(crate) scene: String,
     /// [`super::content::scene_hash`] of the scene and plan.
-    pub hash: u64,
-    pub seed: u64,
-    pub version: String,
+    pub(crate) hash: u64,
+    pub(crate) seed: u64,
+    pub(crate) version: String,
     /// The samples per pixel the whole render is to have, when known
     /// (`--part K/N` of it, or a checkpoint of a render to a set spp).
-    pub total: Option<u32>,
+    pub(crate) total: Option<u32>,
     /// Bloom's settings when the plan runs it: what `merge` post-processes
     /// with.
-    pub bloom: Option<BloomSettings>,
+    pub(crate) bloom: Option<BloomSettings>,
     /// Nothing in the scene is sampled: one sample is the exact image.
-    pub exact: bool,
-    pub triangles: u64,
+    pub(crate) exact: bool,
+    pub(crate) triangles: u64,
     /// Rays traced and seconds spent rendering the samples held.
-    pub rays: u64,
-    pub seconds: f64,
+    pub(crate) rays: u64,
+    pub(crate) seconds: f64,
     /// Which of `render --part K/N` it is, where it is one.
-    pub part: Option<(u32, u32)>,
+    pub(crate) part: Option<(u32, u32)>,
     /// The options of `render` every part of the render shares (the scene,
     /// its size, spp, seed and features), as words: what renders a missing
     /// part, and what `merge --check` opens the scene with.
-    pub command: Vec<String>,
+    pub(crate) command: Vec<String>,
     /// The files the scene was read from, with their CRC-32s, where
     /// recorded (not for a list too long for the header).
-    pub inputs: Option<Vec<Input>>,
+    pub(crate) inputs: Option<Vec<Input>>,
 }
 
 impl Meta {
     /// What a session renders, before any sample.
-    pub fn of(s: &Session, total: Option<u32>) -> Meta {
+    pub(crate) fn of(s: &Session, total: Option<u32>) -> Meta {
         Meta {
             scene: s.scene.name.clone(),
             hash: super::content::scene_hash(&s.scene, &s.plan),
@@ -88,18 +88,18 @@ impl Meta {
 
 /// A uniform film over the sample indices `film.start..film.start + film.spp`.
 #[derive(Clone, Debug)]
-pub struct Part {
-    pub film: Film,
-    pub meta: Meta,
+pub(crate) struct Part {
+    pub(crate) film: Film,
+    pub(crate) meta: Meta,
 }
 
 impl Part {
-    pub fn range(&self) -> Range<u32> {
+    pub(crate) fn range(&self) -> Range<u32> {
         self.film.start..self.film.start + self.film.spp
     }
 
     /// What its header says.
-    pub fn header(&self) -> Header {
+    pub(crate) fn header(&self) -> Header {
         Header {
             meta: self.meta.clone(),
             range: self.range(),
@@ -109,7 +109,7 @@ impl Part {
 
     /// Reads a partial film, refusing anything that is not one rayterm
     /// wrote whole: every error names the file.
-    pub fn read(path: &Path) -> Result<Part> {
+    pub(crate) fn read(path: &Path) -> Result<Part> {
         let source = Source::open(path)?;
         let header = source.header.clone();
         let mut sources = [source];
@@ -135,9 +135,9 @@ impl Part {
 /// of a merge before any pixel is read.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Header {
-    pub meta: Meta,
+    pub(crate) meta: Meta,
     pub range: Range<u32>,
-    pub size: (u32, u32),
+    pub(crate) size: (u32, u32),
 }
 
 impl Header {
@@ -150,7 +150,13 @@ impl Header {
     /// Refuses a part that another film cannot be merged with or continue:
     /// another rayterm version, scene, size or seed, named by `this` and
     /// `that`.
-    pub fn check_same(&self, other: &Meta, size: (u32, u32), this: &str, that: &str) -> Result<()> {
+    pub(crate) fn check_same(
+        &self,
+        other: &Meta,
+        size: (u32, u32),
+        this: &str,
+        that: &str,
+    ) -> Result<()> {
         let m = &self.meta;
         let differ = |field: &str, a: String, b: String| -> Result<()> {
             bail!("{this} and {that} differ in {field}: {a} against {b}")
@@ -339,7 +345,7 @@ const CHECKSUM: &str = "rayterm.checksum";
 const UNSEALED: &str = "00000000";
 
 /// `film` and `meta` as a partial film's OpenEXR bytes.
-pub fn encode(f: &Film, meta: &Meta) -> Result<Vec<u8>> {
+pub(crate) fn encode(f: &Film, meta: &Meta) -> Result<Vec<u8>> {
     if f.adaptive.is_some() {
         bail!("an adaptive film cannot be stored as a partial film");
     }
@@ -878,16 +884,16 @@ fn plausible(p: &PixelStats, spp: u32, start: u32, end: u32) -> bool {
 
 /// The parts of one render, checked from their headers and put in range
 /// order, with the render's total and the ranges no part holds.
-pub struct MergePlan {
-    pub parts: Vec<(PathBuf, Header)>,
-    pub total: u32,
-    pub missing: Vec<Range<u32>>,
+pub(crate) struct MergePlan {
+    pub(crate) parts: Vec<(PathBuf, Header)>,
+    pub(crate) total: u32,
+    pub(crate) missing: Vec<Range<u32>>,
 }
 
 /// Reads the headers of `paths` and checks that they come from one render
 /// and do not overlap. Missing ranges are returned; the caller decides
 /// whether they may be.
-pub fn plan(paths: &[PathBuf]) -> Result<MergePlan> {
+pub(crate) fn plan(paths: &[PathBuf]) -> Result<MergePlan> {
     let mut parts = Vec::with_capacity(paths.len());
     for p in paths {
         parts.push((p.clone(), Header::read(p)?));
@@ -951,12 +957,12 @@ pub fn plan(paths: &[PathBuf]) -> Result<MergePlan> {
 /// A merged render: what its image file and closing line need. A merge
 /// measures them band by band and never holds the merged statistics whole
 /// (176 bytes a pixel, against 12 for the image).
-pub struct Merged {
-    pub meta: Meta,
-    pub size: (u32, u32),
+pub(crate) struct Merged {
+    pub(crate) meta: Meta,
+    pub(crate) size: (u32, u32),
     /// The linear mean image, row-major.
-    pub image: Vec<Vec3>,
-    pub report: Report,
+    pub(crate) image: Vec<Vec3>,
+    pub(crate) report: Report,
 }
 
 /// Opens the planned parts, checking that none changed since planned.
@@ -988,7 +994,7 @@ fn merged_meta(sources: &[Source]) -> Result<Meta> {
 }
 
 /// Reads the planned parts and merges them in range order.
-pub fn merge(plan: &MergePlan, cancel: Cancel) -> Result<Merged> {
+pub(crate) fn merge(plan: &MergePlan, cancel: Cancel) -> Result<Merged> {
     let mut sources = open_planned(plan)?;
     let size = sources[0].header.size;
     let mut image = Vec::with_capacity(size.0 as usize * size.1 as usize);
@@ -1028,7 +1034,7 @@ pub fn merge(plan: &MergePlan, cancel: Cancel) -> Result<Merged> {
 /// Merges the planned parts into one partial film, which merges again
 /// with the parts still to come (a staged merge): their samples must
 /// follow one another, since a partial film holds one range.
-pub fn merge_part(plan: &MergePlan, cancel: Cancel) -> Result<Part> {
+pub(crate) fn merge_part(plan: &MergePlan, cancel: Cancel) -> Result<Part> {
     let (start, end) = match (plan.parts.first(), plan.parts.last()) {
         (Some((_, a)), Some((_, b))) => (a.range.start, b.range.end),
         _ => bail!("no parts to merge"),
@@ -1071,7 +1077,7 @@ pub fn merge_part(plan: &MergePlan, cancel: Cancel) -> Result<Part> {
 impl MergePlan {
     /// The parts of `render --part K/N` the missing samples make, where
     /// they are whole parts: N, and each missing K.
-    pub fn missing_parts(&self) -> Option<(u32, Vec<u32>)> {
+    pub(crate) fn missing_parts(&self) -> Option<(u32, Vec<u32>)> {
         let n = self
             .parts
             .iter()
@@ -1093,7 +1099,7 @@ impl MergePlan {
 }
 
 /// `0..16 and 48..64`.
-pub fn ranges_text(r: &[Range<u32>]) -> String {
+pub(crate) fn ranges_text(r: &[Range<u32>]) -> String {
     let each: Vec<String> = r
         .iter()
         .map(|r| format!("{}..{}", r.start, r.end))

@@ -36,7 +36,7 @@ pub enum Reason {
 }
 
 impl Reason {
-    pub fn long(self) -> &'static str {
+    pub(crate) fn long(self) -> &'static str {
         match self {
             Reason::NoLights => "no lights in scene",
             Reason::NoReflective => "no material with ks > 0",
@@ -52,7 +52,7 @@ impl Reason {
     }
 
     /// At most 13 characters, for narrow panels.
-    pub fn short(self) -> &'static str {
+    pub(crate) fn short(self) -> &'static str {
         match self {
             Reason::NoLights => "no lights",
             Reason::NoReflective => "no ks > 0",
@@ -86,7 +86,7 @@ impl Decision {
     }
 
     /// `on`, `off`, `not needed: ...`, `off: needs ...`.
-    pub fn reason(self) -> String {
+    pub(crate) fn reason(self) -> String {
         match self {
             Decision::On => "on".into(),
             Decision::Off => "off".into(),
@@ -98,7 +98,7 @@ impl Decision {
 
 /// What the scene needs of one feature: `None` when it can use it, or the
 /// reason it cannot.
-pub fn not_needed(scene: &Scene, f: Feature) -> Option<Reason> {
+pub(crate) fn not_needed(scene: &Scene, f: Feature) -> Option<Reason> {
     let any_reflective = scene.materials.iter().any(|m| m.reflective());
     let any_area = scene.lights.iter().any(|l| l.is_area());
     match f {
@@ -171,7 +171,7 @@ const ORDER: [Feature; 14] = [
 ];
 
 /// The integrator `scene` is rendered with, and why.
-pub fn integrator(scene: &Scene) -> (Integrator, &'static str) {
+pub(crate) fn integrator(scene: &Scene) -> (Integrator, &'static str) {
     match scene.settings.integrator {
         Some(Integrator::Path) => (Integrator::Path, "asked for"),
         Some(Integrator::Whitted) => (Integrator::Whitted, "the Whitted integrator was asked for"),
@@ -197,8 +197,8 @@ fn refines(f: Feature) -> Option<Feature> {
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Plan {
-    pub features: Features,
-    pub policy: PlanPolicy,
+    pub(crate) features: Features,
+    pub(crate) policy: PlanPolicy,
     decisions: [Decision; Feature::ALL.len()],
     // What the hot loop reads: one flag per stage, copied from `decisions`.
     pub shadows: bool,
@@ -212,10 +212,10 @@ pub struct Plan {
     pub area_sampling: bool,
     pub supersampling: bool,
     pub environment: bool,
-    pub bloom: bool,
+    pub(crate) bloom: bool,
     pub bvh: bool,
-    pub normal_maps: bool,
-    pub emission: bool,
+    pub(crate) normal_maps: bool,
+    pub(crate) emission: bool,
     /// Camera rays, which all start at the eye, are traced in packets
     /// ([`Bvh::intersect_packet`](crate::bvh::Bvh::intersect_packet)):
     /// the same hits, found together, whenever the BVH is used, for a
@@ -228,12 +228,12 @@ pub struct Plan {
     /// gives the exact image.
     pub deterministic: bool,
     /// The integrator chosen, and why ([`integrator`]).
-    pub integrator: Integrator,
+    pub(crate) integrator: Integrator,
     integrator_why: &'static str,
     /// Paths are traced: the path integrator with indirect light on.
     pub path: bool,
     /// The most bounces after the camera ray.
-    pub max_depth: u32,
+    pub(crate) max_depth: u32,
 }
 
 /// Whether the scene's camera is orthographic.
@@ -310,7 +310,7 @@ impl Plan {
     }
 
     /// The plan with another maximum depth (the TUI's `<` and `>`).
-    pub fn with_max_depth(mut self, depth: u32) -> Self {
+    pub(crate) fn with_max_depth(mut self, depth: u32) -> Self {
         self.max_depth = depth.min(crate::scene::MAX_DEPTH);
         self
     }
@@ -334,14 +334,14 @@ impl Plan {
 
     /// Whether the same stages run under both plans (features that are not
     /// needed may differ).
-    pub fn same_stages(&self, other: &Plan) -> bool {
+    pub(crate) fn same_stages(&self, other: &Plan) -> bool {
         self.runs() == other.runs()
     }
 
     /// Whether a film rendered under `other` holds the same samples as one
     /// rendered under this plan: bloom is applied after the film and brute
     /// force finds the same hits as the BVH, so only they may differ.
-    pub fn same_film(&self, other: &Plan) -> bool {
+    pub(crate) fn same_film(&self, other: &Plan) -> bool {
         let shaping = |p: &Plan| {
             let (mut r, depth) = p.runs();
             r[Feature::Bloom as usize] = false;
@@ -407,7 +407,7 @@ impl Plan {
     }
 
     /// The plan as a table for `--explain`.
-    pub fn explain(&self) -> String {
+    pub(crate) fn explain(&self) -> String {
         let rows = self.rows();
         let w = rows.iter().map(|r| r.0.len()).max().unwrap_or(0);
         let mut s = format!("  {:w$}  {:3}  {}\n", "stage", "run", "why");

@@ -11,14 +11,14 @@ use crate::scene::BloomSettings;
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Displayed {
     /// Linear colours after post-processing, row-major.
-    pub image: Vec<Vec3>,
+    pub(crate) image: Vec<Vec3>,
     /// The mean before bloom, when bloom ran.
-    pub before_bloom: Option<Vec<Vec3>>,
+    pub(crate) before_bloom: Option<Vec<Vec3>>,
 }
 
 /// The one post-processing step from a film's mean image to what is shown
 /// (the TUI), saved (PNG) or inspected.
-pub fn display(
+pub(crate) fn display(
     mean: Vec<Vec3>,
     width: u32,
     height: u32,
@@ -53,7 +53,7 @@ fn display_with(
 /// Adds a glow around pixels brighter than the threshold: the bright part is
 /// blurred with a separable Gaussian and added back with `strength`.
 /// Returns whether anything was over the threshold (nothing changes otherwise).
-pub fn bloom(img: &mut [Vec3], width: usize, height: usize, s: &BloomSettings) -> bool {
+pub(crate) fn bloom(img: &mut [Vec3], width: usize, height: usize, s: &BloomSettings) -> bool {
     let Some(g) = glow(img, width, height, s) else {
         return false;
     };
@@ -65,13 +65,13 @@ pub fn bloom(img: &mut [Vec3], width: usize, height: usize, s: &BloomSettings) -
 
 /// What bloom does to an image: the pixels over the threshold (their
 /// colour, zero elsewhere) and the glow it adds (strength applied).
-pub struct Glow {
-    pub bright: Vec<Vec3>,
-    pub glow: Vec<Vec3>,
+pub(crate) struct Glow {
+    pub(crate) bright: Vec<Vec3>,
+    pub(crate) glow: Vec<Vec3>,
 }
 
 /// Bloom's parts for `img`, or `None` when nothing is over the threshold.
-pub fn glow(img: &[Vec3], width: usize, height: usize, s: &BloomSettings) -> Option<Glow> {
+pub(crate) fn glow(img: &[Vec3], width: usize, height: usize, s: &BloomSettings) -> Option<Glow> {
     let bright: Vec<Vec3> = img
         .iter()
         .map(|c| {

@@ -51,14 +51,14 @@ pub struct Stop {
 }
 
 impl Stop {
-    pub fn spp(n: u32) -> Self {
+    pub(crate) fn spp(n: u32) -> Self {
         Stop {
             spp: Some(n),
             ..Stop::default()
         }
     }
 
-    pub fn seconds(t: f64) -> Self {
+    pub(crate) fn seconds(t: f64) -> Self {
         Stop {
             seconds: Some(t),
             ..Stop::default()
@@ -68,7 +68,7 @@ impl Stop {
 
 /// Which limit ended a render.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Ended {
+pub(crate) enum Ended {
     Spp,
     Time,
     Error,
@@ -81,15 +81,15 @@ pub enum Ended {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PassStats {
     /// Samples each pixel given any received.
-    pub samples: u32,
+    pub(crate) samples: u32,
     /// Pixels that received samples.
-    pub pixels: u64,
-    pub rays: u64,
-    pub ms: f64,
+    pub(crate) pixels: u64,
+    pub(crate) rays: u64,
+    pub(crate) ms: f64,
 }
 
 impl PassStats {
-    pub fn mrays_per_s(&self) -> f64 {
+    pub(crate) fn mrays_per_s(&self) -> f64 {
         self.rays as f64 / (self.ms.max(1e-6) * 1e3)
     }
 }
@@ -97,10 +97,10 @@ impl PassStats {
 /// A whole run of passes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Outcome {
-    pub ended: Ended,
-    pub passes: u32,
-    pub rays: u64,
-    pub seconds: f64,
+    pub(crate) ended: Ended,
+    pub(crate) passes: u32,
+    pub(crate) rays: u64,
+    pub(crate) seconds: f64,
 }
 
 /// A film and the passes that made it, as its [`Job`] decided them.
@@ -153,7 +153,7 @@ impl Default for Progressive {
 /// The most samples per pixel a render read only for its image takes in
 /// one pass (see [`Job::passes_for_stop`]): beyond, a row would keep a
 /// cancel waiting too long.
-pub const ONE_PASS_SPP: u32 = 256;
+pub(crate) const ONE_PASS_SPP: u32 = 256;
 
 /// What a pass gives the pixels.
 enum Give {
@@ -198,24 +198,24 @@ impl Progressive {
     }
 
     /// Rays traced in passes so far (a resumed film's included).
-    pub fn rays(&self) -> u64 {
+    pub(crate) fn rays(&self) -> u64 {
         self.rays
     }
 
     /// Seconds spent in passes so far (a resumed film's included).
-    pub fn seconds(&self) -> f64 {
+    pub(crate) fn seconds(&self) -> f64 {
         self.seconds
     }
 
     /// Samples per pixel the next pass gives at most.
-    pub fn samples_per_pass(&self) -> u32 {
+    pub(crate) fn samples_per_pass(&self) -> u32 {
         self.samples_per_pass
     }
 
     /// Caps the samples per pixel of the growing passes from here
     /// ([`Job::growing`]): the TUI keeps each pass within a frame's time at
     /// the last pass's pace.
-    pub fn cap_passes(&mut self, cap: u32) {
+    pub(crate) fn cap_passes(&mut self, cap: u32) {
         self.pass_cap = cap;
     }
 
@@ -266,7 +266,7 @@ impl Progressive {
 
     /// As [`Progressive::pass`], with any counting recorder, whose counts of
     /// all rows are returned merged.
-    pub fn pass_with<R: Recorder + Default + Send + Merge>(
+    pub(crate) fn pass_with<R: Recorder + Default + Send + Merge>(
         &mut self,
         tracer: &Tracer,
         cancel: Cancel,
@@ -309,7 +309,7 @@ impl Progressive {
 
     /// Which limit of the stop the film has reached, if any; `elapsed` is
     /// the time the render has taken so far.
-    pub fn finished(&self, plan: &Plan, elapsed: f64) -> Option<Ended> {
+    pub(crate) fn finished(&self, plan: &Plan, elapsed: f64) -> Option<Ended> {
         let (f, stop) = (&self.film, &self.stop);
         if plan.deterministic && f.spp >= 1 {
             return Some(Ended::Exact);
@@ -389,7 +389,7 @@ impl Progressive {
     /// samples together, as `render --spp N` traces them: the rate the
     /// passes that took them are measured against. The samples, and so the
     /// rays, are the same; only the passes differ.
-    pub fn retrace(&self, tracer: &Tracer) -> PassStats {
+    pub(crate) fn retrace(&self, tracer: &Tracer) -> PassStats {
         let f = &self.film;
         let give = match &f.adaptive {
             Some(a) => Give::Each(a.spp.clone()),
@@ -500,11 +500,11 @@ const CAMERA_BATCH: usize = crate::bvh::PACKET_RAYS;
 /// and take 0.85x to 0.95x where it holds hundreds (`teapot:256` at
 /// 160x96 and 16 spp) or where reflections are most of the rays
 /// (`mirrors`); see BENCHMARKS.md.
-pub const PACKET_SAMPLES: u32 = PIXEL_STRATA;
+pub(crate) const PACKET_SAMPLES: u32 = PIXEL_STRATA;
 
 /// The most samples per pixel a growing pass gives ([`Job::growing`]):
 /// enough to fill a packet with one pixel's samples.
-pub const MAX_PASS_SPP: u32 = crate::bvh::PACKET_RAYS as u32;
+pub(crate) const MAX_PASS_SPP: u32 = crate::bvh::PACKET_RAYS as u32;
 
 /// One row of a film, with its sample counts when adaptive.
 struct Row<'a> {
@@ -733,7 +733,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
 }
 
 /// Recorders that can be summed across rows.
-pub trait Merge {
+pub(crate) trait Merge {
     fn merge(&mut self, other: &Self);
     fn rays(&self) -> u64;
 }

@@ -27,39 +27,39 @@ pub enum RayKind {
 /// Everything known about a hit, gathered only for active recorders.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct HitInfo {
-    pub t: f32,
+    pub(crate) t: f32,
     pub point: Vec3,
     pub triangle: u32,
     pub mesh: String,
-    pub material: String,
+    pub(crate) material: String,
     /// Weights of the triangle's three vertices.
-    pub barycentric: Vec3,
-    pub geometric_normal: Vec3,
+    pub(crate) barycentric: Vec3,
+    pub(crate) geometric_normal: Vec3,
     pub shading_normal: Vec3,
     pub vertex_normals: Option<[Vec3; 3]>,
-    pub uv: Option<Vec2>,
+    pub(crate) uv: Option<Vec2>,
     pub texel: Option<Vec3>,
     /// Diffuse colour used (texel or kd).
     pub kd: Vec3,
     pub ks: Vec3,
-    pub ns: f32,
+    pub(crate) ns: f32,
     /// A metallic-roughness material's parameters here (absent for
     /// Phong).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub pbr: Option<PbrInfo>,
+    pub(crate) pbr: Option<PbrInfo>,
 }
 
 /// A metallic-roughness material at a hit, after its textures.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub struct PbrInfo {
-    pub metallic: f32,
-    pub roughness: f32,
+pub(crate) struct PbrInfo {
+    pub(crate) metallic: f32,
+    pub(crate) roughness: f32,
     /// Emitted radiance.
-    pub emitted: Vec3,
+    pub(crate) emitted: Vec3,
     /// The occlusion map's factor on ambient light (1 without one).
-    pub occlusion: f32,
+    pub(crate) occlusion: f32,
     /// The normal after the normal map, when one tilted it.
-    pub normal_mapped: Option<Vec3>,
+    pub(crate) normal_mapped: Option<Vec3>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -68,7 +68,7 @@ pub struct MissInfo {
     /// or `latlong` for an environment light's equirectangular map (u from
     /// the left, v from the top), and the coordinates there.
     pub face: Option<String>,
-    pub uv: Option<Vec2>,
+    pub(crate) uv: Option<Vec2>,
     pub color: Vec3,
     /// On a path: how the environment's light found this way is weighed
     /// against sampling it (absent where it counts whole).
@@ -89,7 +89,7 @@ pub struct Mis {
 }
 
 impl Mis {
-    pub fn new(light_pdf: f32, bsdf_pdf: f32) -> Self {
+    pub(crate) fn new(light_pdf: f32, bsdf_pdf: f32) -> Self {
         let light_weight = super::bsdf::power_heuristic(light_pdf, bsdf_pdf);
         Self {
             light_pdf,
@@ -105,7 +105,7 @@ impl Mis {
 /// over the density) and the chance Russian roulette let the path live.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Bounce {
-    pub lobe: super::bsdf::Lobe,
+    pub(crate) lobe: super::bsdf::Lobe,
     pub pdf: Option<f32>,
     pub factor: Vec3,
     pub survival: f32,
@@ -115,14 +115,14 @@ pub struct Bounce {
 /// against sampling the emitter (absent where it counts whole).
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Emission {
-    pub radiance: Vec3,
-    pub mis: Option<Mis>,
+    pub(crate) radiance: Vec3,
+    pub(crate) mis: Option<Mis>,
 }
 
 /// One shadow-tested point on a light.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct LightSample {
-    pub point: Vec3,
+    pub(crate) point: Vec3,
     pub color: Vec3,
     /// `None` when the light is behind the surface and no ray was traced.
     pub shadow_ray: Option<Ray>,
@@ -130,7 +130,7 @@ pub struct LightSample {
     /// Mesh and triangle that blocked the light.
     pub occluder: Option<(String, u32)>,
     pub diffuse: Vec3,
-    pub specular: Vec3,
+    pub(crate) specular: Vec3,
     /// On a path, for lights a bounce could also find: the weighing of
     /// this sample against the BSDF's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -212,9 +212,9 @@ impl Recorder for RayCounter {
 
 /// Counts rays and the BVH work of every traversal, for the TUI's BVH panel.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct WorkCounter {
-    pub rays: u64,
-    pub work: TraversalStats,
+pub(crate) struct WorkCounter {
+    pub(crate) rays: u64,
+    pub(crate) work: TraversalStats,
 }
 
 impl Recorder for WorkCounter {

@@ -85,11 +85,11 @@ pub struct Session {
     pub plan: Plan,
     /// The scene's camera (the TUI moves its own copy).
     pub camera: Camera,
-    pub width: u32,
-    pub height: u32,
-    pub seed: u64,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) seed: u64,
     /// The files the scene was read from, which no output may replace.
-    pub inputs: Vec<Input>,
+    pub(crate) inputs: Vec<Input>,
 }
 
 impl Session {
@@ -111,7 +111,7 @@ impl Session {
     /// The scene `req` names, loaded as [`Session::open`] loads it, and the
     /// files it was read from, with no BVH built: what `rayterm inputs`
     /// lists. Its warnings are the scene's.
-    pub fn load(req: &SceneRequest) -> Result<(Scene, Vec<Input>)> {
+    pub(crate) fn load(req: &SceneRequest) -> Result<(Scene, Vec<Input>)> {
         let how = load::Opening {
             camera: req.camera.clone(),
             allow_outside: req.allow_outside,
@@ -133,7 +133,7 @@ impl Session {
     }
 
     /// The paths of the files the scene was read from.
-    pub fn input_paths(&self) -> Vec<PathBuf> {
+    pub(crate) fn input_paths(&self) -> Vec<PathBuf> {
         self.inputs.iter().map(|i| i.path.clone()).collect()
     }
 
@@ -165,7 +165,7 @@ impl Session {
     }
 
     /// The plan for other features, under this session's policy.
-    pub fn plan_for(&self, features: Features) -> Plan {
+    pub(crate) fn plan_for(&self, features: Features) -> Plan {
         Plan::new(&self.scene, features, self.plan.policy)
     }
 
@@ -189,16 +189,11 @@ impl Session {
             self.seed,
         )
     }
-
-    /// The BVH rebuilt with another builder.
-    pub fn rebuild(&mut self, builder: Builder) {
-        self.bvh = Arc::new(bvh::build(&self.scene.geometry, builder));
-    }
 }
 
 /// Refuses a `w` x `h` film of `bytes_per_pixel` that would not fit in
 /// memory.
-pub fn check_film(w: u32, h: u32, bytes_per_pixel: u64) -> Result<()> {
+pub(crate) fn check_film(w: u32, h: u32, bytes_per_pixel: u64) -> Result<()> {
     crate::memory::check(
         &format!("a {w}x{h} film"),
         w as u64 * h as u64 * bytes_per_pixel,

@@ -17,11 +17,11 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use glam::Vec3;
 
-pub use crate::color::luminance;
-pub use crate::raster::metrics::{rel_mse, rel_mse_on, rmse};
-pub use crate::raster::resample::{resample, Resampled};
+pub(crate) use crate::color::luminance;
+pub use crate::raster::metrics::{rel_mse, rmse};
 pub use plot::draw as plot;
-pub use reference::{default_cache_dir, format_floor, save_reference};
+pub use reference::save_reference;
+pub(crate) use reference::{default_cache_dir, format_floor};
 
 use crate::bvh::Bvh;
 use crate::interrupt::{Cancel, Interrupted};
@@ -70,29 +70,29 @@ impl std::fmt::Display for Budget {
 
 /// The sampling settings a strategy varies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Strategy {
-    pub light_samples: u32,
-    pub glossy_samples: u32,
-    pub stratify: bool,
+pub(crate) struct Strategy {
+    pub(crate) light_samples: u32,
+    pub(crate) glossy_samples: u32,
+    pub(crate) stratify: bool,
     /// Passes after the minimum go to the pixels with the highest error.
-    pub adaptive: bool,
+    pub(crate) adaptive: bool,
     /// How light is followed: a strategy of another integrator converges
     /// to its own image, so against the reference its error levels off.
-    pub integrator: Integrator,
+    pub(crate) integrator: Integrator,
 }
 
 /// Which sampled effects the plan runs, so labels name only those.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Uses {
-    pub area_lights: bool,
-    pub glossy: bool,
-    pub supersampling: bool,
+pub(crate) struct Uses {
+    pub(crate) area_lights: bool,
+    pub(crate) glossy: bool,
+    pub(crate) supersampling: bool,
     /// The plan's integrator: labels name another.
-    pub integrator: Integrator,
+    pub(crate) integrator: Integrator,
 }
 
 impl Uses {
-    pub fn of(scene: &Scene, plan: &Plan) -> Self {
+    pub(crate) fn of(scene: &Scene, plan: &Plan) -> Self {
         Self {
             area_lights: plan.area_sampling && scene.lights.iter().any(|l| l.is_area()),
             glossy: plan.glossy,
@@ -104,7 +104,7 @@ impl Uses {
 
 impl Strategy {
     /// The strategy of settings `s` rendered under `plan`.
-    pub fn of(s: &Settings, plan: &Plan) -> Self {
+    pub(crate) fn of(s: &Settings, plan: &Plan) -> Self {
         Self {
             light_samples: s.light_samples,
             glossy_samples: s.glossy_samples,
@@ -114,7 +114,7 @@ impl Strategy {
         }
     }
 
-    pub fn apply(&self, s: &mut Settings) {
+    pub(crate) fn apply(&self, s: &mut Settings) {
         s.light_samples = self.light_samples;
         s.glossy_samples = self.glossy_samples;
         s.stratify = self.stratify;
@@ -124,7 +124,7 @@ impl Strategy {
     /// E.g. `L16 jittered`: light samples per hit (`L`), glossy directions
     /// per hit (`G`), and whether pixel and light samples are stratified,
     /// where the scene uses them.
-    pub fn label(&self, uses: Uses) -> String {
+    pub(crate) fn label(&self, uses: Uses) -> String {
         let mut parts = Vec::new();
         if self.integrator != uses.integrator {
             parts.push(self.integrator.to_string());
@@ -155,7 +155,7 @@ impl Strategy {
     }
 
     /// The command-line options that select this strategy.
-    pub fn options(&self, uses: Uses) -> String {
+    pub(crate) fn options(&self, uses: Uses) -> String {
         let mut o = Vec::new();
         if self.integrator != uses.integrator {
             o.push(format!("--integrator {}", self.integrator));
@@ -178,7 +178,7 @@ impl Strategy {
     /// The strategies worth comparing with `base` on a scene that uses `uses`:
     /// the other integrator, light samples per hit, glossy samples per hit,
     /// independent sampling, adaptive sampling.
-    pub fn alternatives(base: Strategy, uses: Uses) -> Vec<Strategy> {
+    pub(crate) fn alternatives(base: Strategy, uses: Uses) -> Vec<Strategy> {
         let mut out = vec![Strategy {
             integrator: match base.integrator {
                 Integrator::Path => Integrator::Whitted,
@@ -227,9 +227,9 @@ pub struct Point {
     /// Mean samples per pixel reached.
     pub spp: f64,
     /// Median wall time of a run (robust to a run slowed by other work).
-    pub seconds: f64,
+    pub(crate) seconds: f64,
     /// Mean rays traced by a run.
-    pub rays: f64,
+    pub(crate) rays: f64,
     /// Root of the mean squared error over seeds.
     pub rmse: f64,
     pub rel_mse: f64,
@@ -243,7 +243,7 @@ impl Point {
         self.rel_mse.sqrt()
     }
 
-    pub fn est_err(&self) -> Option<f64> {
+    pub(crate) fn est_err(&self) -> Option<f64> {
         self.est_rel_mse.map(f64::sqrt)
     }
 
@@ -253,7 +253,7 @@ impl Point {
         (self.rel_mse > 0.0).then(|| e / self.rel_err())
     }
 
-    pub fn mrays_per_s(&self) -> f64 {
+    pub(crate) fn mrays_per_s(&self) -> f64 {
         if self.seconds > 0.0 {
             self.rays / self.seconds / 1e6
         } else {
@@ -264,17 +264,17 @@ impl Point {
 
 /// Where a series reaches a target error.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Reach {
-    pub spp: f64,
-    pub seconds: f64,
+pub(crate) struct Reach {
+    pub(crate) spp: f64,
+    pub(crate) seconds: f64,
     /// Inside the measured range (interpolated) rather than extrapolated.
-    pub measured: bool,
+    pub(crate) measured: bool,
 }
 
 /// One strategy's points, in budget order.
 #[derive(Clone, Debug)]
 pub struct Series {
-    pub strategy: Strategy,
+    pub(crate) strategy: Strategy,
     pub label: String,
     pub points: Vec<Point>,
 }
@@ -287,7 +287,7 @@ impl Series {
     /// Slope of log(relative error) against log(time); none where a run
     /// took less than [`MIN_TIMED`], whose time is mostly the timer's and
     /// the scheduler's.
-    pub fn slope_time(&self) -> Option<f64> {
+    pub(crate) fn slope_time(&self) -> Option<f64> {
         if self.points.iter().any(|p| p.seconds < MIN_TIMED) {
             return None;
         }
@@ -302,7 +302,7 @@ impl Series {
     /// Relative error at `seconds`, interpolated in log-log between the
     /// measured points around it; `None` outside the measured times (beyond
     /// the slack a timed run may overshoot by).
-    pub fn error_at(&self, seconds: f64) -> Option<f64> {
+    pub(crate) fn error_at(&self, seconds: f64) -> Option<f64> {
         let mut pts = self.pairs(|p| p.seconds);
         pts.retain(|(t, e)| *t > 0.0 && *e > 0.0);
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -320,7 +320,7 @@ impl Series {
     /// Where the relative error falls to `target`: interpolated where the
     /// measured points cross it, else extrapolated from the last point along
     /// the slope of the last three, or -0.5 where that is steeper.
-    pub fn reach(&self, target: f64) -> Option<Reach> {
+    pub(crate) fn reach(&self, target: f64) -> Option<Reach> {
         let pts = &self.points;
         if let Some(p) = pts.first().filter(|p| p.rel_err() <= target) {
             return Some(Reach {
@@ -411,18 +411,18 @@ pub struct Config {
 pub struct ReferenceInfo {
     /// Where it came from, in words.
     pub source: String,
-    pub spp: Option<u32>,
+    pub(crate) spp: Option<u32>,
     /// Seconds spent rendering it in this run (0 when loaded).
-    pub seconds: f64,
+    pub(crate) seconds: f64,
 }
 
 #[derive(Clone, Debug)]
 pub struct Study {
-    pub scene: String,
-    pub width: u32,
-    pub height: u32,
-    pub seeds: u32,
-    pub uses: Uses,
+    pub(crate) scene: String,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) seeds: u32,
+    pub(crate) uses: Uses,
     /// Nothing is sampled: one pass was rendered and is the answer.
     pub exact: bool,
     pub reference: ReferenceInfo,
@@ -430,7 +430,7 @@ pub struct Study {
     pub series: Vec<Series>,
     /// Passes rendered for the study, the reference's not counted.
     pub passes: u64,
-    pub target: f64,
+    pub(crate) target: f64,
     /// Caveats found while measuring.
     pub notes: Vec<String>,
 }

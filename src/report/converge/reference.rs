@@ -60,7 +60,7 @@ pub(super) fn load_cached(path: &Path, key: u64, width: u32, height: u32) -> Res
 /// error of variance `s²/12` per channel. Errors measured against such a
 /// reference cannot fall below it. Zero for OpenEXR (f32 rounding is some
 /// 1e-8).
-pub fn format_floor(format: Linear, img: &[Vec3]) -> f64 {
+pub(crate) fn format_floor(format: Linear, img: &[Vec3]) -> f64 {
     if format == Linear::Exr || img.is_empty() {
         return 0.0;
     }
@@ -77,7 +77,7 @@ pub fn format_floor(format: Linear, img: &[Vec3]) -> f64 {
 }
 
 /// `$XDG_CACHE_HOME/rayterm`, else `~/.cache/rayterm`.
-pub fn default_cache_dir() -> Option<PathBuf> {
+pub(crate) fn default_cache_dir() -> Option<PathBuf> {
     let base = std::env::var_os("XDG_CACHE_HOME")
         .filter(|v| !v.is_empty())
         .map(PathBuf::from)

@@ -32,7 +32,7 @@ pub(super) fn short(x: f64) -> String {
 
 impl Study {
     /// Times the strategies are compared at: the scene's own budgets.
-    pub fn comparison_times(&self) -> Vec<f64> {
+    pub(crate) fn comparison_times(&self) -> Vec<f64> {
         self.series
             .first()
             .map(|s| {
@@ -48,7 +48,7 @@ impl Study {
     }
 
     /// The strategy that reaches the target first, and where.
-    pub fn fastest_to_target(&self) -> Option<(&Series, Reach)> {
+    pub(crate) fn fastest_to_target(&self) -> Option<(&Series, Reach)> {
         self.series
             .iter()
             .filter_map(|s| s.reach(self.target).map(|r| (s, r)))
