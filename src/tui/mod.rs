@@ -12,27 +12,27 @@
 //! the terminal, and `bench` measures the pass time and terminal bandwidth.
 
 pub mod app;
-pub mod bench;
-pub mod camera;
+pub(crate) mod bench;
+pub(crate) mod camera;
 pub mod color;
-pub mod config;
-pub mod display;
-pub mod export;
+pub(crate) mod config;
+pub(crate) mod display;
+pub(crate) mod export;
 pub mod graphics;
-pub mod inspector;
-pub mod jobs;
-pub mod keys;
-pub mod layout;
-pub mod link;
+pub(crate) mod inspector;
+pub(crate) mod jobs;
+pub(crate) mod keys;
+pub(crate) mod layout;
+pub(crate) mod link;
 mod meter;
 mod overlays;
-pub mod popup;
+pub(crate) mod popup;
 mod reference;
 mod render_choice;
 mod status;
-pub mod term;
+pub(crate) mod term;
 pub mod widgets;
-pub mod worker;
+pub(crate) mod worker;
 
 use std::io::{self, IsTerminal, Stdout, Write};
 use std::path::Path;
@@ -75,7 +75,7 @@ const LEAVE_WAIT: Duration = Duration::from_secs(1);
 /// Opens the TUI on the scene; returns when the user quits. Colours,
 /// symbols and graphics not given here come from the configuration file
 /// and the environment (`config`), else from asking the terminal.
-pub fn run(
+pub(crate) fn run(
     req: &SceneRequest,
     color: Option<ColorMode>,
     symbols: Option<Symbols>,
@@ -510,7 +510,10 @@ fn leave<W: Write>(
 
 /// Lays out the screen for the terminal's size, brings the app in line
 /// with it, then draws (drawing only reads the app).
-pub fn draw<B: ratatui::backend::Backend>(terminal: &mut Terminal<B>, app: &mut App) -> Result<()>
+pub(crate) fn draw<B: ratatui::backend::Backend>(
+    terminal: &mut Terminal<B>,
+    app: &mut App,
+) -> Result<()>
 where
     B::Error: Send + Sync + 'static,
 {
