@@ -13,26 +13,26 @@
 
 pub mod app;
 pub(crate) mod bench;
-pub(crate) mod camera;
+mod camera;
 pub mod color;
-pub(crate) mod config;
-pub(crate) mod display;
-pub(crate) mod export;
+mod config;
+mod display;
+mod export;
 pub mod graphics;
-pub(crate) mod inspector;
-pub(crate) mod jobs;
-pub(crate) mod keys;
-pub(crate) mod layout;
-pub(crate) mod link;
+mod inspector;
+mod jobs;
+mod keys;
+mod layout;
+mod link;
 mod meter;
 mod overlays;
-pub(crate) mod popup;
+mod popup;
 mod reference;
 mod render_choice;
 mod status;
-pub(crate) mod term;
+mod term;
 pub mod widgets;
-pub(crate) mod worker;
+mod worker;
 
 use std::io::{self, IsTerminal, Stdout, Write};
 use std::path::Path;
