@@ -89,7 +89,7 @@ impl App {
         })
     }
 
-    pub fn mode(&self) -> Mode {
+    pub(crate) fn mode(&self) -> Mode {
         if self.popup.is_some() {
             Mode::Popup
         } else if self.inspector.select_mode {
@@ -100,18 +100,18 @@ impl App {
     }
 
     /// Puts `text` on the status line for a while.
-    pub fn say(&mut self, text: impl Into<String>) {
+    pub(crate) fn say(&mut self, text: impl Into<String>) {
         self.status.say(text);
     }
 
     /// What the status line shows: the newest message while it lasts, else
     /// the state (scene, mode, warnings).
-    pub fn status_line(&self) -> String {
+    pub(crate) fn status_line(&self) -> String {
         self.status
             .line(&self.session.scene, self.inspector.select_mode)
     }
 
-    pub fn generation(&self) -> u64 {
+    pub(crate) fn generation(&self) -> u64 {
         self.link.generation()
     }
 
@@ -158,7 +158,7 @@ impl App {
 
     /// The pixel overlay to keep drawn: the view chosen with `o`, of the
     /// selected pixel, for the one-ray views of the ray at the debug cursor.
-    pub fn pixel_request(&self) -> Option<PixelRequest> {
+    pub(crate) fn pixel_request(&self) -> Option<PixelRequest> {
         let view = self.overlays.pixel?;
         let s = self.inspector.selected?;
         Some(PixelRequest {
@@ -207,7 +207,7 @@ impl App {
         );
     }
 
-    pub fn handle_event(&mut self, ev: &Event) {
+    pub(crate) fn handle_event(&mut self, ev: &Event) {
         match ev {
             Event::Key(k) => {
                 if let Some(key) = Key::from_event(k) {
@@ -232,13 +232,13 @@ impl App {
         }
     }
 
-    pub fn handle_key(&mut self, key: Key) {
+    pub(crate) fn handle_key(&mut self, key: Key) {
         if let Some(a) = keys::action(key, self.mode()) {
             self.act(a);
         }
     }
 
-    pub fn act(&mut self, a: Action) {
+    pub(crate) fn act(&mut self, a: Action) {
         match a {
             Action::Orbit(yaw, pitch) => {
                 self.camera.orbit(yaw, pitch);
@@ -378,7 +378,7 @@ impl App {
     }
 
     /// The decision the Features panel shows for `f`.
-    pub fn feature_state(&self, f: Feature) -> Decision {
+    pub(crate) fn feature_state(&self, f: Feature) -> Decision {
         self.choice.decision(f)
     }
 
@@ -390,7 +390,7 @@ impl App {
         }
     }
 
-    pub fn select(&mut self, x: u32, y: u32, sample: u32) {
+    pub(crate) fn select(&mut self, x: u32, y: u32, sample: u32) {
         self.inspector
             .select(x, y, sample, self.display.view_size());
         self.refresh_inspector();
@@ -438,7 +438,7 @@ impl App {
 
     /// Takes what the worker and the jobs have sent; true when the screen
     /// needs redrawing. Fails when the worker has stopped.
-    pub fn poll(&mut self) -> Result<bool> {
+    pub(crate) fn poll(&mut self) -> Result<bool> {
         let mut changed = false;
         while let Some(m) = self.link.try_recv()? {
             changed |= self.on_msg(m);
@@ -525,18 +525,18 @@ impl App {
     }
 
     /// Takes the terminal output's figures; true when a readout changed.
-    pub fn note_output(&mut self, figures: Figures) -> bool {
+    pub(crate) fn note_output(&mut self, figures: Figures) -> bool {
         self.meter.note(figures)
     }
 
     /// Seconds from the start of the current view (a camera move, a
     /// toggle, the launch) until its first full picture was on screen.
-    pub fn view_shown_in(&self) -> Option<f64> {
+    pub(crate) fn view_shown_in(&self) -> Option<f64> {
         self.meter.shown_in(self.generation(), self.link.started)
     }
 
     /// Whether nothing more will change on screen without input.
-    pub fn idle(&self) -> bool {
+    pub(crate) fn idle(&self) -> bool {
         self.current_frame().is_some_and(|f| f.done) && !self.jobs.busy()
     }
 }

@@ -18,37 +18,37 @@ use crate::report::stats::median;
 
 /// What [`measure_pass`] measured.
 #[derive(Clone, Debug, Serialize)]
-pub struct TuiPassStats {
-    pub scene: String,
-    pub triangles: usize,
+pub(crate) struct TuiPassStats {
+    pub(crate) scene: String,
+    pub(crate) triangles: usize,
     /// Image size in pixels: the terminal's columns by twice its rows.
-    pub width: u32,
-    pub height: u32,
-    pub threads: usize,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) threads: usize,
     /// Full passes measured (fewer than asked when the scene is exact after one).
-    pub passes: u32,
+    pub(crate) passes: u32,
     /// The first pass, which also counts BVH work for the panel.
-    pub first_pass_ms: f64,
+    pub(crate) first_pass_ms: f64,
     /// Render time of the later passes, which grow as the worker's do
     /// ([`Job::growing`](crate::render::Job::growing)).
-    pub pass_ms_mean: f64,
-    pub pass_ms_median: f64,
-    pub pass_ms_min: f64,
+    pub(crate) pass_ms_mean: f64,
+    pub(crate) pass_ms_median: f64,
+    pub(crate) pass_ms_min: f64,
     /// Whole worker step of the later passes: render, error estimate,
     /// worst pixels and snapshot.
-    pub step_ms_mean: f64,
-    pub mrays_per_s: f64,
+    pub(crate) step_ms_mean: f64,
+    pub(crate) mrays_per_s: f64,
     /// The film's samples traced again in one pass, each pixel's together as
     /// a one-shot render of the same counts does: the rate the passes'
     /// `mrays_per_s` is measured against.
-    pub one_shot_mrays_per_s: f64,
+    pub(crate) one_shot_mrays_per_s: f64,
     /// The film's mean samples per pixel after the last pass.
-    pub spp_mean: f64,
+    pub(crate) spp_mean: f64,
     /// Bytes written to the terminal for the first frame (every cell) and
     /// per later frame (changed cells only), in truecolor and 256 colours.
-    pub first_frame_bytes: u64,
-    pub frame_bytes_mean: f64,
-    pub frame_bytes_mean_256: f64,
+    pub(crate) first_frame_bytes: u64,
+    pub(crate) frame_bytes_mean: f64,
+    pub(crate) frame_bytes_mean_256: f64,
 }
 
 /// A terminal of `cols x rows` that counts what it would write.
@@ -65,7 +65,12 @@ fn counting_terminal(cols: u16, rows: u16) -> Result<Counting> {
 /// size of a `cols x rows` terminal (two pixels per cell), with the
 /// request's plan, and draws each into a counting terminal filled by the
 /// viewport.
-pub fn measure_pass(req: &SceneRequest, cols: u16, rows: u16, passes: u32) -> Result<TuiPassStats> {
+pub(crate) fn measure_pass(
+    req: &SceneRequest,
+    cols: u16,
+    rows: u16,
+    passes: u32,
+) -> Result<TuiPassStats> {
     if cols == 0 || rows == 0 || passes == 0 {
         bail!("measure_pass needs a non-empty terminal and at least one pass");
     }

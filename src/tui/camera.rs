@@ -15,15 +15,15 @@ const HEIGHT_STEP: f32 = 1.1;
 const HEIGHT_RANGE: f32 = 64.0;
 
 #[derive(Clone, Copy, Debug)]
-pub struct CameraControl {
+pub(crate) struct CameraControl {
     home: Camera,
-    pub camera: Camera,
+    pub(crate) camera: Camera,
     /// World distance of one move step.
     step: f32,
 }
 
 impl CameraControl {
-    pub fn new(home: Camera) -> Self {
+    pub(crate) fn new(home: Camera) -> Self {
         Self {
             home,
             camera: home,
@@ -31,19 +31,14 @@ impl CameraControl {
         }
     }
 
-    /// The camera the TUI started with.
-    pub fn home(&self) -> Camera {
-        self.home
-    }
-
     /// Orbits by whole steps of yaw and pitch about the target.
-    pub fn orbit(&mut self, yaw: i8, pitch: i8) {
+    pub(crate) fn orbit(&mut self, yaw: i8, pitch: i8) {
         self.camera
             .orbit(yaw as f32 * ORBIT_STEP, pitch as f32 * ORBIT_STEP);
     }
 
     /// Moves by whole steps right, up and forward.
-    pub fn pan(&mut self, right: i8, up: i8, forward: i8) {
+    pub(crate) fn pan(&mut self, right: i8, up: i8, forward: i8) {
         let s = self.step;
         self.camera
             .pan(right as f32 * s, up as f32 * s, forward as f32 * s);
@@ -53,7 +48,7 @@ impl CameraControl {
     /// view, or an orthographic view's height (moving an orthographic
     /// camera forward only moves the plane its rays start from); returns
     /// the projection.
-    pub fn zoom(&mut self, steps: i8) -> Projection {
+    pub(crate) fn zoom(&mut self, steps: i8) -> Projection {
         self.camera.projection = match (self.camera.projection, self.home.projection) {
             (Projection::Perspective { vfov }, _) => Projection::Perspective {
                 vfov: (vfov + steps as f32 * FOV_STEP).clamp(FOV_RANGE.0, FOV_RANGE.1),
@@ -72,7 +67,7 @@ impl CameraControl {
         self.camera.projection
     }
 
-    pub fn reset(&mut self) {
+    pub(crate) fn reset(&mut self) {
         self.camera = self.home;
     }
 }

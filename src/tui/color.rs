@@ -37,7 +37,7 @@ impl crate::choice::Choice for ColorMode {
 impl ColorMode {
     /// Truecolor when `COLORTERM` says so or the terminal's terminfo entry
     /// declares it (`rgb`: `RGB` or `Tc`), else 256 colours.
-    pub fn detect(colorterm: Option<&str>, rgb: bool) -> Self {
+    pub(crate) fn detect(colorterm: Option<&str>, rgb: bool) -> Self {
         match colorterm.map(str::to_ascii_lowercase).as_deref() {
             Some("truecolor" | "24bit") => ColorMode::Truecolor,
             _ if rgb => ColorMode::Truecolor,
@@ -45,7 +45,7 @@ impl ColorMode {
         }
     }
 
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             ColorMode::Truecolor => "truecolor",
             ColorMode::Palette256 => "256 colours",
@@ -69,7 +69,7 @@ fn dist(a: [u8; 3], b: [u8; 3]) -> u32 {
 const CUBE: [u8; 6] = [0, 95, 135, 175, 215, 255];
 
 /// RGB of palette entry `i` (16..=255) of the xterm 256-colour palette.
-pub fn palette256(i: u8) -> [u8; 3] {
+pub(crate) fn palette256(i: u8) -> [u8; 3] {
     match i {
         16..=231 => {
             let j = i - 16;
@@ -118,7 +118,7 @@ fn table256() -> &'static [u8] {
 
 /// The 256-colour palette entry for `c`: the one nearest to the
 /// middle of `c`'s table cell (at most 2 steps away in each channel).
-pub fn quantize256(c: [u8; 3]) -> u8 {
+pub(crate) fn quantize256(c: [u8; 3]) -> u8 {
     table256()[table_cell(c)]
 }
 
@@ -280,12 +280,12 @@ fn pick(a: u8, b: u8, ratio: f32, x: u32, y: u32) -> u8 {
 }
 
 /// One of the 16 ANSI colours for pixel `c` at (x, y), ordered-dithered.
-pub fn quantize16(c: [u8; 3], x: u32, y: u32) -> Color {
+pub(crate) fn quantize16(c: [u8; 3], x: u32, y: u32) -> Color {
     ANSI16[dither16(c, x, y) as usize].0
 }
 
 /// The index (0..16) of [`quantize16`]'s colour.
-pub fn dither16(c: [u8; 3], x: u32, y: u32) -> u8 {
+pub(crate) fn dither16(c: [u8; 3], x: u32, y: u32) -> u8 {
     let (a, b) = pairs16()[table_cell(c)];
     if a == b {
         return a;
@@ -296,13 +296,13 @@ pub fn dither16(c: [u8; 3], x: u32, y: u32) -> u8 {
 
 /// The 256-colour entry for pixel `c` at (x, y), ordered-dithered between
 /// cube and ramp entries, which breaks up the bands of smooth gradients.
-pub fn dither256(c: [u8; 3], x: u32, y: u32) -> u8 {
+pub(crate) fn dither256(c: [u8; 3], x: u32, y: u32) -> u8 {
     let clamp = |p: [i32; 3]| p.map(|v| v.clamp(0, 255) as u8);
     dither_where_it_helps(c, x, y, |p| quantize256(clamp(p)), palette256)
 }
 
 /// The terminal colour of sRGB pixel `c` at image position (x, y).
-pub fn to_color(c: [u8; 3], mode: ColorMode, x: u32, y: u32) -> Color {
+pub(crate) fn to_color(c: [u8; 3], mode: ColorMode, x: u32, y: u32) -> Color {
     match mode {
         ColorMode::Truecolor => Color::Rgb(c[0], c[1], c[2]),
         ColorMode::Palette256 => Color::Indexed(dither256(c, x, y)),
@@ -311,7 +311,8 @@ pub fn to_color(c: [u8; 3], mode: ColorMode, x: u32, y: u32) -> Color {
 }
 
 /// The sRGB a terminal shows for `c` (xterm's defaults for the 16 colours).
-pub fn shown(c: Color) -> Option<[u8; 3]> {
+#[cfg(test)]
+pub(crate) fn shown(c: Color) -> Option<[u8; 3]> {
     match c {
         Color::Rgb(r, g, b) => Some([r, g, b]),
         Color::Indexed(i) => Some(palette256(i)),

@@ -16,10 +16,10 @@ use crate::words::{clip_quotes, quoted};
 
 /// The defaults found; `None` where nothing was said.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Defaults {
-    pub color: Option<ColorMode>,
-    pub symbols: Option<Symbols>,
-    pub graphics: Option<GraphicsArg>,
+pub(crate) struct Defaults {
+    pub(crate) color: Option<ColorMode>,
+    pub(crate) symbols: Option<Symbols>,
+    pub(crate) graphics: Option<GraphicsArg>,
 }
 
 /// The file as written: values are checked as the command line checks them.
@@ -32,7 +32,7 @@ struct File {
 }
 
 /// The configuration file's path (which need not exist).
-pub fn path(var: impl Fn(&str) -> Option<String>) -> Option<PathBuf> {
+pub(crate) fn path(var: impl Fn(&str) -> Option<String>) -> Option<PathBuf> {
     let base = var("XDG_CONFIG_HOME")
         .filter(|v| !v.is_empty())
         .map(PathBuf::from)
@@ -43,7 +43,7 @@ pub fn path(var: impl Fn(&str) -> Option<String>) -> Option<PathBuf> {
 /// The defaults from the file at `path` (if there is one) and the
 /// environment (`var`); a bad file or variable is an error that names it
 /// (and the file's line).
-pub fn load(file: Option<&Path>, var: impl Fn(&str) -> Option<String>) -> Result<Defaults> {
+pub(crate) fn load(file: Option<&Path>, var: impl Fn(&str) -> Option<String>) -> Result<Defaults> {
     let mut d = match file {
         Some(path) => match std::fs::read_to_string(path) {
             Ok(text) => parse(path, &text)?,

@@ -9,13 +9,13 @@ use super::layout::Layout;
 
 /// The viewport's way to the screen and the view size it gives.
 pub struct Display {
-    pub color: ColorMode,
+    pub(crate) color: ColorMode,
     /// The block symbols the viewport is drawn with, unless a pixel
     /// protocol shows it.
-    pub symbols: Symbols,
+    pub(crate) symbols: Symbols,
     pub pixels: Option<PixelMode>,
     /// A cell's size in screen pixels: what the terminal said, else 8x16.
-    pub cell: (u32, u32),
+    pub(crate) cell: (u32, u32),
     /// The layout of the last update.
     pub layout: Layout,
     /// The viewport's size in pixels, from the layout.

@@ -18,27 +18,27 @@ use crate::scene::Camera;
 
 /// What to export: the session's scene with its seed, seen from `camera`
 /// with `plan`, at `size`.
-pub struct Request {
-    pub session: Session,
-    pub camera: Camera,
-    pub plan: Plan,
-    pub size: (u32, u32),
+pub(crate) struct Request {
+    pub(crate) session: Session,
+    pub(crate) camera: Camera,
+    pub(crate) plan: Plan,
+    pub(crate) size: (u32, u32),
     /// Where the file goes.
-    pub dir: PathBuf,
+    pub(crate) dir: PathBuf,
 }
 
 /// A finished export.
-pub struct Saved {
-    pub path: PathBuf,
-    pub spp: u32,
-    pub seconds: f64,
+pub(crate) struct Saved {
+    pub(crate) path: PathBuf,
+    pub(crate) spp: u32,
+    pub(crate) seconds: f64,
 }
 
 /// An export in progress.
-pub struct Job {
-    pub size: (u32, u32),
+pub(crate) struct Job {
+    pub(crate) size: (u32, u32),
     /// Samples per pixel the image gets.
-    pub target_spp: u32,
+    pub(crate) target_spp: u32,
     /// Samples per pixel of the passes done, and rows of the pass in
     /// flight done, of passes of `pass_spp`.
     done_spp: Arc<AtomicU32>,
@@ -50,7 +50,7 @@ pub struct Job {
 }
 
 /// A file-name-safe stem from a scene name, which may be a path.
-pub fn stem(scene_name: &str) -> String {
+pub(crate) fn stem(scene_name: &str) -> String {
     let base = Path::new(scene_name)
         .file_stem()
         .map_or(scene_name.into(), |s| s.to_string_lossy());
@@ -74,7 +74,7 @@ pub fn stem(scene_name: &str) -> String {
 impl Job {
     /// Starts rendering `r` to `rayterm-<scene>-NNN.png` at the scene's spp
     /// (one pass when nothing is sampled).
-    pub fn start(r: Request) -> Result<Job> {
+    pub(crate) fn start(r: Request) -> Result<Job> {
         let target_spp = if r.plan.deterministic {
             1
         } else {
@@ -111,7 +111,7 @@ impl Job {
     }
 
     /// Samples per pixel done, counting the rows of the pass in flight.
-    pub fn done_spp(&self) -> u32 {
+    pub(crate) fn done_spp(&self) -> u32 {
         let done = self.done_spp.load(Ordering::Relaxed);
         let rows = self.rows.load(Ordering::Relaxed) as u64;
         // The last pass may be shorter than the others.
@@ -120,7 +120,7 @@ impl Job {
     }
 
     /// The result once the export has finished.
-    pub fn poll(&self) -> Option<Result<Saved>> {
+    pub(crate) fn poll(&self) -> Option<Result<Saved>> {
         match self.result.try_recv() {
             Ok(r) => Some(r),
             Err(TryRecvError::Empty) => None,
@@ -174,7 +174,11 @@ fn render(
 /// The export size for a view of `view` pixels: `asked` (`--size`) when
 /// given, else the view's shape with the long side of `scene` (the scene's
 /// size), so the picture shows what the view shows.
-pub fn size_for(view: (u32, u32), asked: Option<(u32, u32)>, scene: (u32, u32)) -> (u32, u32) {
+pub(crate) fn size_for(
+    view: (u32, u32),
+    asked: Option<(u32, u32)>,
+    scene: (u32, u32),
+) -> (u32, u32) {
     if let Some(s) = asked {
         return s;
     }

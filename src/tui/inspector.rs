@@ -11,10 +11,10 @@ use crate::render::Tracer;
 
 /// The selected pixel and the sample replayed for its ray tree.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Selected {
-    pub x: u32,
-    pub y: u32,
-    pub sample: u32,
+pub(crate) struct Selected {
+    pub(crate) x: u32,
+    pub(crate) y: u32,
+    pub(crate) sample: u32,
 }
 
 /// The longest the pane replays a sample for, on the interface's thread:
@@ -23,10 +23,10 @@ pub struct Selected {
 const TREE_WAIT: Duration = Duration::from_millis(300);
 
 #[derive(Default)]
-pub struct Inspector {
+pub(crate) struct Inspector {
     /// Arrows move the pixel cursor instead of the camera.
-    pub select_mode: bool,
-    pub selected: Option<Selected>,
+    pub(crate) select_mode: bool,
+    pub(crate) selected: Option<Selected>,
     /// The tree of `selected` for a view generation; `None` where its
     /// sample takes longer than [`TREE_WAIT`] to replay.
     tree: Option<((Selected, u64), Option<PixelTree>)>,
@@ -35,16 +35,16 @@ pub struct Inspector {
     /// The tree's lines as shown, folds applied.
     lines: Vec<TreeLine>,
     /// The cursor line and the first visible line.
-    pub cursor: usize,
-    pub top: usize,
+    pub(crate) cursor: usize,
+    pub(crate) top: usize,
     /// Rows and columns of the pane: long lines wrap.
-    pub height: usize,
-    pub width: usize,
+    pub(crate) height: usize,
+    pub(crate) width: usize,
 }
 
 impl Inspector {
     /// Selects pixel `(x, y)` of a `size` view (clamped into it).
-    pub fn select(&mut self, x: u32, y: u32, sample: u32, (w, h): (u32, u32)) {
+    pub(crate) fn select(&mut self, x: u32, y: u32, sample: u32, (w, h): (u32, u32)) {
         if w == 0 || h == 0 {
             return;
         }
@@ -60,7 +60,7 @@ impl Inspector {
 
     /// Keeps the selection on the same point of the image when the view
     /// changes size from `old` to `new`.
-    pub fn rescale(&mut self, old: (u32, u32), new: (u32, u32)) {
+    pub(crate) fn rescale(&mut self, old: (u32, u32), new: (u32, u32)) {
         if let Some(s) = &mut self.selected {
             if old.0 > 0 && old.1 > 0 && new.0 > 0 && new.1 > 0 {
                 let scale = |v: u32, from: u32, to: u32| {
@@ -72,11 +72,12 @@ impl Inspector {
         }
     }
 
-    pub fn tree(&self) -> Option<&PixelTree> {
+    #[cfg(test)]
+    pub(crate) fn tree(&self) -> Option<&PixelTree> {
         self.tree.as_ref().and_then(|t| t.1.as_ref())
     }
 
-    pub fn lines(&self) -> &[TreeLine] {
+    pub(crate) fn lines(&self) -> &[TreeLine] {
         &self.lines
     }
 
@@ -84,7 +85,12 @@ impl Inspector {
     /// (`generation`) changed, takes the pixel's values before and after
     /// bloom from the shown image (`film` of `spp` samples), and keeps the
     /// cursor inside the lines and on screen.
-    pub fn refresh(&mut self, tracer: &Tracer, generation: u64, film: Option<(&Displayed, u32)>) {
+    pub(crate) fn refresh(
+        &mut self,
+        tracer: &Tracer,
+        generation: u64,
+        film: Option<(&Displayed, u32)>,
+    ) {
         match self.selected {
             None => {
                 self.tree = None;
@@ -144,19 +150,19 @@ impl Inspector {
 
     /// The ray of the line at the debug cursor, or of the nearest line
     /// above it that is a ray's (none above the first ray).
-    pub fn cursor_ray(&self) -> Option<usize> {
+    pub(crate) fn cursor_ray(&self) -> Option<usize> {
         let end = (self.cursor + 1).min(self.lines.len());
         self.lines[..end].iter().rev().find_map(|l| l.ray)
     }
 
-    pub fn move_cursor(&mut self, n: i64) {
+    pub(crate) fn move_cursor(&mut self, n: i64) {
         let last = self.lines.len().saturating_sub(1) as i64;
         self.cursor = (self.cursor as i64 + n).clamp(0, last) as usize;
         self.relayout();
     }
 
     /// Toggles the first fold at or below the cursor; false when there is none.
-    pub fn fold(&mut self) -> bool {
+    pub(crate) fn fold(&mut self) -> bool {
         let found = self
             .lines
             .iter()
@@ -178,7 +184,7 @@ impl Inspector {
 /// `line` indented by its depth and wrapped at spaces to `width` columns,
 /// continuation rows indented further (a word longer than a row is cut
 /// where the row ends). Width 0 leaves the line whole.
-pub fn wrap(line: &TreeLine, width: usize) -> Vec<String> {
+pub(crate) fn wrap(line: &TreeLine, width: usize) -> Vec<String> {
     let indent = "  ".repeat(line.depth);
     let whole = format!("{indent}{}", line.text);
     if width == 0 || whole.chars().count() <= width {

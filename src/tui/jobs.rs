@@ -13,7 +13,7 @@ use crate::render::{Plan, Session};
 use crate::report::stability;
 use crate::scene::{Camera, Scene};
 
-pub struct Jobs {
+pub(crate) struct Jobs {
     /// Where PNG exports go: the directory the TUI was started in.
     pub(crate) export_dir: PathBuf,
     /// The export size `--size` asked for; otherwise exports take the
@@ -25,9 +25,9 @@ pub struct Jobs {
 }
 
 /// What finished jobs have to say.
-pub struct Finished {
-    pub status: Option<String>,
-    pub popup: Option<Popup>,
+pub(crate) struct Finished {
+    pub(crate) status: Option<String>,
+    pub(crate) popup: Option<Popup>,
 }
 
 impl Jobs {
@@ -75,7 +75,7 @@ impl Jobs {
     }
 
     /// Export progress for the status line.
-    pub fn export_progress(&self) -> Option<String> {
+    pub(crate) fn export_progress(&self) -> Option<String> {
         self.export.as_ref().map(|j| {
             format!(
                 "exporting {}x{} PNG: {}/{} spp",
@@ -88,13 +88,13 @@ impl Jobs {
     }
 
     /// Stops an export in progress; says so when there was one.
-    pub fn cancel_export(&mut self) -> bool {
+    pub(crate) fn cancel_export(&mut self) -> bool {
         self.export.take().is_some()
     }
 
     /// Runs the stability battery on `scene` in the background; the status
     /// line's text.
-    pub fn stability(&mut self, scene: Arc<Scene>) -> String {
+    pub(crate) fn stability(&mut self, scene: Arc<Scene>) -> String {
         if self.stability.is_some() {
             return "the stability battery is already running".into();
         }
@@ -108,12 +108,12 @@ impl Jobs {
         "running the stability battery...".into()
     }
 
-    pub fn busy(&self) -> bool {
+    pub(crate) fn busy(&self) -> bool {
         self.export.is_some() || self.stability.is_some()
     }
 
     /// Collects what has finished; `None` when nothing has.
-    pub fn poll(&mut self, scene_name: &str) -> Option<Finished> {
+    pub(crate) fn poll(&mut self, scene_name: &str) -> Option<Finished> {
         if let Some(job) = &self.export {
             if let Some(r) = job.poll() {
                 let status = match r {

@@ -7,7 +7,7 @@ use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
 use crate::render::{Feature, Worst};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Key {
+pub(crate) enum Key {
     Char(char),
     Ctrl(char),
     Up,
@@ -24,7 +24,7 @@ pub enum Key {
 impl Key {
     /// The table's key for a terminal key press; `None` for releases and
     /// keys the table does not use.
-    pub fn from_event(e: &KeyEvent) -> Option<Key> {
+    pub(crate) fn from_event(e: &KeyEvent) -> Option<Key> {
         if e.kind == KeyEventKind::Release {
             return None;
         }
@@ -46,7 +46,7 @@ impl Key {
         })
     }
 
-    pub fn label(self) -> String {
+    pub(crate) fn label(self) -> String {
         match self {
             Key::Char(' ') => "Space".into(),
             Key::Char(c) => c.to_string(),
@@ -68,7 +68,7 @@ impl Key {
 /// the pixel cursor in select mode; while a popup is open only its own keys
 /// work.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Mode {
+pub(crate) enum Mode {
     /// View and select mode.
     Any,
     View,
@@ -84,7 +84,7 @@ impl Mode {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Action {
+pub(crate) enum Action {
     /// Yaw and pitch steps about the target.
     Orbit(i8, i8),
     /// Steps right, up and forward.
@@ -128,18 +128,18 @@ pub enum Action {
 }
 
 /// One line of the help: keys with their actions, and what they do.
-pub struct Row {
-    pub mode: Mode,
-    pub keys: &'static [(Key, Action)],
-    pub help: &'static str,
+pub(crate) struct Row {
+    pub(crate) mode: Mode,
+    pub(crate) keys: &'static [(Key, Action)],
+    pub(crate) help: &'static str,
     /// Short label for the key-hint bar, for the bindings worth showing there.
-    pub hint: Option<&'static str>,
+    pub(crate) hint: Option<&'static str>,
 }
 
 use Action as A;
 use Key as K;
 
-pub const ROWS: &[Row] = &[
+pub(crate) const ROWS: &[Row] = &[
     Row {
         mode: Mode::Any,
         keys: &[(K::Char('?'), A::Help)],
@@ -385,7 +385,7 @@ pub const ROWS: &[Row] = &[
 ];
 
 /// What `key` does in `mode`.
-pub fn action(key: Key, mode: Mode) -> Option<Action> {
+pub(crate) fn action(key: Key, mode: Mode) -> Option<Action> {
     ROWS.iter()
         .filter(|r| r.mode.overlaps(mode))
         .flat_map(|r| r.keys)
@@ -394,7 +394,7 @@ pub fn action(key: Key, mode: Mode) -> Option<Action> {
 }
 
 /// The first key bound to `action`.
-pub fn key_for(action: Action) -> Option<Key> {
+pub(crate) fn key_for(action: Action) -> Option<Key> {
     ROWS.iter()
         .flat_map(|r| r.keys)
         .find(|(_, a)| *a == action)
@@ -402,7 +402,7 @@ pub fn key_for(action: Action) -> Option<Key> {
 }
 
 /// A row's keys as one label, e.g. `w s a d`.
-pub fn keys_label(r: &Row) -> String {
+pub(crate) fn keys_label(r: &Row) -> String {
     r.keys
         .iter()
         .map(|(k, _)| k.label())
@@ -411,7 +411,7 @@ pub fn keys_label(r: &Row) -> String {
 }
 
 /// Key-hint bar entries for `mode`: short keys label and hint.
-pub fn hints(mode: Mode) -> Vec<(String, &'static str)> {
+pub(crate) fn hints(mode: Mode) -> Vec<(String, &'static str)> {
     ROWS.iter()
         .filter(|r| r.mode.overlaps(mode))
         .filter_map(|r| {
@@ -432,7 +432,8 @@ pub fn hints(mode: Mode) -> Vec<(String, &'static str)> {
 }
 
 /// The key table as Markdown, as in the README.
-pub fn markdown_table() -> String {
+#[cfg(test)]
+pub(crate) fn markdown_table() -> String {
     let mut s = String::from("| keys | mode | action |\n|---|---|---|\n");
     for r in ROWS {
         let keys = r

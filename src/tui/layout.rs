@@ -10,41 +10,41 @@ use super::popup::Popup;
 use super::widgets::panels;
 
 /// Below this the layout cannot show every panel.
-pub const MIN_SIZE: (u16, u16) = (80, 24);
+pub(crate) const MIN_SIZE: (u16, u16) = (80, 24);
 /// Height of a render panel with a readable chart.
 const RENDER_WITH_CHART: u16 = 16;
 /// The keys every popup takes, on its bottom edge.
-pub const POPUP_HINT: &str = " ↑↓ PgUp PgDn scroll · Esc q close ";
+pub(crate) const POPUP_HINT: &str = " ↑↓ PgUp PgDn scroll · Esc q close ";
 /// Height of the BVH panel.
 const BVH_PANEL: u16 = 5;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Layout {
-    pub area: Rect,
+    pub(crate) area: Rect,
     /// The terminal is smaller than [`MIN_SIZE`]: only a message is shown.
-    pub too_small: bool,
+    pub(crate) too_small: bool,
     /// Everything above the status line (popups centre on it).
-    pub main: Rect,
+    pub(crate) main: Rect,
     /// The viewport panel and, inside its title line, the image.
-    pub view: Rect,
+    pub(crate) view: Rect,
     pub image: Rect,
     /// The debug pane and its text.
-    pub debug: Rect,
-    pub debug_text: Rect,
-    pub bvh: Rect,
-    pub features: Rect,
+    pub(crate) debug: Rect,
+    pub(crate) debug_text: Rect,
+    pub(crate) bvh: Rect,
+    pub(crate) features: Rect,
     /// Whether feature reasons get lines of their own.
-    pub wrap_features: bool,
-    pub render: Rect,
+    pub(crate) wrap_features: bool,
+    pub(crate) render: Rect,
     /// Pixels per cell of the image, across and down: the symbols' grid,
     /// or with a pixel protocol the cell's size (within the budget).
-    pub grid: (u32, u32),
-    pub status: Rect,
-    pub hints: Rect,
+    pub(crate) grid: (u32, u32),
+    pub(crate) status: Rect,
+    pub(crate) hints: Rect,
 }
 
 impl Layout {
-    pub fn compute(area: Rect, app: &App) -> Layout {
+    pub(crate) fn compute(area: Rect, app: &App) -> Layout {
         let mut l = Layout {
             area,
             ..Layout::default()
@@ -93,13 +93,13 @@ impl Layout {
     }
 
     /// The view's size in pixels: the symbols' grid in every cell.
-    pub fn view_size(&self) -> (u32, u32) {
+    pub(crate) fn view_size(&self) -> (u32, u32) {
         let (gx, gy) = self.grid;
         (self.image.width as u32 * gx, self.image.height as u32 * gy)
     }
 
     /// The top left pixel under a terminal cell, when it lies in the image.
-    pub fn pixel_at(&self, column: u16, row: u16) -> Option<(u32, u32)> {
+    pub(crate) fn pixel_at(&self, column: u16, row: u16) -> Option<(u32, u32)> {
         let r = self.image;
         let (gx, gy) = self.grid;
         let inside = column >= r.x && column < r.x + r.width && row >= r.y && row < r.y + r.height;
@@ -107,13 +107,13 @@ impl Layout {
     }
 
     /// Whether a terminal cell lies in the debug pane.
-    pub fn in_debug(&self, column: u16, row: u16) -> bool {
+    pub(crate) fn in_debug(&self, column: u16, row: u16) -> bool {
         let r = self.debug;
         column >= r.x && column < r.x + r.width && row >= r.y && row < r.y + r.height
     }
 
     /// Where `p` is drawn: centred on the main area, as large as its text.
-    pub fn popup(&self, p: &Popup) -> Rect {
+    pub(crate) fn popup(&self, p: &Popup) -> Rect {
         let area = self.main;
         let width = p
             .header

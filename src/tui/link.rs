@@ -11,26 +11,26 @@ use super::worker::{self, Cmd, Msg, OverlayFrame, PixelFrame, PixelRequest, Snap
 use crate::scene::Builder;
 use crate::viz;
 
-pub struct RenderLink {
+pub(crate) struct RenderLink {
     worker: worker::Handle,
     /// Bumped on every change that restarts rendering, and when.
     generation: u64,
-    pub started: Instant,
+    pub(crate) started: Instant,
     /// The newest pass.
-    pub frame: Option<Box<Snapshot>>,
+    pub(crate) frame: Option<Box<Snapshot>>,
     /// The newest BVH overlay.
-    pub overlay: Option<Box<OverlayFrame>>,
+    pub(crate) overlay: Option<Box<OverlayFrame>>,
     /// The newest pixel overlay, and the last one asked for.
-    pub pixel: Option<Box<PixelFrame>>,
+    pub(crate) pixel: Option<Box<PixelFrame>>,
     asked_pixel: Option<PixelRequest>,
     /// Generation and time of the last pass that asked for a redraw.
     shown: (u64, Instant),
     /// A BVH rebuild is under way.
-    pub rebuilding: bool,
+    pub(crate) rebuilding: bool,
 }
 
 impl RenderLink {
-    pub fn new(worker: worker::Handle) -> Self {
+    pub(crate) fn new(worker: worker::Handle) -> Self {
         Self {
             worker,
             generation: 0,
@@ -44,19 +44,19 @@ impl RenderLink {
         }
     }
 
-    pub fn generation(&self) -> u64 {
+    pub(crate) fn generation(&self) -> u64 {
         self.generation
     }
 
     /// Renders `view` from now on, cancelling the pass in flight.
-    pub fn send_view(&mut self, view: View) {
+    pub(crate) fn send_view(&mut self, view: View) {
         self.generation += 1;
         self.started = Instant::now();
         self.worker.send(Cmd::View(self.generation, Box::new(view)));
     }
 
     /// Rebuilds the BVH, then renders the current view again.
-    pub fn rebuild(&mut self, builder: Builder) {
+    pub(crate) fn rebuild(&mut self, builder: Builder) {
         self.generation += 1;
         self.started = Instant::now();
         self.rebuilding = true;
@@ -65,14 +65,14 @@ impl RenderLink {
 
     /// Keeps `view` of the whole image drawn over every view or into
     /// every pass (none: no view).
-    pub fn set_image_view(&mut self, view: Option<viz::View>) {
+    pub(crate) fn set_image_view(&mut self, view: Option<viz::View>) {
         self.overlay = None;
         self.worker.send(Cmd::ImageView(view));
     }
 
     /// Keeps the selected pixel's overlay `p` drawn (none: no overlay);
     /// asks the worker only when it changed.
-    pub fn set_pixel(&mut self, p: Option<PixelRequest>) {
+    pub(crate) fn set_pixel(&mut self, p: Option<PixelRequest>) {
         if self.asked_pixel != p {
             self.asked_pixel = p;
             self.worker.send(Cmd::Pixel(p));
@@ -81,26 +81,26 @@ impl RenderLink {
 
     /// The pixel overlay when it is the one asked for, drawn for the
     /// current view.
-    pub fn current_pixel(&self) -> Option<&PixelFrame> {
+    pub(crate) fn current_pixel(&self) -> Option<&PixelFrame> {
         self.pixel
             .as_deref()
             .filter(|p| p.generation == self.generation && Some(p.request) == self.asked_pixel)
     }
 
     /// The newest pass when it shows the current view.
-    pub fn current_frame(&self) -> Option<&Snapshot> {
+    pub(crate) fn current_frame(&self) -> Option<&Snapshot> {
         self.frame
             .as_deref()
             .filter(|f| f.generation == self.generation)
     }
 
     /// The newest full (not coarse) pass of the current view.
-    pub fn full_frame(&self) -> Option<&Snapshot> {
+    pub(crate) fn full_frame(&self) -> Option<&Snapshot> {
         self.current_frame().filter(|f| !f.coarse)
     }
 
     /// The overlay when it was drawn for the current view.
-    pub fn current_overlay(&self) -> Option<&OverlayFrame> {
+    pub(crate) fn current_overlay(&self) -> Option<&OverlayFrame> {
         self.overlay
             .as_deref()
             .filter(|o| o.generation == self.generation)
@@ -108,14 +108,14 @@ impl RenderLink {
 
     /// (rows done, rows, seconds) of a pass of the current view that has
     /// run longer than [`SLOW_PASS`].
-    pub fn slow_pass(&self) -> Option<(u32, u32, f64)> {
+    pub(crate) fn slow_pass(&self) -> Option<(u32, u32, f64)> {
         let (generation, done, rows, secs) = self.worker.progress.current()?;
         (generation == self.generation && secs >= SLOW_PASS).then_some((done, rows, secs))
     }
 
     /// The next message from the worker, if one is waiting. Fails when the
     /// worker has stopped.
-    pub fn try_recv(&self) -> Result<Option<Msg>> {
+    pub(crate) fn try_recv(&self) -> Result<Option<Msg>> {
         match self.worker.rx.try_recv() {
             Ok(m) => Ok(Some(m)),
             Err(TryRecvError::Empty) => Ok(None),
@@ -124,7 +124,7 @@ impl RenderLink {
     }
 
     /// Waits up to `timeout` for the next message.
-    pub fn recv_timeout(&self, timeout: Duration) -> Result<Option<Msg>> {
+    pub(crate) fn recv_timeout(&self, timeout: Duration) -> Result<Option<Msg>> {
         match self.worker.rx.recv_timeout(timeout) {
             Ok(m) => Ok(Some(m)),
             Err(RecvTimeoutError::Timeout) => Ok(None),
@@ -137,7 +137,7 @@ impl RenderLink {
     /// Keeps a pass; true when it is worth redrawing for. Late passes change
     /// the image less and less, so they are shown less often, which saves
     /// terminal bandwidth.
-    pub fn keep_frame(&mut self, f: Box<Snapshot>) -> bool {
+    pub(crate) fn keep_frame(&mut self, f: Box<Snapshot>) -> bool {
         let due = f.coarse
             || f.done
             || f.generation != self.shown.0
@@ -151,7 +151,7 @@ impl RenderLink {
 }
 
 /// A pass running longer than this gets a progress readout.
-pub const SLOW_PASS: f64 = 0.5;
+pub(crate) const SLOW_PASS: f64 = 0.5;
 
 /// How often a pass at `spp` samples per pixel is worth showing: every
 /// frame up to 32 spp, then less often as each pass changes less, up to

@@ -12,27 +12,27 @@
 //! the terminal, and `bench` measures the pass time and terminal bandwidth.
 
 pub mod app;
-pub mod bench;
-pub mod camera;
+pub(crate) mod bench;
+mod camera;
 pub mod color;
-pub mod config;
-pub mod display;
-pub mod export;
+mod config;
+mod display;
+mod export;
 pub mod graphics;
-pub mod inspector;
-pub mod jobs;
-pub mod keys;
-pub mod layout;
-pub mod link;
+mod inspector;
+mod jobs;
+mod keys;
+mod layout;
+mod link;
 mod meter;
 mod overlays;
-pub mod popup;
+mod popup;
 mod reference;
 mod render_choice;
 mod status;
-pub mod term;
+mod term;
 pub mod widgets;
-pub mod worker;
+mod worker;
 
 use std::io::{self, IsTerminal, Stdout, Write};
 use std::path::Path;
@@ -75,7 +75,7 @@ const LEAVE_WAIT: Duration = Duration::from_secs(1);
 /// Opens the TUI on the scene; returns when the user quits. Colours,
 /// symbols and graphics not given here come from the configuration file
 /// and the environment (`config`), else from asking the terminal.
-pub fn run(
+pub(crate) fn run(
     req: &SceneRequest,
     color: Option<ColorMode>,
     symbols: Option<Symbols>,
@@ -510,7 +510,10 @@ fn leave<W: Write>(
 
 /// Lays out the screen for the terminal's size, brings the app in line
 /// with it, then draws (drawing only reads the app).
-pub fn draw<B: ratatui::backend::Backend>(terminal: &mut Terminal<B>, app: &mut App) -> Result<()>
+pub(crate) fn draw<B: ratatui::backend::Backend>(
+    terminal: &mut Terminal<B>,
+    app: &mut App,
+) -> Result<()>
 where
     B::Error: Send + Sync + 'static,
 {

@@ -2,24 +2,24 @@
 
 use super::keys;
 
-pub struct Popup {
-    pub title: String,
+pub(crate) struct Popup {
+    pub(crate) title: String,
     /// Lines that stay at the top while the rest scrolls (a table's header).
-    pub header: Vec<String>,
+    pub(crate) header: Vec<String>,
     /// The text as given, and as shown (wrapped to the popup's width when
     /// `wrap_indent` is set; tables are cut instead, to keep their columns).
     text: Vec<String>,
-    pub lines: Vec<String>,
+    pub(crate) lines: Vec<String>,
     /// Continuation lines start this far in.
-    pub wrap_indent: Option<usize>,
+    pub(crate) wrap_indent: Option<usize>,
     /// First line shown.
-    pub scroll: usize,
+    pub(crate) scroll: usize,
     /// Lines that fit, set from the layout.
-    pub visible: usize,
+    pub(crate) visible: usize,
 }
 
 impl Popup {
-    pub fn new(title: String, lines: Vec<String>) -> Self {
+    pub(crate) fn new(title: String, lines: Vec<String>) -> Self {
         Self {
             title,
             header: Vec::new(),
@@ -32,19 +32,19 @@ impl Popup {
     }
 
     /// Scrolls by `n` lines, keeping the last page in view.
-    pub fn scroll_by(&mut self, n: i64) {
+    pub(crate) fn scroll_by(&mut self, n: i64) {
         self.scroll = (self.scroll as i64 + n).max(0) as usize;
         self.clamp();
     }
 
     /// Sets the rows inside the frame; the header takes its share.
-    pub fn set_visible(&mut self, rows: usize) {
+    pub(crate) fn set_visible(&mut self, rows: usize) {
         self.visible = rows.saturating_sub(self.header.len()).max(1);
         self.clamp();
     }
 
     /// The first `n` lines become a header that does not scroll.
-    pub fn with_header(mut self, n: usize) -> Self {
+    pub(crate) fn with_header(mut self, n: usize) -> Self {
         let n = n.min(self.text.len());
         self.header = self.text.drain(..n).collect();
         self.lines = self.text.clone();
@@ -52,7 +52,7 @@ impl Popup {
     }
 
     /// Wraps the text to `width` columns when it wraps at all.
-    pub fn set_width(&mut self, width: usize) {
+    pub(crate) fn set_width(&mut self, width: usize) {
         let Some(indent) = self.wrap_indent else {
             return;
         };
@@ -92,7 +92,7 @@ fn wrap(line: &str, width: usize, indent: usize) -> Vec<String> {
 }
 
 /// The help, generated from the key table.
-pub fn help() -> Popup {
+pub(crate) fn help() -> Popup {
     let w = keys::ROWS
         .iter()
         .map(|r| keys::keys_label(r).chars().count())

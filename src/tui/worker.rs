@@ -39,34 +39,34 @@ const PASS_MS: f64 = 125.0;
 const COARSE: u32 = 4;
 /// A view stops accumulating here: the image no longer visibly changes
 /// (`scene::MAX_SPP` is the most any render takes).
-pub const VIEW_SPP: u32 = 1024;
+pub(crate) const VIEW_SPP: u32 = 1024;
 /// A pixel counts as converged in the Render panel below this estimated
 /// relative error (the default target of `rayterm converge`).
-pub const CONVERGED_BELOW: f64 = 0.01;
+pub(crate) const CONVERGED_BELOW: f64 = 0.01;
 
 /// What to render: a camera, the plan of what runs, and the size.
 #[derive(Clone, Debug, PartialEq)]
-pub struct View {
-    pub camera: Camera,
-    pub plan: Plan,
-    pub width: u32,
-    pub height: u32,
+pub(crate) struct View {
+    pub(crate) camera: Camera,
+    pub(crate) plan: Plan,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
     /// A pixel's width over its height on screen.
-    pub pixel_aspect: f64,
+    pub(crate) pixel_aspect: f64,
 }
 
 impl View {
-    pub fn size(&self) -> (u32, u32) {
+    pub(crate) fn size(&self) -> (u32, u32) {
         (self.width, self.height)
     }
 
     /// The camera's frame for `w x h` pixels of this view's shape.
-    pub fn frame(&self, (w, h): (u32, u32)) -> CameraFrame {
+    pub(crate) fn frame(&self, (w, h): (u32, u32)) -> CameraFrame {
         self.camera.frame(w, h).stretched(self.pixel_aspect)
     }
 }
 
-pub enum Cmd {
+pub(crate) enum Cmd {
     /// Render this view; `u64` is its generation.
     View(u64, Box<View>),
     /// Rebuild the BVH with this builder, then render the current view as
@@ -81,7 +81,7 @@ pub enum Cmd {
     Quit,
 }
 
-pub enum Msg {
+pub(crate) enum Msg {
     Frame(Box<Snapshot>),
     /// The BVH was rebuilt.
     Bvh(Arc<Bvh>),
@@ -93,48 +93,47 @@ pub enum Msg {
 /// ray of the one-ray views (none: the view's default) and the samples the
 /// zoom shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct PixelRequest {
-    pub x: u32,
-    pub y: u32,
-    pub sample: u32,
-    pub view: viz::View,
-    pub ray: Option<usize>,
-    pub spp: u32,
+pub(crate) struct PixelRequest {
+    pub(crate) x: u32,
+    pub(crate) y: u32,
+    pub(crate) sample: u32,
+    pub(crate) view: viz::View,
+    pub(crate) ray: Option<usize>,
+    pub(crate) spp: u32,
 }
 
 /// A pixel overlay drawn for one view of the scene.
-pub struct PixelFrame {
-    pub generation: u64,
-    pub request: PixelRequest,
+pub(crate) struct PixelFrame {
+    pub(crate) generation: u64,
+    pub(crate) request: PixelRequest,
     /// The layer and its legend in one line, or why it cannot be drawn.
-    pub layer: Result<(Layer, String), String>,
+    pub(crate) layer: Result<(Layer, String), String>,
 }
 
 /// A BVH view drawn for one view of the scene.
-pub struct OverlayFrame {
-    pub generation: u64,
-    pub view: viz::View,
+pub(crate) struct OverlayFrame {
+    pub(crate) generation: u64,
     /// The layer, or why it cannot be drawn.
-    pub layer: Result<(Layer, String), String>,
+    pub(crate) layer: Result<(Layer, String), String>,
 }
 
 /// A reference image (`--reference`) and the view it shows.
-pub struct Reference {
+pub(crate) struct Reference {
     /// The file's name, for the panel.
-    pub name: String,
-    pub width: u32,
-    pub height: u32,
+    pub(crate) name: String,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
     /// Linear colours, row-major from the top.
-    pub image: Vec<Vec3>,
+    pub(crate) image: Vec<Vec3>,
     /// The camera and plan it was rendered with; other views are not
     /// compared.
-    pub camera: Camera,
-    pub plan: Plan,
+    pub(crate) camera: Camera,
+    pub(crate) plan: Plan,
 }
 
 /// Whether the true error against the reference is measured, and if not why.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Truth {
+pub(crate) enum Truth {
     /// No reference was given.
     NoReference,
     /// Measured over `coverage` of the view's pixels; `exact` when each is
@@ -150,18 +149,18 @@ pub enum Truth {
 
 /// The pass in flight, for a progress readout while a pass is slow.
 #[derive(Debug, Default)]
-pub struct PassProgress {
-    pub generation: AtomicU64,
+pub(crate) struct PassProgress {
+    pub(crate) generation: AtomicU64,
     /// Rows finished and rows in all.
-    pub rows_done: Arc<AtomicU32>,
-    pub rows: AtomicU32,
+    pub(crate) rows_done: Arc<AtomicU32>,
+    pub(crate) rows: AtomicU32,
     /// When the pass began; `None` between passes.
-    pub started: Mutex<Option<Running>>,
+    pub(crate) started: Mutex<Option<Running>>,
 }
 
 impl PassProgress {
     /// (generation, rows done, rows, seconds running) of the pass in flight.
-    pub fn current(&self) -> Option<(u64, u32, u32, f64)> {
+    pub(crate) fn current(&self) -> Option<(u64, u32, u32, f64)> {
         let started = (*self.started.lock().ok()?)?;
         Some((
             self.generation.load(Ordering::Relaxed),
@@ -189,52 +188,52 @@ impl PassProgress {
 
 /// Mean BVH work per ray (camera and shadow rays) of a full pass.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PerRay {
-    pub nodes: f64,
-    pub triangle_tests: f64,
+pub(crate) struct PerRay {
+    pub(crate) nodes: f64,
+    pub(crate) triangle_tests: f64,
 }
 
 /// One finished pass, ready to show.
 #[derive(Clone, Debug)]
 pub struct Snapshot {
-    pub generation: u64,
-    pub width: u32,
-    pub height: u32,
+    pub(crate) generation: u64,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
     /// Linear colours as displayed (after bloom), row-major.
-    pub image: Vec<Vec3>,
+    pub(crate) image: Vec<Vec3>,
     /// The mean before bloom, when bloom ran.
-    pub pre_bloom: Option<Vec<Vec3>>,
+    pub(crate) pre_bloom: Option<Vec<Vec3>>,
     /// With a film view on: the pass as `viz::film_view` draws it (bloom,
     /// samples or error per pixel), and its legend in one line.
-    pub film_view: Option<(viz::View, Vec<Vec3>, String)>,
+    pub(crate) film_view: Option<(viz::View, Vec<Vec3>, String)>,
     /// A quarter-resolution preview, not yet a sample of the film.
-    pub coarse: bool,
-    pub spp: u32,
+    pub(crate) coarse: bool,
+    pub(crate) spp: u32,
     /// Mean samples per pixel (adaptive films differ per pixel).
-    pub spp_mean: f64,
+    pub(crate) spp_mean: f64,
     /// Fraction of pixels predicted below [`CONVERGED_BELOW`] (adaptive).
-    pub converged: Option<f64>,
-    pub pass_ms: f64,
-    pub mrays: f64,
+    pub(crate) converged: Option<f64>,
+    pub(crate) pass_ms: f64,
+    pub(crate) mrays: f64,
     /// The film's estimated relative error ([`Film::relative_error`]),
     /// unknown below two samples.
-    pub error: Option<f64>,
+    pub(crate) error: Option<f64>,
     /// Nothing is sampled and one pass is done: the image is exact.
-    pub exact: bool,
+    pub(crate) exact: bool,
     /// No more passes will come for this view.
     pub done: bool,
     /// Seconds since the view started.
-    pub elapsed: f64,
+    pub(crate) elapsed: f64,
     /// (seconds, error) after each pass with an error estimate.
-    pub history: Vec<(f64, f64)>,
+    pub(crate) history: Vec<(f64, f64)>,
     /// The true error (root relMSE against the reference) when measured.
-    pub true_error: Option<f64>,
-    pub truth: Truth,
+    pub(crate) true_error: Option<f64>,
+    pub(crate) truth: Truth,
     /// (seconds, true error) after each pass.
-    pub true_history: Vec<(f64, f64)>,
-    pub per_ray: Option<PerRay>,
-    pub worst: WorstPixels,
-    pub bad_samples: u64,
+    pub(crate) true_history: Vec<(f64, f64)>,
+    pub(crate) per_ray: Option<PerRay>,
+    pub(crate) worst: WorstPixels,
+    pub(crate) bad_samples: u64,
 }
 
 /// What the last full pass took.
@@ -249,7 +248,7 @@ struct LastPass {
 
 /// The worker's state; [`Worker::step`] runs one pass. The thread in
 /// [`spawn`] and the benchmark drive the same code.
-pub struct Worker {
+pub(crate) struct Worker {
     scene: Arc<Scene>,
     bvh: Arc<Bvh>,
     seed: u64,
@@ -264,7 +263,7 @@ pub struct Worker {
     /// long passes may grow.
     last_full: Option<LastPass>,
     /// The pass in flight, shared with the app.
-    pub progress: Arc<PassProgress>,
+    pub(crate) progress: Arc<PassProgress>,
     reference: Option<Arc<Reference>>,
     truth: Truth,
     /// The reference on the view's pixels while `truth` is `Compared`.
@@ -284,7 +283,7 @@ pub struct Worker {
 }
 
 impl Worker {
-    pub fn new(
+    pub(crate) fn new(
         scene: Arc<Scene>,
         bvh: Arc<Bvh>,
         seed: u64,
@@ -319,7 +318,7 @@ impl Worker {
 
     /// Applies a command; returns a message for the app when there is one.
     /// `Quit` is handled by the thread loop.
-    pub fn apply(&mut self, cmd: Cmd) -> Option<Msg> {
+    pub(crate) fn apply(&mut self, cmd: Cmd) -> Option<Msg> {
         match cmd {
             Cmd::View(generation, view) => {
                 let view = *view;
@@ -437,7 +436,7 @@ impl Worker {
     }
 
     /// Whether more work would change what is shown.
-    pub fn idle(&self) -> bool {
+    pub(crate) fn idle(&self) -> bool {
         let due = self.overlay_due().is_some() || self.pixel_due().is_some();
         if self.resend || due && self.view.is_some() {
             return false;
@@ -463,7 +462,7 @@ impl Worker {
     /// The film's samples traced again in one pass, as a one-shot render
     /// of the same counts would ([`Progressive::retrace`]); `None` before a
     /// view.
-    pub fn retrace(&self) -> Option<crate::render::PassStats> {
+    pub(crate) fn retrace(&self) -> Option<crate::render::PassStats> {
         let view = self.view.as_ref()?;
         let f = self.film.film();
         Some(self.film.retrace(&self.tracer(view, (f.width, f.height))))
@@ -471,7 +470,7 @@ impl Worker {
 
     /// Does the next piece of work: shows a kept film again, draws the
     /// overlay, or runs a pass; `None` when idle or cancelled.
-    pub fn step(&mut self, cancel: Cancel) -> Option<Msg> {
+    pub(crate) fn step(&mut self, cancel: Cancel) -> Option<Msg> {
         if self.idle() {
             return None;
         }
@@ -490,7 +489,6 @@ impl Worker {
                 viz::layer(&self.tracer(&view, view.size()), o).map_err(|e| format!("{e:#}"));
             return Some(Msg::Overlay(Box::new(OverlayFrame {
                 generation: self.generation,
-                view: o,
                 layer,
             })));
         }
@@ -690,17 +688,17 @@ impl Worker {
 }
 
 /// The app's end of the worker.
-pub struct Handle {
+pub(crate) struct Handle {
     tx: Sender<Cmd>,
-    pub rx: Receiver<Msg>,
-    pub progress: Arc<PassProgress>,
+    pub(crate) rx: Receiver<Msg>,
+    pub(crate) progress: Arc<PassProgress>,
     /// Generation of the newest command; passes of older ones stop.
     latest: Arc<AtomicU64>,
     thread: Option<JoinHandle<()>>,
 }
 
 /// Starts the worker thread.
-pub fn spawn(worker: Worker) -> Result<Handle> {
+pub(crate) fn spawn(worker: Worker) -> Result<Handle> {
     let (tx, cmd_rx) = mpsc::channel();
     let (msg_tx, rx) = mpsc::channel();
     let latest = Arc::new(AtomicU64::new(0));
@@ -721,7 +719,7 @@ pub fn spawn(worker: Worker) -> Result<Handle> {
 
 impl Handle {
     /// Sends a command; a view or builder change cancels the pass in flight.
-    pub fn send(&self, cmd: Cmd) {
+    pub(crate) fn send(&self, cmd: Cmd) {
         if let Cmd::View(g, _) | Cmd::Builder(g, _) = cmd {
             self.latest.store(g, Ordering::SeqCst);
         }

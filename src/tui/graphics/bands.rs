@@ -18,7 +18,7 @@ use ratatui::layout::Rect;
 use super::{iterm2, kitty, passthrough, sixel, PixelMode, Protocol};
 
 /// Cell rows per band.
-pub const BAND_ROWS: u16 = 2;
+pub(crate) const BAND_ROWS: u16 = 2;
 /// Kitty image ids of the bands start here: two per band, used in turn, so
 /// that a band's new image is complete before its old one is deleted (one
 /// id replaced in place shows nothing until the new image has arrived).
@@ -37,18 +37,18 @@ fn kitty_delete(mode: &PixelMode, b: usize) -> Vec<u8> {
 }
 
 /// A picture for the viewport: sRGB pixels, `w x h`, over the cells `area`.
-pub struct Picture<'a> {
-    pub px: &'a [[u8; 3]],
-    pub w: u32,
-    pub h: u32,
-    pub area: Rect,
+pub(crate) struct Picture<'a> {
+    pub(crate) px: &'a [[u8; 3]],
+    pub(crate) w: u32,
+    pub(crate) h: u32,
+    pub(crate) area: Rect,
 }
 
 /// The area and image size a set of bands is for.
 type Frame = (Rect, u32, u32);
 
 #[derive(Default)]
-pub struct Bands {
+pub(crate) struct Bands {
     /// Per band, a hash of the pixels on screen or on their way there
     /// (`None`: not on screen).
     sent: Vec<Option<u64>>,
@@ -67,7 +67,7 @@ pub struct Bands {
 
 /// Bands to encode: each with its pixels, and for sixel the whole picture
 /// the palette is made for.
-pub struct Batch {
+pub(crate) struct Batch {
     mode: PixelMode,
     layout: Frame,
     jobs: Vec<Job>,
@@ -88,7 +88,7 @@ struct Job {
 }
 
 /// One encoded band: output of its own.
-pub struct Piece {
+pub(crate) struct Piece {
     band: usize,
     epoch: u64,
     layout: Frame,
@@ -97,13 +97,13 @@ pub struct Piece {
 }
 
 impl Batch {
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.jobs.is_empty()
     }
 
     /// The bands as images in the mode's protocol, each starting with a
     /// cursor move to its place.
-    pub fn encode(self) -> Vec<Piece> {
+    pub(crate) fn encode(self) -> Vec<Piece> {
         let mode = self.mode;
         // One palette for the picture's sixel bands.
         let palette = self
@@ -150,7 +150,7 @@ impl Batch {
 
 impl Bands {
     /// Forgets what is on screen (the screen was cleared).
-    pub fn forget(&mut self) {
+    pub(crate) fn forget(&mut self) {
         for b in 0..self.sent.len() {
             self.off(b);
         }
@@ -164,7 +164,7 @@ impl Bands {
 
     /// Forgets the bands over rows `rows` of the screen (text was written
     /// there, over a sixel or iTerm2 image).
-    pub fn overwritten(&mut self, mode: &PixelMode, rows: &[bool]) {
+    pub(crate) fn overwritten(&mut self, mode: &PixelMode, rows: &[bool]) {
         if mode.protocol == Protocol::Kitty {
             // Kitty keeps images apart from the text.
             return;
@@ -184,7 +184,7 @@ impl Bands {
     /// Deletes the kitty images on rows text now lies over (a popup
     /// opened), at once rather than with the next picture: they are drawn
     /// above the text. `queued`: pieces are still to be written.
-    pub fn uncover(
+    pub(crate) fn uncover(
         &mut self,
         mode: &PixelMode,
         queued: bool,
@@ -212,7 +212,7 @@ impl Bands {
     /// images), and the changed bands to encode. `covered(row)` says
     /// whether text lies over a screen row of the area; such bands are not
     /// shown. The bands planned count as sent.
-    pub fn plan(
+    pub(crate) fn plan(
         &mut self,
         mode: &PixelMode,
         pic: &Picture,
@@ -282,7 +282,7 @@ impl Bands {
     /// The pieces still right for the screen, as output; bands changed
     /// since they were planned (or now under text, per `covered`) are
     /// planned again next time. Returns whether any piece was dropped.
-    pub fn accept(
+    pub(crate) fn accept(
         &mut self,
         pieces: Vec<Piece>,
         covered: impl Fn(u16) -> bool,
@@ -306,7 +306,8 @@ impl Bands {
     }
 
     /// The output that brings the screen to `pic` at once (encoded here).
-    pub fn update(
+    #[cfg(test)]
+    pub(crate) fn update(
         &mut self,
         mode: &PixelMode,
         pic: &Picture,
@@ -320,7 +321,7 @@ impl Bands {
     /// Removes what is on screen (kitty images outlive the text): every
     /// band's image, since one written before it was taken off may still
     /// show.
-    pub fn clear(&mut self, mode: &PixelMode) -> Vec<Vec<u8>> {
+    pub(crate) fn clear(&mut self, mode: &PixelMode) -> Vec<Vec<u8>> {
         for b in 0..self.sent.len() {
             self.off(b);
             self.late[b] = false;
@@ -330,7 +331,7 @@ impl Bands {
 
     /// Removes every image any layout showed, on leaving: deletes queued
     /// with a new layout may not have been written.
-    pub fn leave(&mut self, mode: &PixelMode) -> Vec<u8> {
+    pub(crate) fn leave(&mut self, mode: &PixelMode) -> Vec<u8> {
         self.clear(mode);
         Self::delete(mode, 0..self.most).concat()
     }

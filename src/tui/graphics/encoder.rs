@@ -7,7 +7,7 @@ use std::thread;
 
 use super::bands::{Batch, Piece};
 
-pub struct Encoder {
+pub(crate) struct Encoder {
     tx: Sender<Batch>,
     rx: Receiver<Vec<Piece>>,
     busy: bool,
@@ -15,7 +15,7 @@ pub struct Encoder {
 
 impl Encoder {
     /// Starts the thread; it ends when the encoder is dropped.
-    pub fn spawn() -> std::io::Result<Encoder> {
+    pub(crate) fn spawn() -> std::io::Result<Encoder> {
         let (tx, jobs) = channel::<Batch>();
         let (done, rx) = channel();
         thread::Builder::new()
@@ -35,17 +35,17 @@ impl Encoder {
     }
 
     /// Whether a plan is being encoded.
-    pub fn busy(&self) -> bool {
+    pub(crate) fn busy(&self) -> bool {
         self.busy
     }
 
     /// Hands `plan` to the thread.
-    pub fn start(&mut self, plan: Batch) {
+    pub(crate) fn start(&mut self, plan: Batch) {
         self.busy = self.tx.send(plan).is_ok();
     }
 
     /// The pieces of the plan, once encoded.
-    pub fn done(&mut self) -> Option<Vec<Piece>> {
+    pub(crate) fn done(&mut self) -> Option<Vec<Piece>> {
         let pieces = self.rx.try_recv().ok()?;
         self.busy = false;
         Some(pieces)

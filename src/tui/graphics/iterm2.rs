@@ -9,7 +9,7 @@ use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::ImageEncoder;
 
 /// The `w x h` sRGB pixels as an inline image over `cols x rows` cells.
-pub fn encode(px: &[[u8; 3]], w: usize, h: usize, (cols, rows): (u16, u16)) -> Vec<u8> {
+pub(crate) fn encode(px: &[[u8; 3]], w: usize, h: usize, (cols, rows): (u16, u16)) -> Vec<u8> {
     let mut png = Vec::new();
     let encoder = PngEncoder::new_with_quality(&mut png, CompressionType::Fast, FilterType::Sub);
     if encoder

@@ -18,7 +18,13 @@ const Z: i32 = 1;
 
 /// Image `id` (replacing any earlier one of that id): the `w x h` sRGB
 /// pixels shown over `cols x rows` cells from the cursor, which stays.
-pub fn encode(px: &[[u8; 3]], w: usize, h: usize, (cols, rows): (u16, u16), id: u32) -> Vec<u8> {
+pub(crate) fn encode(
+    px: &[[u8; 3]],
+    w: usize,
+    h: usize,
+    (cols, rows): (u16, u16),
+    id: u32,
+) -> Vec<u8> {
     let mut z = ZlibEncoder::new(Vec::with_capacity(w * h), Compression::fast());
     let _ = z.write_all(px.as_flattened());
     let compressed = z.finish().unwrap_or_default();
@@ -42,14 +48,14 @@ pub fn encode(px: &[[u8; 3]], w: usize, h: usize, (cols, rows): (u16, u16), id: 
 }
 
 /// Deletes image `id` and its placements.
-pub fn delete(id: u32) -> Vec<u8> {
+pub(crate) fn delete(id: u32) -> Vec<u8> {
     format!("\x1b_Ga=d,d=I,i={id},q=2\x1b\\").into_bytes()
 }
 
 /// Decodes the images in `data` (for tests): id, size and pixels of each
 /// complete transmission, in order.
 #[cfg(test)]
-pub fn decode(data: &[u8]) -> Vec<(u32, usize, usize, Vec<[u8; 3]>)> {
+pub(crate) fn decode(data: &[u8]) -> Vec<(u32, usize, usize, Vec<[u8; 3]>)> {
     use std::io::Read;
     let mut images = Vec::new();
     let mut current: Option<(u32, usize, usize, Vec<u8>)> = None;

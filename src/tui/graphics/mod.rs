@@ -4,11 +4,11 @@
 //! (`bands`) so that only what changed is sent again and the output can be
 //! paced between them, encoded off the event loop (`encoder`).
 
-pub mod bands;
-pub mod encoder;
-pub mod iterm2;
-pub mod kitty;
-pub mod sixel;
+pub(crate) mod bands;
+pub(crate) mod encoder;
+pub(crate) mod iterm2;
+pub(crate) mod kitty;
+pub(crate) mod sixel;
 pub mod symbols;
 
 /// What `--graphics` asks for.
@@ -59,7 +59,7 @@ pub enum Protocol {
 }
 
 impl Protocol {
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Protocol::Kitty => "kitty graphics",
             Protocol::Sixel => "sixel",
@@ -70,7 +70,7 @@ impl Protocol {
 
 /// Most pixels rendered for the viewport: beyond this a pass takes too
 /// long to be progressive, and the picture is rendered smaller and scaled.
-pub const PIXEL_BUDGET: u64 = 640_000;
+pub(crate) const PIXEL_BUDGET: u64 = 640_000;
 
 /// A pixel protocol and what it needs to know of the terminal.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -88,7 +88,7 @@ impl PixelMode {
     /// Rendered pixels per cell for an image of `cols x rows` cells: the
     /// cell's size, divided by the smallest whole factor that keeps the
     /// picture within [`PIXEL_BUDGET`].
-    pub fn grid(&self, cols: u16, rows: u16) -> (u32, u32) {
+    pub(crate) fn grid(&self, cols: u16, rows: u16) -> (u32, u32) {
         let (cw, ch) = (self.cell.0.max(1), self.cell.1.max(1));
         let cells = cols as u64 * rows as u64;
         let mut k = 1u32;
@@ -103,7 +103,7 @@ impl PixelMode {
 
 /// `seq` wrapped for tmux's passthrough: inside `DCS tmux; ... ST` with
 /// every ESC doubled.
-pub fn passthrough(seq: &[u8]) -> Vec<u8> {
+pub(crate) fn passthrough(seq: &[u8]) -> Vec<u8> {
     let mut out = Vec::with_capacity(seq.len() + seq.len() / 64 + 16);
     out.extend_from_slice(b"\x1bPtmux;");
     for &b in seq {

@@ -12,17 +12,17 @@ use std::io::Write;
 use crate::tui::color::dither;
 
 /// Most colour registers used.
-pub const MAX_COLOURS: usize = 256;
+pub(crate) const MAX_COLOURS: usize = 256;
 
 /// A picture's palette and the nearest entry for every colour.
-pub struct Palette {
+pub(crate) struct Palette {
     colours: Vec<[u8; 3]>,
     nearest: Nearest,
 }
 
 impl Palette {
     /// At most `colours` entries chosen for `px`.
-    pub fn new(px: &[[u8; 3]], colours: usize) -> Palette {
+    pub(crate) fn new(px: &[[u8; 3]], colours: usize) -> Palette {
         let colours = median_cut(px, colours);
         Palette {
             nearest: Nearest::new(&colours),
@@ -31,7 +31,7 @@ impl Palette {
     }
 
     /// The palette index of every pixel of the `w`-wide image, dithered.
-    pub fn quantize(&self, px: &[[u8; 3]], w: usize) -> Vec<u8> {
+    pub(crate) fn quantize(&self, px: &[[u8; 3]], w: usize) -> Vec<u8> {
         px.iter()
             .enumerate()
             .map(|(i, &c)| {
@@ -178,7 +178,7 @@ impl Nearest {
 
 /// A whole sixel image (DCS ... ST) of the `w x h` sRGB image in the
 /// colours of `palette`.
-pub fn encode(px: &[[u8; 3]], w: usize, h: usize, palette: &Palette) -> Vec<u8> {
+pub(crate) fn encode(px: &[[u8; 3]], w: usize, h: usize, palette: &Palette) -> Vec<u8> {
     let index = palette.quantize(px, w);
     let palette = &palette.colours;
     let mut out = Vec::with_capacity(w * h / 2);
@@ -239,12 +239,12 @@ fn run_length(out: &mut Vec<u8>, row: &[u8]) {
 
 /// A decoded sixel image: width, height, and each pixel if set.
 #[cfg(test)]
-pub type Decoded = (usize, usize, Vec<Option<[u8; 3]>>);
+pub(crate) type Decoded = (usize, usize, Vec<Option<[u8; 3]>>);
 
 /// Decodes a sixel image as a terminal draws it (for tests): the pixels
 /// set, `None` where none was.
 #[cfg(test)]
-pub fn decode(data: &[u8]) -> Option<Decoded> {
+pub(crate) fn decode(data: &[u8]) -> Option<Decoded> {
     let start = data.windows(2).position(|w| w == b"\x1bP")?;
     let q = start + data[start..].iter().position(|&c| c == b'q')?;
     let end = q + data[q..].windows(2).position(|w| w == b"\x1b\\")?;

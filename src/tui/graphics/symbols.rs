@@ -43,7 +43,7 @@ impl crate::choice::Choice for Symbols {
 
 impl Symbols {
     /// Sub-pixels per cell, across and down.
-    pub fn grid(self) -> (u32, u32) {
+    pub(crate) fn grid(self) -> (u32, u32) {
         match self {
             Symbols::Half => (1, 2),
             Symbols::Quad => (2, 2),
@@ -52,7 +52,7 @@ impl Symbols {
         }
     }
 
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Symbols::Half => "half blocks",
             Symbols::Quad => "quadrants",
@@ -64,7 +64,7 @@ impl Symbols {
     /// The glyph whose inked sub-pixels are the bits of `mask` (bit `i` is
     /// sub-pixel `i`, row by row from the top left), if the symbol set has
     /// one. `0` and the full mask are a space (background only).
-    pub fn glyph(self, mask: u8) -> Option<char> {
+    pub(crate) fn glyph(self, mask: u8) -> Option<char> {
         let (gx, gy) = self.grid();
         let full = ((1u32 << (gx * gy)) - 1) as u8;
         if mask == 0 || mask == full {
@@ -144,7 +144,7 @@ fn octant(mask: u8) -> Option<char> {
 
 /// What a cell's foreground covers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Shape {
+pub(crate) enum Shape {
     /// The sub-pixels whose bits are set (`0`: none, one colour).
     Mask(u8),
     /// The upper half block on the sextant grid: the top row, half of the
@@ -158,17 +158,17 @@ const UPPER_HALF_ON_SEXTANTS: [f32; 6] = [1.0, 1.0, 0.5, 0.5, 0.0, 0.0];
 
 /// The fit of one cell: `fg` where `shape` covers, `bg` elsewhere.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Fit {
-    pub shape: Shape,
-    pub fg: [f32; 3],
-    pub bg: [f32; 3],
+pub(crate) struct Fit {
+    pub(crate) shape: Shape,
+    pub(crate) fg: [f32; 3],
+    pub(crate) bg: [f32; 3],
     /// Sum of squared differences over the sub-pixels (sRGB, 0..255).
-    pub error: f32,
+    pub(crate) error: f32,
 }
 
 impl Fit {
     /// What sub-pixel `j` shows.
-    pub fn at(&self, j: usize) -> [f32; 3] {
+    pub(crate) fn at(&self, j: usize) -> [f32; 3] {
         let a = coverage(self.shape, j);
         [0, 1, 2].map(|c| a * self.fg[c] + (1.0 - a) * self.bg[c])
     }
@@ -185,7 +185,7 @@ fn coverage(shape: Shape, j: usize) -> f32 {
 /// The least-squares fit of `px` (the cell's sub-pixels, up to 8, in mask
 /// order) with the shapes of `symbols`: every two-colour partition, and on
 /// the sextant grid also the upper half block.
-pub fn fit(px: &[[f32; 3]], symbols: Symbols) -> Fit {
+pub(crate) fn fit(px: &[[f32; 3]], symbols: Symbols) -> Fit {
     let best = fit_partition(px);
     if symbols != Symbols::Sextant || px.len() != 6 {
         return best;
@@ -335,7 +335,7 @@ impl Grid {
 /// writes the glyphs and colours into `buf`. Of the two ways to show a fit
 /// (a glyph, or its complement with the colours swapped) the one that
 /// repeats the previous cell's colours is taken, which saves bytes.
-pub fn paint(
+pub(crate) fn paint(
     buf: &mut Buffer,
     area: Rect,
     img: &[[u8; 3]],
@@ -432,9 +432,14 @@ fn symbol_fg(symbol: char, fg: Color, prev: Color) -> Color {
 }
 
 /// The sub-pixels a painted cell shows, in mask order (sRGB; a sub-pixel
-/// half covered shows the mean of the two colours). For tests and error
-/// figures.
-pub fn shown_cell(symbols: Symbols, symbol: &str, fg: Color, bg: Color) -> Option<Vec<[f32; 3]>> {
+/// half covered shows the mean of the two colours). For tests.
+#[cfg(test)]
+pub(crate) fn shown_cell(
+    symbols: Symbols,
+    symbol: &str,
+    fg: Color,
+    bg: Color,
+) -> Option<Vec<[f32; 3]>> {
     let (gx, gy) = symbols.grid();
     let n = gx * gy;
     let full = ((1u32 << n) - 1) as u8;

@@ -15,7 +15,7 @@ use crate::tui::graphics::{passthrough, GraphicsArg, PixelMode, Protocol};
 use super::input::{Input, Reader, Reply};
 
 /// The longest wait for the answers.
-pub const WAIT: Duration = Duration::from_millis(1000);
+pub(crate) const WAIT: Duration = Duration::from_millis(1000);
 /// Inside tmux, answers passed through from the outer terminal may come
 /// after tmux's own answer to DA1.
 const TMUX_GRACE: Duration = Duration::from_millis(150);
@@ -34,24 +34,24 @@ const DA1: &[u8] = b"\x1b[c";
 
 /// What to ask.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Ask {
-    pub graphics: bool,
-    pub colour: bool,
+pub(crate) struct Ask {
+    pub(crate) graphics: bool,
+    pub(crate) colour: bool,
     /// Inside tmux: tmux takes an unwrapped kitty query (an APC string)
     /// for the pane's title, so it goes only through passthrough, if at all.
-    pub tmux: bool,
+    pub(crate) tmux: bool,
     /// Inside tmux with passthrough: the graphics queries go through it.
-    pub passthrough: bool,
+    pub(crate) passthrough: bool,
 }
 
 impl Ask {
-    pub fn any(&self) -> bool {
+    pub(crate) fn any(&self) -> bool {
         self.graphics || self.colour
     }
 
     /// The queries, DA1 last. The cell's size is asked whatever is asked:
     /// block symbols keep the picture's proportions with it too.
-    pub fn queries(&self) -> Vec<u8> {
+    pub(crate) fn queries(&self) -> Vec<u8> {
         let mut q = Vec::new();
         let asked: &[&[u8]] = if self.graphics {
             &[KITTY_QUERY, CELL_SIZE, WINDOW_PIXELS, REGISTERS]
@@ -76,22 +76,22 @@ impl Ask {
 
 /// The terminal's answers.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct Answers {
+pub(crate) struct Answers {
     /// DA1 came: the terminal answers queries.
-    pub answered: bool,
-    pub kitty: bool,
-    pub sixel: bool,
-    pub registers: Option<usize>,
+    pub(crate) answered: bool,
+    pub(crate) kitty: bool,
+    pub(crate) sixel: bool,
+    pub(crate) registers: Option<usize>,
     /// A cell's size (width, height) in pixels, and the text area's.
-    pub cell: Option<(u32, u32)>,
-    pub window: Option<(u32, u32)>,
+    pub(crate) cell: Option<(u32, u32)>,
+    pub(crate) window: Option<(u32, u32)>,
     /// Whether the terminal shows 24-bit colour, where it said.
-    pub rgb: Option<bool>,
+    pub(crate) rgb: Option<bool>,
 }
 
 impl Answers {
     /// Takes one answer; true when it was DA1's (the last).
-    pub fn take(&mut self, reply: &Reply) -> bool {
+    pub(crate) fn take(&mut self, reply: &Reply) -> bool {
         match reply {
             Reply::DeviceAttributes(attrs) => {
                 self.answered = true;
@@ -142,7 +142,7 @@ fn keeps_rgb(sgr: &str) -> bool {
 /// Sends the queries with `send` and collects the answers from `reader`
 /// until DA1's (or [`WAIT`], or an input `quits` says ends the program);
 /// keys typed meanwhile are kept for later.
-pub fn ask(
+pub(crate) fn ask(
     ask: Ask,
     mut send: impl FnMut(&[u8]) -> std::io::Result<()>,
     reader: &Reader,
@@ -183,7 +183,7 @@ pub fn ask(
 /// The pixel protocol `arg` and the answers lead to, and what to say about
 /// it. `cell_ioctl` is a cell's size from the window size ioctl; `env`
 /// reads the environment; `tmux_passthrough` is `Some(on)` inside tmux.
-pub fn choose(
+pub(crate) fn choose(
     arg: GraphicsArg,
     answers: &Answers,
     cell_ioctl: Option<(u32, u32)>,
@@ -260,18 +260,18 @@ pub fn choose(
 
 /// What tmux says of itself and of the terminal it runs in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Tmux {
+pub(crate) struct Tmux {
     /// `allow-passthrough` is on.
-    pub passthrough: bool,
+    pub(crate) passthrough: bool,
     /// Whether the terminal it runs in has 24-bit colour (its `RGB`
     /// feature), when a client is attached.
-    pub rgb: Option<bool>,
+    pub(crate) rgb: Option<bool>,
 }
 
 /// A cell's size in pixels: the terminal's answer, else the window size
 /// ioctl's, else the window's pixels over its cells; sizes no font has are
 /// garbage (they would make images of gigapixels) and skipped.
-pub fn cell_size(
+pub(crate) fn cell_size(
     answers: &Answers,
     cell_ioctl: Option<(u32, u32)>,
     cols_rows: (u16, u16),
@@ -288,7 +288,7 @@ pub fn cell_size(
 }
 
 /// Inside tmux, what it says (one `tmux` command).
-pub fn tmux() -> Option<Tmux> {
+pub(crate) fn tmux() -> Option<Tmux> {
     std::env::var_os("TMUX")?;
     let out = std::process::Command::new("tmux")
         .args(["show-options", "-Apv", "allow-passthrough", ";"])

@@ -17,7 +17,7 @@ use ratatui::crossterm::event::{
 
 /// A reply to one of our queries.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Reply {
+pub(crate) enum Reply {
     /// `CSI row ; col R`: the terminal has processed everything before our
     /// `CSI 6n`.
     CursorPosition(u16, u16),
@@ -36,7 +36,7 @@ pub enum Reply {
 }
 
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Input {
+pub(crate) enum Input {
     Event(Event),
     Reply(Reply),
 }
@@ -48,7 +48,7 @@ const SEQUENCE_WAIT: Duration = Duration::from_millis(1000);
 
 /// Splits the terminal's bytes into [`Input`]s.
 #[derive(Default)]
-pub struct Parser {
+pub(crate) struct Parser {
     buf: Vec<u8>,
 }
 
@@ -61,7 +61,7 @@ enum Step {
 
 impl Parser {
     /// Adds bytes and returns every input they complete.
-    pub fn feed(&mut self, bytes: &[u8]) -> Vec<Input> {
+    pub(crate) fn feed(&mut self, bytes: &[u8]) -> Vec<Input> {
         self.buf.extend_from_slice(bytes);
         let mut out = Vec::new();
         while let Step::Done(n, input) = parse(&self.buf) {
@@ -72,13 +72,13 @@ impl Parser {
     }
 
     /// Whether an unfinished sequence is waiting.
-    pub fn pending(&self) -> bool {
+    pub(crate) fn pending(&self) -> bool {
         !self.buf.is_empty()
     }
 
     /// Gives up on what is waiting: a lone ESC is the Esc key, anything
     /// else unfinished is dropped.
-    pub fn flush(&mut self) -> Option<Input> {
+    pub(crate) fn flush(&mut self) -> Option<Input> {
         let lone_esc = self.buf == [0x1b];
         self.buf.clear();
         lone_esc.then(|| key(KeyCode::Esc, KeyModifiers::NONE))
@@ -304,15 +304,15 @@ fn mouse(b: Option<u16>, x: Option<u16>, y: Option<u16>, press: bool) -> Option<
 }
 
 /// The thread that reads the terminal and parses what it sends.
-pub struct Reader {
-    pub rx: Receiver<Input>,
+pub(crate) struct Reader {
+    pub(crate) rx: Receiver<Input>,
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
 }
 
 impl Reader {
     /// Reads file descriptor `fd` (the terminal, in raw mode) until dropped.
-    pub fn spawn(fd: i32) -> Result<Reader> {
+    pub(crate) fn spawn(fd: i32) -> Result<Reader> {
         let (tx, rx) = mpsc::channel();
         let stop = Arc::new(AtomicBool::new(false));
         let flag = stop.clone();

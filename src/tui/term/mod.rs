@@ -3,12 +3,12 @@
 //! changed; `output`, which writes it as fast as the link absorbs, paced by
 //! `pace`) and what it can do (`terminfo`).
 
-pub mod detect;
-pub mod input;
-pub mod output;
-pub mod pace;
-pub mod screen;
-pub mod terminfo;
+pub(crate) mod detect;
+pub(crate) mod input;
+pub(crate) mod output;
+pub(crate) mod pace;
+pub(crate) mod screen;
+pub(crate) mod terminfo;
 
 use super::color::ColorMode;
 
@@ -17,7 +17,7 @@ use super::color::ColorMode;
 /// else the environment (`var` reads a variable): `COLORTERM`, then the
 /// terminfo entry of `TERM` (`RGB`, `Tc`, or a `-direct` name). With fewer
 /// than 24 bits, why, and how to ask for more, for the status line.
-pub fn choose_colour(
+pub(crate) fn choose_colour(
     answer: Option<bool>,
     tmux_rgb: Option<bool>,
     var: impl Fn(&str) -> Option<String>,

@@ -13,29 +13,29 @@ use super::screen::Screen;
 
 /// What the viewport showed in a draw.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Shown {
-    pub generation: u64,
+pub(crate) struct Shown {
+    pub(crate) generation: u64,
     /// A full-resolution pass (not the coarse preview, not an older view).
-    pub full: bool,
+    pub(crate) full: bool,
 }
 
 /// The output's figures, for the Render panel.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Figures {
+pub(crate) struct Figures {
     /// Bytes written so far.
-    pub written: u64,
+    pub(crate) written: u64,
     /// Pictures that reached the screen so far.
-    pub frames: u64,
+    pub(crate) frames: u64,
     /// The link's measured delivery rate in bytes per second.
-    pub link_rate: Option<f64>,
+    pub(crate) link_rate: Option<f64>,
     /// The first full picture of a view to reach the screen: its
     /// generation and when.
-    pub picture: Option<(u64, Instant)>,
+    pub(crate) picture: Option<(u64, Instant)>,
 }
 
 #[derive(Default)]
-pub struct Output {
-    pub pacer: Pacer,
+pub(crate) struct Output {
+    pub(crate) pacer: Pacer,
     /// Draws not yet on screen in full: the screen's sweep count and the
     /// pieces queued when drawn, and what they showed.
     drawn: VecDeque<(u64, u64, Shown)>,
@@ -52,25 +52,29 @@ pub struct Output {
 
 impl Output {
     /// Starts pacing: the first request measures the round trip.
-    pub fn start<W: Write>(&mut self, screen: &mut Screen<W>, now: Instant) -> io::Result<()> {
+    pub(crate) fn start<W: Write>(
+        &mut self,
+        screen: &mut Screen<W>,
+        now: Instant,
+    ) -> io::Result<()> {
         screen.send(PROBE)?;
         self.pacer.sent(PROBE.len(), now);
         Ok(())
     }
 
     /// A frame showing `shown` was drawn into the screen.
-    pub fn drawn<W: Write>(&mut self, screen: &Screen<W>, shown: Shown) {
+    pub(crate) fn drawn<W: Write>(&mut self, screen: &Screen<W>, shown: Shown) {
         self.drawn.push_back((screen.swept(), self.queued, shown));
     }
 
     /// Queues pieces (images) to follow the cells.
-    pub fn queue(&mut self, pieces: Vec<Vec<u8>>) {
+    pub(crate) fn queue(&mut self, pieces: Vec<Vec<u8>>) {
         self.queued += pieces.len() as u64;
         self.pieces.extend(pieces);
     }
 
     /// Queues pieces to go before any other.
-    pub fn queue_first(&mut self, pieces: Vec<Vec<u8>>) {
+    pub(crate) fn queue_first(&mut self, pieces: Vec<Vec<u8>>) {
         self.queued += pieces.len() as u64;
         for p in pieces.into_iter().rev() {
             self.pieces.push_front(p);
@@ -79,25 +83,29 @@ impl Output {
 
     /// Drops the pieces not yet written (leaving: the images they hold
     /// would outlive the TUI); draws waiting for them wait no longer.
-    pub fn drop_pieces(&mut self) {
+    pub(crate) fn drop_pieces(&mut self) {
         self.sent_pieces += self.pieces.len() as u64;
         self.pieces.clear();
     }
 
     /// Whether every queued piece has been written.
-    pub fn pieces_written(&self) -> bool {
+    pub(crate) fn pieces_written(&self) -> bool {
         self.pieces.is_empty()
     }
 
     /// The terminal answered a request.
-    pub fn answered(&mut self, now: Instant) {
+    pub(crate) fn answered(&mut self, now: Instant) {
         self.pacer.answered(now);
         self.land(now);
     }
 
     /// Writes what the pacer has room for, then notes which pictures are
     /// on screen.
-    pub fn pump<W: Write>(&mut self, screen: &mut Screen<W>, now: Instant) -> io::Result<()> {
+    pub(crate) fn pump<W: Write>(
+        &mut self,
+        screen: &mut Screen<W>,
+        now: Instant,
+    ) -> io::Result<()> {
         self.pacer.check(now);
         while screen.pending() {
             let room = self.pacer.room();
@@ -164,12 +172,12 @@ impl Output {
         }
     }
 
-    pub fn figures(&self) -> Figures {
+    pub(crate) fn figures(&self) -> Figures {
         self.figures
     }
 
     /// Whether requests are still unanswered.
-    pub fn waiting(&self) -> bool {
+    pub(crate) fn waiting(&self) -> bool {
         self.pacer.paced() && self.pacer.waiting() > 0
     }
 }

@@ -10,7 +10,7 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 /// The request each chunk ends with.
-pub const PROBE: &[u8] = b"\x1b[6n";
+pub(crate) const PROBE: &[u8] = b"\x1b[6n";
 /// Unanswered output allowed beyond the link's round trip.
 const QUEUE: Duration = Duration::from_millis(150);
 /// Bounds on the unanswered bytes: the first chunks, and always.
@@ -28,7 +28,7 @@ const SAMPLES: usize = 256;
 const NO_ANSWER: Duration = Duration::from_secs(3);
 
 #[derive(Debug, Default)]
-pub struct Pacer {
+pub(crate) struct Pacer {
     /// Chunks written and not yet answered: bytes, when they were written
     /// and the unanswered bytes then, this chunk's included.
     outstanding: VecDeque<(usize, Instant, usize)>,
@@ -50,7 +50,7 @@ pub struct Pacer {
 
 impl Pacer {
     /// Bytes that may be written now.
-    pub fn room(&self) -> usize {
+    pub(crate) fn room(&self) -> usize {
         if self.unpaced {
             return usize::MAX;
         }
@@ -59,7 +59,7 @@ impl Pacer {
 
     /// The unanswered bytes allowed: what the link delivers in a round
     /// trip plus [`QUEUE`].
-    pub fn limit(&self) -> usize {
+    pub(crate) fn limit(&self) -> usize {
         match self.rate {
             Some(rate) => {
                 let rtt = self.min_rtt.unwrap_or_default();
@@ -71,12 +71,12 @@ impl Pacer {
     }
 
     /// Whether output waits for answers.
-    pub fn paced(&self) -> bool {
+    pub(crate) fn paced(&self) -> bool {
         !self.unpaced
     }
 
     /// A chunk of `bytes` (its request included) was written at `now`.
-    pub fn sent(&mut self, bytes: usize, now: Instant) {
+    pub(crate) fn sent(&mut self, bytes: usize, now: Instant) {
         if self.unpaced {
             self.acked += bytes as u64;
             return;
@@ -87,7 +87,7 @@ impl Pacer {
     }
 
     /// The terminal answered the oldest request at `now`.
-    pub fn answered(&mut self, now: Instant) {
+    pub(crate) fn answered(&mut self, now: Instant) {
         let Some((bytes, sent, backlog)) = self.outstanding.pop_front() else {
             return;
         };
@@ -129,7 +129,7 @@ impl Pacer {
     }
 
     /// Stops pacing when the terminal answers no requests.
-    pub fn check(&mut self, now: Instant) {
+    pub(crate) fn check(&mut self, now: Instant) {
         if !self.answered
             && !self.unpaced
             && self
@@ -144,24 +144,24 @@ impl Pacer {
     /// Takes every unanswered request as answered: after a stop, their
     /// answers may have gone to the shell, and output must not wait for
     /// them.
-    pub fn forget(&mut self) {
+    pub(crate) fn forget(&mut self) {
         self.acked += self.in_flight as u64;
         self.in_flight = 0;
         self.outstanding.clear();
     }
 
     /// Bytes the terminal has processed (all written ones when unpaced).
-    pub fn acked(&self) -> u64 {
+    pub(crate) fn acked(&self) -> u64 {
         self.acked
     }
 
     /// Requests not yet answered.
-    pub fn waiting(&self) -> usize {
+    pub(crate) fn waiting(&self) -> usize {
         self.outstanding.len()
     }
 
     /// The link's delivery rate in bytes per second, once measured.
-    pub fn rate(&self) -> Option<f64> {
+    pub(crate) fn rate(&self) -> Option<f64> {
         self.rate
     }
 }

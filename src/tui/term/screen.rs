@@ -18,12 +18,12 @@ use unicode_width::UnicodeWidthStr;
 /// The most of a terminal the TUI uses (from the top left): a window the
 /// ioctl says is larger (up to 65535 x 65535 cells) would need gigabytes
 /// of cells; this is an 8K display in a 6 x 12 px font.
-pub const MAX_SIZE: Size = Size {
+pub(crate) const MAX_SIZE: Size = Size {
     width: 1280,
     height: 360,
 };
 
-pub struct Screen<W: Write> {
+pub(crate) struct Screen<W: Write> {
     out: W,
     /// A fixed size (tests, the benchmark), else the terminal's.
     fixed: Option<Size>,
@@ -50,7 +50,7 @@ pub struct Screen<W: Write> {
 impl<W: Write> Screen<W> {
     /// A screen on the terminal `out` writes to; its size is the
     /// terminal's, or `fixed`. The terminal is cleared by the first write.
-    pub fn new(out: W, fixed: Option<Size>) -> io::Result<Screen<W>> {
+    pub(crate) fn new(out: W, fixed: Option<Size>) -> io::Result<Screen<W>> {
         let mut s = Screen {
             out,
             fixed,
@@ -72,12 +72,12 @@ impl<W: Write> Screen<W> {
     }
 
     /// Bytes written to the terminal so far.
-    pub fn written(&self) -> u64 {
+    pub(crate) fn written(&self) -> u64 {
         self.written
     }
 
     /// Whether some cell differs from what the terminal shows.
-    pub fn pending(&self) -> bool {
+    pub(crate) fn pending(&self) -> bool {
         !self.control.is_empty()
             || self
                 .wanted
@@ -86,12 +86,14 @@ impl<W: Write> Screen<W> {
                 .any(|(w, s)| s.as_ref() != Some(w))
     }
 
-    pub fn writer(&mut self) -> &mut W {
+    #[cfg(test)]
+    pub(crate) fn writer(&mut self) -> &mut W {
         &mut self.out
     }
 
     /// The text the app drew, row by row (for tests).
-    pub fn wanted_text(&self) -> String {
+    #[cfg(test)]
+    pub(crate) fn wanted_text(&self) -> String {
         self.wanted
             .chunks(self.width.max(1) as usize)
             .map(|row| row.iter().map(Cell::symbol).collect::<String>())
@@ -101,7 +103,7 @@ impl<W: Write> Screen<W> {
 
     /// Whether any cell of row `y` within `area` shows something: text, or
     /// a background colour.
-    pub fn row_has_text(&self, y: u16, area: Rect) -> bool {
+    pub(crate) fn row_has_text(&self, y: u16, area: Rect) -> bool {
         let w = self.width as usize;
         (area.x..area.x + area.width).any(|x| {
             self.wanted
@@ -112,7 +114,7 @@ impl<W: Write> Screen<W> {
 
     /// The rows where cells were written since the last call, and whether
     /// the screen was cleared.
-    pub fn take_touched(&mut self) -> (Vec<bool>, bool) {
+    pub(crate) fn take_touched(&mut self) -> (Vec<bool>, bool) {
         let rows = vec![false; self.touched.len()];
         (
             std::mem::replace(&mut self.touched, rows),
@@ -121,18 +123,18 @@ impl<W: Write> Screen<W> {
     }
 
     /// Cells on the screen.
-    pub fn cells(&self) -> usize {
+    pub(crate) fn cells(&self) -> usize {
         self.wanted.len()
     }
 
     /// Cells swept so far: every cell has been brought up to date since
     /// this was `k` once it reaches `k + cells()`.
-    pub fn swept(&self) -> u64 {
+    pub(crate) fn swept(&self) -> u64 {
         self.swept
     }
 
     /// Writes `bytes` (a request, a picture) straight to the terminal.
-    pub fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+    pub(crate) fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.out.write_all(bytes)?;
         self.out.flush()?;
         self.written += bytes.len() as u64;
@@ -143,7 +145,7 @@ impl<W: Write> Screen<W> {
     /// until about `budget` bytes are written (at least one cell) or the
     /// screen is up to date. Returns the bytes written and whether the
     /// sweep went all the way round (the screen is up to date).
-    pub fn pump(&mut self, budget: usize) -> io::Result<(usize, bool)> {
+    pub(crate) fn pump(&mut self, budget: usize) -> io::Result<(usize, bool)> {
         let mut buf = std::mem::take(&mut self.control);
         let n = self.wanted.len();
         let mut pen = Pen::default();
@@ -227,7 +229,7 @@ impl<W: Write> Screen<W> {
 /// Makes `cell` a hole: a place the viewport's image shows through, which
 /// the screen never writes. Blank cells are written, so that a popup over
 /// a sixel picture hides it.
-pub fn make_hole(cell: &mut Cell) {
+pub(crate) fn make_hole(cell: &mut Cell) {
     cell.reset();
     cell.modifier = Modifier::HIDDEN;
 }
@@ -339,7 +341,7 @@ fn cup(buf: &mut Vec<u8>, x: u16, y: u16) {
 /// The SGR parameters of a colour: the 16 ANSI colours as 30-37 and 90-97
 /// (40-47 and 100-107 for the background), the palette as `38;5;N`, RGB as
 /// `38;2;R;G;B`.
-pub fn colour(params: &mut Vec<u8>, c: Color, background: bool) {
+pub(crate) fn colour(params: &mut Vec<u8>, c: Color, background: bool) {
     let base = if background { 40 } else { 30 };
     let ext = if background { 48 } else { 38 };
     let ansi = |i: u8| {

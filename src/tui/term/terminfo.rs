@@ -45,7 +45,7 @@ fn find(term: &str, dirs: &[PathBuf]) -> Option<Vec<u8>> {
 
 /// Whether the entry for `term` declares direct (24-bit) colour; `None`
 /// when no entry is found or it cannot be read.
-pub fn truecolor(term: &str) -> Option<bool> {
+pub(crate) fn truecolor(term: &str) -> Option<bool> {
     parse_truecolor(&find(term, &search_path())?)
 }
 
@@ -57,7 +57,7 @@ fn u16_at(b: &[u8], i: usize) -> Option<usize> {
 /// the standard sections, a header of five counts, the booleans, numbers
 /// and string offsets, and a string table that ends with every extended
 /// capability's name (booleans first, then numbers, then strings).
-pub fn parse_truecolor(b: &[u8]) -> Option<bool> {
+pub(crate) fn parse_truecolor(b: &[u8]) -> Option<bool> {
     let magic = u16_at(b, 0)?;
     let number_size = match magic {
         0o432 => 2,

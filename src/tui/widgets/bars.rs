@@ -13,7 +13,7 @@ use crate::tui::popup::Popup;
 
 /// The status line; a message longer than the line wraps onto the hint
 /// bar's row below while it lasts (true then), cut only beyond that.
-pub fn status(f: &mut Frame, area: Rect, hints: Rect, app: &App) -> bool {
+pub(crate) fn status(f: &mut Frame, area: Rect, hints: Rect, app: &App) -> bool {
     let text = match app.jobs.export_progress() {
         Some(p) => format!("{p} · {}", app.status_line()),
         None => app.status_line(),
@@ -31,7 +31,7 @@ pub fn status(f: &mut Frame, area: Rect, hints: Rect, app: &App) -> bool {
 
 /// As many whole hints as fit, in the key table's order (help and quit
 /// first); `?` lists the rest.
-pub fn hints(f: &mut Frame, area: Rect, app: &App) {
+pub(crate) fn hints(f: &mut Frame, area: Rect, app: &App) {
     let key = Style::new().fg(Color::Black).bg(Color::Gray);
     let mut left = area.width as usize;
     let mut spans = Vec::new();
@@ -48,7 +48,7 @@ pub fn hints(f: &mut Frame, area: Rect, app: &App) {
     f.render_widget(Paragraph::new(Line::from(spans)), area);
 }
 
-pub fn popup(f: &mut Frame, r: Rect, p: &Popup) {
+pub(crate) fn popup(f: &mut Frame, r: Rect, p: &Popup) {
     let bold = Style::new().add_modifier(Modifier::BOLD);
     let text: Vec<Line> = p
         .header
@@ -84,7 +84,7 @@ pub fn popup(f: &mut Frame, r: Rect, p: &Popup) {
     );
 }
 
-pub fn too_small(f: &mut Frame, area: Rect) {
+pub(crate) fn too_small(f: &mut Frame, area: Rect) {
     let msg = format!(
         "terminal too small (need {}x{}, have {}x{})",
         MIN_SIZE.0, MIN_SIZE.1, area.width, area.height

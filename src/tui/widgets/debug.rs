@@ -25,7 +25,7 @@ fn style(k: LineKind) -> Style {
     }
 }
 
-pub fn draw(f: &mut Frame, area: Rect, app: &App) {
+pub(crate) fn draw(f: &mut Frame, area: Rect, app: &App) {
     let ins = &app.inspector;
     let lines = ins.lines();
     let title = match ins.selected {

@@ -3,16 +3,17 @@
 
 mod bars;
 mod debug;
-pub mod panels;
-pub mod viewport;
+pub(crate) mod panels;
+pub(crate) mod viewport;
 
 use ratatui::Frame;
 
 use super::app::App;
 
-pub use viewport::{paint_view, picture};
+pub(crate) use viewport::paint_view;
+pub use viewport::picture;
 
-pub fn draw(f: &mut Frame, app: &App) {
+pub(crate) fn draw(f: &mut Frame, app: &App) {
     let l = &app.display.layout;
     if l.too_small {
         bars::too_small(f, l.area);

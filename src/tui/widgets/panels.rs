@@ -22,7 +22,7 @@ fn panel(title: String) -> Block<'static> {
         .title_style(Style::new().add_modifier(Modifier::BOLD))
 }
 
-pub fn bvh(f: &mut Frame, area: Rect, app: &App) {
+pub(crate) fn bvh(f: &mut Frame, area: Rect, app: &App) {
     let s = &app.session.bvh.stats;
     let title = if app.link.rebuilding {
         format!(" BVH: rebuilding with {}... ", app.choice.builder())
@@ -70,7 +70,7 @@ pub fn bvh(f: &mut Frame, area: Rect, app: &App) {
 /// The features panel's lines for a panel `width` wide. With `wrap`, a
 /// reason too long for the line goes on its own indented line; without,
 /// reasons too long take their short form.
-pub fn feature_lines(app: &App, width: u16, wrap: bool) -> Vec<Line<'static>> {
+pub(crate) fn feature_lines(app: &App, width: u16, wrap: bool) -> Vec<Line<'static>> {
     let mut lines = Vec::new();
     let dim = Style::new().fg(Color::DarkGray);
     let yellow = Style::new().fg(Color::Yellow);
@@ -123,7 +123,7 @@ pub fn feature_lines(app: &App, width: u16, wrap: bool) -> Vec<Line<'static>> {
     lines
 }
 
-pub fn features(f: &mut Frame, area: Rect, lines: Vec<Line<'static>>) {
+pub(crate) fn features(f: &mut Frame, area: Rect, lines: Vec<Line<'static>>) {
     f.render_widget(
         Paragraph::new(lines).block(panel(" Features ".into())),
         area,
@@ -149,7 +149,7 @@ fn output_lines(app: &App) -> Vec<Line<'static>> {
     v
 }
 
-pub fn render(f: &mut Frame, area: Rect, app: &App) {
+pub(crate) fn render(f: &mut Frame, area: Rect, app: &App) {
     let block = panel(" Render ".into());
     let inner = block.inner(area);
     f.render_widget(block, area);

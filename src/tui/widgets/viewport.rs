@@ -25,7 +25,7 @@ pub struct ViewPicture {
     pub px: Vec<[u8; 3]>,
     pub w: u32,
     pub h: u32,
-    pub note: Option<String>,
+    pub(crate) note: Option<String>,
 }
 
 pub fn picture(app: &App) -> Option<ViewPicture> {
@@ -76,7 +76,7 @@ pub fn picture(app: &App) -> Option<ViewPicture> {
     Some(ViewPicture { px, w, h, note })
 }
 
-pub fn draw(f: &mut Frame, area: Rect, app: &App) {
+pub(crate) fn draw(f: &mut Frame, area: Rect, app: &App) {
     let inner = app.display.layout.image;
     let shown = match &app.display.pixels {
         Some(m) => m.protocol.name().to_string(),
@@ -132,7 +132,7 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App) {
 }
 
 /// Paints a snapshot as the viewport does, without overlays (for the benchmark).
-pub fn paint_view(buf: &mut Buffer, area: Rect, s: &Snapshot, mode: ColorMode) {
+pub(crate) fn paint_view(buf: &mut Buffer, area: Rect, s: &Snapshot, mode: ColorMode) {
     let px: Vec<[u8; 3]> = s.image.iter().map(|c| crate::color::srgb(*c)).collect();
     symbols::paint(buf, area, &px, (s.width, s.height), Symbols::Half, mode);
 }
