@@ -12,7 +12,7 @@ use crate::raster::canvas::Canvas;
 use crate::raster::{png, Output};
 use crate::render::{post, Progressive, Session};
 use crate::viz::draw::{draw_legend, Legend};
-use crate::viz::{self, pixel, DebugSpec, Source, View};
+use crate::viz::{self, pixel, DebugSpec, DrawnFrom, View};
 
 /// Draws `spec` and writes it to `out`; `spp` is the samples of the image
 /// under the bloom and pixel views (default: the scene's).
@@ -26,14 +26,14 @@ pub(crate) fn run(
     let t = s.tracer();
     let (w, h) = (s.width, s.height);
     let spp = match (spec, spp) {
-        (DebugSpec::Image(v), Some(_)) if v.source() == Source::Bvh => {
+        (DebugSpec::Image(v), Some(_)) if v.source() == DrawnFrom::Bvh => {
             bail!("--spp is for the bloom, ray and samples views; the BVH views draw over one sample per pixel")
         }
         (_, n) => n.unwrap_or(s.scene.settings.spp).max(1),
     };
     let mut rays: Vec<String> = Vec::new();
     let (image, legend): (Vec<Vec3>, Legend) = match spec {
-        DebugSpec::Image(view) if view.source() == Source::Bvh => return bvh(s, view, out),
+        DebugSpec::Image(view) if view.source() == DrawnFrom::Bvh => return bvh(s, view, out),
         DebugSpec::Image(view) => {
             let film = Progressive::render(&t, spp);
             let (image, legend) = viz::film_view(

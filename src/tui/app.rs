@@ -26,7 +26,7 @@ use super::reference::ReferenceImage;
 use super::render_choice::RenderChoice;
 use super::status::Status;
 use super::term::output::Figures;
-use super::worker::{self, Msg, PixelRequest, Snapshot, View, Worker};
+use super::worker::{self, Msg, PixelRequest, RenderView, Snapshot, Worker};
 use crate::render::{Decision, Feature, Session, Tracer, Worst};
 use crate::scene::Projection;
 use crate::viz;
@@ -147,7 +147,7 @@ impl App {
 
     fn send_view(&mut self) {
         let (width, height) = self.display.view_size();
-        self.link.send_view(View {
+        self.link.send_view(RenderView {
             camera: self.camera.camera,
             plan: self.choice.plan().clone(),
             width,

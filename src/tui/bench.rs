@@ -12,7 +12,7 @@ use serde::Serialize;
 use super::color::ColorMode;
 use super::term::screen::Screen;
 use super::widgets::paint_view;
-use super::worker::{Cmd, Msg, View, Worker};
+use super::worker::{Cmd, Msg, RenderView, Worker};
 use crate::render::{Film, SceneRequest, Session};
 use crate::report::stats::median;
 
@@ -84,7 +84,7 @@ pub(crate) fn measure_pass(
     let mut worker = Worker::new(scene.clone(), s.bvh.clone(), s.seed, None);
     worker.apply(Cmd::View(
         1,
-        Box::new(View {
+        Box::new(RenderView {
             camera: s.camera,
             plan: s.plan.clone(),
             width,

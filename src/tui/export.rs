@@ -12,7 +12,7 @@ use anyhow::{bail, Context, Result};
 
 use crate::interrupt::Cancel;
 use crate::raster::output;
-use crate::render::Job as RenderJob;
+use crate::render::Job;
 use crate::render::{post, Ended, Needs, Plan, Session, Stop};
 use crate::scene::Camera;
 
@@ -35,7 +35,7 @@ pub(crate) struct Saved {
 }
 
 /// An export in progress.
-pub(crate) struct Job {
+pub(crate) struct Export {
     pub(crate) size: (u32, u32),
     /// Samples per pixel the image gets.
     pub(crate) target_spp: u32,
@@ -71,10 +71,10 @@ pub(crate) fn stem(scene_name: &str) -> String {
     }
 }
 
-impl Job {
+impl Export {
     /// Starts rendering `r` to `rayterm-<scene>-NNN.png` at the scene's spp
     /// (one pass when nothing is sampled).
-    pub(crate) fn start(r: Request) -> Result<Job> {
+    pub(crate) fn start(r: Request) -> Result<Export> {
         let target_spp = if r.plan.deterministic {
             1
         } else {
@@ -83,7 +83,7 @@ impl Job {
         // Read for nothing but its image: as `rayterm render` makes one.
         let size = r.size;
         let rows = Arc::new(AtomicU32::new(0));
-        let job = RenderJob::new(size.0, size.1, &r.plan, Stop::spp(target_spp))
+        let job = Job::new(size.0, size.1, &r.plan, Stop::spp(target_spp))
             .needs(Needs::Image)
             .passes_for_stop()
             .rows_done(rows.clone());
@@ -98,7 +98,7 @@ impl Job {
                 let _ = tx.send(render(&r, job, counted, &done, &stop));
             })
             .context("cannot start the export thread")?;
-        Ok(Job {
+        Ok(Export {
             size,
             target_spp,
             done_spp,
@@ -131,7 +131,7 @@ impl Job {
     }
 }
 
-impl Drop for Job {
+impl Drop for Export {
     /// Stops an unfinished export (between rows) and waits for its thread.
     fn drop(&mut self) {
         self.cancel.store(true, Ordering::SeqCst);
@@ -143,7 +143,7 @@ impl Drop for Job {
 
 fn render(
     r: &Request,
-    job: RenderJob,
+    job: Job,
     rows: Arc<AtomicU32>,
     done: &AtomicU32,
     stop: &AtomicBool,
@@ -236,7 +236,7 @@ mod tests {
                 size,
                 dir: dir.clone(),
             };
-            let job = Job::start(r).unwrap();
+            let job = Export::start(r).unwrap();
             let saved = loop {
                 match job.poll() {
                     Some(s) => break s.unwrap(),

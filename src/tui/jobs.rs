@@ -19,7 +19,7 @@ pub(crate) struct Jobs {
     /// The export size `--size` asked for; otherwise exports take the
     /// view's shape at the scene's size.
     pub(crate) export_size: Option<(u32, u32)>,
-    export: Option<export::Job>,
+    export: Option<export::Export>,
     /// The stability battery's result, while it runs.
     stability: Option<Receiver<Result<Vec<stability::Row>>>>,
 }
@@ -61,7 +61,7 @@ impl Jobs {
             size: export::size_for(view_size, self.export_size, scene_size),
             dir: self.export_dir.clone(),
         };
-        match export::Job::start(r) {
+        match export::Export::start(r) {
             Ok(job) => {
                 let s = format!(
                     "exporting this view as a {}x{} PNG at {} spp...",

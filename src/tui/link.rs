@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Result};
 
-use super::worker::{self, Cmd, Msg, OverlayFrame, PixelFrame, PixelRequest, Snapshot, View};
+use super::worker::{self, Cmd, Msg, OverlayFrame, PixelFrame, PixelRequest, RenderView, Snapshot};
 use crate::scene::Builder;
 use crate::viz;
 
@@ -49,7 +49,7 @@ impl RenderLink {
     }
 
     /// Renders `view` from now on, cancelling the pass in flight.
-    pub(crate) fn send_view(&mut self, view: View) {
+    pub(crate) fn send_view(&mut self, view: RenderView) {
         self.generation += 1;
         self.started = Instant::now();
         self.worker.send(Cmd::View(self.generation, Box::new(view)));

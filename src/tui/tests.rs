@@ -265,7 +265,7 @@ fn settle_film_view(t: &mut Terminal<TestBackend>, app: &mut App) -> String {
     let want = app
         .overlays
         .image
-        .filter(|v| v.source() == crate::viz::Source::Film);
+        .filter(|v| v.source() == crate::viz::DrawnFrom::Film);
     while app
         .link
         .current_frame()

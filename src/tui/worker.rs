@@ -25,7 +25,7 @@ use crate::render::{post, Job, Plan, Progressive, Stop, Tracer, WorstPixels};
 use crate::scene::camera::CameraFrame;
 use crate::scene::{Builder, Camera, Scene};
 use crate::viz::draw::{legend_line, Layer};
-use crate::viz::{self, pixel, Source};
+use crate::viz::{self, pixel, DrawnFrom};
 
 /// A full pass of one sample per pixel slower than this is preceded by a
 /// quarter-resolution pass when the view changes.
@@ -46,7 +46,7 @@ pub(crate) const CONVERGED_BELOW: f64 = 0.01;
 
 /// What to render: a camera, the plan of what runs, and the size.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct View {
+pub(crate) struct RenderView {
     pub(crate) camera: Camera,
     pub(crate) plan: Plan,
     pub(crate) width: u32,
@@ -55,7 +55,7 @@ pub(crate) struct View {
     pub(crate) pixel_aspect: f64,
 }
 
-impl View {
+impl RenderView {
     pub(crate) fn size(&self) -> (u32, u32) {
         (self.width, self.height)
     }
@@ -68,7 +68,7 @@ impl View {
 
 pub(crate) enum Cmd {
     /// Render this view; `u64` is its generation.
-    View(u64, Box<View>),
+    View(u64, Box<RenderView>),
     /// Rebuild the BVH with this builder, then render the current view as
     /// generation `u64`.
     Builder(u64, Builder),
@@ -253,7 +253,7 @@ pub(crate) struct Worker {
     bvh: Arc<Bvh>,
     seed: u64,
     generation: u64,
-    view: Option<View>,
+    view: Option<RenderView>,
     film: Progressive,
     coarse_pending: bool,
     started: Running,
@@ -349,9 +349,9 @@ impl Worker {
                 Some(Msg::Bvh(self.bvh.clone()))
             }
             Cmd::ImageView(v) => {
-                self.overlay = v.filter(|v| v.source() == Source::Bvh);
+                self.overlay = v.filter(|v| v.source() == DrawnFrom::Bvh);
                 self.overlay_drawn = None;
-                self.film_view = v.filter(|v| v.source() == Source::Film);
+                self.film_view = v.filter(|v| v.source() == DrawnFrom::Film);
                 // The film is the same: shown again, with or without it.
                 self.resend = self.film.film().spp > 0;
                 None
@@ -366,7 +366,7 @@ impl Worker {
     }
 
     fn restart(&mut self) {
-        let (w, h) = self.view.as_ref().map_or((0, 0), View::size);
+        let (w, h) = self.view.as_ref().map_or((0, 0), RenderView::size);
         // Adaptive after the first quarter block (docs/adaptive.md).
         self.film = match &self.view {
             Some(v) => Job::new(w, h, &v.plan, Self::stop())
@@ -449,7 +449,7 @@ impl Worker {
     }
 
     /// A tracer for the current view.
-    fn tracer<'a>(&'a self, view: &'a View, (w, h): (u32, u32)) -> Tracer<'a> {
+    fn tracer<'a>(&'a self, view: &'a RenderView, (w, h): (u32, u32)) -> Tracer<'a> {
         Tracer::new(
             &self.scene,
             &self.bvh,
@@ -520,7 +520,7 @@ impl Worker {
     }
 
     /// One sample more for every pixel of the view.
-    fn full_pass(&mut self, view: &View, cancel: Cancel) -> Option<Snapshot> {
+    fn full_pass(&mut self, view: &RenderView, cancel: Cancel) -> Option<Snapshot> {
         let t = Tracer::new(
             &self.scene,
             &self.bvh,
@@ -585,7 +585,7 @@ impl Worker {
 
     /// The film as it stands, for the app; `mean` is its image and
     /// `true_error` that image's error against the reference.
-    fn snapshot(&self, view: &View, mean: Vec<Vec3>, true_error: Option<f64>) -> Snapshot {
+    fn snapshot(&self, view: &RenderView, mean: Vec<Vec3>, true_error: Option<f64>) -> Snapshot {
         let film = self.film.film();
         // Only views of the film are kept in `film_view`: none fails.
         let film_view = self.film_view.and_then(|v| {
@@ -635,7 +635,7 @@ impl Worker {
     }
 
     /// One sample of every `COARSE`-th pixel, upscaled to the view.
-    fn coarse(&self, view: &View, cancel: Cancel) -> Option<Snapshot> {
+    fn coarse(&self, view: &RenderView, cancel: Cancel) -> Option<Snapshot> {
         let (cw, ch) = (view.width.div_ceil(COARSE), view.height.div_ceil(COARSE));
         let t = self.tracer(view, (cw, ch));
         let mut small = Job::of(&t, Stop::spp(1))
@@ -786,8 +786,8 @@ mod tests {
         Session::open(&SceneRequest::new(spec)).unwrap().0
     }
 
-    fn view(s: &Session, features: Features) -> View {
-        View {
+    fn view(s: &Session, features: Features) -> RenderView {
+        RenderView {
             camera: s.camera,
             plan: s.plan_for(features),
             width: 16,
@@ -902,7 +902,7 @@ mod tests {
         );
         assert_eq!(last.true_history.len(), 17);
         // Bloom does not change the film; shadows and the camera do.
-        let with = |off: Feature| View {
+        let with = |off: Feature| RenderView {
             plan: s.plan_for(features.without(&[off])),
             ..v.clone()
         };
@@ -941,7 +941,7 @@ mod tests {
         assert_eq!((f.generation, f.spp, f.pre_bloom.is_none()), (2, 2, true));
         // The film goes on, passes growing from where they were.
         assert_eq!(full(&mut w).spp, 4);
-        let shadowless = View {
+        let shadowless = RenderView {
             plan: s.plan_for(Features::all().without(&[
                 Feature::Bloom,
                 Feature::Bvh,

@@ -25,7 +25,7 @@ use crate::scene::BloomSettings;
 use draw::{Layer, Legend};
 pub use spec::DebugSpec;
 pub use view::View;
-pub(crate) use view::{image_views, Source, PIXEL_VIEWS};
+pub(crate) use view::{image_views, DrawnFrom, PIXEL_VIEWS};
 
 /// A view of the BVH drawn at the tracer's resolution, and what it shows in
 /// words.

@@ -43,7 +43,7 @@ pub enum View {
 
 /// What a view is drawn from, which says when it is drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Source {
+pub(crate) enum DrawnFrom {
     /// The BVH and the camera: a layer over the image, once per view of
     /// the scene.
     Bvh,
@@ -81,11 +81,11 @@ pub(crate) const PIXEL_VIEWS: [View; 9] = [
 ];
 
 impl View {
-    pub(crate) fn source(self) -> Source {
+    pub(crate) fn source(self) -> DrawnFrom {
         match self {
-            View::Level(_) | View::Leaves | View::Heat(_) => Source::Bvh,
-            View::Bloom | View::Spp | View::Error => Source::Film,
-            _ => Source::Tree,
+            View::Level(_) | View::Leaves | View::Heat(_) => DrawnFrom::Bvh,
+            View::Bloom | View::Spp | View::Error => DrawnFrom::Film,
+            _ => DrawnFrom::Tree,
         }
     }
 
