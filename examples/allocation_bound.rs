@@ -58,10 +58,14 @@ fn main() -> anyhow::Result<()> {
     }
     // The film's own weights, made after its first quarter.
     let mut p = Job::of(&t, Stop::default()).adaptive(true).start();
-    while p.film().spp < MIN_SPP {
+    while p.film().spp() < MIN_SPP {
         p.pass(&t, Cancel::Never);
     }
-    let weights = p.into_film().adaptive.map(|a| a.weight).unwrap_or_default();
+    let weights = p
+        .into_film()
+        .adaptive()
+        .map(|a| a.weight.clone())
+        .unwrap_or_default();
     let known: Vec<f64> = pixels
         .iter()
         .map(|p| (4.0 * p.err[0] / p.rays.max(1.0)).sqrt())

@@ -833,13 +833,13 @@ pub struct Film {
     /// Samples per pixel attempted so far on a uniform film (the next
     /// pass's first index is `start + spp`), the fewest any pixel has on an
     /// adaptive one.
-    pub spp: u32,
+    pub(crate) spp: u32,
     /// The first sample index of a uniform film: 0, except for a part of a
     /// split render (`render --samples A..B`), which starts at A.
     pub(crate) start: u32,
     /// Per-pixel counts and weights of an adaptive film.
-    pub adaptive: Option<Allocation>,
-    pub bad_count: u64,
+    pub(crate) adaptive: Option<Allocation>,
+    pub(crate) bad_count: u64,
     pub(crate) bad: Vec<BadSample>,
 }
 
@@ -895,6 +895,22 @@ const IMAGES: u64 = 3 * 12 + 3;
 pub(crate) type Counts<'a> = (&'a mut [u32], &'a mut [u32]);
 
 impl Film {
+    /// Samples per pixel so far: on a uniform film, every pixel's (the next
+    /// pass's first index is `start + spp`); on an adaptive one, the fewest.
+    pub fn spp(&self) -> u32 {
+        self.spp
+    }
+
+    /// Per-pixel counts and weights of an adaptive film.
+    pub fn adaptive(&self) -> Option<&Allocation> {
+        self.adaptive.as_ref()
+    }
+
+    /// Samples that were NaN or infinite (left out of the pixels).
+    pub fn bad_count(&self) -> u64 {
+        self.bad_count
+    }
+
     /// Memory a render needs per pixel: the statistics (with an adaptive
     /// film's count, weight and rays, or a lean film's sample they were
     /// made from), and the linear, bloomed and displayed copies of the

@@ -158,7 +158,7 @@ fn adaptive_renders_are_deterministic_and_replayable() {
             .collect::<Vec<_>>()
     };
     assert_eq!(bits(&one), bits(&two));
-    let counts = |f: &Film| f.adaptive.as_ref().unwrap().spp.clone();
+    let counts = |f: &Film| f.adaptive().unwrap().spp.clone();
     assert_eq!(counts(&one), counts(&two));
     assert!(one.spp_range().2 > one.spp_range().0);
     let t = sess.tracer();

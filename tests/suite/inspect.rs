@@ -36,7 +36,7 @@ fn tree_colour_is_the_rendered_sample_to_the_bit() {
         let s = setup(name);
         let t = s.tracer(w, h);
         let film = Progressive::render(&t, 1);
-        assert_eq!(film.bad_count, 0, "{name}: NaN/Inf samples");
+        assert_eq!(film.bad_count(), 0, "{name}: NaN/Inf samples");
         for y in 0..h {
             for x in 0..w {
                 let tree = inspect_pixel(&t, x, y, 0);

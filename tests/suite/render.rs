@@ -198,7 +198,7 @@ fn every_builtin_scene_loads_and_renders_finite() {
         let s = scene::load::open(name, &Default::default()).unwrap().scene;
         assert!(s.geometry.triangle_count() > 0, "{name}");
         let r = render(&s, 32, 24, 2, Features::all(), Builder::Sah, 1);
-        assert_eq!(r.film.bad_count, 0, "{name} has NaN samples");
+        assert_eq!(r.film.bad_count(), 0, "{name} has NaN samples");
         assert!(
             r.image.iter().any(|c| c.max_element() > 0.01),
             "{name} is black"
