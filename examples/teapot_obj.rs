@@ -10,10 +10,10 @@ fn main() -> anyhow::Result<()> {
     let g = rayterm::report::scaling::teapot(n)?;
     let mut out = BufWriter::new(std::io::stdout().lock());
     // `{}` prints the shortest decimal that reads back as the same float.
-    for p in &g.positions {
+    for p in g.positions() {
         writeln!(out, "v {} {} {}", p.x, p.y, p.z)?;
     }
-    for t in &g.indices {
+    for t in g.indices() {
         writeln!(out, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1)?;
     }
     out.flush()?;

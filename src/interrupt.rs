@@ -333,7 +333,7 @@ static STOPPED_NS: AtomicU64 = AtomicU64::new(0);
 /// what the TUI's figures of elapsed time read, so that a pass across a
 /// Ctrl-Z does not look long.
 #[derive(Clone, Copy, Debug)]
-pub struct Running {
+pub(crate) struct Running {
     at: Instant,
     stopped: u64,
 }

@@ -8,7 +8,7 @@ pub mod bvh;
 pub mod choice;
 pub mod cli;
 pub mod color;
-pub mod console;
+pub(crate) mod console;
 pub mod geometry;
 pub mod inspect;
 pub mod interrupt;

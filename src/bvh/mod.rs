@@ -25,9 +25,9 @@ pub(crate) use traverse::Hit;
 /// collapsed from it, with the same boxes and leaves, whose packets hold
 /// the only copy of the triangles ([`Bvh::triangle`]).
 pub struct Bvh {
-    pub nodes: Vec<Node>,
-    pub prim: Vec<u32>,
-    pub stats: BuildStats,
+    pub(crate) nodes: Vec<Node>,
+    pub(crate) prim: Vec<u32>,
+    pub(crate) stats: BuildStats,
     wide: wide::Wide,
     /// The largest coordinate magnitude of any triangle: rays test in f64
     /// beyond [`F32_REACH`](crate::geometry::triangle::F32_REACH).
@@ -68,9 +68,26 @@ impl Bvh {
         self.wide.triangle(i)
     }
 
-    /// Collapses the traversal tree again from `nodes`, after they were
-    /// edited (the stability tests break a box on purpose).
-    pub fn recollapse(&mut self) {
+    /// The binary tree the builder made, root first.
+    pub fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+
+    /// The triangle of each leaf slot, in leaf order.
+    pub fn prims(&self) -> &[u32] {
+        &self.prim
+    }
+
+    /// What the builder measured of its tree.
+    pub fn stats(&self) -> &BuildStats {
+        &self.stats
+    }
+
+    /// Edits every binary node with `f`, then collapses the traversal tree
+    /// again from them (the stability tests break a box on purpose): the
+    /// two trees never disagree.
+    pub fn edit_nodes(&mut self, f: impl FnMut(&mut Node)) {
+        self.nodes.iter_mut().for_each(f);
         let tris: Vec<_> = (0..self.triangle_count())
             .map(|i| self.triangle(i))
             .collect();

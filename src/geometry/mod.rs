@@ -1,6 +1,6 @@
 //! Geometric primitives that know nothing of scenes, BVHs or the UI.
 
-pub mod aabb;
+pub(crate) mod aabb;
 pub mod offset;
 pub mod ray;
 pub mod sampling;

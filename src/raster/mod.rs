@@ -10,7 +10,7 @@ pub(crate) mod canvas;
 pub(crate) mod claim;
 pub(crate) mod flat_exr;
 pub(crate) mod hdr;
-pub mod metrics;
+pub(crate) mod metrics;
 pub mod openexr;
 pub(crate) mod output;
 pub mod png;

@@ -12,7 +12,7 @@ use glam::Vec3;
 
 /// The reference on the view's pixel grid.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Resampled {
+pub(crate) struct Resampled {
     /// `(view pixel index, reference value)` for each view pixel wholly
     /// inside the reference's field of view.
     pub(crate) pixels: Vec<(u32, Vec3)>,
@@ -40,7 +40,7 @@ const EDGE: f64 = 1e-6;
 /// `vh` view of the same camera.
 /// Its pixels are `pixel_aspect` times as wide as they are tall (1 but in
 /// the TUI's block symbols).
-pub fn resample(
+pub(crate) fn resample(
     rw: u32,
     rh: u32,
     reference: &[Vec3],

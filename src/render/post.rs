@@ -9,7 +9,7 @@ use crate::scene::BloomSettings;
 
 /// A film's mean as it is shown: after bloom when the plan runs it.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Displayed {
+pub(crate) struct Displayed {
     /// Linear colours after post-processing, row-major.
     pub(crate) image: Vec<Vec3>,
     /// The mean before bloom, when bloom ran.

@@ -11,7 +11,7 @@ use super::Scene;
 
 /// Emissive triangles and their cumulative power.
 #[derive(Clone, Debug, Default)]
-pub struct Emitters {
+pub(crate) struct Emitters {
     prims: Vec<u32>,
     /// Cumulative power, ending at `total`.
     cdf: Vec<f64>,

@@ -33,15 +33,51 @@ use crate::geometry::Aabb;
 /// cleared in its [`MeshInfo`] and zeros in those slots.
 #[derive(Clone, Debug, Default)]
 pub struct Geometry {
-    pub positions: Vec<Vec3>,
-    pub normals: Vec<Vec3>,
-    pub uvs: Vec<Vec2>,
+    pub(crate) positions: Vec<Vec3>,
+    pub(crate) normals: Vec<Vec3>,
+    pub(crate) uvs: Vec<Vec2>,
     /// Linear RGB per vertex when some mesh has colours (white for the
     /// others); empty when none has.
-    pub colors: Vec<Vec3>,
-    pub indices: Vec<[u32; 3]>,
-    pub tri_material: Vec<u32>,
-    pub tri_mesh: Vec<u32>,
+    pub(crate) colors: Vec<Vec3>,
+    pub(crate) indices: Vec<[u32; 3]>,
+    pub(crate) tri_material: Vec<u32>,
+    pub(crate) tri_mesh: Vec<u32>,
+}
+
+/// Read-only views for tests and tools: the arrays run in parallel (one
+/// entry per vertex, or per triangle), so only the loaders, which keep
+/// them so, write them.
+impl Geometry {
+    pub fn positions(&self) -> &[Vec3] {
+        &self.positions
+    }
+
+    pub fn normals(&self) -> &[Vec3] {
+        &self.normals
+    }
+
+    pub fn uvs(&self) -> &[Vec2] {
+        &self.uvs
+    }
+
+    /// Linear RGB per vertex, or empty when no mesh has colours.
+    pub fn colors(&self) -> &[Vec3] {
+        &self.colors
+    }
+
+    pub fn indices(&self) -> &[[u32; 3]] {
+        &self.indices
+    }
+
+    /// The material of each triangle.
+    pub fn tri_material(&self) -> &[u32] {
+        &self.tri_material
+    }
+
+    /// The mesh ([`Scene::meshes`]) each triangle came from.
+    pub fn tri_mesh(&self) -> &[u32] {
+        &self.tri_mesh
+    }
 }
 
 impl Geometry {
@@ -169,7 +205,7 @@ impl std::fmt::Display for Builder {
 
 /// The most samples per pixel any render takes, and the end of every
 /// range of samples.
-pub const MAX_SPP: u32 = 1 << 20;
+pub(crate) const MAX_SPP: u32 = 1 << 20;
 
 /// The most bounces a ray tree or path may take.
 pub(crate) const MAX_DEPTH: u32 = 64;
@@ -249,7 +285,7 @@ pub struct Scene {
     pub warnings: Vec<String>,
     /// The emissive triangles as lights, found when first asked for
     /// ([`Scene::emitters`]).
-    pub emitters: std::sync::OnceLock<emitters::Emitters>,
+    pub(crate) emitters: std::sync::OnceLock<emitters::Emitters>,
 }
 
 impl Scene {
@@ -284,15 +320,21 @@ impl Scene {
     /// stability battery's scale and offset cases.
     pub fn transform(&mut self, scale: f32, offset: Vec3) {
         let f = |p: Vec3| p * scale + offset;
-        self.emitters = Default::default();
-        for p in &mut self.geometry.positions {
-            *p = f(*p);
-        }
+        self.move_vertices(f);
         self.camera.eye = f(self.camera.eye);
         self.camera.target = f(self.camera.target);
         self.camera.projection = self.camera.projection.scaled(scale);
         for l in &mut self.lights {
             l.transform(scale, offset);
+        }
+    }
+
+    /// Moves every vertex by `f`, alone (the camera and lights stay): the
+    /// tests' controls round a scene as an older loader did.
+    pub fn move_vertices(&mut self, f: impl Fn(Vec3) -> Vec3) {
+        self.emitters = Default::default();
+        for p in &mut self.geometry.positions {
+            *p = f(*p);
         }
     }
 }

@@ -829,11 +829,20 @@ mod tests {
         // Each 4x4 block of the preview is one coarse pixel.
         assert_eq!(s.image[0], s.image[3 * 16 + 3]);
         // One sample, then as many as the film has (the first quarter
-        // block, then adaptive passes raising the mean likewise).
+        // block, then adaptive passes raising the mean likewise), each pass
+        // at a pace that lets the next grow, however busy the machine.
+        let fast = |w: &mut Worker| {
+            w.last_full = Some(LastPass {
+                ms: 1.0,
+                ms_per_spp: 1.0,
+                bvh: true,
+            })
+        };
         for spp in [1, 2, 4] {
             let s = next_frame(&mut w).unwrap();
             assert!(!s.coarse);
             assert_eq!((s.spp, s.generation), (spp, 1));
+            fast(&mut w);
         }
         let s = next_frame(&mut w).unwrap();
         assert!(s.per_ray.is_some());

@@ -19,16 +19,16 @@ fn random_soup(n: usize, seed: u64) -> Geometry {
 
 fn check_invariants(g: &Geometry, b: &Bvh) {
     // Every triangle in exactly one leaf.
-    let mut seen = vec![0u32; g.indices.len()];
+    let mut seen = vec![0u32; g.indices().len()];
     let mut stack = vec![(0usize, 1usize)];
     let mut max_depth = 0;
     while let Some((i, depth)) = stack.pop() {
         max_depth = max_depth.max(depth);
-        let n = &b.nodes[i];
+        let n = &b.nodes()[i];
         let nb = n.bounds();
         if n.is_leaf() {
             for k in n.first..n.first + n.count {
-                let prim = b.prim[k as usize] as usize;
+                let prim = b.prims()[k as usize] as usize;
                 seen[prim] += 1;
                 let tb = Aabb::from_points(&g.triangle(prim));
                 assert!(nb.contains(&tb), "triangle {prim} outside its leaf");
@@ -36,7 +36,7 @@ fn check_invariants(g: &Geometry, b: &Bvh) {
         } else {
             for c in [n.first as usize, n.first as usize + 1] {
                 assert!(
-                    nb.contains(&b.nodes[c].bounds()),
+                    nb.contains(&b.nodes()[c].bounds()),
                     "child {c} outside parent {i}"
                 );
                 stack.push((c, depth + 1));
@@ -47,8 +47,8 @@ fn check_invariants(g: &Geometry, b: &Bvh) {
         seen.iter().all(|&s| s == 1),
         "a triangle is missing or duplicated"
     );
-    assert_eq!(max_depth, b.stats.depth);
-    assert_eq!(b.stats.triangles, g.indices.len());
+    assert_eq!(max_depth, b.stats().depth);
+    assert_eq!(b.stats().triangles, g.indices().len());
 }
 
 #[test]
@@ -58,7 +58,7 @@ fn invariants_hold_for_both_builders() {
         for builder in [Builder::Sah, Builder::Median] {
             let b = bvh::build(&g, builder);
             check_invariants(&g, &b);
-            assert!(b.stats.sah_cost > 0.0);
+            assert!(b.stats().sah_cost > 0.0);
         }
     }
 }
@@ -69,7 +69,7 @@ type TreeBits = (Vec<[u32; 8]>, Vec<u32>, Vec<[[u32; 3]; 3]>);
 
 fn tree_bits(b: &Bvh) -> TreeBits {
     let nodes = b
-        .nodes
+        .nodes()
         .iter()
         .map(|n| {
             let [x, y, z] = n.min.map(f32::to_bits);
@@ -80,7 +80,7 @@ fn tree_bits(b: &Bvh) -> TreeBits {
     let tris = (0..b.triangle_count())
         .map(|i| b.triangle(i).map(|v| v.map(f32::to_bits)))
         .collect();
-    (nodes, b.prim.clone(), tris)
+    (nodes, b.prims().to_vec(), tris)
 }
 
 #[test]
@@ -102,8 +102,8 @@ fn the_tree_is_the_same_on_any_number_of_threads() {
         for threads in [2, 3] {
             let b = on(threads);
             assert!(tree_bits(&b) == want, "{builder}: {threads} threads");
-            assert_eq!(b.stats.depth, one.stats.depth);
-            assert_eq!(b.stats.sah_cost, one.stats.sah_cost);
+            assert_eq!(b.stats().depth, one.stats().depth);
+            assert_eq!(b.stats().sah_cost, one.stats().sah_cost);
         }
     }
 }
@@ -177,7 +177,7 @@ fn no_escapes(spec: &str, centre: Vec3, rays: u32) {
     // Random directions, plus rays aimed exactly at vertices.
     for i in 0..rays {
         let d = if i % 4 == 0 {
-            let v = s.geometry.positions[(r.next_u32() as usize) % s.geometry.positions.len()];
+            let v = s.geometry.positions()[(r.next_u32() as usize) % s.geometry.positions().len()];
             v - centre
         } else {
             let z = 2.0 * r.next_f32() - 1.0;

@@ -4,7 +4,7 @@ use glam::Vec3;
 use rayterm::bvh::Bvh;
 use rayterm::render::{Features, Film, Plan, Progressive, SceneRequest, Session, Tracer};
 use rayterm::scene::load::obj::{MeshData, Parts, Placement};
-use rayterm::scene::{Builder, Camera, Environment, Light, Material, Projection, Scene, Settings};
+use rayterm::scene::{Builder, Camera, Light, Material, Projection, Scene};
 
 /// Positions, triangles and material of one mesh.
 pub type TestMesh = (Vec<Vec3>, Vec<[u32; 3]>, Material);
@@ -26,20 +26,9 @@ pub fn scene(meshes: &[TestMesh], lights: Vec<Light>, camera: Camera) -> Scene {
             &Placement::default(),
         );
     }
-    Scene {
-        name: "test".into(),
-        description: String::new(),
-        geometry: parts.geometry,
-        meshes: parts.meshes,
-        materials: parts.materials,
-        textures: parts.textures,
-        lights,
-        camera,
-        environment: Environment::Color(Vec3::ZERO),
-        settings: Settings::default(),
-        warnings: parts.warnings,
-        emitters: Default::default(),
-    }
+    let mut s = parts.into_scene("test".into(), camera);
+    s.lights = lights;
+    s
 }
 
 /// Axis-aligned quad in the plane y = `y`, from (x0, z0) to (x1, z1), facing +y.

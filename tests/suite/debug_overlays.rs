@@ -90,11 +90,11 @@ fn traversal_boxes_are_the_walk_green_on_the_path_to_the_hit_red_elsewhere() {
         let path = bvh.path_to(hit.triangle);
         assert_eq!(path[0], 0, "the path starts at the root");
         for w in path.windows(2) {
-            let parent = &bvh.nodes[w[0] as usize];
+            let parent = &bvh.nodes()[w[0] as usize];
             assert!(!parent.is_leaf() && (w[1] == parent.first || w[1] == parent.first + 1));
         }
-        let leaf = &bvh.nodes[*path.last().unwrap() as usize];
-        let slot = bvh.prim.iter().position(|&p| p == hit.triangle).unwrap() as u32;
+        let leaf = &bvh.nodes()[*path.last().unwrap() as usize];
+        let slot = bvh.prims().iter().position(|&p| p == hit.triangle).unwrap() as u32;
         assert!(leaf.is_leaf() && (leaf.first..leaf.first + leaf.count).contains(&slot));
         let visited: HashSet<u32> = log.visited.iter().copied().collect();
         assert_eq!(visited.len(), log.visited.len(), "each node once");
@@ -109,7 +109,7 @@ fn traversal_boxes_are_the_walk_green_on_the_path_to_the_hit_red_elsewhere() {
         assert_eq!(count(&o.layer, OFF_PATH) > 0, off > 0);
         // The hit triangle is outlined: its edges' midpoints are yellow.
         let g = &s.scene.geometry;
-        let v = g.indices[hit.triangle as usize].map(|i| g.positions[i as usize]);
+        let v = g.indices()[hit.triangle as usize].map(|i| g.positions()[i as usize]);
         let mut outlined = 0;
         for k in 0..3 {
             if let Some(p) = t.frame.project((v[k] + v[(k + 1) % 3]) * 0.5) {
@@ -141,7 +141,7 @@ fn the_logged_walk_is_the_traversal_to_the_count() {
             assert!(log
                 .visited
                 .iter()
-                .all(|&n| (n as usize) < s.bvh.nodes.len()));
+                .all(|&n| (n as usize) < s.bvh.nodes().len()));
             // Any-hit walks of the same ray, shortened to its hit.
             if let Some(h) = hit {
                 let short = rayterm::geometry::Ray::segment(ray.origin, ray.dir, h.t * 0.5);
@@ -228,8 +228,8 @@ fn normals_are_drawn_where_the_tree_puts_them_and_not_on_flat_meshes() {
     // may cover the one of the vertex nearest the hit).
     let g = &s.scene.geometry;
     let mut red = 0;
-    for (k, vi) in g.indices[hit.triangle as usize].iter().enumerate() {
-        let v = g.positions[*vi as usize];
+    for (k, vi) in g.indices()[hit.triangle as usize].iter().enumerate() {
+        let v = g.positions()[*vi as usize];
         let n = hit.vertex_normals.unwrap()[k].normalize();
         let p = t.frame.project(v + n * len * 0.5).unwrap();
         if near(&o.layer, p, 1, VERTEX_NORMAL) {

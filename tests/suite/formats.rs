@@ -222,7 +222,7 @@ fn one_mesh_in_every_format_renders_the_same_image() {
     for files in [&flat[..], &smooth[..]] {
         let reference = load(&files[0]).unwrap();
         assert!(reference.warnings.is_empty(), "{:?}", reference.warnings);
-        assert_eq!(reference.geometry.positions.len(), p.len());
+        assert_eq!(reference.geometry.positions().len(), p.len());
         let want = image(&reference);
         assert!(want.iter().any(|c| c.max_element() > 0.1), "a black image");
         for f in &files[1..] {
@@ -230,9 +230,9 @@ fn one_mesh_in_every_format_renders_the_same_image() {
             let s = load_up(f, "y").unwrap();
             assert!(s.warnings.is_empty(), "{f}: {:?}", s.warnings);
             let (g, r) = (&s.geometry, &reference.geometry);
-            assert_eq!(g.positions, r.positions, "{f}");
-            assert_eq!(g.indices, r.indices, "{f}");
-            assert_eq!(g.normals, r.normals, "{f}");
+            assert_eq!(g.positions(), r.positions(), "{f}");
+            assert_eq!(g.indices(), r.indices(), "{f}");
+            assert_eq!(g.normals(), r.normals(), "{f}");
             assert_eq!(s.camera, reference.camera, "{f}");
             assert_eq!(s.lights, reference.lights, "{f}");
             assert!(image(&s) == want, "{f}: another image");
@@ -315,14 +315,18 @@ fn every_format_opens_from_the_command_line_and_in_scene_files() {
     for mesh in ["m.ply", "m.stl"] {
         let s = load(&d.write("s.toml", scene(mesh))).unwrap();
         assert!(s.warnings.is_empty(), "{mesh}: {:?}", s.warnings);
-        assert_eq!(s.geometry.positions, reference.geometry.positions, "{mesh}");
+        assert_eq!(
+            s.geometry.positions(),
+            reference.geometry.positions(),
+            "{mesh}"
+        );
         assert!(image(&s) == image(&reference), "{mesh}");
     }
 }
 
 /// The extent of a scene's geometry along y over that along z.
 fn tall(s: &Scene) -> f32 {
-    let (lo, hi) = s.geometry.positions.iter().fold(
+    let (lo, hi) = s.geometry.positions().iter().fold(
         (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
         |(lo, hi), &p| (lo.min(p), hi.max(p)),
     );
@@ -351,23 +355,23 @@ fn stl_files_are_z_up_and_any_mesh_takes_its_up_axis() {
         tall(&o)
     );
     let oz = load_up(&objf, "z").unwrap();
-    assert_eq!(oz.geometry.positions, s.geometry.positions);
+    assert_eq!(oz.geometry.positions(), s.geometry.positions());
     assert_eq!(oz.camera, s.camera);
     assert_eq!(
-        load_up(&stl, "y").unwrap().geometry.positions,
-        o.geometry.positions
+        load_up(&stl, "y").unwrap().geometry.positions(),
+        o.geometry.positions()
     );
     // -z turns it upside down: the tip below the base.
     let down = load_up(&stl, "-z").unwrap();
     let lowest = down
         .geometry
-        .positions
+        .positions()
         .iter()
         .map(|p| p.y)
         .fold(f32::MAX, f32::min);
     assert!(
         down.geometry
-            .positions
+            .positions()
             .iter()
             .filter(|p| p.y == lowest)
             .count()
@@ -383,7 +387,7 @@ fn stl_files_are_z_up_and_any_mesh_takes_its_up_axis() {
     let a = load(&d.write("a.toml", scene("spike.stl", ""))).unwrap();
     let b = load(&d.write("b.toml", scene("spike.obj", "up = \"Z\"\n"))).unwrap();
     assert!(tall(&a) > 3.0);
-    assert_eq!(a.geometry.positions, b.geometry.positions);
+    assert_eq!(a.geometry.positions(), b.geometry.positions());
     let e = load(&d.write("c.toml", scene("spike.obj", "up = \"sideways\"\n"))).unwrap_err();
     assert!(
         e.contains("c.toml:3") && e.contains("x, y, z, -x, -y or -z"),
@@ -659,13 +663,13 @@ fn a_gltf_scene_renders_with_its_hierarchy_materials_camera_and_light() {
         .unwrap();
     let first = s
         .geometry
-        .tri_mesh
+        .tri_mesh()
         .iter()
         .position(|&m| m as usize == tile)
         .unwrap();
-    let corners: Vec<Vec3> = s.geometry.indices[first]
+    let corners: Vec<Vec3> = s.geometry.indices()[first]
         .iter()
-        .map(|&i| s.geometry.positions[i as usize])
+        .map(|&i| s.geometry.positions()[i as usize])
         .collect();
     let near = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
     // (-0.5, -0.5) turned to (0.5, -0.5), moved to (-0.1, -0.5), doubled.
@@ -749,7 +753,7 @@ fn a_gltf_scene_renders_with_its_hierarchy_materials_camera_and_light() {
     let (json, bin) = gltf_parts(serde_json::json!({"uri": "scene%20data.bin"}));
     d.write("scene data.bin", &bin);
     let t = load(&d.write("scene.gltf", serde_json::to_vec(&json).unwrap())).unwrap();
-    assert_eq!(t.geometry.positions, s.geometry.positions);
+    assert_eq!(t.geometry.positions(), s.geometry.positions());
     assert!(common::render(&t, w_, h_, 1, features, Builder::Sah, 1).image == img);
     // As a mesh of a scene file: the meshes, with a note on the rest.
     let toml = d.write(
@@ -758,7 +762,7 @@ fn a_gltf_scene_renders_with_its_hierarchy_materials_camera_and_light() {
          color = [1, 1, 1]\n",
     );
     let in_scene = load(&toml).unwrap();
-    assert_eq!(in_scene.geometry.positions, s.geometry.positions);
+    assert_eq!(in_scene.geometry.positions(), s.geometry.positions());
     assert!(in_scene
         .warnings
         .iter()
@@ -1057,7 +1061,7 @@ fn malformed_gltf_files_say_what_is_wrong() {
     text.extend(serde_json::to_vec(&j).unwrap());
     let s = load(&d.write("bom.gltf", text)).unwrap();
     let plain = load(&d.write("plain.glb", glb(&json, &bin))).unwrap();
-    assert_eq!(s.geometry.positions, plain.geometry.positions);
+    assert_eq!(s.geometry.positions(), plain.geometry.positions());
 }
 
 #[test]
@@ -1072,7 +1076,7 @@ fn obj_vertex_colours_shade_as_ply_vertex_colours_do() {
     let obj = load(&d.write("m.obj", obj)).unwrap();
     assert!(obj.warnings.is_empty(), "{:?}", obj.warnings);
     assert!(obj.meshes[0].colored);
-    assert_eq!(obj.geometry.colors, ply.geometry.colors);
+    assert_eq!(obj.geometry.colors(), ply.geometry.colors());
     let img = image(&obj);
     assert!(img == image(&ply), "another image");
     // Interpolated: red near the red corner, blue near the blue one.
@@ -1120,8 +1124,8 @@ fn ply_face_texcoords_and_face_colours_shade() {
     assert!(by_face.meshes[0].textured);
     let (g, r) = (&by_face.geometry, &by_vertex.geometry);
     assert_eq!(
-        (&g.positions, &g.uvs, &g.indices),
-        (&r.positions, &r.uvs, &r.indices)
+        (&g.positions(), &g.uvs(), &g.indices()),
+        (&r.positions(), &r.uvs(), &r.indices())
     );
     let img = image(&by_face);
     assert!(img == image(&by_vertex), "another image");
@@ -1182,6 +1186,6 @@ fn concave_polygons_render_without_filling_their_notches() {
     assert!(at(0.5, 2.0).max_element() > 0.05, "an arm is dark");
     assert_eq!(at(1.5, 2.2), Vec3::ZERO, "the notch is filled");
     let p = load(&d.write("u.ply", ply)).unwrap();
-    assert_eq!(p.geometry.indices, s.geometry.indices);
+    assert_eq!(p.geometry.indices(), s.geometry.indices());
     assert!(image(&p) == img, "another image");
 }

@@ -51,12 +51,12 @@ fn within_budget<T: Send + 'static>(
 }
 
 fn finite_geometry(g: &Geometry) -> Result<(), TestCaseError> {
-    let n = g.positions.len();
-    prop_assert!(g.positions.iter().all(|p| p.is_finite()));
-    prop_assert!(g.normals.iter().all(|p| p.is_finite()));
-    prop_assert!(g.uvs.iter().all(|p| p.is_finite()));
-    prop_assert!(g.indices.iter().flatten().all(|&i| (i as usize) < n));
-    prop_assert_eq!(g.indices.len(), g.tri_material.len());
+    let n = g.positions().len();
+    prop_assert!(g.positions().iter().all(|p| p.is_finite()));
+    prop_assert!(g.normals().iter().all(|p| p.is_finite()));
+    prop_assert!(g.uvs().iter().all(|p| p.is_finite()));
+    prop_assert!(g.indices().iter().flatten().all(|&i| (i as usize) < n));
+    prop_assert_eq!(g.indices().len(), g.tri_material().len());
     Ok(())
 }
 
@@ -150,7 +150,7 @@ fn load_mesh(format: Format, bytes: Vec<u8>) -> Result<(), TestCaseError> {
     })?;
     if let Ok(p) = parts {
         finite_geometry(&p.geometry)?;
-        prop_assert!(p.geometry.colors.iter().all(|c| c.is_finite()));
+        prop_assert!(p.geometry.colors().iter().all(|c| c.is_finite()));
     }
     Ok(())
 }

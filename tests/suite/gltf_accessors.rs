@@ -142,13 +142,13 @@ fn attributes_rayterm_does_not_use_are_ignored() {
     });
     let s = load(&d.write("custom.glb", glb(&json, &bin))).unwrap();
     let reference = load(&d.write("plain.glb", glb(&plain, &bin))).unwrap();
-    assert_eq!(s.geometry.positions, reference.geometry.positions);
-    assert_eq!(s.geometry.indices, reference.geometry.indices);
+    assert_eq!(s.geometry.positions(), reference.geometry.positions());
+    assert_eq!(s.geometry.indices(), reference.geometry.indices());
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     // A name glTF does not define at all: read all the same, and said.
     json["meshes"][0]["primitives"][0]["attributes"]["FOO"] = 0.into();
     let s = load(&d.write("foo.glb", glb(&json, &bin))).unwrap();
-    assert_eq!(s.geometry.positions, reference.geometry.positions);
+    assert_eq!(s.geometry.positions(), reference.geometry.positions());
     assert!(
         warned(
             &s,
@@ -203,7 +203,7 @@ fn sparse_accessors_are_read_with_their_substitutions() {
     let s = load(&d.write("sparse.glb", glb(&json, &bin))).unwrap();
     let g = &s.geometry;
     assert_eq!(
-        g.positions,
+        g.positions(),
         [
             Vec3::new(-0.5, -0.5, 0.0),
             Vec3::new(0.5, -0.5, 0.25),
@@ -211,15 +211,15 @@ fn sparse_accessors_are_read_with_their_substitutions() {
             Vec3::new(-0.5, 0.5, 0.0)
         ]
     );
-    assert_eq!(g.indices, [[0, 1, 2], [0, 3, 1]]);
+    assert_eq!(g.indices(), [[0, 1, 2], [0, 3, 1]]);
     assert!(
-        g.normals.iter().all(|&n| near3(n, Vec3::Z, 1e-6)),
+        g.normals().iter().all(|&n| near3(n, Vec3::Z, 1e-6)),
         "{:?}",
-        g.normals
+        g.normals()
     );
-    assert_eq!(g.colors, [Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, Vec3::X]);
+    assert_eq!(g.colors(), [Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, Vec3::X]);
     // glTF's v runs down the image, rayterm's up.
-    assert_eq!(g.uvs, [Vec2::Y, Vec2::Y, Vec2::new(0.25, 0.25), Vec2::Y]);
+    assert_eq!(g.uvs(), [Vec2::Y, Vec2::Y, Vec2::new(0.25, 0.25), Vec2::Y]);
 
     // Sparse indices are checked as every index is; their views as every view.
     let (base, bin) = (json, bin);
@@ -318,12 +318,12 @@ fn accessors_without_a_view_are_zeros() {
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     let g = &s.geometry;
     assert_eq!(
-        g.positions,
+        g.positions(),
         [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y]
     );
-    assert_eq!(g.indices, [[0, 1, 2], [0, 2, 3]]);
+    assert_eq!(g.indices(), [[0, 1, 2], [0, 2, 3]]);
     // glTF's v runs down the image, rayterm's up.
-    assert_eq!(g.uvs, [Vec2::Y; 4]);
+    assert_eq!(g.uvs(), [Vec2::Y; 4]);
 
     // Positions all zeros: a file of nothing but degenerate triangles.
     let mut flat = json.clone();
@@ -362,7 +362,7 @@ fn accessors_without_a_view_are_zeros() {
         .unwrap()
         .push(json!({"attributes": {"TEXCOORD_0": uv}}));
     let s = load(&d.write("partial.glb", glb(&partial, &bin))).unwrap();
-    assert_eq!(s.geometry.indices.len(), 2);
+    assert_eq!(s.geometry.indices().len(), 2);
     assert!(
         warned(&s, "partial.glb: not shown, rayterm has no equivalent: primitives without POSITION (mesh 0 primitive 1)"),
         "{:?}",
@@ -394,8 +394,8 @@ fn accessors_not_aligned_to_their_components_are_read_with_a_warning() {
     let s = load(&d.write("misaligned.glb", glb(&json, &bin))).unwrap();
     let (_, aligned) = quad();
     let reference = load(&d.write("aligned.glb", glb(&plain, &aligned))).unwrap();
-    assert_eq!(s.geometry.positions, reference.geometry.positions);
-    assert_eq!(s.geometry.indices, reference.geometry.indices);
+    assert_eq!(s.geometry.positions(), reference.geometry.positions());
+    assert_eq!(s.geometry.indices(), reference.geometry.indices());
     assert_eq!(
         s.warnings,
         [format!(
@@ -418,7 +418,7 @@ fn accessors_not_aligned_to_their_components_are_read_with_a_warning() {
     bin.put(&u16s(&[0, 1, 2, 0, 2, 3]));
     strided["accessors"][0]["bufferView"] = p.into();
     let s = load(&d.write("strided.glb", glb(&strided, &bin))).unwrap();
-    assert_eq!(s.geometry.positions, reference.geometry.positions);
+    assert_eq!(s.geometry.positions(), reference.geometry.positions());
     assert!(
         warned(
             &s,
@@ -460,24 +460,24 @@ fn quantized_attributes_are_read_as_normalised_or_plain_integers() {
     json["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
     let s = load(&d.write("quantized.glb", glb(&json, &bin))).unwrap();
     let g = &s.geometry;
-    for (got, want) in g.positions.iter().zip(QUAD.chunks(3)) {
+    for (got, want) in g.positions().iter().zip(QUAD.chunks(3)) {
         assert!(
             near3(*got, Vec3::from_slice(want), 1e-6),
             "{:?}",
-            g.positions
+            g.positions()
         );
     }
     // -127 and 127 are -1 and 1 (placed normals are unit length).
     let want = [Vec3::Z, Vec3::Y, Vec3::NEG_X, Vec3::Z];
-    for (got, want) in g.normals.iter().zip(want) {
-        assert!(near3(*got, want, 1e-6), "{:?}", g.normals);
+    for (got, want) in g.normals().iter().zip(want) {
+        assert!(near3(*got, want, 1e-6), "{:?}", g.normals());
     }
     assert!(near3(
-        g.uvs[3].extend(0.0),
+        g.uvs()[3].extend(0.0),
         Vec3::new(0.0, 1.0 - 32768.0 / 65535.0, 0.0),
         1e-6
     ));
-    assert_eq!(g.uvs[2], Vec2::new(1.0, 0.0));
+    assert_eq!(g.uvs()[2], Vec2::new(1.0, 0.0));
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
 
     // Signed normalised positions: -128 clamps to -1 as -127 does; plain
@@ -494,10 +494,10 @@ fn quantized_attributes_are_read_as_normalised_or_plain_integers() {
     json["nodes"][0] = json!({"mesh": 0});
     let s = load(&d.write("signed.glb", glb(&json, &bin))).unwrap();
     let g = &s.geometry;
-    assert_eq!(g.positions[0], Vec3::new(-1.0, -1.0, 0.0));
-    assert_eq!(g.positions[2], Vec3::new(1.0, 1.0, 0.0));
-    assert_eq!(g.uvs[0], Vec2::new(2.0, -2.0));
-    assert_eq!(g.uvs[1], Vec2::new(-2.0, 1.0));
+    assert_eq!(g.positions()[0], Vec3::new(-1.0, -1.0, 0.0));
+    assert_eq!(g.positions()[2], Vec3::new(1.0, 1.0, 0.0));
+    assert_eq!(g.uvs()[0], Vec2::new(2.0, -2.0));
+    assert_eq!(g.uvs()[1], Vec2::new(-2.0, 1.0));
 
     // What neither glTF nor the extension allows is refused, naming both.
     json["accessors"][normal]["componentType"] = 5121.into();
@@ -541,7 +541,7 @@ fn required_extensions_are_read_or_named() {
     // the geometry the file is still refused.
     let looks = json!(["KHR_materials_unlit", "KHR_materials_pbrSpecularGlossiness"]);
     let s = load(&with("unlit.glb", looks.clone(), looks)).unwrap();
-    assert_eq!(s.geometry.indices.len(), 2);
+    assert_eq!(s.geometry.indices().len(), 2);
     assert!(
         warned(
             &s,
@@ -580,7 +580,7 @@ fn required_extensions_are_read_or_named() {
     j["meshes"][0]["primitives"][0]["extensions"] = json!({"KHR_draco_mesh_compression":
         {"bufferView": 0, "attributes": {"POSITION": 0}}});
     let s = load(&d.write("fallback.glb", glb(&j, &bin))).unwrap();
-    assert_eq!(s.geometry.indices.len(), 2);
+    assert_eq!(s.geometry.indices().len(), 2);
     assert!(
         warned(&s, "KHR_draco_mesh_compression (extensionsUsed)"),
         "{:?}",
@@ -641,7 +641,7 @@ fn a_texture_transform_moves_the_coordinates_of_its_texture() {
     // glTF's (u, v) scaled to (u / 2, 2v), turned a quarter to (2v, -u / 2),
     // moved by (0.5, 0); then v up, as rayterm has it.
     let want = |u: f32, v: f32| Vec2::new(2.0 * v + 0.5, 1.0 + u / 2.0);
-    let uvs = &s.geometry.uvs;
+    let uvs = &s.geometry.uvs();
     for (got, [u, v]) in uvs
         .iter()
         .zip([[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]])
@@ -672,12 +672,12 @@ fn gltfpack_compressed_files_read_as_their_uncompressed_original() {
     // file is not there (it needs not be read).
     let reference = load(&fixture("sphere.glb")).unwrap();
     let r = &reference.geometry;
-    assert_eq!((r.positions.len(), r.indices.len()), (162, 320));
+    assert_eq!((r.positions().len(), r.indices().len()), (162, 320));
     for name in ["sphere-cc.glb", "sphere-cc-vpf.glb", "sphere-cf.glb"] {
         let s = load(&fixture(name)).unwrap_or_else(|e| panic!("{e}"));
         let g = &s.geometry;
-        assert_eq!(g.positions.len(), r.positions.len(), "{name}");
-        assert_eq!(g.indices.len(), r.indices.len(), "{name}");
+        assert_eq!(g.positions().len(), r.positions().len(), "{name}");
+        assert_eq!(g.indices().len(), r.indices().len(), "{name}");
         // The same triangles, each perhaps in another place and started at
         // another corner (gltfpack orders them for its codec): positions
         // within 14 bits over a size of about 2, normals within 8-bit
@@ -685,12 +685,12 @@ fn gltfpack_compressed_files_read_as_their_uncompressed_original() {
         let same = |a: &[u32; 3], b: &[u32; 3], k: usize| {
             (0..3).all(|c| {
                 let (i, j) = (a[(c + k) % 3] as usize, b[c] as usize);
-                near3(g.positions[i], r.positions[j], 2e-4)
-                    && near3(g.normals[i], r.normals[j], 0.03)
+                near3(g.positions()[i], r.positions()[j], 2e-4)
+                    && near3(g.normals()[i], r.normals()[j], 0.03)
             })
         };
-        for (t, a) in g.indices.iter().enumerate() {
-            let found = r.indices.iter().any(|b| (0..3).any(|k| same(a, b, k)));
+        for (t, a) in g.indices().iter().enumerate() {
+            let found = r.indices().iter().any(|b| (0..3).any(|k| same(a, b, k)));
             assert!(
                 found,
                 "{name}: triangle {t} {:?} is not in the original",

@@ -263,11 +263,11 @@ fn corners(s: &Scene, name: &str) -> [Vec3; 3] {
         });
     let t = s
         .geometry
-        .tri_mesh
+        .tri_mesh()
         .iter()
         .position(|&x| x as usize == m)
         .unwrap();
-    s.geometry.indices[t].map(|i| s.geometry.positions[i as usize])
+    s.geometry.indices()[t].map(|i| s.geometry.positions()[i as usize])
 }
 
 fn near(a: Vec3, b: Vec3) -> bool {
@@ -1009,7 +1009,7 @@ fn metallic_roughness_materials_take_every_core_texture() {
     let emitted = texel(p.emissive_texture.unwrap());
     assert!(near(emitted, Vec3::new(4.0, 2.0, 0.0) * srgb), "{emitted}");
     assert!(m.emissive());
-    let default = &s.materials[s.geometry.tri_material[1] as usize];
+    let default = &s.materials[s.geometry.tri_material()[1] as usize];
     let dp = default
         .pbr
         .as_ref()

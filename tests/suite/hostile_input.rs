@@ -417,7 +417,7 @@ fn byte_order_marks_and_line_endings_change_nothing() {
     d.write("plain/m.mtl", mtl);
     d.write("plain/m.obj", obj);
     let plain = clean(&d.write("plain/s.toml", &toml));
-    assert_eq!(plain.geometry.positions[0], glam::Vec3::ZERO);
+    assert_eq!(plain.geometry.positions()[0], glam::Vec3::ZERO);
     for (name, f) in [
         (
             "bom",
@@ -429,13 +429,13 @@ fn byte_order_marks_and_line_endings_change_nothing() {
         d.write(&format!("{name}/m.mtl"), f(mtl));
         d.write(&format!("{name}/m.obj"), f(obj));
         let s = clean(&d.write(&format!("{name}/s.toml"), f(&toml)));
-        assert_eq!(s.geometry.positions, plain.geometry.positions, "{name}");
-        assert_eq!(s.geometry.indices, plain.geometry.indices, "{name}");
+        assert_eq!(s.geometry.positions(), plain.geometry.positions(), "{name}");
+        assert_eq!(s.geometry.indices(), plain.geometry.indices(), "{name}");
         assert_eq!(s.materials, plain.materials, "{name}: first material kept");
         assert_eq!(s.settings.spp, 3, "{name}");
         // A bare OBJ and a patch file alike.
         let bare = clean(&d.write(&format!("{name}/bare.obj"), f(TRI)));
-        assert_eq!(bare.geometry.positions[1], glam::Vec3::X, "{name}");
+        assert_eq!(bare.geometry.positions()[1], glam::Vec3::X, "{name}");
         d.write(&format!("{name}/p.bpt"), f(&patches(1)));
         clean(&d.write(&format!("{name}/p.toml"), f(&scene_with("p.bpt", ""))));
     }
@@ -535,7 +535,7 @@ fn w_components_are_ignored_and_huge_exponents_checked_after_every_step() {
     for (name, w) in [("w.obj", "1e-45"), ("w0.obj", "0"), ("w300.obj", "1e-300")] {
         let s = clean(&obj(name, &format!("v 2 0 0 {w}")));
         assert_eq!(
-            s.geometry.positions[1],
+            s.geometry.positions()[1],
             glam::Vec3::new(2.0, 0.0, 0.0),
             "{name}"
         );
@@ -617,7 +617,7 @@ fn w_components_are_ignored_and_huge_exponents_checked_after_every_step() {
         &s,
         &["big.toml: the scene is 3e38 across", "scaled by 2^-127"],
     );
-    assert!(s.geometry.positions.iter().all(|p| p.is_finite()));
+    assert!(s.geometry.positions().iter().all(|p| p.is_finite()));
     let s = d.write("tiny.toml", scene_with("tri.obj", "scale = 1e-30"));
     let s = warned(
         &s,
@@ -721,7 +721,7 @@ fn indices_are_checked_exactly() {
             &obj(name, face),
             &[&format!("{name}:8: "), want, "read without"],
         );
-        assert_eq!(s.geometry.indices.len(), 1);
+        assert_eq!(s.geometry.indices().len(), 1);
     }
     // Relative and forward references that land in range load.
     clean(&obj("ok.obj", "f -3/-1/-3 -2/1/-2 -1/1/-1"));
@@ -1324,7 +1324,7 @@ fn ply_elements_without_properties_are_skipped_without_looping() {
                 "ignored, not used: element junk (9223372036854775807)",
             ],
         );
-        assert_eq!(s.geometry.indices.len(), 1, "{name}");
+        assert_eq!(s.geometry.indices().len(), 1, "{name}");
     }
 }
 
@@ -1604,7 +1604,7 @@ fn huge_concave_polygons_load_in_time() {
     let d = Dir::new("hostile-polygons");
     // Clipped: every tooth apart, no warning.
     let s = clean(&d.write("comb.obj", comb(30_000)));
-    assert_eq!(s.geometry.indices.len(), 2 * 30_000);
+    assert_eq!(s.geometry.indices().len(), 2 * 30_000);
     // Too many corners to clip: a fan, said once.
     let s = warned(
         &d.write("huge.obj", comb(40_000)),
@@ -1613,5 +1613,5 @@ fn huge_concave_polygons_load_in_time() {
             "more than 65536 corners: triangulated as a fan",
         ],
     );
-    assert!(!s.geometry.indices.is_empty());
+    assert!(!s.geometry.indices().is_empty());
 }

@@ -334,9 +334,7 @@ fn far_meshes_render_as_at_the_origin() {
     // read before, collapses (its vertices 2 apart at 2e7).
     let mut rounded = far_sphere(DVec3::new(1.0, -0.5, 0.75) * 2e7, true);
     let shift = DVec3::new(1.0, -0.5, 0.75) * 2e7;
-    for p in &mut rounded.geometry.positions {
-        *p = ((p.as_dvec3() + shift).as_vec3().as_dvec3() - shift).as_vec3();
-    }
+    rounded.move_vertices(|p| ((p.as_dvec3() + shift).as_vec3().as_dvec3() - shift).as_vec3());
     assert!(relative_difference(&reference, &render(&rounded)) > 0.05);
 }
 

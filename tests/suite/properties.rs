@@ -278,7 +278,10 @@ fn load_obj(text: impl Into<Vec<u8>>) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), Stri
         None,
     )
     .map_err(|e| format!("{e:#}"))?;
-    Ok((parts.geometry.positions, parts.geometry.indices))
+    Ok((
+        parts.geometry.positions().to_vec(),
+        parts.geometry.indices().to_vec(),
+    ))
 }
 
 /// Opens the scene file `s.toml` of `src`.
@@ -426,8 +429,8 @@ proptest! {
         let far = open_toml(&src);
         match (near, far) {
             (Ok((np, ni)), Ok(scene)) => {
-                let fp = &scene.geometry.positions;
-                prop_assert_eq!(&scene.geometry.indices, &ni);
+                let fp = scene.geometry.positions();
+                prop_assert_eq!(scene.geometry.indices(), &ni[..]);
                 for (a, b) in np.iter().zip(fp) {
                     prop_assert_eq!(*a - np[0], *b - fp[0]);
                 }

@@ -73,8 +73,8 @@ fn obj_faces_using_vertices_beyond_f32_are_left_out() {
              faces using them skipped"
         )],
     );
-    assert_eq!(s.geometry.indices.len(), 2);
-    assert!(s.geometry.positions.iter().all(|p| p.is_finite()));
+    assert_eq!(s.geometry.indices().len(), 2);
+    assert!(s.geometry.positions().iter().all(|p| p.is_finite()));
     // Every face uses one: nothing left to draw, and said why.
     let all = d.write("all.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     refused(
@@ -99,8 +99,11 @@ fn utf16_obj_and_mtl_files_are_decoded() {
         let said =
             |f: &str| format!("{f}: UTF-16 text ({order}, as its byte-order mark says): decoded");
         let s = warned(&o, &[said(&o), said(&m)]);
-        assert_eq!(s.geometry.indices.len(), 2);
-        assert_eq!(s.materials[s.geometry.tri_material[0] as usize].kd, Vec3::X);
+        assert_eq!(s.geometry.indices().len(), 2);
+        assert_eq!(
+            s.materials[s.geometry.tri_material()[0] as usize].kd,
+            Vec3::X
+        );
     }
     // A UTF-8 mark goes without a word.
     let o = d.write("utf8.obj", format!("\u{feff}{QUAD}"));
@@ -125,7 +128,7 @@ fn ply_triangle_strips_and_short_faces_are_read_as_other_readers_read_them() {
     let d = Dir::new("tolerant-ply");
     let p = d.write("strip.ply", format!("{STRIP_HEAD}4 0 1 2 3\n"));
     let s = warned(&p, &[]);
-    assert_eq!(s.geometry.indices, [[0, 1, 2], [2, 1, 3]]);
+    assert_eq!(s.geometry.indices(), [[0, 1, 2], [2, 1, 3]]);
     let face = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
                 property float z\nelement face 3\nproperty list uchar int vertex_indices\n\
                 end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 1\n4 0 1 2 3\n0\n";
@@ -136,7 +139,7 @@ fn ply_triangle_strips_and_short_faces_are_read_as_other_readers_read_them() {
             "{p}:14: element face 0: a face of 2 vertices (and 1 more of fewer than 3): skipped"
         )],
     );
-    assert_eq!(s.geometry.indices.len(), 2);
+    assert_eq!(s.geometry.indices().len(), 2);
     // Attacked: nothing but restarts, an index past the vertices, a count
     // past the file (ASCII; binary, where it is past memory too).
     for (name, body, want) in [

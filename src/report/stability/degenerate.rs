@@ -102,24 +102,16 @@ fn camera() -> Camera {
 
 fn scene_from(parts: Parts, name: &str) -> Scene {
     Scene {
-        name: name.into(),
-        description: String::new(),
-        geometry: parts.geometry,
-        meshes: parts.meshes,
-        materials: parts.materials,
-        textures: parts.textures,
         lights: vec![Light::Point {
             position: Vec3::new(1.0, 2.5, 1.5),
             color: Vec3::ONE,
         }],
-        camera: camera(),
         environment: Environment::Color(Vec3::splat(0.1)),
         settings: Settings {
             ambient: Vec3::splat(0.05),
             ..Settings::default()
         },
-        warnings: parts.warnings,
-        emitters: Default::default(),
+        ..parts.into_scene(name.into(), camera())
     }
 }
 

@@ -124,30 +124,23 @@ pub fn stage(ns: f32, light: Vec3, intensity: f32, shut_in: bool) -> Result<Scen
             &Placement::default(),
         );
     }
+    let camera = Camera {
+        eye: Vec3::new(0.0, 2.0, 5.0),
+        target: Vec3::new(0.0, 0.8, 0.0),
+        up: Vec3::Y,
+        projection: Projection::perspective(45.0),
+    };
     Ok(Scene {
-        name: "stiff".into(),
-        description: String::new(),
-        geometry: parts.geometry,
-        meshes: parts.meshes,
-        materials: parts.materials,
-        textures: parts.textures,
         lights: vec![Light::Point {
             position: light,
             color: Vec3::splat(intensity),
         }],
-        camera: Camera {
-            eye: Vec3::new(0.0, 2.0, 5.0),
-            target: Vec3::new(0.0, 0.8, 0.0),
-            up: Vec3::Y,
-            projection: Projection::perspective(45.0),
-        },
         environment: Environment::Color(Vec3::splat(0.02)),
         settings: Settings {
             ambient: Vec3::splat(AMBIENT),
             ..Settings::default()
         },
-        warnings: parts.warnings,
-        emitters: Default::default(),
+        ..parts.into_scene("stiff".into(), camera)
     })
 }
 

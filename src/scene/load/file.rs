@@ -684,18 +684,11 @@ pub(crate) fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     Ok(Scene {
-        name: f.name.unwrap_or(stem),
         description: f.description.unwrap_or_default(),
-        geometry: parts.geometry,
-        meshes: parts.meshes,
-        materials: parts.materials,
-        textures: parts.textures,
         lights,
-        camera,
         environment,
         settings,
-        warnings: parts.warnings,
-        emitters: Default::default(),
+        ..parts.into_scene(f.name.unwrap_or(stem), camera)
     })
 }
 

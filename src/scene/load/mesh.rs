@@ -270,20 +270,13 @@ pub(crate) fn load_bare_from(
     let name = path.display().to_string();
     Ok(Scene {
         description: format!("mesh {name}"),
-        name,
-        camera,
         lights,
         environment,
         settings: Settings {
             ambient,
             ..Settings::default()
         },
-        geometry: parts.geometry,
-        meshes: parts.meshes,
-        materials: parts.materials,
-        textures: parts.textures,
-        warnings: parts.warnings,
-        emitters: Default::default(),
+        ..parts.into_scene(name, camera)
     })
 }
 

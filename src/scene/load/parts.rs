@@ -14,7 +14,7 @@ use super::source::{resolve, Kind, Outside, Source};
 use crate::memory;
 use crate::scene::frame::Frame;
 use crate::scene::texture::Encoding;
-use crate::scene::{Geometry, Material, MeshInfo, Texture};
+use crate::scene::{Camera, Environment, Geometry, Material, MeshInfo, Scene, Settings, Texture};
 
 /// Mesh placement for meshes built in code.
 #[derive(Clone, Copy, Debug)]
@@ -155,6 +155,25 @@ pub struct Parts {
 }
 
 impl Parts {
+    /// The scene of these parts seen by `camera`: no lights, a black
+    /// background and default settings until the caller sets them.
+    pub fn into_scene(self, name: String, camera: Camera) -> Scene {
+        Scene {
+            name,
+            description: String::new(),
+            geometry: self.geometry,
+            meshes: self.meshes,
+            materials: self.materials,
+            textures: self.textures,
+            lights: Vec::new(),
+            camera,
+            environment: Environment::Color(Vec3::ZERO),
+            settings: Settings::default(),
+            warnings: self.warnings,
+            emitters: Default::default(),
+        }
+    }
+
     /// Loads the texture `written` in the file `base` names once per path;
     /// `None` (with a warning naming `from`, where it was asked for) when
     /// missing, unreadable or too large. One outside `base`'s folder is

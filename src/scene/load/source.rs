@@ -500,7 +500,7 @@ fn outside_of(base: &Path, target: &Path) -> Option<Outside> {
 /// `rayterm inputs` lists, and what partial films record so that `merge
 /// --check` can say which file differs.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Input {
+pub(crate) struct Input {
     pub(crate) path: PathBuf,
     pub(crate) crc: u32,
 }

@@ -13,7 +13,7 @@ pub mod symbols;
 
 /// What `--graphics` asks for.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum GraphicsArg {
+pub(crate) enum GraphicsArg {
     #[default]
     Auto,
     Kitty,

@@ -12,7 +12,7 @@ use ratatui::style::Color;
 use crate::tui::color::{to_color, ColorMode};
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Symbols {
+pub(crate) enum Symbols {
     #[default]
     Half,
     Quad,
