@@ -6,8 +6,8 @@ use anyhow::{bail, Result};
 
 use super::args::{ConvergeArgs, MAX_SPP};
 use super::open_scene;
-use crate::raster::{png, Format, Output};
-use crate::report::converge::{self, Budget, Config, ReferenceSource, Subject};
+use crate::raster::{png, ImageFormat, Output};
+use crate::report::converge::{self, Config, ReferenceSource, RunLimit, Subject};
 
 /// Small enough that a whole study takes seconds; `--size` changes it.
 const DEFAULT_SIZE: (u32, u32) = (64, 64);
@@ -24,19 +24,19 @@ pub(crate) fn run(a: ConvergeArgs) -> Result<ExitCode> {
     let csv = a
         .csv
         .as_ref()
-        .map(|p| Output::check(p, &inputs, &[Format::Csv]))
+        .map(|p| Output::check(p, &inputs, &[ImageFormat::Csv]))
         .transpose()?;
     let plot = a
         .plot
         .as_ref()
-        .map(|p| Output::check(p, &inputs, &[Format::Png]))
+        .map(|p| Output::check(p, &inputs, &[ImageFormat::Png]))
         .transpose()?;
     // Every option is checked before the scene loads.
     let mut budgets = if a.times.is_empty() {
         if a.spp.iter().any(|&n| n == 0 || n > MAX_SPP) {
             bail!("--spp budgets must be 1 to {MAX_SPP} samples per pixel");
         }
-        a.spp.iter().map(|&n| Budget::Spp(n)).collect::<Vec<_>>()
+        a.spp.iter().map(|&n| RunLimit::Spp(n)).collect::<Vec<_>>()
     } else {
         if a.times
             .iter()
@@ -44,11 +44,11 @@ pub(crate) fn run(a: ConvergeArgs) -> Result<ExitCode> {
         {
             bail!("--times must be positive numbers of seconds, each at most {MAX_SECONDS}");
         }
-        a.times.iter().map(|&t| Budget::Seconds(t)).collect()
+        a.times.iter().map(|&t| RunLimit::Seconds(t)).collect()
     };
-    let key = |b: &Budget| match b {
-        Budget::Spp(n) => *n as f64,
-        Budget::Seconds(t) => *t,
+    let key = |b: &RunLimit| match b {
+        RunLimit::Spp(n) => *n as f64,
+        RunLimit::Seconds(t) => *t,
     };
     budgets.sort_by(|x, y| key(x).total_cmp(&key(y)));
     budgets.dedup();

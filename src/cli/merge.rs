@@ -12,15 +12,15 @@ use clap::Parser;
 use super::args::{Cli, Command, MergeArgs};
 use super::render::{image_bytes, summary};
 use crate::interrupt::{self, Cancel};
-use crate::raster::{Format, Output};
+use crate::raster::{ImageFormat, Output};
 use crate::render::partial::{self, ranges_text, MergePlan, Meta};
 use crate::render::SceneRequest;
 use crate::words;
 
 pub(crate) fn run(a: MergeArgs) -> Result<ExitCode> {
     let formats = match a.partial {
-        true => &[Format::Exr][..],
-        false => Format::RENDERS,
+        true => &[ImageFormat::Exr][..],
+        false => ImageFormat::RENDERS,
     };
     let out = Output::check(&a.output, &a.parts, formats)?;
     interrupt::flag();
@@ -378,9 +378,9 @@ fn check(spec: &str, plan: &MergePlan) -> Result<()> {
 
 /// The input of `list` with the file name of `path`, where only one has it.
 fn same_name<'a>(
-    list: &'a [crate::scene::load::source::Input],
+    list: &'a [crate::scene::load::source::InputFile],
     path: &Path,
-) -> Option<&'a crate::scene::load::source::Input> {
+) -> Option<&'a crate::scene::load::source::InputFile> {
     let name = path.file_name()?;
     let mut hits = list.iter().filter(|i| i.path.file_name() == Some(name));
     match (hits.next(), hits.next()) {

@@ -17,7 +17,7 @@ use super::open_request;
 use super::progress::{Begin, Reporter};
 use crate::interrupt::{self, Cancel};
 use crate::raster::claim::Claim;
-use crate::raster::{png, Format, Output};
+use crate::raster::{png, ImageFormat, Output};
 use crate::render::aov;
 use crate::render::partial::{self, Meta, Part};
 use crate::render::session::check_film;
@@ -35,18 +35,18 @@ pub(crate) fn run(a: RenderArgs) -> Result<ExitCode> {
         .collect();
     let split = a.samples.is_some() || a.part.is_some();
     let formats = if split {
-        &[Format::Exr][..]
+        &[ImageFormat::Exr][..]
     } else {
-        Format::RENDERS
+        ImageFormat::RENDERS
     };
     if split {
         partial_name(&a.output, "a part")?;
     }
     let out = Output::check(&a.output, &scene_file, formats)?;
-    if a.debug.is_some() && out.format != Format::Png {
+    if a.debug.is_some() && out.format != ImageFormat::Png {
         bail!("--debug views are PNG images; name the output .png");
     }
-    if !a.aov.is_empty() && out.format != Format::Exr {
+    if !a.aov.is_empty() && out.format != ImageFormat::Exr {
         bail!(
             "--aov writes channels beside the picture in an OpenEXR file; name the output .exr, not {}",
             words::path(&a.output)
@@ -65,7 +65,7 @@ pub(crate) fn run(a: RenderArgs) -> Result<ExitCode> {
                 );
             }
             partial_name(c, "a checkpoint")?;
-            let out = Output::check(c, &scene_file, &[Format::Exr])?;
+            let out = Output::check(c, &scene_file, &[ImageFormat::Exr])?;
             if !out.in_place() {
                 _claim = Some(Claim::take(c)?);
             }
@@ -533,8 +533,8 @@ const PROGRAM_BYTES: u64 = 12 << 20;
 /// Refuses a partial film (`what`) named for another image format; other
 /// faults of the path are `Output::check`'s to name.
 fn partial_name(path: &Path, what: &str) -> Result<()> {
-    match Format::of(path) {
-        Some(f) if f != Format::Exr => bail!(
+    match ImageFormat::of(path) {
+        Some(f) if f != ImageFormat::Exr => bail!(
             "{}: {what} is a partial film: name it .exr",
             words::path(path)
         ),
@@ -574,15 +574,17 @@ fn stopped(checkpoint: Option<(&Output, &Meta)>, f: &Film, write: bool) -> Resul
 /// as it is for .exr and .hdr (what `converge` and the TUI's `--reference`
 /// compare against), the post-processed picture for .png.
 pub(crate) fn image_bytes(
-    format: Format,
+    format: ImageFormat,
     image: Vec<Vec3>,
     width: u32,
     height: u32,
     bloom: Option<&BloomSettings>,
 ) -> Result<Vec<u8>> {
     match format {
-        Format::Hdr | Format::Exr | Format::Csv => format.encode_linear(width, height, &image),
-        Format::Png => {
+        ImageFormat::Hdr | ImageFormat::Exr | ImageFormat::Csv => {
+            format.encode_linear(width, height, &image)
+        }
+        ImageFormat::Png => {
             let mut image = image;
             if let Some(b) = bloom {
                 post::bloom(&mut image, width as usize, height as usize, b);

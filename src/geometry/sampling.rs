@@ -112,7 +112,7 @@ pub(crate) fn pixel_stratum(pixel: u64, k: u32, seed: u64) -> u32 {
 
 /// What a run of samples of one pixel, under one seed, share: the
 /// pixel's [`PixelStreams`] and the strata of its current block
-/// ([`pixel_stratum`]), drawn once for the run, not once a sample.
+/// (`pixel_stratum`), drawn once for the run, not once a sample.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Run {
     pixel: Option<u64>,
@@ -144,7 +144,7 @@ impl Run {
         self.streams.sample(k as u64)
     }
 
-    /// [`pixel_stratum`].
+    /// `pixel_stratum`.
     #[inline]
     pub(crate) fn stratum(&mut self, pixel: u64, k: u32, seed: u64) -> u32 {
         self.at(pixel, seed);

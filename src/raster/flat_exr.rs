@@ -13,7 +13,7 @@ use anyhow::{bail, Context, Result};
 
 /// A channel's sample type, as OpenEXR numbers them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Kind {
+pub(crate) enum SampleType {
     U32 = 0,
     F32 = 2,
 }
@@ -24,7 +24,7 @@ pub(crate) struct ExrHeader {
     pub(crate) width: u32,
     pub(crate) height: u32,
     /// In the order the file stores them: sorted by name, byte by byte.
-    pub(crate) channels: Vec<(String, Kind)>,
+    pub(crate) channels: Vec<(String, SampleType)>,
     /// The text attributes, each with where its value lies in the file.
     pub(crate) attributes: Vec<(String, String, Range<usize>)>,
 }
@@ -316,8 +316,8 @@ fn latin1(b: &[u8]) -> String {
 }
 
 /// A channel list: sorted, 32-bit, unsubsampled.
-fn chlist(v: &[u8]) -> Result<Vec<(String, Kind)>> {
-    let mut out: Vec<(String, Kind)> = Vec::new();
+fn chlist(v: &[u8]) -> Result<Vec<(String, SampleType)>> {
+    let mut out: Vec<(String, SampleType)> = Vec::new();
     let (mut at, mut last): (usize, &[u8]) = (0, &[]);
     loop {
         let rest = v.get(at..).unwrap_or_default();
@@ -331,8 +331,8 @@ fn chlist(v: &[u8]) -> Result<Vec<(String, Kind)>> {
         let name = latin1(&rest[..len]);
         let field = |k: usize| le_u32(v, at + len + 1 + 4 * k);
         let kind = match field(0)? {
-            0 => Kind::U32,
-            2 => Kind::F32,
+            0 => SampleType::U32,
+            2 => SampleType::F32,
             _ => bail!("channel {name} is not 32-bit"),
         };
         if (field(2)?, field(3)?) != (1, 1) {
@@ -356,7 +356,7 @@ mod tests {
         ExrHeader {
             width: 3,
             height: 2,
-            channels: vec![("B".into(), Kind::F32), ("n".into(), Kind::U32)],
+            channels: vec![("B".into(), SampleType::F32), ("n".into(), SampleType::U32)],
             attributes: vec![("a.note".into(), "caf\u{e9} \u{263a}".into(), 0..0)],
         }
     }

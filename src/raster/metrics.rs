@@ -38,7 +38,7 @@ pub fn rel_mse(img: &[Vec3], reference: &[Vec3]) -> f64 {
 }
 
 /// [`rel_mse`] over some pixels only: `(index into img, reference value)`
-/// pairs, as [`super::Resampled`] gives them; 0 when there are none.
+/// pairs, as [`Resampled`](crate::raster::resample::Resampled) gives them; 0 when there are none.
 pub(crate) fn rel_mse_on(img: &[Vec3], pairs: &[(u32, Vec3)]) -> f64 {
     if pairs.is_empty() {
         return 0.0;

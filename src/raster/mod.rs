@@ -25,7 +25,7 @@ use anyhow::{bail, Result};
 use crate::memory::bytes;
 use glam::Vec3;
 
-pub use output::{Format, Output};
+pub use output::{ImageFormat, Output};
 
 /// The most memory a decoded image may take (1 GiB): a header declaring more
 /// is refused before anything is allocated.
@@ -145,13 +145,13 @@ pub fn read_linear(path: &Path) -> Result<Image> {
 
 /// Writes a linear image, in the format its extension names.
 pub fn write_linear(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<()> {
-    let out = Output::check(path, &[], &[Format::Exr, Format::Hdr])?;
+    let out = Output::check(path, &[], &[ImageFormat::Exr, ImageFormat::Hdr])?;
     out.write(&out.format.encode_linear(width, height, pixels)?)
 }
 
 /// Writes a picture as PNG.
 pub(crate) fn write_png(path: &Path, img: &image::RgbImage) -> Result<()> {
-    Output::check(path, &[], &[Format::Png])?.write(&png::encode(img)?)
+    Output::check(path, &[], &[ImageFormat::Png])?.write(&png::encode(img)?)
 }
 
 #[cfg(test)]

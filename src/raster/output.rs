@@ -17,7 +17,7 @@ use crate::interrupt::{Cancel, Interrupted};
 
 /// The image formats `rayterm render -o` writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
+pub enum ImageFormat {
     /// 8-bit sRGB after bloom.
     Png,
     /// The linear film before bloom, 8-bit mantissas.
@@ -28,26 +28,27 @@ pub enum Format {
     Csv,
 }
 
-impl Format {
+impl ImageFormat {
     /// What a render writes.
-    pub(crate) const RENDERS: &'static [Format] = &[Format::Png, Format::Exr, Format::Hdr];
+    pub(crate) const RENDERS: &'static [ImageFormat] =
+        &[ImageFormat::Png, ImageFormat::Exr, ImageFormat::Hdr];
 
     fn describe(self) -> &'static str {
         match self {
-            Format::Png => ".png (the picture)",
-            Format::Hdr => ".hdr (the linear film, 8-bit mantissas)",
-            Format::Exr => ".exr (the linear film, 32-bit float)",
-            Format::Csv => ".csv (the table)",
+            ImageFormat::Png => ".png (the picture)",
+            ImageFormat::Hdr => ".hdr (the linear film, 8-bit mantissas)",
+            ImageFormat::Exr => ".exr (the linear film, 32-bit float)",
+            ImageFormat::Csv => ".csv (the table)",
         }
     }
 
-    pub(crate) fn of(path: &Path) -> Option<Format> {
+    pub(crate) fn of(path: &Path) -> Option<ImageFormat> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         match ext.as_str() {
-            "png" => Some(Format::Png),
-            "hdr" => Some(Format::Hdr),
-            "exr" => Some(Format::Exr),
-            "csv" => Some(Format::Csv),
+            "png" => Some(ImageFormat::Png),
+            "hdr" => Some(ImageFormat::Hdr),
+            "exr" => Some(ImageFormat::Exr),
+            "csv" => Some(ImageFormat::Csv),
             _ => None,
         }
     }
@@ -55,9 +56,11 @@ impl Format {
     /// A linear image encoded in this format; PNG is not linear.
     pub fn encode_linear(self, width: u32, height: u32, img: &[Vec3]) -> Result<Vec<u8>> {
         match self {
-            Format::Hdr => super::hdr::encode(width, height, img),
-            Format::Exr => super::openexr::encode(width, height, img),
-            Format::Png | Format::Csv => bail!("{} is not a linear image format", self.describe()),
+            ImageFormat::Hdr => super::hdr::encode(width, height, img),
+            ImageFormat::Exr => super::openexr::encode(width, height, img),
+            ImageFormat::Png | ImageFormat::Csv => {
+                bail!("{} is not a linear image format", self.describe())
+            }
         }
     }
 }
@@ -65,7 +68,7 @@ impl Format {
 #[derive(Debug)]
 pub struct Output {
     pub(crate) path: PathBuf,
-    pub(crate) format: Format,
+    pub(crate) format: ImageFormat,
     /// A device or FIFO is opened when checked and kept open: a FIFO's
     /// reader would see the end of its input if it were closed.
     device: Option<fs::File>,
@@ -75,7 +78,11 @@ impl Output {
     /// Checks `path` as an output in one of the `accepted` formats (by its
     /// extension; a device or FIFO without one gets the first) of a command
     /// whose inputs are `inputs`.
-    pub(crate) fn check(path: &Path, inputs: &[PathBuf], accepted: &[Format]) -> Result<Output> {
+    pub(crate) fn check(
+        path: &Path,
+        inputs: &[PathBuf],
+        accepted: &[ImageFormat],
+    ) -> Result<Output> {
         let shown = path.display();
         let mut device = None;
         // `x.png/` names a directory whatever is there: the file's name
@@ -117,7 +124,7 @@ impl Output {
             Err(e) => bail!("{shown}: {}", reason(&e)),
         }
         // A device or pipe gets a PNG unless its name says otherwise.
-        let format = match (Format::of(path), device.is_some()) {
+        let format = match (ImageFormat::of(path), device.is_some()) {
             (Some(f), _) if accepted.contains(&f) => f,
             (None, true) => accepted[0],
             _ => bail!(
@@ -354,7 +361,7 @@ mod tests {
         let d = dir("stopped");
         let target = d.join("x.png");
         fs::write(&target, b"old").unwrap();
-        let out = Output::check(&target, &[], &[Format::Png]).unwrap();
+        let out = Output::check(&target, &[], &[ImageFormat::Png]).unwrap();
         let e = out
             .write_result(b"new", Cancel::When(&|| true))
             .unwrap_err();
@@ -384,19 +391,19 @@ mod tests {
     fn formats_by_extension() {
         let d = dir("fmt");
         assert_eq!(
-            Output::check(&d.join("a.PNG"), &[], Format::RENDERS)
+            Output::check(&d.join("a.PNG"), &[], ImageFormat::RENDERS)
                 .unwrap()
                 .format,
-            Format::Png
+            ImageFormat::Png
         );
         assert_eq!(
-            Output::check(&d.join("a.hdr"), &[], Format::RENDERS)
+            Output::check(&d.join("a.hdr"), &[], ImageFormat::RENDERS)
                 .unwrap()
                 .format,
-            Format::Hdr
+            ImageFormat::Hdr
         );
         for bad in ["a.jpg", "noext", "a.png.tmp"] {
-            let e = Output::check(&d.join(bad), &[], Format::RENDERS)
+            let e = Output::check(&d.join(bad), &[], ImageFormat::RENDERS)
                 .unwrap_err()
                 .to_string();
             assert!(
@@ -410,23 +417,23 @@ mod tests {
     #[test]
     fn directories_inputs_and_missing_folders_are_refused() {
         let d = dir("dirs");
-        let e = Output::check(&d, &[], Format::RENDERS)
+        let e = Output::check(&d, &[], ImageFormat::RENDERS)
             .unwrap_err()
             .to_string();
         assert!(e.contains("is a directory"), "{e}");
         let sub = d.join("x.png");
         fs::create_dir(&sub).unwrap();
-        let e = Output::check(&sub, &[], Format::RENDERS)
+        let e = Output::check(&sub, &[], ImageFormat::RENDERS)
             .unwrap_err()
             .to_string();
         assert!(e.contains("is a directory"), "{e}");
-        let e = Output::check(&d.join("nope/x.png"), &[], Format::RENDERS)
+        let e = Output::check(&d.join("nope/x.png"), &[], ImageFormat::RENDERS)
             .unwrap_err()
             .to_string();
         assert!(e.contains("does not exist"), "{e}");
         let scene = d.join("scene.png");
         fs::write(&scene, b"input").unwrap();
-        let e = Output::check(&scene, std::slice::from_ref(&scene), Format::RENDERS)
+        let e = Output::check(&scene, std::slice::from_ref(&scene), ImageFormat::RENDERS)
             .unwrap_err()
             .to_string();
         assert!(e.contains("is an input"), "{e}");
@@ -435,13 +442,16 @@ mod tests {
 
     #[test]
     fn devices_are_written_in_place() {
-        let null = Output::check(Path::new("/dev/null"), &[], Format::RENDERS).unwrap();
-        assert_eq!((null.device.is_some(), null.format), (true, Format::Png));
+        let null = Output::check(Path::new("/dev/null"), &[], ImageFormat::RENDERS).unwrap();
+        assert_eq!(
+            (null.device.is_some(), null.format),
+            (true, ImageFormat::Png)
+        );
         let d = dir("dev");
         let link = d.join("null.hdr");
         std::os::unix::fs::symlink("/dev/null", &link).unwrap();
-        let out = Output::check(&link, &[], Format::RENDERS).unwrap();
-        assert_eq!((out.device.is_some(), out.format), (true, Format::Hdr));
+        let out = Output::check(&link, &[], ImageFormat::RENDERS).unwrap();
+        assert_eq!((out.device.is_some(), out.format), (true, ImageFormat::Hdr));
         fs::remove_dir_all(d).unwrap();
     }
 
@@ -454,7 +464,7 @@ mod tests {
             eprintln!("skipping: mkfifo is not available");
             return;
         }
-        let e = Output::check(&fifo, &[], Format::RENDERS)
+        let e = Output::check(&fifo, &[], ImageFormat::RENDERS)
             .unwrap_err()
             .to_string();
         assert!(e.contains("FIFO that no process is reading"), "{e}");

@@ -43,7 +43,7 @@ pub(crate) struct Lobes {
 /// A sampled specular direction and its weight: BRDF times cosine over
 /// the direction's density.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Sampled {
+pub(crate) struct SpecularSample {
     pub(crate) dir: Vec3,
     pub(crate) weight: Vec3,
 }
@@ -147,14 +147,14 @@ impl Brdf {
     /// the mirror direction with Fresnel for a mirror, else a direction
     /// drawn from the visible normals with `u`. `None` when the drawn
     /// direction falls below the surface (it carries no light).
-    pub(crate) fn sample_specular(&self, n: Vec3, v: Vec3, u: Vec2) -> Option<Sampled> {
+    pub(crate) fn sample_specular(&self, n: Vec3, v: Vec3, u: Vec2) -> Option<SpecularSample> {
         let cos_v = n.dot(v);
         if cos_v <= 0.0 {
             return None;
         }
         if self.is_mirror() {
             let dir = 2.0 * cos_v * n - v;
-            return Some(Sampled {
+            return Some(SpecularSample {
                 dir,
                 weight: schlick(self.f0, cos_v),
             });
@@ -170,7 +170,7 @@ impl Brdf {
         }
         let (lv, ll) = (lambda(self.alpha, cos_v), lambda(self.alpha, cos_l));
         let g2_over_g1 = (1.0 + lv) / (1.0 + lv + ll);
-        Some(Sampled {
+        Some(SpecularSample {
             dir,
             weight: schlick(self.f0, v.dot(h)) * g2_over_g1,
         })

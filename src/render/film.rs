@@ -24,7 +24,7 @@
 //! 1.19 at 8 spp. Independent samples give `s²/n`.
 //!
 //! Each quarter of a block visits the four quadrants of the pixel once
-//! ([`crate::geometry::sampling::pixel_stratum`]), so the first `4q`
+//! ([`Run`](crate::geometry::sampling::Run)), so the first `4q`
 //! samples (`q` of 1 to 3) already stratify it 2x2. A quarter's contrast,
 //! its two samples in black quadrants minus its two in white, has a square
 //! whose mean is the four samples' variance within their quadrants, plus
@@ -88,9 +88,9 @@ pub struct PixelStats {
     pub(crate) open: u32,
     /// The first block seen, while incomplete: the one a range that starts
     /// inside a block shares with the range before it.
-    pub(crate) head: Piece,
+    pub(crate) head: BlockPart,
     /// The block being filled after the first.
-    pub(crate) tail: Piece,
+    pub(crate) tail: BlockPart,
     /// Sum over the first block's complete quarters of the square of their
     /// contrast (black quadrants minus white); NaN once unknowable (a
     /// sample of the first block dropped, or statistics merged or read
@@ -103,7 +103,7 @@ pub struct PixelStats {
 /// A sample as a pass adds it to pixel `x` of a row: its index, colour
 /// and sub-pixel stratum when jittered.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Sampled {
+pub(crate) struct RowSample {
     pub(crate) x: u32,
     pub(crate) k: u32,
     pub(crate) c: Vec3,
@@ -116,21 +116,21 @@ const RUN: usize = 16;
 /// Part of a block of strata: its index, samples, luminance sum and
 /// checkerboard difference (black minus white).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Zeroable)]
-pub(crate) struct Piece {
+pub(crate) struct BlockPart {
     pub(crate) block: u32,
     pub(crate) n: u32,
     pub(crate) sum: f64,
     pub(crate) diff: f64,
 }
 
-impl Piece {
+impl BlockPart {
     /// `r (16 - r)`: what an incomplete block adds to the variance.
     fn open(&self) -> u32 {
         self.n * (PIXEL_STRATA - self.n)
     }
 
-    fn join(self, o: Piece) -> Piece {
-        Piece {
+    fn join(self, o: BlockPart) -> BlockPart {
+        BlockPart {
             block: self.block,
             n: self.n + o.n,
             sum: self.sum + o.sum,
@@ -214,8 +214,8 @@ fn mean_of(sum: &[i128; 3], n: u32) -> DVec3 {
 
 /// Whether the samples of `run` all have the same colour, bit for bit.
 #[inline]
-fn is_one_colour(run: &[Sampled]) -> bool {
-    let bits = |s: &Sampled| s.c.to_array().map(f32::to_bits);
+fn is_one_colour(run: &[RowSample]) -> bool {
+    let bits = |s: &RowSample| s.c.to_array().map(f32::to_bits);
     run.first()
         .is_some_and(|a| run.iter().all(|s| bits(s) == bits(a)))
 }
@@ -262,7 +262,7 @@ impl PixelStats {
     /// pixel samples are jittered.
     #[inline]
     pub(crate) fn add(&mut self, k: u32, c: Vec3, stratum: Option<u32>) {
-        self.add_run(&[Sampled {
+        self.add_run(&[RowSample {
             x: 0,
             k,
             c,
@@ -277,7 +277,7 @@ impl PixelStats {
     /// on one another only through the sums, so those of several samples
     /// overlap where one at a time each waits for the last.
     #[inline]
-    pub(crate) fn add_run(&mut self, run: &[Sampled]) {
+    pub(crate) fn add_run(&mut self, run: &[RowSample]) {
         let one_colour = self.n == 0 && self.sum == [0; 3] && is_one_colour(run);
         for run in run.chunks(RUN) {
             let mut lum = [0.0; RUN];
@@ -370,14 +370,14 @@ impl PixelStats {
             if self.tail.n > 0 && block != self.tail.block {
                 // A sample of the block being filled was dropped (not finite).
                 self.open += self.tail.open();
-                self.tail = Piece::default();
+                self.tail = BlockPart::default();
             }
             &mut self.tail
         };
         if piece.n == 0 {
-            *piece = Piece {
+            *piece = BlockPart {
                 block,
-                ..Piece::default()
+                ..BlockPart::default()
             };
         }
         piece.n += 1;
@@ -390,7 +390,7 @@ impl PixelStats {
     }
 
     /// Counts a complete block.
-    fn close_block(&mut self, p: Piece) {
+    fn close_block(&mut self, p: BlockPart) {
         let m = p.sum / PIXEL_STRATA as f64;
         (self.blocks, self.block_mean, self.block_m2) =
             chan((self.blocks, self.block_mean, self.block_m2), (1, m, 0.0));
@@ -438,7 +438,7 @@ impl PixelStats {
         };
         let first = (b.head.n > 0).then_some(b.head);
         let b_only_head = b.only_head();
-        let place = |out: &mut PixelStats, p: Piece, is_first: bool, is_last: bool| {
+        let place = |out: &mut PixelStats, p: BlockPart, is_first: bool, is_last: bool| {
             if p.n == PIXEL_STRATA {
                 out.close_block(p);
             } else if is_first {
@@ -650,7 +650,7 @@ impl<'a> Samples<'a> {
     /// not), and keep a dropped one, which means none. Each pixel's run of
     /// samples goes in at once ([`PixelStats::add_run`]).
     #[inline]
-    pub(crate) fn add(&mut self, samples: &[Sampled]) {
+    pub(crate) fn add(&mut self, samples: &[RowSample]) {
         match self {
             Samples::Stats(p) => {
                 for run in samples.chunk_by(|a, b| a.x == b.x) {
@@ -1575,8 +1575,8 @@ mod tests {
                 })
                 .map(|c| if c.is_finite() { c } else { Vec3::splat(0.25) })
                 .collect();
-            let run: Vec<Sampled> = (0..len)
-                .map(|k| Sampled {
+            let run: Vec<RowSample> = (0..len)
+                .map(|k| RowSample {
                     x: 0,
                     k: k as u32,
                     c: c[k],
@@ -1621,11 +1621,11 @@ mod tests {
     /// of the same samples added one at a time, bit for bit.
     #[test]
     fn runs_of_samples_add_as_single_samples() {
-        let samples: Vec<Sampled> = (0..70)
+        let samples: Vec<RowSample> = (0..70)
             .map(|k| {
                 let (stratum, v) = sample(11, k, 1.0, 1.0);
                 let c = Vec3::new(v as f32, 0.3 + 2.0 * v as f32, 1e-9 * k as f32);
-                Sampled {
+                RowSample {
                     x: 0,
                     k,
                     c,
@@ -1634,7 +1634,7 @@ mod tests {
             })
             .collect();
         for skip in [None, Some(5), Some(33)] {
-            let kept: Vec<Sampled> = samples
+            let kept: Vec<RowSample> = samples
                 .iter()
                 .filter(|s| Some(s.k) != skip)
                 .copied()
@@ -1670,9 +1670,9 @@ mod tests {
         for c in colours {
             for jittered in [false, true] {
                 for skip in [None, Some(3), Some(17)] {
-                    let kept: Vec<Sampled> = (0..40)
+                    let kept: Vec<RowSample> = (0..40)
                         .filter(|&k| Some(k) != skip)
-                        .map(|k| Sampled {
+                        .map(|k| RowSample {
                             x: 0,
                             k,
                             // Past 32 samples the colour changes.
@@ -1713,11 +1713,11 @@ mod tests {
             let mut films = [Film::new(2, 1), Film::new_summary(2, 1)];
             for f in &mut films {
                 let mut pixels = f.sample_into().0;
-                let row: Vec<Sampled> = (0..2)
+                let row: Vec<RowSample> = (0..2)
                     .flat_map(|x| {
                         (0..n).map(move |k| {
                             let (stratum, v) = sample(x as u64, k, 1.0, 1.0);
-                            Sampled {
+                            RowSample {
                                 x,
                                 k,
                                 c: Vec3::splat(v as f32),
@@ -1755,7 +1755,7 @@ mod tests {
                         Vec3::new(v as f32, 0.5 + v as f32, 1e-3 * k as f32)
                     };
                     let stratum = (x % 2 == 0).then_some(stratum);
-                    row.push(Sampled { x, k, c, stratum });
+                    row.push(RowSample { x, k, c, stratum });
                 }
             }
             samples.push(row);

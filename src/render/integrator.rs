@@ -133,7 +133,7 @@ pub(crate) fn mirror(dir: Vec3, n: Vec3, ng: Vec3) -> Vec3 {
 /// axis) and sub-pixel stratum when jittered, and the random numbers the
 /// rest of the sample draws.
 #[derive(Clone, Debug)]
-pub(crate) struct Placed {
+pub(crate) struct SamplePoint {
     pub(crate) x: u32,
     pub(crate) y: u32,
     pub(crate) off: Vec2,
@@ -141,7 +141,7 @@ pub(crate) struct Placed {
     rng: Rng,
 }
 
-impl Placed {
+impl SamplePoint {
     /// The image position of the sample, in pixels.
     #[inline]
     fn position(&self) -> (f64, f64) {
@@ -236,7 +236,7 @@ impl<'a> Tracer<'a> {
     }
 
     /// The sub-pixel stratum of sample `k` of pixel `(x, y)` when pixel
-    /// samples are jittered ([`crate::geometry::sampling::pixel_stratum`]),
+    /// samples are jittered ([`Run`](crate::geometry::sampling::Run)),
     /// else `None`.
     pub fn stratum(&self, x: u32, y: u32, k: u32) -> Option<u32> {
         self.stratum_in(x, y, k, &mut Run::default())
@@ -265,7 +265,7 @@ impl<'a> Tracer<'a> {
     /// sample's chain of random numbers they would wait in front of every
     /// ray.
     #[inline(always)]
-    pub(crate) fn place(&self, x: u32, y: u32, k: u32, run: &mut Run) -> Placed {
+    pub(crate) fn place(&self, x: u32, y: u32, k: u32, run: &mut Run) -> SamplePoint {
         let pixel = y as u64 * self.width as u64 + x as u64;
         // Nothing an exact render does draws a random number (see
         // `Plan::deterministic`), so its samples need no seeded stream.
@@ -282,7 +282,7 @@ impl<'a> Tracer<'a> {
         } else {
             Vec2::splat(0.5)
         };
-        Placed {
+        SamplePoint {
             x,
             y,
             off,
@@ -293,7 +293,7 @@ impl<'a> Tracer<'a> {
 
     /// The camera ray of a placed sample.
     #[inline]
-    pub(crate) fn camera_ray(&self, s: &Placed) -> Ray {
+    pub(crate) fn camera_ray(&self, s: &SamplePoint) -> Ray {
         let (x, y) = s.position();
         self.frame.ray(x, y)
     }
@@ -303,7 +303,7 @@ impl<'a> Tracer<'a> {
     /// ([`CameraFrame::rays`](crate::scene::camera::CameraFrame::rays)).
     pub(crate) fn camera_rays<'p>(
         &self,
-        placed: impl Iterator<Item = &'p Placed>,
+        placed: impl Iterator<Item = &'p SamplePoint>,
         out: &mut Vec<Ray>,
     ) {
         const BATCH: usize = 64;
@@ -321,7 +321,7 @@ impl<'a> Tracer<'a> {
     }
 
     /// The colour of the placed sample `s`, whose camera ray is `ray`.
-    pub(crate) fn sample_from<R: Recorder>(&self, s: Placed, ray: &Ray, rec: &mut R) -> Vec3 {
+    pub(crate) fn sample_from<R: Recorder>(&self, s: SamplePoint, ray: &Ray, rec: &mut R) -> Vec3 {
         self.camera_sample(s, ray, None, rec)
     }
 
@@ -331,7 +331,7 @@ impl<'a> Tracer<'a> {
     #[inline(always)]
     pub(crate) fn sample_from_hit<R: Recorder>(
         &self,
-        s: Placed,
+        s: SamplePoint,
         ray: &Ray,
         hit: Option<Hit>,
         rec: &mut R,
@@ -344,7 +344,7 @@ impl<'a> Tracer<'a> {
     #[inline(always)]
     fn camera_sample<R: Recorder>(
         &self,
-        s: Placed,
+        s: SamplePoint,
         ray: &Ray,
         found: Option<Option<Hit>>,
         rec: &mut R,

@@ -18,12 +18,12 @@ use anyhow::{bail, Result};
 
 use glam::Vec3;
 
-use super::film::{Film, Piece, PixelStats, Report, FIXED_MAX, FIXED_ONE};
+use super::film::{BlockPart, Film, PixelStats, Report, FIXED_MAX, FIXED_ONE};
 use super::Session;
 use crate::geometry::sampling::PIXEL_STRATA;
 use crate::interrupt::Cancel;
-use crate::raster::flat_exr::{self, ExrHeader, Kind, Scanlines};
-use crate::scene::load::source::Input;
+use crate::raster::flat_exr::{self, ExrHeader, SampleType, Scanlines};
+use crate::scene::load::source::InputFile;
 use crate::scene::BloomSettings;
 use crate::words::quoted;
 
@@ -62,7 +62,7 @@ pub(crate) struct Meta {
     pub(crate) command: Vec<String>,
     /// The files the scene was read from, with their CRC-32s, where
     /// recorded (not for a list too long for the header).
-    pub(crate) inputs: Option<Vec<Input>>,
+    pub(crate) inputs: Option<Vec<InputFile>>,
 }
 
 impl Meta {
@@ -308,13 +308,13 @@ fn from_words(w: &Words) -> PixelStats {
         n: w[0],
         blocks: w[1],
         open: w[2],
-        head: Piece {
+        head: BlockPart {
             block: w[3],
             n: w[4],
             sum: double(4),
             diff: double(5),
         },
-        tail: Piece {
+        tail: BlockPart {
             block: w[5],
             n: w[6],
             sum: double(6),
@@ -430,8 +430,8 @@ pub(crate) fn encode(f: &Film, meta: &Meta) -> Result<Vec<u8>> {
             .iter()
             .map(|&(name, c)| {
                 let kind = match c {
-                    Column::Mean(_) => Kind::F32,
-                    Column::Word(_) => Kind::U32,
+                    Column::Mean(_) => SampleType::F32,
+                    Column::Word(_) => SampleType::U32,
                 };
                 (name.to_string(), kind)
             })
@@ -577,7 +577,7 @@ fn header_of(l: &ExrHeader) -> Result<Header> {
                     let crc = u32::from_str_radix(&crc, 16).map_err(|_| {
                         anyhow::anyhow!("rayterm.inputs gives {} as a CRC-32", quoted(&crc))
                     })?;
-                    Ok(Input {
+                    Ok(InputFile {
                         path: path.into(),
                         crc,
                     })
@@ -677,8 +677,8 @@ impl Source {
         let mut columns = Vec::new();
         for (c, (name, kind)) in l.channels.iter().enumerate() {
             match (name.as_str(), kind) {
-                ("R" | "G" | "B", Kind::F32) => {}
-                (_, Kind::U32) => columns.push((give(name)?, 8 + c * row)),
+                ("R" | "G" | "B", SampleType::F32) => {}
+                (_, SampleType::U32) => columns.push((give(name)?, 8 + c * row)),
                 _ => bail!(
                     "channel {} is not of the type a partial film stores",
                     quoted(name)
@@ -867,7 +867,7 @@ fn plausible(p: &PixelStats, spp: u32, start: u32, end: u32) -> bool {
         let lo = b * PIXEL_STRATA;
         (lo + PIXEL_STRATA).min(end).saturating_sub(lo.max(start))
     };
-    let piece = |q: &Piece| {
+    let piece = |q: &BlockPart| {
         q.n == 0 || (q.n < PIXEL_STRATA && blocks.contains(&q.block) && q.n <= held(q.block))
     };
     p.n <= spp
@@ -1123,10 +1123,10 @@ mod tests {
     fn forged_statistics_are_not_plausible() {
         let honest = PixelStats {
             n: 4,
-            head: Piece {
+            head: BlockPart {
                 block: 0,
                 n: 4,
-                ..Piece::default()
+                ..BlockPart::default()
             },
             ..PixelStats::default()
         };
@@ -1138,7 +1138,7 @@ mod tests {
         assert!(!plausible(&low, 4, 12, 16));
         let wide = PixelStats {
             n: 4,
-            head: Piece {
+            head: BlockPart {
                 n: 12,
                 ..honest.head
             },

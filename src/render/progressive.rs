@@ -23,8 +23,8 @@ use std::time::Instant;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::film::{Allocation, BadSample, Film, PixelStats, Sampled, Samples};
-use super::integrator::Placed;
+use super::film::{Allocation, BadSample, Film, PixelStats, RowSample, Samples};
+use super::integrator::SamplePoint;
 use super::job::Job;
 use crate::geometry::sampling::{Run, PIXEL_STRATA, QUARTER};
 use crate::interrupt::Cancel;
@@ -604,7 +604,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             let mut hits = [None; CAMERA_BATCH];
             let mut packed = [false; CAMERA_BATCH];
             let mut colours = Vec::with_capacity(CAMERA_BATCH);
-            let mut trace = |placed: &mut Vec<(u32, Placed)>| {
+            let mut trace = |placed: &mut Vec<(u32, SamplePoint)>| {
                 rays.clear();
                 tracer.camera_rays(placed.iter().map(|(_, p)| p), &mut rays);
                 let hits = &mut hits[..rays.len()];
@@ -639,7 +639,7 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                     if !c.is_finite() {
                         bad.push(BadSample { x, y, sample: k });
                     }
-                    colours.push(Sampled { x, k, c, stratum });
+                    colours.push(RowSample { x, k, c, stratum });
                 }
                 pixels.add(&colours);
                 colours.clear();

@@ -11,7 +11,7 @@ use anyhow::{bail, Result};
 use super::plan::{Plan, PlanPolicy};
 use super::{Features, Film, Tracer};
 use crate::bvh::{self, Bvh};
-use crate::scene::load::{self, source::Input, Opened};
+use crate::scene::load::{self, source::InputFile, Opened};
 use crate::scene::{self, Builder, Camera, Scene};
 
 /// What to open and how to render it.
@@ -89,7 +89,7 @@ pub struct Session {
     pub(crate) height: u32,
     pub(crate) seed: u64,
     /// The files the scene was read from, which no output may replace.
-    pub(crate) inputs: Vec<Input>,
+    pub(crate) inputs: Vec<InputFile>,
 }
 
 impl Session {
@@ -111,7 +111,7 @@ impl Session {
     /// The scene `req` names, loaded as [`Session::open`] loads it, and the
     /// files it was read from, with no BVH built: what `rayterm inputs`
     /// lists. Its warnings are the scene's.
-    pub(crate) fn load(req: &SceneRequest) -> Result<(Scene, Vec<Input>)> {
+    pub(crate) fn load(req: &SceneRequest) -> Result<(Scene, Vec<InputFile>)> {
         let how = load::Opening {
             camera: req.camera.clone(),
             allow_outside: req.allow_outside,

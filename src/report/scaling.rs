@@ -8,7 +8,7 @@ use anyhow::Result;
 use serde::Serialize;
 
 use super::stats::{fit_line, median};
-use super::workload::{self, Frame, Workload};
+use super::workload::{self, HitImage, Workload};
 use super::{Machine, Progress};
 use crate::bvh::{self, TraversalStats};
 use crate::scene::{self, Builder, Geometry};
@@ -122,7 +122,7 @@ pub(crate) fn run(
         let Some(b) = last else { continue };
         let build_ms = median(&mut ms);
         let w = Workload::auto(&g.bounds(), o.width, o.height);
-        let mut frame = Frame::new(&w);
+        let mut frame = HitImage::new(&w);
         let (mut p, mut s) = (Vec::new(), Vec::new());
         for _ in 0..3 {
             p.push(workload::trace_primary(

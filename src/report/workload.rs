@@ -154,16 +154,16 @@ pub struct Checksum {
 
 /// Per-pixel hit distances (negative for a miss) and triangles, and per-row
 /// sums.
-pub struct Frame {
+pub struct HitImage {
     t: Vec<f32>,
     tri: Vec<u32>,
     rows: Vec<Checksum>,
 }
 
-impl Frame {
+impl HitImage {
     pub fn new(w: &Workload) -> Self {
         let n = w.width as usize * w.height as usize;
-        Frame {
+        HitImage {
             t: vec![-1.0; n],
             tri: vec![0; n],
             rows: vec![Checksum::default(); w.height as usize],
@@ -275,7 +275,7 @@ pub enum Rows<'a> {
 /// loop, as in the Embree harness.
 pub fn trace_primary(
     w: &Workload,
-    frame: &mut Frame,
+    frame: &mut HitImage,
     source: Rows,
     closest: impl Fn(&Ray) -> Option<(f32, u32)> + Sync,
 ) -> f64 {
@@ -329,7 +329,7 @@ pub fn trace_primary(
 /// elapsed seconds.
 pub fn trace_shadow(
     w: &Workload,
-    frame: &mut Frame,
+    frame: &mut HitImage,
     source: Rows,
     occluded: impl Fn(&Ray) -> bool + Sync,
 ) -> f64 {
@@ -387,7 +387,7 @@ pub(crate) const TILE: usize = 8;
 /// as there.
 pub(crate) fn trace_primary_packets(
     w: &Workload,
-    frame: &mut Frame,
+    frame: &mut HitImage,
     source: Rows,
     bvh: &Bvh,
 ) -> f64 {
@@ -438,7 +438,7 @@ pub(crate) fn trace_primary_packets(
 /// tile) traced together by [`Bvh::occluded_packet`].
 pub(crate) fn trace_shadow_packets(
     w: &Workload,
-    frame: &mut Frame,
+    frame: &mut HitImage,
     source: Rows,
     bvh: &Bvh,
 ) -> f64 {
@@ -496,7 +496,7 @@ pub(crate) fn primary_rays(w: &Workload) -> Vec<Vec<Ray>> {
 }
 
 /// The shadow rays of every row, made before they are timed.
-pub(crate) fn shadow_rays(w: &Workload, frame: &Frame) -> Vec<Vec<Ray>> {
+pub(crate) fn shadow_rays(w: &Workload, frame: &HitImage) -> Vec<Vec<Ray>> {
     frame
         .t
         .par_chunks(w.width as usize)
@@ -511,7 +511,7 @@ pub(crate) fn shadow_rays(w: &Workload, frame: &Frame) -> Vec<Vec<Ray>> {
 
 /// The diffuse rays of every row (one per primary hit, in pixel order),
 /// made before they are timed, as in the harness.
-pub fn diffuse_rays(w: &Workload, frame: &Frame, geom: &Geometry) -> Vec<Vec<Ray>> {
+pub fn diffuse_rays(w: &Workload, frame: &HitImage, geom: &Geometry) -> Vec<Vec<Ray>> {
     let width = w.width as usize;
     (0..w.height as usize)
         .into_par_iter()
@@ -535,7 +535,7 @@ pub fn diffuse_rays(w: &Workload, frame: &Frame, geom: &Geometry) -> Vec<Vec<Ray
 /// Traces the diffuse rays of every row with `closest`; returns the
 /// elapsed seconds.
 pub fn trace_diffuse(
-    frame: &mut Frame,
+    frame: &mut HitImage,
     rays: &[Vec<Ray>],
     closest: impl Fn(&Ray) -> Option<(f32, u32)> + Sync,
 ) -> f64 {
@@ -627,7 +627,7 @@ pub struct RaysReport {
 pub fn run(mesh: &str, geom: &Geometry, o: &RaysOptions) -> RaysReport {
     let w = Workload::auto(&geom.bounds(), o.width, o.height);
     let reps = o.reps.max(1);
-    let mut frame = Frame::new(&w);
+    let mut frame = HitImage::new(&w);
     let (mut build, mut prim, mut shad, mut diff) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut sum: Option<Checksum> = None;
@@ -639,7 +639,7 @@ pub fn run(mesh: &str, geom: &Geometry, o: &RaysOptions) -> RaysReport {
         bvh.cap_simd(o.simd);
         simd = bvh.simd();
         let (closest, occluded) = (|r: &Ray| closest(&bvh, r), |r: &Ray| occluded(&bvh, r));
-        let primary = |frame: &mut Frame, rows| match o.packets {
+        let primary = |frame: &mut HitImage, rows| match o.packets {
             true => trace_primary_packets(&w, frame, rows, &bvh),
             false => trace_primary(&w, frame, rows, closest),
         };
@@ -650,7 +650,7 @@ pub fn run(mesh: &str, geom: &Geometry, o: &RaysOptions) -> RaysReport {
         } else {
             prim.push(primary(&mut frame, Rows::Make));
         }
-        let shadow = |frame: &mut Frame, rows| match o.packets {
+        let shadow = |frame: &mut HitImage, rows| match o.packets {
             true => trace_shadow_packets(&w, frame, rows, &bvh),
             false => trace_shadow(&w, frame, rows, occluded),
         };

@@ -128,7 +128,7 @@ impl Light {
         }
     }
 
-    /// Position and colour at parameter `s` in [0,1]^2 (segments use `s.x`).
+    /// Position and colour at parameter `s` in `[0,1]^2` (segments use `s.x`).
     /// Always inlined: returned through memory, a point light's position
     /// was stored in an 8-byte and a 4-byte move and read back across both,
     /// a load the store buffer cannot forward.

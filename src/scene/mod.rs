@@ -5,11 +5,11 @@
 pub(crate) mod camera;
 pub(crate) mod emitters;
 pub mod envlight;
-pub mod frame;
 pub mod light;
 pub mod load;
 pub(crate) mod material;
 mod reach;
+pub mod rebase;
 pub(crate) mod show;
 pub(crate) mod summary;
 pub(crate) mod texture;
@@ -341,9 +341,9 @@ impl Scene {
 
 impl Scene {
     /// Moves a scene that lies far from the origin for its size (see
-    /// [`frame::FAR`]) next to it, and says so in `warnings`; returns the
+    /// [`rebase::FAR`]) next to it, and says so in `warnings`; returns the
     /// shift subtracted. For scenes moved in code (the stability battery):
-    /// the loaders do the same in f64, before rounding ([`frame::Frame`]).
+    /// the loaders do the same in f64, before rounding ([`rebase::Rebase`]).
     ///
     /// Far out, f32 positions are coarse (1/16 apart at 1e6): every hit point
     /// and spawned ray origin would be rounded to that grid, which speckles
@@ -357,10 +357,10 @@ impl Scene {
             return None;
         }
         let (min, max) = (b.min.as_dvec3(), b.max.as_dvec3());
-        let shift = frame::far_shift(min, max)?.as_vec3();
+        let shift = rebase::far_shift(min, max)?.as_vec3();
         self.transform(1.0, -shift);
         self.warnings
-            .push(frame::far_warning(shift.as_dvec3(), min, max));
+            .push(rebase::far_warning(shift.as_dvec3(), min, max));
         Some(shift)
     }
 }

@@ -230,7 +230,7 @@ pub struct CubeMap {
     pub(crate) faces: [Texture; 6],
 }
 
-/// Face and (s, t) in [0,1]^2 (t from the top row) for a direction, as in
+/// Face and (s, t) in `[0,1]^2` (t from the top row) for a direction, as in
 /// the OpenGL specification's major-axis table.
 pub(crate) fn cube_face_uv(d: Vec3) -> (usize, Vec2) {
     let a = d.abs();

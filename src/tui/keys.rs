@@ -128,7 +128,7 @@ pub(crate) enum Action {
 }
 
 /// One line of the help: keys with their actions, and what they do.
-pub(crate) struct Row {
+pub(crate) struct KeyRow {
     pub(crate) mode: Mode,
     pub(crate) keys: &'static [(Key, Action)],
     pub(crate) help: &'static str,
@@ -139,26 +139,26 @@ pub(crate) struct Row {
 use Action as A;
 use Key as K;
 
-pub(crate) const ROWS: &[Row] = &[
-    Row {
+pub(crate) const ROWS: &[KeyRow] = &[
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Char('?'), A::Help)],
         help: "this help",
         hint: Some("help"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Char('q'), A::Quit), (K::Ctrl('c'), A::Quit)],
         help: "quit",
         hint: Some("quit"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Ctrl('z'), A::Suspend)],
         help: "suspend to the shell (fg resumes)",
         hint: None,
     },
-    Row {
+    KeyRow {
         mode: Mode::View,
         keys: &[
             (K::Left, A::Orbit(-1, 0)),
@@ -169,7 +169,7 @@ pub(crate) const ROWS: &[Row] = &[
         help: "orbit the camera around its target",
         hint: Some("orbit"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[
             (K::Char('w'), A::Move(0, 0, 1)),
@@ -180,7 +180,7 @@ pub(crate) const ROWS: &[Row] = &[
         help: "move forward, back, left, right",
         hint: Some("move"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[
             (K::Char('e'), A::Move(0, 1, 0)),
@@ -189,7 +189,7 @@ pub(crate) const ROWS: &[Row] = &[
         help: "move up, down",
         hint: None,
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[
             (K::Char('+'), A::Fov(-1)),
@@ -199,13 +199,13 @@ pub(crate) const ROWS: &[Row] = &[
         help: "zoom in, in, out (field of view, or an orthographic view's height)",
         hint: Some("zoom"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Char('r'), A::ResetView)],
         help: "reset the view",
         hint: None,
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[
             (K::Char('1'), A::Toggle(Feature::Shadows)),
@@ -226,25 +226,25 @@ pub(crate) const ROWS: &[Row] = &[
         help: "toggle a feature (each key is listed in the Features panel)",
         hint: Some("features"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Char('<'), A::Depth(-1)), (K::Char('>'), A::Depth(1))],
         help: "fewer, more bounces (the maximum depth of paths and ray trees)",
         hint: None,
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Char('b'), A::SwitchBuilder)],
         help: "switch the BVH builder (sah, median) and rebuild",
         hint: Some("builder"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Char('v'), A::SelectMode), (K::Tab, A::SelectMode)],
         help: "select mode on/off: pick the pixel to inspect (or click it)",
         hint: Some("select"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Select,
         keys: &[
             (K::Char('h'), A::Cursor(-1, 0)),
@@ -259,7 +259,7 @@ pub(crate) const ROWS: &[Row] = &[
         help: "move the pixel cursor (select mode)",
         hint: Some("cursor"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Select,
         keys: &[
             (K::Char('H'), A::Cursor(-8, 0)),
@@ -270,31 +270,31 @@ pub(crate) const ROWS: &[Row] = &[
         help: "move the pixel cursor 8 pixels (select mode)",
         hint: None,
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Esc, A::Back)],
         help: "leave select mode",
         hint: None,
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Enter, A::Fold), (K::Char(' '), A::Fold)],
         help: "fold or unfold the list at the debug cursor",
         hint: Some("fold"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Char(']'), A::Line(1)), (K::Char('['), A::Line(-1))],
         help: "move the debug cursor down, up",
         hint: None,
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::PageDown, A::Page(1)), (K::PageUp, A::Page(-1))],
         help: "scroll the debug pane a page down, up",
         hint: None,
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[
             (K::Char('n'), A::Worst(Worst::Nan)),
@@ -304,43 +304,43 @@ pub(crate) const ROWS: &[Row] = &[
         help: "jump to the worst pixel: NaN/Inf sample, highest variance, brightest",
         hint: Some("worst"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Char('o'), A::PixelOverlay)],
         help: "pixel overlay: rays, rays in colour, lights, traversal, normals, texture, environment, glossy, samples, off",
         hint: Some("overlay"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Char('g'), A::Overlay)],
         help: "view overlay: off, BVH level k, leaves, heat map (nodes, tests), bloom, spp, error per pixel",
         hint: Some("view overlay"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Char('.'), A::Level(1)), (K::Char(','), A::Level(-1))],
         help: "BVH overlay level k up, down",
         hint: None,
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Char('p'), A::SavePng)],
         help: "save a PNG of this view (rendered in the background)",
         hint: Some("png"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Char('W'), A::Warnings)],
         help: "list the scene's load warnings",
         hint: None,
     },
-    Row {
+    KeyRow {
         mode: Mode::Any,
         keys: &[(K::Char('x'), A::Stability)],
         help: "run the numerical stability battery on this scene",
         hint: Some("stability"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Popup,
         keys: &[
             (K::Up, A::ScrollPopup(-1)),
@@ -351,7 +351,7 @@ pub(crate) const ROWS: &[Row] = &[
         help: "scroll a popup (help, stability table) up, down",
         hint: Some("scroll"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Popup,
         keys: &[
             (K::PageUp, A::PagePopup(-1)),
@@ -360,7 +360,7 @@ pub(crate) const ROWS: &[Row] = &[
         help: "scroll a popup a page up, down",
         hint: None,
     },
-    Row {
+    KeyRow {
         mode: Mode::Popup,
         keys: &[
             (K::Esc, A::ClosePopup),
@@ -370,13 +370,13 @@ pub(crate) const ROWS: &[Row] = &[
         help: "close the popup",
         hint: Some("close"),
     },
-    Row {
+    KeyRow {
         mode: Mode::Popup,
         keys: &[(K::Ctrl('c'), A::Quit)],
         help: "quit",
         hint: None,
     },
-    Row {
+    KeyRow {
         mode: Mode::Popup,
         keys: &[(K::Ctrl('z'), A::Suspend)],
         help: "suspend to the shell (fg resumes)",
@@ -402,7 +402,7 @@ pub(crate) fn key_for(action: Action) -> Option<Key> {
 }
 
 /// A row's keys as one label, e.g. `w s a d`.
-pub(crate) fn keys_label(r: &Row) -> String {
+pub(crate) fn keys_label(r: &KeyRow) -> String {
     r.keys
         .iter()
         .map(|(k, _)| k.label())

@@ -60,7 +60,7 @@ use graphics::symbols::Symbols;
 use graphics::{GraphicsArg, PixelMode};
 use term::detect::{self, Ask};
 use term::input::{Input, Reader, Reply};
-use term::output::{Output, Shown};
+use term::output::{Shown, TermOutput};
 use term::screen::Screen;
 
 /// At most this many frames per second are drawn.
@@ -168,7 +168,7 @@ pub(crate) fn run(
             .collect();
         said.retain(|s| !s.is_empty());
         app.say(said.join(" · "));
-        let mut out = Output::default();
+        let mut out = TermOutput::default();
         out.start(terminal.backend_mut(), Instant::now())?;
         let mut images = match app.display.pixels {
             Some(_) => Some(Images::new()?),
@@ -250,7 +250,7 @@ fn event_loop<W: Write>(
     terminal: &mut Terminal<Screen<W>>,
     app: &mut App,
     reader: &Reader,
-    out: &mut Output,
+    out: &mut TermOutput,
     mut images: Option<&mut Images>,
     kept: Vec<Input>,
 ) -> Result<()> {
@@ -348,7 +348,7 @@ fn event_loop<W: Write>(
 fn suspend<W: Write>(
     terminal: &mut Terminal<Screen<W>>,
     reader: &Reader,
-    out: &mut Output,
+    out: &mut TermOutput,
     pictures: Option<(PixelMode, &mut Images)>,
 ) -> Result<bool> {
     leave(terminal.backend_mut(), reader, out, pictures);
@@ -367,7 +367,7 @@ fn suspend<W: Write>(
 /// whole screen drawn anew. The startup questions are not asked again: the
 /// terminal is the same, and answers unanswered before the stop are
 /// forgotten (they may have gone to the shell).
-fn take_back<W: Write>(terminal: &mut Terminal<Screen<W>>, out: &mut Output) -> Result<()> {
+fn take_back<W: Write>(terminal: &mut Terminal<Screen<W>>, out: &mut TermOutput) -> Result<()> {
     // After a SIGSTOP crossterm still takes raw mode to be on.
     let _ = disable_raw_mode();
     TerminalGuard::setup()?;
@@ -405,7 +405,7 @@ impl Images {
         &mut self,
         screen: &mut Screen<W>,
         app: &App,
-        out: &mut Output,
+        out: &mut TermOutput,
         mode: &PixelMode,
         due: &mut bool,
     ) {
@@ -478,7 +478,7 @@ fn shown(app: &App) -> Shown {
 fn leave<W: Write>(
     screen: &mut Screen<W>,
     reader: &Reader,
-    out: &mut Output,
+    out: &mut TermOutput,
     images: Option<(PixelMode, &mut Images)>,
 ) {
     // Given back already: stopped, then told to quit.

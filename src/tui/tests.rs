@@ -632,13 +632,13 @@ fn octants_show_four_times_the_pixels_and_selection_follows() {
 
 #[test]
 fn the_render_panel_says_when_the_view_reached_the_screen() {
-    use super::term::output::Output;
+    use super::term::output::TermOutput;
     use super::term::screen::Screen;
     use ratatui::layout::Size;
     use std::time::Instant;
     let mut app = app("cornell", &[]);
     let mut t = Terminal::new(Screen::new(Vec::new(), Some(Size::new(100, 30))).unwrap()).unwrap();
-    let mut out = Output::default();
+    let mut out = TermOutput::default();
     out.start(t.backend_mut(), Instant::now()).unwrap();
     app.update(ratatui::layout::Rect::new(0, 0, 100, 30));
     assert!(app.wait_frame(WAIT).unwrap());

@@ -215,7 +215,7 @@ pub struct Snapshot {
     pub(crate) converged: Option<f64>,
     pub(crate) pass_ms: f64,
     pub(crate) mrays: f64,
-    /// The film's estimated relative error ([`Film::relative_error`]),
+    /// The film's estimated relative error ([`Film::relative_error`](crate::render::Film::relative_error)),
     /// unknown below two samples.
     pub(crate) error: Option<f64>,
     /// Nothing is sampled and one pass is done: the image is exact.

@@ -9,7 +9,7 @@ use crate::common;
 use rayterm::bvh::{self, Simd, TraversalStats};
 use rayterm::geometry::triangle::{intersect, RayShear};
 use rayterm::geometry::Ray;
-use rayterm::report::workload::{self, Checksum, Frame, Workload};
+use rayterm::report::workload::{self, Checksum, HitImage, Workload};
 use rayterm::scene::{self, Builder, Geometry};
 
 /// The workload traced with the BVH on a pool of `threads` threads.
@@ -19,7 +19,7 @@ fn with_bvh(g: &Geometry, w: &Workload, builder: Builder, threads: usize) -> Che
         .num_threads(threads)
         .build()
         .unwrap();
-    let mut frame = Frame::new(w);
+    let mut frame = HitImage::new(w);
     let closest = |r: &Ray| {
         b.intersect::<false>(r, &mut TraversalStats::default())
             .map(|h| (h.t, h.prim))

@@ -9,7 +9,7 @@ use rayterm::bvh::{self, Bvh};
 use rayterm::interrupt::Cancel;
 use rayterm::raster::reference::load_reference;
 use rayterm::render::{Feature, Features, Plan, PlanPolicy};
-use rayterm::report::converge::{rmse, Budget, Config, ReferenceSource, Study, Subject};
+use rayterm::report::converge::{rmse, Config, ReferenceSource, RunLimit, Study, Subject};
 use rayterm::report::stats::fit_log_log;
 use rayterm::scene::{self, Builder, Light, Scene};
 use std::path::PathBuf;
@@ -18,7 +18,7 @@ fn config(w: u32, h: u32, budgets: &[u32], reference: ReferenceSource) -> Config
     Config {
         width: w,
         height: h,
-        budgets: budgets.iter().map(|&n| Budget::Spp(n)).collect(),
+        budgets: budgets.iter().map(|&n| RunLimit::Spp(n)).collect(),
         seeds: 2,
         seed: 5,
         compare: false,

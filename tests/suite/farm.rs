@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use crate::files::{rayterm, Dir, Run};
 use glam::Vec3;
-use rayterm::raster::Format;
+use rayterm::raster::ImageFormat;
 use serde_json::{json, Value};
 
 const SCENE: [&str; 3] = ["cornell-area", "--size", "40x28"];
@@ -182,7 +182,7 @@ fn inputs_lists_a_scene_files_meshes_and_environment_map() {
     d.write("meshes/box.mtl", "newmtl Wood\nKd 1 1 1\nmap_Kd wood.png\n");
     d.write("meshes/wood.png", png([200, 120, 40]));
     d.write("meshes/tri.stl", stl());
-    let sky = Format::Hdr
+    let sky = ImageFormat::Hdr
         .encode_linear(4, 2, &[Vec3::new(0.5, 0.6, 0.9); 8])
         .unwrap();
     d.write("env/sky.hdr", sky);

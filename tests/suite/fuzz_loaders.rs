@@ -16,11 +16,11 @@ use std::time::Duration;
 use glam::DAffine3;
 use proptest::prelude::*;
 use proptest::sample::Index;
-use rayterm::scene::frame::Frame;
-use rayterm::scene::load::mesh::{self, Format};
+use rayterm::scene::load::mesh::{self, MeshFormat};
 use rayterm::scene::load::obj::{self, Parts, Placement};
 use rayterm::scene::load::source::{self, Memory};
 use rayterm::scene::load::{self, bezier, Opening};
+use rayterm::scene::rebase::Rebase;
 use rayterm::scene::{Geometry, Light};
 
 /// Far more than any of these loads takes; only a hang reaches it.
@@ -131,10 +131,10 @@ fn load_obj(src: Memory) -> Result<(), TestCaseError> {
 
 /// Loads `bytes` as a mesh file of `format` (named `m.ply`, `m.stl` or
 /// `m.gltf`; a glTF's `m.bin` is the one of [`gltf_file`]).
-fn load_mesh(format: Format, bytes: Vec<u8>) -> Result<(), TestCaseError> {
+fn load_mesh(format: MeshFormat, bytes: Vec<u8>) -> Result<(), TestCaseError> {
     let name = match format {
-        Format::Ply => "m.ply",
-        Format::Gltf => "m.gltf",
+        MeshFormat::Ply => "m.ply",
+        MeshFormat::Gltf => "m.gltf",
         _ => "m.stl",
     };
     let parts = within_budget(name, move || {
@@ -143,7 +143,7 @@ fn load_mesh(format: Format, bytes: Vec<u8>) -> Result<(), TestCaseError> {
         let path = Path::new(name);
         mesh::load_placed(format, &mut parts, &src, path, &DAffine3::IDENTITY, None).map(|m| {
             for m in m {
-                parts.add_placed(m, &Frame::IDENTITY);
+                parts.add_placed(m, &Rebase::IDENTITY);
             }
             parts
         })
@@ -613,7 +613,7 @@ proptest! {
         } else {
             mutate_bytes(b, &bytes, cut)
         };
-        load_mesh(Format::Ply, b)?;
+        load_mesh(MeshFormat::Ply, b)?;
     }
 
     #[test]
@@ -629,7 +629,7 @@ proptest! {
         } else {
             mutate_bytes(stl_file(n, count.unwrap_or(n)), &bytes, cut)
         };
-        load_mesh(Format::Stl, b)?;
+        load_mesh(MeshFormat::Stl, b)?;
     }
 
     #[test]
@@ -653,16 +653,16 @@ proptest! {
         if let Some((from, to)) = swap {
             text = text.replacen(from, to, 1);
         }
-        load_mesh(Format::Gltf, mutate(&text, &e, cut))?;
+        load_mesh(MeshFormat::Gltf, mutate(&text, &e, cut))?;
     }
 
     #[test]
     fn binary_garbage(bytes in prop::collection::vec(any::<u8>(), 0..4096)) {
-        load_mesh(Format::Gltf, bytes.clone())?;
-        load_mesh(Format::Gltf, [b"glTF\x02\x00\x00\x00".as_slice(), &bytes].concat())?;
-        load_mesh(Format::Ply, [b"ply\nformat binary_little_endian 1.0\n".as_slice(), &bytes].concat())?;
-        load_mesh(Format::Ply, bytes.clone())?;
-        load_mesh(Format::Stl, bytes.clone())?;
+        load_mesh(MeshFormat::Gltf, bytes.clone())?;
+        load_mesh(MeshFormat::Gltf, [b"glTF\x02\x00\x00\x00".as_slice(), &bytes].concat())?;
+        load_mesh(MeshFormat::Ply, [b"ply\nformat binary_little_endian 1.0\n".as_slice(), &bytes].concat())?;
+        load_mesh(MeshFormat::Ply, bytes.clone())?;
+        load_mesh(MeshFormat::Stl, bytes.clone())?;
         load_obj(files(("m.obj", bytes.clone())))?;
         load_obj(files(("m.mtl", bytes.clone())))?;
         load_toml(bytes.clone())?;
@@ -678,7 +678,7 @@ fn the_unmutated_ply_and_stl_files_load() {
             let src = files(("m.ply", ply_file(format, float, index)));
             let mut parts = Parts::default();
             let m = mesh::load_placed(
-                Format::Ply,
+                MeshFormat::Ply,
                 &mut parts,
                 &src,
                 Path::new("m.ply"),
@@ -694,7 +694,7 @@ fn the_unmutated_ply_and_stl_files_load() {
         let mut parts = Parts::default();
         let src = files(("m.gltf", gltf_file(embedded).into_bytes())).with("m.bin", gltf_bin());
         let m = mesh::load_placed(
-            Format::Gltf,
+            MeshFormat::Gltf,
             &mut parts,
             &src,
             Path::new("m.gltf"),
@@ -708,7 +708,7 @@ fn the_unmutated_ply_and_stl_files_load() {
         let mut parts = Parts::default();
         let src = files(("m.stl", bytes));
         let m = mesh::load_placed(
-            Format::Stl,
+            MeshFormat::Stl,
             &mut parts,
             &src,
             Path::new("m.stl"),

@@ -79,7 +79,7 @@ unsafe fn slab_hits_avx(
     (mask, tnear)
 }
 
-/// [`frustum_boxes`] with AVX.
+/// [`frustum_boxes`](super::portable::frustum_boxes) with AVX.
 ///
 /// # Safety
 /// The CPU must support AVX.
@@ -109,7 +109,7 @@ pub(in crate::bvh) unsafe fn frustum_boxes_avx(
     slab_hits_avx([nx, ny, nz], [fx, fy, fz], tmax)
 }
 
-/// [`rays_box`] with AVX, eight rays at a time.
+/// [`rays_box`](super::portable::rays_box) with AVX, eight rays at a time.
 ///
 /// # Safety
 /// The CPU must support AVX.

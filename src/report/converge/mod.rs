@@ -54,16 +54,16 @@ const TIME_SLACK: f64 = 1.25;
 
 /// How one run is limited.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Budget {
+pub enum RunLimit {
     Spp(u32),
     Seconds(f64),
 }
 
-impl std::fmt::Display for Budget {
+impl std::fmt::Display for RunLimit {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Budget::Spp(n) => write!(f, "{n} spp"),
-            Budget::Seconds(s) => write!(f, "{s} s"),
+            RunLimit::Spp(n) => write!(f, "{n} spp"),
+            RunLimit::Seconds(s) => write!(f, "{s} s"),
         }
     }
 }
@@ -223,7 +223,7 @@ impl Strategy {
 /// One budget of one strategy, averaged over seeds.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Point {
-    pub budget: Budget,
+    pub budget: RunLimit,
     /// Mean samples per pixel reached.
     pub spp: f64,
     /// Median wall time of a run (robust to a run slowed by other work).
@@ -394,7 +394,7 @@ pub struct Config {
     pub width: u32,
     pub height: u32,
     /// All in spp or all in seconds.
-    pub budgets: Vec<Budget>,
+    pub budgets: Vec<RunLimit>,
     pub seeds: u32,
     /// Seed of the first run; run `i` uses `seed + i`.
     pub seed: u64,
@@ -448,20 +448,20 @@ struct Run {
 /// adaptive spp budget is the mean over pixels, with no cap on any one.
 fn run_once(
     tracer: &Tracer,
-    budget: Budget,
+    budget: RunLimit,
     adaptive: bool,
     passes: &mut u64,
     cancel: Cancel,
 ) -> Run {
     let stop = match budget {
-        Budget::Spp(_) if adaptive && !tracer.plan.deterministic => Stop::default(),
-        Budget::Spp(n) => Stop::spp(n),
-        Budget::Seconds(t) => Stop::seconds(t),
+        RunLimit::Spp(_) if adaptive && !tracer.plan.deterministic => Stop::default(),
+        RunLimit::Spp(n) => Stop::spp(n),
+        RunLimit::Seconds(t) => Stop::seconds(t),
     };
     let mut p = Job::of(tracer, stop).adaptive(adaptive).start();
     let mut overran = false;
     match budget {
-        Budget::Spp(n) if adaptive && !tracer.plan.deterministic => {
+        RunLimit::Spp(n) if adaptive && !tracer.plan.deterministic => {
             while p.film().spp_range().1 < n as f64 {
                 *passes += 1;
                 let pass = p.pass(tracer, cancel);
@@ -479,7 +479,7 @@ fn run_once(
                 .passes as u64;
             // A render always completes its first pass: one that overran a
             // time budget says the budget is too short.
-            overran = matches!((budget, first), (Budget::Seconds(t), Some(f)) if f > t);
+            overran = matches!((budget, first), (RunLimit::Seconds(t), Some(f)) if f > t);
         }
     }
     Run {
@@ -502,7 +502,7 @@ impl Subject<'_> {
     fn measure(
         &self,
         strategy: Strategy,
-        budget: Budget,
+        budget: RunLimit,
         cfg: &Config,
         reference: &[Vec3],
         passes: &mut u64,
@@ -601,8 +601,8 @@ impl Subject<'_> {
             }
             ReferenceSource::Render { spp, cache } => {
                 let largest = cfg.budgets.iter().fold(0, |m, b| match b {
-                    Budget::Spp(n) => m.max(*n),
-                    Budget::Seconds(_) => m,
+                    RunLimit::Spp(n) => m.max(*n),
+                    RunLimit::Seconds(_) => m,
                 });
                 let spp = spp.unwrap_or(if largest > 0 {
                     (largest.saturating_mul(REFERENCE_FACTOR)).min(REFERENCE_MAX_SPP)
@@ -725,7 +725,7 @@ impl Subject<'_> {
             // One pass is the answer: it is its own reference unless one is given.
             let frame = self.scene.camera.frame(cfg.width, cfg.height);
             let tracer = Tracer::new(self.scene, self.bvh, self.plan, frame, cfg.seed);
-            let r = run_once(&tracer, Budget::Spp(1), false, &mut passes, cancel);
+            let r = run_once(&tracer, RunLimit::Spp(1), false, &mut passes, cancel);
             let img = r.film.image();
             let (reference, info) = match cfg.reference {
                 ReferenceSource::Render { .. } => (
@@ -743,7 +743,7 @@ impl Subject<'_> {
                 strategy: base,
                 label: base.label(uses),
                 points: vec![Point {
-                    budget: Budget::Spp(1),
+                    budget: RunLimit::Spp(1),
                     spp: 1.0,
                     seconds: r.seconds,
                     rays: r.rays as f64,
@@ -800,7 +800,7 @@ impl Subject<'_> {
                     label: s.label(uses),
                     points: Vec::new(),
                 };
-                if matches!(cfg.budgets[0], Budget::Seconds(_)) {
+                if matches!(cfg.budgets[0], RunLimit::Seconds(_)) {
                     series.points.extend(cfg.budgets.iter().filter_map(|&b| {
                         self.measure(s, b, cfg, &reference, &mut passes, progress, cancel)
                     }));
@@ -809,7 +809,7 @@ impl Subject<'_> {
                     let mut n = 1;
                     while let Some(p) = self.measure(
                         s,
-                        Budget::Spp(n),
+                        RunLimit::Spp(n),
                         cfg,
                         &reference,
                         &mut passes,
@@ -845,7 +845,7 @@ mod tests {
     #[test]
     fn no_slope_against_times_too_short_to_measure() {
         let point = |spp: f64, seconds: f64| Point {
-            budget: Budget::Spp(spp as u32),
+            budget: RunLimit::Spp(spp as u32),
             spp,
             seconds,
             rays: 0.0,
@@ -882,7 +882,7 @@ mod tests {
             points: errs
                 .iter()
                 .map(|&(spp, seconds, e)| Point {
-                    budget: Budget::Spp(spp as u32),
+                    budget: RunLimit::Spp(spp as u32),
                     spp,
                     seconds,
                     rays: 0.0,

@@ -34,7 +34,7 @@ pub(super) fn save_cached(
 ) -> Result<()> {
     let bytes =
         raster::openexr::encode_noted(width, height, img, Some((KEY, &format!("{key:016x}"))))?;
-    raster::Output::check(path, &[], &[raster::Format::Exr])?.write(&bytes)
+    raster::Output::check(path, &[], &[raster::ImageFormat::Exr])?.write(&bytes)
 }
 
 /// A cached reference of `key` at `width` x `height`; an error saying why

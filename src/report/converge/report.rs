@@ -2,7 +2,7 @@
 
 use std::fmt::Write as _;
 
-use super::{Budget, Reach, Series, Study};
+use super::{Reach, RunLimit, Series, Study};
 
 /// How far past the largest budget an extrapolated sample count is given.
 const FAR: f64 = 1000.0;
@@ -39,8 +39,8 @@ impl Study {
                 s.points
                     .iter()
                     .map(|p| match p.budget {
-                        Budget::Seconds(t) => t,
-                        Budget::Spp(_) => p.seconds,
+                        RunLimit::Seconds(t) => t,
+                        RunLimit::Spp(_) => p.seconds,
                     })
                     .collect()
             })

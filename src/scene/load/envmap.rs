@@ -10,7 +10,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use glam::Vec3;
 use image::ImageDecoder;
 
-use super::source::{Kind, Source};
+use super::source::{FileKind, Source};
 use crate::memory;
 use crate::scene::envlight::{EnvLight, DISTRIBUTION_BYTES};
 use crate::scene::show::show;
@@ -27,7 +27,7 @@ const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 /// Texel values that cannot be radiance (negative, not finite) are
 /// read as 0, with a warning.
 pub(crate) fn read(src: &dyn Source, path: &Path, warnings: &mut Vec<String>) -> Result<EnvLight> {
-    let bytes = src.read(path, Kind::Image)?;
+    let bytes = src.read(path, FileKind::Image)?;
     let shown = crate::words::path(path);
     let mut texture = decode(&shown, &bytes)
         .map_err(|e| anyhow!("{shown}: {}", clip_quotes(&format!("{e:#}"))))?;

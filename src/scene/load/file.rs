@@ -4,7 +4,7 @@
 //! coordinates) are warnings that name them too.
 //!
 //! Coordinates stay in f64 until the whole scene is placed: meshes, camera
-//! and lights then go through one [`Frame`] (moved next to the origin when
+//! and lights then go through one [`Rebase`](crate::scene::rebase::Rebase) (moved next to the origin when
 //! far, scaled down when huge) and are rounded to f32 last.
 
 use std::marker::PhantomData;
@@ -24,9 +24,9 @@ use super::mesh;
 use super::numbers::{self, ABSURD};
 use super::obj::{Parts, Placed};
 use super::parts::bounds;
-use super::source::{resolve, Kind, Source};
+use super::source::{resolve, FileKind, Source};
 use super::up::Up;
-use crate::scene::frame::Frame;
+use crate::scene::rebase::Rebase;
 use crate::scene::show::{show, show3};
 use crate::scene::texture::{Encoding, FACE_NAMES};
 use crate::scene::{
@@ -404,13 +404,13 @@ impl Locator<'_> {
 
 /// The placement of a `[[mesh]]`: its up axis turned to +Y (`up`, or its
 /// format's; a `.bpt` is Y-up unless told), then scale, rotate, translate.
-fn placement(m: &MeshSpec, loc: &Locator, format: Option<mesh::Format>) -> Result<DAffine3> {
+fn placement(m: &MeshSpec, loc: &Locator, format: Option<mesh::MeshFormat>) -> Result<DAffine3> {
     let up = match &m.up {
         Some(u) => u
             .get_ref()
             .parse::<Up>()
             .map_err(|e| anyhow!("{}: up: {e}", loc.at(u.span())))?,
-        None => format.map_or(Up::Y, mesh::Format::up),
+        None => format.map_or(Up::Y, mesh::MeshFormat::up),
     };
     let mut xf = up.to_y();
     if let Some(s) = &m.scale {
@@ -448,7 +448,7 @@ fn patches(
     material: u32,
     room: u64,
 ) -> Result<Placed> {
-    let text = src.read_text(mesh_path, Kind::Patches)?;
+    let text = src.read_text(mesh_path, FileKind::Patches)?;
     let patches = bezier::parse_bpt(&text)
         .map_err(|e| anyhow!("{}:{}: {}", mesh_path.display(), e.line, e.message))?;
     let n = segments as u64;
@@ -544,7 +544,7 @@ fn named<'a>(written: &'a str, what: &str) -> Result<&'a str> {
 }
 
 pub(crate) fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<Scene> {
-    let text = src.read_text(path, Kind::Scene)?;
+    let text = src.read_text(path, FileKind::Scene)?;
     let mut f = parse(path, &text)?;
     sanitize(&mut f);
     let loc = Locator {
@@ -562,7 +562,8 @@ pub(crate) fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("bpt"));
         // An unknown extension is read as OBJ, as it always was.
-        let format = (!is_bpt).then(|| mesh::Format::of(&mesh_path).unwrap_or(mesh::Format::Obj));
+        let format =
+            (!is_bpt).then(|| mesh::MeshFormat::of(&mesh_path).unwrap_or(mesh::MeshFormat::Obj));
         let xf = placement(m, &loc, format)?;
         let material = m
             .material
@@ -589,7 +590,7 @@ pub(crate) fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<
                     .budget
                     .take(p.positions.len() as u64, p.indices.len() as u64);
             }
-            (p.map(|p| vec![p]), Kind::Patches)
+            (p.map(|p| vec![p]), FileKind::Patches)
         } else {
             if let Some(s) = &m.segments {
                 parts.warnings.push(format!(
@@ -597,7 +598,7 @@ pub(crate) fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<
                     loc.at(s.span())
                 ));
             }
-            let format = format.unwrap_or(mesh::Format::Obj);
+            let format = format.unwrap_or(mesh::MeshFormat::Obj);
             let p = mesh::load_placed(format, &mut parts, src, &mesh_path, &xf, material.as_ref());
             (p, format.kind())
         };
@@ -619,7 +620,7 @@ pub(crate) fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<
         }
     }
     let (min, max) = bounds(&placed);
-    let (frame, moved) = Frame::fit(min, max);
+    let (frame, moved) = Rebase::fit(min, max);
     parts.warnings.extend(
         moved
             .into_iter()
@@ -694,7 +695,7 @@ pub(crate) fn load_with(src: &dyn Source, path: &Path, ov: Overrides) -> Result<
 
 fn camera_from(
     c: &CameraTable,
-    frame: &Frame,
+    frame: &Rebase,
     loc: &Locator,
     table: Range<usize>,
     parts: &mut Parts,
@@ -728,7 +729,7 @@ fn camera_from(
 /// orthographic with `height`; the other's field is an error.
 fn projection_from(
     c: &CameraTable,
-    frame: &Frame,
+    frame: &Rebase,
     loc: &Locator,
     here: &str,
 ) -> Result<Projection> {
@@ -818,7 +819,7 @@ fn material_from(parts: &mut Parts, src: &dyn Source, loc: &Locator, m: &Materia
 
 fn light_from(
     l: &LightSpec,
-    frame: &Frame,
+    frame: &Rebase,
     loc: &Locator,
     warnings: &mut Vec<String>,
 ) -> Result<Light, String> {
@@ -923,7 +924,7 @@ fn load_cube(
             warnings.push(o.warning(&base.display().to_string(), &what, &written));
         }
         let read = src
-            .read(&p, Kind::Image)
+            .read(&p, FileKind::Image)
             .map_err(anyhow::Error::from)
             .and_then(|bytes| {
                 crate::scene::Texture::decode(&crate::words::path(&p), &bytes, Encoding::Srgb)
@@ -936,7 +937,7 @@ fn load_cube(
                     })
             });
         let read = match &outside {
-            Some(o) => o.quiet(Kind::Image, read, warnings, usize::MAX),
+            Some(o) => o.quiet(FileKind::Image, read, warnings, usize::MAX),
             None => read,
         };
         faces.push(read.with_context(|| what.clone())?);
@@ -1059,7 +1060,7 @@ fn map_from(
     let before = warnings.len();
     let read = super::envmap::read(src, &p, warnings);
     let read = match &outside {
-        Some(o) => o.quiet(Kind::Image, read, warnings, before),
+        Some(o) => o.quiet(FileKind::Image, read, warnings, before),
         None => read,
     };
     read.with_context(|| format!("{here}: environment map {}", quoted(written)))

@@ -10,10 +10,10 @@ use glam::{DAffine3, Vec3};
 use super::gltf::{self, FileCamera, FileLight};
 use super::obj;
 use super::parts::{Parts, Placed};
-use super::source::{Kind, Source};
+use super::source::{FileKind, Source};
 use super::up::Up;
-use crate::scene::frame::Frame;
 use crate::scene::light::Cone;
+use crate::scene::rebase::Rebase;
 use crate::scene::{Camera, EnvLight, Environment, Light, Material, Scene, Settings};
 
 /// The key light of a glTF file without lights, in Phong units (π times
@@ -24,7 +24,7 @@ const DEFAULT_SKY: Vec3 = Vec3::splat(0.4);
 
 /// The mesh formats, by extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
+pub enum MeshFormat {
     Obj,
     Ply,
     Stl,
@@ -34,14 +34,14 @@ pub enum Format {
 /// The extensions a bare mesh file may have, as messages list them.
 pub(crate) const EXTENSIONS: &str = ".obj, .ply, .stl, .gltf or .glb";
 
-impl Format {
+impl MeshFormat {
     /// What a file of this format holds, as messages name it.
-    pub(crate) fn kind(self) -> Kind {
+    pub(crate) fn kind(self) -> FileKind {
         match self {
-            Format::Obj => Kind::Obj,
-            Format::Ply => Kind::Ply,
-            Format::Stl => Kind::Stl,
-            Format::Gltf => Kind::Gltf,
+            MeshFormat::Obj => FileKind::Obj,
+            MeshFormat::Ply => FileKind::Ply,
+            MeshFormat::Stl => FileKind::Stl,
+            MeshFormat::Gltf => FileKind::Gltf,
         }
     }
 
@@ -50,19 +50,19 @@ impl Format {
     /// specification says so; OBJ and PLY writers mostly are).
     pub(crate) fn up(self) -> Up {
         match self {
-            Format::Stl => Up::Z,
+            MeshFormat::Stl => Up::Z,
             _ => Up::Y,
         }
     }
 
     /// The format of `path` by its extension (any case).
-    pub(crate) fn of(path: &Path) -> Option<Format> {
+    pub(crate) fn of(path: &Path) -> Option<MeshFormat> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         Some(match ext.as_str() {
-            "obj" => Format::Obj,
-            "ply" => Format::Ply,
-            "stl" => Format::Stl,
-            "gltf" | "glb" => Format::Gltf,
+            "obj" => MeshFormat::Obj,
+            "ply" => MeshFormat::Ply,
+            "stl" => MeshFormat::Stl,
+            "gltf" | "glb" => MeshFormat::Gltf,
             _ => return None,
         })
     }
@@ -72,7 +72,7 @@ impl Format {
 /// the meshes come back placed by `xf` in f64. `material` replaces the
 /// file's materials when given.
 pub fn load_placed(
-    format: Format,
+    format: MeshFormat,
     parts: &mut Parts,
     src: &dyn Source,
     path: &Path,
@@ -89,7 +89,7 @@ pub fn load_placed(
 }
 
 fn read_placed(
-    format: Format,
+    format: MeshFormat,
     parts: &mut Parts,
     src: &dyn Source,
     path: &Path,
@@ -97,8 +97,8 @@ fn read_placed(
     material: Option<&Material>,
 ) -> Result<Vec<Placed>> {
     match format {
-        Format::Obj => obj::load_placed(parts, src, path, xf, material),
-        Format::Gltf => {
+        MeshFormat::Obj => obj::load_placed(parts, src, path, xf, material),
+        MeshFormat::Gltf => {
             let g = gltf::load(parts, src, path, xf, material)?;
             if !g.cameras.is_empty() || !g.lights.is_empty() {
                 parts.warnings.push(format!(
@@ -109,14 +109,14 @@ fn read_placed(
             }
             Ok(g.meshes)
         }
-        Format::Stl => {
-            let bytes = src.read(path, Kind::Stl)?;
+        MeshFormat::Stl => {
+            let bytes = src.read(path, FileKind::Stl)?;
             let id = parts.add_material(material.cloned().unwrap_or_default());
             let room = parts.budget.room();
             super::stl::parse(path, &bytes, xf, id, &mut parts.warnings, room)
         }
-        Format::Ply => {
-            let bytes = src.read(path, Kind::Ply)?;
+        MeshFormat::Ply => {
+            let bytes = src.read(path, FileKind::Ply)?;
             let room = parts.budget.room();
             let ply = super::ply::parse(path, &bytes, &mut parts.warnings, room)?;
             drop(bytes);
@@ -150,11 +150,11 @@ fn read_placed(
 /// `camera`) and lights where it has them (glTF), else the shared
 /// workload's auto camera and point light (none where `env_given`: the
 /// environment light the caller puts in lights it); moved next to the
-/// origin (and scaled) in f64 when far or huge ([`Frame`]).
+/// origin (and scaled) in f64 when far or huge ([`Rebase`](crate::scene::rebase::Rebase)).
 pub(crate) fn load_bare_from(
     src: &dyn Source,
     path: &Path,
-    format: Format,
+    format: MeshFormat,
     camera: Option<&str>,
     up: Option<Up>,
     env_given: bool,
@@ -162,7 +162,7 @@ pub(crate) fn load_bare_from(
     let mut parts = Parts::default();
     let xf = up.unwrap_or(format.up()).to_y();
     let (meshes, camera, file_lights) = match format {
-        Format::Gltf => {
+        MeshFormat::Gltf => {
             let g = gltf::load(&mut parts, src, path, &xf, None)?;
             let camera = match camera {
                 Some(name) => Some(pick_camera(path, g.cameras, name)?),
@@ -185,7 +185,7 @@ pub(crate) fn load_bare_from(
         }
     };
     let (min, max) = super::parts::bounds(&meshes);
-    let (frame, moved) = Frame::fit(min, max);
+    let (frame, moved) = Rebase::fit(min, max);
     parts.warnings.extend(
         moved
             .into_iter()
@@ -250,7 +250,7 @@ pub(crate) fn load_bare_from(
     // Phong file) or a grey sky (a glTF file, whose metals show only
     // what they reflect).
     let unlit = lights.is_empty() && !env_given;
-    let sky = unlit && format == Format::Gltf;
+    let sky = unlit && format == MeshFormat::Gltf;
     let mut environment = Environment::Color(Vec3::ZERO);
     let mut ambient = Vec3::ZERO;
     if unlit {

@@ -1,7 +1,7 @@
 //! Loaders: a scene spec (a built-in name, a `.toml` scene file or a bare
 //! mesh file: OBJ, PLY, STL, glTF) read into the scene model, [`open`]
 //! the one way in. Files are read in f64 and placed in f64 before the
-//! model's f32 ([`crate::scene::frame::Frame`]).
+//! model's f32 ([`crate::scene::rebase::Rebase`]).
 
 pub mod bezier;
 pub mod builtin;
@@ -24,7 +24,7 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 
 pub(crate) use envmap::EnvRequest;
-use source::{Disk, Input, Source};
+use source::{Disk, InputFile, Source};
 
 use crate::scene::{Environment, Scene};
 
@@ -38,7 +38,7 @@ pub struct Opening<'a> {
     /// Whether glTF files may name files outside their folder.
     pub allow_outside: bool,
     /// A bare mesh file's up axis, where not its format's
-    /// ([`mesh::Format::up`]).
+    /// ([`mesh::MeshFormat::up`]).
     pub up: Option<up::Up>,
     /// An environment light in place of the scene's environment, whatever
     /// the scene.
@@ -54,13 +54,13 @@ pub struct Opening<'a> {
 pub struct Opened {
     pub scene: Scene,
     /// The files read from disk, for `rayterm inputs` and partial films.
-    pub(crate) inputs: Vec<Input>,
+    pub(crate) inputs: Vec<InputFile>,
 }
 
 /// Opens `spec`: a built-in name (`cornell`, `teapot:32`, ...), a `.toml`
-/// scene file or a bare mesh file ([`mesh::Format`]), as `how` says;
+/// scene file or a bare mesh file ([`mesh::MeshFormat`]), as `how` says;
 /// far-away and huge scenes are moved and scaled in f64 as they load
-/// ([`crate::scene::frame::Frame`]).
+/// ([`crate::scene::rebase::Rebase`]).
 pub fn open(spec: &str, how: &Opening) -> Result<Opened> {
     let mut opened = open_any(spec, how)?;
     let scene = &mut opened.scene;
@@ -159,8 +159,8 @@ fn open_named(spec: &str, how: &Opening) -> Result<Opened> {
             how.up.unwrap_or(up::Up::Y)
         ),
         Some("toml") => file::load_with(src, path, file::Overrides::default()),
-        _ if mesh::Format::of(path).is_some() => {
-            let format = mesh::Format::of(path).unwrap_or(mesh::Format::Obj);
+        _ if mesh::MeshFormat::of(path).is_some() => {
+            let format = mesh::MeshFormat::of(path).unwrap_or(mesh::MeshFormat::Obj);
             mesh::load_bare_from(src, path, format, camera, how.up, how.env.is_some())
         }
         _ if !path.exists() => {

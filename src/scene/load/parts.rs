@@ -1,7 +1,7 @@
 //! Accumulates meshes, materials and textures into one scene.
 //!
 //! Loaders place meshes in f64 ([`Placed`]) and add them once the scene's
-//! [`Frame`] is known, so rounding to f32 comes last; scenes built in code
+//! [`Rebase`] is known, so rounding to f32 comes last; scenes built in code
 //! add f32 meshes directly ([`Parts::add_mesh`]).
 
 use std::path::{Path, PathBuf};
@@ -10,9 +10,9 @@ use anyhow::Result;
 use glam::{Affine3A, DAffine3, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::source::{resolve, Kind, Outside, Source};
+use super::source::{resolve, FileKind, Outside, Source};
 use crate::memory;
-use crate::scene::frame::Frame;
+use crate::scene::rebase::Rebase;
 use crate::scene::texture::Encoding;
 use crate::scene::{Camera, Environment, Geometry, Material, MeshInfo, Scene, Settings, Texture};
 
@@ -215,7 +215,7 @@ impl Parts {
             self.warnings.push(o.warning(from, "texture", written));
         }
         let decoded = src
-            .read(path, Kind::Image)
+            .read(path, FileKind::Image)
             .map_err(anyhow::Error::from)
             .and_then(|bytes| {
                 Texture::decode(&name, &bytes, encoding).map_err(|e| {
@@ -223,7 +223,7 @@ impl Parts {
                 })
             });
         let decoded = match &outside {
-            Some(o) => o.quiet(Kind::Image, decoded, &mut self.warnings, usize::MAX),
+            Some(o) => o.quiet(FileKind::Image, decoded, &mut self.warnings, usize::MAX),
             None => decoded,
         };
         let id = match decoded {
@@ -261,7 +261,7 @@ impl Parts {
     }
 
     /// Adds a placed mesh, mapped through the scene's frame and rounded to f32.
-    pub fn add_placed(&mut self, m: Placed, frame: &Frame) {
+    pub fn add_placed(&mut self, m: Placed, frame: &Rebase) {
         let positions = m
             .positions
             .par_iter()

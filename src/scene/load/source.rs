@@ -3,7 +3,7 @@
 //!
 //! Every read from disk goes through [`read_file`]: only regular files are
 //! read (a FIFO would block forever, `/dev/zero` never ends), and each kind
-//! of file has a size limit ([`Kind::limit`]), so no file makes a loader
+//! of file has a size limit ([`FileKind::limit`]), so no file makes a loader
 //! hang or exhaust memory. [`text`] turns the bytes of a text file into a
 //! string the parsers share: BOM stripped, UTF-8 checked with the line of
 //! the first bad byte, CR and CRLF line endings turned into LF.
@@ -17,7 +17,7 @@ use anyhow::{anyhow, Result};
 
 /// What a file holds: sets its size limit and names it in messages.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Kind {
+pub enum FileKind {
     /// A TOML scene file.
     Scene,
     /// A Wavefront OBJ mesh.
@@ -40,7 +40,7 @@ pub enum Kind {
 
 const MIB: u64 = 1 << 20;
 
-impl Kind {
+impl FileKind {
     /// Largest file of this kind that is read, in bytes.
     ///
     /// Scene files, material libraries and patch files are small by nature;
@@ -50,33 +50,33 @@ impl Kind {
     /// by the texture budget ([`crate::scene::texture::TEXTURE_BUDGET`]).
     pub(crate) const fn limit(self) -> u64 {
         match self {
-            Kind::Scene => 16 * MIB,
-            Kind::Obj => 1024 * MIB,
-            Kind::Mtl => 16 * MIB,
-            Kind::Ply | Kind::Stl | Kind::Gltf | Kind::Buffer => 2048 * MIB,
-            Kind::Patches => 64 * MIB,
-            Kind::Image => 256 * MIB,
+            FileKind::Scene => 16 * MIB,
+            FileKind::Obj => 1024 * MIB,
+            FileKind::Mtl => 16 * MIB,
+            FileKind::Ply | FileKind::Stl | FileKind::Gltf | FileKind::Buffer => 2048 * MIB,
+            FileKind::Patches => 64 * MIB,
+            FileKind::Image => 256 * MIB,
         }
     }
 
     /// The kind in words with its article: `an OBJ mesh`.
     pub(crate) fn a_noun(self) -> String {
-        let an = matches!(self, Kind::Obj | Kind::Stl | Kind::Image);
+        let an = matches!(self, FileKind::Obj | FileKind::Stl | FileKind::Image);
         format!("{} {}", if an { "an" } else { "a" }, self.noun())
     }
 
     /// The kind in words, as messages name it.
     pub(crate) const fn noun(self) -> &'static str {
         match self {
-            Kind::Scene => "scene file",
-            Kind::Obj => "OBJ mesh",
-            Kind::Mtl => "material library",
-            Kind::Ply => "PLY mesh",
-            Kind::Stl => "STL mesh",
-            Kind::Gltf => "glTF file",
-            Kind::Buffer => "glTF buffer",
-            Kind::Patches => "patch file",
-            Kind::Image => "image",
+            FileKind::Scene => "scene file",
+            FileKind::Obj => "OBJ mesh",
+            FileKind::Mtl => "material library",
+            FileKind::Ply => "PLY mesh",
+            FileKind::Stl => "STL mesh",
+            FileKind::Gltf => "glTF file",
+            FileKind::Buffer => "glTF buffer",
+            FileKind::Patches => "patch file",
+            FileKind::Image => "image",
         }
     }
 }
@@ -115,12 +115,12 @@ impl fmt::Display for Cause {
 #[derive(Debug)]
 pub struct ReadError {
     pub(crate) path: PathBuf,
-    pub(crate) kind: Kind,
+    pub(crate) kind: FileKind,
     pub(crate) cause: Cause,
 }
 
 impl ReadError {
-    pub(crate) fn new(path: &Path, kind: Kind, cause: Cause) -> Self {
+    pub(crate) fn new(path: &Path, kind: FileKind, cause: Cause) -> Self {
         Self {
             path: path.to_path_buf(),
             kind,
@@ -221,7 +221,7 @@ fn open_nonblocking(path: &Path) -> std::io::Result<File> {
 /// opened file again (it may have been replaced in between); the read itself
 /// stops one byte past the limit, so a file growing meanwhile cannot make it
 /// unbounded either.
-pub(crate) fn read_file(path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
+pub(crate) fn read_file(path: &Path, kind: FileKind) -> Result<Vec<u8>, ReadError> {
     read_limited(path, kind.limit()).map_err(|cause| ReadError::new(path, kind, cause))
 }
 
@@ -381,10 +381,10 @@ fn clean(s: String) -> String {
 }
 
 pub trait Source: Sync {
-    fn read(&self, path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError>;
+    fn read(&self, path: &Path, kind: FileKind) -> Result<Vec<u8>, ReadError>;
 
     /// The file as text (see [`text`]).
-    fn read_text(&self, path: &Path, kind: Kind) -> Result<String> {
+    fn read_text(&self, path: &Path, kind: FileKind) -> Result<String> {
         text(path, self.read(path, kind)?)
     }
 
@@ -433,7 +433,7 @@ impl Outside {
     /// unless it is the file's own [`ReadError`] (not found, too large).
     pub(crate) fn quiet<T>(
         &self,
-        kind: Kind,
+        kind: FileKind,
         result: Result<T>,
         warnings: &mut Vec<String>,
         before: usize,
@@ -500,7 +500,7 @@ fn outside_of(base: &Path, target: &Path) -> Option<Outside> {
 /// `rayterm inputs` lists, and what partial films record so that `merge
 /// --check` can say which file differs.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub(crate) struct Input {
+pub(crate) struct InputFile {
     pub(crate) path: PathBuf,
     pub(crate) crc: u32,
 }
@@ -509,7 +509,7 @@ pub(crate) struct Input {
 /// (so that no output can overwrite one of them) with their checksums.
 #[derive(Default)]
 pub(crate) struct Disk {
-    read: std::sync::Mutex<Vec<Input>>,
+    read: std::sync::Mutex<Vec<InputFile>>,
     /// Whether glTF files may name files outside their folder.
     allow_outside: bool,
 }
@@ -525,7 +525,7 @@ impl Disk {
     }
 
     /// The files read so far, each once, in the order first read.
-    pub(crate) fn files(self) -> Vec<Input> {
+    pub(crate) fn files(self) -> Vec<InputFile> {
         let mut read = self.read.into_inner().unwrap_or_else(|e| e.into_inner());
         let mut seen = std::collections::HashSet::new();
         read.retain(|i| seen.insert(i.path.clone()));
@@ -534,13 +534,13 @@ impl Disk {
 }
 
 impl Source for Disk {
-    fn read(&self, path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
+    fn read(&self, path: &Path, kind: FileKind) -> Result<Vec<u8>, ReadError> {
         let bytes = read_file(path, kind)?;
         // A pass over bytes just read, at memory speed: far less than
         // parsing them.
         let crc = crc32fast::hash(&bytes);
         if let Ok(mut r) = self.read.lock() {
-            r.push(Input {
+            r.push(InputFile {
                 path: path.to_path_buf(),
                 crc,
             });
@@ -561,7 +561,7 @@ impl Source for Disk {
 pub(crate) struct Embedded(pub &'static [(&'static str, &'static [u8])]);
 
 impl Source for Embedded {
-    fn read(&self, path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
+    fn read(&self, path: &Path, kind: FileKind) -> Result<Vec<u8>, ReadError> {
         let key = normalize(path);
         self.0
             .iter()
@@ -630,7 +630,7 @@ impl Memory {
 }
 
 impl Source for Memory {
-    fn read(&self, path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
+    fn read(&self, path: &Path, kind: FileKind) -> Result<Vec<u8>, ReadError> {
         let key = normalize(path);
         self.0
             .iter()

@@ -45,7 +45,7 @@ pub(crate) struct Picture<'a> {
 }
 
 /// The area and image size a set of bands is for.
-type Frame = (Rect, u32, u32);
+type Target = (Rect, u32, u32);
 
 #[derive(Default)]
 pub(crate) struct Bands {
@@ -60,7 +60,7 @@ pub(crate) struct Bands {
     late: Vec<bool>,
     /// Per band, which of its two kitty ids the newest image has.
     turn: Vec<bool>,
-    layout: Option<Frame>,
+    layout: Option<Target>,
     /// The most bands any layout had: kitty ids in use up to there.
     most: usize,
 }
@@ -69,7 +69,7 @@ pub(crate) struct Bands {
 /// the palette is made for.
 pub(crate) struct Batch {
     mode: PixelMode,
-    layout: Frame,
+    layout: Target,
     jobs: Vec<Job>,
     picture: Option<Arc<Vec<[u8; 3]>>>,
 }
@@ -88,10 +88,10 @@ struct Job {
 }
 
 /// One encoded band: output of its own.
-pub(crate) struct Piece {
+pub(crate) struct EncodedBand {
     band: usize,
     epoch: u64,
-    layout: Frame,
+    layout: Target,
     rows: (u16, u16),
     bytes: Vec<u8>,
 }
@@ -103,7 +103,7 @@ impl Batch {
 
     /// The bands as images in the mode's protocol, each starting with a
     /// cursor move to its place.
-    pub(crate) fn encode(self) -> Vec<Piece> {
+    pub(crate) fn encode(self) -> Vec<EncodedBand> {
         let mode = self.mode;
         // One palette for the picture's sixel bands.
         let palette = self
@@ -136,7 +136,7 @@ impl Batch {
                 let mut bytes = Vec::with_capacity(image.len() + 16);
                 let _ = write!(bytes, "\x1b[{};{}H", job.at.1 + 1, job.at.0 + 1);
                 bytes.extend(wrap(&mode, &image));
-                Piece {
+                EncodedBand {
                     band: job.band,
                     epoch: job.epoch,
                     layout: self.layout,
@@ -284,7 +284,7 @@ impl Bands {
     /// planned again next time. Returns whether any piece was dropped.
     pub(crate) fn accept(
         &mut self,
-        pieces: Vec<Piece>,
+        pieces: Vec<EncodedBand>,
         covered: impl Fn(u16) -> bool,
     ) -> (Vec<Vec<u8>>, bool) {
         let mut out = Vec::with_capacity(pieces.len());

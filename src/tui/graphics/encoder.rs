@@ -5,11 +5,11 @@
 use std::sync::mpsc::{channel, Receiver, Sender};
 use std::thread;
 
-use super::bands::{Batch, Piece};
+use super::bands::{Batch, EncodedBand};
 
 pub(crate) struct Encoder {
     tx: Sender<Batch>,
-    rx: Receiver<Vec<Piece>>,
+    rx: Receiver<Vec<EncodedBand>>,
     busy: bool,
 }
 
@@ -45,7 +45,7 @@ impl Encoder {
     }
 
     /// The pieces of the plan, once encoded.
-    pub(crate) fn done(&mut self) -> Option<Vec<Piece>> {
+    pub(crate) fn done(&mut self) -> Option<Vec<EncodedBand>> {
         let pieces = self.rx.try_recv().ok()?;
         self.busy = false;
         Some(pieces)

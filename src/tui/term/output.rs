@@ -1,4 +1,4 @@
-//! Output to the terminal as the link allows: the [`Screen`]'s changed
+//! TermOutput to the terminal as the link allows: the [`Screen`]'s changed
 //! cells in chunks the [`Pacer`] makes room for, and which pictures have
 //! reached the screen (every cell written since they were drawn, and the
 //! terminal has answered for those bytes), for the frame rate and the time
@@ -34,7 +34,7 @@ pub(crate) struct Figures {
 }
 
 #[derive(Default)]
-pub(crate) struct Output {
+pub(crate) struct TermOutput {
     pub(crate) pacer: Pacer,
     /// Draws not yet on screen in full: the screen's sweep count and the
     /// pieces queued when drawn, and what they showed.
@@ -50,7 +50,7 @@ pub(crate) struct Output {
     figures: Figures,
 }
 
-impl Output {
+impl TermOutput {
     /// Starts pacing: the first request measures the round trip.
     pub(crate) fn start<W: Write>(
         &mut self,
@@ -194,7 +194,7 @@ mod tests {
     fn a_picture_lands_when_every_cell_is_written_and_answered() {
         let mut t =
             Terminal::new(Screen::new(Vec::new(), Some(Size::new(40, 10))).unwrap()).unwrap();
-        let mut out = Output::default();
+        let mut out = TermOutput::default();
         let t0 = Instant::now();
         out.start(t.backend_mut(), t0).unwrap();
         let shown = Shown {

@@ -37,7 +37,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use glam::{DAffine3, DMat4, DVec3, Vec3};
 
 use super::parts::{mesh_fits, Parts, Placed};
-use super::source::{Kind, Outside, Source};
+use super::source::{FileKind, Outside, Source};
 use crate::scene::texture::{Encoding, Texture, Wrap};
 use crate::scene::{Material, Pbr, Projection};
 use check::{check_lights, check_transform, check_trees, check_values, Broken};
@@ -493,7 +493,7 @@ pub(crate) fn load(
     xf: &DAffine3,
     material: Option<&Material>,
 ) -> Result<GltfScene> {
-    let bytes = src.read(path, Kind::Gltf)?;
+    let bytes = src.read(path, FileKind::Gltf)?;
     let invalid = |e: &dyn std::fmt::Display| {
         let e = crate::words::clip_quotes(&e.to_string());
         anyhow!("{}: not a valid glTF file: {e}", path.display())
@@ -589,7 +589,7 @@ pub(crate) fn load(
                     let (p, o) = uri::file(src, path, uri)
                         .map_err(|e| anyhow!("{}: buffer {name}: {e}", path.display()))?;
                     let data = src
-                        .read(&p, Kind::Buffer)
+                        .read(&p, FileKind::Buffer)
                         .with_context(|| format!("{}: buffer {name}", path.display()))?;
                     outside = o;
                     (data, 0, crate::words::path(&p))

@@ -33,14 +33,14 @@ use super::mtl::{self, MtlMaterial};
 use super::numbers::{self, Absurd};
 use super::parts::mesh_fits;
 use super::polygon::Triangulator;
-use super::source::{resolve, text_lossy, Kind, ReadError, Source};
+use super::source::{resolve, text_lossy, FileKind, ReadError, Source};
 use crate::color::srgb_to_linear;
 use crate::memory;
-use crate::scene::frame::Frame;
+use crate::scene::rebase::Rebase;
 use crate::scene::show::show3;
 use crate::scene::texture::Wrap;
 use crate::scene::Material;
-use piece::{Budget, Out, Piece, Switch, Tally, Unusable};
+use piece::{Out, Piece, Shared, Switch, Tally, Unusable};
 
 pub use super::numbers::ABSURD;
 pub use super::parts::{MeshData, Parts, Placed, Placement};
@@ -172,7 +172,7 @@ impl ObjFile {
             line += lines;
             before = [0, 1, 2].map(|k| before[k] + counts[k]);
         }
-        let budget = Budget {
+        let budget = Shared {
             available,
             triangles: AtomicU64::new(0),
         };
@@ -664,7 +664,7 @@ fn read_libraries(src: &dyn Source, obj: &ObjFile, warnings: &mut Vec<String>) -
     for (written, line) in &obj.libraries {
         let read = |w: &str| {
             let p = resolve(&obj.path, w);
-            let bytes = src.read(&p, Kind::Mtl).map_err(anyhow::Error::from);
+            let bytes = src.read(&p, FileKind::Mtl).map_err(anyhow::Error::from);
             (p, bytes)
         };
         let (whole, split) = library_names(written);
@@ -677,7 +677,7 @@ fn read_libraries(src: &dyn Source, obj: &ObjFile, warnings: &mut Vec<String>) -
             // A file outside that cannot be read is not quoted either.
             let bytes = match &outside {
                 Some(o) if bytes.as_ref().is_err_and(|e| !is_not_found(e)) => {
-                    o.quiet(Kind::Mtl, bytes, warnings, usize::MAX)
+                    o.quiet(FileKind::Mtl, bytes, warnings, usize::MAX)
                 }
                 _ => bytes,
             };
@@ -700,7 +700,7 @@ fn read_libraries(src: &dyn Source, obj: &ObjFile, warnings: &mut Vec<String>) -
             let text = text_lossy(&mtl_path, bytes, warnings);
             let materials = mtl::parse(&mtl_path, &text, warnings);
             let materials = match &outside {
-                Some(o) => o.quiet(Kind::Mtl, materials, warnings, before),
+                Some(o) => o.quiet(FileKind::Mtl, materials, warnings, before),
                 None => materials,
             }?;
             lib.extend(materials.into_iter().map(|m| (mtl_path.clone(), m)));
@@ -749,7 +749,7 @@ pub(crate) fn load_placed(
     xf: &DAffine3,
     material: Option<&Material>,
 ) -> Result<Vec<Placed>> {
-    let text = text_lossy(path, src.read(path, Kind::Obj)?, &mut parts.warnings);
+    let text = text_lossy(path, src.read(path, FileKind::Obj)?, &mut parts.warnings);
     let obj = ObjFile::parse(path, &text, &mut parts.warnings, parts.budget.room())?;
     drop(text);
     if let Some(m) = material {
@@ -840,7 +840,7 @@ pub fn load_into(
 ) -> Result<()> {
     let xf = place.transform.as_daffine3();
     for m in load_placed(parts, src, path, &xf, material)? {
-        parts.add_placed(m, &Frame::IDENTITY);
+        parts.add_placed(m, &Rebase::IDENTITY);
     }
     Ok(())
 }

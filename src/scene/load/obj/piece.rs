@@ -343,7 +343,7 @@ pub(crate) struct Piece {
 
 /// What the pieces read together share: the memory for triangles and the
 /// triangles read so far.
-pub(crate) struct Budget {
+pub(crate) struct Shared {
     pub(crate) available: u64,
     pub(crate) triangles: AtomicU64,
 }
@@ -370,7 +370,7 @@ struct Reader<'a> {
     here: [usize; 3],
     piece: Piece,
     plain: Plain,
-    budget: &'a Budget,
+    budget: &'a Shared,
     triangles: u64,
     pending: u64,
 }
@@ -383,7 +383,7 @@ pub(crate) fn read(
     line: usize,
     counts: [usize; 3],
     out: Out,
-    budget: &Budget,
+    budget: &Shared,
 ) -> Piece {
     let mut r = Reader {
         path,

@@ -28,13 +28,13 @@ pub(crate) const TINY: f64 = 1.0 / HUGE;
 /// The map from file coordinates to render coordinates:
 /// `(p - shift) * scale`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Frame {
+pub struct Rebase {
     pub(crate) shift: DVec3,
     /// A power of two.
     pub(crate) scale: f64,
 }
 
-impl Default for Frame {
+impl Default for Rebase {
     fn default() -> Self {
         Self::IDENTITY
     }
@@ -73,8 +73,8 @@ pub(crate) fn far_warning(shift: DVec3, min: DVec3, max: DVec3) -> String {
     )
 }
 
-impl Frame {
-    pub const IDENTITY: Frame = Frame {
+impl Rebase {
+    pub const IDENTITY: Rebase = Rebase {
         shift: DVec3::ZERO,
         scale: 1.0,
     };
@@ -82,8 +82,8 @@ impl Frame {
     /// The frame for a scene whose geometry spans `min..max`, and the
     /// warnings that say what it does; the identity for an empty or near,
     /// not huge scene.
-    pub(crate) fn fit(min: DVec3, max: DVec3) -> (Frame, Vec<String>) {
-        let mut frame = Frame::IDENTITY;
+    pub(crate) fn fit(min: DVec3, max: DVec3) -> (Rebase, Vec<String>) {
+        let mut frame = Rebase::IDENTITY;
         let mut warnings = Vec::new();
         if !(min.is_finite() && max.is_finite()) || min.cmpgt(max).any() {
             return (frame, warnings);
@@ -127,11 +127,11 @@ mod tests {
 
     #[test]
     fn near_scenes_stay_far_ones_move() {
-        let (f, w) = Frame::fit(DVec3::splat(-1.0), DVec3::splat(1.0));
-        assert_eq!(f, Frame::IDENTITY);
+        let (f, w) = Rebase::fit(DVec3::splat(-1.0), DVec3::splat(1.0));
+        assert_eq!(f, Rebase::IDENTITY);
         assert!(w.is_empty());
         let off = DVec3::new(2e7, 0.5, -3e7);
-        let (f, w) = Frame::fit(off - 1.0, off + 1.0);
+        let (f, w) = Rebase::fit(off - 1.0, off + 1.0);
         assert_eq!(f.shift, DVec3::new(2e7, 0.0, -3e7));
         assert_eq!(f.scale, 1.0);
         assert_eq!(w.len(), 1);
@@ -142,23 +142,23 @@ mod tests {
 
     #[test]
     fn huge_scenes_are_scaled_by_a_power_of_two() {
-        let (f, w) = Frame::fit(DVec3::splat(-1e20), DVec3::splat(1e20));
+        let (f, w) = Rebase::fit(DVec3::splat(-1e20), DVec3::splat(1e20));
         assert!(f.scale < 1.0 && f.scale.log2().fract() == 0.0);
         assert!((f.vector(DVec3::splat(2e20)).x as f64) < 2.0);
         assert!(w[0].contains("scaled by 2^-67"), "{w:?}");
-        let (f, _) = Frame::fit(DVec3::ZERO, DVec3::splat(1e12));
+        let (f, _) = Rebase::fit(DVec3::ZERO, DVec3::splat(1e12));
         assert_eq!(f.scale, 1.0);
-        let (f, w) = Frame::fit(DVec3::ZERO, DVec3::splat(1e-30));
+        let (f, w) = Rebase::fit(DVec3::ZERO, DVec3::splat(1e-30));
         assert_eq!(f.scale, 2f64.powi(100));
         assert!(w[0].contains("underflows; scaled by 2^100"), "{w:?}");
-        let (f, _) = Frame::fit(DVec3::ZERO, DVec3::splat(1e-6));
+        let (f, _) = Rebase::fit(DVec3::ZERO, DVec3::splat(1e-6));
         assert_eq!(f.scale, 1.0);
     }
 
     #[test]
     fn empty_and_non_finite_bounds_are_left_alone() {
         let empty = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        assert_eq!(Frame::fit(empty.0, empty.1).0, Frame::IDENTITY);
+        assert_eq!(Rebase::fit(empty.0, empty.1).0, Rebase::IDENTITY);
         assert!(far_shift(DVec3::splat(f64::NAN), DVec3::ONE).is_none());
     }
 }
