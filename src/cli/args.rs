@@ -308,7 +308,7 @@ pub(crate) struct RenderArgs {
     /// Write a debug view instead: bvh-level:K (boxes of level K over the
     /// image), bvh-leaves, bvh-heat (nodes visited per pixel) or
     /// bvh-heat:tests; bloom (the pixels over the threshold and their glow);
-    /// `ray:X,Y[:VIEW[:N]]` (pixel X,Y's rays, or VIEW: colour, lights,
+    /// ray:X,Y[:VIEW[:N]] (pixel X,Y's rays, or VIEW: colour, lights,
     /// traversal, normals, texture, environment, glossy, samples; N picks
     /// the ray of traversal, normals, texture and environment); samples:X,Y
     /// (a zoom of the pixel's samples).
