@@ -53,6 +53,26 @@ const COMMANDS: &[(&str, How)] = &[
         Run,
     ),
     (
+        "rayterm render teapot --turntable 24 --size 320x240 --spp 8 -o spin.gif",
+        Run,
+    ),
+    (
+        "rayterm render teapot --frame 1/3 --size 240x180 --spp 4 -o f1.png",
+        Run,
+    ),
+    (
+        "rayterm render teapot --frame 2/3 --size 240x180 --spp 4 -o f2.png",
+        Run,
+    ),
+    (
+        "rayterm render teapot --frame 3/3 --size 240x180 --spp 4 -o f3.png",
+        Run,
+    ),
+    (
+        "rayterm animate f1.png f2.png f3.png --fps 6 -o spin3.apng",
+        Run,
+    ),
+    (
         "rayterm render env --env 0.4,0.6,1.0 --size 640x360 -o blue-sky.png",
         Run,
     ),

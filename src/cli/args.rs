@@ -38,8 +38,11 @@ impl Cli {
 
 #[derive(Subcommand, Debug)]
 pub(crate) enum Command {
-    /// Render a scene to a PNG file.
+    /// Render a scene to a PNG file, or a turntable to a GIF or APNG.
     Render(RenderArgs),
+    /// Join PNG frames (`render --frame K/N`, one job each) into a GIF or
+    /// APNG that loops, in the order given.
+    Animate(AnimateArgs),
     /// Merge the partial films of a split render into one image.
     ///
     /// The parts (from `render --part K/N` or `--samples A..B`) must come
@@ -357,6 +360,51 @@ pub(crate) struct RenderArgs {
     /// checkpoints, the peak memory) and render nothing.
     #[arg(long, conflicts_with_all = ["debug", "compare_one_shot"])]
     pub(crate) dry_run: bool,
+    /// Render a turntable: the camera orbits its target once, about its up
+    /// axis, in FRAMES frames, each rendered as one picture is (--spp,
+    /// --time or --target-error a frame), into a looping animation: -o
+    /// .gif (256 colours, one palette) or .apng (24-bit; a .png is one too).
+    #[arg(long, value_name = "FRAMES", value_parser = clap::value_parser!(u32).range(2..=3600),
+          conflicts_with_all = ["frame", "debug", "samples", "part", "checkpoint", "resume",
+                                "aov", "compare_one_shot", "dry_run"])]
+    pub(crate) turntable: Option<u32>,
+    /// Render frame K of an N-frame turntable as one picture, for a job
+    /// array (any other option applies to it); `rayterm animate` joins the
+    /// frames. Frame 1 is the scene's own camera.
+    #[arg(long, value_name = "K/N", value_parser = parse_frame)]
+    pub(crate) frame: Option<(u32, u32)>,
+    /// Frames a second of a --turntable animation [default: 15].
+    #[arg(long, requires = "turntable", value_parser = clap::value_parser!(u32).range(1..=100))]
+    pub(crate) fps: Option<u32>,
+}
+
+/// `K/N`: frame K of an N-frame turntable, 1 <= K <= N, 2 <= N <= 3600.
+fn parse_frame(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("'{s}' is not K/N (frame K of an N-frame turntable, N from 2 to 3600)");
+    let (k, n) = s.split_once('/').ok_or_else(bad)?;
+    let (k, n): (u32, u32) = match (k.trim().parse(), n.trim().parse()) {
+        (Ok(k), Ok(n)) => (k, n),
+        _ => return Err(bad()),
+    };
+    if !(2..=3600).contains(&n) || k == 0 || k > n {
+        return Err(bad());
+    }
+    Ok((k, n))
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct AnimateArgs {
+    /// The frames, PNG pictures of one size, in the order they show.
+    #[arg(required = true)]
+    pub(crate) frames: Vec<PathBuf>,
+    /// Output: .gif (256 colours, one palette) or .apng (24-bit; a .png
+    /// is one too).
+    #[arg(short, long)]
+    pub(crate) output: PathBuf,
+    /// Frames a second.
+    #[arg(long, default_value_t = super::turntable::DEFAULT_FPS,
+          value_parser = clap::value_parser!(u32).range(1..=100))]
+    pub(crate) fps: u32,
 }
 
 /// A number of seconds above zero.

@@ -12,6 +12,7 @@ mod progress;
 mod render;
 mod scenes;
 mod stability;
+mod turntable;
 
 use std::process::ExitCode;
 
@@ -78,6 +79,7 @@ pub fn main() -> ExitCode {
     let result = match command {
         Command::Render(a) => render::run(a),
         Command::Merge(a) => merge::run(a),
+        Command::Animate(a) => turntable::animate(a),
         Command::Inputs(a) => inputs::run(a),
         Command::Scenes => scenes::run(),
         Command::Inspect(a) => inspect::run(a),

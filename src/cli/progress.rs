@@ -52,6 +52,8 @@ pub(crate) struct Begin<'a> {
     pub(crate) total: Option<u32>,
     /// The film resumed from, its samples and the seconds they took.
     pub(crate) resumed: Option<(&'a Path, Range<u32>, f64)>,
+    /// A turntable's frames; `total` then counts all of their samples.
+    pub(crate) frames: Option<u32>,
 }
 
 /// A render's progress reporter; its methods may be called from any
@@ -134,6 +136,9 @@ impl Reporter {
                 if let Some(r) = &b.samples {
                     o["samples"] = json!([r.start, r.end]);
                 }
+                if let Some(n) = b.frames {
+                    o["frames"] = json!(n);
+                }
                 if let Some((path, r, s)) = &b.resumed {
                     o["resumed_from"] = json!({
                         "file": path.display().to_string(),
@@ -160,7 +165,13 @@ impl Reporter {
                     return;
                 }
                 let mut text = format!("render: {} at {w}x{h}", b.scene);
+                if let Some(n) = b.frames {
+                    text += &format!(", a turntable of {n} frames");
+                }
                 match (&b.samples, b.total) {
+                    (None, Some(t)) if b.frames.is_some() => {
+                        text += &format!(", {} spp a frame", t / b.frames.unwrap_or(1))
+                    }
                     (Some(r), Some(t)) => {
                         text += &format!(", samples {}..{} of {t} spp", r.start, r.end)
                     }

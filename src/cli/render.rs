@@ -26,6 +26,9 @@ use crate::scene::BloomSettings;
 use crate::words;
 
 pub(crate) fn run(a: RenderArgs) -> Result<ExitCode> {
+    if let Some(frames) = a.turntable {
+        return super::turntable::run(&a, frames);
+    }
     let stop = stop(&a)?;
     // The scene file is checked now, the files it names once they are read.
     let scene_file: Vec<PathBuf> = std::path::Path::new(&a.scene.scene)
@@ -83,10 +86,13 @@ pub(crate) fn run(a: RenderArgs) -> Result<ExitCode> {
     };
     // The film is checked against memory once it is known how much it
     // keeps.
-    let s = open_request(&SceneRequest {
+    let mut s = open_request(&SceneRequest {
         check_film: false,
         ..a.scene.request()
     })?;
+    if let Some((k, n)) = a.frame {
+        s.set_camera(s.camera.turntable(k - 1, n));
+    }
     let inputs = s.input_paths();
     out.check_not_input(&inputs)?;
     // The film resumed from is work to keep, not to write over.
@@ -210,6 +216,7 @@ pub(crate) fn run(a: RenderArgs) -> Result<ExitCode> {
             .resume
             .as_deref()
             .map(|path| (path, held.clone(), seconds_before)),
+        frames: None,
     });
     let start = Instant::now();
     let every = a.checkpoint_every.unwrap_or(CHECKPOINT_SECONDS);
@@ -581,9 +588,11 @@ pub(crate) fn image_bytes(
     bloom: Option<&BloomSettings>,
 ) -> Result<Vec<u8>> {
     match format {
-        ImageFormat::Hdr | ImageFormat::Exr | ImageFormat::Csv => {
-            format.encode_linear(width, height, &image)
-        }
+        ImageFormat::Hdr
+        | ImageFormat::Exr
+        | ImageFormat::Csv
+        | ImageFormat::Gif
+        | ImageFormat::Apng => format.encode_linear(width, height, &image),
         ImageFormat::Png => {
             let mut image = image;
             if let Some(b) = bloom {
@@ -705,7 +714,7 @@ fn resumed(
 }
 
 /// The stop the options ask for; `None` means the scene's spp.
-fn stop(a: &RenderArgs) -> Result<Option<Stop>> {
+pub(super) fn stop(a: &RenderArgs) -> Result<Option<Stop>> {
     if let Some(t) = a.time {
         if !(t > 0.0 && t.is_finite()) {
             bail!("--time must be a positive number of seconds");

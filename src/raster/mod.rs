@@ -2,10 +2,12 @@
 //! a reference ([`metrics`], [`resample`]), and image files, the
 //! one place rayterm reads and writes them: PNG for
 //! pictures, OpenEXR (32-bit float) and Radiance `.hdr` (8-bit mantissas)
-//! for linear images such as references. Every write goes through
+//! for linear images such as references, GIF and APNG for turntables
+//! ([`animation`]). Every write goes through
 //! [`Output`] (regular files replaced atomically, devices written in place),
 //! and every read checks the size an image declares before decoding it.
 
+pub(crate) mod animation;
 pub(crate) mod canvas;
 pub(crate) mod claim;
 pub(crate) mod flat_exr;

@@ -26,6 +26,10 @@ pub enum ImageFormat {
     Exr,
     /// A table of numbers.
     Csv,
+    /// An animation in 256 colours.
+    Gif,
+    /// An animation in 24-bit colour.
+    Apng,
 }
 
 impl ImageFormat {
@@ -33,12 +37,18 @@ impl ImageFormat {
     pub(crate) const RENDERS: &'static [ImageFormat] =
         &[ImageFormat::Png, ImageFormat::Exr, ImageFormat::Hdr];
 
+    /// What a turntable writes (a `.png` is an APNG, as browsers read it).
+    pub(crate) const ANIMATIONS: &'static [ImageFormat] =
+        &[ImageFormat::Gif, ImageFormat::Apng, ImageFormat::Png];
+
     fn describe(self) -> &'static str {
         match self {
             ImageFormat::Png => ".png (the picture)",
             ImageFormat::Hdr => ".hdr (the linear film, 8-bit mantissas)",
             ImageFormat::Exr => ".exr (the linear film, 32-bit float)",
             ImageFormat::Csv => ".csv (the table)",
+            ImageFormat::Gif => ".gif (an animation, 256 colours)",
+            ImageFormat::Apng => ".apng (an animation, 24-bit colour)",
         }
     }
 
@@ -49,6 +59,8 @@ impl ImageFormat {
             "hdr" => Some(ImageFormat::Hdr),
             "exr" => Some(ImageFormat::Exr),
             "csv" => Some(ImageFormat::Csv),
+            "gif" => Some(ImageFormat::Gif),
+            "apng" => Some(ImageFormat::Apng),
             _ => None,
         }
     }
@@ -58,7 +70,7 @@ impl ImageFormat {
         match self {
             ImageFormat::Hdr => super::hdr::encode(width, height, img),
             ImageFormat::Exr => super::openexr::encode(width, height, img),
-            ImageFormat::Png | ImageFormat::Csv => {
+            ImageFormat::Png | ImageFormat::Csv | ImageFormat::Gif | ImageFormat::Apng => {
                 bail!("{} is not a linear image format", self.describe())
             }
         }

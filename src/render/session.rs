@@ -170,6 +170,14 @@ impl Session {
     }
 
     /// A tracer for the session's camera, size and plan.
+    /// Renders from `camera` from now on, the scene's own camera too, so
+    /// that partial films of another view (a turntable's other frame) have
+    /// another content hash and never merge with these.
+    pub(crate) fn set_camera(&mut self, camera: Camera) {
+        Arc::make_mut(&mut self.scene).camera = camera;
+        self.camera = camera;
+    }
+
     pub fn tracer(&self) -> Tracer<'_> {
         self.tracer_for(&self.plan, &self.camera, (self.width, self.height))
     }

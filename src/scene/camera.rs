@@ -56,6 +56,22 @@ impl Camera {
         }
     }
 
+    /// Frame `k` (from 0) of a turntable of `n`: the eye turned `k / n` of
+    /// a circle around the target, about the up axis (anticlockwise seen
+    /// from above), in f64; frame 0 is this camera.
+    pub fn turntable(&self, k: u32, n: u32) -> Camera {
+        if k.is_multiple_of(n.max(1)) {
+            return *self;
+        }
+        let angle = std::f64::consts::TAU * (k % n) as f64 / n as f64;
+        let turn = glam::DQuat::from_axis_angle(self.up.as_dvec3().normalize(), angle);
+        let (eye, target) = (self.eye.as_dvec3(), self.target.as_dvec3());
+        Camera {
+            eye: (target + turn * (eye - target)).as_vec3(),
+            ..*self
+        }
+    }
+
     /// The workload's auto light position for a mesh with bounds `b`.
     pub(crate) fn auto_light(b: &Aabb) -> Vec3 {
         let c = b.center();
@@ -462,5 +478,40 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A turntable keeps the eye's distance and height, turns it evenly
+    /// (half way round is opposite), and starts at the camera itself.
+    #[test]
+    fn a_turntable_circles_the_target_at_one_height() {
+        let c = Camera {
+            eye: Vec3::new(3.0, 2.0, 4.0),
+            target: Vec3::new(1.0, 0.5, 0.0),
+            up: Vec3::Y,
+            projection: Projection::perspective(40.0),
+        };
+        assert_eq!(c.turntable(0, 12), c);
+        assert_eq!(c.turntable(12, 12), c);
+        let off = c.eye - c.target;
+        for k in 1..12 {
+            let t = c.turntable(k, 12);
+            let o = t.eye - t.target;
+            assert_eq!(
+                (t.target, t.up, t.projection),
+                (c.target, c.up, c.projection)
+            );
+            assert!((o.length() - off.length()).abs() < 1e-5 && (o.y - off.y).abs() < 1e-5);
+            let turned = (k as f32 / 12.0) * std::f32::consts::TAU;
+            let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z).normalize();
+            assert!((flat(o).dot(flat(off)) - turned.cos()).abs() < 1e-5, "{k}");
+        }
+        let half = c.turntable(6, 12).eye - c.target;
+        assert!((half.x + off.x).abs() < 1e-5 && (half.z + off.z).abs() < 1e-5);
+        // Anticlockwise seen from above: a quarter turn takes +z to +x.
+        let q = c.turntable(3, 12).eye - c.target;
+        assert!(
+            (q.x - off.z).abs() < 1e-5 && (q.z + off.x).abs() < 1e-5,
+            "{q}"
+        );
     }
 }

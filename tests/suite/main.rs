@@ -42,3 +42,4 @@ mod shading;
 mod split;
 mod stability;
 mod tolerant_loaders;
+mod turntable;
