@@ -60,6 +60,16 @@ impl Simd {
             .collect()
     }
 
+    /// This level, where this CPU runs it; else an error naming the
+    /// widest it has.
+    pub(crate) fn on_this_cpu(self) -> anyhow::Result<Simd> {
+        let most = Simd::detect();
+        if self > most {
+            anyhow::bail!("--simd {self}: this CPU has no {self} (the widest it has is {most})");
+        }
+        Ok(self)
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Simd::Portable => "portable",

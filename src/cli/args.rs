@@ -229,6 +229,11 @@ pub(crate) struct SceneOpts {
         allow_hyphen_values = true
     )]
     pub(crate) env_rotate: Option<f32>,
+    /// The SIMD kernels the BVH walks with (default: the widest this CPU
+    /// has): every level finds the same hits, so the picture, and a part
+    /// of a split render, is the same bit for bit on any machine.
+    #[arg(long, value_enum)]
+    pub(crate) simd: Option<crate::bvh::Simd>,
 }
 
 impl SceneOpts {
@@ -258,6 +263,7 @@ impl SceneOpts {
                 strength: self.env_strength.unwrap_or(1.0),
                 rotate: self.env_rotate.unwrap_or(0.0),
             }),
+            simd: self.simd,
             check_film: true,
         }
     }

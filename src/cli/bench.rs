@@ -170,11 +170,7 @@ pub(crate) fn run(a: BenchArgs) -> Result<ExitCode> {
 }
 
 fn rays(a: RaysArgs) -> Result<()> {
-    let most = Simd::detect();
-    let simd = a.simd.unwrap_or(most);
-    if simd > most {
-        anyhow::bail!("--simd {simd}: this CPU has no {simd} (the widest it has is {most})");
-    }
+    let simd = a.simd.unwrap_or(Simd::detect()).on_this_cpu()?;
     let s = super::load_scene(&a.mesh)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.threads as usize)

@@ -44,6 +44,9 @@ pub struct SceneRequest {
     pub up: Option<crate::scene::load::up::Up>,
     /// An environment light in place of the scene's environment.
     pub env: Option<crate::scene::load::EnvRequest>,
+    /// The SIMD kernels the BVH walks with, at most (default: the widest
+    /// this CPU has); every level finds the same hits.
+    pub simd: Option<crate::bvh::Simd>,
     /// Whether opening refuses an image size whose film of statistics
     /// would not fit in memory; off for a caller that checks the film it
     /// makes, which may keep far less ([`Job::bytes_per_pixel`]).
@@ -71,6 +74,7 @@ impl SceneRequest {
             allow_outside: false,
             up: None,
             env: None,
+            simd: None,
             check_film: true,
         }
     }
@@ -96,6 +100,9 @@ impl Session {
     /// Loads the scene `req` names and prepares it; the load warnings are
     /// returned for the caller to show.
     pub fn open(req: &SceneRequest) -> Result<(Session, Vec<String>)> {
+        if let Some(s) = req.simd {
+            s.on_this_cpu()?;
+        }
         let (scene, inputs) = Self::load(req)?;
         let (w, h) = req
             .size
@@ -150,7 +157,10 @@ impl Session {
         st.stratify &= !req.independent;
         let (width, height) = req.size.unwrap_or((st.width, st.height));
         let plan = Plan::new(&scene, req.features, req.policy);
-        let bvh = bvh::build(&scene.geometry, scene.settings.builder);
+        let mut bvh = bvh::build(&scene.geometry, scene.settings.builder);
+        if let Some(s) = req.simd {
+            bvh.cap_simd(s);
+        }
         let session = Session {
             camera: scene.camera,
             scene: Arc::new(scene),

@@ -839,3 +839,68 @@ fn a_part_that_cannot_be_read_is_named() {
     }
     std::fs::remove_dir_all(d).unwrap();
 }
+
+/// What an older CPU's C library does for `powf`, `sincosf` and the rest:
+/// glibc's plain variants in place of the FMA and AVX2 ones it picks here
+/// (other C libraries ignore the variable).
+const PLAIN_LIBM: (&str, &str) = ("GLIBC_TUNABLES", "glibc.cpu.hwcaps=-AVX2,-FMA,-FMA4,-AVX512F");
+
+/// A farm of unlike x86-64 machines makes one image: every SIMD level this
+/// CPU has renders every built-in scene to the same bytes, and parts
+/// rendered each at another level, one with the plain C library maths,
+/// merge into the single render byte for byte.
+#[test]
+fn parts_from_unlike_machines_merge_exactly() {
+    use rayterm::bvh::Simd;
+    let d = dir("machines");
+    let levels = Simd::available();
+    if !levels.contains(&Simd::Avx512) {
+        eprintln!("note: this CPU has no AVX-512; the levels checked are {levels:?}");
+    }
+    let run = |args: &[&str], plain_libm: bool| {
+        let mut c = Command::new(BIN);
+        c.args(args).current_dir(&d).stdin(Stdio::null());
+        if plain_libm {
+            c.env(PLAIN_LIBM.0, PLAIN_LIBM.1);
+        }
+        let out = c.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    for scene in ["cornell", "cornell-area", "cube-textured", "mirrors", "teapot", "env"] {
+        let base = [scene, "--size", "48x36", "--spp", "16"];
+        let at = |extra: &[&str], out: &str, plain: bool| {
+            run(&[&["render"], &base[..], extra, &["-o", out]].concat(), plain)
+        };
+        at(&[], "single.exr", false);
+        for l in &levels {
+            at(&["--simd", l.name()], "level.exr", false);
+            assert!(
+                bytes(&d, "level.exr") == bytes(&d, "single.exr"),
+                "{scene}: --simd {l} differs"
+            );
+        }
+        // One part a level, and one more with the plain maths.
+        let n = levels.len() + 1;
+        let mut parts = Vec::new();
+        for k in 1..=n {
+            let (level, plain) = match levels.get(k - 1) {
+                Some(l) => (*l, false),
+                None => (Simd::Portable, true),
+            };
+            let part = format!("part-{k}.exr");
+            let which = format!("{k}/{n}");
+            at(&["--part", &which, "--simd", level.name()], &part, plain);
+            parts.push(part);
+        }
+        let names: Vec<&str> = parts.iter().map(String::as_str).collect();
+        run(&[&["merge"], &names[..], &["-o", "merged.exr"]].concat(), false);
+        assert!(
+            bytes(&d, "merged.exr") == bytes(&d, "single.exr"),
+            "{scene}: parts from unlike machines differ from the single render"
+        );
+    }
+}
