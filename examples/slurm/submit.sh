@@ -12,6 +12,8 @@ N=${1:-8}
 CPUS=${CPUS:-2}
 RAYTERM=${RAYTERM:-rayterm}
 export SCENE=${SCENE:-cornell-area} SIZE=${SIZE:-1920x1080} SPP=${SPP:-1024}
+# Each task is part K of N, also when one is queued again on its own.
+export PARTS=$N
 here=$(dirname "$0")
 peak=$("$RAYTERM" render "$SCENE" --size "$SIZE" --spp "$SPP" --part "1/$N" \
   --checkpoint estimate.ckpt.exr --dry-run -o estimate.exr |

@@ -219,7 +219,7 @@ impl<'a> Tracer<'a> {
             scene,
             bvh,
             plan,
-            frame,
+            frame: frame.lanes(bvh.simd() >= crate::bvh::Simd::Avx),
             width,
             height,
             seed,

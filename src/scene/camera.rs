@@ -118,6 +118,18 @@ impl Camera {
     }
 }
 
+/// Whether this CPU has AVX.
+fn has_avx() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
 /// Precomputed camera basis for one image size.
 #[derive(Clone, Copy, Debug)]
 pub struct CameraFrame {
@@ -136,6 +148,11 @@ pub struct CameraFrame {
     width: f64,
     height: f64,
     size: (u32, u32),
+    /// Whether rays are made four at a time with AVX: only where the CPU
+    /// has it, and not when the walks were held to the portable kernels
+    /// ([`CameraFrame::lanes`]), so that a narrower level runs what a
+    /// machine without AVX runs.
+    avx: bool,
 }
 
 impl CameraFrame {
@@ -168,7 +185,15 @@ impl CameraFrame {
             width: width as f64,
             height: height as f64,
             size: (width, height),
+            avx: has_avx(),
         }
+    }
+
+    /// This frame, making rays with AVX only if `avx` too (the BVH's
+    /// kernels are AVX or wider).
+    pub(crate) fn lanes(mut self, avx: bool) -> Self {
+        self.avx &= avx;
+        self
     }
 
     /// The frame for pixels shown `pixel_aspect` times as wide as they are
@@ -246,9 +271,9 @@ impl CameraFrame {
         out.reserve(a.len());
         let mut done = 0;
         #[cfg(target_arch = "x86_64")]
-        if !self.ortho && std::arch::is_x86_feature_detected!("avx") {
+        if !self.ortho && self.avx {
             done = a.len() / 4 * 4;
-            // SAFETY: the CPU has AVX.
+            // SAFETY: `avx` is set only where the CPU has AVX.
             unsafe { self.batch_avx::<POS>(&a[..done], &b[..done], out) };
         }
         for (&a, &b) in a[done..].iter().zip(&b[done..]) {

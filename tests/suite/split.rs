@@ -713,14 +713,27 @@ fn the_slurm_scripts_run_their_commands() {
             String::from_utf8_lossy(&out.stderr)
         );
     }
-    // Task 2 preempted and requeued: it continues from its checkpoint
-    // (samples 3..5 of its 3..6).
+    // Task 2 preempted and queued again on its own (`sbatch --array=2`,
+    // an array of one; submit.sh's PARTS says how many there are): it
+    // continues from its checkpoint (samples 3..5 of its 3..6).
     std::fs::remove_file(d.join("parts/part-2.exr")).unwrap();
     let mut ckpt = vec!["render", "cornell-area", "--size", "40x28"];
     ckpt.extend(["--samples", "3..5", "-o", "parts/part-2.ckpt.exr"]);
     ok(&d, &ckpt);
-    let mut requeued = env.to_vec();
-    requeued.push(("SLURM_ARRAY_TASK_ID", "2"));
+    let mut requeued: Vec<_> = env
+        .iter()
+        .map(|&(k, v)| {
+            (
+                k,
+                if k == "SLURM_ARRAY_TASK_COUNT" {
+                    "1"
+                } else {
+                    v
+                },
+            )
+        })
+        .collect();
+    requeued.extend([("SLURM_ARRAY_TASK_ID", "2"), ("PARTS", "4")]);
     let out = bash(&d, &script("render.sbatch"), &requeued);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "requeued task: {err}");
@@ -843,7 +856,10 @@ fn a_part_that_cannot_be_read_is_named() {
 /// What an older CPU's C library does for `powf`, `sincosf` and the rest:
 /// glibc's plain variants in place of the FMA and AVX2 ones it picks here
 /// (other C libraries ignore the variable).
-const PLAIN_LIBM: (&str, &str) = ("GLIBC_TUNABLES", "glibc.cpu.hwcaps=-AVX2,-FMA,-FMA4,-AVX512F");
+const PLAIN_LIBM: (&str, &str) = (
+    "GLIBC_TUNABLES",
+    "glibc.cpu.hwcaps=-AVX2,-FMA,-FMA4,-AVX512F",
+);
 
 /// A farm of unlike x86-64 machines makes one image: every SIMD level this
 /// CPU has renders every built-in scene to the same bytes, and parts
@@ -870,10 +886,20 @@ fn parts_from_unlike_machines_merge_exactly() {
             String::from_utf8_lossy(&out.stderr)
         );
     };
-    for scene in ["cornell", "cornell-area", "cube-textured", "mirrors", "teapot", "env"] {
+    for scene in [
+        "cornell",
+        "cornell-area",
+        "cube-textured",
+        "mirrors",
+        "teapot",
+        "env",
+    ] {
         let base = [scene, "--size", "48x36", "--spp", "16"];
         let at = |extra: &[&str], out: &str, plain: bool| {
-            run(&[&["render"], &base[..], extra, &["-o", out]].concat(), plain)
+            run(
+                &[&["render"], &base[..], extra, &["-o", out]].concat(),
+                plain,
+            )
         };
         at(&[], "single.exr", false);
         for l in &levels {
@@ -897,7 +923,10 @@ fn parts_from_unlike_machines_merge_exactly() {
             parts.push(part);
         }
         let names: Vec<&str> = parts.iter().map(String::as_str).collect();
-        run(&[&["merge"], &names[..], &["-o", "merged.exr"]].concat(), false);
+        run(
+            &[&["merge"], &names[..], &["-o", "merged.exr"]].concat(),
+            false,
+        );
         assert!(
             bytes(&d, "merged.exr") == bytes(&d, "single.exr"),
             "{scene}: parts from unlike machines differ from the single render"
