@@ -230,8 +230,9 @@ pub(crate) struct SceneOpts {
     )]
     pub(crate) env_rotate: Option<f32>,
     /// The SIMD kernels the BVH walks with (default: the widest this CPU
-    /// has): every level finds the same hits, so the picture, and a part
-    /// of a split render, is the same bit for bit on any machine.
+    /// has): every level finds the same hits, so a picture, or a part of a
+    /// split render, is the same bit for bit on any x86-64 machine that
+    /// runs this build.
     #[arg(long, value_enum)]
     pub(crate) simd: Option<crate::bvh::Simd>,
 }
