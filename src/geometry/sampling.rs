@@ -20,6 +20,16 @@ fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// A number in [0, 1) drawn from `words` alone: the same words, the same
+/// number.
+pub(crate) fn unit_hash(words: impl IntoIterator<Item = u32>) -> f32 {
+    let h = words
+        .into_iter()
+        .fold(0x9e37_79b9_7f4a_7c15, |h: u64, w| mix64(h ^ w as u64));
+    // The top 24 bits: every value exact in f32, below 1.
+    (h >> 40) as f32 / (1u64 << 24) as f32
+}
+
 impl Rng {
     /// The stream for one sample of one pixel.
     pub fn for_sample(pixel: u64, sample: u64, seed: u64) -> Self {

@@ -23,6 +23,7 @@ pub enum Feature {
     NormalMaps,
     Emission,
     Indirect,
+    Alpha,
 }
 
 impl Choice for Feature {
@@ -52,13 +53,16 @@ impl Choice for Feature {
             Feature::Indirect => {
                 "Light arriving after bounces off other surfaces (path tracing; direct light only when off)"
             }
+            Feature::Alpha => {
+                "Cut-outs and see-through surfaces of glTF alpha (MASK, BLEND), for every ray"
+            }
         };
         (self.name(), help)
     }
 }
 
 impl Feature {
-    pub(crate) const ALL: [Feature; 14] = [
+    pub(crate) const ALL: [Feature; 15] = [
         Feature::Shadows,
         Feature::Reflections,
         Feature::SmoothNormals,
@@ -73,6 +77,7 @@ impl Feature {
         Feature::NormalMaps,
         Feature::Emission,
         Feature::Indirect,
+        Feature::Alpha,
     ];
 
     pub(crate) fn name(self) -> &'static str {
@@ -91,6 +96,7 @@ impl Feature {
             Feature::NormalMaps => "normal-maps",
             Feature::Emission => "emission",
             Feature::Indirect => "indirect",
+            Feature::Alpha => "alpha",
         }
     }
 

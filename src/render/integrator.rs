@@ -167,7 +167,7 @@ pub(super) struct Surface<'m> {
 
 /// A texture's value at `uv`, filtered as the plan says.
 #[inline]
-fn lookup(tex: &Texture, uv: Vec2, bilinear: bool) -> Vec3 {
+pub(super) fn lookup(tex: &Texture, uv: Vec2, bilinear: bool) -> Vec3 {
     if bilinear {
         tex.bilinear(uv)
     } else {
@@ -355,8 +355,9 @@ impl<'a> Tracer<'a> {
         self.trace(ray, found, Depth::CAMERA, kind, w, &mut rng, rec)
     }
 
+    /// The closest hit, with the BVH or without as the plan says.
     #[inline]
-    fn closest<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Option<Hit> {
+    pub(super) fn nearest<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Option<Hit> {
         if self.plan.bvh {
             rec.intersect(self.bvh, ray)
         } else {
@@ -366,6 +367,9 @@ impl<'a> Tracer<'a> {
 
     pub(super) fn blocked<R: Recorder>(&self, ray: &Ray, rec: &mut R) -> Option<u32> {
         rec.shadow_ray();
+        if self.plan.alpha {
+            return self.blocked_past_cutouts(ray, rec);
+        }
         if self.plan.bvh {
             rec.occluded(self.bvh, ray)
         } else {
@@ -392,7 +396,16 @@ impl<'a> Tracer<'a> {
         rec.begin_ray(kind, ray, weight);
         let hit = match found {
             Some(hit) => hit,
-            None => self.closest(ray, rec),
+            None => self.nearest(ray, rec),
+        };
+        // Past what alpha leaves out, the ray goes on from there.
+        let passed;
+        let (ray, hit) = match self.plan.alpha {
+            true => {
+                passed = self.past_cutouts(ray, hit, rec);
+                (&passed.0, passed.1)
+            }
+            false => (ray, hit),
         };
         let color = match hit {
             None => self.miss(ray, depth, rec),

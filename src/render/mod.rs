@@ -2,6 +2,7 @@
 //! the one shading code path (generic over a [`Recorder`]), the film, the
 //! one progressive loop and the one post-processing step.
 
+mod alpha;
 pub(crate) mod aov;
 pub(crate) mod brdf;
 pub(crate) mod bsdf;

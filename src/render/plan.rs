@@ -32,6 +32,7 @@ pub enum Reason {
     NoEnvironment,
     NoNormalMaps,
     NoEmission,
+    NoAlpha,
     Whitted,
 }
 
@@ -47,6 +48,7 @@ impl Reason {
             Reason::NoEnvironment => "no environment map in scene",
             Reason::NoNormalMaps => "no normal maps in scene",
             Reason::NoEmission => "no emissive material in scene",
+            Reason::NoAlpha => "no alpha-masked or blended material in scene",
             Reason::Whitted => "the Whitted integrator runs",
         }
     }
@@ -63,6 +65,7 @@ impl Reason {
             Reason::NoEnvironment => "no env. map",
             Reason::NoNormalMaps => "no normal map",
             Reason::NoEmission => "no emission",
+            Reason::NoAlpha => "no alpha",
             Reason::Whitted => "whitted",
         }
     }
@@ -127,6 +130,9 @@ pub(crate) fn not_needed(scene: &Scene, f: Feature) -> Option<Reason> {
             Some(Reason::NoEmission)
         }
         Feature::Indirect if integrator(scene).0 == Integrator::Whitted => Some(Reason::Whitted),
+        Feature::Alpha if !scene.materials.iter().any(|m| m.alpha.is_some()) => {
+            Some(Reason::NoAlpha)
+        }
         _ => None,
     }
 }
@@ -148,12 +154,13 @@ fn stage_name(f: Feature) -> &'static str {
         Feature::NormalMaps => "normal maps",
         Feature::Emission => "emission",
         Feature::Indirect => "path tracing (indirect light)",
+        Feature::Alpha => "alpha tests (cut-outs, blending)",
     }
 }
 
 /// Stages in the order `--explain` lists them; a refinement comes after the
 /// feature it needs.
-const ORDER: [Feature; 14] = [
+const ORDER: [Feature; 15] = [
     Feature::Indirect,
     Feature::Shadows,
     Feature::Reflections,
@@ -162,6 +169,7 @@ const ORDER: [Feature; 14] = [
     Feature::Bilinear,
     Feature::NormalMaps,
     Feature::Emission,
+    Feature::Alpha,
     Feature::SmoothNormals,
     Feature::SoftShadows,
     Feature::Supersampling,
@@ -216,6 +224,8 @@ pub struct Plan {
     pub bvh: bool,
     pub(crate) normal_maps: bool,
     pub(crate) emission: bool,
+    /// Rays pass the parts of alpha-tested surfaces that are not there.
+    pub(crate) alpha: bool,
     /// Camera rays, which all start at the eye, are traced in packets
     /// ([`Bvh::intersect_packet`](crate::bvh::Bvh::intersect_packet)):
     /// the same hits, found together, whenever the BVH is used, for a
@@ -300,6 +310,7 @@ impl Plan {
             bvh: on(Feature::Bvh),
             normal_maps: on(Feature::NormalMaps),
             emission: on(Feature::Emission),
+            alpha: on(Feature::Alpha),
             packets: on(Feature::Bvh) && !orthographic(scene),
             deterministic,
             integrator,

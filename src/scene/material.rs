@@ -26,6 +26,21 @@ pub struct Material {
     /// Shaded by glTF's metallic-roughness BRDF rather than Phong, with
     /// lights in their physical units.
     pub pbr: Option<Pbr>,
+    /// How much of the surface is there (glTF's `MASK` and `BLEND`): rays
+    /// of every kind pass where it is not.
+    pub alpha: Option<Alpha>,
+}
+
+/// glTF alpha: the base colour factor's alpha times its texture's, at a
+/// hit; `MASK` keeps the surface where that reaches `cutoff`, `BLEND`
+/// keeps it with that probability (stochastic transparency).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Alpha {
+    /// `MASK`'s cutoff; `None` for `BLEND`.
+    pub cutoff: Option<f32>,
+    pub factor: f32,
+    /// The base colour image's alpha channel, linear, in every component.
+    pub texture: Option<u32>,
 }
 
 /// glTF 2.0's metallic-roughness parameters and textures (texture indices
@@ -73,6 +88,7 @@ impl Default for Material {
             dissolve: 1.0,
             texture: None,
             pbr: None,
+            alpha: None,
         }
     }
 }

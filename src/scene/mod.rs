@@ -20,7 +20,7 @@ use rayon::prelude::*;
 pub use camera::{Camera, Projection};
 pub use envlight::EnvLight;
 pub use light::Light;
-pub use material::{Material, Pbr};
+pub use material::{Alpha, Material, Pbr};
 pub use reach::check_reach;
 pub use texture::{CubeMap, Texture, Wrap};
 

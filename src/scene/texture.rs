@@ -73,12 +73,15 @@ impl Wrap {
 }
 
 /// How an image's 8-bit values become linear ones: colours are sRGB
-/// encoded, data (normals, roughness, occlusion) are stored linearly.
+/// encoded, data (normals, roughness, occlusion) are stored linearly, and
+/// an alpha channel is stored linearly in every component (1 for an image
+/// without one).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub(crate) enum Encoding {
     #[default]
     Srgb,
     Linear,
+    Alpha,
 }
 
 /// Most memory one texture may take to decode and store (12 bytes a texel
@@ -108,22 +111,30 @@ pub(super) const TEXEL_BYTES: u64 = std::mem::size_of::<Vec3>() as u64;
 
 impl Texture {
     pub(crate) fn from_image(name: &str, img: image::DynamicImage, encoding: Encoding) -> Self {
-        let rgb = img.into_rgb8();
+        let (width, height) = (img.width(), img.height());
         let lut: Vec<f32> = (0..256)
             .map(|i| i as f32 / 255.0)
             .map(|c| match encoding {
                 Encoding::Srgb => srgb_to_linear(c),
-                Encoding::Linear => c,
+                Encoding::Linear | Encoding::Alpha => c,
             })
             .collect();
-        let texels = rgb
-            .pixels()
-            .map(|p| Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
-            .collect();
+        let texels = match encoding {
+            Encoding::Alpha => img
+                .into_rgba8()
+                .pixels()
+                .map(|p| Vec3::splat(lut[p[3] as usize]))
+                .collect(),
+            _ => img
+                .into_rgb8()
+                .pixels()
+                .map(|p| Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
+                .collect(),
+        };
         Self {
             name: name.to_string(),
-            width: rgb.width(),
-            height: rgb.height(),
+            width,
+            height,
             texels: Arc::new(texels),
             wrap: [Wrap::Repeat; 2],
             tint: Vec3::ONE,
@@ -157,8 +168,10 @@ impl Texture {
             bail!("the image has no pixels ({w}x{h})");
         }
         let texels = w as u64 * h as u64;
-        let converted = match decoder.color_type() {
-            image::ColorType::Rgb8 => 0,
+        let converted = match (decoder.color_type(), encoding) {
+            (image::ColorType::Rgb8, Encoding::Srgb | Encoding::Linear) => 0,
+            (image::ColorType::Rgba8, Encoding::Alpha) => 0,
+            (_, Encoding::Alpha) => 4,
             _ => 3,
         };
         let needed = decoder.total_bytes() + texels * (converted + TEXEL_BYTES);

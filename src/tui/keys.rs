@@ -222,6 +222,7 @@ pub(crate) const ROWS: &[KeyRow] = &[
             (K::Char('N'), A::Toggle(Feature::NormalMaps)),
             (K::Char('E'), A::Toggle(Feature::Emission)),
             (K::Char('i'), A::Toggle(Feature::Indirect)),
+            (K::Char('A'), A::Toggle(Feature::Alpha)),
         ],
         help: "toggle a feature (each key is listed in the Features panel)",
         hint: Some("features"),

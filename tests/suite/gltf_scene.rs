@@ -1065,3 +1065,145 @@ fn textures_other_than_the_base_colours_are_looked_up() {
     let c = img[4 * 9 + 4];
     assert!((c - Vec3::splat(0.21586)).abs().max_element() < 1e-3, "{c}");
 }
+
+/// A 4x4 floor under a 2x2 leaf one unit above it, seen straight down by
+/// an orthographic camera, lit by a directional light of 2 lux slanting
+/// down toward -x (the leaf's shadow falls one unit toward -x). The leaf's
+/// material is `leaf`; its texture's left half (x < 0) has alpha 0, its
+/// right half alpha 255.
+fn leaf_over_floor(leaf: Value) -> Vec<u8> {
+    let mut bin = Bin::default();
+    let quad = |y: f32, r: f32| {
+        [
+            Vec3::new(-r, y, -r),
+            Vec3::new(r, y, -r),
+            Vec3::new(r, y, r),
+            Vec3::new(-r, y, r),
+        ]
+    };
+    let faces = [[0, 2, 1], [0, 3, 2]];
+    let (floor, floor_ind) = bin.mesh(&quad(0.0, 3.0), &faces);
+    let (leaf_pos, leaf_ind) = bin.mesh(&quad(1.0, 1.0), &faces);
+    let uv = bin.floats(&[0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0], 2, "VEC2");
+    let img = image::RgbaImage::from_fn(8, 8, |x, _| {
+        image::Rgba([255, 255, 255, if x < 4 { 0 } else { 255 }])
+    });
+    let mut png = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let png = bin.view(&png);
+    let light = glam::Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(-1.0, -1.0, 0.0).normalize());
+    let down = glam::Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2);
+    let grey = json!({"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1.0],
+                                               "metallicFactor": 0.0}});
+    bin.glb(json!({
+        "scene": 0, "scenes": [{"nodes": [0, 1, 2, 3]}],
+        "nodes": [{"mesh": 0}, {"mesh": 1},
+                  {"camera": 0, "translation": [0.0, 5.0, 0.0], "rotation": down.to_array()},
+                  {"extensions": {"KHR_lights_punctual": {"light": 0}},
+                   "rotation": light.to_array()}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": floor}, "indices": floor_ind,
+                                    "material": 0}]},
+                   {"primitives": [{"attributes": {"POSITION": leaf_pos, "TEXCOORD_0": uv},
+                                    "indices": leaf_ind, "material": 1}]}],
+        "materials": [grey, leaf],
+        "textures": [{"source": 0}],
+        "images": [{"bufferView": png, "mimeType": "image/png"}],
+        "cameras": [{"type": "orthographic",
+                     "orthographic": {"xmag": 2.0, "ymag": 2.0, "znear": 0.1, "zfar": 10.0}}],
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [
+            {"type": "directional", "intensity": 2.0}]}}
+    }))
+}
+
+/// The mean colour over world x in `x0..x1`, z in -0.9..0.9, of a 64x64
+/// render from above with `features` (Whitted: direct light only).
+fn strip(file: &str, features: Features) -> impl Fn(f32, f32) -> Vec3 {
+    let req = rayterm::render::SceneRequest {
+        size: Some((64, 64)),
+        features,
+        integrator: Some(scene::Integrator::Whitted),
+        ..rayterm::render::SceneRequest::new(file)
+    };
+    let s = rayterm::render::Session::open(&req).unwrap().0;
+    let img = rayterm::render::Progressive::render(&s.tracer(), 1).image();
+    move |x0: f32, x1: f32| {
+        // Column c sees x = -2 + 4 (c + 0.5) / 64; rows likewise see z.
+        let seen = |i: usize| -2.0 + 4.0 * (i as f32 + 0.5) / 64.0;
+        let (mut sum, mut n) = (Vec3::ZERO, 0.0);
+        for (i, p) in img.iter().enumerate() {
+            let (x, z) = (seen(i % 64), seen(i / 64));
+            if x > x0 && x < x1 && z.abs() < 0.9 {
+                (sum, n) = (sum + *p, n + 1.0);
+            }
+        }
+        sum / n
+    }
+}
+
+/// Alpha MASK from a texture: camera rays see the floor through the
+/// cut-out half, and the light passes it too, so its shadow has the
+/// opaque half's shape; with alpha off the leaf is whole again. BLEND at
+/// one half lets half the light through.
+#[test]
+fn alpha_cut_outs_are_passed_by_camera_and_shadow_rays() {
+    let d = Dir::new("gltf-alpha");
+    let leaf = |mode: &str, factor: f32| {
+        json!({"name": "Leaf", "alphaMode": mode, "alphaCutoff": 0.5,
+               "pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.0, 0.0, factor],
+                                        "baseColorTexture": {"index": 0},
+                                        "metallicFactor": 0.0}})
+    };
+    let mask = d.write("mask.glb", leaf_over_floor(leaf("MASK", 1.0)));
+    let s = load(&mask).unwrap();
+    let m = s.materials.iter().find(|m| m.name == "Leaf").unwrap();
+    let a = m.alpha.expect("MASK is an alpha test");
+    assert_eq!((a.cutoff, a.factor), (Some(0.5), 1.0));
+    assert!(a.texture.is_some(), "{:?}", s.warnings);
+    assert!(
+        !s.warnings.iter().any(|w| w.contains("alpha")),
+        "{:?}",
+        s.warnings
+    );
+
+    let on = strip(&mask, exact());
+    // Right of the leaf (x > 1) the floor is in no shadow; left of it
+    // (x < -1), where the cut-out half's shadow would fall, nor is it.
+    let grey_lit = on(1.1, 1.9).x;
+    assert!(grey_lit > 0.1, "{grey_lit}");
+    let lit = on(-1.9, -1.1);
+    assert!((lit.x - grey_lit).abs() < 1e-5, "{lit} against {grey_lit}");
+    // Seen through the cut-out: the floor, in the opaque half's shadow.
+    let through = on(-0.9, -0.1);
+    assert!(through.max_element() < 1e-4, "{through}");
+    // The opaque half: red.
+    let red = on(0.1, 0.9);
+    // (Its specular lobe, white, adds a little green and blue.)
+    assert!(red.x > 0.1 && red.x > 20.0 * red.y.max(red.z), "{red}");
+
+    // Alpha off: the whole leaf is there, and its whole shadow too.
+    let off = strip(&mask, exact().without(&[Feature::Alpha]));
+    assert!(off(-1.9, -1.1).max_element() < 1e-4, "{}", off(-1.9, -1.1));
+    let whole = off(-0.9, -0.1);
+    assert!(whole.x > 0.1 && whole.x > 20.0 * whole.y, "{whole}");
+
+    // BLEND: the texture's alpha times the factor's one half; where the
+    // texture is opaque, half the shadow rays pass.
+    let blend = d.write("blend.glb", leaf_over_floor(leaf("BLEND", 0.5)));
+    let half = strip(&blend, exact());
+    // The cut-out half still casts nothing; the opaque half's shadow,
+    // seen through the cut-out, is half as dark as it was.
+    let clear = half(-1.9, -1.1);
+    assert!(
+        (clear.x - grey_lit).abs() < 1e-5,
+        "{clear}: the cut-out half casts nothing"
+    );
+    let shaded = half(-0.9, -0.1);
+    assert!(
+        (shaded.x / grey_lit - 0.5).abs() < 0.05 && shaded.y / grey_lit > 0.45,
+        "{shaded}: half the light of {grey_lit}"
+    );
+    let plan = Plan::new(&load(&blend).unwrap(), exact(), PlanPolicy::Prune);
+    assert!(plan.decision(Feature::Alpha).runs());
+}

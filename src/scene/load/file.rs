@@ -814,6 +814,7 @@ fn material_from(parts: &mut Parts, src: &dyn Source, loc: &Locator, m: &Materia
         dissolve,
         texture,
         pbr: None,
+        alpha: None,
     }
 }
 

@@ -39,7 +39,7 @@ use glam::{DAffine3, DMat4, DVec3, Vec3};
 use super::parts::{mesh_fits, Parts, Placed};
 use super::source::{FileKind, Outside, Source};
 use crate::scene::texture::{Encoding, Texture, Wrap};
-use crate::scene::{Material, Pbr, Projection};
+use crate::scene::{Alpha, Material, Pbr, Projection};
 use check::{check_lights, check_transform, check_trees, check_values, Broken};
 use primitive::{Decoded, Key};
 use uri::inline_uri;
@@ -152,15 +152,25 @@ pub(crate) fn metallic_roughness(
         kd: Vec3::new(base[0], base[1], base[2]).clamp(Vec3::ZERO, Vec3::ONE),
         ks: Vec3::ZERO,
         ns: 0.0,
-        dissolve: match alpha {
-            AlphaMode::Opaque => 1.0,
-            AlphaMode::Blend => base[3].clamp(0.0, 1.0),
-            AlphaMode::Mask => {
-                if base[3] >= cutoff {
-                    1.0
-                } else {
-                    0.0
-                }
+        dissolve: 1.0,
+        alpha: {
+            let factor = if base[3].is_finite() {
+                base[3].clamp(0.0, 1.0)
+            } else {
+                1.0
+            };
+            match alpha {
+                AlphaMode::Opaque => None,
+                AlphaMode::Blend => Some(Alpha {
+                    cutoff: None,
+                    factor,
+                    texture: None,
+                }),
+                AlphaMode::Mask => Some(Alpha {
+                    cutoff: Some(if cutoff.is_finite() { cutoff } else { 0.5 }),
+                    factor,
+                    texture: None,
+                }),
             }
         },
         texture: None,
@@ -452,9 +462,19 @@ impl Reader<'_> {
                 p.emissive,
             )?;
         }
-        if m.alpha_mode() != AlphaMode::Opaque && pbr.base_color_texture().is_some() {
-            self.unmapped.note("alpha from textures", || here.clone());
+        if let Some(a) = &mut mat.alpha {
+            a.texture = self.texture(
+                parts,
+                pbr.base_color_texture(),
+                &here,
+                Encoding::Alpha,
+                Vec3::ONE,
+            )?;
         }
+        // A surface there everywhere needs no test.
+        mat.alpha = mat.alpha.filter(|a| {
+            a.texture.is_some() || a.factor < 1.0 && a.cutoff.is_none_or(|c| a.factor < c)
+        });
         mat.pbr = Some(p);
         let id = parts.add_material(mat);
         self.materials.insert(key, id);

@@ -735,6 +735,7 @@ fn convert_material(
         dissolve: m.dissolve.unwrap_or(d.dissolve),
         texture,
         pbr: None,
+        alpha: None,
     }
 }
 
