@@ -193,6 +193,25 @@ fn empty_scenes_open_and_an_unplaced_default_scene_is_said() {
             && e.contains("its scene Scene.001 has no nodes, so nothing is placed, though the file has 1 mesh"),
         "{e}"
     );
+    // No scenes at all (Blender's exporter writes such files): a library
+    // to glTF, whose root nodes are placed as Blender's importer places
+    // them, and said; a child is placed under its parent, once.
+    let mut bin = Bin::default();
+    let (p, t) = triangle();
+    let (pos, ind) = bin.mesh(&p, &t);
+    let library = bin.glb(json!({
+        "nodes": [{"mesh": 0, "children": [1]}, {"mesh": 0, "translation": [3.0, 0.0, 0.0]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos}, "indices": ind}]}]
+    }));
+    let s = load(&d.write("library.glb", library)).unwrap();
+    assert_eq!(s.geometry.triangle_count(), 2);
+    assert!(
+        s.warnings.iter().any(
+            |w| w.contains("it has no scenes; its 1 root node is placed as a scene's would be")
+        ),
+        "{:?}",
+        s.warnings
+    );
     // In a scene file beside another mesh it is a warning.
     d.write("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     let toml = d.write(

@@ -223,3 +223,24 @@ fn map_kd_options_and_escaped_spaces_are_read() {
     });
     assert!(std::sync::Arc::ptr_eq(&a, &b));
 }
+
+/// An OBJ of lines and points alone is refused saying so (its curves are
+/// not drawn); beside faces they are no fault and go unsaid.
+#[test]
+fn an_obj_of_lines_and_points_says_why_it_draws_nothing() {
+    let d = Dir::new("obj-lines");
+    let wire = d.write(
+        "wire.obj",
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nl 1 2 3\np 1\nl 2 3\n",
+    );
+    refused(
+        &d,
+        &wire,
+        &[
+            "wire.obj: no triangles",
+            "wire.obj:4: 3 lines and points: not drawn (rayterm draws faces)",
+        ],
+    );
+    let both = d.write("both.obj", format!("{QUAD}l 1 2\np 3\n"));
+    warned(&both, &[]);
+}

@@ -206,7 +206,7 @@ pub(super) fn check_lights(
 pub(super) fn check_trees(
     path: &Path,
     doc: &::gltf::Document,
-    scene: &::gltf::Scene,
+    roots: &[::gltf::Node],
 ) -> Result<()> {
     let mut parents = vec![0usize; doc.nodes().len()];
     for n in doc.nodes() {
@@ -225,20 +225,20 @@ pub(super) fn check_trees(
         );
     }
     let mut seen = vec![false; parents.len()];
-    for n in scene.nodes() {
+    for n in roots {
         if parents[n.index()] > 0 {
             bail!(
                 "{}: node {} is a root of the scene and the child of another node \
                  (a cycle in the node hierarchy?)",
                 path.display(),
-                name(&n)
+                name(n)
             );
         }
         if std::mem::replace(&mut seen[n.index()], true) {
             bail!(
                 "{}: node {} is listed twice among the scene's nodes",
                 path.display(),
-                name(&n)
+                name(n)
             );
         }
     }

@@ -686,34 +686,51 @@ pub(crate) fn load(
     // An empty scene is valid (Blender writes one beside the scene it
     // exports); one that leaves the file's meshes unplaced is said.
     let meshes = doc.meshes().len();
-    if meshes > 0 && scene.as_ref().is_none_or(|s| s.nodes().len() == 0) {
-        let which = match &scene {
-            Some(s) => format!("its scene {} has no nodes", named(s.name(), s.index())),
-            None => "it has no scenes".into(),
-        };
-        parts.warnings.push(format!(
-            "{}: {which}, so nothing is placed, though the file has {}",
-            path.display(),
-            crate::words::count(meshes as u64, "mesh", "meshes")
-        ));
-    }
-    let Some(scene) = scene else {
-        // Without scenes, nothing is placed (the spec says so).
-        parts.warnings.extend(r.unmapped.warning(path));
-        parts.warnings.extend(r.broken.unused(path, doc.as_json()));
-        return Ok(out);
+    let roots: Vec<::gltf::Node> = match &scene {
+        Some(s) => {
+            if meshes > 0 && s.nodes().len() == 0 {
+                parts.warnings.push(format!(
+                    "{}: its scene {} has no nodes, so nothing is placed, though the file has {}",
+                    path.display(),
+                    named(s.name(), s.index()),
+                    crate::words::count(meshes as u64, "mesh", "meshes")
+                ));
+            }
+            s.nodes().collect()
+        }
+        // A file without scenes is a library to glTF; its nodes that are
+        // no other's child are placed, as Blender's importer places them,
+        // and said.
+        None => {
+            let children: std::collections::HashSet<usize> = doc
+                .nodes()
+                .flat_map(|n| n.children().map(|c| c.index()).collect::<Vec<_>>())
+                .collect();
+            let roots: Vec<_> = doc
+                .nodes()
+                .filter(|n| !children.contains(&n.index()))
+                .collect();
+            if meshes > 0 {
+                parts.warnings.push(format!(
+                    "{}: it has no scenes; its {} placed as a scene's would be",
+                    path.display(),
+                    crate::words::count(roots.len() as u64, "root node is", "root nodes are")
+                ));
+            }
+            roots
+        }
     };
     // Depth first, with each node's world transform in f64: each node
     // once, as the hierarchy is a forest. Each instance of a mesh is a copy
     // of it, counted before anything is read.
-    check_trees(path, &doc, &scene)?;
-    let (vertices, triangles, uses) = r.instanced(&scene)?;
+    check_trees(path, &doc, &roots)?;
+    let (vertices, triangles, uses) = r.instanced(&roots)?;
     r.uses = uses;
     mesh_fits(vertices, triangles, parts.budget.room())
         .map_err(|e| anyhow!("{}: its meshes, each instance counted: {e}", path.display()))?;
     check_values(path, &doc, &r.broken)?;
     check_lights(path, &doc, &mut parts.warnings)?;
-    let mut stack: Vec<(::gltf::Node, DAffine3)> = scene.nodes().map(|n| (n, *xf)).collect();
+    let mut stack: Vec<(::gltf::Node, DAffine3)> = roots.into_iter().map(|n| (n, *xf)).collect();
     stack.reverse();
     while let Some((node, parent)) = stack.pop() {
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));

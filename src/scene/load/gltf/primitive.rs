@@ -366,10 +366,10 @@ impl Reader<'_> {
     /// each node is visited once.
     pub(super) fn instanced(
         &self,
-        scene: &::gltf::Scene,
+        roots: &[::gltf::Node],
     ) -> Result<(u64, u64, HashMap<Key, usize>)> {
         let (mut v, mut t, mut uses) = (0u64, 0u64, HashMap::new());
-        let mut stack: Vec<::gltf::Node> = scene.nodes().collect();
+        let mut stack: Vec<::gltf::Node> = roots.to_vec();
         while let Some(node) = stack.pop() {
             let node_name = super::named(node.name(), node.index());
             if let Some(mesh) = node.mesh() {

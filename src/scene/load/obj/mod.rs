@@ -186,6 +186,7 @@ impl ObjFile {
         let mut absurd = Absurd::default();
         let mut ignored = piece::Ignored::default();
         let (mut bad_colors, mut short_faces) = (Tally::default(), Tally::default());
+        let mut lines = Tally::default();
         let mut unusable = Unusable::default();
         let mut colors = Vec::new();
         let mut current = Group {
@@ -211,6 +212,7 @@ impl ObjFile {
             ignored.extend(p.ignored);
             bad_colors = bad_colors.then(p.bad_colors);
             short_faces = short_faces.then(p.short_faces);
+            lines = lines.then(p.lines);
             unusable = unusable.then(p.unusable);
             colors.extend(p.colors);
         }
@@ -261,6 +263,15 @@ impl ObjFile {
             }
         }
         warnings.extend(dropped);
+        // Said only where they are all there is: a mesh's wireframe beside
+        // its faces is no fault.
+        if let (Some(line), true) = (lines.first, f.pieces.iter().all(|p| p.faces.is_empty())) {
+            warnings.push(format!(
+                "{}:{line}: {}: not drawn (rayterm draws faces)",
+                path.display(),
+                crate::words::count(lines.count as u64, "line or point", "lines and points")
+            ));
+        }
         if let Some(list) = ignored.list() {
             warnings.push(format!(
                 "{}: ignored, not supported: {list}",

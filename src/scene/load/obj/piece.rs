@@ -24,8 +24,9 @@ pub(crate) const PIECE: usize = 4 << 20;
 /// Triangles a piece counts before adding them to the shared count.
 const FLUSH: u64 = 1 << 16;
 
-/// Statements ignored by design, silently.
-const SILENT: &[&str] = &["s", "l", "p"];
+/// Statements ignored by design, silently (lines and points are counted,
+/// to say why a file of nothing else has no triangles).
+const SILENT: &[&str] = &["s"];
 
 /// `text` cut into pieces of about `size` bytes, each ending after a line
 /// that ends a statement (not blank, not continued by `\`).
@@ -326,6 +327,8 @@ pub(crate) struct Piece {
     pub(crate) bad_colors: Tally,
     /// Faces of fewer than three vertices: skipped.
     pub(crate) short_faces: Tally,
+    /// Lines and points (`l`, `p`): not drawn.
+    pub(crate) lines: Tally,
     /// Vertices that cannot be placed: NaN, the faces using them skipped.
     pub(crate) unusable: Unusable,
     pub(crate) switches: Vec<(usize, Switch)>,
@@ -642,6 +645,7 @@ impl Reader<'_> {
                     self.piece.libraries.push((rest.to_string(), n));
                 }
             }
+            "l" | "p" => self.piece.lines.add(n),
             k if SILENT.contains(&k) => {}
             other => self.piece.ignored.add(other, n, 1),
         }
