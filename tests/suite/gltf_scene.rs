@@ -1226,3 +1226,53 @@ fn alpha_cut_outs_are_passed_by_camera_and_shadow_rays() {
     let plan = Plan::new(&load(&blend).unwrap(), exact(), PlanPolicy::Prune);
     assert!(plan.decision(Feature::Alpha).runs());
 }
+
+/// Valid files other readers open, which the glTF crate alone refuses or
+/// rayterm once did: whole numbers written as floats (`0.0` for an
+/// index), bytes after a .glb's declared end, and a buffer nothing reads
+/// that cannot be read (an http: URI): each opens, the last two with a
+/// warning naming what was left out.
+#[test]
+fn whole_floats_trailing_bytes_and_unread_buffers_open() {
+    let d = Dir::new("gltf-lenient");
+    let floats = one_mesh(json!({"scene": 0.0, "scenes": [{"nodes": [0.0]}]}));
+    let s = load(&d.write("floats.glb", &floats)).unwrap();
+    assert_eq!(s.geometry.triangle_count(), 1);
+
+    let mut trailing = one_mesh(json!({}));
+    trailing.extend(b"\0\0\0");
+    let s = load(&d.write("trailing.glb", &trailing)).unwrap();
+    assert_eq!(s.geometry.triangle_count(), 1);
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("trailing.glb: 3 bytes after the end its header declares")),
+        "{:?}",
+        s.warnings
+    );
+
+    let mut bin = Bin::default();
+    let (p, t) = triangle();
+    let (pos, ind) = bin.mesh(&p, &t);
+    use base64::Engine;
+    let data = base64::engine::general_purpose::STANDARD.encode(&bin.bytes);
+    let text = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos}, "indices": ind}]}],
+        "buffers": [{"byteLength": bin.bytes.len(),
+                     "uri": format!("data:application/octet-stream;base64,{data}")},
+                    {"byteLength": 4, "uri": "http://example.com/unused.bin"}],
+        "bufferViews": bin.views, "accessors": bin.accessors
+    });
+    let s = load(&d.write("unread.gltf", text.to_string())).unwrap();
+    assert_eq!(s.geometry.triangle_count(), 1);
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("buffer 1: http: URIs are not read")
+                && w.contains("no view reads it: left out")),
+        "{:?}",
+        s.warnings
+    );
+}

@@ -2,7 +2,9 @@
 //! again with what the crate requires filled in: a scene without `nodes`
 //! (Blender writes an empty one), an animation channel whose target has no
 //! `node` (`KHR_animation_pointer` aims it elsewhere). rayterm shows a file
-//! at rest, so such a channel is simply left out. And the crate's
+//! at rest, so such a channel is simply left out. An integer written as
+//! a float (`1.0`, `1e0`: the same JSON number) is read as the integer.
+//! And the crate's
 //! validation, which [`document`] runs forgiving what glTF allows.
 
 use ::gltf::json::{self, Value};
@@ -80,6 +82,7 @@ fn fill(doc: &mut Value) -> bool {
             filled = true;
         }
     }
+    filled |= integers(doc);
     for animation in objects(doc, "animations") {
         if let Some(Value::Array(channels)) = animation.get_mut("channels") {
             let before = channels.len();
@@ -88,6 +91,24 @@ fn fill(doc: &mut Value) -> bool {
         }
     }
     filled
+}
+
+/// Writes every whole number written as a float (`1.0`, `1e0`) as an
+/// integer, which the crate's integer fields require and its float fields
+/// take alike; whether any was.
+fn integers(v: &mut Value) -> bool {
+    match v {
+        Value::Number(n) if !n.is_u64() && !n.is_i64() => {
+            let Some(f) = n.as_f64().filter(|f| f.fract() == 0.0 && f.abs() < 9.0e15) else {
+                return false;
+            };
+            *v = Value::from(f as i64);
+            true
+        }
+        Value::Array(a) => a.iter_mut().fold(false, |any, x| integers(x) | any),
+        Value::Object(o) => o.values_mut().fold(false, |any, x| integers(x) | any),
+        _ => false,
+    }
 }
 
 #[cfg(test)]
@@ -110,6 +131,14 @@ mod tests {
         assert_eq!(channels.len(), 1);
         assert_eq!(channels[0]["sampler"], 0);
         assert!(!fill(&mut doc), "filled twice");
+        // Whole numbers written as floats become integers; others stay.
+        let mut floats = serde_json::json!({"accessors": [{"count": 3.0, "bufferView": 1e0,
+                                                          "min": [0.5, -2.0]}]});
+        assert!(fill(&mut floats));
+        assert_eq!(
+            floats,
+            serde_json::json!({"accessors": [{"count": 3, "bufferView": 1, "min": [0.5, -2]}]})
+        );
         // glTF 1.0 keeps scenes in an object: nothing to fill.
         let mut old = serde_json::json!({"scenes": {"s": {}}});
         assert!(!fill(&mut old));

@@ -482,6 +482,12 @@ impl Reader<'_> {
     }
 }
 
+/// The length a .glb's header declares (at least its 12 header bytes).
+fn glb_length(body: &[u8]) -> Option<usize> {
+    let n = u32::from_le_bytes(body.strip_prefix(b"glTF")?.get(4..8)?.try_into().ok()?);
+    Some((n as usize).max(12))
+}
+
 /// Whether a file the glTF 2.0 reader refused is a glTF 1.0 one: a binary
 /// file of container version 1, or JSON whose `asset.version` is 1.x
 /// (glTF 1.0 keeps its meshes and nodes in objects, not arrays, so the
@@ -521,6 +527,20 @@ pub(crate) fn load(
     // A .gltf is JSON text, read with or without a byte-order mark as every
     // text file is (a .glb starts with its magic number).
     let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
+    // Bytes after a .glb's declared length are not the file's (glTF
+    // allows readers to ignore them): said, and left out.
+    let body = match glb_length(body).filter(|&n| n < body.len()) {
+        Some(n) => {
+            parts.warnings.push(format!(
+                "{}: {} after the end its header declares ({n} bytes): ignored",
+                path.display(),
+                crate::words::count((body.len() - n) as u64, "byte", "bytes")
+            ));
+            &body[..n]
+        }
+        None => body,
+    };
+    let body_is_glb = body.starts_with(b"glTF");
     let file = ::gltf::Gltf::from_slice_without_validation(body)
         .or_else(|e| lenient::reread(body).unwrap_or(Err(e)))
         .map_err(|e| match version_1(body) {
@@ -577,6 +597,8 @@ pub(crate) fn load(
     let broken = Broken::of(&json);
     let doc = lenient::document(json).map_err(|e| invalid(&e))?;
     let mut blob = file.blob;
+    let is_glb = body_is_glb;
+    let used: std::collections::HashSet<usize> = doc.views().map(|v| v.buffer().index()).collect();
     let (mut buffers, mut origins, mut foreign) = (Vec::new(), Vec::new(), Vec::new());
     for b in doc.buffers() {
         let name = named(b.name(), b.index());
@@ -588,33 +610,55 @@ pub(crate) fn load(
         }
         let mut outside = None;
         // The binary chunk is padded to 4 bytes past the buffer's length.
-        let (mut data, padding, origin) = match b.source() {
-            ::gltf::buffer::Source::Bin => (
-                blob.take().ok_or_else(|| {
-                    anyhow!(
-                        "{}: buffer {name} is the binary chunk of a .glb, and the file has none",
-                        path.display()
-                    )
-                })?,
-                3,
-                String::new(),
-            ),
-            ::gltf::buffer::Source::Uri(uri) => match inline_uri(uri) {
-                Some(d) => (
-                    d.map_err(|e| anyhow!("{}: buffer {name}: {e}", path.display()))?,
-                    0,
+        let mut read = || -> Result<(Vec<u8>, usize, String)> {
+            Ok(match b.source() {
+                ::gltf::buffer::Source::Bin => (
+                    blob.take().ok_or_else(|| match is_glb && b.index() == 0 {
+                        true => anyhow!(
+                            "{}: buffer {name} is the binary chunk of a .glb, and the file has none",
+                            path.display()
+                        ),
+                        false => anyhow!(
+                            "{}: buffer {name} has no uri (only a .glb's first buffer, its \
+                             binary chunk, goes without one)",
+                            path.display()
+                        ),
+                    })?,
+                    3,
                     String::new(),
                 ),
-                None => {
-                    let (p, o) = uri::file(src, path, uri)
-                        .map_err(|e| anyhow!("{}: buffer {name}: {e}", path.display()))?;
-                    let data = src
-                        .read(&p, FileKind::Buffer)
-                        .with_context(|| format!("{}: buffer {name}", path.display()))?;
-                    outside = o;
-                    (data, 0, crate::words::path(&p))
-                }
-            },
+                ::gltf::buffer::Source::Uri(uri) => match inline_uri(uri) {
+                    Some(d) => (
+                        d.map_err(|e| anyhow!("{}: buffer {name}: {e}", path.display()))?,
+                        0,
+                        String::new(),
+                    ),
+                    None => {
+                        let (p, o) = uri::file(src, path, uri)
+                            .map_err(|e| anyhow!("{}: buffer {name}: {e}", path.display()))?;
+                        let data = src
+                            .read(&p, FileKind::Buffer)
+                            .with_context(|| format!("{}: buffer {name}", path.display()))?;
+                        outside = o;
+                        (data, 0, crate::words::path(&p))
+                    }
+                },
+            })
+        };
+        // A buffer no view reads is no part of the picture: one that cannot
+        // be read is said, not a reason to refuse the file.
+        let (mut data, padding, origin) = match read() {
+            Ok(read) => read,
+            Err(e) if !used.contains(&b.index()) => {
+                parts
+                    .warnings
+                    .push(format!("{e:#}; no view reads it: left out"));
+                buffers.push(Vec::new());
+                origins.push(String::new());
+                foreign.push(None);
+                continue;
+            }
+            Err(e) => return Err(e),
         };
         if data.len() < b.length() {
             bail!(
