@@ -143,7 +143,13 @@ impl Output {
                 "{shown}: unknown format; this writes {}",
                 accepted
                     .iter()
-                    .map(|f| f.describe())
+                    // A .png among animations is one too.
+                    .map(
+                        |&f| match f == ImageFormat::Png && accepted.contains(&ImageFormat::Gif) {
+                            true => ".png (an APNG)",
+                            false => f.describe(),
+                        }
+                    )
                     .collect::<Vec<_>>()
                     .join(", ")
             ),

@@ -18,6 +18,9 @@ pub(crate) const POPUP_HINT: &str = " ↑↓ PgUp PgDn scroll · Esc q close ";
 /// Height of the BVH panel.
 const BVH_PANEL: u16 = 5;
 
+/// The render panel's title and its first line, the samples and error.
+const RENDER_LEAST: u16 = 2;
+
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Layout {
     pub(crate) area: Rect,
@@ -83,8 +86,12 @@ impl Layout {
             l.wrap_features = false;
             n = panels::feature_lines(app, right.width, false).len() as u16;
         }
+        // Where even that leaves the render panel no line under its title
+        // (80x24), the BVH panel gives up its last lines first: the
+        // samples and error matter more than the tree's figures.
+        let bvh = BVH_PANEL.min(right.height.saturating_sub(1 + n + RENDER_LEAST).max(3));
         [l.bvh, l.features, l.render] = Split::vertical([
-            Constraint::Length(BVH_PANEL),
+            Constraint::Length(bvh),
             Constraint::Length(1 + n),
             Constraint::Min(0),
         ])
