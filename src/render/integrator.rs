@@ -597,6 +597,11 @@ impl<'a> Tracer<'a> {
                 pbr: pbr_info,
             });
         }
+        // Unlit: its colour as it is, whatever the light (on a path too,
+        // where it lights what it is seen from, as an emitter would).
+        if mat.unlit {
+            return kd;
+        }
         if let Some(m) = pbr_mapped {
             n = m;
         }

@@ -29,6 +29,9 @@ pub struct Material {
     /// How much of the surface is there (glTF's `MASK` and `BLEND`): rays
     /// of every kind pass where it is not.
     pub alpha: Option<Alpha>,
+    /// glTF's `KHR_materials_unlit`: the surface shows its base colour
+    /// (texture and vertex colours included), lit by nothing.
+    pub unlit: bool,
 }
 
 /// glTF alpha: the base colour factor's alpha times its texture's, at a
@@ -89,6 +92,7 @@ impl Default for Material {
             texture: None,
             pbr: None,
             alpha: None,
+            unlit: false,
         }
     }
 }

@@ -1276,3 +1276,52 @@ fn whole_floats_trailing_bytes_and_unread_buffers_open() {
         s.warnings
     );
 }
+
+/// `KHR_materials_unlit`: the surface shows its base colour exactly,
+/// whatever the lights (none here), under either integrator; the
+/// extension goes unmentioned in the warnings.
+#[test]
+fn unlit_materials_show_their_base_colour() {
+    let d = Dir::new("gltf-unlit");
+    let base = [0.25, 0.5, 0.75];
+    let big = [
+        Vec3::new(-50.0, -50.0, -1.0),
+        Vec3::new(50.0, -50.0, -1.0),
+        Vec3::new(0.0, 50.0, -1.0),
+    ];
+    let mut bin = Bin::default();
+    let (pos, ind) = bin.mesh(&big, &[[0, 1, 2]]);
+    let file = d.write(
+        "unlit.glb",
+        bin.glb(json!({
+            "scene": 0, "scenes": [{"nodes": [0, 1]}],
+            "nodes": [{"mesh": 0}, {"camera": 0, "translation": [0.0, 0.0, 2.0]}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": pos}, "indices": ind,
+                                        "material": 0}]}],
+            "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [base[0], base[1], base[2], 1.0]},
+                           "extensions": {"KHR_materials_unlit": {}}}],
+            "cameras": [{"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1}}],
+            "extensionsUsed": ["KHR_materials_unlit"]
+        })),
+    );
+    let s = load(&file).unwrap();
+    assert!(s.materials.iter().any(|m| m.unlit));
+    assert!(
+        !s.warnings.iter().any(|w| w.contains("unlit")),
+        "{:?}",
+        s.warnings
+    );
+    for integrator in [scene::Integrator::Whitted, scene::Integrator::Path] {
+        let req = rayterm::render::SceneRequest {
+            size: Some((8, 8)),
+            features: exact(),
+            integrator: Some(integrator),
+            ..rayterm::render::SceneRequest::new(&file)
+        };
+        let session = rayterm::render::Session::open(&req).unwrap().0;
+        let img = rayterm::render::Progressive::render(&session.tracer(), 2).image();
+        for p in img {
+            assert_eq!(p, Vec3::from_array(base), "{integrator:?}");
+        }
+    }
+}

@@ -815,6 +815,7 @@ fn material_from(parts: &mut Parts, src: &dyn Source, loc: &Locator, m: &Materia
         texture,
         pbr: None,
         alpha: None,
+        unlit: false,
     }
 }
 

@@ -21,6 +21,7 @@ pub(super) const READ: &[&str] = &[
     "EXT_mesh_gpu_instancing",
     "EXT_texture_webp",
     "KHR_materials_emissive_strength",
+    "KHR_materials_unlit",
 ];
 
 const DRACO: &str = "KHR_draco_mesh_compression";

@@ -174,6 +174,7 @@ pub(crate) fn metallic_roughness(
             }
         },
         texture: None,
+        unlit: false,
         pbr: Some(Pbr {
             metallic: metallic.clamp(0.0, 1.0),
             roughness: roughness.clamp(0.0, 1.0),
@@ -462,6 +463,9 @@ impl Reader<'_> {
                 p.emissive,
             )?;
         }
+        mat.unlit = m
+            .extensions()
+            .is_some_and(|e| e.contains_key("KHR_materials_unlit"));
         if let Some(a) = &mut mat.alpha {
             a.texture = self.texture(
                 parts,

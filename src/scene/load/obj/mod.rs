@@ -747,6 +747,7 @@ fn convert_material(
         texture,
         pbr: None,
         alpha: None,
+        unlit: false,
     }
 }
 
