@@ -539,19 +539,19 @@ fn required_extensions_are_read_or_named() {
     // Required extensions that change only how surfaces look open, drawn
     // without them, as other viewers draw them; with one that may change
     // the geometry the file is still refused.
-    let looks = json!(["KHR_materials_unlit", "KHR_materials_pbrSpecularGlossiness"]);
-    let s = load(&with("unlit.glb", looks.clone(), looks)).unwrap();
+    let looks = json!(["KHR_materials_sheen", "KHR_materials_pbrSpecularGlossiness"]);
+    let s = load(&with("looks.glb", looks.clone(), looks)).unwrap();
     assert_eq!(s.geometry.indices().len(), 2);
     assert!(
         warned(
             &s,
-            "unlit.glb: requires KHR_materials_unlit, KHR_materials_pbrSpecularGlossiness, \
+            "looks.glb: requires KHR_materials_sheen, KHR_materials_pbrSpecularGlossiness, \
              which rayterm does not read: its surfaces are drawn without them"
         ),
         "{:?}",
         s.warnings
     );
-    let mixed = json!(["KHR_materials_unlit", "EXT_frobnicate"]);
+    let mixed = json!(["KHR_materials_sheen", "EXT_frobnicate"]);
     let e = load(&with("mixed.glb", mixed.clone(), mixed)).unwrap_err();
     assert!(
         e.ends_with("requires extension EXT_frobnicate, which rayterm does not read"),
@@ -569,7 +569,8 @@ fn required_extensions_are_read_or_named() {
     let read = json!([
         "KHR_lights_punctual",
         "KHR_mesh_quantization",
-        "EXT_meshopt_compression"
+        "EXT_meshopt_compression",
+        "KHR_materials_unlit"
     ]);
     let s = load(&with("read.glb", read.clone(), read)).unwrap();
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
