@@ -19,6 +19,7 @@ use crate::geometry::sampling::onb;
 pub(crate) const MIRROR_ALPHA: f32 = 1e-3;
 
 /// F0 of a dielectric of index of refraction 1.5.
+#[cfg(test)]
 const DIELECTRIC_F0: f32 = 0.04;
 
 /// The BRDF of one shading point.
@@ -91,9 +92,17 @@ fn visibility(alpha: f32, cos_l: f32, cos_v: f32) -> f32 {
 }
 
 impl Brdf {
-    /// The BRDF of a base colour (linear), metalness and perceptual
-    /// roughness, each clamped to 0..1.
+    /// [`Brdf::with_f0`] with glTF's default dielectric reflectance.
+    #[cfg(test)]
     pub(crate) fn new(base: Vec3, metallic: f32, roughness: f32) -> Self {
+        Self::with_f0(base, metallic, roughness, DIELECTRIC_F0)
+    }
+
+    /// The BRDF of a base colour (linear), metalness and perceptual
+    /// roughness, each clamped to 0..1, for a dielectric that reflects
+    /// `dielectric_f0` at normal incidence (0.04, or what
+    /// `KHR_materials_ior` says).
+    pub(crate) fn with_f0(base: Vec3, metallic: f32, roughness: f32, dielectric_f0: f32) -> Self {
         let m = if metallic.is_nan() {
             1.0
         } else {
@@ -107,7 +116,7 @@ impl Brdf {
         let base = base.max(Vec3::ZERO);
         Self {
             c_diff: base * (1.0 - m),
-            f0: Vec3::splat(DIELECTRIC_F0).lerp(base, m),
+            f0: Vec3::splat(dielectric_f0.clamp(0.0, 1.0)).lerp(base, m),
             alpha: r * r,
         }
     }
@@ -346,6 +355,20 @@ mod tests {
             assert!(dof > 50, "too few bins with counts: {dof}");
             assert!(chi2 < limit, "alpha {alpha}: chi2 {chi2} over {dof} bins");
         }
+    }
+
+    /// `KHR_materials_ior`'s reflectance takes the dielectric's 0.04 place:
+    /// at 0.25 a white dielectric keeps 75 % as diffuse; a metal's F0 is
+    /// its base colour whatever the index.
+    #[test]
+    fn the_dielectric_reflectance_is_the_index_of_refractions() {
+        let n = Vec3::Z;
+        let d = Brdf::with_f0(Vec3::ONE, 0.0, 0.5, 0.25);
+        assert_eq!(d.f0, Vec3::splat(0.25));
+        let e = d.eval(n, n, n);
+        assert!((e.diffuse.x - 0.75 * FRAC_1_PI).abs() < 1e-6, "{e:?}");
+        let gold = Vec3::new(1.0, 0.8, 0.3);
+        assert_eq!(Brdf::with_f0(gold, 1.0, 0.5, 0.25).f0, gold);
     }
 
     /// The spec's split: a dielectric keeps 96 % of a white base as

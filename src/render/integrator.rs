@@ -566,7 +566,7 @@ impl<'a> Tracer<'a> {
                     mapped = Some(normal_mapped(verts, uvs, n, v, tex(id), scale));
                 }
             }
-            brdf = Some(Brdf::new(kd, metallic, roughness));
+            brdf = Some(Brdf::with_f0(kd, metallic, roughness, pbr.dielectric_f0));
             pbr_mapped = mapped;
             if R::ACTIVE {
                 pbr_info = Some(PbrInfo {

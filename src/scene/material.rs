@@ -63,6 +63,9 @@ pub struct Pbr {
     /// darkens ambient and environment light only, as the glTF
     /// specification intends (direct light finds its own shadows).
     pub occlusion: Option<(u32, f32)>,
+    /// A dielectric's reflectance at normal incidence: 0.04, or what
+    /// `KHR_materials_ior` makes it, `((ior - 1) / (ior + 1))²`.
+    pub dielectric_f0: f32,
 }
 
 impl Default for Pbr {
@@ -77,6 +80,7 @@ impl Default for Pbr {
             emissive: Vec3::ZERO,
             emissive_texture: None,
             occlusion: None,
+            dielectric_f0: 0.04,
         }
     }
 }

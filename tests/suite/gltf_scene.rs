@@ -1325,3 +1325,66 @@ fn unlit_materials_show_their_base_colour() {
         }
     }
 }
+
+/// `KHR_materials_ior` sets a dielectric's reflectance at normal
+/// incidence, `((ior - 1) / (ior + 1))²`; 0 means it reflects all; the
+/// default (1.5, or no extension) gives 0.04; a value below 1 is said
+/// and left at the default.
+#[test]
+fn the_index_of_refraction_sets_a_dielectrics_reflectance() {
+    let d = Dir::new("gltf-ior");
+    let mat = |name: &str, ior: Value| {
+        let mut m = json!({"name": name, "pbrMetallicRoughness": {"metallicFactor": 0.0}});
+        if !ior.is_null() {
+            m["extensions"] = json!({"KHR_materials_ior": ior});
+        }
+        m
+    };
+    let mut bin = Bin::default();
+    let (p, t) = triangle();
+    let (pos, ind) = bin.mesh(&p, &t);
+    let names = ["plain", "glass", "diamond", "all", "bad"];
+    let materials = vec![
+        mat("plain", Value::Null),
+        mat("glass", json!({})),
+        mat("diamond", json!({"ior": 2.0})),
+        mat("all", json!({"ior": 0.0})),
+        mat("bad", json!({"ior": 0.5})),
+    ];
+    let prims: Vec<Value> = (0..names.len())
+        .map(|i| json!({"attributes": {"POSITION": pos}, "indices": ind, "material": i}))
+        .collect();
+    let file = d.write(
+        "ior.glb",
+        bin.glb(json!({
+            "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+            "meshes": [{"primitives": prims}], "materials": materials,
+            "extensionsUsed": ["KHR_materials_ior"]
+        })),
+    );
+    let s = load(&file).unwrap();
+    let f0 = |name: &str| {
+        let m = s.materials.iter().find(|m| m.name == name).unwrap();
+        m.pbr.as_ref().unwrap().dielectric_f0
+    };
+    assert_eq!(
+        (f0("plain"), f0("glass"), f0("all"), f0("bad")),
+        (0.04, 0.04, 1.0, 0.04)
+    );
+    assert!(
+        (f0("diamond") - 1.0 / 9.0).abs() < 1e-7,
+        "{}",
+        f0("diamond")
+    );
+    assert!(
+        s.warnings.iter().any(|w| w.contains("material bad")
+            && w.contains("ior 0.5 is not 0 or a number of at least 1")),
+        "{:?}",
+        s.warnings
+    );
+    assert!(
+        !s.warnings.iter().any(|w| w.contains("not shown")),
+        "{:?}",
+        s.warnings
+    );
+}

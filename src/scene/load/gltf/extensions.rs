@@ -22,6 +22,7 @@ pub(super) const READ: &[&str] = &[
     "EXT_texture_webp",
     "KHR_materials_emissive_strength",
     "KHR_materials_unlit",
+    "KHR_materials_ior",
 ];
 
 const DRACO: &str = "KHR_draco_mesh_compression";

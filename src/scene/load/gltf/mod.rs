@@ -466,6 +466,24 @@ impl Reader<'_> {
         mat.unlit = m
             .extensions()
             .is_some_and(|e| e.contains_key("KHR_materials_unlit"));
+        let ior = m
+            .extensions()
+            .and_then(|e| e.get("KHR_materials_ior"))
+            .map(|i| i.get("ior").map_or(Some(1.5), serde_json::Value::as_f64));
+        match ior {
+            None => {}
+            // 0 is the extension's way to say "reflects everything".
+            Some(Some(i)) if i == 0.0 => p.dielectric_f0 = 1.0,
+            Some(Some(i)) if (1.0..1e6).contains(&i) => {
+                p.dielectric_f0 = (((i - 1.0) / (i + 1.0)).powi(2)) as f32
+            }
+            Some(i) => parts.warnings.push(format!(
+                "{}: {here}: KHR_materials_ior's ior {} is not 0 or a number of at least 1; \
+                 0.04 is used (ior 1.5)",
+                self.at(),
+                i.map_or("(not a number)".to_string(), |i| i.to_string())
+            )),
+        }
         if let Some(a) = &mut mat.alpha {
             a.texture = self.texture(
                 parts,
