@@ -473,7 +473,7 @@ impl Reader<'_> {
         match ior {
             None => {}
             // 0 is the extension's way to say "reflects everything".
-            Some(Some(i)) if i == 0.0 => p.dielectric_f0 = 1.0,
+            Some(Some(0.0)) => p.dielectric_f0 = 1.0,
             Some(Some(i)) if (1.0..1e6).contains(&i) => {
                 p.dielectric_f0 = (((i - 1.0) / (i + 1.0)).powi(2)) as f32
             }
