@@ -3,35 +3,15 @@
 //! very file `--turntable N` makes, GIF and APNG; bad requests are refused
 //! by name with nothing written.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::path::Path;
 
-const BIN: &str = env!("CARGO_BIN_EXE_rayterm");
+use crate::files::{rayterm, Dir};
+
 const SCENE: [&str; 5] = ["teapot", "--size", "40x30", "--spp", "2"];
-
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rayterm-turntable-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn rayterm(d: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(d)
-        .stdin(Stdio::null())
-        .output()
-        .unwrap()
-}
 
 fn ok(d: &Path, args: &[&str]) {
     let out = rayterm(d, args);
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.ok(), "{args:?}: {}", out.stderr);
 }
 
 fn render(d: &Path, more: &[&str]) {
@@ -40,36 +20,35 @@ fn render(d: &Path, more: &[&str]) {
 
 /// The error a command must fail with, having left the folder as it was.
 fn refused(d: &Path, args: &[&str]) -> String {
-    let before: Vec<_> = std::fs::read_dir(d)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .collect();
+    let files = || -> Vec<_> {
+        std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect()
+    };
+    let before = files();
     let out = rayterm(d, args);
-    let err = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(!out.status.success(), "{args:?} succeeded");
-    assert!(!err.contains("panicked"), "{args:?}: {err}");
-    let after: Vec<_> = std::fs::read_dir(d)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .collect();
-    assert_eq!(before, after, "{args:?} left files");
-    err
+    assert!(!out.ok(), "{args:?} succeeded");
+    assert!(!out.stderr.contains("panicked"), "{args:?}: {}", out.stderr);
+    assert_eq!(before, files(), "{args:?} left files");
+    out.stderr
 }
 
 #[test]
 fn frames_rendered_apart_join_into_the_turntable_itself() {
-    let d = dir("join");
+    let dir = Dir::new("turntable-join");
+    let d = dir.0.as_path();
     for ext in ["gif", "apng"] {
-        render(&d, &["--turntable", "4", "-o", &format!("whole.{ext}")]);
+        render(d, &["--turntable", "4", "-o", &format!("whole.{ext}")]);
         let mut frames = Vec::new();
         for k in 1..=4 {
             let f = format!("f{k}.png");
-            render(&d, &["--frame", &format!("{k}/4"), "-o", &f]);
+            render(d, &["--frame", &format!("{k}/4"), "-o", &f]);
             frames.push(f);
         }
         let joined = format!("joined.{ext}");
         let names: Vec<&str> = frames.iter().map(String::as_str).collect();
-        ok(&d, &[&["animate"], &names[..], &["-o", &joined]].concat());
+        ok(d, &[&["animate"], &names[..], &["-o", &joined]].concat());
         let (a, b) = (
             std::fs::read(d.join(format!("whole.{ext}"))).unwrap(),
             std::fs::read(d.join(&joined)).unwrap(),
@@ -77,7 +56,7 @@ fn frames_rendered_apart_join_into_the_turntable_itself() {
         assert!(a == b, "{ext}: the joined frames differ from the turntable");
     }
     // Frame 1 is the scene's own view; the others turn away from it.
-    render(&d, &["-o", "plain.png"]);
+    render(d, &["-o", "plain.png"]);
     let read = |f: &str| std::fs::read(d.join(f)).unwrap();
     assert_eq!(read("plain.png"), read("f1.png"));
     assert_ne!(read("f1.png"), read("f2.png"));
@@ -86,8 +65,9 @@ fn frames_rendered_apart_join_into_the_turntable_itself() {
 
 #[test]
 fn the_apng_holds_every_frame_at_the_rate_asked() {
-    let d = dir("apng");
-    render(&d, &["--turntable", "3", "--fps", "24", "-o", "spin.png"]);
+    let dir = Dir::new("turntable-apng");
+    let d = dir.0.as_path();
+    render(d, &["--turntable", "3", "--fps", "24", "-o", "spin.png"]);
     let bytes = std::fs::read(d.join("spin.png")).unwrap();
     let mut r = png::Decoder::new(std::io::Cursor::new(&bytes))
         .read_info()
@@ -110,8 +90,9 @@ fn the_apng_holds_every_frame_at_the_rate_asked() {
 
 #[test]
 fn bad_requests_are_refused_by_name_and_leave_nothing() {
-    let d = dir("bad");
-    let render = |more: &[&str]| refused(&d, &[&["render"], &SCENE[..], more].concat());
+    let dir = Dir::new("turntable-bad");
+    let d = dir.0.as_path();
+    let render = |more: &[&str]| refused(d, &[&["render"], &SCENE[..], more].concat());
     let e = render(&["--turntable", "4", "-o", "spin.exr"]);
     assert!(e.contains("spin.exr") && e.contains(".gif"), "{e}");
     for bad in [
@@ -127,29 +108,29 @@ fn bad_requests_are_refused_by_name_and_leave_nothing() {
     assert!(e.contains("--part"), "{e}");
     // Frames of two sizes, a missing frame, a frame that is no PNG.
     ok(
-        &d,
+        d,
         &[
             "render", "cornell", "--size", "8x8", "--spp", "1", "-o", "a.png",
         ],
     );
     ok(
-        &d,
+        d,
         &[
             "render", "cornell", "--size", "8x6", "--spp", "1", "-o", "b.png",
         ],
     );
     std::fs::write(d.join("c.png"), b"not a picture").unwrap();
-    let e = refused(&d, &["animate", "a.png", "b.png", "-o", "x.gif"]);
+    let e = refused(d, &["animate", "a.png", "b.png", "-o", "x.gif"]);
     assert!(
         e.contains("b.png is 8x6") && e.contains("a.png is 8x8"),
         "{e}"
     );
-    let e = refused(&d, &["animate", "a.png", "gone.png", "-o", "x.gif"]);
+    let e = refused(d, &["animate", "a.png", "gone.png", "-o", "x.gif"]);
     assert!(e.contains("gone.png"), "{e}");
-    let e = refused(&d, &["animate", "a.png", "c.png", "-o", "x.gif"]);
+    let e = refused(d, &["animate", "a.png", "c.png", "-o", "x.gif"]);
     assert!(e.contains("c.png"), "{e}");
     // A frame is never its own output.
-    let e = refused(&d, &["animate", "a.png", "a.png", "-o", "a.png"]);
+    let e = refused(d, &["animate", "a.png", "a.png", "-o", "a.png"]);
     assert!(e.contains("a.png"), "{e}");
 }
 
@@ -157,18 +138,19 @@ fn bad_requests_are_refused_by_name_and_leave_nothing() {
 /// another render, refused by its content hash.
 #[test]
 fn parts_of_a_frame_merge_and_parts_of_two_frames_do_not() {
-    let d = dir("parts");
+    let dir = Dir::new("turntable-parts");
+    let d = dir.0.as_path();
     for (frame, part, out) in [
         ("2/4", "1/2", "a1.exr"),
         ("2/4", "2/2", "a2.exr"),
         ("3/4", "2/2", "b2.exr"),
     ] {
-        render(&d, &["--frame", frame, "--part", part, "-o", out]);
+        render(d, &["--frame", frame, "--part", part, "-o", out]);
     }
-    ok(&d, &["merge", "a1.exr", "a2.exr", "-o", "merged.png"]);
-    render(&d, &["--frame", "2/4", "-o", "single.png"]);
+    ok(d, &["merge", "a1.exr", "a2.exr", "-o", "merged.png"]);
+    render(d, &["--frame", "2/4", "-o", "single.png"]);
     let read = |f: &str| std::fs::read(d.join(f)).unwrap();
     assert!(read("merged.png") == read("single.png"));
-    let e = refused(&d, &["merge", "a1.exr", "b2.exr", "-o", "mixed.png"]);
+    let e = refused(d, &["merge", "a1.exr", "b2.exr", "-o", "mixed.png"]);
     assert!(e.contains("content hash"), "{e}");
 }
