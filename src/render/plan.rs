@@ -48,7 +48,7 @@ impl Reason {
             Reason::NoEnvironment => "no environment map in scene",
             Reason::NoNormalMaps => "no normal maps in scene",
             Reason::NoEmission => "no emissive material in scene",
-            Reason::NoAlpha => "no alpha-masked or blended material in scene",
+            Reason::NoAlpha => "no alpha-tested material in scene",
             Reason::Whitted => "the Whitted integrator runs",
         }
     }
