@@ -30,12 +30,7 @@ pub(crate) fn run(a: RenderArgs) -> Result<ExitCode> {
         return super::turntable::run(&a, frames);
     }
     let stop = stop(&a)?;
-    // The scene file is checked now, the files it names once they are read.
-    let scene_file: Vec<PathBuf> = std::path::Path::new(&a.scene.scene)
-        .is_file()
-        .then(|| PathBuf::from(&a.scene.scene))
-        .into_iter()
-        .collect();
+    let scene_file = scene_file(&a);
     let split = a.samples.is_some() || a.part.is_some();
     let formats = if split {
         &[ImageFormat::Exr][..]
@@ -103,12 +98,7 @@ pub(crate) fn run(a: RenderArgs) -> Result<ExitCode> {
         c.check_not_input(&inputs)?;
     }
     if a.explain {
-        crate::noteln!(
-            "plan for {}:\n{}{}\n",
-            s.scene.name,
-            s.plan.explain(),
-            crate::scene::summary::explain(&s.scene, s.plan.path)
-        );
+        explain(&s);
     }
     if let Some(spec) = a.debug {
         check_film(s.width, s.height, Film::BYTES_PER_PIXEL)?;
@@ -413,6 +403,26 @@ pub(crate) fn run(a: RenderArgs) -> Result<ExitCode> {
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The scene file itself, as an input no output may replace: checked
+/// now, the files it names once they are read.
+pub(super) fn scene_file(a: &RenderArgs) -> Vec<PathBuf> {
+    Path::new(&a.scene.scene)
+        .is_file()
+        .then(|| PathBuf::from(&a.scene.scene))
+        .into_iter()
+        .collect()
+}
+
+/// `--explain`: the plan and what the materials and lights are.
+pub(super) fn explain(s: &Session) {
+    crate::noteln!(
+        "plan for {}:\n{}{}\n",
+        s.scene.name,
+        s.plan.explain(),
+        crate::scene::summary::explain(&s.scene, s.plan.path)
+    );
 }
 
 /// The options of this `render` that every part of a split render shares,

@@ -3,7 +3,6 @@
 //! or APNG; and `rayterm animate`, which joins frames rendered apart
 //! (`render --frame K/N`, one job of an array each).
 
-use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -12,7 +11,7 @@ use anyhow::{bail, Result};
 use super::args::{AnimateArgs, RenderArgs};
 use super::open_request;
 use super::progress::{Begin, Reporter};
-use super::render::{duration, stop};
+use super::render::{duration, explain, scene_file, stop};
 use crate::interrupt::{self, Cancel};
 use crate::raster::animation::{self, Frames};
 use crate::raster::{ImageFormat, Output};
@@ -25,24 +24,14 @@ pub(crate) const DEFAULT_FPS: u32 = 15;
 
 pub(crate) fn run(a: &RenderArgs, frames: u32) -> Result<ExitCode> {
     let stop = stop(a)?;
-    let scene_file: Vec<PathBuf> = std::path::Path::new(&a.scene.scene)
-        .is_file()
-        .then(|| PathBuf::from(&a.scene.scene))
-        .into_iter()
-        .collect();
-    let out = Output::check(&a.output, &scene_file, ImageFormat::ANIMATIONS)?;
+    let out = Output::check(&a.output, &scene_file(a), ImageFormat::ANIMATIONS)?;
     let s = open_request(&SceneRequest {
         check_film: false,
         ..a.scene.request()
     })?;
     out.check_not_input(&s.input_paths())?;
     if a.explain {
-        crate::noteln!(
-            "plan for {}:\n{}{}\n",
-            s.scene.name,
-            s.plan.explain(),
-            crate::scene::summary::explain(&s.scene, s.plan.path)
-        );
+        explain(&s);
     }
     let stop = stop.unwrap_or(Stop::spp(s.scene.settings.spp));
     let (w, h) = (s.width, s.height);
