@@ -506,6 +506,27 @@ def scene_h():
     return g
 
 
+def scene_i():
+    """A cage: a sphere whose base colour texture's alpha cuts it into
+    bands (alphaMode MASK, cutoff 0.5), on the floor under a point light
+    of 250 cd: camera rays see the floor through the gaps, and the
+    light's shadow rays pass them, so the shadow is striped too."""
+    g = Gltf()
+    floor(g)
+    n = 256
+    y, x = np.mgrid[0:n, 0:n] / n
+    rgba = np.zeros((n, n, 4), dtype=np.uint8)
+    rgba[..., :3] = (200, 120, 60)
+    rgba[..., 3] = np.where((np.floor(y * 12) % 2) == 0, 255, 0)
+    m = g.material("cage", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.6,
+                   base_tex=g.texture(rgba))
+    g.doc["materials"][m]["alphaMode"] = "MASK"
+    g.sphere("sphere", (0.0, 0.8, 0.0), 0.7, m)
+    g.camera("cam", (0.0, 1.8, 4.0), (0.0, 0.6, 0.0), 0.7, ASPECT)
+    g.light("key", "point", 250.0, position=(-1.0, 3.5, 1.5))
+    return g
+
+
 SCENES = {
     "a_spheres": scene_a,
     "b_diffuse": scene_b,
@@ -515,6 +536,7 @@ SCENES = {
     "f_sky": scene_f,
     "g_glow": scene_g,
     "h_textured": scene_h,
+    "i_alpha": scene_i,
 }
 
 # The world each scene is lit by besides its lights: a constant linear
@@ -538,14 +560,15 @@ def render_rayterm(binary, glb, exr, size, spp, extra=()):
 
 
 def png_bytes(rgb):
-    """An 8-bit RGB PNG of an (h, w, 3) uint8 array."""
-    h, w, _ = rgb.shape
+    """An 8-bit RGB (or RGBA) PNG of an (h, w, 3 or 4) uint8 array."""
+    h, w, channels = rgb.shape
     raw = b"".join(b"\0" + rgb[y].tobytes() for y in range(h))
 
     def chunk(kind, data):
         return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
 
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+    colour = {3: 2, 4: 6}[channels]
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, colour, 0, 0, 0))
             + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
 
 
@@ -644,12 +667,17 @@ def render_cycles(glb, exr, width, height, spp, distribution, depth, world):
         c.caustics_reflective = True
     c.transmission_bounces = 0
     c.volume_bounces = 0
-    c.transparent_max_bounces = 0
+    # Alpha cut-outs: rayterm passes at most 64 such surfaces a ray.
+    c.transparent_max_bounces = 64
     c.caustics_refractive = False
     c.sample_clamp_direct = 0.0
     c.sample_clamp_indirect = 0.0
     c.blur_glossy = 0.0
-    c.filter_type = "BOX"
+    # Blender 5 renamed the pixel filter's setting.
+    if hasattr(c, "pixel_filter_type"):
+        c.pixel_filter_type = "BOX"
+    else:
+        c.filter_type = "BOX"
     c.filter_width = 1.0
     c.film_exposure = 1.0  # a multiplier in Cycles: 1 is none
     c.use_light_tree = False
