@@ -281,6 +281,36 @@ impl App {
                 self.link.rebuild(builder);
                 self.say(format!("rebuilding the BVH with the {builder} builder..."));
             }
+            Action::FullScreen => {
+                let a = &mut self.display.arrangement;
+                a.full_screen = !a.full_screen;
+                let full = a.full_screen;
+                self.say(if full {
+                    "full screen: f brings the panels back"
+                } else {
+                    "panels back"
+                });
+            }
+            Action::TreePane => {
+                let a = &mut self.display.arrangement;
+                a.pane = a.pane.next();
+                a.full_screen = false;
+                let said = a.pane.name();
+                self.say(said);
+            }
+            Action::Legend => {
+                let items = crate::tui::widgets::viewport::legend(self);
+                let mut p = Popup::new(
+                    "legend".into(),
+                    if items.is_empty() {
+                        vec!["no overlay on the view (o: pixel overlays, g: view overlays)".into()]
+                    } else {
+                        items
+                    },
+                );
+                p.wrap_indent = Some(2);
+                self.popup = Some(p);
+            }
             Action::SelectMode => {
                 let s = &mut self.inspector;
                 s.select_mode = !s.select_mode;
@@ -491,15 +521,9 @@ impl App {
                 true
             }
             Msg::Pixel(p) => {
-                // The title may cut the legend short: the status line has
-                // the whole width.
-                let name = p.request.view.title();
-                match &p.layer {
-                    Err(e) => self.say(format!("pixel overlay: {e}")),
-                    Ok((_, legend)) if p.generation == self.link.generation() => {
-                        self.say(format!("{name}: {legend}"))
-                    }
-                    Ok(_) => {}
+                // The legend shows beneath the view; a failure says why here.
+                if let Err(e) = &p.layer {
+                    self.say(format!("pixel overlay: {e}"));
                 }
                 self.link.pixel = Some(p);
                 true

@@ -18,6 +18,8 @@ pub struct Display {
     pub(crate) cell: (u32, u32),
     /// The layout of the last update.
     pub layout: Layout,
+    /// What shares the screen with the view.
+    pub(crate) arrangement: Arrangement,
     /// The viewport's size in pixels, from the layout.
     view_size: (u32, u32),
     /// A view pixel's width over its height on screen, as last sent.
@@ -32,6 +34,7 @@ impl Display {
             pixels: None,
             cell: (8, 16),
             layout: Layout::default(),
+            arrangement: Arrangement::default(),
             view_size: (0, 0),
             view_aspect: 1.0,
         }
@@ -63,5 +66,43 @@ impl Display {
         }
         self.view_aspect = aspect;
         Some(std::mem::replace(&mut self.view_size, size))
+    }
+}
+
+/// What shares the screen with the viewport: everything (the panels and the
+/// ray-tree pane, at one of its heights) or nothing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Arrangement {
+    pub(crate) full_screen: bool,
+    pub(crate) pane: Pane,
+}
+
+/// The ray-tree pane's height under the view.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum Pane {
+    /// About a third of the left column.
+    #[default]
+    Normal,
+    /// Two thirds: long trees at small sizes.
+    Tall,
+    /// Its title line only.
+    Hidden,
+}
+
+impl Pane {
+    pub(crate) fn next(self) -> Pane {
+        match self {
+            Pane::Normal => Pane::Tall,
+            Pane::Tall => Pane::Hidden,
+            Pane::Hidden => Pane::Normal,
+        }
+    }
+
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            Pane::Normal => "ray-tree pane: normal height",
+            Pane::Tall => "ray-tree pane: tall",
+            Pane::Hidden => "ray-tree pane: hidden (T shows it)",
+        }
     }
 }

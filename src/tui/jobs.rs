@@ -152,16 +152,16 @@ impl Jobs {
                         rows.len() - failed,
                         rows.len()
                     )),
-                    popup: Some(
-                        Popup::new(
+                    popup: Some({
+                        let table = stability::format_table(&rows);
+                        let mut p = Popup::new(
                             format!("stability battery: {scene_name} ({failed} failed)"),
-                            stability::format_table(&rows)
-                                .lines()
-                                .map(str::to_string)
-                                .collect(),
+                            table.lines().map(str::to_string).collect(),
                         )
-                        .with_header(1),
-                    ),
+                        .with_header(1);
+                        p.last_column = table.find("detail");
+                        p
+                    }),
                 }
             }
             Err(e) => Finished {

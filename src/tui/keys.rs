@@ -114,6 +114,12 @@ pub(crate) enum Action {
     /// Step the BVH overlay level.
     Level(i8),
     SavePng,
+    /// The viewport alone on the screen, or back.
+    FullScreen,
+    /// The ray-tree pane: normal, tall, hidden.
+    TreePane,
+    /// The overlays' whole legend in a popup.
+    Legend,
     Stability,
     Help,
     /// List what loading the scene warned about.
@@ -321,6 +327,24 @@ pub(crate) const ROWS: &[KeyRow] = &[
         mode: Mode::Any,
         keys: &[(K::Char('.'), A::Level(1)), (K::Char(','), A::Level(-1))],
         help: "BVH overlay level k up, down",
+        hint: None,
+    },
+    KeyRow {
+        mode: Mode::Any,
+        keys: &[(K::Char('O'), A::Legend)],
+        help: "the overlays' whole legend (beneath the view, it may be shortened)",
+        hint: None,
+    },
+    KeyRow {
+        mode: Mode::Any,
+        keys: &[(K::Char('f'), A::FullScreen)],
+        help: "full screen: the view alone (f again brings the panels back)",
+        hint: Some("full screen"),
+    },
+    KeyRow {
+        mode: Mode::Any,
+        keys: &[(K::Char('T'), A::TreePane)],
+        help: "ray-tree pane: taller, hidden, back to its size",
         hint: None,
     },
     KeyRow {

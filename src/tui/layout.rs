@@ -6,8 +6,9 @@ use ratatui::layout::{Constraint, Layout as Split, Rect};
 use ratatui::widgets::{Block, Borders};
 
 use super::app::App;
+use super::display::Pane;
 use super::popup::Popup;
-use super::widgets::panels;
+use super::widgets::{legend, panels, viewport};
 
 /// Below this the layout cannot show every panel.
 pub(crate) const MIN_SIZE: (u16, u16) = (80, 24);
@@ -15,11 +16,14 @@ pub(crate) const MIN_SIZE: (u16, u16) = (80, 24);
 const RENDER_WITH_CHART: u16 = 16;
 /// The keys every popup takes, on its bottom edge.
 pub(crate) const POPUP_HINT: &str = " ↑↓ PgUp PgDn scroll · Esc q close ";
+/// Rows the legend takes from a full-screen view while an overlay is on
+/// (fixed, so that the view's size does not follow the legend's).
+const LEGEND_FULL: u16 = 3;
 /// Height of the BVH panel.
 const BVH_PANEL: u16 = 5;
 
 /// The render panel's title and its first line, the samples and error.
-const RENDER_LEAST: u16 = 2;
+const RENDER_LEAST: u16 = 3;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Layout {
@@ -31,6 +35,8 @@ pub struct Layout {
     /// The viewport panel and, inside its title line, the image.
     pub(crate) view: Rect,
     pub image: Rect,
+    /// The overlays' legend, beneath the view.
+    pub(crate) legend: Rect,
     /// The debug pane and its text.
     pub(crate) debug: Rect,
     pub(crate) debug_text: Rect,
@@ -62,13 +68,37 @@ impl Layout {
             Constraint::Length(1),
         ])
         .areas(area);
-        let side = (area.width * 2 / 7).clamp(32, 46);
-        let [left, right] = Split::horizontal([Constraint::Min(0), Constraint::Length(side)])
-            .spacing(1)
-            .areas(l.main);
-        [l.view, l.debug] = Split::vertical([
+        let arrangement = app.display.arrangement;
+        let left = if arrangement.full_screen {
+            l.main
+        } else {
+            let side = (area.width * 2 / 7).clamp(32, 46);
+            let [left, right] = Split::horizontal([Constraint::Min(0), Constraint::Length(side)])
+                .spacing(1)
+                .areas(l.main);
+            l.side(right, app);
+            left
+        };
+        // The legend takes its rows from the ray-tree pane while that keeps
+        // a few lines (the view's size stays); else a few from the view.
+        let overlay = app.overlays.pixel.is_some() || app.overlays.image.is_some();
+        let pane = match (arrangement.full_screen, arrangement.pane) {
+            (true, _) => 0,
+            (false, Pane::Normal) => (left.height * 3 / 10).max(6),
+            (false, Pane::Tall) => left.height * 6 / 10,
+            (false, Pane::Hidden) => 1,
+        };
+        let (legend, pane) = if pane >= 6 {
+            let want = legend::rows(&viewport::legend(app), left.width as usize).len() as u16;
+            let rows = if overlay { want.clamp(1, pane - 3) } else { 0 };
+            (rows, pane - rows)
+        } else {
+            (if overlay { LEGEND_FULL } else { 0 }, pane)
+        };
+        [l.view, l.legend, l.debug] = Split::vertical([
             Constraint::Min(0),
-            Constraint::Length((left.height * 3 / 10).max(6)),
+            Constraint::Length(legend),
+            Constraint::Length(pane),
         ])
         .areas(left);
         let titled = Block::new().borders(Borders::TOP);
@@ -78,25 +108,29 @@ impl Layout {
             None => app.display.symbols.grid(),
         };
         l.debug_text = titled.inner(l.debug);
+        l
+    }
+
+    /// The right column: the BVH, features and render panels.
+    fn side(&mut self, right: Rect, app: &App) {
         // Reasons get lines of their own when that leaves the render panel
         // room for its chart.
-        l.wrap_features = true;
+        self.wrap_features = true;
         let mut n = panels::feature_lines(app, right.width, true).len() as u16;
         if BVH_PANEL + 1 + n + RENDER_WITH_CHART > right.height {
-            l.wrap_features = false;
+            self.wrap_features = false;
             n = panels::feature_lines(app, right.width, false).len() as u16;
         }
         // Where even that leaves the render panel no line under its title
         // (80x24), the BVH panel gives up its last lines first: the
         // samples and error matter more than the tree's figures.
         let bvh = BVH_PANEL.min(right.height.saturating_sub(1 + n + RENDER_LEAST).max(3));
-        [l.bvh, l.features, l.render] = Split::vertical([
+        [self.bvh, self.features, self.render] = Split::vertical([
             Constraint::Length(bvh),
             Constraint::Length(1 + n),
             Constraint::Min(0),
         ])
         .areas(right);
-        l
     }
 
     /// The view's size in pixels: the symbols' grid in every cell.

@@ -637,10 +637,11 @@ fn the_render_panel_says_when_the_view_reached_the_screen() {
     use ratatui::layout::Size;
     use std::time::Instant;
     let mut app = app("cornell", &[]);
-    let mut t = Terminal::new(Screen::new(Vec::new(), Some(Size::new(100, 30))).unwrap()).unwrap();
+    // Tall enough for the render panel's last line.
+    let mut t = Terminal::new(Screen::new(Vec::new(), Some(Size::new(100, 40))).unwrap()).unwrap();
     let mut out = TermOutput::default();
     out.start(t.backend_mut(), Instant::now()).unwrap();
-    app.update(ratatui::layout::Rect::new(0, 0, 100, 30));
+    app.update(ratatui::layout::Rect::new(0, 0, 100, 40));
     assert!(app.wait_frame(WAIT).unwrap());
     super::draw(&mut t, &mut app).unwrap();
     out.drawn(t.backend(), super::shown(&app));
@@ -820,4 +821,106 @@ fn every_symbol_set_keeps_the_proportions_of_pixel_graphics() {
             "{name}: {p:.3} against {pixels:.3} in pixel graphics"
         );
     }
+}
+
+/// Draws, then what was cut, each tagged with `state`.
+fn cuts(t: &mut Terminal<TestBackend>, app: &mut App, state: &str) -> Vec<String> {
+    super::widgets::fit::take_cut();
+    super::draw(t, app).unwrap();
+    let (w, h) = (t.size().unwrap().width, t.size().unwrap().height);
+    super::widgets::fit::take_cut()
+        .into_iter()
+        .map(|c| format!("{w}x{h} {state}: {c}"))
+        .collect()
+}
+
+/// Every panel, overlay legend, popup and message drawn at the smallest,
+/// a common and a large size: nothing may be cut.
+#[test]
+fn nothing_is_cut_from_80x24_to_240x70() {
+    let dir = std::env::temp_dir().join(format!("rayterm-tui-cut-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut found = Vec::new();
+    for (w, h) in [(80, 24), (160, 48), (240, 70)] {
+        let mut app = app("cornell-area", &[]);
+        app.jobs.export_dir = dir.clone();
+        let mut t = terminal(w, h);
+        settle(&mut t, &mut app);
+        found.extend(cuts(&mut t, &mut app, "first pass"));
+        // The last pass: the render panel says it is done (the larger the
+        // panel, the more room; the largest view takes long to finish).
+        let end = std::time::Instant::now() + WAIT;
+        while w < 240
+            && !app.current_frame().is_some_and(|f| f.done)
+            && std::time::Instant::now() < end
+        {
+            app.poll().unwrap();
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        found.extend(cuts(&mut t, &mut app, "done"));
+        // Each view overlay, then each pixel overlay on a selected pixel.
+        for k in 0..crate::viz::image_views(0).len() {
+            app.handle_key(Key::Char('g'));
+            if app.overlays.image.is_none() {
+                break;
+            }
+            if app
+                .overlays
+                .image
+                .is_some_and(|v| v.source() == crate::viz::DrawnFrom::Film)
+            {
+                settle_film_view(&mut t, &mut app);
+            } else {
+                settle(&mut t, &mut app);
+            }
+            found.extend(cuts(&mut t, &mut app, &format!("view overlay {k}")));
+        }
+        app.handle_key(Key::Char('v'));
+        settle(&mut t, &mut app);
+        found.extend(cuts(&mut t, &mut app, "select mode"));
+        let (vw, vh) = app.display.view_size();
+        app.select(vw / 2, vh * 7 / 8, 0);
+        for k in 0..crate::viz::PIXEL_VIEWS.len() {
+            app.handle_key(Key::Char('o'));
+            if app.overlays.pixel.is_none() {
+                break;
+            }
+            settle_pixel(&mut t, &mut app);
+            found.extend(cuts(&mut t, &mut app, &format!("pixel overlay {k}")));
+        }
+        // Full screen, and the ray-tree pane tall and hidden, with the
+        // overlays still on.
+        for (key, state) in [
+            ('f', "full screen"),
+            ('f', "panels"),
+            ('T', "tall"),
+            ('T', "hidden"),
+            ('T', "normal"),
+        ] {
+            app.handle_key(Key::Char(key));
+            settle(&mut t, &mut app);
+            found.extend(cuts(&mut t, &mut app, state));
+        }
+        app.handle_key(Key::Esc);
+        // A message, and one beside an export in flight.
+        app.handle_key(Key::Char('b'));
+        settle(&mut t, &mut app);
+        found.extend(cuts(&mut t, &mut app, "builder message"));
+        app.handle_key(Key::Char('p'));
+        found.extend(cuts(&mut t, &mut app, "export"));
+        // Every popup.
+        for (key, name) in [('?', "help"), ('W', "warnings"), ('x', "stability")] {
+            app.handle_key(Key::Char(key));
+            let end = std::time::Instant::now() + WAIT;
+            while app.popup.is_none() && std::time::Instant::now() < end {
+                app.poll().unwrap();
+                std::thread::sleep(Duration::from_millis(5));
+            }
+            app.update(ratatui::layout::Rect::new(0, 0, w, h));
+            found.extend(cuts(&mut t, &mut app, name));
+            app.handle_key(Key::Esc);
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(found.is_empty(), "cut:\n{}", found.join("\n"));
 }

@@ -21,7 +21,7 @@ use crate::raster::metrics::rel_mse_on;
 use crate::raster::resample::resample;
 use crate::render::progressive::MAX_PASS_SPP;
 use crate::render::recorder::WorkCounter;
-use crate::render::{post, Job, Plan, Progressive, Stop, Tracer, WorstPixels};
+use crate::render::{post, Job, PassStats, Plan, Progressive, Stop, Tracer, WorstPixels};
 use crate::scene::camera::CameraFrame;
 use crate::scene::{Builder, Camera, Scene};
 use crate::viz::draw::{legend_line, Layer};
@@ -193,6 +193,16 @@ pub(crate) struct PerRay {
     pub(crate) triangle_tests: f64,
 }
 
+impl PerRay {
+    fn of(pass: &PassStats, work: &WorkCounter) -> PerRay {
+        let n = pass.rays.max(1) as f64;
+        PerRay {
+            nodes: work.work.nodes_visited as f64 / n,
+            triangle_tests: work.work.triangle_tests as f64 / n,
+        }
+    }
+}
+
 /// One finished pass, ready to show.
 #[derive(Clone, Debug)]
 pub struct Snapshot {
@@ -222,7 +232,7 @@ pub struct Snapshot {
     pub(crate) exact: bool,
     /// No more passes will come for this view.
     pub done: bool,
-    /// Seconds since the view started.
+    /// Seconds from the view's start to the end of its last pass.
     pub(crate) elapsed: f64,
     /// (seconds, error) after each pass with an error estimate.
     pub(crate) history: Vec<(f64, f64)>,
@@ -257,6 +267,9 @@ pub(crate) struct Worker {
     film: Progressive,
     coarse_pending: bool,
     started: Running,
+    /// Seconds from `started` to the end of the last pass: what snapshots
+    /// report, so that a view resent after its last pass stops the clock.
+    ran: f64,
     history: Vec<(f64, f64)>,
     per_ray: Option<PerRay>,
     /// The last full pass, to decide whether coarse passes pay off and how
@@ -298,6 +311,7 @@ impl Worker {
             film: Progressive::default(),
             coarse_pending: false,
             started: Running::now(),
+            ran: 0.0,
             history: Vec::new(),
             per_ray: None,
             last_full: None,
@@ -383,6 +397,7 @@ impl Worker {
             .last_full
             .is_none_or(|l| l.ms_per_spp > COARSE_ABOVE_MS || l.bvh != bvh);
         self.started = Running::now();
+        self.ran = 0.0;
         self.history.clear();
         self.per_ray = None;
         self.true_history.clear();
@@ -476,6 +491,14 @@ impl Worker {
         }
         let view = self.view.clone()?;
         if std::mem::take(&mut self.resend) {
+            // A kept film whose passes ran without the BVH has no figures
+            // for the panel: one throwaway sample per pixel measures them.
+            if view.plan.bvh && self.per_ray.is_none() {
+                let t = self.tracer(&view, view.size());
+                let mut probe = Job::of(&t, Stop::spp(1)).start();
+                let (pass, work) = probe.pass_with::<WorkCounter>(&t, cancel)?;
+                self.per_ray = Some(PerRay::of(&pass, &work));
+            }
             let mean = self.film.film().image();
             let truth = self.true_error(&mean);
             return Some(Msg::Frame(Box::new(self.snapshot(&view, mean, truth))));
@@ -534,11 +557,7 @@ impl Worker {
         // take the fast path.
         let pass = if self.film.film().spp == 0 && view.plan.bvh {
             let (pass, work) = self.film.pass_with::<WorkCounter>(&t, cancel)?;
-            let n = pass.rays.max(1) as f64;
-            self.per_ray = Some(PerRay {
-                nodes: work.work.nodes_visited as f64 / n,
-                triangle_tests: work.work.triangle_tests as f64 / n,
-            });
+            self.per_ray = Some(PerRay::of(&pass, &work));
             pass
         } else {
             let pass = self.film.pass(&t, cancel);
@@ -552,6 +571,7 @@ impl Worker {
         });
         self.last_mrays = pass.mrays_per_s();
         let elapsed = self.started.elapsed().as_secs_f64();
+        self.ran = elapsed;
         if let Some(error) = self.film.film().relative_error().filter(|&e| e > 0.0) {
             self.history.push((elapsed, error));
         }
@@ -623,7 +643,7 @@ impl Worker {
             error: film.relative_error(),
             exact: view.plan.deterministic,
             done: self.idle(),
-            elapsed: self.started.elapsed().as_secs_f64(),
+            elapsed: self.ran,
             history: self.history.clone(),
             true_error,
             truth: self.truth,

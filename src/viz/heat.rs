@@ -122,23 +122,40 @@ pub(crate) fn scale_color(t: f64) -> Vec3 {
 }
 
 /// Fills `layer` with the heat map of `measure` and its colour bar; says
-/// what it shows.
+/// what it shows. The colours run from the least work in the view to the
+/// most, so that a small tree's few levels still differ; where every ray
+/// did the same work there is nothing to tell apart, and it says so.
 pub(crate) fn draw(layer: &mut Layer, tracer: &Tracer, measure: HeatMeasure) -> String {
     let values = heat(tracer, measure);
     let (max, mean) = heat_summary(&values);
-    for (px, &v) in layer.pixels.iter_mut().zip(&values) {
-        *px = Some(heat_color(v, max));
+    let min = values.iter().copied().min().unwrap_or(0);
+    if min == max {
+        let mid = heat_color(1, 2);
+        layer.pixels.iter_mut().for_each(|px| *px = Some(mid));
+        let why = match measure {
+            HeatMeasure::NodesVisited => {
+                " (the whole tree fits in one wide node; bvh-heat:tests differs)"
+            }
+            HeatMeasure::TriangleTests => "",
+        };
+        return format!(
+            "{} per camera ray: {max} for every pixel{why}",
+            measure.label()
+        );
     }
-    legend(layer, max);
+    for (px, &v) in layer.pixels.iter_mut().zip(&values) {
+        *px = Some(heat_color(v - min, max - min));
+    }
+    legend(layer, min, max);
     format!(
-        "{} per camera ray: max {max}, mean {mean:.2} per pixel",
+        "{} per camera ray: {min} (dark) to {max} (bright), mean {mean:.2} per pixel",
         measure.label()
     )
 }
 
-/// Draws a vertical colour bar for a `0..=max` heat map at the right edge,
-/// labelled with 0 at the bottom and `max` at the top.
-fn legend(c: &mut Layer, max: u32) {
+/// Draws a vertical colour bar for a `min..=max` heat map at the right
+/// edge, labelled with `min` at the bottom and `max` at the top.
+fn legend(c: &mut Layer, min: u32, max: u32) {
     let (w, h) = (c.width as i32, c.height as i32);
     if w < 16 || h < 16 {
         return;
@@ -150,10 +167,11 @@ fn legend(c: &mut Layer, max: u32) {
     let x0 = w - margin - bar_w;
     c.rect(x0 - 1, top - 1, x0 + bar_w, bottom, Some(Vec3::ZERO));
     let span = (bottom - top - 1).max(1);
+    let range = max - min;
     for y in top..bottom {
-        // The top row is `max`, the bottom row 0.
+        // The top row is `max`, the bottom row `min`.
         let t = (bottom - 1 - y) as f64 / span as f64;
-        let col = heat_color((t * max as f64).round() as u32, max);
+        let col = heat_color((t * range as f64).round() as u32, range);
         c.rect(x0, y, x0 + bar_w - 1, y, Some(col));
     }
     let mut label = |text: &str, y: i32| {
@@ -163,7 +181,7 @@ fn legend(c: &mut Layer, max: u32) {
         c.text(x, y, text, Some(Vec3::ONE), scale);
     };
     label(&max.to_string(), (top - GLYPH * scale - 2).max(0));
-    label("0", bottom + 2);
+    label(&min.to_string(), bottom + 2);
 }
 
 #[cfg(test)]
@@ -220,7 +238,7 @@ mod tests {
     fn legend_runs_from_dark_at_the_bottom_to_bright_at_the_top() {
         let (w, h) = (200u32, 160u32);
         let mut layer: Layer = Canvas::new(w, h, None);
-        legend(&mut layer, 42);
+        legend(&mut layer, 10, 52);
         let col = w - (w / 80).max(2) - 1;
         let at = |y: u32| layer.get(col, y).flatten();
         assert_eq!(at(h / 8), Some(heat_color(42, 42)));
@@ -230,5 +248,19 @@ mod tests {
             .pixels
             .chunks(w as usize)
             .all(|row| row[..(w / 2) as usize].iter().all(Option::is_none)));
+    }
+
+    #[test]
+    fn a_map_where_every_ray_does_the_same_work_says_so() {
+        // The Cornell box's tree is one wide node: every ray visits 1.
+        let s = session(24, 16);
+        let t = s.tracer();
+        let mut layer: Layer = Canvas::new(24, 16, None);
+        let said = draw(&mut layer, &t, HeatMeasure::NodesVisited);
+        assert!(said.contains("1 for every pixel"), "{said}");
+        assert!(said.contains("one wide node"), "{said}");
+        let mut layer: Layer = Canvas::new(24, 16, None);
+        let said = draw(&mut layer, &t, HeatMeasure::TriangleTests);
+        assert!(said.contains("(dark) to"), "{said}");
     }
 }

@@ -9,21 +9,26 @@ use ratatui::Frame;
 use crate::tui::app::App;
 use crate::tui::keys;
 use crate::tui::layout::{MIN_SIZE, POPUP_HINT};
-use crate::tui::popup::Popup;
+use crate::tui::popup::{wrap, Popup};
+
+use super::fit;
 
 /// The status line; a message longer than the line wraps onto the hint
-/// bar's row below while it lasts (true then), cut only beyond that.
+/// bar's row below while it lasts (true then).
 pub(crate) fn status(f: &mut Frame, area: Rect, hints: Rect, app: &App) -> bool {
     let text = match app.jobs.export_progress() {
         Some(p) => format!("{p} · {}", app.status_line()),
         None => app.status_line(),
     };
-    let wraps = text.chars().count() > area.width as usize;
+    let rows: Vec<Line> = wrap(&text, area.width as usize, 0)
+        .into_iter()
+        .map(Line::raw)
+        .collect();
+    let wraps = rows.len() > 1;
     let area = if wraps { area.union(hints) } else { area };
+    fit::check_all("status line", &rows, area);
     f.render_widget(
-        Paragraph::new(text)
-            .wrap(Wrap { trim: true })
-            .style(Style::new().bg(Color::DarkGray).fg(Color::White)),
+        Paragraph::new(rows).style(Style::new().bg(Color::DarkGray).fg(Color::White)),
         area,
     );
     wraps
@@ -71,6 +76,22 @@ pub(crate) fn popup(f: &mut Frame, r: Rect, p: &Popup) {
     } else {
         String::new()
     };
+    let inner = Block::bordered().inner(r);
+    fit::check(
+        "popup title",
+        &Line::raw(format!(" {} ", p.title)),
+        inner.width,
+    );
+    fit::check(
+        "popup foot",
+        &Line::raw(format!("{shown}{POPUP_HINT}")),
+        inner.width,
+    );
+    fit::check_all(
+        "popup",
+        &text[..text.len().min(inner.height as usize)],
+        inner,
+    );
     f.render_widget(Clear, r);
     f.render_widget(
         Paragraph::new(text).block(

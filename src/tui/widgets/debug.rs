@@ -8,6 +8,7 @@ use ratatui::text::Line;
 use ratatui::widgets::{Block, Borders, Paragraph};
 use ratatui::Frame;
 
+use super::fit;
 use crate::inspect::LineKind;
 use crate::tui::app::App;
 use crate::tui::inspector::wrap;
@@ -41,8 +42,9 @@ pub(crate) fn draw(f: &mut Frame, area: Rect, app: &App) {
     };
     let block = Block::new()
         .borders(Borders::TOP)
-        .title(title)
+        .title(title.clone())
         .title_style(Style::new().add_modifier(Modifier::BOLD));
+    fit::check("ray tree title", &Line::raw(&title), area.width);
     let inner = block.inner(area);
     f.render_widget(block, area);
     if lines.is_empty() {
@@ -69,5 +71,6 @@ pub(crate) fn draw(f: &mut Frame, area: Rect, app: &App) {
         })
         .take(inner.height as usize)
         .collect();
+    fit::check_all("ray tree", &text, inner);
     f.render_widget(Paragraph::new(text), inner);
 }

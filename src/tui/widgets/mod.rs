@@ -3,6 +3,8 @@
 
 mod bars;
 mod debug;
+pub(crate) mod fit;
+pub(crate) mod legend;
 pub(crate) mod panels;
 pub(crate) mod viewport;
 
@@ -20,14 +22,18 @@ pub(crate) fn draw(f: &mut Frame, app: &App) {
         return;
     }
     viewport::draw(f, l.view, app);
-    debug::draw(f, l.debug, app);
-    panels::bvh(f, l.bvh, app);
-    panels::features(
-        f,
-        l.features,
-        panels::feature_lines(app, l.features.width, l.wrap_features),
-    );
-    panels::render(f, l.render, app);
+    if l.debug.height > 0 {
+        debug::draw(f, l.debug, app);
+    }
+    if !app.display.arrangement.full_screen {
+        panels::bvh(f, l.bvh, app);
+        panels::features(
+            f,
+            l.features,
+            panels::feature_lines(app, l.features.width, l.wrap_features),
+        );
+        panels::render(f, l.render, app);
+    }
     if !bars::status(f, l.status, l.hints, app) {
         bars::hints(f, l.hints, app);
     }

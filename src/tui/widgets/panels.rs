@@ -8,10 +8,12 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::{Axis, Block, Borders, Chart, Dataset, GraphType, Paragraph};
 use ratatui::Frame;
 
+use super::fit;
 use crate::render::plan::not_needed;
 use crate::render::{Decision, Feature};
 use crate::tui::app::App;
 use crate::tui::keys::{self, Action};
+use crate::tui::popup::wrap;
 use crate::tui::worker::{Snapshot, Truth, CONVERGED_BELOW};
 use crate::words::{self, si};
 
@@ -49,9 +51,16 @@ pub(crate) fn bvh(f: &mut Frame, area: Rect, app: &App) {
         _ => "per ray: measuring...".into(),
     };
     let text = vec![
-        Line::from(format!(
-            "binary: {} nodes {} leaves depth {}",
-            s.nodes, s.leaves, s.depth
+        Line::from(fit::joined(
+            &[
+                ("binary:".into(), 1),
+                (
+                    format!("{} nodes {} leaves depth {}", s.nodes, s.leaves, s.depth),
+                    0,
+                ),
+            ],
+            " ",
+            room,
         )),
         Line::from(format!(
             "leaf max {} mean {:.1} SAH {:.1}",
@@ -64,6 +73,13 @@ pub(crate) fn bvh(f: &mut Frame, area: Rect, app: &App) {
         )),
         Line::from(per_ray),
     ];
+    let inner = panel(String::new()).inner(area);
+    fit::check("BVH title", &Line::raw(&title), area.width);
+    fit::check_all(
+        "BVH panel",
+        &text[..text.len().min(inner.height as usize)],
+        inner,
+    );
     f.render_widget(Paragraph::new(text).block(panel(title)), area);
 }
 
@@ -112,7 +128,7 @@ pub(crate) fn feature_lines(app: &App, width: u16, wrap: bool) -> Vec<Line<'stat
                 "off" => format!("off ({})", w.short()),
                 _ => w.short().to_string(),
             });
-            short.chars().take(room).collect()
+            short
         };
         lines.push(Line::from(vec![
             head,
@@ -124,6 +140,7 @@ pub(crate) fn feature_lines(app: &App, width: u16, wrap: bool) -> Vec<Line<'stat
 }
 
 pub(crate) fn features(f: &mut Frame, area: Rect, lines: Vec<Line<'static>>) {
+    fit::check_all("Features panel", &lines, panel(String::new()).inner(area));
     f.render_widget(
         Paragraph::new(lines).block(panel(" Features ".into())),
         area,
@@ -132,28 +149,31 @@ pub(crate) fn features(f: &mut Frame, area: Rect, lines: Vec<Line<'static>>) {
 
 /// What goes to the terminal: bytes and pictures per second, the link's
 /// measured rate, and how long the view took to appear.
-fn output_lines(app: &App) -> Vec<Line<'static>> {
-    let mut v = vec![Line::from(format!(
-        "terminal {}B/s · {:.1} frames/s",
-        si(app.meter.bytes_per_sec()),
-        app.meter.frames_per_sec()
+fn output_lines(app: &App, room: usize) -> Vec<Line<'static>> {
+    let mut v = vec![Line::from(fit::joined(
+        &[
+            (format!("terminal {}B/s", si(app.meter.bytes_per_sec())), 0),
+            (format!("{:.1} frames/s", app.meter.frames_per_sec()), 1),
+        ],
+        " · ",
+        room,
     ))];
     let link = app.meter.link_rate().map(|r| format!("link {}B/s", si(r)));
     let shown = app
         .view_shown_in()
         .map(|s| format!("view shown in {}", words::ms(s * 1e3)));
-    let parts: Vec<String> = link.into_iter().chain(shown).collect();
-    if !parts.is_empty() {
-        v.push(Line::from(parts.join(" · ")));
-    }
+    v.extend(
+        link.into_iter()
+            .chain(shown)
+            .map(|p| Line::from(p.to_string())),
+    );
     v
 }
 
-pub(crate) fn render(f: &mut Frame, area: Rect, app: &App) {
-    let block = panel(" Render ".into());
-    let inner = block.inner(area);
-    f.render_widget(block, area);
-    let bytes = output_lines(app);
+/// The render panel's lines for a panel `room` columns wide, the most
+/// telling first: where the panel is short, the last ones go.
+fn render_lines(app: &App, room: usize) -> Vec<Line<'static>> {
+    let bytes = output_lines(app, room);
     let mut text = match app.current_frame() {
         None => [vec![Line::from("starting...")], bytes].concat(),
         Some(s) if s.coarse => [
@@ -172,33 +192,42 @@ pub(crate) fn render(f: &mut Frame, area: Rect, app: &App) {
             };
             let done = if s.done && !s.exact { " (done)" } else { "" };
             let spp = match s.converged {
-                Some(c) => format!(
-                    "{:.1} spp mean, {:.0}% below {}%",
-                    s.spp_mean,
-                    c * 100.0,
-                    CONVERGED_BELOW * 100.0
-                ),
-                None => format!("{} spp", s.spp),
+                Some(_) => format!("{:.1} spp mean{done}", s.spp_mean),
+                None => format!("{} spp{done}", s.spp),
             };
             let mut v = vec![
-                Line::from(format!("{spp}{done} · {}/pass", words::ms(s.pass_ms))),
-                Line::from(format!(
-                    "{} · {:.1} s",
-                    words::rays_per_s(s.mrays * 1e6),
-                    s.elapsed
+                Line::from(fit::joined(
+                    &[(spp, 0), (format!("{}/pass", words::ms(s.pass_ms)), 1)],
+                    " · ",
+                    room,
                 )),
                 Line::from(error),
             ];
-            if app.reference.loaded() {
-                v.extend(truth_lines(s));
+            if let Some(c) = s.converged {
+                v.push(Line::from(format!(
+                    "{:.0}% of pixels below {}%",
+                    c * 100.0,
+                    CONVERGED_BELOW * 100.0
+                )));
             }
-            v.extend(bytes);
+            v.push(Line::from(fit::joined(
+                &[
+                    (words::rays_per_s(s.mrays * 1e6), 0),
+                    (words::ms(s.elapsed * 1e3), 0),
+                ],
+                " · ",
+                room,
+            )));
             if s.bad_samples > 0 {
                 v.push(Line::styled(
                     format!("{} NaN/Inf samples (n finds one)", s.bad_samples),
                     Style::new().fg(Color::Red),
                 ));
             }
+            if app.reference.loaded() {
+                v.extend(truth_lines(s));
+            }
+            v.extend(bytes);
             v
         }
     };
@@ -214,8 +243,27 @@ pub(crate) fn render(f: &mut Frame, area: Rect, app: &App) {
             ),
         );
     }
+    // Lines too long for the panel wrap under themselves.
+    text.into_iter()
+        .flat_map(|l| {
+            let style = l.style;
+            let one = l.to_string();
+            wrap(&one, room, 2)
+                .into_iter()
+                .map(move |r| Line::styled(r, style))
+        })
+        .collect()
+}
+
+pub(crate) fn render(f: &mut Frame, area: Rect, app: &App) {
+    let block = panel(" Render ".into());
+    let inner = block.inner(area);
+    f.render_widget(block, area);
+    let mut text = render_lines(app, inner.width as usize);
+    text.truncate(inner.height as usize);
     let [text_area, chart_area] =
         Layout::vertical([Constraint::Length(text.len() as u16), Constraint::Min(0)]).areas(inner);
+    fit::check_all("Render panel", &text, inner);
     f.render_widget(Paragraph::new(text), text_area);
     if chart_area.height >= 6 {
         if let Some(s) = app

@@ -5,79 +5,109 @@
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::style::{Color, Style};
+use ratatui::text::Line;
 use ratatui::widgets::{Block, Borders, Paragraph};
 use ratatui::Frame;
 
+use super::fit;
 use crate::tui::app::App;
 use crate::tui::color::ColorMode;
 use crate::tui::graphics::symbols::{self, Symbols};
 use crate::tui::term::screen::make_hole;
 use crate::tui::worker::Snapshot;
+use crate::viz::draw::Layer;
 
 /// Colour of the marks around the selected pixel.
 const MARK: [u8; 3] = [255, 0, 255];
 
 /// The viewport's picture: the newest pass in sRGB with the BVH overlay,
-/// the selected pixel's overlay and its mark when they are for this view,
-/// and what the overlays say (their legends) for the title. The block symbols and the pixel
-/// protocols show the same picture.
+/// the selected pixel's overlay and its mark when they are for this view.
+/// The block symbols and the pixel protocols show the same picture.
 pub struct ViewPicture {
     pub px: Vec<[u8; 3]>,
     pub w: u32,
     pub h: u32,
-    pub(crate) note: Option<String>,
 }
 
-pub fn picture(app: &App) -> Option<ViewPicture> {
+/// What the view shows of the newest pass: the film view in place of the
+/// image, the layers drawn over it, and what each says (its legend, one
+/// item per line of it).
+struct Shown<'a> {
+    image: &'a [glam::Vec3],
+    layers: Vec<&'a Layer>,
+    legend: Vec<String>,
+    /// The overlays and marks are for the current camera and size.
+    current: bool,
+}
+
+fn shown(app: &App) -> Option<Shown<'_>> {
     let frame = app.link.frame.as_deref()?;
     let (w, h) = (frame.width, frame.height);
-    let mut note = None;
+    let mut s = Shown {
+        image: &frame.image,
+        layers: Vec::new(),
+        legend: Vec::new(),
+        current: app.link.current_frame().is_some() && (w, h) == app.display.view_size(),
+    };
+    let mut say = |text: &str| s.legend.extend(text.split(" · ").map(str::to_string));
     // A film view (bloom, samples or error per pixel) replaces the
     // picture: it shows the pass itself.
-    let mut img = match &frame.film_view {
-        Some((v, view, legend)) if app.overlays.image == Some(*v) => {
-            note = Some(legend.clone());
-            view.clone()
+    if let Some((v, view, legend)) = &frame.film_view {
+        if app.overlays.image == Some(*v) {
+            say(legend);
+            s.image = view;
         }
-        _ => frame.image.clone(),
-    };
+    }
     // Overlays and marks follow the current camera and size, so they wait
     // for a pass of that view.
-    let current = app.link.current_frame().is_some() && (w, h) == app.display.view_size();
-    if current {
+    if s.current {
         if let Some(o) = app.link.current_overlay() {
             match &o.layer {
                 Ok((layer, summary)) if (layer.width, layer.height) == (w, h) => {
-                    layer.over(&mut img);
-                    note = Some(summary.to_string());
+                    s.layers.push(layer);
+                    say(summary);
                 }
                 Ok(_) => {}
-                Err(e) => note = Some(e.to_string()),
+                Err(e) => say(&e.to_string()),
             }
         }
         if let Some(p) = app.link.current_pixel() {
             match &p.layer {
                 Ok((layer, legend)) if (layer.width, layer.height) == (w, h) => {
-                    layer.over(&mut img);
-                    note = Some(match note {
-                        Some(n) => format!("{n} · {legend}"),
-                        None => legend.clone(),
-                    });
+                    s.layers.push(layer);
+                    say(legend);
                 }
                 Ok(_) => {}
-                Err(e) => note = Some(e.clone()),
+                Err(e) => say(e),
             }
         }
     }
+    Some(s)
+}
+
+/// What the overlays on the view say, one item per line of their legends.
+pub(crate) fn legend(app: &App) -> Vec<String> {
+    shown(app).map(|s| s.legend).unwrap_or_default()
+}
+
+pub fn picture(app: &App) -> Option<ViewPicture> {
+    let frame = app.link.frame.as_deref()?;
+    let (w, h) = (frame.width, frame.height);
+    let shown = shown(app)?;
+    let mut img = shown.image.to_vec();
+    for layer in &shown.layers {
+        layer.over(&mut img);
+    }
     let mut px: Vec<[u8; 3]> = img.iter().map(|c| crate::color::srgb(*c)).collect();
-    if let (true, Some(s)) = (current, app.inspector.selected) {
+    if let (true, Some(s)) = (shown.current, app.inspector.selected) {
         mark(&mut px, w, h, s.x, s.y);
     }
-    Some(ViewPicture { px, w, h, note })
+    Some(ViewPicture { px, w, h })
 }
 
 pub(crate) fn draw(f: &mut Frame, area: Rect, app: &App) {
     let inner = app.display.layout.image;
+    let (w, h) = app.display.view_size();
     let shown = match &app.display.pixels {
         Some(m) => m.protocol.name().to_string(),
         None => format!(
@@ -86,28 +116,27 @@ pub(crate) fn draw(f: &mut Frame, area: Rect, app: &App) {
             app.display.color.name()
         ),
     };
-    let mut title = format!(
-        " {} · {}x{} px · {shown}",
-        app.session.scene.name,
-        app.display.view_size().0,
-        app.display.view_size().1,
-    );
+    // Narrow, the way the view is shown goes first, then its size.
+    let mut parts = vec![
+        (app.session.scene.name.clone(), 0),
+        (format!("{w}x{h} px"), 1),
+        (shown, 2),
+    ];
     if app.inspector.select_mode {
-        title += " · SELECT";
+        parts.push(("SELECT".into(), 0));
     }
+    let room = (area.width as usize).saturating_sub(2);
+    let title = format!(" {} ", fit::joined(&parts, " · ", room));
+    fit::check("viewport title", &Line::raw(&title), area.width);
+    f.render_widget(Block::new().borders(Borders::TOP).title(title), area);
+    super::legend::draw(f, app.display.layout.legend, &legend(app));
     let Some(pic) = picture(app) else {
-        f.render_widget(Block::new().borders(Borders::TOP).title(title), area);
         f.render_widget(
             Paragraph::new("rendering the first pass...").style(Style::new().fg(Color::DarkGray)),
             inner,
         );
         return;
     };
-    if let Some(note) = &pic.note {
-        title += &format!(" · {note}");
-    }
-    title.push(' ');
-    f.render_widget(Block::new().borders(Borders::TOP).title(title), area);
     // With a pixel protocol the cells are holes: the event loop sends the
     // picture as images over them.
     if app.display.pixels.is_some() {
