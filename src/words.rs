@@ -59,9 +59,36 @@ pub(crate) fn clip_quotes(msg: &str) -> String {
 }
 
 /// A path as messages and summaries print it: [`Path::display`] prints
-/// control characters as they are.
+/// control characters as they are; `a/../b` and `./` are written out (on
+/// the path's own words, as `data/textures/x.png` for a texture a scene
+/// in `data/scenes` reaches as `../textures/x.png`).
 pub(crate) fn path(p: &Path) -> String {
-    quoted(&p.display().to_string())
+    quoted(&tidy(p).display().to_string())
+}
+
+/// `p` without `.` and with each `..` taking back the name before it,
+/// where there is one.
+fn tidy(p: &Path) -> std::path::PathBuf {
+    use std::path::Component;
+    let mut out = std::path::PathBuf::new();
+    for c in p.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => match out.components().next_back() {
+                Some(Component::Normal(_)) => {
+                    out.pop();
+                }
+                // Above the root is the root.
+                Some(Component::RootDir) => {}
+                _ => out.push(".."),
+            },
+            c => out.push(c),
+        }
+    }
+    if out.as_os_str().is_empty() {
+        out.push(".");
+    }
+    out
 }
 
 /// `1 light`, `3 lights`; `plural` is the word for any count but one.
@@ -135,6 +162,19 @@ pub(crate) fn error_unknown(spp: u32) -> &'static str {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn paths_are_printed_tidy() {
+        let p = |s: &str| path(Path::new(s));
+        assert_eq!(
+            p("data/scenes/../meshes/../textures/checker.png"),
+            "data/textures/checker.png"
+        );
+        assert_eq!(p("./a/./b"), "a/b");
+        assert_eq!(p("../x/../y"), "../y");
+        assert_eq!(p("/a/../../b"), "/b");
+        assert_eq!(p("a/.."), ".");
+    }
+
     use super::*;
 
     #[test]

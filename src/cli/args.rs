@@ -38,7 +38,7 @@ impl Cli {
 
 #[derive(Subcommand, Debug)]
 pub(crate) enum Command {
-    /// Render a scene to a PNG file, or a turntable to a GIF or APNG.
+    /// Render a scene to PNG, EXR or HDR (by the extension), or a turntable to GIF or APNG.
     Render(RenderArgs),
     /// Join PNG frames (`render --frame K/N`, one job each) into a GIF or
     /// APNG that loops, in the order given.

@@ -7,10 +7,12 @@ use std::time::Instant;
 use anyhow::{bail, Result};
 use glam::Vec3;
 
+use super::progress::ProgressMode;
 use crate::inspect::{inspect_pixel, tree_rays};
+use crate::interrupt;
 use crate::raster::canvas::Canvas;
 use crate::raster::{png, Output};
-use crate::render::{post, Progressive, Session};
+use crate::render::{post, Session};
 use crate::viz::draw::{draw_legend, Legend};
 use crate::viz::{self, pixel, DebugSpec, DrawnFrom, View};
 
@@ -21,6 +23,7 @@ pub(crate) fn run(
     spec: DebugSpec,
     spp: Option<u32>,
     out: &Output,
+    progress: ProgressMode,
 ) -> Result<ExitCode> {
     let start = Instant::now();
     let t = s.tracer();
@@ -35,7 +38,9 @@ pub(crate) fn run(
     let (image, legend): (Vec<Vec3>, Legend) = match spec {
         DebugSpec::Image(view) if view.source() == DrawnFrom::Bvh => return bvh(s, view, out),
         DebugSpec::Image(view) => {
-            let film = Progressive::render(&t, spp);
+            let Some(film) = super::progress::film(s, &t, spp, progress) else {
+                return Ok(ExitCode::from(interrupt::exit_code()));
+            };
             let (image, legend) = viz::film_view(
                 view,
                 &film,
@@ -60,7 +65,9 @@ pub(crate) fn run(
             }
             let tree = inspect_pixel(&t, x, y, 0);
             let mut o = pixel::draw(&t, &tree, view, ray, spp)?;
-            let film = Progressive::render(&t, spp);
+            let Some(film) = super::progress::film(s, &t, spp, progress) else {
+                return Ok(ExitCode::from(interrupt::exit_code()));
+            };
             let mut image =
                 post::display(film.image(), w, h, &s.plan, &s.scene.settings.bloom).image;
             draw_legend(&mut o.layer, &o.legend, o.legend_bottom);
@@ -83,12 +90,13 @@ pub(crate) fn run(
     out.write(&png::encode(&post::to_rgb8(&image, w, h))?)?;
     let st = &s.bvh.stats;
     crate::outln!(
-        "{} {spec} at {w}x{h}: {} triangles, {} BVH nodes, depth {} ({}); {ms:.1} ms -> {}",
+        "{} {spec} at {w}x{h}: {} triangles, {} BVH nodes, depth {} ({}); {} -> {}",
         s.scene.name,
         st.triangles,
         st.nodes,
         st.depth,
         st.builder,
+        super::render::duration(ms),
         crate::words::path(&out.path)
     )?;
     for (_, line) in &legend {
@@ -108,7 +116,7 @@ fn bvh(s: &Session, view: View, out: &Output) -> Result<ExitCode> {
     out.write(&png::encode(&post::to_rgb8(&d.image, s.width, s.height))?)?;
     let st = &s.bvh.stats;
     crate::outln!(
-        "{} {view} at {}x{}: {} triangles, {} BVH nodes, depth {} ({}); {} ({ms:.1} ms) -> {}",
+        "{} {view} at {}x{}: {} triangles, {} BVH nodes, depth {} ({}); {} ({}) -> {}",
         s.scene.name,
         s.width,
         s.height,
@@ -117,6 +125,7 @@ fn bvh(s: &Session, view: View, out: &Output) -> Result<ExitCode> {
         st.depth,
         st.builder,
         d.summary,
+        super::render::duration(ms),
         crate::words::path(&out.path)
     )?;
     Ok(ExitCode::SUCCESS)

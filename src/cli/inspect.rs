@@ -7,8 +7,10 @@ use anyhow::{bail, Result};
 
 use super::args::InspectArgs;
 use super::open_scene;
+use super::progress::ProgressMode;
+use crate::color::LUMA;
 use crate::inspect::{inspect_pixel, to_text};
-use crate::render::{post, Progressive};
+use crate::render::{post, Film, Worst};
 
 pub(crate) fn run(a: InspectArgs) -> Result<ExitCode> {
     let s = open_scene(&a.scene)?;
@@ -25,12 +27,26 @@ pub(crate) fn run(a: InspectArgs) -> Result<ExitCode> {
     // The image the pixel belongs to: rendered to pick the worst pixel, and
     // for the pixel's value before and after bloom.
     let spp = a.spp.unwrap_or(if a.worst.is_some() { 16 } else { 1 });
-    let film = (a.worst.is_some() || s.plan.bloom).then(|| Progressive::render(&tracer, spp));
+    // Looking for the worst pixel takes a render worth a progress report.
+    let progress = match a.worst {
+        Some(_) => ProgressMode::Auto,
+        None => ProgressMode::None,
+    };
+    let film = match a.worst.is_some() || s.plan.bloom {
+        true => match super::progress::film(&s, &tracer, spp, progress) {
+            Some(f) => Some(f),
+            None => return Ok(ExitCode::from(crate::interrupt::exit_code())),
+        },
+        false => None,
+    };
     let (x, y, k) = match (a.pixel, a.worst, &film) {
         (Some((x, y)), _, _) => (x, y, a.sample),
         (None, Some(w), Some(film)) => match film.worst(w) {
-            Some(found) => found,
-            None if s.plan.deterministic && w == crate::render::Worst::Variance => {
+            Some(found) => {
+                crate::noteln!("{}", why_worst(film, w, found));
+                found
+            }
+            None if s.plan.deterministic && w == Worst::Variance => {
                 crate::outln!(
                     "no pixel varies: nothing in this scene is sampled, the image is exact"
                 )?;
@@ -40,9 +56,9 @@ pub(crate) fn run(a: InspectArgs) -> Result<ExitCode> {
                 crate::outln!(
                     "no pixel {} in {} sample{} per pixel",
                     match w {
-                        crate::render::Worst::Nan => "had a NaN or infinite sample",
-                        crate::render::Worst::Variance => "varies between samples",
-                        crate::render::Worst::Brightest => "exists",
+                        Worst::Nan => "had a NaN or infinite sample",
+                        Worst::Variance => "varies between samples",
+                        Worst::Brightest => "exists",
                     },
                     film.spp,
                     if film.spp == 1 { "" } else { "s" }
@@ -71,4 +87,25 @@ pub(crate) fn run(a: InspectArgs) -> Result<ExitCode> {
     // A closed pipe (`| head`) is an error to return, not a panic.
     std::io::stdout().lock().write_all(text.as_bytes())?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// Which pixel `--worst` picked, and by what measure, in `film`.
+fn why_worst(film: &Film, w: Worst, (x, y, k): (u32, u32, u32)) -> String {
+    let p = &film.pixels()[(y * film.width + x) as usize];
+    let of = format!("of {} samples per pixel", film.spp);
+    match w {
+        Worst::Nan => format!(
+            "worst pixel: ({x}, {y}), whose sample {k} was NaN or infinite ({} such samples {of})",
+            film.bad_count
+        ),
+        Worst::Variance => format!(
+            "worst pixel: ({x}, {y}), the highest variance of luminance between its samples ({} {of}; mean {})",
+            crate::words::significant(p.variance()),
+            crate::words::significant(p.mean.dot(LUMA.as_dvec3())),
+        ),
+        Worst::Brightest => format!(
+            "worst pixel: ({x}, {y}), the brightest (mean luminance {} {of})",
+            crate::words::significant(p.mean.dot(LUMA.as_dvec3())),
+        ),
+    }
 }

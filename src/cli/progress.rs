@@ -13,7 +13,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 
 use super::render::duration;
-use crate::render::Stop;
+use crate::interrupt::{self, Cancel};
+use crate::render::{Ended, Film, Job, Session, Stop, Tracer};
 use crate::report;
 
 /// `--progress`: how a render reports on standard error.
@@ -28,6 +29,32 @@ pub(crate) enum ProgressMode {
     Json,
     /// Nothing but warnings and errors.
     None,
+}
+
+/// A film of `spp` samples a pixel (the image under a debug view, or
+/// where `inspect` looks for the worst pixel), with the progress a render
+/// shows; `None` when a signal stopped it.
+pub(crate) fn film(s: &Session, t: &Tracer, spp: u32, progress: ProgressMode) -> Option<Film> {
+    let stop = Stop::spp(spp);
+    let report = Reporter::new(progress, &stop, s.plan.deterministic, 0);
+    report.begin(&Begin {
+        scene: &s.scene.name,
+        size: (s.width, s.height),
+        samples: None,
+        total: Some(spp),
+        resumed: None,
+        frames: None,
+    });
+    interrupt::flag();
+    let mut p = Job::of(t, stop).start();
+    let outcome = p.run(t, Cancel::Signal, |film, _| report.at(film.spp_range().1));
+    if outcome.ended == Ended::Cancelled {
+        report.abandon();
+        crate::noteln!("interrupted: nothing written");
+        return None;
+    }
+    report.finish(p.film().spp_range().1);
+    Some(p.into_film())
 }
 
 /// The longest a log goes without a progress line.

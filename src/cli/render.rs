@@ -102,7 +102,7 @@ pub(crate) fn run(a: RenderArgs) -> Result<ExitCode> {
     }
     if let Some(spec) = a.debug {
         check_film(s.width, s.height, Film::BYTES_PER_PIXEL)?;
-        return super::debug::run(&s, spec, a.spp, &out);
+        return super::debug::run(&s, spec, a.spp, &out, a.progress);
     }
     // A note only where the user asked for more than the one exact pass.
     if s.plan.deterministic && stop.is_some_and(|st| st != Stop::spp(1)) && !split {
@@ -350,14 +350,14 @@ pub(crate) fn run(a: RenderArgs) -> Result<ExitCode> {
         _ => String::new(),
     };
     let head = format!(
-        "{}: {}, build {:.1} ms ({}), render {}",
+        "{}: {}, build {} ({}), render {}",
         s.scene.name,
         words::count(
             s.scene.geometry.triangle_count() as u64,
             "triangle",
             "triangles"
         ),
-        s.bvh.stats.build_ms,
+        duration(s.bvh.stats.build_ms),
         s.bvh.stats.builder,
         duration(render_ms),
     );
@@ -804,12 +804,15 @@ fn progress(film: &Film, stop: &Stop, elapsed: f64) -> (String, Option<f64>) {
     (text, left.is_finite().then_some(left))
 }
 
-/// `812.3 ms` below ten seconds, `24.9 s` from there.
+/// A run's length as people read it: `812 ms`, `3.18 s`, `2 min 05 s`.
 pub(super) fn duration(ms: f64) -> String {
-    if ms < 1e4 {
-        format!("{ms:.1} ms")
+    if ms < 1e3 {
+        format!("{} ms", words::significant(ms))
+    } else if ms < 60e3 {
+        format!("{} s", words::significant(ms / 1e3))
     } else {
-        format!("{:.1} s", ms / 1e3)
+        let s = (ms / 1e3).round() as u64;
+        format!("{} min {:02} s", s / 60, s % 60)
     }
 }
 
@@ -826,8 +829,10 @@ mod tests {
 
     #[test]
     fn durations_read_in_the_unit_that_fits() {
-        assert_eq!(duration(812.34), "812.3 ms");
+        assert_eq!(duration(812.34), "812 ms");
+        assert_eq!(duration(3731.8), "3.73 s");
         assert_eq!(duration(24_927.9), "24.9 s");
+        assert_eq!(duration(125_400.0), "2 min 05 s");
     }
 
     #[test]
@@ -846,7 +851,7 @@ mod tests {
         // Half the error needs four times the samples: 12 more, at 0.25 s each.
         let (text, left) = progress(&f, &stop, 1.0);
         assert!(
-            text.contains("about 16 spp") && text.ends_with("eta 3000.0 ms"),
+            text.contains("about 16 spp") && text.ends_with("eta 3.00 s"),
             "{text}"
         );
         assert_eq!(left, Some(3.0));
@@ -854,6 +859,6 @@ mod tests {
             seconds: Some(5.0),
             ..Stop::default()
         };
-        assert!(progress(&f, &timed, 1.0).0.ends_with("eta 4000.0 ms"));
+        assert!(progress(&f, &timed, 1.0).0.ends_with("eta 4.00 s"));
     }
 }

@@ -137,6 +137,27 @@ pub(crate) fn not_needed(scene: &Scene, f: Feature) -> Option<Reason> {
     }
 }
 
+/// Why `f`'s stage runs when the plan keeps it: what in a scene needs it.
+fn needed_for(f: Feature) -> &'static str {
+    match f {
+        Feature::Shadows => "the lights are tested for occluders",
+        Feature::Reflections => "some material reflects (ks > 0 or metallic)",
+        Feature::Glossy => "some material has a glossy (rough) reflection",
+        Feature::Textures => "some material has a texture",
+        Feature::Bilinear => "textures are read between their texels",
+        Feature::SmoothNormals => "the meshes have vertex normals",
+        Feature::SoftShadows => "area lights are sampled over their surface",
+        Feature::Supersampling => "samples jittered across each pixel smooth its edges",
+        Feature::Environment => "the environment is looked up for missed rays",
+        Feature::Bloom => "light above 1 glows (the scene's bloom settings)",
+        Feature::Bvh => "rays walk the tree instead of testing every triangle",
+        Feature::NormalMaps => "some material has a normal map",
+        Feature::Emission => "some material emits light",
+        Feature::Indirect => "paths bounce",
+        Feature::Alpha => "some material is cut out or blended by alpha",
+    }
+}
+
 /// The stage each feature controls, as `--explain` names it.
 fn stage_name(f: Feature) -> &'static str {
     match f {
@@ -208,6 +229,8 @@ pub struct Plan {
     pub(crate) features: Features,
     pub(crate) policy: PlanPolicy,
     decisions: [Decision; Feature::ALL.len()],
+    /// Stages that run only because the policy runs every enabled one.
+    unplanned: [bool; Feature::ALL.len()],
     // What the hot loop reads: one flag per stage, copied from `decisions`.
     pub shadows: bool,
     pub reflections: bool,
@@ -272,6 +295,7 @@ impl Plan {
             };
         }
         let on = |f: Feature| decisions[f as usize].runs();
+        let unplanned = Feature::ALL.map(|f| on(f) && not_needed(scene, f).is_some());
         let any_area = scene.lights.iter().any(|l| l.is_area());
         // Surfaces that reflect and let light through split a ray tree in
         // two at each bounce; past `MAX_PATHS` a split picks one branch at
@@ -296,6 +320,7 @@ impl Plan {
             features,
             policy,
             decisions,
+            unplanned,
             shadows: on(Feature::Shadows),
             reflections: on(Feature::Reflections),
             specular: !prune || scene.materials.iter().any(|m| m.reflective()),
@@ -377,6 +402,11 @@ impl Plan {
                         )
                     }
                     (Feature::Indirect, Decision::Off) => "off: direct light only".into(),
+                    (_, Decision::On) if self.unplanned[f as usize] => {
+                        "on: --no-plan runs every enabled stage".into()
+                    }
+                    (_, Decision::On) => format!("on: {}", needed_for(f)),
+                    (_, Decision::Off) => "off: turned off (--no or its key)".into(),
                     _ => d.reason(),
                 };
                 (stage_name(f), d.runs(), why)
@@ -400,7 +430,7 @@ impl Plan {
             "specular term",
             self.specular,
             if self.specular {
-                "on".into()
+                "on: some material has a highlight (ks > 0)".into()
             } else {
                 "not needed: no material with ks > 0".into()
             },
@@ -411,7 +441,7 @@ impl Plan {
             if self.deterministic {
                 "not needed: nothing is sampled, one pass is exact".into()
             } else {
-                "on".into()
+                "on: the image is sampled; each pass adds samples and lowers its error".into()
             },
         ));
         rows

@@ -463,7 +463,10 @@ impl App {
             self.choice.plan(),
             self.display.view_size(),
         );
-        self.say(said);
+        match said {
+            Some(s) => self.say(s),
+            None => self.status.clear(),
+        }
     }
 
     /// Takes what the worker and the jobs have sent; true when the screen

@@ -41,17 +41,18 @@ impl Jobs {
     }
 
     /// Starts exporting what `camera` sees of `session` with `plan`, in the
-    /// shape of a `view_size` view, unless an export is running; the status
-    /// line's text.
+    /// shape of a `view_size` view, unless an export is running; what the
+    /// status line says when it did not start (once started, the export's
+    /// progress is on the status line).
     pub(crate) fn export(
         &mut self,
         session: &Session,
         camera: Camera,
         plan: &Plan,
         view_size: (u32, u32),
-    ) -> String {
+    ) -> Option<String> {
         if self.export.is_some() {
-            return "an export is already running".into();
+            return Some("an export is already running".into());
         }
         let scene_size = (session.width, session.height);
         let r = export::Request {
@@ -63,14 +64,10 @@ impl Jobs {
         };
         match export::Export::start(r) {
             Ok(job) => {
-                let s = format!(
-                    "exporting this view as a {}x{} PNG at {} spp...",
-                    job.size.0, job.size.1, job.target_spp
-                );
                 self.export = Some(job);
-                s
+                None
             }
-            Err(e) => format!("cannot export: {e:#}"),
+            Err(e) => Some(format!("cannot export: {e:#}")),
         }
     }
 
@@ -78,7 +75,7 @@ impl Jobs {
     pub(crate) fn export_progress(&self) -> Option<String> {
         self.export.as_ref().map(|j| {
             format!(
-                "exporting {}x{} PNG: {}/{} spp",
+                "exporting this view as a {}x{} PNG: {}/{} spp",
                 j.size.0,
                 j.size.1,
                 j.done_spp(),

@@ -1050,7 +1050,7 @@ mod tests {
         assert!(
             p.warnings
                 .iter()
-                .any(|w| w.starts_with("m/sub/my mat.mtl:6: texture m/sub/../tex dir/t 1.png")),
+                .any(|w| w.starts_with("m/sub/my mat.mtl:6: texture m/tex dir/t 1.png")),
             "{:?}",
             p.warnings
         );
