@@ -325,8 +325,13 @@ fn the_documented_commands_are_the_checked_list() {
         .map(|c| c.0.to_string())
         .filter(|d| d.starts_with("docs/"))
         .collect();
-    assert_eq!(pages, listed, "add the new page to COMMANDS in tests/readme.rs");
-    assert!(COMMANDS.iter().any(|(doc, _)| !examples(&read(doc)).is_empty()));
+    assert_eq!(
+        pages, listed,
+        "add the new page to COMMANDS in tests/readme.rs"
+    );
+    assert!(COMMANDS
+        .iter()
+        .any(|(doc, _)| !examples(&read(doc)).is_empty()));
 }
 
 /// Runs every command in order, as the documents list them.
