@@ -10,7 +10,9 @@
 //! ```` ```shell ```` or ```` ```bash ```` are shown, not run here: they
 //! need what the repository does not hold (a cluster, another program), or
 //! another test runs them (`tests/suite/split.rs`, the `bash` blocks of
-//! docs/split-renders.md).
+//! docs/split-renders.md). BENCHMARKS.md and docs/notes/ record
+//! measurements whose commands mostly need `../shared`; their links are
+//! checked, their commands are not run.
 //!
 //! Also: every relative link in the documents leads to a file that exists,
 //! and to a heading of it where it names one.
