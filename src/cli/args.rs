@@ -299,7 +299,7 @@ pub(crate) struct RenderArgs {
           value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub(crate) max_spp: Option<u32>,
     /// Give every pixel the same samples with --time or --target-error too,
-    /// where a sampled scene is otherwise rendered adaptively: after 16 spp,
+    /// where a sampled scene is otherwise rendered adaptively: after 4 spp,
     /// samples go where the error is (docs/adaptive.md).
     #[arg(long, requires = "budget")]
     pub(crate) uniform: bool,

@@ -1,8 +1,8 @@
 //! Split renders: parts of a render's samples merge into exactly the image
 //! one render makes; mismatched, overlapping, missing and damaged parts are
 //! refused with a message naming them; a checkpoint resumes into the render
-//! that was never interrupted; the README's commands (GNU parallel, a
-//! checkpoint) and the Slurm scripts of `examples/slurm` run as written.
+//! that was never interrupted; the commands of docs/split-renders.md (GNU
+//! parallel, a checkpoint) and the Slurm scripts of `examples/slurm` run as written.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -552,15 +552,12 @@ fn bash(d: &Path, script: &str, env: &[(&str, &str)]) -> Output {
         .unwrap()
 }
 
-/// The runnable (`bash`) blocks of the README's section on split renders.
-fn readme_split_commands() -> (String, Vec<String>) {
-    let text =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
-    let from = text
-        .find("## Split renders and checkpoints")
-        .expect("the README's split render section");
-    let section = &text[from..];
-    let section = &section[..section[3..].find("\n## ").map_or(section.len(), |e| e + 3)];
+/// The runnable (`bash`) blocks of docs/split-renders.md.
+fn doc_split_commands() -> (String, Vec<String>) {
+    let section = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/split-renders.md"),
+    )
+    .unwrap();
     let mut lines = Vec::new();
     let mut inside = false;
     for line in section.lines() {
@@ -570,17 +567,17 @@ fn readme_split_commands() -> (String, Vec<String>) {
             lines.push(line.to_string());
         }
     }
-    (section.to_string(), lines)
+    (section, lines)
 }
 
-/// The README's split render commands, run as written in a directory like
+/// The commands of docs/split-renders.md, run as written in a directory like
 /// a fresh clone's: the GNU parallel parts merge into the single render's
 /// image, and the checkpointed render resumed into the uninterrupted one.
 #[test]
-fn the_readme_split_commands_run_as_written() {
-    let (section, lines) = readme_split_commands();
+fn the_split_render_doc_commands_run_as_written() {
+    let (section, lines) = doc_split_commands();
     assert!(section.contains("--sshlogin") && section.contains("examples/slurm/submit.sh"));
-    let d = dir("readme");
+    let d = dir("split-doc");
     std::os::unix::fs::symlink(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("data"),
         d.join("data"),
