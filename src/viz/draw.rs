@@ -69,32 +69,68 @@ pub(crate) fn draw_box<P: Copy>(c: &mut Canvas<P>, frame: &CameraFrame, b: &Aabb
 }
 
 /// Writes the legend in the top left corner of `layer` (bottom left with
-/// `bottom`): a swatch and a line of text per entry, on black.
+/// `bottom`): a swatch and a line of text per entry, on black, each entry
+/// wrapped at spaces to stay inside the image.
 pub(crate) fn draw_legend(layer: &mut Layer, legend: &Legend, bottom: bool) {
     let scale = (layer.height as i32 / 400).max(1);
     let line = (GLYPH + 4) * scale;
     let pad = 4 * scale;
+    let tx = pad + (GLYPH + 4) * scale;
+    let room = layer.width as i32 - tx - pad;
+    let rows: Vec<(Option<Vec3>, String)> = legend
+        .iter()
+        .flat_map(|(swatch, text)| {
+            wrap_to(text, room, scale)
+                .into_iter()
+                .enumerate()
+                .map(move |(i, row)| (swatch.filter(|_| i == 0), row))
+        })
+        .collect();
     let top = if bottom {
-        layer.height as i32 - pad - legend.len() as i32 * line
+        layer.height as i32 - pad - rows.len() as i32 * line
     } else {
         pad
     };
-    for (i, (swatch, text)) in legend.iter().enumerate() {
+    for (i, (swatch, text)) in rows.iter().enumerate() {
         let y = top + i as i32 * line;
-        let x = pad;
-        let tx = x + (GLYPH + 4) * scale;
         layer.rect(
-            x - 2,
+            pad - 2,
             y - 2,
             tx + text_width(text, scale) + 2,
             y + GLYPH * scale + 1,
             Some(Vec3::ZERO),
         );
         if let Some(c) = swatch {
-            layer.rect(x, y, x + GLYPH * scale - 1, y + GLYPH * scale - 1, Some(*c));
+            layer.rect(
+                pad,
+                y,
+                pad + GLYPH * scale - 1,
+                y + GLYPH * scale - 1,
+                Some(*c),
+            );
         }
         layer.text(tx, y, text, Some(Vec3::ONE), scale);
     }
+}
+
+/// `text` broken at spaces into rows at most `room` pixels wide (a word
+/// wider than that alone on its row).
+fn wrap_to(text: &str, room: i32, scale: i32) -> Vec<String> {
+    let mut rows = vec![String::new()];
+    for word in text.split(' ') {
+        let row = rows.last_mut().expect("one row at least");
+        let joined = if row.is_empty() {
+            word.to_string()
+        } else {
+            format!("{row} {word}")
+        };
+        if row.is_empty() || text_width(&joined, scale) <= room {
+            *row = joined;
+        } else {
+            rows.push(word.to_string());
+        }
+    }
+    rows
 }
 
 /// The legend as one line, for the TUI's title.
@@ -140,6 +176,22 @@ pub(crate) fn clip_to_rect(
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_long_legend_wraps_inside_the_image() {
+        let legend: Legend = vec![(
+            Some(Vec3::X),
+            "a legend line far too long for a small image".into(),
+        )];
+        let mut layer: Layer = crate::raster::canvas::Canvas::new(120, 100, None);
+        draw_legend(&mut layer, &legend, false);
+        let rows = wrap_to(&legend[0].1, 120 - 16 - 4, 1);
+        assert!(rows.len() > 1, "{rows:?}");
+        assert!(rows.iter().all(|r| text_width(r, 1) <= 100), "{rows:?}");
+        assert_eq!(rows.join(" "), legend[0].1);
+        // Nothing is drawn in the last column: the text stopped short.
+        assert!((0..100).all(|y| layer.get(119, y).flatten().is_none()));
+    }
+
     use super::*;
     use crate::scene::{Camera, Projection};
 

@@ -764,6 +764,11 @@ impl Subject<'_> {
             label: base.label(uses),
             points: Vec::new(),
         };
+        // One run untimed first: the first budget's time would otherwise
+        // include the caches and threads warming up.
+        if let Some(&first) = cfg.budgets.first() {
+            self.measure(base, first, cfg, &reference, &mut 0, progress, cancel);
+        }
         for &b in &cfg.budgets {
             match self.measure(base, b, cfg, &reference, &mut passes, progress, cancel) {
                 Some(p) => main.points.push(p),
@@ -835,7 +840,7 @@ impl Subject<'_> {
 }
 
 /// The shortest run whose time a slope is fitted to, in seconds.
-const MIN_TIMED: f64 = 0.01;
+pub(crate) const MIN_TIMED: f64 = 0.01;
 
 #[cfg(test)]
 mod tests {

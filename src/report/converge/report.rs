@@ -167,8 +167,15 @@ impl Study {
         );
         let _ = writeln!(
             o,
-            "errors on luminance: rel err = sqrt(relMSE), relMSE = mean (x - ref)^2 / (ref^2 + 0.01); est = the film's own estimate (- = unknown: below 2 samples per pixel)\n"
+            "errors on luminance: rel err = sqrt(relMSE), relMSE = mean (x - ref)^2 / (ref^2 + 0.01); est = the film's own estimate (- = unknown: below 2 samples per pixel)"
         );
+        if self.series.len() > 1 {
+            let _ = writeln!(
+                o,
+                "strategies: Ln = n samples per area light a hit (--light-samples n), Gn = n glossy directions a hit (--glossy-samples n), jittered or independent samples (--independent), adaptive = passes go to the pixels with the most error, path or whitted = the integrator"
+            );
+        }
+        o.push('\n');
         for (i, s) in self.series.iter().enumerate() {
             if i > 0 && self.series.len() > 1 && i == 1 {
                 let _ = writeln!(o, "compared strategies:");
@@ -179,6 +186,8 @@ impl Study {
                 s.label,
                 if i == 0 {
                     " (the scene's settings)"
+                } else if s.strategy.integrator != self.series[0].strategy.integrator {
+                    " (another integrator converges to its own image: against this reference its error levels off)"
                 } else {
                     ""
                 }
@@ -215,10 +224,16 @@ impl Study {
             }
             if !self.exact {
                 let slope = |x: Option<f64>| x.map(|v| format!("{v:.2}")).unwrap_or("-".into());
+                let time = match s.slope_time() {
+                    Some(t) => format!("{t:.2} against log(time)"),
+                    None => format!(
+                        "none against log(time) (runs under {} ms time the timer more than the method)",
+                        super::MIN_TIMED * 1e3
+                    ),
+                };
                 let _ = writeln!(
                     o,
-                    "  slope of log(rel err): {} against log(time), {} against log(spp)\n",
-                    slope(s.slope_time()),
+                    "  slope of log(rel err) (-0.5: plain Monte Carlo): {} against log(spp), {time}\n",
                     slope(s.slope_spp())
                 );
             }
