@@ -77,7 +77,7 @@ pub(crate) fn draw_legend(layer: &mut Layer, legend: &Legend, bottom: bool) {
     let pad = 4 * scale;
     let tx = pad + (GLYPH + 4) * scale;
     let room = layer.width as i32 - tx - pad;
-    let rows: Vec<(Option<Vec3>, String)> = legend
+    let mut rows: Vec<(Option<Vec3>, String)> = legend
         .iter()
         .flat_map(|(swatch, text)| {
             wrap_to(text, room, scale)
@@ -86,6 +86,13 @@ pub(crate) fn draw_legend(layer: &mut Layer, legend: &Legend, bottom: bool) {
                 .map(move |(i, row)| (swatch.filter(|_| i == 0), row))
         })
         .collect();
+    // On a small image the legend keeps to its top (or bottom) part, so as
+    // not to hide what it explains; the command prints it whole.
+    let most = ((layer.height as i32 * 2 / 5 - pad) / line).max(1) as usize;
+    if rows.len() > most {
+        rows.truncate(most - 1);
+        rows.push((None, "...".into()));
+    }
     let top = if bottom {
         layer.height as i32 - pad - rows.len() as i32 * line
     } else {
@@ -190,6 +197,11 @@ mod tests {
         assert_eq!(rows.join(" "), legend[0].1);
         // Nothing is drawn in the last column: the text stopped short.
         assert!((0..100).all(|y| layer.get(119, y).flatten().is_none()));
+        // Nor below two fifths of the image, however long the legend.
+        let long: Legend = (0..20).map(|i| (None, format!("line {i}"))).collect();
+        let mut layer: Layer = crate::raster::canvas::Canvas::new(120, 100, None);
+        draw_legend(&mut layer, &long, false);
+        assert!((40..100).all(|y| (0..120).all(|x| layer.get(x, y).flatten().is_none())));
     }
 
     use super::*;
