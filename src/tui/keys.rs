@@ -356,7 +356,7 @@ pub(crate) const ROWS: &[KeyRow] = &[
     KeyRow {
         mode: Mode::Any,
         keys: &[(K::Char('W'), A::Warnings)],
-        help: "list the scene's load warnings",
+        help: "the last message in full and the scene's load warnings",
         hint: None,
     },
     KeyRow {

@@ -88,18 +88,27 @@ impl Status {
         parts.join(" · ")
     }
 
-    /// The popup listing the load warnings of the scene `name`.
+    /// The popup with the newest message in full (the status line may
+    /// shorten it) and the load warnings of the scene `name`.
     pub(crate) fn warnings_popup(&self, name: &str) -> Popup {
-        Popup::new(
+        let mut lines = Vec::new();
+        if !self.message.is_empty() {
+            lines.push(format!("last message: {}", self.message));
+            lines.push(String::new());
+        }
+        if self.warnings.is_empty() {
+            lines.push("the scene loaded without warnings".into());
+        } else {
+            lines.extend(self.warnings.iter().cloned());
+        }
+        let mut p = Popup::new(
             format!(
                 "{} loading {name}",
                 words::count(self.warnings.len() as u64, "warning", "warnings"),
             ),
-            if self.warnings.is_empty() {
-                vec!["the scene loaded without warnings".into()]
-            } else {
-                self.warnings.clone()
-            },
-        )
+            lines,
+        );
+        p.wrap_indent = Some(2);
+        p
     }
 }

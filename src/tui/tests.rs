@@ -908,6 +908,9 @@ fn nothing_is_cut_from_80x24_to_240x70() {
         found.extend(cuts(&mut t, &mut app, "builder message"));
         app.handle_key(Key::Char('p'));
         found.extend(cuts(&mut t, &mut app, "export"));
+        // Messages said together at start-up, longer than two rows.
+        app.say("256 colours: no answer on 24-bit colour, nor COLORTERM; ".repeat(6));
+        found.extend(cuts(&mut t, &mut app, "long message"));
         // Every popup.
         for (key, name) in [('?', "help"), ('W', "warnings"), ('x', "stability")] {
             app.handle_key(Key::Char(key));

@@ -13,6 +13,9 @@ use crate::tui::popup::{wrap, Popup};
 
 use super::fit;
 
+/// How a message too long for two rows ends.
+const MORE: &str = " … (W shows it whole)";
+
 /// The status line; a message longer than the line wraps onto the hint
 /// bar's row below while it lasts (true then).
 pub(crate) fn status(f: &mut Frame, area: Rect, hints: Rect, app: &App) -> bool {
@@ -20,10 +23,18 @@ pub(crate) fn status(f: &mut Frame, area: Rect, hints: Rect, app: &App) -> bool 
         Some(p) => format!("{p} · {}", app.status_line()),
         None => app.status_line(),
     };
-    let rows: Vec<Line> = wrap(&text, area.width as usize, 0)
-        .into_iter()
-        .map(Line::raw)
-        .collect();
+    let width = area.width as usize;
+    let mut rows = wrap(&text, width, 0);
+    // Two rows at most: the rest is in the popup `W` opens.
+    if rows.len() > 2 {
+        rows.truncate(2);
+        let mut last: Vec<&str> = rows[1].split(' ').collect();
+        while !last.is_empty() && fit::width(&last.join(" ")) + fit::width(MORE) > width {
+            last.pop();
+        }
+        rows[1] = last.join(" ") + MORE;
+    }
+    let rows: Vec<Line> = rows.into_iter().map(Line::raw).collect();
     let wraps = rows.len() > 1;
     let area = if wraps { area.union(hints) } else { area };
     fit::check_all("status line", &rows, area);
