@@ -159,6 +159,7 @@ fn raw_scene(loaded: &Scene) -> Scene {
             smooth: true,
             textured: true,
             colored: false,
+            uv1: None,
         }],
         ..loaded.clone()
     }

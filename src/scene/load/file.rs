@@ -497,6 +497,7 @@ fn patches(
                 .collect(),
         ),
         uvs: Some(pm.uvs),
+        uvs1: None,
         colors: None,
         indices: pm.indices,
         material,

@@ -49,6 +49,8 @@ pub struct Placed {
     /// Unit normals, already transformed.
     pub normals: Option<Vec<Vec3>>,
     pub uvs: Option<Vec<Vec2>>,
+    /// A second UV set, for the textures that read it.
+    pub uvs1: Option<Vec<Vec2>>,
     /// Linear RGB per vertex, multiplying the material's diffuse colour.
     pub colors: Option<Vec<Vec3>>,
     pub indices: Vec<[u32; 3]>,
@@ -254,7 +256,7 @@ impl Parts {
             m.name,
             positions.collect(),
             [normals, None],
-            m.uvs.map(<[Vec2]>::to_vec),
+            [m.uvs.map(<[Vec2]>::to_vec), None],
             m.indices.to_vec(),
             m.material,
         );
@@ -272,7 +274,7 @@ impl Parts {
             m.name,
             positions,
             [m.normals, m.colors],
-            m.uvs,
+            [m.uvs, m.uvs1],
             m.indices,
             m.material,
         );
@@ -284,7 +286,7 @@ impl Parts {
         name: String,
         positions: Vec<Vec3>,
         [normals, colors]: [Option<Vec<Vec3>>; 2],
-        uvs: Option<Vec<Vec2>>,
+        [uvs, uvs1]: [Option<Vec<Vec2>>; 2],
         mut kept: Vec<[u32; 3]>,
         material: u32,
     ) {
@@ -315,6 +317,11 @@ impl Parts {
             Some(v) => g.uvs.extend(v),
             None => g.uvs.extend(std::iter::repeat_n(Vec2::ZERO, n)),
         }
+        let uv1 = uvs1.map(|v| {
+            let shift = base - g.uvs1.len() as u32;
+            g.uvs1.extend(v);
+            shift
+        });
         let positions = &g.positions;
         // Exactly zero, in f64: in f32 the products (let alone a squared
         // length) underflow for slivers and tiny triangles.
@@ -353,6 +360,7 @@ impl Parts {
             smooth,
             textured,
             colored,
+            uv1,
         });
     }
 

@@ -77,6 +77,7 @@ impl Solid {
             positions,
             normals: None,
             uvs: None,
+            uvs1: None,
             colors: None,
             indices: self.indices,
             material,

@@ -20,6 +20,8 @@ pub(super) struct Decoded {
     positions: Vec<DVec3>,
     normals: Option<Vec<DVec3>>,
     uvs: Option<Vec<Vec2>>,
+    /// `TEXCOORD_1`, read only where the material's textures read it.
+    uvs1: Option<Vec<Vec2>>,
     colors: Option<Vec<Vec3>>,
     indices: Vec<[u32; 3]>,
 }
@@ -27,7 +29,7 @@ pub(super) struct Decoded {
 /// The accessors and mode that decide a primitive's [`Decoded`]: primitives
 /// (of one mesh placed many times, or of many meshes) that share them
 /// share it.
-pub(super) type Key = [Option<usize>; 6];
+pub(super) type Key = [Option<usize>; 7];
 
 fn key(p: &::gltf::Primitive) -> Key {
     let index = |a: Option<::gltf::Accessor>| a.map(|a| a.index());
@@ -35,10 +37,17 @@ fn key(p: &::gltf::Primitive) -> Key {
         index(p.get(&Semantic::Positions)),
         index(p.get(&Semantic::Normals)),
         index(p.get(&Semantic::TexCoords(0))),
+        index(second_set(p)),
         index(p.get(&Semantic::Colors(0))),
         index(p.indices()),
         Some(p.mode().as_gl_enum() as usize),
     ]
+}
+
+/// A primitive's `TEXCOORD_1`, where its material's textures read it.
+fn second_set<'a>(p: &::gltf::Primitive<'a>) -> Option<::gltf::Accessor<'a>> {
+    let read = super::texcoord::sets(&p.material()).contains(&1);
+    p.get(&Semantic::TexCoords(1)).filter(|_| read)
 }
 
 /// Whether rayterm draws a primitive of this mode (triangles, strips and
@@ -57,19 +66,6 @@ pub(super) fn triangles(mode: Mode, corners: usize) -> usize {
         Mode::Triangles => corners / 3,
         _ => corners.saturating_sub(2),
     }
-}
-
-/// Texture coordinates (rayterm's, v up) through a `KHR_texture_transform`:
-/// scaled, turned, then offset, in glTF's coordinates (v down).
-fn transformed(mut uvs: Vec<Vec2>, t: &::gltf::texture::TextureTransform) -> Vec<Vec2> {
-    let ([ox, oy], [sx, sy]) = (t.offset(), t.scale());
-    let (sin, cos) = t.rotation().sin_cos();
-    for uv in &mut uvs {
-        let (u, v) = (uv.x * sx, (1.0 - uv.y) * sy);
-        let (u, v) = (cos * u + sin * v + ox, cos * v - sin * u + oy);
-        *uv = Vec2::new(u, 1.0 - v);
-    }
-    uvs
 }
 
 impl Reader<'_> {
@@ -136,6 +132,7 @@ impl Reader<'_> {
                 let used: Vec<_> = used
                     .iter()
                     .filter_map(|s| p.get(s))
+                    .chain(second_set(&p))
                     .chain(p.indices())
                     .collect();
                 self.unpack(&used)?;
@@ -156,31 +153,40 @@ impl Reader<'_> {
                 show3(q)
             )
         })?;
-        let textured = p.material().pbr_metallic_roughness().base_color_texture();
-        if material.is_none() && d.uvs.is_none() && textured.is_some() {
-            self.unmapped.note(
-                "base colour textures on primitives without TEXCOORD_0 (drawn in the \
-                 material's colour)",
-                || {
-                    let m = p.material();
-                    let m = super::named(m.name(), m.index().unwrap_or_default());
-                    format!("material {m}, mesh {mesh_name}")
-                },
-            );
-        }
-        // A texture's KHR_texture_transform (gltfpack's de-quantization of
-        // coordinates, atlases) moves the coordinates only it reads.
-        let transform = textured.as_ref().and_then(|t| t.texture_transform());
-        let uvs = match (material, transform, d.uvs) {
-            (None, Some(t), Some(uvs)) => {
-                let uvs = transformed(uvs, &t);
-                if !uvs.iter().all(|uv| uv.is_finite()) {
-                    bail!("{here}: TEXCOORD_0 through its material's texture transform holds a number that is not finite");
+        if material.is_none() {
+            // Each slot's texture needs the coordinates it reads.
+            let m = p.material();
+            let has = [d.uvs.is_some(), d.uvs1.is_some()];
+            let base = m.pbr_metallic_roughness().base_color_texture();
+            let base = base.map(|i| {
+                let t = i
+                    .texture_transform()
+                    .map(|t| super::texcoord::Transform::of_info(&t));
+                super::texcoord::Transform::set(t.as_ref(), i.tex_coord())
+            });
+            let mut sets = super::texcoord::sets(&m);
+            sets.sort_unstable();
+            sets.dedup();
+            for set in sets {
+                if set < 2 && !has[set as usize] {
+                    let what = match Some(set) == base {
+                        true => "base colour textures",
+                        false => "textures",
+                    };
+                    self.unmapped.note(
+                        &format!(
+                            "{what} on primitives without TEXCOORD_{set} (drawn in the \
+                             material's colour)"
+                        ),
+                        || {
+                            let name = super::named(m.name(), m.index().unwrap_or_default());
+                            format!("material {name}, mesh {mesh_name}")
+                        },
+                    );
                 }
-                Some(uvs)
             }
-            (_, _, uvs) => uvs,
-        };
+        }
+        let (uvs, uvs1) = (d.uvs, d.uvs1.filter(|_| material.is_none()));
         let material = match material {
             Some(m) => m,
             None => self.material(parts, p.material())?,
@@ -198,6 +204,7 @@ impl Reader<'_> {
             positions: placed,
             normals: d.normals.map(|n| place_normals(&n, xf)),
             uvs,
+            uvs1,
             colors: d.colors,
             indices: d.indices,
             material,
@@ -215,11 +222,17 @@ impl Reader<'_> {
             return Ok(());
         };
         self.check_accessor(here, "POSITION", &position, &[F32, I8, U8, I16, U16], &[V3])?;
-        let attributes: [(_, _, &[_], &[_]); 3] = [
+        let attributes: [(_, _, &[_], &[_]); 4] = [
             (Semantic::Normals, "NORMAL", &[F32, I8, I16], &[V3]),
             (
                 Semantic::TexCoords(0),
                 "TEXCOORD_0",
+                &[F32, I8, U8, I16, U16],
+                &[V2],
+            ),
+            (
+                Semantic::TexCoords(1),
+                "TEXCOORD_1",
                 &[F32, I8, U8, I16, U16],
                 &[V2],
             ),
@@ -283,9 +296,9 @@ impl Reader<'_> {
         let n = positions.len();
         let normals = self.all(here, "NORMAL", p.get(&Semantic::Normals), d3)?;
         // glTF puts v = 0 at the top of the image, rayterm at the bottom.
-        let uvs = self.all(here, "TEXCOORD_0", p.get(&Semantic::TexCoords(0)), |v| {
-            Vec2::new(v[0] as f32, 1.0 - v[1] as f32)
-        })?;
+        let uv = |v: &[f64]| Vec2::new(v[0] as f32, 1.0 - v[1] as f32);
+        let uvs = self.all(here, "TEXCOORD_0", p.get(&Semantic::TexCoords(0)), uv)?;
+        let uvs1 = self.all(here, "TEXCOORD_1", second_set(p), uv)?;
         // Integer colours are normalised (glTF allows no others).
         let color = p.get(&Semantic::Colors(0));
         let scale = match color.as_ref().map(|a| (a.data_type(), a.normalized())) {
@@ -304,6 +317,7 @@ impl Reader<'_> {
         };
         finite(normals.iter().flatten().all(|v| v.is_finite()), "NORMAL")?;
         finite(uvs.iter().flatten().all(|v| v.is_finite()), "TEXCOORD_0")?;
+        finite(uvs1.iter().flatten().all(|v| v.is_finite()), "TEXCOORD_1")?;
         finite(colors.iter().flatten().all(|v| v.is_finite()), "COLOR_0")?;
         let corners = match self.all(here, "indices", p.indices(), |v| v[0] as u32)? {
             Some(c) => c,
@@ -341,6 +355,7 @@ impl Reader<'_> {
             positions,
             normals,
             uvs,
+            uvs1,
             colors,
             indices,
         })

@@ -580,6 +580,7 @@ impl ObjFile {
                 positions,
                 normals,
                 uvs,
+                uvs1: None,
                 material: material(g.material.as_ref(), colors.is_some()),
                 colors,
                 indices,

@@ -175,6 +175,7 @@ impl PlyMesh {
             positions,
             normals: self.normals.map(|n| place_normals(&n, xf)),
             uvs: self.uvs,
+            uvs1: None,
             colors: self.colors,
             indices: self.indices,
             material,
