@@ -8,7 +8,7 @@
 
 use std::f32::consts::{FRAC_1_PI, PI};
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 use super::brdf::Brdf;
 use super::plan::Plan;
@@ -224,6 +224,28 @@ fn normal_mapped(verts: [Vec3; 3], uvs: [Vec2; 3], n: Vec3, v: Vec3, t: Vec3, sc
     } else {
         n
     }
+}
+
+/// The normal `vn` tilted by a normal map's texel `t` scaled by `scale`,
+/// in the vertex tangent frame of `tangents` at barycentric `b`: as
+/// MikkTSpace's pixel shader does it, the interpolated normal and tangent
+/// and the bitangent `w · vn × tangent` made from them, none normalised
+/// first (the frame the map was baked in). `None` where the corners have
+/// no tangent.
+fn tangent_mapped(vn: Vec3, tangents: [Vec4; 3], b: Vec3, t: Vec3, scale: f32) -> Option<Vec3> {
+    let [t0, t1, t2] = tangents;
+    let vt = t0.truncate() * b.x + t1.truncate() * b.y + t2.truncate() * b.z;
+    if !vt.is_finite() || vt.length_squared() <= 1e-12 {
+        return None;
+    }
+    let w = if t0.w * b.x + t1.w * b.y + t2.w * b.z < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
+    let vb = vn.cross(vt) * w;
+    let m = t * 2.0 - Vec3::ONE;
+    Some((vt * (m.x * scale) + vb * (m.y * scale) + vn * m.z).normalize_or_zero())
 }
 
 impl<'a> Tracer<'a> {
@@ -574,11 +596,31 @@ impl<'a> Tracer<'a> {
             }
             if let Some((id, scale)) = pbr.normal.filter(|_| self.plan.normal_maps) {
                 let map = &textures[id as usize];
-                if let (Some(t), Some(corners)) = (tex(id), geo.corner_uvs(mesh, prim, map.uv.set))
-                {
+                // The vertex tangent frame where the mesh has one (and its
+                // normals are on), else the triangle's own.
+                let vertex = match SMOOTH && mesh.smooth {
+                    true => geo.corner_tangents(mesh, prim),
+                    false => None,
+                };
+                let t = tex(id);
+                let by_vertex = vertex.zip(t).and_then(|(tangents, t)| {
+                    let vn = idx.map(|i| geo.normals[i as usize]);
+                    let vn = vn[0] * b.x + vn[1] * b.y + vn[2] * b.z;
+                    let m = tangent_mapped(vn, tangents, b, t, scale)?;
+                    // Seen from the back, the whole frame turns with the
+                    // normal (glTF's double-sided rule).
+                    let m = if n.dot(vn) < 0.0 { -m } else { m };
+                    Some(if m.dot(v) > 0.0 && m.is_finite() {
+                        m
+                    } else {
+                        n
+                    })
+                });
+                mapped = by_vertex.or_else(|| {
+                    let corners = geo.corner_uvs(mesh, prim, map.uv.set)?;
                     let corners = corners.map(|c| map.uv.apply(c));
-                    mapped = Some(normal_mapped(verts, corners, n, v, t, scale));
-                }
+                    Some(normal_mapped(verts, corners, n, v, t?, scale))
+                });
             }
             brdf = Some(Brdf::with_f0(kd, metallic, roughness, pbr.dielectric_f0));
             pbr_mapped = mapped;

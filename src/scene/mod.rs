@@ -14,7 +14,7 @@ pub(crate) mod show;
 pub(crate) mod summary;
 pub(crate) mod texture;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 pub use camera::{Camera, Projection};
@@ -40,6 +40,11 @@ pub struct Geometry {
     /// of meshes whose textures read it ([`MeshInfo`]'s `uv1`): it does
     /// not run in parallel with the others.
     pub(crate) uvs1: Vec<Vec2>,
+    /// Tangents for normal maps (xyz, and w the sign of the bitangent,
+    /// `w · normal × tangent`; zero where there is none), held only for
+    /// the vertices of normal-mapped meshes with vertex normals
+    /// ([`MeshInfo`]'s `tangent`), as `uvs1`.
+    pub(crate) tangents: Vec<Vec4>,
     /// Linear RGB per vertex when some mesh has colours (white for the
     /// others); empty when none has.
     pub(crate) colors: Vec<Vec3>,
@@ -67,6 +72,11 @@ impl Geometry {
     /// The second UV set of the meshes that have one.
     pub fn uvs1(&self) -> &[Vec2] {
         &self.uvs1
+    }
+
+    /// The tangents of the normal-mapped meshes that have them.
+    pub fn tangents(&self) -> &[Vec4] {
+        &self.tangents
     }
 
     /// Linear RGB per vertex, or empty when no mesh has colours.
@@ -120,6 +130,14 @@ impl Geometry {
         }
     }
 
+    /// The tangents at the corners of triangle `prim` of `mesh`, where it
+    /// has them.
+    #[inline]
+    pub(crate) fn corner_tangents(&self, mesh: &MeshInfo, prim: usize) -> Option<[Vec4; 3]> {
+        let shift = mesh.tangent?;
+        Some(self.indices[prim].map(|i| self.tangents[(i - shift) as usize]))
+    }
+
     pub fn triangle(&self, i: usize) -> [Vec3; 3] {
         self.indices[i].map(|v| self.positions[v as usize])
     }
@@ -159,6 +177,8 @@ pub struct MeshInfo {
     /// Where its vertices' second UV set is, when it has one: vertex `i`'s
     /// is `Geometry::uvs1[i - shift]`.
     pub(crate) uv1: Option<u32>,
+    /// Where its vertices' tangents are, likewise (`Geometry::tangents`).
+    pub(crate) tangent: Option<u32>,
 }
 
 /// What a ray that leaves the scene sees.

@@ -160,6 +160,7 @@ fn raw_scene(loaded: &Scene) -> Scene {
             textured: true,
             colored: false,
             uv1: None,
+            tangent: None,
         }],
         ..loaded.clone()
     }

@@ -498,6 +498,7 @@ fn patches(
         ),
         uvs: Some(pm.uvs),
         uvs1: None,
+        tangents: None,
         colors: None,
         indices: pm.indices,
         material,

@@ -78,6 +78,7 @@ impl Solid {
             normals: None,
             uvs: None,
             uvs1: None,
+            tangents: None,
             colors: None,
             indices: self.indices,
             material,

@@ -6,7 +6,9 @@
 //! Read: the default scene (or the first) through its node hierarchy, each
 //! node's transform applied in f64; triangle primitives (strips and fans
 //! turned into triangles) with positions, normals, `TEXCOORD_0`,
-//! `TEXCOORD_1` (kept where a texture reads it) and `COLOR_0`, quantized
+//! `TEXCOORD_1` (kept where a texture reads it), `COLOR_0` and, for
+//! normal maps, `TANGENT` (MikkTSpace's where the file has none, see
+//! [`super::tangents`]), quantized
 //! or not, sparse or not, compressed with meshoptimizer or not (see
 //! [`accessor`]); metallic-roughness materials (see
 //! [`metallic_roughness`]) with their base colour, metallic-roughness,

@@ -6,11 +6,12 @@ use std::collections::HashMap;
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::mesh::{Mode, Semantic};
 use anyhow::{anyhow, bail, Result};
-use glam::{DAffine3, DVec3, Vec2, Vec3};
+use glam::{DAffine3, DVec3, Vec2, Vec3, Vec4};
 
 use super::Reader;
 use crate::scene::load::numbers;
-use crate::scene::load::parts::{place_normals, place_positions, Parts, Placed};
+use crate::scene::load::parts::{place_normals, place_positions, place_tangents, Parts, Placed};
+use crate::scene::load::tangents;
 use crate::scene::show::show3;
 
 /// What a primitive's accessors hold, checked: every index in range and
@@ -23,13 +24,16 @@ pub(super) struct Decoded {
     /// `TEXCOORD_1`, read only where the material's textures read it.
     uvs1: Option<Vec<Vec2>>,
     colors: Option<Vec<Vec3>>,
+    /// Tangents (the file's `TANGENT`, or MikkTSpace's) where the
+    /// material has a normal map and the primitive normals.
+    tangents: Option<Vec<Vec4>>,
     indices: Vec<[u32; 3]>,
 }
 
 /// The accessors and mode that decide a primitive's [`Decoded`]: primitives
 /// (of one mesh placed many times, or of many meshes) that share them
 /// share it.
-pub(super) type Key = [Option<usize>; 7];
+pub(super) type Key = [Option<usize>; 9];
 
 fn key(p: &::gltf::Primitive) -> Key {
     let index = |a: Option<::gltf::Accessor>| a.map(|a| a.index());
@@ -41,7 +45,27 @@ fn key(p: &::gltf::Primitive) -> Key {
         index(p.get(&Semantic::Colors(0))),
         index(p.indices()),
         Some(p.mode().as_gl_enum() as usize),
+        index(tangent(p)),
+        normal_set(p).map(|s| s as usize),
     ]
+}
+
+/// The UV set a primitive's normal map reads, where its material has one
+/// and it has normals: then it needs tangents.
+fn normal_set(p: &::gltf::Primitive) -> Option<u32> {
+    p.get(&Semantic::Normals)?;
+    let n = p.material().normal_texture()?;
+    let t = n
+        .extension_value(super::TEXTURE_TRANSFORM)
+        .and_then(|v| super::texcoord::Transform::of_json(v).ok());
+    Some(super::texcoord::Transform::set(t.as_ref(), n.tex_coord()))
+}
+
+/// A primitive's `TANGENT`, where its normal map reads it (glTF ignores
+/// it without normals).
+fn tangent<'a>(p: &::gltf::Primitive<'a>) -> Option<::gltf::Accessor<'a>> {
+    normal_set(p)?;
+    p.get(&Semantic::Tangents)
 }
 
 /// A primitive's `TEXCOORD_1`, where its material's textures read it.
@@ -133,6 +157,7 @@ impl Reader<'_> {
                     .iter()
                     .filter_map(|s| p.get(s))
                     .chain(second_set(&p))
+                    .chain(tangent(&p))
                     .chain(p.indices())
                     .collect();
                 self.unpack(&used)?;
@@ -186,7 +211,9 @@ impl Reader<'_> {
                 }
             }
         }
-        let (uvs, uvs1) = (d.uvs, d.uvs1.filter(|_| material.is_none()));
+        // A material given in place of the file's reads neither.
+        let own = material.is_none();
+        let (uvs, uvs1) = (d.uvs, d.uvs1.filter(|_| own));
         let material = match material {
             Some(m) => m,
             None => self.material(parts, p.material())?,
@@ -206,6 +233,7 @@ impl Reader<'_> {
             uvs,
             uvs1,
             colors: d.colors,
+            tangents: d.tangents.filter(|_| own).map(|t| place_tangents(&t, xf)),
             indices: d.indices,
             material,
         }))
@@ -249,6 +277,17 @@ impl Reader<'_> {
                         position.count()
                     );
                 }
+            }
+        }
+        if let Some(a) = tangent(p) {
+            self.check_accessor(here, "TANGENT", &a, &[F32, I8, I16], &[V4])?;
+            if a.count() != position.count() {
+                bail!(
+                    "{here}: TANGENT (accessor {}) has {} values for {} positions",
+                    a.index(),
+                    a.count(),
+                    position.count()
+                );
             }
         }
         if let Some(a) = p.indices() {
@@ -309,6 +348,9 @@ impl Reader<'_> {
         let colors = self.all(here, "COLOR_0", color, |v| {
             Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32) / scale
         })?;
+        let file_tangents = self.all(here, "TANGENT", tangent(p), |v| {
+            Vec4::new(v[0] as f32, v[1] as f32, v[2] as f32, v[3] as f32)
+        })?;
         let finite = |ok: bool, what: &str| -> Result<()> {
             if !ok {
                 bail!("{here}: {what} holds a number that is not finite");
@@ -319,6 +361,10 @@ impl Reader<'_> {
         finite(uvs.iter().flatten().all(|v| v.is_finite()), "TEXCOORD_0")?;
         finite(uvs1.iter().flatten().all(|v| v.is_finite()), "TEXCOORD_1")?;
         finite(colors.iter().flatten().all(|v| v.is_finite()), "COLOR_0")?;
+        finite(
+            file_tangents.iter().flatten().all(|v| v.is_finite()),
+            "TANGENT",
+        )?;
         let corners = match self.all(here, "indices", p.indices(), |v| v[0] as u32)? {
             Some(c) => c,
             None => (0..n as u32).collect(),
@@ -351,12 +397,42 @@ impl Reader<'_> {
                 .map(|c| [c[0], c[1], c[2]])
                 .collect(),
         };
+        let (mut positions, mut normals, mut uvs, mut uvs1, mut colors) =
+            (positions, normals, uvs, uvs1, colors);
+        let mut indices = indices;
+        // Generated where the file gives none, in the primitive's own
+        // space, as glTF asks.
+        let set = normal_set(p).filter(|&s| s < 2);
+        let generated = match (&file_tangents, set, &normals) {
+            (None, Some(set), Some(n)) => [&uvs, &uvs1][set as usize].as_ref().map(|uv| {
+                let f = |v: &[DVec3]| v.iter().map(|v| v.as_vec3()).collect::<Vec<_>>();
+                tangents::generate(&f(&positions), &f(n), uv, &mut indices)
+            }),
+            _ => None,
+        };
+        let tangents = match generated {
+            Some((t, copies)) => {
+                tangents::extend(&mut positions, &copies);
+                for v in normals.iter_mut() {
+                    tangents::extend(v, &copies);
+                }
+                for v in uvs.iter_mut().chain(uvs1.iter_mut()) {
+                    tangents::extend(v, &copies);
+                }
+                for v in colors.iter_mut() {
+                    tangents::extend(v, &copies);
+                }
+                Some(t)
+            }
+            None => file_tangents,
+        };
         Ok(Decoded {
             positions,
             normals,
             uvs,
             uvs1,
             colors,
+            tangents,
             indices,
         })
     }

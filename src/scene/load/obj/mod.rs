@@ -581,6 +581,7 @@ impl ObjFile {
                 normals,
                 uvs,
                 uvs1: None,
+                tangents: None,
                 material: material(g.material.as_ref(), colors.is_some()),
                 colors,
                 indices,

@@ -176,6 +176,7 @@ impl PlyMesh {
             normals: self.normals.map(|n| place_normals(&n, xf)),
             uvs: self.uvs,
             uvs1: None,
+            tangents: None,
             colors: self.colors,
             indices: self.indices,
             material,
