@@ -591,6 +591,12 @@ impl<'a> Tracer<'a> {
             if let Some(t) = pbr.metallic_roughness.and_then(tex) {
                 (metallic, roughness) = (metallic * t.z, roughness * t.y);
             }
+            if let Some(t) = pbr.roughness_texture.and_then(tex) {
+                roughness *= t.x;
+            }
+            if let Some(t) = pbr.metallic_texture.and_then(tex) {
+                metallic *= t.x;
+            }
             if let Some((t, strength)) = pbr.occlusion.and_then(|(id, s)| Some((tex(id)?, s))) {
                 occlusion = 1.0 + strength * (t.x - 1.0);
             }

@@ -54,6 +54,10 @@ pub struct Pbr {
     pub roughness: f32,
     /// Linear texels: blue scales `metallic`, green `roughness`.
     pub metallic_roughness: Option<u32>,
+    /// Textures of one value each (linear, red channel), as MTL's `map_Pr`
+    /// and `map_Pm` hold them: they scale `roughness` and `metallic`.
+    pub roughness_texture: Option<u32>,
+    pub metallic_texture: Option<u32>,
     /// Tangent-space normals (linear texels) and their scale.
     pub normal: Option<(u32, f32)>,
     /// Emitted radiance, strength included, before its texture.
@@ -76,6 +80,8 @@ impl Default for Pbr {
             metallic: 1.0,
             roughness: 1.0,
             metallic_roughness: None,
+            roughness_texture: None,
+            metallic_texture: None,
             normal: None,
             emissive: Vec3::ZERO,
             emissive_texture: None,
@@ -112,7 +118,11 @@ impl Material {
     /// Whether its reflection is sampled from a lobe rather than a mirror.
     pub(crate) fn glossy(&self) -> bool {
         match &self.pbr {
-            Some(p) => p.roughness >= MIRROR_ROUGHNESS || p.metallic_roughness.is_some(),
+            Some(p) => {
+                p.roughness >= MIRROR_ROUGHNESS
+                    || p.metallic_roughness.is_some()
+                    || p.roughness_texture.is_some()
+            }
             None => self.reflective() && self.ns < GLOSSY_MAX_NS,
         }
     }

@@ -341,6 +341,8 @@ impl Scene {
             m.texture.is_some()
                 || m.pbr.as_ref().is_some_and(|p| {
                     p.metallic_roughness.is_some()
+                        || p.roughness_texture.is_some()
+                        || p.metallic_texture.is_some()
                         || p.normal.is_some()
                         || p.occlusion.is_some()
                         || p.emissive_texture.is_some()

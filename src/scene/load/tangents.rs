@@ -7,6 +7,8 @@ use std::collections::HashMap;
 
 use glam::{Vec2, Vec3, Vec4};
 
+use super::parts::Placed;
+
 /// A mesh's triangles as MikkTSpace reads them, and the tangent it gives
 /// each corner.
 struct Mesh<'a> {
@@ -107,6 +109,27 @@ pub(crate) fn generate(
         .map(Option::unwrap_or_default)
         .collect();
     (tangents, copies)
+}
+
+/// Gives a placed mesh with normals and texture coordinates MikkTSpace's
+/// tangents, splitting vertices where [`generate`] does; others are left
+/// as they are (shaded with each triangle's own frame).
+pub(crate) fn add(m: &mut Placed) {
+    let (Some(normals), Some(uvs)) = (&mut m.normals, &mut m.uvs) else {
+        return;
+    };
+    let positions: Vec<Vec3> = m.positions.iter().map(|p| p.as_vec3()).collect();
+    let (t, copies) = generate(&positions, normals, uvs, &mut m.indices);
+    extend(&mut m.positions, &copies);
+    extend(normals, &copies);
+    extend(uvs, &copies);
+    if let Some(v) = &mut m.uvs1 {
+        extend(v, &copies);
+    }
+    if let Some(v) = &mut m.colors {
+        extend(v, &copies);
+    }
+    m.tangents = Some(t);
 }
 
 /// `v` with the vertices `copies` names appended, in order: a vertex
