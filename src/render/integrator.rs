@@ -628,7 +628,15 @@ impl<'a> Tracer<'a> {
                     Some(normal_mapped(verts, corners, n, v, t?, scale))
                 });
             }
-            brdf = Some(Brdf::with_f0(kd, metallic, roughness, pbr.dielectric_f0));
+            let (mut weight, mut tint) = (pbr.specular, pbr.specular_color);
+            if let Some(t) = pbr.specular_texture.and_then(tex) {
+                weight *= t.x;
+            }
+            if let Some(t) = pbr.specular_color_texture.and_then(tex) {
+                tint *= t;
+            }
+            let f0 = (Vec3::splat(pbr.dielectric_f0) * tint).min(Vec3::ONE) * weight;
+            brdf = Some(Brdf::with_specular(kd, metallic, roughness, f0, weight));
             pbr_mapped = mapped;
             if R::ACTIVE {
                 pbr_info = Some(PbrInfo {

@@ -70,6 +70,14 @@ pub struct Pbr {
     /// A dielectric's reflectance at normal incidence: 0.04, or what
     /// `KHR_materials_ior` makes it, `((ior - 1) / (ior + 1))²`.
     pub dielectric_f0: f32,
+    /// `KHR_materials_specular`: the dielectric's Fresnel term is scaled
+    /// by `specular` (times its texture's alpha) and its reflectance at
+    /// normal incidence tinted by `specular_color` (times its texture,
+    /// sRGB), at most 1. 1 and white leave the glTF core's BRDF.
+    pub specular: f32,
+    pub specular_texture: Option<u32>,
+    pub specular_color: Vec3,
+    pub specular_color_texture: Option<u32>,
 }
 
 impl Default for Pbr {
@@ -87,6 +95,10 @@ impl Default for Pbr {
             emissive_texture: None,
             occlusion: None,
             dielectric_f0: 0.04,
+            specular: 1.0,
+            specular_texture: None,
+            specular_color: Vec3::ONE,
+            specular_color_texture: None,
         }
     }
 }

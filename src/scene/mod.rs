@@ -343,6 +343,8 @@ impl Scene {
                     p.metallic_roughness.is_some()
                         || p.roughness_texture.is_some()
                         || p.metallic_texture.is_some()
+                        || p.specular_texture.is_some()
+                        || p.specular_color_texture.is_some()
                         || p.normal.is_some()
                         || p.occlusion.is_some()
                         || p.emissive_texture.is_some()

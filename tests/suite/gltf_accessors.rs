@@ -539,14 +539,14 @@ fn required_extensions_are_read_or_named() {
     // Required extensions that change only how surfaces look open, drawn
     // without them, as other viewers draw them; with one that may change
     // the geometry the file is still refused.
-    let looks = json!(["KHR_materials_sheen", "KHR_materials_pbrSpecularGlossiness"]);
+    let looks = json!(["KHR_materials_sheen", "KHR_materials_clearcoat"]);
     let s = load(&with("looks.glb", looks.clone(), looks)).unwrap();
     assert_eq!(s.geometry.indices().len(), 2);
     assert!(
         warned(
             &s,
-            "looks.glb: requires KHR_materials_sheen, KHR_materials_pbrSpecularGlossiness, \
-             which rayterm does not read: its surfaces are drawn without them"
+            "looks.glb: requires KHR_materials_sheen, KHR_materials_clearcoat, which rayterm \
+             does not read: its surfaces are drawn without them"
         ),
         "{:?}",
         s.warnings
@@ -570,7 +570,9 @@ fn required_extensions_are_read_or_named() {
         "KHR_lights_punctual",
         "KHR_mesh_quantization",
         "EXT_meshopt_compression",
-        "KHR_materials_unlit"
+        "KHR_materials_unlit",
+        "KHR_materials_specular",
+        "KHR_materials_pbrSpecularGlossiness"
     ]);
     let s = load(&with("read.glb", read.clone(), read)).unwrap();
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);

@@ -1546,3 +1546,80 @@ fn generated_tangents_match_blenders() {
         sum / n
     );
 }
+
+/// `KHR_materials_specular` and `KHR_materials_pbrSpecularGlossiness` are
+/// read: the specular weight and colour and their textures; a
+/// specular-glossiness material converted to metallic-roughness, its
+/// specular-glossiness texture texel by texel. Neither is listed as not
+/// shown.
+#[test]
+fn specular_extensions_are_read() {
+    let d = Dir::new("gltf-specular");
+    let mut bin = Bin::default();
+    let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let (pos, ind) = bin.mesh(&p, &[[0, 1, 2]]);
+    let uv = bin.floats(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0], 2, "VEC2");
+    // White, fully glossy: a specular-glossiness texel of a white metal.
+    let img = image::RgbaImage::from_pixel(2, 2, image::Rgba([255, 255, 255, 255]));
+    let mut png = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let png = bin.view(&png);
+    let prim = |m: usize| {
+        json!({"attributes": {"POSITION": pos, "TEXCOORD_0": uv},
+                                 "indices": ind, "material": m})
+    };
+    let doc = json!({
+        "scene": 0, "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"mesh": 1, "translation": [2.0, 0.0, 0.0]}],
+        "meshes": [{"primitives": [prim(0)]}, {"primitives": [prim(1)]}],
+        "extensionsUsed": ["KHR_materials_specular", "KHR_materials_pbrSpecularGlossiness"],
+        "materials": [
+            {"name": "Satin",
+             "pbrMetallicRoughness": {"metallicFactor": 0.0},
+             "extensions": {"KHR_materials_specular": {
+                 "specularFactor": 0.5, "specularColorFactor": [1.0, 0.5, 0.25],
+                 "specularTexture": {"index": 0},
+                 "specularColorTexture": {"index": 0, "texCoord": 0}}}},
+            {"name": "Plastic",
+             "extensions": {"KHR_materials_pbrSpecularGlossiness": {
+                 "diffuseFactor": [0.5, 0.2, 0.1, 1.0], "specularFactor": [0.04, 0.04, 0.04],
+                 "glossinessFactor": 0.3, "diffuseTexture": {"index": 0},
+                 "specularGlossinessTexture": {"index": 0}}}}],
+        "textures": [{"source": 0}],
+        "images": [{"bufferView": png, "mimeType": "image/png"}]
+    });
+    let s = load(&d.write("specular.glb", bin.glb(doc))).unwrap();
+    assert!(
+        !s.warnings.iter().any(|w| w.contains("not shown")),
+        "{:?}",
+        s.warnings
+    );
+    let material = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap();
+    let satin = material("Satin").pbr.as_ref().unwrap();
+    assert_eq!(
+        (satin.specular, satin.specular_color),
+        (0.5, Vec3::new(1.0, 0.5, 0.25))
+    );
+    let weight = &s.textures[satin.specular_texture.unwrap() as usize];
+    assert_eq!(weight.texels[0], Vec3::ONE, "the alpha channel");
+    assert!(satin.specular_color_texture.is_some());
+    // The plastic's factors: no metal, its diffuse colour as base, its
+    // glossiness 0.3 a roughness of 0.7.
+    let plastic = material("Plastic");
+    assert!((plastic.kd - Vec3::new(0.5, 0.2, 0.1)).abs().max_element() < 1e-5);
+    let p = plastic.pbr.as_ref().unwrap();
+    assert!(plastic.texture.is_some());
+    // Its texture, white and fully glossy times the factors: specular
+    // 0.04 is still no metal, glossiness 0.3 still a roughness of 0.7.
+    let mr = &s.textures[p.metallic_roughness.unwrap() as usize];
+    assert_eq!((p.metallic, p.roughness), (1.0, 1.0));
+    assert!(
+        (mr.texels[0] - Vec3::new(0.0, 0.7, 0.0))
+            .abs()
+            .max_element()
+            < 1e-5,
+        "{}",
+        mr.texels[0]
+    );
+}

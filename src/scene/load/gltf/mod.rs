@@ -6,19 +6,20 @@
 //! Read: the default scene (or the first) through its node hierarchy, each
 //! node's transform applied in f64; triangle primitives (strips and fans
 //! turned into triangles) with positions, normals, `TEXCOORD_0`,
-//! `TEXCOORD_1` (kept where a texture reads it), `COLOR_0` and, for
-//! normal maps, `TANGENT` (MikkTSpace's where the file has none, see
-//! [`super::tangents`]), quantized
-//! or not, sparse or not, compressed with meshoptimizer or not (see
-//! [`accessor`]); metallic-roughness materials (see
-//! [`metallic_roughness`]) with their base colour, metallic-roughness,
+//! `TEXCOORD_1` (kept where a texture reads it), `COLOR_0` and, for normal
+//! maps, `TANGENT` (MikkTSpace's where the file has none, see
+//! [`super::tangents`]), quantized or not, sparse or not, compressed with
+//! meshoptimizer or not (see [`accessor`]); metallic-roughness materials
+//! (see [`metallic_roughness`]) with their base colour, metallic-roughness,
 //! normal, occlusion and emissive textures, each on the UV set it names
-//! and with its own `KHR_texture_transform` (see [`texcoord`]),
-//! `KHR_materials_emissive_strength`, the samplers' wrap modes (WebP
-//! images through `EXT_texture_webp`); `EXT_mesh_gpu_instancing`; perspective and
-//! orthographic cameras (the first, or the one `--camera` names);
-//! `KHR_lights_punctual` lights in their units (candela and lux). What cannot be mapped is
-//! listed once in the warnings.
+//! and with its own `KHR_texture_transform` (see [`texcoord`]), the
+//! samplers' wrap modes (WebP images through `EXT_texture_webp`),
+//! `KHR_materials_emissive_strength`, `_unlit`, `_ior`, `_specular` and
+//! `_pbrSpecularGlossiness` (converted, see [`specular`]);
+//! `EXT_mesh_gpu_instancing`; perspective and orthographic cameras (the
+//! first, or the one `--camera` names); `KHR_lights_punctual` lights in
+//! their units (candela and lux). What cannot be mapped is listed once in
+//! the warnings.
 
 mod accessor;
 mod check;
@@ -27,6 +28,8 @@ mod instancing;
 mod lenient;
 mod meshopt;
 mod primitive;
+mod specgloss;
+mod specular;
 mod texcoord;
 mod uri;
 
@@ -394,12 +397,24 @@ impl Reader<'_> {
             return Ok(id);
         };
         let name = named(m.name(), index);
+        let here = format!("material {name}");
         let pbr = m.pbr_metallic_roughness();
-        let base = pbr.base_color_factor();
+        // A specular-glossiness material, converted, in place of its
+        // metallic-roughness fallback.
+        let spec_gloss = m.extensions().and_then(|e| e.get(specular::SPEC_GLOSS));
+        let converted = spec_gloss.map(|v| self.spec_gloss_factors(parts, v, &here));
+        let (base, metallic, roughness) = match &converted {
+            Some(c) => (c.base, c.metallic, c.roughness),
+            None => (
+                pbr.base_color_factor(),
+                pbr.metallic_factor(),
+                pbr.roughness_factor(),
+            ),
+        };
         let mut mat = metallic_roughness(
             base,
-            pbr.metallic_factor(),
-            pbr.roughness_factor(),
+            metallic,
+            roughness,
             m.alpha_mode(),
             m.alpha_cutoff().unwrap_or(0.5),
         );
@@ -407,25 +422,39 @@ impl Reader<'_> {
             Some(n) if !n.trim().is_empty() => name.clone(),
             _ => format!("material {name}"),
         };
-        let here = format!("material {name}");
         let mut p = mat.pbr.take().expect("a metallic-roughness material");
         // Each texture multiplies its factor: the base colour's, the
         // emissive colour's; metallic and roughness scale at lookup.
         let base_tint = mat.kd;
-        mat.texture = self.texture(
-            parts,
-            pbr.base_color_texture(),
-            &here,
-            Encoding::Srgb,
-            base_tint,
-        )?;
-        p.metallic_roughness = self.texture(
-            parts,
-            pbr.metallic_roughness_texture(),
-            &here,
-            Encoding::Linear,
-            Vec3::ONE,
-        )?;
+        match (spec_gloss, &converted) {
+            // The diffuse texture tinted by the converted base colour
+            // (exact where the conversion finds no metal).
+            (Some(v), Some(c)) => {
+                let diffuse = v.get("diffuseTexture");
+                mat.texture =
+                    self.json_texture(parts, diffuse, &here, Encoding::Srgb, base_tint)?;
+                p.metallic_roughness = self.spec_gloss_texture(parts, v, c, &here)?;
+                if p.metallic_roughness.is_some() {
+                    (p.metallic, p.roughness) = (1.0, 1.0);
+                }
+            }
+            _ => {
+                mat.texture = self.texture(
+                    parts,
+                    pbr.base_color_texture(),
+                    &here,
+                    Encoding::Srgb,
+                    base_tint,
+                )?;
+                p.metallic_roughness = self.texture(
+                    parts,
+                    pbr.metallic_roughness_texture(),
+                    &here,
+                    Encoding::Linear,
+                    Vec3::ONE,
+                )?;
+            }
+        }
         if let Some(n) = m.normal_texture() {
             let scale = n.scale();
             let id = self.texture_of(
@@ -508,14 +537,21 @@ impl Reader<'_> {
                 i.map_or("(not a number)".to_string(), |i| i.to_string())
             )),
         }
+        self.specular(parts, &m, &mut p, &here)?;
         if let Some(a) = &mut mat.alpha {
-            a.texture = self.texture(
-                parts,
-                pbr.base_color_texture(),
-                &here,
-                Encoding::Alpha,
-                Vec3::ONE,
-            )?;
+            a.texture = match spec_gloss {
+                Some(v) => {
+                    let diffuse = v.get("diffuseTexture");
+                    self.json_texture(parts, diffuse, &here, Encoding::Alpha, Vec3::ONE)?
+                }
+                None => self.texture(
+                    parts,
+                    pbr.base_color_texture(),
+                    &here,
+                    Encoding::Alpha,
+                    Vec3::ONE,
+                )?,
+            };
         }
         // A surface there everywhere needs no test.
         mat.alpha = mat.alpha.filter(|a| {

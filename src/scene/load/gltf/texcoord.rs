@@ -117,8 +117,9 @@ pub(super) fn uv_map(tex_coord: u32, t: Option<&Transform>) -> Result<UvMap, Str
     Ok(UvMap { set, transform })
 }
 
-/// The UV sets a material's core texture slots read (a slot whose
-/// transform cannot be read, its own `texCoord`).
+/// The UV sets a material's texture slots read, the core's and those of
+/// the extensions rayterm reads (a slot whose transform cannot be read,
+/// its own `texCoord`).
 pub(super) fn sets(m: &::gltf::Material) -> Vec<u32> {
     let pbr = m.pbr_metallic_roughness();
     let info = |i: Option<::gltf::texture::Info>| {
@@ -143,6 +144,7 @@ pub(super) fn sets(m: &::gltf::Material) -> Vec<u32> {
     ]
     .into_iter()
     .flatten()
+    .chain(super::specular::sets(m))
     .collect()
 }
 
