@@ -5,7 +5,9 @@
 //! leaf-shaped shadows. Only scenes with such materials pay: the plan's
 //! `alpha` is off elsewhere.
 
-use super::integrator::{lookup, Tracer};
+use glam::Vec3;
+
+use super::integrator::{lookup, Tracer, Uvs};
 use super::recorder::Recorder;
 use crate::bvh::Hit;
 use crate::geometry::offset::{geometric_normal, hit_point, offset_origin};
@@ -23,12 +25,15 @@ impl Tracer<'_> {
         let prim = hit.prim as usize;
         let a = self.scene.materials[geo.tri_material[prim] as usize].alpha?;
         let mut alpha = a.factor;
-        let textured =
-            self.plan.textures && self.scene.meshes[geo.tri_mesh[prim] as usize].textured;
-        if let (Some(id), true) = (a.texture, textured) {
-            let t = geo.indices[prim].map(|i| geo.uvs[i as usize]);
-            let st = t[0] * (1.0 - hit.u - hit.v) + t[1] * hit.u + t[2] * hit.v;
-            alpha *= lookup(&self.scene.textures[id as usize], st, self.plan.bilinear).x;
+        if let (Some(id), true) = (a.texture, self.plan.textures) {
+            let uvs = Uvs::at(
+                self.scene,
+                prim,
+                Vec3::new(1.0 - hit.u - hit.v, hit.u, hit.v),
+            );
+            if let Some(t) = lookup(&self.scene.textures[id as usize], &uvs, self.plan.bilinear) {
+                alpha *= t.x;
+            }
         }
         Some((alpha, a.cutoff))
     }

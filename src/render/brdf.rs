@@ -29,6 +29,9 @@ pub(crate) struct Brdf {
     pub(crate) c_diff: Vec3,
     /// Reflectance at normal incidence.
     pub(crate) f0: Vec3,
+    /// Reflectance at grazing incidence: 1, less for a dielectric whose
+    /// `KHR_materials_specular` weight is below 1.
+    pub(crate) f90: Vec3,
     /// GGX alpha: roughness squared.
     pub(crate) alpha: f32,
 }
@@ -51,9 +54,9 @@ pub(crate) struct SpecularSample {
 
 /// Schlick's Fresnel.
 #[inline]
-fn schlick(f0: Vec3, cos: f32) -> Vec3 {
+fn schlick(f0: Vec3, f90: Vec3, cos: f32) -> Vec3 {
     let m = (1.0 - cos.clamp(0.0, 1.0)).powi(5);
-    f0 + (Vec3::ONE - f0) * m
+    f0 + (f90 - f0) * m
 }
 
 /// GGX's normal distribution at `cos_h`, the cosine between the normal
@@ -102,7 +105,23 @@ impl Brdf {
     /// roughness, each clamped to 0..1, for a dielectric that reflects
     /// `dielectric_f0` at normal incidence (0.04, or what
     /// `KHR_materials_ior` says).
+    #[cfg(test)]
     pub(crate) fn with_f0(base: Vec3, metallic: f32, roughness: f32, dielectric_f0: f32) -> Self {
+        Self::with_specular(base, metallic, roughness, Vec3::splat(dielectric_f0), 1.0)
+    }
+
+    /// [`Brdf::with_f0`] for a dielectric reflecting `dielectric_f0` (a
+    /// colour) at normal incidence and `weight` at grazing incidence:
+    /// `KHR_materials_specular`, whose weight scales the dielectric's
+    /// whole Fresnel term (the diffuse share is what that leaves, per
+    /// channel, where the extension takes the largest channel's).
+    pub(crate) fn with_specular(
+        base: Vec3,
+        metallic: f32,
+        roughness: f32,
+        dielectric_f0: Vec3,
+        weight: f32,
+    ) -> Self {
         let m = if metallic.is_nan() {
             1.0
         } else {
@@ -116,7 +135,8 @@ impl Brdf {
         let base = base.max(Vec3::ZERO);
         Self {
             c_diff: base * (1.0 - m),
-            f0: Vec3::splat(dielectric_f0.clamp(0.0, 1.0)).lerp(base, m),
+            f0: dielectric_f0.clamp(Vec3::ZERO, Vec3::ONE).lerp(base, m),
+            f90: Vec3::splat(weight.clamp(0.0, 1.0)).lerp(Vec3::ONE, m),
             alpha: r * r,
         }
     }
@@ -137,7 +157,7 @@ impl Brdf {
             return Lobes::default();
         }
         let h = (v + l).normalize_or_zero();
-        let f = schlick(self.f0, v.dot(h));
+        let f = schlick(self.f0, self.f90, v.dot(h));
         let diffuse = (Vec3::ONE - f) * self.c_diff * (FRAC_1_PI * cos_l);
         if self.is_mirror() {
             return Lobes {
@@ -165,7 +185,7 @@ impl Brdf {
             let dir = 2.0 * cos_v * n - v;
             return Some(SpecularSample {
                 dir,
-                weight: schlick(self.f0, cos_v),
+                weight: schlick(self.f0, self.f90, cos_v),
             });
         }
         let (t, b) = onb(n);
@@ -181,14 +201,14 @@ impl Brdf {
         let g2_over_g1 = (1.0 + lv) / (1.0 + lv + ll);
         Some(SpecularSample {
             dir,
-            weight: schlick(self.f0, v.dot(h)) * g2_over_g1,
+            weight: schlick(self.f0, self.f90, v.dot(h)) * g2_over_g1,
         })
     }
 
     /// Schlick's Fresnel seen from `cos_v`: what a mirror reflects.
     #[inline]
     pub(crate) fn fresnel(&self, cos_v: f32) -> Vec3 {
-        schlick(self.f0, cos_v)
+        schlick(self.f0, self.f90, cos_v)
     }
 
     /// The density (per solid angle) with which [`Brdf::sample_specular`]
@@ -279,6 +299,7 @@ mod tests {
             let b = Brdf {
                 c_diff: Vec3::ZERO,
                 f0: Vec3::ONE,
+                f90: Vec3::ONE,
                 alpha,
             };
             let v = dir(theta_v, 0.7);
@@ -309,6 +330,7 @@ mod tests {
             let b = Brdf {
                 c_diff: Vec3::ZERO,
                 f0: Vec3::ONE,
+                f90: Vec3::ONE,
                 alpha,
             };
             let v = dir(theta_v, 0.0);
@@ -369,6 +391,26 @@ mod tests {
         assert!((e.diffuse.x - 0.75 * FRAC_1_PI).abs() < 1e-6, "{e:?}");
         let gold = Vec3::new(1.0, 0.8, 0.3);
         assert_eq!(Brdf::with_f0(gold, 1.0, 0.5, 0.25).f0, gold);
+    }
+
+    /// `KHR_materials_specular`: a weight of 0 leaves a dielectric pure
+    /// Lambert (no Fresnel at any angle, nothing taken from the diffuse);
+    /// a coloured F0 reflects that colour head-on and the weight at
+    /// grazing; a metal ignores both.
+    #[test]
+    fn the_specular_weight_and_colour_scale_the_dielectric_fresnel() {
+        let n = Vec3::Z;
+        let plain = Brdf::with_specular(Vec3::ONE, 0.0, 0.5, Vec3::ZERO, 0.0);
+        for v in [n, dir(1.4, 0.0)] {
+            let e = plain.eval(n, v, n);
+            assert_eq!(e.specular, Vec3::ZERO);
+            assert!((e.diffuse.x - FRAC_1_PI).abs() < 1e-6, "{e:?}");
+        }
+        let red = Brdf::with_specular(Vec3::ONE, 0.0, 0.5, Vec3::new(0.08, 0.0, 0.0), 0.5);
+        assert_eq!(red.fresnel(1.0), Vec3::new(0.08, 0.0, 0.0));
+        assert!((red.fresnel(0.0) - Vec3::splat(0.5)).abs().max_element() < 1e-6);
+        let metal = Brdf::with_specular(Vec3::new(1.0, 0.8, 0.3), 1.0, 0.5, Vec3::ZERO, 0.0);
+        assert_eq!((metal.f0, metal.f90), (Vec3::new(1.0, 0.8, 0.3), Vec3::ONE));
     }
 
     /// The spec's split: a dielectric keeps 96 % of a white base as

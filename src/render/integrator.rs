@@ -8,7 +8,7 @@
 
 use std::f32::consts::{FRAC_1_PI, PI};
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 use super::brdf::Brdf;
 use super::plan::Plan;
@@ -165,14 +165,35 @@ pub(super) struct Surface<'m> {
     pub(super) brdf: Option<Brdf>,
 }
 
-/// A texture's value at `uv`, filtered as the plan says.
-#[inline]
-pub(super) fn lookup(tex: &Texture, uv: Vec2, bilinear: bool) -> Vec3 {
-    if bilinear {
-        tex.bilinear(uv)
-    } else {
-        tex.nearest(uv)
+/// A hit's texture coordinates: each UV set its mesh has, interpolated
+/// (none where the plan reads no textures).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Uvs(pub(crate) [Option<Vec2>; 2]);
+
+impl Uvs {
+    /// At barycentric coordinates `b` of triangle `prim`.
+    #[inline]
+    pub(crate) fn at(scene: &Scene, prim: usize, b: Vec3) -> Uvs {
+        let geo = &scene.geometry;
+        let mesh = &scene.meshes[geo.tri_mesh[prim] as usize];
+        let at = |set| {
+            geo.corner_uvs(mesh, prim, set)
+                .map(|t| t[0] * b.x + t[1] * b.y + t[2] * b.z)
+        };
+        Uvs([at(0), at(1)])
     }
+}
+
+/// A texture's value at the coordinates it reads of `uvs`, filtered as
+/// the plan says; `None` where the hit has not that UV set.
+#[inline]
+pub(crate) fn lookup(tex: &Texture, uvs: &Uvs, bilinear: bool) -> Option<Vec3> {
+    let st = tex.uv.apply(uvs.0[tex.uv.set as usize]?);
+    Some(if bilinear {
+        tex.bilinear(st)
+    } else {
+        tex.nearest(st)
+    })
 }
 
 /// The shading normal `n` tilted by a normal map's texel `t` (tangent
@@ -203,6 +224,28 @@ fn normal_mapped(verts: [Vec3; 3], uvs: [Vec2; 3], n: Vec3, v: Vec3, t: Vec3, sc
     } else {
         n
     }
+}
+
+/// The normal `vn` tilted by a normal map's texel `t` scaled by `scale`,
+/// in the vertex tangent frame of `tangents` at barycentric `b`: as
+/// MikkTSpace's pixel shader does it, the interpolated normal and tangent
+/// and the bitangent `w · vn × tangent` made from them, none normalised
+/// first (the frame the map was baked in). `None` where the corners have
+/// no tangent.
+fn tangent_mapped(vn: Vec3, tangents: [Vec4; 3], b: Vec3, t: Vec3, scale: f32) -> Option<Vec3> {
+    let [t0, t1, t2] = tangents;
+    let vt = t0.truncate() * b.x + t1.truncate() * b.y + t2.truncate() * b.z;
+    if !vt.is_finite() || vt.length_squared() <= 1e-12 {
+        return None;
+    }
+    let w = if t0.w * b.x + t1.w * b.y + t2.w * b.z < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
+    let vb = vn.cross(vt) * w;
+    let m = t * 2.0 - Vec3::ONE;
+    Some((vt * (m.x * scale) + vb * (m.y * scale) + vn * m.z).normalize_or_zero())
 }
 
 impl<'a> Tracer<'a> {
@@ -523,22 +566,16 @@ impl<'a> Tracer<'a> {
             }
         }
         let mut kd = mat.kd;
-        let mut uv = None;
         let mut texel = None;
-        if TEX && mesh.textured {
-            let t = idx.map(|i| geo.uvs[i as usize]);
-            let st = t[0] * b.x + t[1] * b.y + t[2] * b.z;
-            uv = Some(st);
-            if let Some(tex) = mat.texture {
-                let tex = &scene.textures[tex as usize];
-                let c = if self.plan.bilinear {
-                    tex.bilinear(st)
-                } else {
-                    tex.nearest(st)
-                };
-                texel = Some(c);
-                kd = c;
-            }
+        let uvs = match TEX {
+            true => Uvs::at(scene, prim, b),
+            false => Uvs::default(),
+        };
+        let textures = &scene.textures;
+        let tex = |id: u32| lookup(&textures[id as usize], &uvs, self.plan.bilinear);
+        if let Some(c) = mat.texture.and_then(tex) {
+            texel = Some(c);
+            kd = c;
         }
         if mesh.colored {
             let c = idx.map(|i| geo.colors[i as usize]);
@@ -549,24 +586,57 @@ impl<'a> Tracer<'a> {
         let (mut pbr_info, mut pbr_mapped) = (None, None);
         if let Some(pbr) = &mat.pbr {
             let (mut metallic, mut roughness) = (pbr.metallic, pbr.roughness);
-            emitted = self.emitted(pbr, uv);
+            emitted = self.emitted(pbr, &uvs);
             let mut mapped = None;
-            if let Some(st) = uv {
-                let textures = &scene.textures;
-                let tex = |id: u32| lookup(&textures[id as usize], st, self.plan.bilinear);
-                if let Some(id) = pbr.metallic_roughness {
-                    let t = tex(id);
-                    (metallic, roughness) = (metallic * t.z, roughness * t.y);
-                }
-                if let Some((id, strength)) = pbr.occlusion {
-                    occlusion = 1.0 + strength * (tex(id).x - 1.0);
-                }
-                if let Some((id, scale)) = pbr.normal.filter(|_| self.plan.normal_maps) {
-                    let uvs = idx.map(|i| geo.uvs[i as usize]);
-                    mapped = Some(normal_mapped(verts, uvs, n, v, tex(id), scale));
-                }
+            if let Some(t) = pbr.metallic_roughness.and_then(tex) {
+                (metallic, roughness) = (metallic * t.z, roughness * t.y);
             }
-            brdf = Some(Brdf::with_f0(kd, metallic, roughness, pbr.dielectric_f0));
+            if let Some(t) = pbr.roughness_texture.and_then(tex) {
+                roughness *= t.x;
+            }
+            if let Some(t) = pbr.metallic_texture.and_then(tex) {
+                metallic *= t.x;
+            }
+            if let Some((t, strength)) = pbr.occlusion.and_then(|(id, s)| Some((tex(id)?, s))) {
+                occlusion = 1.0 + strength * (t.x - 1.0);
+            }
+            if let Some((id, scale)) = pbr.normal.filter(|_| self.plan.normal_maps) {
+                let map = &textures[id as usize];
+                // The vertex tangent frame where the mesh has one (and its
+                // normals are on), else the triangle's own.
+                let vertex = match SMOOTH && mesh.smooth {
+                    true => geo.corner_tangents(mesh, prim),
+                    false => None,
+                };
+                let t = tex(id);
+                let by_vertex = vertex.zip(t).and_then(|(tangents, t)| {
+                    let vn = idx.map(|i| geo.normals[i as usize]);
+                    let vn = vn[0] * b.x + vn[1] * b.y + vn[2] * b.z;
+                    let m = tangent_mapped(vn, tangents, b, t, scale)?;
+                    // Seen from the back, the whole frame turns with the
+                    // normal (glTF's double-sided rule).
+                    let m = if n.dot(vn) < 0.0 { -m } else { m };
+                    Some(if m.dot(v) > 0.0 && m.is_finite() {
+                        m
+                    } else {
+                        n
+                    })
+                });
+                mapped = by_vertex.or_else(|| {
+                    let corners = geo.corner_uvs(mesh, prim, map.uv.set)?;
+                    let corners = corners.map(|c| map.uv.apply(c));
+                    Some(normal_mapped(verts, corners, n, v, t?, scale))
+                });
+            }
+            let (mut weight, mut tint) = (pbr.specular, pbr.specular_color);
+            if let Some(t) = pbr.specular_texture.and_then(tex) {
+                weight *= t.x;
+            }
+            if let Some(t) = pbr.specular_color_texture.and_then(tex) {
+                tint *= t;
+            }
+            let f0 = (Vec3::splat(pbr.dielectric_f0) * tint).min(Vec3::ONE) * weight;
+            brdf = Some(Brdf::with_specular(kd, metallic, roughness, f0, weight));
             pbr_mapped = mapped;
             if R::ACTIVE {
                 pbr_info = Some(PbrInfo {
@@ -589,7 +659,7 @@ impl<'a> Tracer<'a> {
                 geometric_normal: ng,
                 shading_normal: n,
                 vertex_normals: mesh.smooth.then(|| idx.map(|i| geo.normals[i as usize])),
-                uv,
+                uv: uvs.0[0],
                 texel,
                 kd,
                 ks: mat.ks,
@@ -681,17 +751,14 @@ impl<'a> Tracer<'a> {
     }
 
     /// The light a metallic-roughness surface gives off at texture
-    /// coordinates `uv` (where the plan reads textures), as emission has it.
-    pub(super) fn emitted(&self, pbr: &crate::scene::material::Pbr, uv: Option<Vec2>) -> Vec3 {
+    /// coordinates `uvs`, as emission has it.
+    pub(super) fn emitted(&self, pbr: &crate::scene::material::Pbr, uvs: &Uvs) -> Vec3 {
         if !self.plan.emission {
             return Vec3::ZERO;
         }
-        match (pbr.emissive_texture, uv) {
-            (Some(id), Some(st)) => {
-                lookup(&self.scene.textures[id as usize], st, self.plan.bilinear)
-            }
-            _ => pbr.emissive,
-        }
+        pbr.emissive_texture
+            .and_then(|id| lookup(&self.scene.textures[id as usize], uvs, self.plan.bilinear))
+            .unwrap_or(pbr.emissive)
     }
 
     /// One light's Phong contribution, averaged over its samples.

@@ -17,7 +17,7 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3};
 
 use super::bsdf::{Bsdf, Lobe};
-use super::integrator::{Depth, Surface, Tracer};
+use super::integrator::{Depth, Surface, Tracer, Uvs};
 use super::recorder::{Bounce, Emission, LightSample, Mis, RayKind, Recorder};
 use crate::geometry::offset::{offset_origin, SHADOW_EPSILON};
 use crate::geometry::sampling::Rng;
@@ -343,11 +343,14 @@ impl Tracer<'_> {
         let Some(pbr) = &mat.pbr else {
             return Vec3::ZERO;
         };
-        let mesh = &scene.meshes[geo.tri_mesh[prim as usize] as usize];
-        let st = (self.plan.textures && mesh.textured).then(|| {
-            let t = geo.indices[prim as usize].map(|i| geo.uvs[i as usize]);
-            t[0] * (1.0 - uv.x - uv.y) + t[1] * uv.x + t[2] * uv.y
-        });
-        self.emitted(pbr, st)
+        let uvs = match self.plan.textures {
+            true => Uvs::at(
+                scene,
+                prim as usize,
+                Vec3::new(1.0 - uv.x - uv.y, uv.x, uv.y),
+            ),
+            false => Uvs::default(),
+        };
+        self.emitted(pbr, &uvs)
     }
 }

@@ -421,6 +421,7 @@ mod tests {
             texels: Arc::new(texels),
             wrap: [Wrap::Repeat; 2],
             tint: Vec3::ONE,
+            uv: Default::default(),
         })
     }
 

@@ -54,6 +54,10 @@ pub struct Pbr {
     pub roughness: f32,
     /// Linear texels: blue scales `metallic`, green `roughness`.
     pub metallic_roughness: Option<u32>,
+    /// Textures of one value each (linear, red channel), as MTL's `map_Pr`
+    /// and `map_Pm` hold them: they scale `roughness` and `metallic`.
+    pub roughness_texture: Option<u32>,
+    pub metallic_texture: Option<u32>,
     /// Tangent-space normals (linear texels) and their scale.
     pub normal: Option<(u32, f32)>,
     /// Emitted radiance, strength included, before its texture.
@@ -66,6 +70,14 @@ pub struct Pbr {
     /// A dielectric's reflectance at normal incidence: 0.04, or what
     /// `KHR_materials_ior` makes it, `((ior - 1) / (ior + 1))²`.
     pub dielectric_f0: f32,
+    /// `KHR_materials_specular`: the dielectric's Fresnel term is scaled
+    /// by `specular` (times its texture's alpha) and its reflectance at
+    /// normal incidence tinted by `specular_color` (times its texture,
+    /// sRGB), at most 1. 1 and white leave the glTF core's BRDF.
+    pub specular: f32,
+    pub specular_texture: Option<u32>,
+    pub specular_color: Vec3,
+    pub specular_color_texture: Option<u32>,
 }
 
 impl Default for Pbr {
@@ -76,11 +88,17 @@ impl Default for Pbr {
             metallic: 1.0,
             roughness: 1.0,
             metallic_roughness: None,
+            roughness_texture: None,
+            metallic_texture: None,
             normal: None,
             emissive: Vec3::ZERO,
             emissive_texture: None,
             occlusion: None,
             dielectric_f0: 0.04,
+            specular: 1.0,
+            specular_texture: None,
+            specular_color: Vec3::ONE,
+            specular_color_texture: None,
         }
     }
 }
@@ -112,7 +130,11 @@ impl Material {
     /// Whether its reflection is sampled from a lobe rather than a mirror.
     pub(crate) fn glossy(&self) -> bool {
         match &self.pbr {
-            Some(p) => p.roughness >= MIRROR_ROUGHNESS || p.metallic_roughness.is_some(),
+            Some(p) => {
+                p.roughness >= MIRROR_ROUGHNESS
+                    || p.metallic_roughness.is_some()
+                    || p.roughness_texture.is_some()
+            }
             None => self.reflective() && self.ns < GLOSSY_MAX_NS,
         }
     }

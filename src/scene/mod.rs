@@ -14,7 +14,7 @@ pub(crate) mod show;
 pub(crate) mod summary;
 pub(crate) mod texture;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 pub use camera::{Camera, Projection};
@@ -22,7 +22,7 @@ pub use envlight::EnvLight;
 pub use light::Light;
 pub use material::{Alpha, Material, Pbr};
 pub use reach::check_reach;
-pub use texture::{CubeMap, Texture, Wrap};
+pub use texture::{CubeMap, Texture, UvMap, Wrap};
 
 use crate::choice::Choice;
 use crate::geometry::Aabb;
@@ -36,6 +36,15 @@ pub struct Geometry {
     pub(crate) positions: Vec<Vec3>,
     pub(crate) normals: Vec<Vec3>,
     pub(crate) uvs: Vec<Vec2>,
+    /// A second UV set (glTF's `TEXCOORD_1`), held only for the vertices
+    /// of meshes whose textures read it ([`MeshInfo`]'s `uv1`): it does
+    /// not run in parallel with the others.
+    pub(crate) uvs1: Vec<Vec2>,
+    /// Tangents for normal maps (xyz, and w the sign of the bitangent,
+    /// `w · normal × tangent`; zero where there is none), held only for
+    /// the vertices of normal-mapped meshes with vertex normals
+    /// ([`MeshInfo`]'s `tangent`), as `uvs1`.
+    pub(crate) tangents: Vec<Vec4>,
     /// Linear RGB per vertex when some mesh has colours (white for the
     /// others); empty when none has.
     pub(crate) colors: Vec<Vec3>,
@@ -58,6 +67,16 @@ impl Geometry {
 
     pub fn uvs(&self) -> &[Vec2] {
         &self.uvs
+    }
+
+    /// The second UV set of the meshes that have one.
+    pub fn uvs1(&self) -> &[Vec2] {
+        &self.uvs1
+    }
+
+    /// The tangents of the normal-mapped meshes that have them.
+    pub fn tangents(&self) -> &[Vec4] {
+        &self.tangents
     }
 
     /// Linear RGB per vertex, or empty when no mesh has colours.
@@ -98,6 +117,27 @@ impl Geometry {
         g
     }
 
+    /// The coordinates of UV set `set` at the corners of triangle `prim`
+    /// of `mesh`, where the mesh has that set.
+    #[inline]
+    pub(crate) fn corner_uvs(&self, mesh: &MeshInfo, prim: usize, set: u8) -> Option<[Vec2; 3]> {
+        let idx = self.indices[prim];
+        match set {
+            0 => mesh.textured.then(|| idx.map(|i| self.uvs[i as usize])),
+            _ => mesh
+                .uv1
+                .map(|shift| idx.map(|i| self.uvs1[(i - shift) as usize])),
+        }
+    }
+
+    /// The tangents at the corners of triangle `prim` of `mesh`, where it
+    /// has them.
+    #[inline]
+    pub(crate) fn corner_tangents(&self, mesh: &MeshInfo, prim: usize) -> Option<[Vec4; 3]> {
+        let shift = mesh.tangent?;
+        Some(self.indices[prim].map(|i| self.tangents[(i - shift) as usize]))
+    }
+
     pub fn triangle(&self, i: usize) -> [Vec3; 3] {
         self.indices[i].map(|v| self.positions[v as usize])
     }
@@ -134,6 +174,11 @@ pub struct MeshInfo {
     pub textured: bool,
     /// Vertex colours multiply the material's diffuse colour.
     pub colored: bool,
+    /// Where its vertices' second UV set is, when it has one: vertex `i`'s
+    /// is `Geometry::uvs1[i - shift]`.
+    pub(crate) uv1: Option<u32>,
+    /// Where its vertices' tangents are, likewise (`Geometry::tangents`).
+    pub(crate) tangent: Option<u32>,
 }
 
 /// What a ray that leaves the scene sees.
@@ -296,6 +341,10 @@ impl Scene {
             m.texture.is_some()
                 || m.pbr.as_ref().is_some_and(|p| {
                     p.metallic_roughness.is_some()
+                        || p.roughness_texture.is_some()
+                        || p.metallic_texture.is_some()
+                        || p.specular_texture.is_some()
+                        || p.specular_color_texture.is_some()
                         || p.normal.is_some()
                         || p.occlusion.is_some()
                         || p.emissive_texture.is_some()

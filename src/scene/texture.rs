@@ -24,6 +24,29 @@ pub struct Texture {
     /// What every lookup is multiplied by (a glTF material's base colour
     /// factor).
     pub tint: Vec3,
+    /// The texture coordinates it reads.
+    pub uv: UvMap,
+}
+
+/// Which texture coordinates a texture reads, and how they are moved
+/// before the lookup: glTF's `texCoord` and `KHR_texture_transform`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct UvMap {
+    /// The UV set: 0 (`TEXCOORD_0`, every format's) or 1 (`TEXCOORD_1`).
+    pub set: u8,
+    /// Applied to the coordinates (rayterm's, v up); `None` leaves them
+    /// as they are, bit for bit.
+    pub transform: Option<glam::Affine2>,
+}
+
+impl UvMap {
+    #[inline]
+    pub fn apply(&self, uv: Vec2) -> Vec2 {
+        match &self.transform {
+            Some(m) => m.transform_point2(uv),
+            None => uv,
+        }
+    }
 }
 
 /// How texture coordinates outside 0..1 (and neighbours across an edge)
@@ -138,6 +161,7 @@ impl Texture {
             texels: Arc::new(texels),
             wrap: [Wrap::Repeat; 2],
             tint: Vec3::ONE,
+            uv: UvMap::default(),
         }
     }
 
@@ -295,6 +319,7 @@ mod tests {
             ),
             wrap: [Wrap::Repeat; 2],
             tint: Vec3::ONE,
+            uv: UvMap::default(),
         }
     }
 

@@ -539,14 +539,14 @@ fn required_extensions_are_read_or_named() {
     // Required extensions that change only how surfaces look open, drawn
     // without them, as other viewers draw them; with one that may change
     // the geometry the file is still refused.
-    let looks = json!(["KHR_materials_sheen", "KHR_materials_pbrSpecularGlossiness"]);
+    let looks = json!(["KHR_materials_sheen", "KHR_materials_clearcoat"]);
     let s = load(&with("looks.glb", looks.clone(), looks)).unwrap();
     assert_eq!(s.geometry.indices().len(), 2);
     assert!(
         warned(
             &s,
-            "looks.glb: requires KHR_materials_sheen, KHR_materials_pbrSpecularGlossiness, \
-             which rayterm does not read: its surfaces are drawn without them"
+            "looks.glb: requires KHR_materials_sheen, KHR_materials_clearcoat, which rayterm \
+             does not read: its surfaces are drawn without them"
         ),
         "{:?}",
         s.warnings
@@ -570,7 +570,9 @@ fn required_extensions_are_read_or_named() {
         "KHR_lights_punctual",
         "KHR_mesh_quantization",
         "EXT_meshopt_compression",
-        "KHR_materials_unlit"
+        "KHR_materials_unlit",
+        "KHR_materials_specular",
+        "KHR_materials_pbrSpecularGlossiness"
     ]);
     let s = load(&with("read.glb", read.clone(), read)).unwrap();
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
@@ -623,42 +625,91 @@ fn a_texture_transform_moves_the_coordinates_of_its_texture() {
         png
     };
     let image = bin.put(&png);
-    let t = bin.put(&f32s(&[0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0]));
+    let corners = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+    let t = bin.put(&f32s(&corners.concat()));
     let uv = accessor(
         &mut json,
         json!({"bufferView": t, "componentType": 5126, "count": 4, "type": "VEC2"}),
     );
+    // A second set: the first's halved.
+    let half: Vec<f32> = corners.concat().iter().map(|x| x / 2.0).collect();
+    let t1 = bin.put(&f32s(&half));
+    let uv1 = accessor(
+        &mut json,
+        json!({"bufferView": t1, "componentType": 5126, "count": 4, "type": "VEC2"}),
+    );
     json["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = uv.into();
+    json["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = uv1.into();
     json["meshes"][0]["primitives"][0]["material"] = 0.into();
     let transform =
         json!({"offset": [0.5, 0.0], "scale": [0.5, 2.0], "rotation": std::f32::consts::FRAC_PI_2});
-    json["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture":
-        {"index": 0, "extensions": {"KHR_texture_transform": transform}}}}]);
+    let on_second = json!({"offset": [0.25, 0.0], "texCoord": 1});
+    let slot = |t: &Value| json!({"index": 0, "extensions": {"KHR_texture_transform": t}});
+    json["materials"] = json!([{
+        "pbrMetallicRoughness": {"baseColorTexture": slot(&transform),
+                                 "metallicRoughnessTexture": {"index": 0, "texCoord": 1}},
+        "normalTexture": slot(&on_second),
+        "occlusionTexture": slot(&transform),
+        "emissiveTexture": slot(&on_second),
+        "emissiveFactor": [1.0, 1.0, 1.0]}]);
     json["textures"] = json!([{"source": 0}]);
     json["images"] = json!([{"bufferView": image, "mimeType": "image/png"}]);
     json["extensionsUsed"] = json!(["KHR_texture_transform"]);
     json["extensionsRequired"] = json!(["KHR_texture_transform"]);
     let s = load(&d.write("moved.glb", glb(&json, &bin))).unwrap();
-    // glTF's (u, v) scaled to (u / 2, 2v), turned a quarter to (2v, -u / 2),
-    // moved by (0.5, 0); then v up, as rayterm has it.
-    let want = |u: f32, v: f32| Vec2::new(2.0 * v + 0.5, 1.0 + u / 2.0);
-    let uvs = &s.geometry.uvs();
-    for (got, [u, v]) in uvs
-        .iter()
-        .zip([[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]])
-    {
-        assert!((*got - want(u, v)).abs().max_element() < 1e-6, "{uvs:?}");
-    }
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
-    // The transform may move the texture to another set, which is said.
+    let (m, g) = (&s.materials[0], &s.geometry);
+    let p = m.pbr.as_ref().unwrap();
+    let texture = |id: Option<u32>| &s.textures[id.unwrap() as usize];
+    // The file's coordinates are kept, v up as rayterm has them; each
+    // texture moves those of its set as its own transform says.
+    let file = |[u, v]: [f32; 2]| Vec2::new(u, 1.0 - v);
+    assert_eq!(g.uvs(), corners.map(file));
+    assert_eq!(g.uvs1(), corners.map(|c| file(c.map(|x| x / 2.0))));
+    // glTF's (u, v) scaled to (u / 2, 2v), turned a quarter to (2v, -u / 2),
+    // moved by (0.5, 0); then v up.
+    let turned = |u: f32, v: f32| Vec2::new(2.0 * v + 0.5, 1.0 + u / 2.0);
+    let shifted = |u: f32, v: f32| Vec2::new(u / 2.0 + 0.25, 1.0 - v / 2.0);
+    for (t, set, want) in [
+        (texture(m.texture), 0, &turned as &dyn Fn(f32, f32) -> Vec2),
+        (texture(p.occlusion.map(|o| o.0)), 0, &turned),
+        (texture(p.normal.map(|n| n.0)), 1, &shifted),
+        (texture(p.emissive_texture), 1, &shifted),
+    ] {
+        assert_eq!(t.uv.set, set);
+        let read = [g.uvs(), g.uvs1()][set as usize];
+        for (got, [u, v]) in read.iter().zip(corners) {
+            let got = t.uv.apply(*got);
+            assert!(
+                (got - want(u, v)).abs().max_element() < 1e-6,
+                "{got} {u} {v}"
+            );
+        }
+    }
+    let mr = texture(p.metallic_roughness);
+    assert_eq!((mr.uv.set, mr.uv.transform), (1, None));
+    // A second set no texture reads is not kept.
+    let mut one = json.clone();
+    one["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    let s = load(&d.write("one.glb", glb(&one, &bin))).unwrap();
+    assert!(s.geometry.uvs1().is_empty());
+    // A set the primitive lacks, or past the second, is said.
+    let attributes = "/meshes/0/primitives/0/attributes";
+    json.pointer_mut(attributes)
+        .unwrap()
+        .as_object_mut()
+        .unwrap()
+        .remove("TEXCOORD_1");
     let info = "/materials/0/pbrMetallicRoughness/baseColorTexture";
-    json.pointer_mut(info).unwrap()["extensions"]["KHR_texture_transform"]["texCoord"] = 1.into();
+    json.pointer_mut(info).unwrap()["extensions"]["KHR_texture_transform"]["texCoord"] = 2.into();
     let s = load(&d.write("second.glb", glb(&json, &bin))).unwrap();
-    assert!(
-        warned(&s, "textures on a second UV set (material 0)"),
-        "{:?}",
-        s.warnings
-    );
+    for want in [
+        "textures on primitives without TEXCOORD_1 (drawn in the material's colour) (material 0",
+        "textures on TEXCOORD_2 (rayterm reads TEXCOORD_0 and TEXCOORD_1) (material 0)",
+    ] {
+        assert!(warned(&s, want), "{:?}", s.warnings);
+    }
+    assert!(s.materials[0].texture.is_none());
 }
 
 fn fixture(name: &str) -> String {

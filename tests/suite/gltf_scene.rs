@@ -1388,3 +1388,238 @@ fn the_index_of_refraction_sets_a_dielectrics_reflectance() {
         s.warnings
     );
 }
+
+/// A 2x2 square facing the camera on +z, its normal map tilting every
+/// normal toward the texture's up (+v, world +y here), under a directional
+/// light from above and in front. Its two halves meet at x = 0, sharing
+/// the vertices there; with `mirror`, the right half's u runs back
+/// (u = 1 - |x|), as NormalTangentMirrorTest's halves do; else
+/// u = (x + 1) / 2.
+/// `tangent_w`, when given, is the file's TANGENT: +x with that w.
+fn bumped_square(mirror: bool, tangent_w: Option<f32>, texel: [u8; 3]) -> Vec<u8> {
+    let mut bin = Bin::default();
+    let xs = [-1.0, 0.0, 1.0];
+    let p: Vec<Vec3> = [-1.0, 1.0]
+        .iter()
+        .flat_map(|&y| xs.map(|x| Vec3::new(x, y, 0.0)))
+        .collect();
+    let (pos, ind) = bin.mesh(&p, &[[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4]]);
+    let uv: Vec<f32> = p
+        .iter()
+        .flat_map(|p| {
+            let u = if mirror {
+                1.0 - p.x.abs()
+            } else {
+                (p.x + 1.0) / 2.0
+            };
+            [u, (1.0 - p.y) / 2.0]
+        })
+        .collect();
+    let uv = bin.floats(&uv, 2, "VEC2");
+    let normal = bin.floats(&[0.0, 0.0, 1.0].repeat(6), 3, "VEC3");
+    let mut attributes = json!({"POSITION": pos, "NORMAL": normal, "TEXCOORD_0": uv});
+    if let Some(w) = tangent_w {
+        attributes["TANGENT"] = bin.floats(&[1.0, 0.0, 0.0, w].repeat(6), 4, "VEC4").into();
+    }
+    let img = image::RgbImage::from_pixel(2, 2, image::Rgb(texel));
+    let mut png = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let png = bin.view(&png);
+    let light = glam::Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(0.0, -1.0, -1.0).normalize());
+    bin.glb(json!({
+        "scene": 0, "scenes": [{"nodes": [0, 1, 2]}],
+        "nodes": [{"mesh": 0}, {"camera": 0, "translation": [0.0, 0.0, 3.0]},
+                  {"extensions": {"KHR_lights_punctual": {"light": 0}},
+                   "rotation": light.to_array()}],
+        "meshes": [{"primitives": [{"attributes": attributes, "indices": ind, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1.0],
+                                                "metallicFactor": 0.0, "roughnessFactor": 1.0},
+                       "normalTexture": {"index": 0}}],
+        "textures": [{"source": 0}],
+        "images": [{"bufferView": png, "mimeType": "image/png"}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.1}}],
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [
+            {"type": "directional", "intensity": 3.0}]}}
+    }))
+}
+
+/// The mean colour of a patch in the left half and one in the right half
+/// of a 32x32 render of `file` (Whitted, exact).
+fn halves(file: &str) -> (Vec3, Vec3) {
+    let req = rayterm::render::SceneRequest {
+        size: Some((32, 32)),
+        features: exact(),
+        integrator: Some(scene::Integrator::Whitted),
+        ..rayterm::render::SceneRequest::new(file)
+    };
+    let s = rayterm::render::Session::open(&req).unwrap().0;
+    let img = rayterm::render::Progressive::render(&s.tracer(), 1).image();
+    let patch = |c0: usize| {
+        let mut sum = Vec3::ZERO;
+        for y in 12..20 {
+            for x in c0..c0 + 4 {
+                sum += img[y * 32 + x];
+            }
+        }
+        sum / 32.0
+    };
+    (patch(8), patch(20))
+}
+
+/// A normal map over texture coordinates mirrored at a seam: the vertices
+/// on the seam get a tangent frame per side (MikkTSpace's, the file having
+/// none), so both halves bump the same way and look alike, as
+/// NormalTangentMirrorTest asks. The tilt toward the light is seen.
+#[test]
+fn a_normal_map_over_mirrored_coordinates_bumps_both_halves_alike() {
+    let d = Dir::new("gltf-tangent-mirror");
+    let tilted = [128, 200, 200];
+    let (left, right) = halves(&d.write("mirror.glb", bumped_square(true, None, tilted)));
+    let (flat, _) = halves(&d.write("flat.glb", bumped_square(true, None, [128, 128, 255])));
+    assert!(left.x > flat.x * 1.05, "{left} against flat {flat}");
+    assert!(
+        (left - right).abs().max_element() < 1e-4,
+        "{left} against {right}"
+    );
+    let s = load(d.path("mirror.glb").to_str().unwrap()).unwrap();
+    // The seam's two vertices were split, each half keeping its frame.
+    assert_eq!(s.geometry.positions().len(), 8);
+    assert_eq!(s.geometry.tangents().len(), 8);
+}
+
+/// A file's TANGENT is what the normal map turns by: with w = 1 it is the
+/// frame MikkTSpace makes for these coordinates; w = -1 turns the
+/// bitangent over, so the bump tilts away from the light.
+#[test]
+fn a_files_tangents_are_honoured_and_w_flips_the_bump() {
+    let d = Dir::new("gltf-tangent-w");
+    let tilted = [128, 200, 200];
+    let (generated, _) = halves(&d.write("gen.glb", bumped_square(false, None, tilted)));
+    let (up, up_right) = halves(&d.write("up.glb", bumped_square(false, Some(1.0), tilted)));
+    let (down, _) = halves(&d.write("down.glb", bumped_square(false, Some(-1.0), tilted)));
+    assert!(
+        (up - generated).abs().max_element() < 1e-4,
+        "{up} against {generated}"
+    );
+    assert!(
+        (up - up_right).abs().max_element() < 1e-4,
+        "{up} against {up_right}"
+    );
+    assert!(down.x < up.x * 0.8, "w = -1: {down}, w = 1: {up}");
+}
+
+/// Tangents MikkTSpace makes are those Blender wrote: its Suzanne (the
+/// glTF-Blender-IO exporter's round-trip test, with TANGENT) read with and
+/// without its TANGENT attribute.
+#[test]
+fn generated_tangents_match_blenders() {
+    let d = Dir::new("gltf-tangent-blender");
+    let dir = format!("{}/tests/files/blender", env!("CARGO_MANIFEST_DIR"));
+    let with = load(&format!("{dir}/suzanne.gltf")).unwrap();
+    let mut doc: Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{dir}/suzanne.gltf")).unwrap())
+            .unwrap();
+    for p in doc["meshes"][0]["primitives"].as_array_mut().unwrap() {
+        p["attributes"].as_object_mut().unwrap().remove("TANGENT");
+    }
+    std::fs::copy(format!("{dir}/suzanne.bin"), d.path("suzanne.bin")).unwrap();
+    let without = load(&d.write("suzanne.gltf", serde_json::to_vec(&doc).unwrap())).unwrap();
+    let (a, b) = (&with.geometry, &without.geometry);
+    assert_eq!(a.positions().len(), b.positions().len());
+    assert_eq!(a.tangents().len(), a.positions().len());
+    let (mut sum, mut worst, mut n) = (0.0, 0.0f32, 0.0);
+    for (ta, tb) in a.indices().iter().zip(b.indices()) {
+        for k in 0..3 {
+            let (x, y) = (a.tangents()[ta[k] as usize], b.tangents()[tb[k] as usize]);
+            assert_eq!(x.w, y.w);
+            let angle = x.truncate().angle_between(y.truncate()).to_degrees();
+            (sum, worst, n) = (sum + angle, worst.max(angle), n + 1.0);
+        }
+    }
+    // Blender makes them on its quads, before triangulating: a few degrees
+    // apart at most.
+    assert!(
+        sum / n < 1.0 && worst < 10.0,
+        "mean {} worst {worst}",
+        sum / n
+    );
+}
+
+/// `KHR_materials_specular` and `KHR_materials_pbrSpecularGlossiness` are
+/// read: the specular weight and colour and their textures; a
+/// specular-glossiness material converted to metallic-roughness, its
+/// specular-glossiness texture texel by texel. Neither is listed as not
+/// shown.
+#[test]
+fn specular_extensions_are_read() {
+    let d = Dir::new("gltf-specular");
+    let mut bin = Bin::default();
+    let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let (pos, ind) = bin.mesh(&p, &[[0, 1, 2]]);
+    let uv = bin.floats(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0], 2, "VEC2");
+    // White, fully glossy: a specular-glossiness texel of a white metal.
+    let img = image::RgbaImage::from_pixel(2, 2, image::Rgba([255, 255, 255, 255]));
+    let mut png = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let png = bin.view(&png);
+    let prim = |m: usize| {
+        json!({"attributes": {"POSITION": pos, "TEXCOORD_0": uv},
+                                 "indices": ind, "material": m})
+    };
+    let doc = json!({
+        "scene": 0, "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"mesh": 1, "translation": [2.0, 0.0, 0.0]}],
+        "meshes": [{"primitives": [prim(0)]}, {"primitives": [prim(1)]}],
+        "extensionsUsed": ["KHR_materials_specular", "KHR_materials_pbrSpecularGlossiness"],
+        "materials": [
+            {"name": "Satin",
+             "pbrMetallicRoughness": {"metallicFactor": 0.0},
+             "extensions": {"KHR_materials_specular": {
+                 "specularFactor": 0.5, "specularColorFactor": [1.0, 0.5, 0.25],
+                 "specularTexture": {"index": 0},
+                 "specularColorTexture": {"index": 0, "texCoord": 0}}}},
+            {"name": "Plastic",
+             "extensions": {"KHR_materials_pbrSpecularGlossiness": {
+                 "diffuseFactor": [0.5, 0.2, 0.1, 1.0], "specularFactor": [0.04, 0.04, 0.04],
+                 "glossinessFactor": 0.3, "diffuseTexture": {"index": 0},
+                 "specularGlossinessTexture": {"index": 0}}}}],
+        "textures": [{"source": 0}],
+        "images": [{"bufferView": png, "mimeType": "image/png"}]
+    });
+    let s = load(&d.write("specular.glb", bin.glb(doc))).unwrap();
+    assert!(
+        !s.warnings.iter().any(|w| w.contains("not shown")),
+        "{:?}",
+        s.warnings
+    );
+    let material = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap();
+    let satin = material("Satin").pbr.as_ref().unwrap();
+    assert_eq!(
+        (satin.specular, satin.specular_color),
+        (0.5, Vec3::new(1.0, 0.5, 0.25))
+    );
+    let weight = &s.textures[satin.specular_texture.unwrap() as usize];
+    assert_eq!(weight.texels[0], Vec3::ONE, "the alpha channel");
+    assert!(satin.specular_color_texture.is_some());
+    // The plastic's factors: no metal, its diffuse colour as base, its
+    // glossiness 0.3 a roughness of 0.7.
+    let plastic = material("Plastic");
+    assert!((plastic.kd - Vec3::new(0.5, 0.2, 0.1)).abs().max_element() < 1e-5);
+    let p = plastic.pbr.as_ref().unwrap();
+    assert!(plastic.texture.is_some());
+    // Its texture, white and fully glossy times the factors: specular
+    // 0.04 is still no metal, glossiness 0.3 still a roughness of 0.7.
+    let mr = &s.textures[p.metallic_roughness.unwrap() as usize];
+    assert_eq!((p.metallic, p.roughness), (1.0, 1.0));
+    assert!(
+        (mr.texels[0] - Vec3::new(0.0, 0.7, 0.0))
+            .abs()
+            .max_element()
+            < 1e-5,
+        "{}",
+        mr.texels[0]
+    );
+}

@@ -366,3 +366,110 @@ fn a_long_mtllib_line_names_several_libraries() {
     assert!(r.ok(), "{}", r.stderr);
     assert!(!r.stderr.contains("warning"), "{}", r.stderr);
 }
+
+/// A PNG of `w` x `h` texels of colour `f(x, y)`.
+fn png(w: u32, h: u32, f: impl Fn(u32, u32) -> [u8; 3]) -> Vec<u8> {
+    let img = image::RgbImage::from_fn(w, h, |x, y| image::Rgb(f(x, y)));
+    let mut out = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut out), image::ImageFormat::Png)
+        .unwrap();
+    out
+}
+
+/// The MTL PBR extension makes a material physically based: Pr, Pm, Ke
+/// and their maps, a normal map from `norm` or from a `map_Bump` whose
+/// image is one (with its `-bm` scale), MikkTSpace tangents for its
+/// meshes; a grey `map_Bump` is a height map, said and left out. A plain
+/// Phong material beside it stays Phong, its Ke and map_Bump ignored as
+/// before.
+#[test]
+fn mtl_pbr_materials_are_physically_based() {
+    let d = Dir::new("mtl-pbr");
+    d.write("rough.png", png(2, 2, |x, _| [255 * x as u8; 3]));
+    d.write(
+        "bumps.png",
+        png(4, 4, |x, y| [100 + 20 * x as u8, 90 + 30 * y as u8, 240]),
+    );
+    d.write("height.png", png(4, 4, |x, y| [(40 * (x + y)) as u8; 3]));
+    d.write("glow.png", png(2, 2, |_, _| [255, 128, 0]));
+    d.write(
+        "m.mtl",
+        "newmtl metal\nKd 0.9 0.6 0.3\nKs 1 1 1\nNs 100\nPr 0.25\nPm 1\nKe 2 2 2\n\
+         map_Ke glow.png\nmap_Bump -bm 0.5 bumps.png\n\
+         newmtl mapped\nNs 225\nmap_Pr rough.png\nmap_Pm rough.png\nbump height.png\n\
+         newmtl derived\nPm 0.5\nNs 225\nnorm bumps.png\n\
+         newmtl phong\nKd 0.5 0.5 0.5\nKs 0.2\nNs 10\nKe 1 0 0\nmap_Bump bumps.png\n",
+    );
+    let quad = |m: &str| format!("usemtl {m}\nf -4/-4/1 -3/-3/1 -2/-2/1 -1/-1/1\n");
+    let mut obj = String::from("mtllib m.mtl\nvn 0 0 1\n");
+    for (i, m) in ["metal", "mapped", "derived", "phong"].iter().enumerate() {
+        let x = 3.0 * i as f32;
+        obj += &format!(
+            "v {x} 0 0\nv {} 0 0\nv {} 1 0\nv {x} 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n",
+            x + 1.0,
+            x + 1.0
+        );
+        obj += &format!("o {m}\n{}", quad(m));
+    }
+    let file = d.write("m.obj", obj);
+    let s = load::open(&file, &Opening::default()).unwrap().scene;
+    let material = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap();
+    let metal = material("metal");
+    let p = metal
+        .pbr
+        .as_ref()
+        .expect("Pr and Pm make it physically based");
+    assert_eq!((p.roughness, p.metallic), (0.25, 1.0));
+    assert_eq!(
+        (metal.kd, metal.ks, metal.ns),
+        (Vec3::new(0.9, 0.6, 0.3), Vec3::ZERO, 0.0)
+    );
+    // Ke tints its map, as glTF's emissive factor does.
+    assert_eq!(p.emissive, Vec3::splat(2.0));
+    let glow = &s.textures[p.emissive_texture.unwrap() as usize];
+    assert_eq!(glow.tint, Vec3::splat(2.0));
+    assert!(metal.emissive());
+    let (bumps, scale) = p.normal.expect("a bluish map_Bump is a normal map");
+    assert_eq!(scale, 0.5);
+    assert_eq!(s.textures[bumps as usize].texels.len(), 16);
+    // Maps replace their numbers; roughness maps are looked up.
+    let mapped = material("mapped");
+    let p = mapped.pbr.as_ref().unwrap();
+    assert_eq!((p.roughness, p.metallic), (1.0, 1.0));
+    assert!(p.roughness_texture.is_some() && p.metallic_texture.is_some());
+    assert!(p.normal.is_none(), "a grey bump map is a height map");
+    // No Pr: the roughness Blender's exporter wrote as Ns (1 - r)² 900.
+    let derived = material("derived").pbr.as_ref().unwrap();
+    assert!(
+        (derived.roughness - 0.5).abs() < 1e-6,
+        "{}",
+        derived.roughness
+    );
+    assert_eq!(
+        (derived.metallic, derived.normal.map(|n| n.1)),
+        (0.5, Some(1.0))
+    );
+    // Phong stays Phong.
+    let phong = material("phong");
+    assert!(phong.pbr.is_none());
+    assert_eq!((phong.ks, phong.ns), (Vec3::splat(0.2), 10.0));
+    let all = s.warnings.join("\n");
+    for want in [
+        "m.mtl:14: bump height.png is a height map (its texels are grey), not a normal map: \
+         ignored",
+        "Ke (emission) (line 23)",
+        "map_Bump (line 24)",
+    ] {
+        assert!(all.contains(want), "{want}: {all}");
+    }
+    // The normal-mapped meshes (metal, derived) have tangents: +x, along u.
+    let g = &s.geometry;
+    assert_eq!(g.tangents().len(), 8);
+    assert!(g
+        .tangents()
+        .iter()
+        .all(|t| (*t - glam::Vec4::new(1.0, 0.0, 0.0, 1.0))
+            .abs()
+            .max_element()
+            < 1e-6));
+}

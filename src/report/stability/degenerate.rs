@@ -159,6 +159,8 @@ fn raw_scene(loaded: &Scene) -> Scene {
             smooth: true,
             textured: true,
             colored: false,
+            uv1: None,
+            tangent: None,
         }],
         ..loaded.clone()
     }

@@ -174,6 +174,7 @@ fn decode(name: &str, bytes: &[u8]) -> Result<Texture> {
         texels: Arc::new(rgb.pixels().map(|p| Vec3::from(p.0)).collect()),
         wrap: [Wrap::Repeat; 2],
         tint: Vec3::ONE,
+        uv: Default::default(),
     })
 }
 
@@ -196,6 +197,7 @@ fn decode_exr(name: &str, bytes: &[u8]) -> Result<Texture> {
         texels: Arc::new(texels),
         wrap: [Wrap::Repeat; 2],
         tint: Vec3::ONE,
+        uv: Default::default(),
     })
 }
 

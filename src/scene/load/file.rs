@@ -497,6 +497,8 @@ fn patches(
                 .collect(),
         ),
         uvs: Some(pm.uvs),
+        uvs1: None,
+        tangents: None,
         colors: None,
         indices: pm.indices,
         material,

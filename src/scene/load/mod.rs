@@ -17,6 +17,7 @@ mod ply;
 mod polygon;
 pub mod source;
 mod stl;
+mod tangents;
 pub(crate) mod up;
 
 use std::path::Path;

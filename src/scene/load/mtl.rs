@@ -1,13 +1,17 @@
-//! Wavefront MTL material libraries: the Phong subset rayterm renders.
+//! Wavefront MTL material libraries: the Phong subset rayterm renders, and
+//! the PBR extension's physically based materials.
 //!
 //! `Kd`, `Ks` (one number for grey or three for RGB), `Ns`, `d` and
 //! `map_Kd` (with `-clamp`) are used; `Ka`, `Tf`, `Ni`, `illum` and
 //! `sharpness` are checked and ignored (the ambient term is the scene's,
-//! there is no refraction); a non-black `Ke`, `Tr`, the other texture
-//! maps, other texture options (skipped with the values each takes) and
-//! unknown statements are ignored with one warning per file. Malformed
-//! statements are errors naming the file and line; negative colours and
-//! out-of-range `Ns` or `d` are warnings.
+//! there is no refraction). A material with `Pr` or `Pm` (or their maps)
+//! is physically based: `Pr`, `Pm`, `Ke`, `map_Pr`, `map_Pm`, `map_Ke`
+//! and `norm` or `map_Bump` (with `-bm`) are read for it. On a Phong
+//! material a non-black `Ke` and those maps, and anywhere `Tr`, the other
+//! texture maps, other texture options (skipped with the values each
+//! takes) and unknown statements are ignored with one warning per file.
+//! Malformed statements are errors naming the file and line; negative
+//! colours and out-of-range `Ns`, `d`, `Pr` or `Pm` are warnings.
 
 use std::path::Path;
 
@@ -15,6 +19,10 @@ use anyhow::{anyhow, bail, Result};
 use glam::Vec3;
 
 use super::numbers::{self, Absurd};
+use super::parts::Parts;
+use super::source::{resolve, Source};
+use crate::scene::texture::{Encoding, Texture};
+use crate::scene::Pbr;
 use crate::words::quoted;
 
 /// One `newmtl` block as written.
@@ -30,6 +38,37 @@ pub(crate) struct MtlMaterial {
     pub(crate) map_kd: Option<(String, usize)>,
     /// `map_Kd -clamp on`: the texture clamped rather than repeated.
     pub(crate) clamp: bool,
+    /// The PBR extension: roughness and metalness, and their maps.
+    pub(crate) pr: Option<f32>,
+    pub(crate) pm: Option<f32>,
+    pub(crate) map_pr: Option<(String, usize)>,
+    pub(crate) map_pm: Option<(String, usize)>,
+    /// Emission (`Ke`) and its line, and its map.
+    pub(crate) ke: Option<(Vec3, usize)>,
+    pub(crate) map_ke: Option<(String, usize)>,
+    /// The normal map (`norm`, or `map_Bump` and `bump` where the image is
+    /// one).
+    pub(crate) normal: Option<Normal>,
+}
+
+/// A normal map as an MTL statement names it.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Normal {
+    pub(crate) file: String,
+    pub(crate) line: usize,
+    /// `-bm`: how far the normals tilt (1 as written).
+    pub(crate) scale: f32,
+    /// The statement: `norm` holds only normal maps, `map_Bump` and
+    /// `bump` height maps too.
+    pub(crate) statement: &'static str,
+}
+
+impl MtlMaterial {
+    /// Whether it is a physically based material: one with the PBR
+    /// extension's roughness or metalness.
+    pub(crate) fn pbr(&self) -> bool {
+        self.pr.is_some() || self.pm.is_some() || self.map_pr.is_some() || self.map_pm.is_some()
+    }
 }
 
 /// What a texture option takes after its name.
@@ -69,6 +108,8 @@ struct TextureArgs {
     ignored: Vec<String>,
     /// `-clamp on` (or `off`), the last one written.
     clamp: Option<bool>,
+    /// `-bm`, the last one written.
+    bm: Option<f32>,
     /// The file name, which may hold spaces, a backslash before one
     /// escaping it (`my\ texture.png`).
     file: String,
@@ -81,6 +122,7 @@ fn texture_args(rest: &str) -> TextureArgs {
     let mut args = TextureArgs {
         ignored: Vec::new(),
         clamp: None,
+        bm: None,
         file: String::new(),
     };
     // The first word of `rest`, taken off it.
@@ -110,6 +152,10 @@ fn texture_args(rest: &str) -> TextureArgs {
             Some(Takes::Switch) if ["on", "off"].contains(&next) => values.push(word(&mut rest)),
             Some(Takes::Word) if !next.is_empty() => values.push(word(&mut rest)),
             _ => {}
+        }
+        // `-bm` scales a normal map, and is ignored (and said) elsewhere.
+        if let ("-bm", Some(v)) = (name.as_str(), values.first()) {
+            args.bm = v.parse().ok().filter(|b: &f32| b.is_finite());
         }
         match (name.as_str(), values.first().map(String::as_str)) {
             ("-clamp", Some(v)) => args.clamp = Some(v == "on"),
@@ -208,6 +254,9 @@ pub(crate) fn parse(
             .split_once(char::is_whitespace)
             .map_or((line, ""), |(k, r)| (k, r.trim()));
         if key == "newmtl" {
+            if let Some(m) = materials.last() {
+                phong_leftovers(m, &mut ignored);
+            }
             if rest.is_empty() {
                 warnings.push(format!(
                     "{}:{n}: newmtl without a name: the material of a usemtl without one",
@@ -259,7 +308,7 @@ pub(crate) fn parse(
                     (_, None) => ignored.note(&format!("{key} {}", rest_word(rest)), n),
                     ("Kd", c) => m.kd = c,
                     ("Ks", c) => m.ks = c,
-                    ("Ke", Some(c)) if c != Vec3::ZERO => ignored.note("Ke (emission)", n),
+                    ("Ke", Some(c)) => m.ke = Some((c, n)),
                     _ => {}
                 }
             }
@@ -298,6 +347,65 @@ pub(crate) fn parse(
             "Ni" | "sharpness" => {
                 single(&mut absurd)?;
             }
+            "Pr" | "Pm" => {
+                let x = single(&mut absurd)?;
+                if !(0.0..=1.0).contains(&x) {
+                    warnings.push(format!(
+                        "{}:{n}: {key} {} is outside 0..1: clamped",
+                        path.display(),
+                        quoted(rest)
+                    ));
+                }
+                let x = Some(x.clamp(0.0, 1.0));
+                match key {
+                    "Pr" => m.pr = x,
+                    _ => m.pm = x,
+                }
+            }
+            "map_Pr" | "map_Pm" | "map_Ke" | "norm" | "map_Bump" | "bump" => {
+                let args = texture_args(rest);
+                let file = args.file.trim_matches('"').trim();
+                if file.is_empty() {
+                    warnings.push(format!(
+                        "{}:{n}: {key} names no file: ignored",
+                        path.display()
+                    ));
+                    continue;
+                }
+                let normal = matches!(key, "norm" | "map_Bump" | "bump");
+                // `-bm` is the normal map's scale, not an option ignored.
+                let options: Vec<&String> = args
+                    .ignored
+                    .iter()
+                    .filter(|o| !(normal && o.starts_with("-bm ")))
+                    .collect();
+                if !options.is_empty() {
+                    let list: Vec<&str> = options.iter().map(|o| o.as_str()).collect();
+                    warnings.push(format!(
+                        "{}:{n}: {key} options ignored: {} (the texture is applied as is)",
+                        path.display(),
+                        quoted(&list.join(", "))
+                    ));
+                }
+                let at = Some((args.file.clone(), n));
+                match key {
+                    "map_Pr" => m.map_pr = at,
+                    "map_Pm" => m.map_pm = at,
+                    "map_Ke" => m.map_ke = at,
+                    _ => {
+                        m.normal = Some(Normal {
+                            file: args.file,
+                            line: n,
+                            scale: args.bm.unwrap_or(1.0),
+                            statement: match key {
+                                "norm" => "norm",
+                                "bump" => "bump",
+                                _ => "map_Bump",
+                            },
+                        })
+                    }
+                }
+            }
             "Tr" => {
                 single(&mut absurd)?;
                 ignored.note("Tr (opacity is read from d)", n);
@@ -308,6 +416,7 @@ pub(crate) fn parse(
                     ignored: options,
                     clamp,
                     file,
+                    ..
                 } = texture_args(rest);
                 // As a missing texture: the material keeps its Kd.
                 if file.trim_matches('"').trim().is_empty() {
@@ -330,6 +439,9 @@ pub(crate) fn parse(
             other => ignored.note(other, n),
         }
     }
+    if let Some(m) = materials.last() {
+        phong_leftovers(m, &mut ignored);
+    }
     if let Some(n) = orphans {
         warnings.push(format!(
             "{}:{n}: statements before the first newmtl belong to no material: ignored",
@@ -339,6 +451,115 @@ pub(crate) fn parse(
     warnings.extend(absurd.warning(path));
     warnings.extend(ignored.warning(path));
     Ok(materials)
+}
+
+/// What a Phong material (one without the PBR extension's roughness or
+/// metalness) has no use for: a non-black `Ke` and the extension's maps,
+/// listed with the ignored statements once its block has ended.
+fn phong_leftovers(m: &MtlMaterial, ignored: &mut Ignored) {
+    if m.pbr() {
+        return;
+    }
+    if let Some((_, line)) = m.ke.filter(|(c, _)| *c != Vec3::ZERO) {
+        ignored.note("Ke (emission)", line);
+    }
+    if let Some(n) = &m.normal {
+        ignored.note(n.statement, n.line);
+    }
+    if let Some((_, line)) = &m.map_ke {
+        ignored.note("map_Ke", *line);
+    }
+}
+
+/// The physically based material of an MTL material with the PBR
+/// extension (`m.pbr()`), its textures read into `parts`: `Pr` and `Pm`
+/// or their maps (a map replaces its number, as Blender's importer reads
+/// them; a roughness given by neither comes from `Ns`, `1 - √Ns / 30`, the
+/// inverse of Blender's exporter, else is 1), `Ke` tinting `map_Ke`, and
+/// the normal map.
+pub(crate) fn pbr(parts: &mut Parts, src: &dyn Source, mtl_path: &Path, m: &MtlMaterial) -> Pbr {
+    let texture = |parts: &mut Parts, file: &str, line: usize, encoding| {
+        let from = format!("{}:{line}", mtl_path.display());
+        let path = resolve(mtl_path, file);
+        parts.texture_at(
+            src,
+            &path,
+            src.outside(mtl_path, &path),
+            file,
+            &from,
+            encoding,
+        )
+    };
+    let map = |parts: &mut Parts, m: &Option<(String, usize)>, encoding| {
+        m.as_ref()
+            .and_then(|(file, line)| texture(parts, file, *line, encoding))
+    };
+    let roughness_texture = map(parts, &m.map_pr, Encoding::Linear);
+    let metallic_texture = map(parts, &m.map_pm, Encoding::Linear);
+    let roughness = match (roughness_texture, m.pr, m.ns) {
+        (Some(_), _, _) => 1.0,
+        (None, Some(r), _) => r,
+        (None, None, Some(ns)) => (1.0 - ns.sqrt() / 30.0).clamp(0.0, 1.0),
+        (None, None, None) => 1.0,
+    };
+    let metallic = match (metallic_texture, m.pm) {
+        (Some(_), _) => 1.0,
+        (None, pm) => pm.unwrap_or(0.0),
+    };
+    let ke = m.ke.map_or(Vec3::ZERO, |(c, _)| c.max(Vec3::ZERO));
+    let mut emissive = ke;
+    let emissive_texture = map(parts, &m.map_ke, Encoding::Srgb).map(|id| {
+        // The map is the emitted colour, tinted by a Ke beside it.
+        let tint = if ke == Vec3::ZERO { Vec3::ONE } else { ke };
+        emissive = tint;
+        match tint == Vec3::ONE {
+            true => id,
+            false => {
+                let mut t = parts.textures[id as usize].clone();
+                t.tint = tint;
+                parts.add_texture(t)
+            }
+        }
+    });
+    let normal = m.normal.as_ref().and_then(|n| {
+        let id = texture(parts, &n.file, n.line, Encoding::Linear)?;
+        if n.statement != "norm" && !normal_map(&parts.textures[id as usize]) {
+            parts.warnings.push(format!(
+                "{}:{}: {} {} is a height map (its texels are grey), not a normal map: ignored",
+                mtl_path.display(),
+                n.line,
+                n.statement,
+                quoted(&n.file)
+            ));
+            return None;
+        }
+        Some((id, n.scale))
+    });
+    Pbr {
+        metallic,
+        roughness,
+        roughness_texture,
+        metallic_texture,
+        normal,
+        emissive,
+        emissive_texture,
+        ..Pbr::default()
+    }
+}
+
+/// Whether an image `map_Bump` names is a tangent-space normal map rather
+/// than a height map: height maps are grey, normal maps bluish (their
+/// texels point out of the surface, `z` near 1, and lean in x and y).
+fn normal_map(t: &Texture) -> bool {
+    // A sample of at most 64k texels says as much as all of them.
+    let step = (t.texels.len() / 65536).max(1);
+    let (mut coloured, mut z, mut n) = (0usize, 0.0f64, 0usize);
+    for c in t.texels.iter().step_by(step) {
+        coloured += (c.max_element() - c.min_element() > 0.02) as usize;
+        z += c.z as f64;
+        n += 1;
+    }
+    coloured * 10 > n && z / n as f64 > 0.6
 }
 
 /// The first word of `rest` (`spectral`, `xyz`), for the ignored list.
@@ -432,6 +653,9 @@ mod tests {
         let args = |ignored: &[&str], clamp, file: &str| TextureArgs {
             ignored: ignored.iter().map(|s| s.to_string()).collect(),
             clamp,
+            bm: ignored
+                .iter()
+                .find_map(|o| o.strip_prefix("-bm ")?.parse().ok()),
             file: file.into(),
         };
         for (written, want) in [
@@ -483,6 +707,33 @@ mod tests {
             w,
             ["m.mtl:2: map_Kd options ignored: -bm 2 (the texture is applied as is)"]
         );
+    }
+
+    #[test]
+    fn the_pbr_extension_is_read_where_a_material_has_it() {
+        let (m, w) = parse_ok(
+            "newmtl a\nPr 1.5\nPm 0.5\nKe 1 0 0\nnorm -bm 0.25 -s 2 n.png\nmap_Pr r.png\n\
+             newmtl b\nKe 0 1 0\nnorm n.png\n",
+        );
+        assert!(m[0].pbr() && !m[1].pbr());
+        assert_eq!((m[0].pr, m[0].pm), (Some(1.0), Some(0.5)));
+        assert_eq!(m[0].ke, Some((Vec3::X, 4)));
+        let n = m[0].normal.as_ref().unwrap();
+        assert_eq!(
+            (n.file.as_str(), n.scale, n.statement),
+            ("n.png", 0.25, "norm")
+        );
+        assert_eq!(m[0].map_pr, Some(("r.png".into(), 6)));
+        let all = w.join("\n");
+        for part in [
+            "m.mtl:2: Pr 1.5 is outside 0..1: clamped",
+            "m.mtl:5: norm options ignored: -s 2 (the texture is applied as is)",
+            "Ke (emission) (line 8), norm (line 9)",
+        ] {
+            assert!(all.contains(part), "missing '{part}' in {all}");
+        }
+        // The physically based material's Ke is read, not ignored.
+        assert!(!all.contains("line 4"), "{all}");
     }
 
     #[test]

@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
-use glam::{Affine3A, DAffine3, DVec3, Vec2, Vec3};
+use glam::{Affine3A, DAffine3, DVec3, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::source::{resolve, FileKind, Outside, Source};
@@ -49,6 +49,11 @@ pub struct Placed {
     /// Unit normals, already transformed.
     pub normals: Option<Vec<Vec3>>,
     pub uvs: Option<Vec<Vec2>>,
+    /// A second UV set, for the textures that read it.
+    pub uvs1: Option<Vec<Vec2>>,
+    /// Tangents for a normal map, already transformed (see
+    /// [`place_tangents`]).
+    pub tangents: Option<Vec<Vec4>>,
     /// Linear RGB per vertex, multiplying the material's diffuse colour.
     pub colors: Option<Vec<Vec3>>,
     pub indices: Vec<[u32; 3]>,
@@ -85,6 +90,22 @@ pub(crate) fn place_normals(normals: &[DVec3], xf: &DAffine3) -> Vec<Vec3> {
     normals
         .iter()
         .map(|&n| (nxf * n).normalize_or_zero().as_vec3())
+        .collect()
+}
+
+/// Tangents turned by `xf` and made unit length. Their bitangents,
+/// `w · normal × tangent`, must turn as the surface does: a transform that
+/// mirrors (a negative determinant) turns the cross product of the placed
+/// normal and tangent the other way, so it flips `w`.
+pub(crate) fn place_tangents(tangents: &[Vec4], xf: &DAffine3) -> Vec<Vec4> {
+    let m = xf.matrix3;
+    let flip = if m.determinant() < 0.0 { -1.0 } else { 1.0 };
+    tangents
+        .iter()
+        .map(|t| {
+            let d = (m * t.truncate().as_dvec3()).normalize_or_zero().as_vec3();
+            d.extend(if t.w < 0.0 { -flip } else { flip })
+        })
         .collect()
 }
 
@@ -254,7 +275,8 @@ impl Parts {
             m.name,
             positions.collect(),
             [normals, None],
-            m.uvs.map(<[Vec2]>::to_vec),
+            [m.uvs.map(<[Vec2]>::to_vec), None],
+            None,
             m.indices.to_vec(),
             m.material,
         );
@@ -272,19 +294,22 @@ impl Parts {
             m.name,
             positions,
             [m.normals, m.colors],
-            m.uvs,
+            [m.uvs, m.uvs1],
+            m.tangents,
             m.indices,
             m.material,
         );
     }
 
     /// Appends a mesh; drops zero-area triangles and counts them.
+    #[allow(clippy::too_many_arguments)]
     fn push(
         &mut self,
         name: String,
         positions: Vec<Vec3>,
         [normals, colors]: [Option<Vec<Vec3>>; 2],
-        uvs: Option<Vec<Vec2>>,
+        [uvs, uvs1]: [Option<Vec<Vec2>>; 2],
+        tangents: Option<Vec<Vec4>>,
         mut kept: Vec<[u32; 3]>,
         material: u32,
     ) {
@@ -315,6 +340,16 @@ impl Parts {
             Some(v) => g.uvs.extend(v),
             None => g.uvs.extend(std::iter::repeat_n(Vec2::ZERO, n)),
         }
+        let uv1 = uvs1.map(|v| {
+            let shift = base - g.uvs1.len() as u32;
+            g.uvs1.extend(v);
+            shift
+        });
+        let tangent = tangents.map(|v| {
+            let shift = base - g.tangents.len() as u32;
+            g.tangents.extend(v);
+            shift
+        });
         let positions = &g.positions;
         // Exactly zero, in f64: in f32 the products (let alone a squared
         // length) underflow for slivers and tiny triangles.
@@ -353,6 +388,8 @@ impl Parts {
             smooth,
             textured,
             colored,
+            uv1,
+            tangent,
         });
     }
 

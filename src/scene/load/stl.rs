@@ -77,6 +77,8 @@ impl Solid {
             positions,
             normals: None,
             uvs: None,
+            uvs1: None,
+            tangents: None,
             colors: None,
             indices: self.indices,
             material,

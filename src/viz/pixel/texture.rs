@@ -34,7 +34,22 @@ impl Drawing<'_, '_> {
         };
         let tex = &scene.textures[tex as usize];
         let idx = geo.indices[prim];
-        let t = idx.map(|i| geo.uvs[i as usize]);
+        // The coordinates the texture reads: its UV set, moved by its
+        // transform.
+        let mesh = &scene.meshes[geo.tri_mesh[prim] as usize];
+        let Some(t) = geo.corner_uvs(mesh, prim, tex.uv.set) else {
+            let set = tex.uv.set;
+            self.say(None, format!("mesh '{}' has no TEXCOORD_{set}", h.mesh));
+            return;
+        };
+        let t = t.map(|c| tex.uv.apply(c));
+        let uv = match (tex.uv.set, tex.uv.transform) {
+            (0, None) => uv,
+            _ => {
+                let b = h.barycentric;
+                t[0] * b.x + t[1] * b.y + t[2] * b.z
+            }
+        };
         let p = idx.map(|i| geo.positions[i as usize]);
         // The triangle's affine map from uv to the world.
         let (e1, e2) = (t[1] - t[0], t[2] - t[0]);

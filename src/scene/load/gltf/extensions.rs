@@ -23,6 +23,8 @@ pub(super) const READ: &[&str] = &[
     "KHR_materials_emissive_strength",
     "KHR_materials_unlit",
     "KHR_materials_ior",
+    "KHR_materials_specular",
+    "KHR_materials_pbrSpecularGlossiness",
 ];
 
 const DRACO: &str = "KHR_draco_mesh_compression";

@@ -5,16 +5,21 @@
 //!
 //! Read: the default scene (or the first) through its node hierarchy, each
 //! node's transform applied in f64; triangle primitives (strips and fans
-//! turned into triangles) with positions, normals, the first UV set and
-//! `COLOR_0`, quantized or not, sparse or not, compressed with
+//! turned into triangles) with positions, normals, `TEXCOORD_0`,
+//! `TEXCOORD_1` (kept where a texture reads it), `COLOR_0` and, for normal
+//! maps, `TANGENT` (MikkTSpace's where the file has none, see
+//! [`super::tangents`]), quantized or not, sparse or not, compressed with
 //! meshoptimizer or not (see [`accessor`]); metallic-roughness materials
 //! (see [`metallic_roughness`]) with their base colour, metallic-roughness,
-//! normal, occlusion and emissive textures, `KHR_materials_emissive_strength`,
-//! the samplers' wrap modes and the base colour's `KHR_texture_transform`
-//! (WebP images through `EXT_texture_webp`); `EXT_mesh_gpu_instancing`; perspective and
-//! orthographic cameras (the first, or the one `--camera` names);
-//! `KHR_lights_punctual` lights in their units (candela and lux). What cannot be mapped is
-//! listed once in the warnings.
+//! normal, occlusion and emissive textures, each on the UV set it names
+//! and with its own `KHR_texture_transform` (see [`texcoord`]), the
+//! samplers' wrap modes (WebP images through `EXT_texture_webp`),
+//! `KHR_materials_emissive_strength`, `_unlit`, `_ior`, `_specular` and
+//! `_pbrSpecularGlossiness` (converted, see [`specular`]);
+//! `EXT_mesh_gpu_instancing`; perspective and orthographic cameras (the
+//! first, or the one `--camera` names); `KHR_lights_punctual` lights in
+//! their units (candela and lux). What cannot be mapped is listed once in
+//! the warnings.
 
 mod accessor;
 mod check;
@@ -23,6 +28,9 @@ mod instancing;
 mod lenient;
 mod meshopt;
 mod primitive;
+mod specgloss;
+mod specular;
+mod texcoord;
 mod uri;
 
 use std::cell::RefCell;
@@ -42,7 +50,10 @@ use crate::scene::texture::{Encoding, Texture, Wrap};
 use crate::scene::{Alpha, Material, Pbr, Projection};
 use check::{check_lights, check_transform, check_trees, check_values, Broken};
 use primitive::{Decoded, Key};
+use texcoord::Transform;
 use uri::inline_uri;
+
+const TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
 
 /// A camera of the file, placed in f64.
 #[derive(Clone, Debug)]
@@ -305,12 +316,12 @@ impl Reader<'_> {
         let Some(info) = info else {
             return Ok(None);
         };
-        let set = info.texture_transform().and_then(|t| t.tex_coord());
+        let transform = info.texture_transform().map(|t| Ok(Transform::of_info(&t)));
         self.texture_of(
             parts,
             info.texture(),
             info.tex_coord(),
-            set,
+            transform,
             user,
             encoding,
             tint,
@@ -318,24 +329,39 @@ impl Reader<'_> {
     }
 
     /// A texture decoded as `encoding`, with its sampler's wrapping and
-    /// `tint`; `None` (noted) where it cannot be shown. `set` is the UV
-    /// set a `KHR_texture_transform` names instead of `tex_coord`.
+    /// `tint`, reading the coordinates its `texCoord` and
+    /// `KHR_texture_transform` say; `None` (noted) where it cannot be
+    /// shown.
     #[allow(clippy::too_many_arguments)]
     fn texture_of(
         &mut self,
         parts: &mut Parts,
         texture: ::gltf::Texture,
         tex_coord: u32,
-        set: Option<u32>,
+        transform: Option<Result<Transform, String>>,
         user: &str,
         encoding: Encoding,
         tint: Vec3,
     ) -> Result<Option<u32>> {
-        if set.unwrap_or(tex_coord) != 0 {
-            self.unmapped
-                .note("textures on a second UV set", || user.to_string());
-            return Ok(None);
-        }
+        let transform = match transform {
+            Some(Err(why)) => {
+                parts.warnings.push(format!(
+                    "{}: {user}: a texture's KHR_texture_transform cannot be read ({why}): \
+                     the texture is drawn without it",
+                    self.at()
+                ));
+                None
+            }
+            Some(Ok(t)) => Some(t),
+            None => None,
+        };
+        let uv = match texcoord::uv_map(tex_coord, transform.as_ref()) {
+            Ok(uv) => uv,
+            Err(what) => {
+                self.unmapped.note(&what, || user.to_string());
+                return Ok(None);
+            }
+        };
         let sampler = texture.sampler();
         let image = match texture.source() {
             Some(image) => self.image(parts, image, user, encoding)?,
@@ -351,6 +377,7 @@ impl Reader<'_> {
             // Every material of the image shares its texels.
             t.tint = tint;
             t.wrap = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
+            t.uv = uv;
             parts.add_texture(t)
         }))
     }
@@ -370,12 +397,24 @@ impl Reader<'_> {
             return Ok(id);
         };
         let name = named(m.name(), index);
+        let here = format!("material {name}");
         let pbr = m.pbr_metallic_roughness();
-        let base = pbr.base_color_factor();
+        // A specular-glossiness material, converted, in place of its
+        // metallic-roughness fallback.
+        let spec_gloss = m.extensions().and_then(|e| e.get(specular::SPEC_GLOSS));
+        let converted = spec_gloss.map(|v| self.spec_gloss_factors(parts, v, &here));
+        let (base, metallic, roughness) = match &converted {
+            Some(c) => (c.base, c.metallic, c.roughness),
+            None => (
+                pbr.base_color_factor(),
+                pbr.metallic_factor(),
+                pbr.roughness_factor(),
+            ),
+        };
         let mut mat = metallic_roughness(
             base,
-            pbr.metallic_factor(),
-            pbr.roughness_factor(),
+            metallic,
+            roughness,
             m.alpha_mode(),
             m.alpha_cutoff().unwrap_or(0.5),
         );
@@ -383,32 +422,46 @@ impl Reader<'_> {
             Some(n) if !n.trim().is_empty() => name.clone(),
             _ => format!("material {name}"),
         };
-        let here = format!("material {name}");
         let mut p = mat.pbr.take().expect("a metallic-roughness material");
         // Each texture multiplies its factor: the base colour's, the
         // emissive colour's; metallic and roughness scale at lookup.
         let base_tint = mat.kd;
-        mat.texture = self.texture(
-            parts,
-            pbr.base_color_texture(),
-            &here,
-            Encoding::Srgb,
-            base_tint,
-        )?;
-        p.metallic_roughness = self.texture(
-            parts,
-            pbr.metallic_roughness_texture(),
-            &here,
-            Encoding::Linear,
-            Vec3::ONE,
-        )?;
+        match (spec_gloss, &converted) {
+            // The diffuse texture tinted by the converted base colour
+            // (exact where the conversion finds no metal).
+            (Some(v), Some(c)) => {
+                let diffuse = v.get("diffuseTexture");
+                mat.texture =
+                    self.json_texture(parts, diffuse, &here, Encoding::Srgb, base_tint)?;
+                p.metallic_roughness = self.spec_gloss_texture(parts, v, c, &here)?;
+                if p.metallic_roughness.is_some() {
+                    (p.metallic, p.roughness) = (1.0, 1.0);
+                }
+            }
+            _ => {
+                mat.texture = self.texture(
+                    parts,
+                    pbr.base_color_texture(),
+                    &here,
+                    Encoding::Srgb,
+                    base_tint,
+                )?;
+                p.metallic_roughness = self.texture(
+                    parts,
+                    pbr.metallic_roughness_texture(),
+                    &here,
+                    Encoding::Linear,
+                    Vec3::ONE,
+                )?;
+            }
+        }
         if let Some(n) = m.normal_texture() {
             let scale = n.scale();
             let id = self.texture_of(
                 parts,
                 n.texture(),
                 n.tex_coord(),
-                None,
+                n.extension_value(TEXTURE_TRANSFORM).map(Transform::of_json),
                 &here,
                 Encoding::Linear,
                 Vec3::ONE,
@@ -421,7 +474,7 @@ impl Reader<'_> {
                 parts,
                 o.texture(),
                 o.tex_coord(),
-                None,
+                o.extension_value(TEXTURE_TRANSFORM).map(Transform::of_json),
                 &here,
                 Encoding::Linear,
                 Vec3::ONE,
@@ -484,14 +537,21 @@ impl Reader<'_> {
                 i.map_or("(not a number)".to_string(), |i| i.to_string())
             )),
         }
+        self.specular(parts, &m, &mut p, &here)?;
         if let Some(a) = &mut mat.alpha {
-            a.texture = self.texture(
-                parts,
-                pbr.base_color_texture(),
-                &here,
-                Encoding::Alpha,
-                Vec3::ONE,
-            )?;
+            a.texture = match spec_gloss {
+                Some(v) => {
+                    let diffuse = v.get("diffuseTexture");
+                    self.json_texture(parts, diffuse, &here, Encoding::Alpha, Vec3::ONE)?
+                }
+                None => self.texture(
+                    parts,
+                    pbr.base_color_texture(),
+                    &here,
+                    Encoding::Alpha,
+                    Vec3::ONE,
+                )?,
+            };
         }
         // A surface there everywhere needs no test.
         mat.alpha = mat.alpha.filter(|a| {

@@ -6,11 +6,12 @@ use std::collections::HashMap;
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::mesh::{Mode, Semantic};
 use anyhow::{anyhow, bail, Result};
-use glam::{DAffine3, DVec3, Vec2, Vec3};
+use glam::{DAffine3, DVec3, Vec2, Vec3, Vec4};
 
 use super::Reader;
 use crate::scene::load::numbers;
-use crate::scene::load::parts::{place_normals, place_positions, Parts, Placed};
+use crate::scene::load::parts::{place_normals, place_positions, place_tangents, Parts, Placed};
+use crate::scene::load::tangents;
 use crate::scene::show::show3;
 
 /// What a primitive's accessors hold, checked: every index in range and
@@ -20,14 +21,19 @@ pub(super) struct Decoded {
     positions: Vec<DVec3>,
     normals: Option<Vec<DVec3>>,
     uvs: Option<Vec<Vec2>>,
+    /// `TEXCOORD_1`, read only where the material's textures read it.
+    uvs1: Option<Vec<Vec2>>,
     colors: Option<Vec<Vec3>>,
+    /// Tangents (the file's `TANGENT`, or MikkTSpace's) where the
+    /// material has a normal map and the primitive normals.
+    tangents: Option<Vec<Vec4>>,
     indices: Vec<[u32; 3]>,
 }
 
 /// The accessors and mode that decide a primitive's [`Decoded`]: primitives
 /// (of one mesh placed many times, or of many meshes) that share them
 /// share it.
-pub(super) type Key = [Option<usize>; 6];
+pub(super) type Key = [Option<usize>; 9];
 
 fn key(p: &::gltf::Primitive) -> Key {
     let index = |a: Option<::gltf::Accessor>| a.map(|a| a.index());
@@ -35,10 +41,37 @@ fn key(p: &::gltf::Primitive) -> Key {
         index(p.get(&Semantic::Positions)),
         index(p.get(&Semantic::Normals)),
         index(p.get(&Semantic::TexCoords(0))),
+        index(second_set(p)),
         index(p.get(&Semantic::Colors(0))),
         index(p.indices()),
         Some(p.mode().as_gl_enum() as usize),
+        index(tangent(p)),
+        normal_set(p).map(|s| s as usize),
     ]
+}
+
+/// The UV set a primitive's normal map reads, where its material has one
+/// and it has normals: then it needs tangents.
+fn normal_set(p: &::gltf::Primitive) -> Option<u32> {
+    p.get(&Semantic::Normals)?;
+    let n = p.material().normal_texture()?;
+    let t = n
+        .extension_value(super::TEXTURE_TRANSFORM)
+        .and_then(|v| super::texcoord::Transform::of_json(v).ok());
+    Some(super::texcoord::Transform::set(t.as_ref(), n.tex_coord()))
+}
+
+/// A primitive's `TANGENT`, where its normal map reads it (glTF ignores
+/// it without normals).
+fn tangent<'a>(p: &::gltf::Primitive<'a>) -> Option<::gltf::Accessor<'a>> {
+    normal_set(p)?;
+    p.get(&Semantic::Tangents)
+}
+
+/// A primitive's `TEXCOORD_1`, where its material's textures read it.
+fn second_set<'a>(p: &::gltf::Primitive<'a>) -> Option<::gltf::Accessor<'a>> {
+    let read = super::texcoord::sets(&p.material()).contains(&1);
+    p.get(&Semantic::TexCoords(1)).filter(|_| read)
 }
 
 /// Whether rayterm draws a primitive of this mode (triangles, strips and
@@ -57,19 +90,6 @@ pub(super) fn triangles(mode: Mode, corners: usize) -> usize {
         Mode::Triangles => corners / 3,
         _ => corners.saturating_sub(2),
     }
-}
-
-/// Texture coordinates (rayterm's, v up) through a `KHR_texture_transform`:
-/// scaled, turned, then offset, in glTF's coordinates (v down).
-fn transformed(mut uvs: Vec<Vec2>, t: &::gltf::texture::TextureTransform) -> Vec<Vec2> {
-    let ([ox, oy], [sx, sy]) = (t.offset(), t.scale());
-    let (sin, cos) = t.rotation().sin_cos();
-    for uv in &mut uvs {
-        let (u, v) = (uv.x * sx, (1.0 - uv.y) * sy);
-        let (u, v) = (cos * u + sin * v + ox, cos * v - sin * u + oy);
-        *uv = Vec2::new(u, 1.0 - v);
-    }
-    uvs
 }
 
 impl Reader<'_> {
@@ -136,6 +156,8 @@ impl Reader<'_> {
                 let used: Vec<_> = used
                     .iter()
                     .filter_map(|s| p.get(s))
+                    .chain(second_set(&p))
+                    .chain(tangent(&p))
                     .chain(p.indices())
                     .collect();
                 self.unpack(&used)?;
@@ -156,31 +178,42 @@ impl Reader<'_> {
                 show3(q)
             )
         })?;
-        let textured = p.material().pbr_metallic_roughness().base_color_texture();
-        if material.is_none() && d.uvs.is_none() && textured.is_some() {
-            self.unmapped.note(
-                "base colour textures on primitives without TEXCOORD_0 (drawn in the \
-                 material's colour)",
-                || {
-                    let m = p.material();
-                    let m = super::named(m.name(), m.index().unwrap_or_default());
-                    format!("material {m}, mesh {mesh_name}")
-                },
-            );
-        }
-        // A texture's KHR_texture_transform (gltfpack's de-quantization of
-        // coordinates, atlases) moves the coordinates only it reads.
-        let transform = textured.as_ref().and_then(|t| t.texture_transform());
-        let uvs = match (material, transform, d.uvs) {
-            (None, Some(t), Some(uvs)) => {
-                let uvs = transformed(uvs, &t);
-                if !uvs.iter().all(|uv| uv.is_finite()) {
-                    bail!("{here}: TEXCOORD_0 through its material's texture transform holds a number that is not finite");
+        if material.is_none() {
+            // Each slot's texture needs the coordinates it reads.
+            let m = p.material();
+            let has = [d.uvs.is_some(), d.uvs1.is_some()];
+            let base = m.pbr_metallic_roughness().base_color_texture();
+            let base = base.map(|i| {
+                let t = i
+                    .texture_transform()
+                    .map(|t| super::texcoord::Transform::of_info(&t));
+                super::texcoord::Transform::set(t.as_ref(), i.tex_coord())
+            });
+            let mut sets = super::texcoord::sets(&m);
+            sets.sort_unstable();
+            sets.dedup();
+            for set in sets {
+                if set < 2 && !has[set as usize] {
+                    let what = match Some(set) == base {
+                        true => "base colour textures",
+                        false => "textures",
+                    };
+                    self.unmapped.note(
+                        &format!(
+                            "{what} on primitives without TEXCOORD_{set} (drawn in the \
+                             material's colour)"
+                        ),
+                        || {
+                            let name = super::named(m.name(), m.index().unwrap_or_default());
+                            format!("material {name}, mesh {mesh_name}")
+                        },
+                    );
                 }
-                Some(uvs)
             }
-            (_, _, uvs) => uvs,
-        };
+        }
+        // A material given in place of the file's reads neither.
+        let own = material.is_none();
+        let (uvs, uvs1) = (d.uvs, d.uvs1.filter(|_| own));
         let material = match material {
             Some(m) => m,
             None => self.material(parts, p.material())?,
@@ -198,7 +231,9 @@ impl Reader<'_> {
             positions: placed,
             normals: d.normals.map(|n| place_normals(&n, xf)),
             uvs,
+            uvs1,
             colors: d.colors,
+            tangents: d.tangents.filter(|_| own).map(|t| place_tangents(&t, xf)),
             indices: d.indices,
             material,
         }))
@@ -215,11 +250,17 @@ impl Reader<'_> {
             return Ok(());
         };
         self.check_accessor(here, "POSITION", &position, &[F32, I8, U8, I16, U16], &[V3])?;
-        let attributes: [(_, _, &[_], &[_]); 3] = [
+        let attributes: [(_, _, &[_], &[_]); 4] = [
             (Semantic::Normals, "NORMAL", &[F32, I8, I16], &[V3]),
             (
                 Semantic::TexCoords(0),
                 "TEXCOORD_0",
+                &[F32, I8, U8, I16, U16],
+                &[V2],
+            ),
+            (
+                Semantic::TexCoords(1),
+                "TEXCOORD_1",
                 &[F32, I8, U8, I16, U16],
                 &[V2],
             ),
@@ -236,6 +277,17 @@ impl Reader<'_> {
                         position.count()
                     );
                 }
+            }
+        }
+        if let Some(a) = tangent(p) {
+            self.check_accessor(here, "TANGENT", &a, &[F32, I8, I16], &[V4])?;
+            if a.count() != position.count() {
+                bail!(
+                    "{here}: TANGENT (accessor {}) has {} values for {} positions",
+                    a.index(),
+                    a.count(),
+                    position.count()
+                );
             }
         }
         if let Some(a) = p.indices() {
@@ -283,9 +335,9 @@ impl Reader<'_> {
         let n = positions.len();
         let normals = self.all(here, "NORMAL", p.get(&Semantic::Normals), d3)?;
         // glTF puts v = 0 at the top of the image, rayterm at the bottom.
-        let uvs = self.all(here, "TEXCOORD_0", p.get(&Semantic::TexCoords(0)), |v| {
-            Vec2::new(v[0] as f32, 1.0 - v[1] as f32)
-        })?;
+        let uv = |v: &[f64]| Vec2::new(v[0] as f32, 1.0 - v[1] as f32);
+        let uvs = self.all(here, "TEXCOORD_0", p.get(&Semantic::TexCoords(0)), uv)?;
+        let uvs1 = self.all(here, "TEXCOORD_1", second_set(p), uv)?;
         // Integer colours are normalised (glTF allows no others).
         let color = p.get(&Semantic::Colors(0));
         let scale = match color.as_ref().map(|a| (a.data_type(), a.normalized())) {
@@ -296,6 +348,9 @@ impl Reader<'_> {
         let colors = self.all(here, "COLOR_0", color, |v| {
             Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32) / scale
         })?;
+        let file_tangents = self.all(here, "TANGENT", tangent(p), |v| {
+            Vec4::new(v[0] as f32, v[1] as f32, v[2] as f32, v[3] as f32)
+        })?;
         let finite = |ok: bool, what: &str| -> Result<()> {
             if !ok {
                 bail!("{here}: {what} holds a number that is not finite");
@@ -304,7 +359,12 @@ impl Reader<'_> {
         };
         finite(normals.iter().flatten().all(|v| v.is_finite()), "NORMAL")?;
         finite(uvs.iter().flatten().all(|v| v.is_finite()), "TEXCOORD_0")?;
+        finite(uvs1.iter().flatten().all(|v| v.is_finite()), "TEXCOORD_1")?;
         finite(colors.iter().flatten().all(|v| v.is_finite()), "COLOR_0")?;
+        finite(
+            file_tangents.iter().flatten().all(|v| v.is_finite()),
+            "TANGENT",
+        )?;
         let corners = match self.all(here, "indices", p.indices(), |v| v[0] as u32)? {
             Some(c) => c,
             None => (0..n as u32).collect(),
@@ -337,11 +397,42 @@ impl Reader<'_> {
                 .map(|c| [c[0], c[1], c[2]])
                 .collect(),
         };
+        let (mut positions, mut normals, mut uvs, mut uvs1, mut colors) =
+            (positions, normals, uvs, uvs1, colors);
+        let mut indices = indices;
+        // Generated where the file gives none, in the primitive's own
+        // space, as glTF asks.
+        let set = normal_set(p).filter(|&s| s < 2);
+        let generated = match (&file_tangents, set, &normals) {
+            (None, Some(set), Some(n)) => [&uvs, &uvs1][set as usize].as_ref().map(|uv| {
+                let f = |v: &[DVec3]| v.iter().map(|v| v.as_vec3()).collect::<Vec<_>>();
+                tangents::generate(&f(&positions), &f(n), uv, &mut indices)
+            }),
+            _ => None,
+        };
+        let tangents = match generated {
+            Some((t, copies)) => {
+                tangents::extend(&mut positions, &copies);
+                for v in normals.iter_mut() {
+                    tangents::extend(v, &copies);
+                }
+                for v in uvs.iter_mut().chain(uvs1.iter_mut()) {
+                    tangents::extend(v, &copies);
+                }
+                for v in colors.iter_mut() {
+                    tangents::extend(v, &copies);
+                }
+                Some(t)
+            }
+            None => file_tangents,
+        };
         Ok(Decoded {
             positions,
             normals,
             uvs,
+            uvs1,
             colors,
+            tangents,
             indices,
         })
     }

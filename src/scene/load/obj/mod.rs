@@ -580,6 +580,8 @@ impl ObjFile {
                 positions,
                 normals,
                 uvs,
+                uvs1: None,
+                tangents: None,
                 material: material(g.material.as_ref(), colors.is_some()),
                 colors,
                 indices,
@@ -738,14 +740,22 @@ fn convert_material(
         t.wrap = [Wrap::Clamp; 2];
         Some(parts.add_texture(t))
     });
+    // The PBR extension's materials: metallic-roughness, whose base
+    // colour is Kd and its map, without Phong's specular terms.
+    let pbr = m.pbr().then(|| mtl::pbr(parts, src, mtl_path, m));
+    let phong = pbr.is_none();
     Material {
         name: m.name.clone(),
         kd: m.kd.unwrap_or(d.kd),
-        ks: m.ks.unwrap_or(d.ks),
-        ns: m.ns.unwrap_or(d.ns),
+        ks: if phong {
+            m.ks.unwrap_or(d.ks)
+        } else {
+            Vec3::ZERO
+        },
+        ns: if phong { m.ns.unwrap_or(d.ns) } else { 0.0 },
         dissolve: m.dissolve.unwrap_or(d.dissolve),
         texture,
-        pbr: None,
+        pbr,
         alpha: None,
         unlit: false,
     }
@@ -780,7 +790,7 @@ pub(crate) fn load_placed(
     let mut defaults = [None, None];
     let mut unknown: Vec<(String, usize)> = Vec::new();
     let mut new_materials = Vec::new();
-    let meshes = obj.place(
+    let mut meshes = obj.place(
         xf,
         |used, colored| {
             // The last definition of a name wins, as in other readers.
@@ -811,6 +821,16 @@ pub(crate) fn load_placed(
     )?;
     for m in new_materials {
         parts.add_material(m);
+    }
+    // Normal maps turn by MikkTSpace's tangents (an OBJ has none of its own).
+    for m in &mut meshes {
+        let normal_mapped = parts.materials[m.material as usize]
+            .pbr
+            .as_ref()
+            .is_some_and(|p| p.normal.is_some());
+        if normal_mapped {
+            super::tangents::add(m);
+        }
     }
     for (name, line) in unknown {
         let what = match name.is_empty() {

@@ -175,6 +175,8 @@ impl PlyMesh {
             positions,
             normals: self.normals.map(|n| place_normals(&n, xf)),
             uvs: self.uvs,
+            uvs1: None,
+            tangents: None,
             colors: self.colors,
             indices: self.indices,
             material,
