@@ -27,7 +27,9 @@ fn meshes() -> Vec<(String, Geometry)> {
         .map(|o| o.scene)
     {
         Ok(s) => v.push(("bunny".to_string(), s.geometry)),
-        Err(_) => eprintln!("bunny skipped: ../shared/data/meshes/bunny.obj not found"),
+        Err(_) => eprintln!(
+            "bunny skipped: ../shared/data/meshes/bunny.obj not found (optional: see BENCHMARKS.md)"
+        ),
     }
     v
 }

@@ -129,7 +129,8 @@ pub(crate) fn run(
             Some(dir) => v.extend(shared_objs(&dir)),
             None => notes.push(
                 "../shared/data/meshes not found (looked beside the current directory, \
-                 the executable and the crate): shared meshes skipped"
+                 the executable and the crate): the optional bench meshes (the bunny...) \
+                 skipped; BENCHMARKS.md says what that folder holds"
                     .to_string(),
             ),
         }
