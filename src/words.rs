@@ -68,7 +68,7 @@ pub(crate) fn path(p: &Path) -> String {
 
 /// `p` without `.` and with each `..` taking back the name before it,
 /// where there is one.
-fn tidy(p: &Path) -> std::path::PathBuf {
+pub(crate) fn tidy(p: &Path) -> std::path::PathBuf {
     use std::path::Component;
     let mut out = std::path::PathBuf::new();
     for c in p.components() {

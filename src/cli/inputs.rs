@@ -14,8 +14,10 @@ pub(crate) fn run(a: InputsArgs) -> Result<ExitCode> {
     for w in &scene.warnings {
         super::say("warning", w);
     }
+    // `a/../b` written out, as every message writes paths (the same file
+    // on any path without symbolic links on it).
     for i in &inputs {
-        crate::outln!("{}", i.path.display())?;
+        crate::outln!("{}", crate::words::tidy(&i.path).display())?;
     }
     Ok(ExitCode::SUCCESS)
 }
