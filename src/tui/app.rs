@@ -302,10 +302,17 @@ impl App {
                 let items = crate::tui::widgets::viewport::legend(self);
                 let mut p = Popup::new(
                     "legend".into(),
-                    if items.is_empty() {
-                        vec!["no overlay on the view (o: pixel overlays, g: view overlays)".into()]
-                    } else {
-                        items
+                    match (
+                        items.is_empty(),
+                        self.overlays.pixel.or(self.overlays.image),
+                    ) {
+                        (false, _) => items,
+                        (true, Some(_)) => {
+                            vec!["the overlay is still being drawn: O again in a moment".into()]
+                        }
+                        (true, None) => vec![
+                            "no overlay on the view (o: pixel overlays, g: view overlays)".into(),
+                        ],
                     },
                 );
                 p.wrap_indent = Some(2);
