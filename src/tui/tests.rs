@@ -927,3 +927,32 @@ fn nothing_is_cut_from_80x24_to_240x70() {
     std::fs::remove_dir_all(&dir).ok();
     assert!(found.is_empty(), "cut:\n{}", found.join("\n"));
 }
+
+#[test]
+fn full_screen_and_the_tree_pane_give_the_view_room() {
+    let mut app = app("cornell", &[]);
+    let mut t = terminal(80, 24);
+    settle(&mut t, &mut app);
+    let l = app.display.layout;
+    let normal = (l.view.width, l.view.height, l.debug.height);
+    app.handle_key(Key::Char('f'));
+    let s = settle(&mut t, &mut app);
+    let l = app.display.layout;
+    assert_eq!((l.view.width, l.debug.height), (80, 0), "{s}");
+    assert!(!s.contains("Features"), "{s}");
+    app.handle_key(Key::Char('f'));
+    settle(&mut t, &mut app);
+    assert_eq!(app.display.layout.view.width, normal.0);
+    // Taller, hidden (its title alone), back.
+    app.handle_key(Key::Char('T'));
+    settle(&mut t, &mut app);
+    assert!(app.display.layout.debug.height > normal.2);
+    app.handle_key(Key::Char('T'));
+    let s = settle(&mut t, &mut app);
+    assert_eq!(app.display.layout.debug.height, 1);
+    assert!(s.contains("Ray tree"), "{s}");
+    app.handle_key(Key::Char('T'));
+    settle(&mut t, &mut app);
+    let l = app.display.layout;
+    assert_eq!((l.view.width, l.view.height, l.debug.height), normal);
+}
