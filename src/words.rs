@@ -119,9 +119,14 @@ pub(crate) fn rays_per_s(rays_per_s: f64) -> String {
     format!("{}rays/s", spaced(si(rays_per_s)))
 }
 
-/// Milliseconds to three significant digits: `0.05 ms`, `12.3 ms`, `1.23 s`.
+/// A time in milliseconds as people read it, three significant digits:
+/// `0.05 ms`, `812 ms`, `3.73 s`, then whole seconds: `2 min 05 s`.
 pub(crate) fn ms(ms: f64) -> String {
     match ms {
+        m if m >= 60e3 => {
+            let s = (m / 1e3).round() as u64;
+            format!("{} min {:02} s", s / 60, s % 60)
+        }
         m if m >= 1e3 => format!("{} s", significant(m / 1e3)),
         m => format!("{} ms", significant(m)),
     }

@@ -96,7 +96,7 @@ pub(crate) fn run(
         st.nodes,
         st.depth,
         st.builder,
-        super::render::duration(ms),
+        crate::words::ms(ms),
         crate::words::path(&out.path)
     )?;
     for (_, line) in &legend {
@@ -125,7 +125,7 @@ fn bvh(s: &Session, view: View, out: &Output) -> Result<ExitCode> {
         st.depth,
         st.builder,
         d.summary,
-        super::render::duration(ms),
+        crate::words::ms(ms),
         crate::words::path(&out.path)
     )?;
     Ok(ExitCode::SUCCESS)

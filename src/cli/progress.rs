@@ -12,7 +12,6 @@ use std::time::{Duration, Instant};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 
-use super::render::duration;
 use crate::interrupt::{self, Cancel};
 use crate::render::{Ended, Film, Job, Session, Stop, Tracer};
 use crate::report;
@@ -182,7 +181,7 @@ impl Reporter {
                         crate::words::path(path),
                         r.start,
                         r.end,
-                        duration(s * 1e3)
+                        crate::words::ms(s * 1e3)
                     )
                 });
                 if matches!(out, Out::Bar(_)) {
@@ -267,12 +266,12 @@ impl Reporter {
                     (Some(p), None) => text += &format!("{p:.0}% ({spp:.0} spp)"),
                     (None, _) => text += &format!("{spp:.0} spp"),
                 }
-                text += &format!(", {} elapsed", duration(elapsed * 1e3));
+                text += &format!(", {} elapsed", crate::words::ms(elapsed * 1e3));
                 match estimate {
                     Some((words, _)) => text += &format!(", {words}"),
                     None => {
                         if let Some(l) = left {
-                            text += &format!(", about {} left", duration(l * 1e3));
+                            text += &format!(", about {} left", crate::words::ms(l * 1e3));
                         }
                     }
                 }
@@ -316,7 +315,7 @@ impl Reporter {
             Out::Bar(b) => b.finish_and_clear(),
             Out::Lines => line(&format!(
                 "progress: done, {spp:.0} spp, {} elapsed",
-                duration(elapsed * 1e3)
+                crate::words::ms(elapsed * 1e3)
             )),
             Out::Json => line(
                 &json!({

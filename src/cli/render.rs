@@ -357,15 +357,15 @@ pub(crate) fn run(a: RenderArgs) -> Result<ExitCode> {
             "triangle",
             "triangles"
         ),
-        duration(s.bvh.stats.build_ms),
+        words::ms(s.bvh.stats.build_ms),
         s.bvh.stats.builder,
-        duration(render_ms),
+        words::ms(render_ms),
     );
     // A resumed render's rate is that of all its passes, the resumed
     // film's and this run's (which may have had nothing left to do).
     let (head, rays, ms) = match a.resume {
         Some(_) => (
-            format!("{head} ({} in all)", duration(p.seconds() * 1e3)),
+            format!("{head} ({} in all)", words::ms(p.seconds() * 1e3)),
             p.rays(),
             p.seconds() * 1e3,
         ),
@@ -393,7 +393,7 @@ pub(crate) fn run(a: RenderArgs) -> Result<ExitCode> {
         let line = format!(
             "the same samples in one pass: {} in {}; the passes' {} are {:.2}x that",
             words::rays_per_s(once),
-            duration(again.ms),
+            words::ms(again.ms),
             words::rays_per_s(passes),
             passes / once.max(1e-12)
         );
@@ -799,21 +799,9 @@ fn progress(film: &Film, stop: &Stop, elapsed: f64) -> (String, Option<f64>) {
     }
     left = left.min((cap - spp).max(0.0) * per_spp);
     if left.is_finite() {
-        text += &format!(", eta {}", duration(left * 1e3));
+        text += &format!(", eta {}", words::ms(left * 1e3));
     }
     (text, left.is_finite().then_some(left))
-}
-
-/// A run's length as people read it: `812 ms`, `3.18 s`, `2 min 05 s`.
-pub(super) fn duration(ms: f64) -> String {
-    if ms < 1e3 {
-        format!("{} ms", words::significant(ms))
-    } else if ms < 60e3 {
-        format!("{} s", words::significant(ms / 1e3))
-    } else {
-        let s = (ms / 1e3).round() as u64;
-        format!("{} min {:02} s", s / 60, s % 60)
-    }
 }
 
 #[cfg(test)]
@@ -829,10 +817,10 @@ mod tests {
 
     #[test]
     fn durations_read_in_the_unit_that_fits() {
-        assert_eq!(duration(812.34), "812 ms");
-        assert_eq!(duration(3731.8), "3.73 s");
-        assert_eq!(duration(24_927.9), "24.9 s");
-        assert_eq!(duration(125_400.0), "2 min 05 s");
+        assert_eq!(words::ms(812.34), "812 ms");
+        assert_eq!(words::ms(3731.8), "3.73 s");
+        assert_eq!(words::ms(24_927.9), "24.9 s");
+        assert_eq!(words::ms(125_400.0), "2 min 05 s");
     }
 
     #[test]

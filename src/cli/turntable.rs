@@ -11,7 +11,7 @@ use anyhow::{bail, Result};
 use super::args::{AnimateArgs, RenderArgs};
 use super::open_request;
 use super::progress::{Begin, Reporter};
-use super::render::{duration, explain, scene_file, stop};
+use super::render::{explain, scene_file, stop};
 use crate::interrupt::{self, Cancel};
 use crate::raster::animation::{self, Frames};
 use crate::raster::{ImageFormat, Output};
@@ -111,7 +111,7 @@ pub(crate) fn run(a: &RenderArgs, frames: u32) -> Result<ExitCode> {
         "{}: turntable of {frames} frames at {w}x{h}, {:.0} spp a frame on average, render {}, {} -> {} ({fps} frames a second)",
         s.scene.name,
         done / frames as f64,
-        duration(ms),
+        crate::words::ms(ms),
         words::rays_per_s(rays as f64 / (ms.max(1e-6) / 1e3)),
         words::path(&a.output),
     );

@@ -162,11 +162,7 @@ fn output_lines(app: &App, room: usize) -> Vec<Line<'static>> {
     let shown = app
         .view_shown_in()
         .map(|s| format!("view shown in {}", words::ms(s * 1e3)));
-    v.extend(
-        link.into_iter()
-            .chain(shown)
-            .map(|p| Line::from(p.to_string())),
-    );
+    v.extend(link.into_iter().chain(shown).map(Line::from));
     v
 }
 
