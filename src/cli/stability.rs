@@ -5,6 +5,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 
 use super::args::StabilityArgs;
+use super::progress::ReportBar;
 use crate::report::stability::{run_and_print, Options};
 
 pub(crate) fn run(a: StabilityArgs) -> Result<ExitCode> {
@@ -14,7 +15,7 @@ pub(crate) fn run(a: StabilityArgs) -> Result<ExitCode> {
         height,
         ..Options::default()
     };
-    Ok(if run_and_print(&a.scene, &o, a.json)? {
+    Ok(if run_and_print(&a.scene, &o, a.json, &ReportBar::new())? {
         ExitCode::SUCCESS
     } else {
         ExitCode::FAILURE

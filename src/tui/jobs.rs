@@ -97,7 +97,7 @@ impl Jobs {
         }
         let (tx, rx) = mpsc::channel();
         std::thread::spawn(move || {
-            let rows = stability::run_battery_on(&scene, &stability::Options::default());
+            let rows = stability::run_battery_on(&scene, &stability::Options::default(), &());
             // The receiver is gone only when the TUI has quit.
             let _ = tx.send(rows);
         });

@@ -15,6 +15,7 @@ pub mod watertight;
 
 use std::time::Instant;
 
+use super::Progress;
 use anyhow::{bail, Context, Result};
 use serde::Serialize;
 
@@ -93,6 +94,7 @@ pub fn run_battery(scene_spec: &str, o: &Options) -> Result<Vec<Row>> {
     run_battery_on(
         &crate::scene::load::open(scene_spec, &Default::default())?.scene,
         o,
+        &(),
     )
 }
 
@@ -103,8 +105,13 @@ pub fn run_battery(scene_spec: &str, o: &Options) -> Result<Vec<Row>> {
 const BYTES_PER_PIXEL: u64 = 200;
 const BYTES_PER_PIXEL_THREAD: u64 = 48;
 
-/// As [`run_battery`], on a scene already loaded (the TUI's).
-pub(crate) fn run_battery_on(scene: &crate::scene::Scene, o: &Options) -> Result<Vec<Row>> {
+/// As [`run_battery`], on a scene already loaded (the TUI's), saying
+/// which group of cases runs to `progress`.
+pub(crate) fn run_battery_on(
+    scene: &crate::scene::Scene,
+    o: &Options,
+    progress: &dyn Progress,
+) -> Result<Vec<Row>> {
     // Below this, pixel centres sit on the scene's symmetry lines and edges
     // fill whole pixels, so image differences measure ties, not precision.
     if o.width < 16 || o.height < 16 {
@@ -117,13 +124,34 @@ pub(crate) fn run_battery_on(scene: &crate::scene::Scene, o: &Options) -> Result
         None,
     )?;
     crate::scene::check_reach(scene)?;
-    let mut rows = scale_offset(scene, o).context("scale and offset cases")?;
-    rows.extend(watertight(o).context("watertightness cases")?);
-    rows.extend(grazing(o).context("grazing cases")?);
-    rows.extend(degenerate(o).context("degenerate geometry cases")?);
-    rows.extend(stiff_shading(o).context("stiff shading cases")?);
-    rows.extend(reintersection(o).context("reintersection cases")?);
-    rows.extend(hygiene().context("input hygiene cases")?);
+    type Group<'a> = (&'static str, Box<dyn Fn() -> Result<Vec<Row>> + 'a>);
+    let groups: [Group; 7] = [
+        (
+            "scale and offset cases",
+            Box::new(|| scale_offset(scene, o)),
+        ),
+        ("watertightness cases", Box::new(|| watertight(o))),
+        ("grazing cases", Box::new(|| grazing(o))),
+        ("degenerate geometry cases", Box::new(|| degenerate(o))),
+        ("stiff shading cases", Box::new(|| stiff_shading(o))),
+        ("reintersection cases", Box::new(|| reintersection(o))),
+        ("input hygiene cases", Box::new(hygiene)),
+    ];
+    progress.begin(Some(groups.len() as u64));
+    let mut rows = Vec::new();
+    for (what, run) in &groups {
+        progress.doing(what);
+        let found = run().context(*what);
+        progress.step();
+        match found {
+            Ok(r) => rows.extend(r),
+            Err(e) => {
+                progress.end();
+                return Err(e);
+            }
+        }
+    }
+    progress.end();
     Ok(rows)
 }
 
@@ -167,9 +195,15 @@ pub fn format_table(rows: &[Row]) -> String {
 
 /// Runs the battery and prints its table (or JSON); the returned flag is
 /// whether every case passed.
-pub(crate) fn run_and_print(scene_spec: &str, o: &Options, json: bool) -> Result<bool> {
+pub(crate) fn run_and_print(
+    scene_spec: &str,
+    o: &Options,
+    json: bool,
+    progress: &dyn Progress,
+) -> Result<bool> {
     let start = Instant::now();
-    let rows = run_battery(scene_spec, o)?;
+    let scene = crate::scene::load::open(scene_spec, &Default::default())?.scene;
+    let rows = run_battery_on(&scene, o, progress)?;
     let failed = rows.iter().filter(|r| !r.pass).count();
     if json {
         crate::outln!("{}", serde_json::to_string_pretty(&rows)?)?;
