@@ -384,6 +384,7 @@ fn png(w: u32, h: u32, f: impl Fn(u32, u32) -> [u8; 3]) -> Vec<u8> {
 /// before.
 #[test]
 fn mtl_pbr_materials_are_physically_based() {
+    mtl_normal_maps_that_are_not_say_why();
     let d = Dir::new("mtl-pbr");
     d.write("rough.png", png(2, 2, |x, _| [255 * x as u8; 3]));
     d.write(
@@ -455,8 +456,8 @@ fn mtl_pbr_materials_are_physically_based() {
     assert_eq!((phong.ks, phong.ns), (Vec3::splat(0.2), 10.0));
     let all = s.warnings.join("\n");
     for want in [
-        "m.mtl:14: bump height.png is a height map (its texels are grey), not a normal map: \
-         ignored",
+        "m.mtl:14: bump height.png is a height map (its texels are grey): no normal map for \
+         this material",
         "Ke (emission) (line 23)",
         "map_Bump (line 24)",
     ] {
@@ -472,4 +473,40 @@ fn mtl_pbr_materials_are_physically_based() {
             .abs()
             .max_element()
             < 1e-6));
+}
+
+/// A normal-map statement whose image is not one, or whose `-bm` is not a
+/// finite number, says so by line rather than drawing a flat or untouched
+/// surface in silence.
+fn mtl_normal_maps_that_are_not_say_why() {
+    let d = Dir::new("mtl-bad-normals");
+    d.write("red.png", png(4, 4, |_, _| [255, 0, 0]));
+    d.write(
+        "bumps.png",
+        png(4, 4, |x, y| [100 + 20 * x as u8, 90 + 30 * y as u8, 240]),
+    );
+    d.write(
+        "m.mtl",
+        "newmtl a\nPr 0.5\nnorm red.png\n\
+         newmtl b\nPr 0.5\nmap_Bump -bm nan bumps.png\n\
+         newmtl c\nPr 0.5\nmap_Bump -bm X bumps.png\n",
+    );
+    let mut obj = String::from("mtllib m.mtl\nvn 0 0 1\nvt 0 0\nvt 1 0\nvt 1 1\n");
+    for (i, m) in ["a", "b", "c"].iter().enumerate() {
+        obj += &format!("v {i} 0 0\nv {} 0 0\nv {i} 1 0\nusemtl {m}\n", i + 1);
+        obj += "f -3/1/1 -2/2/1 -1/3/1\n";
+    }
+    let file = d.write("m.obj", obj);
+    let s = load::open(&file, &Opening::default()).unwrap().scene;
+    let all = s.warnings.join("\n");
+    for want in [
+        "m.mtl:3: norm red.png is not a normal map (its texels are not the bluish of one)",
+        "m.mtl:6: map_Bump options ignored: -bm nan (not a finite number)",
+        "m.mtl:9: map_Bump options ignored: -bm (no number after it: X is read as part of the \
+         file's name)",
+    ] {
+        assert!(all.contains(want), "{want:?} not in\n{all}");
+    }
+    let a = s.materials.iter().find(|m| m.name == "a").unwrap();
+    assert!(a.pbr.as_ref().unwrap().normal.is_none());
 }

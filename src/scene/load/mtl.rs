@@ -157,8 +157,16 @@ fn texture_args(rest: &str) -> TextureArgs {
         if let ("-bm", Some(v)) = (name.as_str(), values.first()) {
             args.bm = v.parse().ok().filter(|b: &f32| b.is_finite());
         }
+        let wanted = matches!(takes, Some((_, Takes::Numbers(_)))) && values.is_empty();
         match (name.as_str(), values.first().map(String::as_str)) {
             ("-clamp", Some(v)) => args.clamp = Some(v == "on"),
+            ("-bm", Some(v)) if args.bm.is_none() => {
+                args.ignored.push(format!("-bm {v} (not a finite number)"))
+            }
+            _ if wanted => args.ignored.push(format!(
+                "{name} (no number after it: {} is read as part of the file's name)",
+                quoted(next)
+            )),
             _ => args.ignored.push(
                 [name]
                     .into_iter()
@@ -374,10 +382,18 @@ pub(crate) fn parse(
                 }
                 let normal = matches!(key, "norm" | "map_Bump" | "bump");
                 // `-bm` is the normal map's scale, not an option ignored.
+                let scale = args.bm.map(|b| format!("-bm {b}"));
                 let options: Vec<&String> = args
                     .ignored
                     .iter()
-                    .filter(|o| !(normal && o.starts_with("-bm ")))
+                    .filter(|o| {
+                        !(normal
+                            && args.bm.is_some()
+                            && o.strip_prefix("-bm ")
+                                .and_then(|v| v.parse::<f32>().ok())
+                                .map(|b| format!("-bm {b}"))
+                                == scale)
+                    })
                     .collect();
                 if !options.is_empty() {
                     let list: Vec<&str> = options.iter().map(|o| o.as_str()).collect();
@@ -523,17 +539,19 @@ pub(crate) fn pbr(parts: &mut Parts, src: &dyn Source, mtl_path: &Path, m: &MtlM
     });
     let normal = m.normal.as_ref().and_then(|n| {
         let id = texture(parts, &n.file, n.line, Encoding::Linear)?;
-        if n.statement != "norm" && !normal_map(&parts.textures[id as usize]) {
-            parts.warnings.push(format!(
-                "{}:{}: {} {} is a height map (its texels are grey), not a normal map: ignored",
-                mtl_path.display(),
-                n.line,
-                n.statement,
-                quoted(&n.file)
-            ));
-            return None;
-        }
-        Some((id, n.scale))
+        let what = match map_kind(&parts.textures[id as usize]) {
+            MapKind::Normal => return Some((id, n.scale)),
+            MapKind::Height => "a height map (its texels are grey)",
+            MapKind::Other => "not a normal map (its texels are not the bluish of one)",
+        };
+        parts.warnings.push(format!(
+            "{}:{}: {} {} is {what}: no normal map for this material",
+            mtl_path.display(),
+            n.line,
+            n.statement,
+            quoted(&n.file)
+        ));
+        None
     });
     Pbr {
         metallic,
@@ -547,19 +565,35 @@ pub(crate) fn pbr(parts: &mut Parts, src: &dyn Source, mtl_path: &Path, m: &MtlM
     }
 }
 
-/// Whether an image `map_Bump` names is a tangent-space normal map rather
-/// than a height map: height maps are grey, normal maps bluish (their
-/// texels point out of the surface, `z` near 1, and lean in x and y).
-fn normal_map(t: &Texture) -> bool {
+/// What an image a normal-map statement names holds.
+enum MapKind {
+    /// A tangent-space normal map: bluish (its texels point out of the
+    /// surface, `z` near 1, and lean in x and y).
+    Normal,
+    /// A height map (bump map): grey.
+    Height,
+    Other,
+}
+
+fn map_kind(t: &Texture) -> MapKind {
     // A sample of at most 64k texels says as much as all of them.
     let step = (t.texels.len() / 65536).max(1);
     let (mut coloured, mut z, mut n) = (0usize, 0.0f64, 0usize);
+    let mut bluish = 0usize;
     for c in t.texels.iter().step_by(step) {
         coloured += (c.max_element() - c.min_element() > 0.02) as usize;
+        // x and y about their middle, z above it.
+        bluish += ((c.x - 0.5).abs() < 0.4 && (c.y - 0.5).abs() < 0.4 && c.z > 0.5) as usize;
         z += c.z as f64;
         n += 1;
     }
-    coloured * 10 > n && z / n as f64 > 0.6
+    if coloured * 10 <= n {
+        MapKind::Height
+    } else if z / n as f64 > 0.6 && bluish * 10 >= n * 9 {
+        MapKind::Normal
+    } else {
+        MapKind::Other
+    }
 }
 
 /// The first word of `rest` (`spectral`, `xyz`), for the ignored list.
