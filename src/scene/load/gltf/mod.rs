@@ -401,7 +401,7 @@ impl Reader<'_> {
         let pbr = m.pbr_metallic_roughness();
         // A specular-glossiness material, converted, in place of its
         // metallic-roughness fallback.
-        let spec_gloss = m.extensions().and_then(|e| e.get(specular::SPEC_GLOSS));
+        let spec_gloss = self.ext_object(parts, &m, specular::SPEC_GLOSS, &here);
         let converted = spec_gloss.map(|v| self.spec_gloss_factors(parts, v, &here));
         let (base, metallic, roughness) = match &converted {
             Some(c) => (c.base, c.metallic, c.roughness),

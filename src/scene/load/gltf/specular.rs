@@ -40,6 +40,19 @@ fn numbers<const N: usize>(v: &Value, key: &str, default: [f32; N]) -> Result<[f
     }
 }
 
+/// A whole number from 0 at `key` of a textureInfo an extension gives as
+/// JSON (`1.0` too, as the core textures read it); `None` when absent.
+fn whole(info: &Value, key: &str) -> Result<Option<u32>, String> {
+    match info.get(key) {
+        None => Ok(None),
+        Some(v) => v
+            .as_f64()
+            .filter(|x| x.fract() == 0.0 && (0.0..=u32::MAX as f64).contains(x))
+            .map(|x| Some(x as u32))
+            .ok_or_else(|| format!("its {key} is {v}, not a whole number from 0")),
+    }
+}
+
 /// The UV sets the texture slots of these extensions read.
 pub(super) fn sets(m: &::gltf::Material) -> Vec<u32> {
     let slots = [
@@ -55,8 +68,8 @@ pub(super) fn sets(m: &::gltf::Material) -> Vec<u32> {
             let t = info
                 .pointer(&format!("/extensions/{TEXTURE_TRANSFORM}"))
                 .and_then(|t| Transform::of_json(t).ok());
-            let tex_coord = info.get("texCoord").and_then(Value::as_u64).unwrap_or(0);
-            Transform::set(t.as_ref(), tex_coord.min(u32::MAX as u64) as u32)
+            let tex_coord = whole(info, "texCoord").ok().flatten().unwrap_or(0);
+            Transform::set(t.as_ref(), tex_coord)
         })
         .collect()
 }
@@ -91,6 +104,27 @@ impl Reader<'_> {
         })
     }
 
+    /// Material `m`'s extension `ext`, where it is a JSON object as glTF
+    /// requires; anything else is left out with a warning naming `user`.
+    pub(super) fn ext_object<'m>(
+        &self,
+        parts: &mut Parts,
+        m: &'m ::gltf::Material,
+        ext: &str,
+        user: &str,
+    ) -> Option<&'m Value> {
+        let v = m.extensions()?.get(ext)?;
+        if !v.is_object() {
+            parts.warnings.push(format!(
+                "{}: {user}: {ext} is {}, not an object: left out",
+                self.at(),
+                crate::words::quoted(&v.to_string())
+            ));
+            return None;
+        }
+        Some(v)
+    }
+
     /// The texture of a textureInfo an extension gives as JSON (`index`,
     /// `texCoord` and its own `KHR_texture_transform`).
     pub(super) fn json_texture(
@@ -104,7 +138,16 @@ impl Reader<'_> {
         let Some(info) = info else {
             return Ok(None);
         };
-        let index = info.get("index").and_then(Value::as_u64);
+        let read = whole(info, "index").and_then(|i| Ok((i, whole(info, "texCoord")?)));
+        let (index, tex_coord) = match read {
+            Ok(r) => r,
+            Err(why) => {
+                parts
+                    .warnings
+                    .push(format!("{}: {user}: a texture left out: {why}", self.at()));
+                return Ok(None);
+            }
+        };
         let Some(texture) = index.and_then(|i| self.doc.textures().nth(i as usize)) else {
             parts.warnings.push(format!(
                 "{}: {user}: a texture index {} that is not one of the file's {} textures: \
@@ -115,11 +158,10 @@ impl Reader<'_> {
             ));
             return Ok(None);
         };
-        let tex_coord = info.get("texCoord").and_then(Value::as_u64).unwrap_or(0);
         let transform = info
             .pointer(&format!("/extensions/{TEXTURE_TRANSFORM}"))
             .map(Transform::of_json);
-        let tex_coord = tex_coord.min(u32::MAX as u64) as u32;
+        let tex_coord = tex_coord.unwrap_or(0);
         self.texture_of(parts, texture, tex_coord, transform, user, encoding, tint)
     }
 
@@ -131,7 +173,7 @@ impl Reader<'_> {
         p: &mut Pbr,
         user: &str,
     ) -> Result<()> {
-        let Some(v) = m.extensions().and_then(|e| e.get(SPECULAR)) else {
+        let Some(v) = self.ext_object(parts, m, SPECULAR, user) else {
             return Ok(());
         };
         let [weight] = self.ext_numbers(parts, (SPECULAR, v), "specularFactor", [1.0], user);
@@ -228,5 +270,19 @@ mod tests {
         assert_eq!(numbers(&v, "c", [0.0; 3]), Ok([1.0, 0.5, 0.0]));
         assert!(numbers(&v, "bad", [1.0]).unwrap_err().contains("\"x\""));
         assert!(numbers(&v, "short", [1.0; 3]).is_err());
+    }
+
+    #[test]
+    fn texture_indices_and_sets_are_whole_numbers_or_said() {
+        let v = serde_json::json!({"i": 0, "f": 1.0, "x": "x", "m": -1, "h": 1e30, "p": 0.5});
+        assert_eq!(whole(&v, "i"), Ok(Some(0)));
+        assert_eq!(whole(&v, "f"), Ok(Some(1)));
+        assert_eq!(whole(&v, "none"), Ok(None));
+        for bad in ["x", "m", "h", "p"] {
+            assert!(
+                whole(&v, bad).unwrap_err().contains("not a whole number"),
+                "{bad}"
+            );
+        }
     }
 }
