@@ -509,4 +509,19 @@ fn mtl_normal_maps_that_are_not_say_why() {
     }
     let a = s.materials.iter().find(|m| m.name == "a").unwrap();
     assert!(a.pbr.as_ref().unwrap().normal.is_none());
+    // A true normal map on a mesh whose texture coordinates span nothing.
+    d.write("n.mtl", "newmtl n\nPr 0.5\nnorm bumps.png\n");
+    let flat = d.write(
+        "flat.obj",
+        "mtllib n.mtl\nvn 0 0 1\nvt 0.5 0.5\nv 0 0 0\nv 1 0 0\nv 0 1 0\no flat\nusemtl n\n\
+         f 1/1/1 2/1/1 3/1/1\n",
+    );
+    let s = load::open(&flat, &Opening::default()).unwrap().scene;
+    assert!(
+        s.warnings.iter().any(|w| w.contains(
+            "flat: the normal map of material n needs texture coordinates that span an area"
+        )),
+        "{:?}",
+        s.warnings
+    );
 }

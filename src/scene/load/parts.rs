@@ -327,6 +327,29 @@ impl Parts {
             None if !g.colors.is_empty() => g.colors.extend(std::iter::repeat_n(Vec3::ONE, n)),
             None => {}
         }
+        // A normal map turns the normal in the frame of the texture
+        // coordinates; where they span no area there is none to turn in.
+        let normal_mapped = self
+            .materials
+            .get(material as usize)
+            .is_some_and(|m| m.pbr.as_ref().is_some_and(|p| p.normal.is_some()));
+        if normal_mapped
+            && ![&uvs, &uvs1]
+                .iter()
+                .any(|u| spans_area(u.as_deref(), &kept))
+        {
+            let m = &self.materials[material as usize].name;
+            let m = match m.starts_with("material ") {
+                true => m.clone(),
+                false => format!("material {}", crate::words::quoted(m)),
+            };
+            self.warnings.push(format!(
+                "{}: the normal map of {m} needs texture coordinates that span an area, and \
+                 these span none: drawn without it",
+                crate::words::quoted(&name),
+            ));
+        }
+        let g = &mut self.geometry;
         if g.positions.is_empty() {
             g.positions = positions;
         } else {
@@ -411,4 +434,16 @@ impl Parts {
         self.materials.push(m);
         self.materials.len() as u32 - 1
     }
+}
+
+/// Whether some triangle of `indices` covers an area in texture space.
+fn spans_area(uvs: Option<&[Vec2]>, indices: &[[u32; 3]]) -> bool {
+    let Some(uv) = uvs else {
+        return false;
+    };
+    indices.iter().any(|t| {
+        let [a, b, c] = t.map(|i| uv.get(i as usize).copied().unwrap_or_default().as_dvec2());
+        let area = (b - a).perp_dot(c - a);
+        area.is_finite() && area.abs() > 1e-20
+    })
 }
