@@ -1045,7 +1045,7 @@ fn malformed_gltf_files_say_what_is_wrong() {
     });
     let s = load(&d.write("quiet.glb", quiet)).unwrap();
     for want in [
-        "base colour textures on primitives without TEXCOORD_0 (drawn in the material's colour) \
+        "textures (the base colour's among them) on primitives without TEXCOORD_0 (drawn in the material's colour) \
          (material Checker, mesh TileMesh)",
         "projective node matrices (their last row is not 0 0 0 1: read as their affine part) \
          (node Rig)",

@@ -195,7 +195,7 @@ impl Reader<'_> {
             for set in sets {
                 if set < 2 && !has[set as usize] {
                     let what = match Some(set) == base {
-                        true => "base colour textures",
+                        true => "textures (the base colour's among them)",
                         false => "textures",
                     };
                     self.unmapped.note(
