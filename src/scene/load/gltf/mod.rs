@@ -106,15 +106,21 @@ pub(crate) struct GltfScene {
 }
 
 /// Things of the file rayterm cannot show, each listed once with where it
-/// was first found and how often.
+/// was first found and in how many places (a place noted twice, as a
+/// material whose five textures read a missing set, counts once).
 #[derive(Default)]
-struct Unmapped(Vec<(String, String, usize)>);
+struct Unmapped(Vec<(String, String, std::collections::HashSet<String>)>);
 
 impl Unmapped {
-    fn note(&mut self, what: &str, first: impl FnOnce() -> String) {
+    fn note(&mut self, what: &str, place: impl FnOnce() -> String) {
+        let place = place();
         match self.0.iter_mut().find(|(w, _, _)| w == what) {
-            Some(e) => e.2 += 1,
-            None => self.0.push((what.to_string(), first(), 1)),
+            Some(e) => {
+                e.2.insert(place);
+            }
+            None => self
+                .0
+                .push((what.to_string(), place.clone(), [place].into())),
         }
     }
 
@@ -125,7 +131,7 @@ impl Unmapped {
         let list: Vec<String> = self
             .0
             .iter()
-            .map(|(w, first, n)| match n {
+            .map(|(w, first, places)| match places.len() {
                 1 => format!("{w} ({first})"),
                 n => format!("{w} ({first} and {} more)", n - 1),
             })
