@@ -387,7 +387,7 @@ pub(crate) fn run(a: RenderArgs) -> Result<ExitCode> {
     }
     if a.compare_one_shot {
         check_film(s.width, s.height, Film::SUMMARY_BYTES_PER_PIXEL)?;
-        let again = p.retrace(&tracer);
+        let again = p.retrace(&tracer, 0);
         let passes = rays as f64 / (ms.max(1e-6) / 1e3);
         let once = again.rays as f64 / (again.ms.max(1e-6) / 1e3);
         let line = format!(

@@ -383,23 +383,25 @@ impl Progressive {
         }
     }
 
-    /// Traces every sample the film holds again, in one pass into a
-    /// scratch film that keeps what a one-shot render to an image keeps
-    /// (each pixel's mean and error, [`Film::new_summary`]), each pixel's
-    /// samples together, as `render --spp N` traces them: the rate the
-    /// passes that took them are measured against. The samples, and so the
-    /// rays, are the same; only the passes differ.
-    pub(crate) fn retrace(&self, tracer: &Tracer) -> PassStats {
+    /// Traces the samples the film holds again from each pixel's `from`th
+    /// on (0: all of them), in one pass into a scratch film that keeps
+    /// what a one-shot render to an image keeps (each pixel's mean and
+    /// error, [`Film::new_summary`]), each pixel's samples together, as
+    /// `render --spp N` traces them: the rate the passes that took them are
+    /// measured against. The samples, and so the rays, are the same; only
+    /// the passes differ.
+    pub(crate) fn retrace(&self, tracer: &Tracer, from: u32) -> PassStats {
         let f = &self.film;
         let give = match &f.adaptive {
-            Some(a) => Give::Each(a.spp.clone()),
-            None => Give::All(f.spp),
+            Some(a) => Give::Each(a.spp.iter().map(|&n| n.saturating_sub(from)).collect()),
+            None => Give::All(f.spp.saturating_sub(from)),
         };
         let mut scratch = Film::new_summary(f.width, f.height);
+        scratch.start = f.start + from;
         let start = Instant::now();
         let rec: RayCounter = sample_rows(tracer, &mut scratch, &give, Cancel::Never, None, false);
         PassStats {
-            samples: f.spp_range().2,
+            samples: f.spp_range().2.saturating_sub(from),
             pixels: f.pixels_len() as u64,
             rays: rec.rays(),
             ms: start.elapsed().as_secs_f64() * 1e3,
@@ -880,7 +882,8 @@ mod tests {
     }
 
     /// A retrace traces the film's samples again, so the same rays, in
-    /// one pass: for uniform and adaptive films, grown in passes.
+    /// one pass: for uniform and adaptive films, grown in passes; and from
+    /// a later sample on, the rays of the passes after those samples.
     #[test]
     fn a_retrace_traces_the_same_rays_in_one_pass() {
         let s = session(&[]);
@@ -892,13 +895,18 @@ mod tests {
                 error: None,
             };
             let mut p = Job::of(&t, stop).adaptive(adaptive).growing().start();
-            for _ in 0..6 {
+            p.pass(&t, Cancel::Never).unwrap();
+            let (first, first_rays) = (p.film.spp, p.rays);
+            assert_eq!(first, 1);
+            for _ in 0..5 {
                 p.pass(&t, Cancel::Never).unwrap();
             }
             let (lo, _, hi) = p.film.spp_range();
             assert_eq!(lo < hi, adaptive);
-            let again = p.retrace(&t);
+            let again = p.retrace(&t, 0);
             assert_eq!(again.rays, p.rays, "adaptive: {adaptive}");
+            let later = p.retrace(&t, first);
+            assert_eq!(later.rays, p.rays - first_rays, "adaptive: {adaptive}");
         }
     }
 

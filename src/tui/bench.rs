@@ -38,9 +38,9 @@ pub(crate) struct TuiPassStats {
     /// worst pixels and snapshot.
     pub(crate) step_ms_mean: f64,
     pub(crate) mrays_per_s: f64,
-    /// The film's samples traced again in one pass, each pixel's together as
-    /// a one-shot render of the same counts does: the rate the passes'
-    /// `mrays_per_s` is measured against.
+    /// The samples of the later passes traced again in one pass, each
+    /// pixel's together as a one-shot render of the same counts does: the
+    /// rate the passes' `mrays_per_s` is measured against.
     pub(crate) one_shot_mrays_per_s: f64,
     /// The film's mean samples per pixel after the last pass.
     pub(crate) spp_mean: f64,
@@ -97,6 +97,10 @@ pub(crate) fn measure_pass(
     let (mut pass_ms, mut step_ms, mut frame_bytes, mut frame_bytes_256) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let (mut rays, mut spp_mean) = (Vec::new(), 0.0);
+    // Samples per pixel after the first full pass, which is left out of
+    // the passes' rate (it also counts BVH work for the panel), and so of
+    // the one-pass rate they are compared with.
+    let mut first_spp = 0;
     while (pass_ms.len() as u32) < passes {
         let start = Instant::now();
         let s = match worker.step(crate::interrupt::Cancel::Never) {
@@ -107,6 +111,9 @@ pub(crate) fn measure_pass(
         let step = start.elapsed().as_secs_f64() * 1e3;
         if s.coarse {
             continue;
+        }
+        if pass_ms.is_empty() {
+            first_spp = s.spp;
         }
         pass_ms.push(s.pass_ms);
         step_ms.push(step);
@@ -141,7 +148,8 @@ pub(crate) fn measure_pass(
         mean(&later(&v))
     };
     let pass_mean = mean(&sorted);
-    let once = worker.retrace().map_or(0.0, |p| p.mrays_per_s());
+    let from = if pass_ms.len() > 1 { first_spp } else { 0 };
+    let once = worker.retrace(from).map_or(0.0, |p| p.mrays_per_s());
     Ok(TuiPassStats {
         scene: scene.name.clone(),
         triangles: scene.geometry.triangle_count(),

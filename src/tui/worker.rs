@@ -474,13 +474,16 @@ impl Worker {
         )
     }
 
-    /// The film's samples traced again in one pass, as a one-shot render
-    /// of the same counts would ([`Progressive::retrace`]); `None` before a
-    /// view.
-    pub(crate) fn retrace(&self) -> Option<crate::render::PassStats> {
+    /// The film's samples from each pixel's `from`th on, traced again in
+    /// one pass as a one-shot render of the same counts would
+    /// ([`Progressive::retrace`]); `None` before a view.
+    pub(crate) fn retrace(&self, from: u32) -> Option<crate::render::PassStats> {
         let view = self.view.as_ref()?;
         let f = self.film.film();
-        Some(self.film.retrace(&self.tracer(view, (f.width, f.height))))
+        Some(
+            self.film
+                .retrace(&self.tracer(view, (f.width, f.height)), from),
+        )
     }
 
     /// Does the next piece of work: shows a kept film again, draws the
