@@ -90,7 +90,8 @@ Matching the two renderers
   rays, and Cycles gets diffuse_bounces 0, glossy_bounces = max_bounces = 4
   (so that glossy rays see the direct light on what they hit, as rayterm's
   reflection rays do) and caustics off.  Either way transmission, volume
-  and transparent bounces are 0, and there is no sample clamping, no glossy filter, no light tree, no denoising, adaptive
+  and transparent bounces are 0, and there is no sample clamping, no glossy filter
+  (rayterm: --no regularize), no light tree, no denoising, adaptive
   sampling off, and a black world, except for the scenes lit by a constant
   sky (WORLD below: rayterm's --env, Cycles' world colour).
 * Film.  rayterm jitters its samples uniformly over each pixel (a box filter
@@ -554,7 +555,9 @@ WORLD = {
 
 
 def render_rayterm(binary, glb, exr, size, spp, extra=()):
+    # No regularization: Cycles runs without its glossy filter too.
     cmd = [binary, "render", glb, "-o", exr, "--size", size, "--spp", str(spp), "--no", "bloom",
+           "--no", "regularize",
            "--progress", "none", *extra]
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
 

@@ -272,8 +272,9 @@ fn ray(out: &mut Out, n: &RayNode, d: usize) {
             d + 1,
             LineKind::Detail,
             format!(
-                "bounce: {} lobe, pdf {pdf}, factor {}, survival {}{ends}",
+                "bounce: {} lobe{}, pdf {pdf}, factor {}, survival {}{ends}",
                 b.lobe.name(),
+                if b.regularized { " (regularized)" } else { "" },
                 v(b.factor),
                 num(b.survival, 4)
             ),

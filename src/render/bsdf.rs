@@ -132,6 +132,32 @@ impl Bsdf {
         }
     }
 
+    /// The scattering with its specular lobe at least as rough as a GGX
+    /// alpha of `alpha` (a mirror's included; a Phong lobe through the
+    /// alpha of its exponent, `Ns = 2 / α² - 2`): path regularization
+    /// ([`regularizing_alpha`]).
+    pub(crate) fn regularized(mut self, alpha: f32) -> Self {
+        if alpha <= 0.0 {
+            return self;
+        }
+        match &mut self.model {
+            Model::Pbr(b) => b.alpha = b.alpha.max(alpha),
+            Model::Phong { spec: Some(s), .. } => {
+                let own = if s.mirror {
+                    0.0
+                } else {
+                    (2.0 / (s.ns + 2.0)).sqrt()
+                };
+                if own < alpha {
+                    s.ns = 2.0 / (alpha * alpha) - 2.0;
+                    s.mirror = false;
+                }
+            }
+            Model::Phong { spec: None, .. } => {}
+        }
+        self
+    }
+
     /// The chance of the specular lobe among the reflecting ones, seen
     /// from `cos_v`.
     fn share(&self, cos_v: f32) -> f32 {
@@ -295,10 +321,54 @@ pub(crate) fn power_heuristic(a: f32, b: f32) -> f32 {
     }
 }
 
+/// The least GGX alpha of a specular lobe at a path's hit after bounces
+/// whose least density was `least_pdf`: `sqrt(1 - pdf) / 2` below a
+/// density of 1, as Cycles' Filter Glossy at its default of 1 blurs. After
+/// a diffuse bounce (a density of at most 1/π) a smooth lobe is at least
+/// 0.41 rough (an alpha of 0.41), so light that reaches a diffuse surface by way of a smooth
+/// reflection (a caustic) arrives blurred, found by light sampling, instead
+/// of by rare bounces that leave single bright pixels; after sharp glossy
+/// bounces (densities above 1) nothing changes.
+pub(crate) fn regularizing_alpha(least_pdf: f32) -> f32 {
+    if least_pdf < 1.0 {
+        0.5 * (1.0 - least_pdf.max(0.0)).sqrt()
+    } else {
+        0.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::geometry::sampling::Rng;
+
+    /// Regularization blurs by the path's least density as Cycles' Filter
+    /// Glossy does, never below a lobe's own roughness; a mirror becomes
+    /// glossy, with a density light sampling can weigh against, and a
+    /// Phong lobe takes the exponent of that alpha.
+    #[test]
+    fn regularization_roughens_smooth_lobes_only() {
+        assert_eq!(regularizing_alpha(f32::INFINITY), 0.0);
+        assert_eq!(regularizing_alpha(1.0), 0.0);
+        assert!((regularizing_alpha(FRAC_1_PI) - 0.41284).abs() < 1e-4);
+        assert_eq!(regularizing_alpha(0.0), 0.5);
+        let (n, v) = (Vec3::Z, dir(0.3, 0.0));
+        let l = 2.0 * v.dot(n) * n - v;
+        let mirror = Bsdf::pbr(Brdf::new(Vec3::ONE, 1.0, 0.0), 1.0);
+        assert_eq!(mirror.pdf(n, v, l), 0.0);
+        let blurred = mirror.regularized(0.41);
+        assert!(blurred.pdf(n, v, l) > 0.0 && blurred.eval(n, v, l).x > 0.0);
+        assert_eq!(mirror.regularized(0.0), mirror);
+        let rough = Bsdf::pbr(Brdf::new(Vec3::ONE, 1.0, 0.8), 1.0);
+        assert_eq!(rough.regularized(0.41), rough);
+        let phong = Bsdf::phong(Vec3::ZERO, Vec3::ONE, 1000.0, false, 1.0);
+        let Model::Phong { spec: Some(s), .. } = phong.regularized(0.5).model else {
+            panic!("a Phong lobe stays Phong");
+        };
+        assert!(!s.mirror && (s.ns - 6.0).abs() < 1e-4, "{s:?}");
+        let dull = Bsdf::phong(Vec3::ZERO, Vec3::ONE, 2.0, true, 1.0);
+        assert_eq!(dull.regularized(0.5), dull);
+    }
 
     fn dir(theta: f32, phi: f32) -> Vec3 {
         Vec3::new(

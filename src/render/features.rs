@@ -24,6 +24,7 @@ pub enum Feature {
     Emission,
     Indirect,
     Alpha,
+    Regularize,
 }
 
 impl Choice for Feature {
@@ -56,13 +57,16 @@ impl Choice for Feature {
             Feature::Alpha => {
                 "Cut-outs and see-through surfaces of glTF alpha (MASK, BLEND), for every ray"
             }
+            Feature::Regularize => {
+                "Smooth reflections made rougher after a diffuse or glossy bounce (path tracing): caustics blur instead of sparkling"
+            }
         };
         (self.name(), help)
     }
 }
 
 impl Feature {
-    pub(crate) const ALL: [Feature; 15] = [
+    pub(crate) const ALL: [Feature; 16] = [
         Feature::Shadows,
         Feature::Reflections,
         Feature::SmoothNormals,
@@ -78,6 +82,7 @@ impl Feature {
         Feature::Emission,
         Feature::Indirect,
         Feature::Alpha,
+        Feature::Regularize,
     ];
 
     pub(crate) fn name(self) -> &'static str {
@@ -97,6 +102,7 @@ impl Feature {
             Feature::Emission => "emission",
             Feature::Indirect => "indirect",
             Feature::Alpha => "alpha",
+            Feature::Regularize => "regularize",
         }
     }
 

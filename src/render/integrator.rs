@@ -49,6 +49,10 @@ pub(super) struct Depth {
     /// `None` for the camera's rays, mirrors, passes through and Whitted's
     /// rays, which light sampling cannot stand in for.
     pub(super) pdf: Option<f32>,
+    /// On a path, the least density of its bounces so far (infinite before
+    /// any, and for mirrors): how far a smooth lobe at the next hit is made
+    /// rougher ([`Plan::regularize`]).
+    pub(super) least_pdf: f32,
 }
 
 impl Depth {
@@ -56,6 +60,7 @@ impl Depth {
         bounces: 0,
         paths: 1,
         pdf: None,
+        least_pdf: f32::INFINITY,
     };
 
     /// The next bounce, on one of `split` branches.
@@ -64,6 +69,7 @@ impl Depth {
             bounces: self.bounces + 1,
             paths: self.paths.saturating_mul(split),
             pdf: None,
+            least_pdf: self.least_pdf,
         }
     }
 
@@ -73,6 +79,7 @@ impl Depth {
             bounces: self.bounces + 1,
             paths: self.paths,
             pdf,
+            least_pdf: self.least_pdf.min(pdf.unwrap_or(f32::INFINITY)),
         }
     }
 

@@ -16,7 +16,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use super::bsdf::{Bsdf, Lobe};
+use super::bsdf::{regularizing_alpha, Bsdf, Lobe};
 use super::integrator::{Depth, Surface, Tracer, Uvs};
 use super::recorder::{Bounce, Emission, LightSample, Mis, RayKind, Recorder};
 use crate::geometry::offset::{offset_origin, SHADOW_EPSILON};
@@ -69,7 +69,13 @@ impl Tracer<'_> {
                 mis,
             });
         }
-        let bsdf = self.bsdf(s);
+        let blur = match self.plan.regularize {
+            true => regularizing_alpha(depth.least_pdf),
+            false => 0.0,
+        };
+        let own = self.bsdf(s);
+        let bsdf = own.regularized(blur);
+        let regularized = bsdf != own;
         for (i, light) in self.scene.lights.iter().enumerate() {
             color += self.path_light(s, &bsdf, i, light, rng, rec);
         }
@@ -103,6 +109,7 @@ impl Tracer<'_> {
             if survival.is_nan() || survival <= 0.0 || rng.next_f32() >= survival {
                 rec.bounce(Bounce {
                     lobe: b.lobe,
+                    regularized,
                     pdf: b.pdf,
                     factor: b.weight,
                     survival,
@@ -113,6 +120,7 @@ impl Tracer<'_> {
         let factor = b.weight / survival;
         rec.bounce(Bounce {
             lobe: b.lobe,
+            regularized,
             pdf: b.pdf,
             factor: b.weight,
             survival,

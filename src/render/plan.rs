@@ -133,6 +133,8 @@ pub(crate) fn not_needed(scene: &Scene, f: Feature) -> Option<Reason> {
         Feature::Alpha if !scene.materials.iter().any(|m| m.alpha.is_some()) => {
             Some(Reason::NoAlpha)
         }
+        Feature::Regularize if integrator(scene).0 == Integrator::Whitted => Some(Reason::Whitted),
+        Feature::Regularize if !any_reflective => Some(Reason::NoReflective),
         _ => None,
     }
 }
@@ -155,6 +157,9 @@ fn needed_for(f: Feature) -> &'static str {
         Feature::Emission => "some material emits light",
         Feature::Indirect => "paths bounce",
         Feature::Alpha => "some material is cut out or blended by alpha",
+        Feature::Regularize => {
+            "paths that met a diffuse or glossy surface see smooth reflections rougher"
+        }
     }
 }
 
@@ -176,13 +181,15 @@ fn stage_name(f: Feature) -> &'static str {
         Feature::Emission => "emission",
         Feature::Indirect => "path tracing (indirect light)",
         Feature::Alpha => "alpha tests (cut-outs, blending)",
+        Feature::Regularize => "path regularization",
     }
 }
 
 /// Stages in the order `--explain` lists them; a refinement comes after the
 /// feature it needs.
-const ORDER: [Feature; 15] = [
+const ORDER: [Feature; 16] = [
     Feature::Indirect,
+    Feature::Regularize,
     Feature::Shadows,
     Feature::Reflections,
     Feature::Glossy,
@@ -220,6 +227,7 @@ fn refines(f: Feature) -> Option<Feature> {
     match f {
         Feature::Glossy => Some(Feature::Reflections),
         Feature::Bilinear | Feature::NormalMaps => Some(Feature::Textures),
+        Feature::Regularize => Some(Feature::Indirect),
         _ => None,
     }
 }
@@ -249,6 +257,9 @@ pub struct Plan {
     pub(crate) emission: bool,
     /// Rays pass the parts of alpha-tested surfaces that are not there.
     pub(crate) alpha: bool,
+    /// A path's smooth lobes are made rougher after its first diffuse or
+    /// glossy bounce ([`Bsdf::regularized`](super::bsdf::Bsdf::regularized)).
+    pub(crate) regularize: bool,
     /// Camera rays, which all start at the eye, are traced in packets
     /// ([`Bvh::intersect_packet`](crate::bvh::Bvh::intersect_packet)):
     /// the same hits, found together, whenever the BVH is used, for a
@@ -336,6 +347,7 @@ impl Plan {
             normal_maps: on(Feature::NormalMaps),
             emission: on(Feature::Emission),
             alpha: on(Feature::Alpha),
+            regularize: on(Feature::Regularize),
             packets: on(Feature::Bvh) && !orthographic(scene),
             deterministic,
             integrator,

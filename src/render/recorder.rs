@@ -102,10 +102,14 @@ impl Mis {
 
 /// How a path went on from a hit: the lobe drawn, its density (`None` for
 /// a mirror or a pass through), the throughput factor (BSDF times cosine
-/// over the density) and the chance Russian roulette let the path live.
+/// over the density) and the chance Russian roulette let the path live;
+/// whether the surface's lobes were made rougher for the bounce
+/// ([`Bsdf::regularized`](super::bsdf::Bsdf::regularized)).
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Bounce {
     pub(crate) lobe: super::bsdf::Lobe,
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub(crate) regularized: bool,
     pub pdf: Option<f32>,
     pub factor: Vec3,
     pub survival: f32,

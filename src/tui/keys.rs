@@ -229,6 +229,7 @@ pub(crate) const ROWS: &[KeyRow] = &[
             (K::Char('E'), A::Toggle(Feature::Emission)),
             (K::Char('i'), A::Toggle(Feature::Indirect)),
             (K::Char('A'), A::Toggle(Feature::Alpha)),
+            (K::Char('R'), A::Toggle(Feature::Regularize)),
         ],
         help: "toggle a feature (each key is listed in the Features panel)",
         hint: Some("features"),

@@ -446,3 +446,63 @@ fn path_traced_parts_and_checkpoints_make_the_single_render() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A smooth metal sphere on a grey floor under a point light, seen from
+/// above: light reaches the floor by way of the sphere (a caustic) through
+/// rare bounces that leave single bright pixels. Regularization makes the
+/// sphere rougher for paths that bounced off the floor, so light sampling
+/// finds that light instead: no pixel of the floor stands out, and the
+/// floor keeps its brightness.
+#[test]
+fn regularization_takes_the_fireflies_out_of_a_caustic() {
+    let (fp, ft) = quad_y(-6.0, -6.0, 6.0, 6.0, 0.0);
+    let (sp, st) = sphere(Vec3::new(0.0, 1.0, 0.0), 1.0, 24);
+    let mut s = path(scene(
+        &[(fp, ft, pbr(0.5, 0.0, 1.0)), (sp, st, pbr(0.9, 1.0, 0.15))],
+        vec![Light::Photometric {
+            position: Vec3::new(-1.5, 4.0, 1.5),
+            intensity: Vec3::splat(200.0),
+            range: None,
+            cone: None,
+        }],
+        Camera {
+            eye: Vec3::new(0.0, 7.0, 0.01),
+            target: Vec3::ZERO,
+            up: Vec3::NEG_Z,
+            projection: Projection::perspective(51.6),
+        },
+    ));
+    s.settings.max_depth = 4;
+    // The floor around the sphere: pixels over 0.3 of the width from the
+    // middle. Its mean, median, brightest, and pixels over 3x the median.
+    let floor = |features: Features| {
+        let r = render(&s, 32, 32, 64, features, Builder::Sah, 1);
+        let mut px: Vec<f32> = (0..32 * 32)
+            .filter(|i| {
+                let (x, y) = ((i % 32) as f32 - 15.5, (i / 32) as f32 - 15.5);
+                x.hypot(y) > 0.3 * 32.0
+            })
+            .map(|i| r.image[i].x)
+            .collect();
+        px.sort_by(f32::total_cmp);
+        let mean = px.iter().sum::<f32>() / px.len() as f32;
+        let median = px[px.len() / 2];
+        let over = px.iter().filter(|&&v| v > 3.0 * median).count();
+        (mean, median, px[px.len() - 1], over)
+    };
+    let (mean_off, median_off, max_off, over_off) =
+        floor(no_bloom().without(&[Feature::Regularize]));
+    assert!(
+        over_off > 0,
+        "no firefly to take out: brightest {max_off}, median {median_off}"
+    );
+    let (mean_on, median_on, max_on, over_on) = floor(no_bloom());
+    assert_eq!(
+        over_on, 0,
+        "regularized: brightest {max_on}, median {median_on}"
+    );
+    assert!(
+        (mean_on - mean_off).abs() < 0.1 * mean_off,
+        "means {mean_on} and {mean_off}"
+    );
+}
