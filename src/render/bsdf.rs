@@ -321,17 +321,19 @@ pub(crate) fn power_heuristic(a: f32, b: f32) -> f32 {
     }
 }
 
-/// The least GGX alpha of a specular lobe at a path's hit after bounces
-/// whose least density was `least_pdf`: `sqrt(1 - pdf) / 2` below a
-/// density of 1, as Cycles' Filter Glossy at its default of 1 blurs. After
-/// a diffuse bounce (a density of at most 1/π) a smooth lobe is at least
-/// 0.41 rough (an alpha of 0.41), so light that reaches a diffuse surface by way of a smooth
-/// reflection (a caustic) arrives blurred, found by light sampling, instead
-/// of by rare bounces that leave single bright pixels; after sharp glossy
-/// bounces (densities above 1) nothing changes.
-pub(crate) fn regularizing_alpha(least_pdf: f32) -> f32 {
-    if least_pdf < 1.0 {
-        0.5 * (1.0 - least_pdf.max(0.0)).sqrt()
+/// The least GGX alpha of a specular lobe at a path's hit after diffuse
+/// bounces whose least density was `diffuse_pdf` (infinite for none):
+/// `sqrt(1 - pdf) / 2`, as Cycles' Filter Glossy at its default of 1
+/// blurs, so at least 0.41 (a diffuse bounce's density is at most 1/π).
+/// Light that reaches a diffuse surface by way of a smooth reflection (a
+/// caustic) then arrives blurred, found by light sampling, instead of by
+/// rare bounces that leave single bright pixels. Unlike Cycles, glossy
+/// bounces do not count: a point light here is found by light sampling
+/// alone, and a lobe made only a little rougher turns a mirror's one
+/// image of it into many bright pixels.
+pub(crate) fn regularizing_alpha(diffuse_pdf: f32) -> f32 {
+    if diffuse_pdf < 1.0 {
+        0.5 * (1.0 - diffuse_pdf.max(0.0)).sqrt()
     } else {
         0.0
     }

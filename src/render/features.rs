@@ -58,7 +58,7 @@ impl Choice for Feature {
                 "Cut-outs and see-through surfaces of glTF alpha (MASK, BLEND), for every ray"
             }
             Feature::Regularize => {
-                "Smooth reflections made rougher after a diffuse or glossy bounce (path tracing): caustics blur instead of sparkling"
+                "Smooth reflections made rougher after a diffuse bounce (path tracing): caustics blur instead of sparkling"
             }
         };
         (self.name(), help)

@@ -49,10 +49,10 @@ pub(super) struct Depth {
     /// `None` for the camera's rays, mirrors, passes through and Whitted's
     /// rays, which light sampling cannot stand in for.
     pub(super) pdf: Option<f32>,
-    /// On a path, the least density of its bounces so far (infinite before
-    /// any, and for mirrors): how far a smooth lobe at the next hit is made
+    /// On a path, the least density of its diffuse bounces so far
+    /// (infinite before any): how far a smooth lobe at the next hit is made
     /// rougher ([`Plan::regularize`]).
-    pub(super) least_pdf: f32,
+    pub(super) diffuse_pdf: f32,
 }
 
 impl Depth {
@@ -60,7 +60,7 @@ impl Depth {
         bounces: 0,
         paths: 1,
         pdf: None,
-        least_pdf: f32::INFINITY,
+        diffuse_pdf: f32::INFINITY,
     };
 
     /// The next bounce, on one of `split` branches.
@@ -69,17 +69,21 @@ impl Depth {
             bounces: self.bounces + 1,
             paths: self.paths.saturating_mul(split),
             pdf: None,
-            least_pdf: self.least_pdf,
+            diffuse_pdf: self.diffuse_pdf,
         }
     }
 
-    /// A path's next bounce, drawn with density `pdf`.
-    pub(super) fn bounce(self, pdf: Option<f32>) -> Depth {
+    /// A path's next bounce, drawn with density `pdf`, from the diffuse
+    /// lobe or not.
+    pub(super) fn bounce(self, pdf: Option<f32>, diffuse: bool) -> Depth {
         Depth {
             bounces: self.bounces + 1,
             paths: self.paths,
             pdf,
-            least_pdf: self.least_pdf.min(pdf.unwrap_or(f32::INFINITY)),
+            diffuse_pdf: match (diffuse, pdf) {
+                (true, Some(p)) => self.diffuse_pdf.min(p),
+                _ => self.diffuse_pdf,
+            },
         }
     }
 

@@ -70,7 +70,7 @@ impl Tracer<'_> {
             });
         }
         let blur = match self.plan.regularize {
-            true => regularizing_alpha(depth.least_pdf),
+            true => regularizing_alpha(depth.diffuse_pdf),
             false => 0.0,
         };
         let own = self.bsdf(s);
@@ -133,7 +133,7 @@ impl Tracer<'_> {
         };
         let o = offset_origin(s.p, s.err, s.ng, b.dir);
         let ray = Ray::new(o, b.dir);
-        let next = depth.bounce(b.pdf);
+        let next = depth.bounce(b.pdf, b.lobe == Lobe::Diffuse);
         color + factor * self.trace(&ray, None, next, kind, weight * factor, rng, rec)
     }
 

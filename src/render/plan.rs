@@ -158,7 +158,7 @@ fn needed_for(f: Feature) -> &'static str {
         Feature::Indirect => "paths bounce",
         Feature::Alpha => "some material is cut out or blended by alpha",
         Feature::Regularize => {
-            "paths that met a diffuse or glossy surface see smooth reflections rougher"
+            "paths that bounced off a diffuse surface see smooth reflections rougher"
         }
     }
 }
@@ -257,8 +257,7 @@ pub struct Plan {
     pub(crate) emission: bool,
     /// Rays pass the parts of alpha-tested surfaces that are not there.
     pub(crate) alpha: bool,
-    /// A path's smooth lobes are made rougher after its first diffuse or
-    /// glossy bounce ([`Bsdf::regularized`](super::bsdf::Bsdf::regularized)).
+    /// A path's smooth lobes are made rougher after a diffuse bounce ([`Bsdf::regularized`](super::bsdf::Bsdf::regularized)).
     pub(crate) regularize: bool,
     /// Camera rays, which all start at the eye, are traced in packets
     /// ([`Bvh::intersect_packet`](crate::bvh::Bvh::intersect_packet)):
