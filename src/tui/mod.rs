@@ -56,7 +56,7 @@ use app::App;
 use color::ColorMode;
 use graphics::bands::{Bands, Picture};
 use graphics::encoder::Encoder;
-use graphics::symbols::Symbols;
+use graphics::symbols::SymbolsArg;
 use graphics::{GraphicsArg, PixelMode};
 use term::detect::{self, Ask};
 use term::input::{Input, Reader, Reply};
@@ -78,7 +78,7 @@ const LEAVE_WAIT: Duration = Duration::from_secs(1);
 pub(crate) fn run(
     req: &SceneRequest,
     color: Option<ColorMode>,
-    symbols: Option<Symbols>,
+    symbols: Option<SymbolsArg>,
     graphics: Option<GraphicsArg>,
     reference: Option<&Path>,
 ) -> Result<ExitCode> {
@@ -114,7 +114,6 @@ pub(crate) fn run(
         reference,
     )?;
     app.jobs.export_size = req.size;
-    app.display.symbols = symbols;
     // SIGTERM, SIGHUP and an outside SIGINT quit like `q`: the loop sees the
     // flag and the guard below restores the terminal. SIGTSTP suspends like
     // Ctrl-Z.
@@ -131,15 +130,17 @@ pub(crate) fn run(
         let ask = Ask {
             graphics: graphics != GraphicsArg::Symbols,
             colour: color.is_none(),
+            symbols: !matches!(symbols, SymbolsArg::Set(s) if s.grid().1 <= 2),
             tmux: tmux.is_some(),
-            passthrough: tmux.is_some_and(|t| t.passthrough),
+            passthrough: tmux.as_ref().is_some_and(|t| t.passthrough),
         };
         let screen = terminal.backend_mut();
         let (answers, kept) = detect::ask(ask, |b| screen.send(b), &reader, tmux.is_some(), quits)?;
         let hint = match color {
             Some(_) => None,
             None => {
-                let (mode, hint) = term::choose_colour(answers.rgb, tmux.and_then(|t| t.rgb), var);
+                let tmux_rgb = tmux.as_ref().and_then(|t| t.rgb);
+                let (mode, hint) = term::choose_colour(answers.rgb, tmux_rgb, var);
                 app.display.color = mode;
                 hint
             }
@@ -151,8 +152,16 @@ pub(crate) fn run(
             cell_from_ioctl(),
             (size.width, size.height),
             var,
-            tmux.map(|t| t.passthrough),
+            tmux.as_ref().map(|t| t.passthrough),
         );
+        // Inside tmux, XTVERSION names tmux; the terminal is what tmux was
+        // told by the one it runs in.
+        let named = match &tmux {
+            Some(t) => t.terminal.as_deref(),
+            None => answers.version.as_deref(),
+        };
+        let (set, symbols_hint) = term::glyphs::choose(symbols, named, &answers.advances);
+        app.display.symbols = set;
         app.display.pixels = pixels;
         if let Some(cell) =
             detect::cell_size(&answers, cell_from_ioctl(), (size.width, size.height))
@@ -162,8 +171,10 @@ pub(crate) fn run(
         // The colours' hint first: the status line wraps, and it is the
         // one to keep whole.
         let colour_hint = hint.filter(|_| app.display.pixels.is_none());
+        let symbols_hint = symbols_hint.filter(|_| app.display.pixels.is_none());
         let mut said: Vec<String> = colour_hint
             .into_iter()
+            .chain(symbols_hint)
             .chain([app.status.message().to_string(), said])
             .collect();
         said.retain(|s| !s.is_empty());
