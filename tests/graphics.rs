@@ -333,6 +333,38 @@ fn quitting_while_images_crawl_through_a_slow_link_leaves_none() {
     no_image_left(&out);
 }
 
+/// The widths (`s=`) of the kitty images transmitted, in order.
+fn kitty_widths(out: &[u8]) -> Vec<u32> {
+    let text = String::from_utf8_lossy(out);
+    text.split("\x1b_Ga=T,")
+        .skip(1)
+        .filter_map(|t| {
+            let keys = t.split(';').next()?;
+            keys.split(',')
+                .find_map(|k| k.strip_prefix("s=")?.parse().ok())
+        })
+        .collect()
+}
+
+#[test]
+fn a_slow_link_gets_a_coarse_picture_first_then_the_sharp_one() {
+    let mut t = Term::start(&["cornell", "--graphics", "kitty"], (80, 24), kitty);
+    t.rate = Some(32_000.0);
+    // Every band goes coarse first (a fraction of the width), then sharp.
+    let sharp_follows = |o: &[u8]| {
+        let widths = kitty_widths(o);
+        let Some(&coarse) = widths.first() else {
+            return false;
+        };
+        let bands = widths.iter().take_while(|&&w| w == coarse).count();
+        widths.iter().filter(|&&w| w >= 2 * coarse).count() >= bands
+    };
+    assert!(t.run_until(PATIENCE, sharp_follows), "no sharp picture");
+    let (status, out) = t.quit();
+    assert_eq!(status, Some(0));
+    no_image_left(&out);
+}
+
 #[test]
 fn garbage_answers_and_huge_windows_neither_hang_nor_abort() {
     // A cell of 65535 x 65535 pixels (sixel images of terapixels, were it
