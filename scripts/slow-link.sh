@@ -3,6 +3,8 @@
 # output throttled by pv (default 32 kB/s), and this measures how long the
 # first full picture takes to appear and how long `q` takes to act.
 # The TUI gets --color 256 unless the extra options name a --color.
+# Block symbols only: pixel graphics need a real terminal, which
+# scripts/slow-link-x.py runs on a virtual X display.
 # Needs tmux, pv and script (util-linux). Usage:
 #   scripts/slow-link.sh [RATE] [SCENE] [extra rayterm tui options...]
 set -eu

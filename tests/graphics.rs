@@ -22,7 +22,11 @@ fn contains(out: &[u8], needle: &[u8]) -> bool {
 fn auto_falls_back_to_symbols_when_nothing_answers() {
     let start = Instant::now();
     let (status, out) = run(&["cornell"], b"the terminal answered no query");
-    eprintln!("fallback seen after {:?}", start.elapsed());
+    let waited = start.elapsed();
+    eprintln!("fallback seen after {waited:?}");
+    // The wait for answers is a second; loading and the first frame are
+    // quick.
+    assert!(waited < Duration::from_secs(20), "{waited:?}");
     // The colours' hint comes first, and the status line wraps before
     // "symbols".
     assert!(
@@ -33,8 +37,42 @@ fn auto_falls_back_to_symbols_when_nothing_answers() {
     // The queries went out, and no image followed them.
     assert!(contains(&out, b"\x1b_Gi=31,s=1,v=1,a=q"));
     assert!(!contains(&out, b"\x1bP0;1;0q") && !contains(&out, b"\x1b_Ga=T"));
+    // So did the glyph probes (`--symbols auto` by default); unanswered,
+    // they leave half blocks, without a word about symbols.
+    assert!(contains(&out, b"\x1b[>0q") && contains(&out, "\u{1CD00}\x1b[6n".as_bytes()));
+    let text = String::from_utf8_lossy(&out);
+    let count = |r: std::ops::RangeInclusive<char>| text.chars().filter(|c| r.contains(c)).count();
+    assert_eq!(
+        count('\u{1FB00}'..='\u{1FB3B}'),
+        1,
+        "sextants beyond the probe's"
+    );
+    assert_eq!(
+        count('\u{1CD00}'..='\u{1CDE5}'),
+        1,
+        "octants beyond the probe's"
+    );
+    assert!(text.contains("half") && !text.contains("show as boxes"));
     assert_eq!(status.map(|s| s.code()), Some(Some(0)));
     assert!(contains(&out, b"\x1b[?1049l"), "the screen is restored");
+}
+
+#[test]
+fn octants_asked_of_a_terminal_that_says_nothing_are_kept_and_the_risk_said() {
+    let (status, out) = run(
+        &["cornell", "--graphics", "symbols", "--symbols", "octant"],
+        b"unless the font has them",
+    );
+    assert!(
+        contains(
+            &out,
+            b"octants show as boxes or blanks unless the font has them"
+        ),
+        "{}",
+        String::from_utf8_lossy(&out)
+    );
+    assert!(contains(&out, "\u{1CD00}".as_bytes()) && contains(&out, b"octants"));
+    assert_eq!(status.map(|s| s.code()), Some(Some(0)));
 }
 
 #[test]
@@ -290,6 +328,38 @@ fn quitting_while_images_crawl_through_a_slow_link_leaves_none() {
     t.rate = Some(32_000.0);
     // Quit in the middle of an image's chunks.
     assert!(t.run_until(PATIENCE, |o| contains(o, b"\x1b_Gm=1;")));
+    let (status, out) = t.quit();
+    assert_eq!(status, Some(0));
+    no_image_left(&out);
+}
+
+/// The widths (`s=`) of the kitty images transmitted, in order.
+fn kitty_widths(out: &[u8]) -> Vec<u32> {
+    let text = String::from_utf8_lossy(out);
+    text.split("\x1b_Ga=T,")
+        .skip(1)
+        .filter_map(|t| {
+            let keys = t.split(';').next()?;
+            keys.split(',')
+                .find_map(|k| k.strip_prefix("s=")?.parse().ok())
+        })
+        .collect()
+}
+
+#[test]
+fn a_slow_link_gets_a_coarse_picture_first_then_the_sharp_one() {
+    let mut t = Term::start(&["cornell", "--graphics", "kitty"], (80, 24), kitty);
+    t.rate = Some(32_000.0);
+    // Every band goes coarse first (a fraction of the width), then sharp.
+    let sharp_follows = |o: &[u8]| {
+        let widths = kitty_widths(o);
+        let Some(&coarse) = widths.first() else {
+            return false;
+        };
+        let bands = widths.iter().take_while(|&&w| w == coarse).count();
+        widths.iter().filter(|&&w| w >= 2 * coarse).count() >= bands
+    };
+    assert!(t.run_until(PATIENCE, sharp_follows), "no sharp picture");
     let (status, out) = t.quit();
     assert_eq!(status, Some(0));
     no_image_left(&out);

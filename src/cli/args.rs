@@ -9,7 +9,7 @@ use crate::render::{Feature, Features, PlanPolicy, SceneRequest, Worst};
 use crate::scene::load::{up::Up, EnvRequest};
 use crate::scene::{Builder, Integrator, MAX_DEPTH};
 use crate::tui::color::ColorMode;
-use crate::tui::graphics::symbols::Symbols;
+use crate::tui::graphics::symbols::SymbolsArg;
 use crate::tui::graphics::GraphicsArg;
 use crate::viz::DebugSpec;
 
@@ -557,10 +557,12 @@ pub(crate) struct TuiArgs {
     pub(crate) color: Option<ColorMode>,
     /// Block symbols for the viewport: half blocks (1x2 pixels per cell,
     /// every terminal), quadrants (2x2), sextants (2x3, Unicode 13) or
-    /// octants (2x4, Unicode 16; fonts are newer) [default: RAYTERM_SYMBOLS,
-    /// else `symbols` in the config file, else half].
+    /// octants (2x4, Unicode 16; few fonts have them), or auto: the densest
+    /// set the terminal is known to draw itself, whatever its font
+    /// [default: RAYTERM_SYMBOLS, else `symbols` in the config file, else
+    /// auto].
     #[arg(long, value_enum)]
-    pub(crate) symbols: Option<Symbols>,
+    pub(crate) symbols: Option<SymbolsArg>,
     /// Pixel graphics for the viewport: ask the terminal (auto, within a
     /// second; block symbols when it has no protocol, or inside tmux
     /// without allow-passthrough), a protocol, or block symbols only. A

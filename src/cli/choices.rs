@@ -10,7 +10,7 @@ use crate::render::aov::Aov;
 use crate::render::{Feature, Worst};
 use crate::scene::{Builder, Integrator};
 use crate::tui::color::ColorMode;
-use crate::tui::graphics::symbols::Symbols;
+use crate::tui::graphics::symbols::SymbolsArg;
 use crate::tui::graphics::GraphicsArg;
 
 macro_rules! value_enum {
@@ -36,6 +36,6 @@ value_enum!(
     Integrator,
     Simd,
     ColorMode,
-    Symbols,
+    SymbolsArg,
     GraphicsArg
 );

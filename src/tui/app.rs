@@ -569,6 +569,11 @@ impl App {
         self.meter.shown_in(self.generation(), self.link.started)
     }
 
+    /// The same until it was on screen at full resolution.
+    pub(crate) fn view_sharp_in(&self) -> Option<f64> {
+        self.meter.sharp_in(self.generation(), self.link.started)
+    }
+
     /// Whether nothing more will change on screen without input.
     pub(crate) fn idle(&self) -> bool {
         self.current_frame().is_some_and(|f| f.done) && !self.jobs.busy()

@@ -9,7 +9,7 @@ use anyhow::{anyhow, Context, Result};
 use serde::Deserialize;
 
 use super::color::ColorMode;
-use super::graphics::symbols::Symbols;
+use super::graphics::symbols::SymbolsArg;
 use super::graphics::GraphicsArg;
 use crate::choice::{self, Choice};
 use crate::words::{clip_quotes, quoted};
@@ -18,7 +18,7 @@ use crate::words::{clip_quotes, quoted};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(crate) struct Defaults {
     pub(crate) color: Option<ColorMode>,
-    pub(crate) symbols: Option<Symbols>,
+    pub(crate) symbols: Option<SymbolsArg>,
     pub(crate) graphics: Option<GraphicsArg>,
 }
 
@@ -105,6 +105,7 @@ fn value<T: Choice>(v: &str) -> Result<T, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::tui::graphics::symbols::Symbols;
 
     fn env<'a>(pairs: &'a [(&'a str, &'a str)]) -> impl Fn(&str) -> Option<String> + 'a {
         move |k| {
@@ -126,7 +127,7 @@ mod tests {
             d,
             Defaults {
                 color: Some(ColorMode::Palette256),
-                symbols: Some(Symbols::Sextant),
+                symbols: Some(SymbolsArg::Set(Symbols::Sextant)),
                 graphics: None,
             }
         );
@@ -139,13 +140,15 @@ mod tests {
         )
         .unwrap();
         assert_eq!(d.color, Some(ColorMode::Truecolor));
-        assert_eq!(d.symbols, Some(Symbols::Sextant));
+        assert_eq!(d.symbols, Some(SymbolsArg::Set(Symbols::Sextant)));
         assert_eq!(d.graphics, Some(GraphicsArg::Symbols));
         // A bad value: the file and its line, and the choices.
         std::fs::write(&file, "color = \"256\"\n\nsymbols = \"braille\"\n").unwrap();
         let e = load(Some(&file), env(&[])).unwrap_err().to_string();
         assert!(e.starts_with(&format!("{}:3: ", file.display())), "{e}");
-        assert!(e.contains("half, quad, sextant, octant"), "{e}");
+        assert!(e.contains("auto, half, quad, sextant, octant"), "{e}");
+        let d = load(None, env(&[("RAYTERM_SYMBOLS", "Auto")])).unwrap();
+        assert_eq!(d.symbols, Some(SymbolsArg::Auto));
         // Bad TOML and an unknown key: named too.
         std::fs::write(&file, "color = 256 colours\n").unwrap();
         let e = load(Some(&file), env(&[])).unwrap_err().to_string();

@@ -33,11 +33,17 @@ impl Default for Meter {
     }
 }
 
+/// Seconds from `started` to `at`, if that was for view `generation`.
+fn since((shown, at): (u64, Instant), generation: u64, started: Instant) -> Option<f64> {
+    (shown == generation).then(|| at.saturating_duration_since(started).as_secs_f64())
+}
+
 impl Meter {
     /// Takes the terminal output's figures; the rates are updated once a
     /// second. True when a readout changed.
     pub(crate) fn note(&mut self, figures: Figures) -> bool {
-        let picture_changed = figures.picture != self.figures.picture;
+        let picture_changed =
+            (figures.picture, figures.sharp) != (self.figures.picture, self.figures.sharp);
         self.figures = figures;
         let (since, base) = self.mark;
         let dt = since.elapsed().as_secs_f64();
@@ -69,8 +75,13 @@ impl Meter {
     /// Seconds from `started` until the first full picture of view
     /// `generation` was on screen.
     pub(crate) fn shown_in(&self, generation: u64, started: Instant) -> Option<f64> {
-        let (shown, at) = self.figures.picture?;
-        (shown == generation).then(|| at.saturating_duration_since(started).as_secs_f64())
+        since(self.figures.picture?, generation, started)
+    }
+
+    /// The same for the first sharp picture: later where a coarse one was
+    /// sent first over a slow link.
+    pub(crate) fn sharp_in(&self, generation: u64, started: Instant) -> Option<f64> {
+        since(self.figures.sharp?, generation, started)
     }
 
     /// Whether a slow pass's progress is due to be shown again; it counts

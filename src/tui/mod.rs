@@ -56,7 +56,7 @@ use app::App;
 use color::ColorMode;
 use graphics::bands::{Bands, Picture};
 use graphics::encoder::Encoder;
-use graphics::symbols::Symbols;
+use graphics::symbols::SymbolsArg;
 use graphics::{GraphicsArg, PixelMode};
 use term::detect::{self, Ask};
 use term::input::{Input, Reader, Reply};
@@ -69,6 +69,11 @@ const FRAME: Duration = Duration::from_millis(33);
 /// the terminal, and while idle (a resize is seen within that).
 const POLL_BUSY: Duration = Duration::from_millis(8);
 const POLL_IDLE: Duration = Duration::from_millis(100);
+/// Over a slow link, a view's preview pass (see `render`) is sent as a
+/// picture only if its full pass has not come within this long: the full
+/// pass sent coarse shows as much, and one coarse picture is enough (two
+/// would take twice as long).
+const PREVIEW_WAIT: Duration = Duration::from_secs(1);
 /// How long leaving waits for the terminal's last answers.
 const LEAVE_WAIT: Duration = Duration::from_secs(1);
 
@@ -78,7 +83,7 @@ const LEAVE_WAIT: Duration = Duration::from_secs(1);
 pub(crate) fn run(
     req: &SceneRequest,
     color: Option<ColorMode>,
-    symbols: Option<Symbols>,
+    symbols: Option<SymbolsArg>,
     graphics: Option<GraphicsArg>,
     reference: Option<&Path>,
 ) -> Result<ExitCode> {
@@ -114,7 +119,6 @@ pub(crate) fn run(
         reference,
     )?;
     app.jobs.export_size = req.size;
-    app.display.symbols = symbols;
     // SIGTERM, SIGHUP and an outside SIGINT quit like `q`: the loop sees the
     // flag and the guard below restores the terminal. SIGTSTP suspends like
     // Ctrl-Z.
@@ -131,15 +135,17 @@ pub(crate) fn run(
         let ask = Ask {
             graphics: graphics != GraphicsArg::Symbols,
             colour: color.is_none(),
+            symbols: !matches!(symbols, SymbolsArg::Set(s) if s.grid().1 <= 2),
             tmux: tmux.is_some(),
-            passthrough: tmux.is_some_and(|t| t.passthrough),
+            passthrough: tmux.as_ref().is_some_and(|t| t.passthrough),
         };
         let screen = terminal.backend_mut();
         let (answers, kept) = detect::ask(ask, |b| screen.send(b), &reader, tmux.is_some(), quits)?;
         let hint = match color {
             Some(_) => None,
             None => {
-                let (mode, hint) = term::choose_colour(answers.rgb, tmux.and_then(|t| t.rgb), var);
+                let tmux_rgb = tmux.as_ref().and_then(|t| t.rgb);
+                let (mode, hint) = term::choose_colour(answers.rgb, tmux_rgb, var);
                 app.display.color = mode;
                 hint
             }
@@ -151,8 +157,16 @@ pub(crate) fn run(
             cell_from_ioctl(),
             (size.width, size.height),
             var,
-            tmux.map(|t| t.passthrough),
+            tmux.as_ref().map(|t| t.passthrough),
         );
+        // Inside tmux, XTVERSION names tmux; the terminal is what tmux was
+        // told by the one it runs in.
+        let named = match &tmux {
+            Some(t) => t.terminal.as_deref(),
+            None => answers.version.as_deref(),
+        };
+        let (set, symbols_hint) = term::glyphs::choose(symbols, named, &answers.advances);
+        app.display.symbols = set;
         app.display.pixels = pixels;
         if let Some(cell) =
             detect::cell_size(&answers, cell_from_ioctl(), (size.width, size.height))
@@ -162,8 +176,10 @@ pub(crate) fn run(
         // The colours' hint first: the status line wraps, and it is the
         // one to keep whole.
         let colour_hint = hint.filter(|_| app.display.pixels.is_none());
+        let symbols_hint = symbols_hint.filter(|_| app.display.pixels.is_none());
         let mut said: Vec<String> = colour_hint
             .into_iter()
+            .chain(symbols_hint)
             .chain([app.status.message().to_string(), said])
             .collect();
         said.retain(|s| !s.is_empty());
@@ -383,6 +399,15 @@ struct Images {
     encoder: Encoder,
     /// What the picture being encoded shows.
     encoding: Option<Shown>,
+    /// The view whose full pass was last sent coarse, over a slow link;
+    /// and whether the sharp picture is still to follow it.
+    coarse_for: Option<u64>,
+    refine: bool,
+    /// The newest view's generation, and when its first picture was due.
+    view: Option<(u64, Instant)>,
+    /// The last coarse picture (its view, pixels and size): sent again
+    /// where text kept some of its bands off the screen, only those change.
+    coarse: Option<(u64, Vec<[u8; 3]>, u32, u32)>,
 }
 
 impl Images {
@@ -391,6 +416,10 @@ impl Images {
             bands: Bands::default(),
             encoder: Encoder::spawn().context("cannot start the image encoder")?,
             encoding: None,
+            coarse_for: None,
+            refine: false,
+            view: None,
+            coarse: None,
         })
     }
 
@@ -432,20 +461,70 @@ impl Images {
             }
             *due |= dropped;
         }
-        if !*due || self.encoder.busy() || !out.pieces_written() {
+        if self.encoder.busy() || !out.pieces_written() {
             return;
         }
-        *due = false;
-        let shown = shown(app);
+        // The sharp picture follows a coarse one once that is written.
+        if !std::mem::take(&mut self.refine) && !*due {
+            return;
+        }
+        let mut shown = shown(app);
         let Some(pic) = widgets::picture(app) else {
+            *due = false;
             out.drawn(screen, shown);
             return;
         };
+        // Until a view's full pass has gone coarse, its pictures go coarse
+        // where the link would take over a second for them (or is not
+        // measured yet); the next picture after it is sharp.
+        let cells = (area.width, area.height);
+        let rate = out.figures().link_rate;
+        let k = match self.coarse_for {
+            Some(g) if g == shown.generation => 1,
+            _ => graphics::coarse_factor(mode, (pic.w, pic.h), cells, rate),
+        };
+        let since = match self.view {
+            Some((g, at)) if g == shown.generation => at.elapsed(),
+            _ => {
+                self.view = Some((shown.generation, Instant::now()));
+                Duration::ZERO
+            }
+        };
+        if k > 1 && !shown.full && since < PREVIEW_WAIT {
+            *due = true;
+            return;
+        }
+        *due = false;
+        let coarse = if k > 1 {
+            let (px, w, h) = graphics::downscale(&pic.px, pic.w, pic.h, k);
+            if shown.full {
+                self.coarse_for = Some(shown.generation);
+            }
+            Some(self.coarse.insert((shown.generation, px, w, h)).clone())
+        } else {
+            // Bands the coarse picture left off (text lay over them then)
+            // go coarse, once, before the sharp picture: only they change.
+            let holes = self.bands.holes(|row| screen.row_has_text(row, area));
+            self.coarse
+                .take()
+                .filter(|c| holes && c.0 == shown.generation)
+        };
+        let sharp = coarse.is_none();
+        if !sharp {
+            self.refine = true;
+            shown.sharp = false;
+        }
+        let (px, w, h) = coarse
+            .as_ref()
+            .map_or((&pic.px[..], pic.w, pic.h), |(_, px, w, h)| {
+                (&px[..], *w, *h)
+            });
         let picture = Picture {
-            px: &pic.px,
-            w: pic.w,
-            h: pic.h,
+            px,
+            w,
+            h,
             area,
+            coarse: !sharp,
         };
         let (now, plan) = self
             .bands
@@ -467,6 +546,7 @@ fn shown(app: &App) -> Shown {
     Shown {
         generation: frame.map_or(0, |f| f.generation),
         full: frame.is_some_and(|f| !f.coarse && f.generation == app.generation()),
+        sharp: true,
     }
 }
 

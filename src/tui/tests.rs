@@ -699,6 +699,7 @@ fn kitty_and_sixel_frames_decode_to_the_viewport_picture() {
                 w: pic.w,
                 h: pic.h,
                 area,
+                coarse: false,
             },
             |_| false,
         );

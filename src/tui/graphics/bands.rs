@@ -42,6 +42,10 @@ pub(crate) struct Picture<'a> {
     pub(crate) w: u32,
     pub(crate) h: u32,
     pub(crate) area: Rect,
+    /// Shrunk for a slow link (see [`super::coarse_factor`]): sixel gives
+    /// each of its pixels one colour, undithered, which sends in far fewer
+    /// bytes than the dithered picture scaled up.
+    pub(crate) coarse: bool,
 }
 
 /// The area and image size a set of bands is for.
@@ -72,6 +76,7 @@ pub(crate) struct Batch {
     layout: Target,
     jobs: Vec<Job>,
     picture: Option<Arc<Vec<[u8; 3]>>>,
+    coarse: bool,
 }
 
 struct Job {
@@ -128,8 +133,12 @@ impl Batch {
                             job.cells.0 as usize * mode.cell.0 as usize,
                             job.cells.1 as usize * mode.cell.1 as usize,
                         );
-                        let scaled = scale(&job.px, w, h, sw, sh);
-                        sixel::encode(&scaled, sw, sh, palette)
+                        let index = if self.coarse {
+                            scale(&palette.nearest(&job.px), w, h, sw, sh)
+                        } else {
+                            palette.quantize(&scale(&job.px, w, h, sw, sh), sw)
+                        };
+                        sixel::encode(&index, sw, sh, palette)
                     }
                     (Protocol::Sixel, None) => Vec::new(),
                 };
@@ -154,6 +163,18 @@ impl Bands {
         for b in 0..self.sent.len() {
             self.off(b);
         }
+    }
+
+    /// Whether a band of the area is not on screen, with no text over it.
+    pub(crate) fn holes(&self, covered: impl Fn(u16) -> bool) -> bool {
+        let Some((area, ..)) = self.layout else {
+            return false;
+        };
+        self.sent.iter().enumerate().any(|(b, s)| {
+            let top = area.y + b as u16 * BAND_ROWS;
+            let bottom = (top + BAND_ROWS).min(area.y + area.height);
+            s.is_none() && !(top..bottom).any(&covered)
+        })
     }
 
     /// Band `b` is not on screen.
@@ -222,9 +243,12 @@ impl Bands {
         let area = pic.area;
         let layout = (area, pic.w, pic.h);
         let count = area.height.div_ceil(BAND_ROWS) as usize;
-        if self.layout != Some(layout) {
+        // Another size of the same area (a coarse picture, then the sharp
+        // one) replaces the bands one by one: none goes blank meanwhile.
+        let same_area = self.layout.is_some_and(|(a, ..)| a == area);
+        self.layout = Some(layout);
+        if !same_area {
             now.extend(self.clear(mode));
-            self.layout = Some(layout);
             self.sent = vec![None; count];
             self.epoch = vec![0; count];
             self.late = vec![false; count];
@@ -236,6 +260,7 @@ impl Bands {
             layout,
             jobs: Vec::new(),
             picture: None,
+            coarse: pic.coarse,
         };
         if area.width == 0 || pic.w == 0 || pic.h == 0 || pic.px.len() < (pic.w * pic.h) as usize {
             return (now, plan);
@@ -255,6 +280,7 @@ impl Bands {
             let y1 = ((top + rows) as u64 * pic.h as u64 / area.height as u64) as u32;
             let rows_px = &pic.px[(y0 * pic.w) as usize..(y1 * pic.w) as usize];
             let mut hasher = std::collections::hash_map::DefaultHasher::new();
+            (pic.w, pic.h, pic.coarse).hash(&mut hasher);
             rows_px.as_flattened().hash(&mut hasher);
             let hash = hasher.finish();
             if self.sent[b] == Some(hash) || y1 == y0 {
@@ -360,7 +386,7 @@ fn wrap(mode: &PixelMode, seq: &[u8]) -> Vec<u8> {
 }
 
 /// Nearest-neighbour scaling of a `w x h` image to `sw x sh`.
-fn scale(px: &[[u8; 3]], w: usize, h: usize, sw: usize, sh: usize) -> Vec<[u8; 3]> {
+fn scale<T: Copy>(px: &[T], w: usize, h: usize, sw: usize, sh: usize) -> Vec<T> {
     if (w, h) == (sw, sh) {
         return px.to_vec();
     }
@@ -404,6 +430,7 @@ mod tests {
             w,
             h,
             area,
+            coarse: false,
         };
         let mut bands = Bands::default();
         let pieces = bands.update(&m, &pic, |_| false);
@@ -426,6 +453,7 @@ mod tests {
             w,
             h,
             area,
+            coarse: false,
         };
         let pieces = bands.update(&m, &pic2, |_| false);
         assert_eq!(pieces.len(), 1);
@@ -469,6 +497,7 @@ mod tests {
             w,
             h,
             area,
+            coarse: false,
         };
         let pieces = Bands::default().update(&m, &pic, |_| false);
         assert_eq!(pieces.len(), 2);
@@ -483,6 +512,60 @@ mod tests {
                     (0..3).all(|c| g[c].abs_diff(want[c]) <= 24),
                     "{g:?} {want:?}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn a_coarse_picture_is_replaced_band_by_band_and_its_holes_found() {
+        // kitty: the sharp picture after the coarse one deletes nothing at
+        // once (no band goes blank); each band's new image replaces the old.
+        let m = mode(Protocol::Kitty);
+        let area = Rect::new(0, 0, 20, 7);
+        let sharp = picture(80, 56, 1);
+        let (small, w, h) = super::super::downscale(&sharp, 80, 56, 4);
+        let coarse = Picture {
+            px: &small,
+            w,
+            h,
+            area,
+            coarse: true,
+        };
+        let mut bands = Bands::default();
+        // Text over row 6 (band 3) then: that band is a hole once it goes.
+        assert_eq!(bands.update(&m, &coarse, |r| r == 6).len(), 3);
+        assert!(!bands.holes(|r| r == 6) && bands.holes(|_| false));
+        // The same coarse picture again: only the hole is sent.
+        let pieces = bands.update(&m, &coarse, |_| false);
+        assert_eq!(pieces.len(), 1);
+        assert!(pieces[0].starts_with(b"\x1b[7;1H"), "band 3 at row 6");
+        assert!(!bands.holes(|_| false));
+        let pic = Picture {
+            px: &sharp,
+            w: 80,
+            h: 56,
+            area,
+            coarse: false,
+        };
+        let (now, plan) = bands.plan(&m, &pic, |_| false);
+        assert!(now.is_empty(), "nothing deleted before the new images");
+        let pieces = bands.accept(plan.encode(), |_| false).0;
+        assert_eq!(pieces.len(), 4);
+        for p in &pieces {
+            assert_eq!(kitty::decode(p)[0].1, 80, "sharp");
+            assert_eq!(p.windows(5).filter(|w| w == b"a=d,d").count(), 1);
+        }
+        // Sixel: each coarse pixel is one colour over its block of the
+        // terminal's pixels (4x8 cells, a 20x14 picture over 80x56).
+        let m = mode(Protocol::Sixel);
+        let pieces = Bands::default().update(&m, &coarse, |_| false);
+        for p in &pieces {
+            let (sw, sh, got) = sixel::decode(p).unwrap();
+            let at = |x: usize, y: usize| got[y * sw + x].unwrap();
+            for y in 0..sh {
+                for x in 0..sw {
+                    assert_eq!(at(x, y), at(x / 4 * 4, y / 4 * 4), "({x}, {y})");
+                }
             }
         }
     }

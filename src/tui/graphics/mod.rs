@@ -101,6 +101,65 @@ impl PixelMode {
     }
 }
 
+/// Over a slow link the first picture of a view is sent coarse, to be on
+/// screen within about this long (the text around it takes a little more:
+/// 8 kB at 160x48 in 256 colours), and the sharp one follows.
+const COARSE_WITHIN: f64 = 0.8;
+/// Bytes a coarse image takes per pixel sent, about: kitty's
+/// zlib-compressed RGB in base64 takes 1.2 to 1.5 once shrunk (a sharp one
+/// 0.8 to 1); sixel about 3 per block of one colour (measured in xterm at
+/// 160x48: 40 kB for 13,400 blocks), its lines of six pixel rows being
+/// written once per colour they hold.
+const BYTES_PER_PIXEL: f64 = 1.5;
+const SIXEL_BYTES_PER_BLOCK: f64 = 3.0;
+/// The link's rate assumed before it is measured: the first picture's.
+const UNMEASURED_RATE: f64 = 32e3;
+
+/// By how much to shrink (each way) the `w x h` picture for `cols x rows`
+/// cells so that it reaches the terminal within [`COARSE_WITHIN`] over a
+/// link of `rate` bytes per second (`None`: not measured yet); 1 where the
+/// link is fast enough. Never below one pixel per cell.
+pub(crate) fn coarse_factor(
+    mode: &PixelMode,
+    (w, h): (u32, u32),
+    (cols, rows): (u16, u16),
+    rate: Option<f64>,
+) -> u32 {
+    let per_pixel = match mode.protocol {
+        Protocol::Sixel => SIXEL_BYTES_PER_BLOCK,
+        Protocol::Kitty | Protocol::Iterm2 => BYTES_PER_PIXEL,
+    };
+    let bytes = w as f64 * h as f64 * per_pixel;
+    let budget = rate.unwrap_or(UNMEASURED_RATE) * COARSE_WITHIN;
+    let k = (bytes / budget.max(1.0)).sqrt().ceil().max(1.0) as u32;
+    let most = (w / cols.max(1) as u32).min(h / rows.max(1) as u32).max(1);
+    k.min(most)
+}
+
+/// The `w x h` picture shrunk `k` times each way (the mean of each block;
+/// those at the right and bottom edges may be smaller), and its size.
+pub(crate) fn downscale(px: &[[u8; 3]], w: u32, h: u32, k: u32) -> (Vec<[u8; 3]>, u32, u32) {
+    let (cw, ch) = (w.div_ceil(k), h.div_ceil(k));
+    let mut out = Vec::with_capacity((cw * ch) as usize);
+    for cy in 0..ch {
+        for cx in 0..cw {
+            let mut sum = [0u32; 3];
+            let mut n = 0;
+            for y in cy * k..((cy + 1) * k).min(h) {
+                for x in cx * k..((cx + 1) * k).min(w) {
+                    let p = px[(y * w + x) as usize];
+                    for c in 0..3 {
+                        sum[c] += p[c] as u32;
+                    }
+                    n += 1;
+                }
+            }
+            out.push(sum.map(|s| ((s + n / 2) / n.max(1)) as u8));
+        }
+    }
+    (out, cw, ch)
+}
+
 /// `seq` wrapped for tmux's passthrough: inside `DCS tmux; ... ST` with
 /// every ESC doubled.
 pub(crate) fn passthrough(seq: &[u8]) -> Vec<u8> {
@@ -132,6 +191,38 @@ mod tests {
         let (gx, gy) = m.grid(300, 100);
         assert!(300 * 100 * (gx * gy) as u64 <= PIXEL_BUDGET, "{gx}x{gy}");
         assert_eq!((gx, gy), (3, 6));
+    }
+
+    #[test]
+    fn a_slow_link_gets_a_coarse_picture_that_fits_its_second() {
+        let kitty = PixelMode {
+            protocol: Protocol::Kitty,
+            cell: (6, 13),
+            colours: 256,
+            passthrough: false,
+        };
+        let (pic, cells) = ((684, 416), (114, 32));
+        // 285k pixels: shrunk 5 times each way for 32 kB/s (17 kB, with
+        // 26 kB in 0.8 s), not at all for 1 MB/s.
+        assert_eq!(coarse_factor(&kitty, pic, cells, Some(32e3)), 5);
+        assert_eq!(coarse_factor(&kitty, pic, cells, None), 5);
+        assert_eq!(coarse_factor(&kitty, pic, cells, Some(1e6)), 1);
+        // Never below a pixel per cell, however slow.
+        assert_eq!(coarse_factor(&kitty, pic, cells, Some(10.0)), 6);
+        // Sixel takes more bytes per block.
+        let sixel = PixelMode {
+            protocol: Protocol::Sixel,
+            ..kitty
+        };
+        assert_eq!(coarse_factor(&sixel, pic, cells, Some(32e3)), 6);
+        assert_eq!(coarse_factor(&sixel, (342, 208), cells, Some(32e3)), 3);
+        // Blocks are averaged; the edges' smaller ones too.
+        let px: Vec<[u8; 3]> = (0..15).map(|i| [i as u8 * 10, 0, 255]).collect();
+        let (small, w, h) = downscale(&px, 5, 3, 2);
+        assert_eq!((w, h), (3, 2));
+        assert_eq!(small[0], [30, 0, 255]);
+        assert_eq!(small[2], [65, 0, 255]);
+        assert_eq!(small[5], [140, 0, 255]);
     }
 
     #[test]

@@ -45,6 +45,14 @@ impl Palette {
             })
             .collect()
     }
+
+    /// The palette index of every pixel, each the nearest entry (no
+    /// dithering: blocks of one colour stay one colour).
+    pub(crate) fn nearest(&self, px: &[[u8; 3]]) -> Vec<u8> {
+        px.iter()
+            .map(|c| self.nearest.get(c.map(|v| v as i32)))
+            .collect()
+    }
 }
 
 /// Pixels of one colour bin (5 bits per channel): their sum and count.
@@ -176,15 +184,19 @@ impl Nearest {
     }
 }
 
-/// A whole sixel image (DCS ... ST) of the `w x h` sRGB image in the
-/// colours of `palette`.
-pub(crate) fn encode(px: &[[u8; 3]], w: usize, h: usize, palette: &Palette) -> Vec<u8> {
-    let index = palette.quantize(px, w);
+/// A whole sixel image (DCS ... ST) of the `w x h` image whose pixels are
+/// the entries `index` of `palette`.
+pub(crate) fn encode(index: &[u8], w: usize, h: usize, palette: &Palette) -> Vec<u8> {
     let palette = &palette.colours;
     let mut out = Vec::with_capacity(w * h / 2);
     // P2 = 1: pixels left unset keep what is under them.
     let _ = write!(out, "\x1bP0;1;0q\"1;1;{w};{h}");
-    for (i, p) in palette.iter().enumerate() {
+    // Only the entries used: a band of a picture uses a few of them.
+    let mut used = vec![false; palette.len()];
+    for &k in index {
+        used[k as usize] = true;
+    }
+    for (i, p) in palette.iter().enumerate().filter(|(i, _)| used[*i]) {
         let pct = p.map(|v| (v as u32 * 100 + 127) / 255);
         let _ = write!(out, "#{i};2;{};{};{}", pct[0], pct[1], pct[2]);
     }
@@ -328,7 +340,10 @@ mod tests {
         let px: Vec<[u8; 3]> = (0..w * h)
             .map(|i| colours[(i % w / 10 + i / w / 7) % 4])
             .collect();
-        let data = encode(&px, w, h, &Palette::new(&px, 16));
+        let palette = Palette::new(&px, 16);
+        let data = encode(&palette.quantize(&px, w), w, h, &palette);
+        // Only the four colours used are defined.
+        assert_eq!(data.windows(3).filter(|w| w == b";2;").count(), 4);
         let (dw, dh, got) = decode(&data).unwrap();
         assert_eq!((dw, dh), (w, h));
         for (g, p) in got.iter().zip(&px) {

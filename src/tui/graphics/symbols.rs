@@ -41,6 +41,35 @@ impl crate::choice::Choice for Symbols {
     }
 }
 
+/// What `--symbols` asks for: a set, or the densest set the terminal is
+/// known to draw (see `term::glyphs`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum SymbolsArg {
+    #[default]
+    Auto,
+    Set(Symbols),
+}
+
+impl crate::choice::Choice for SymbolsArg {
+    const ALL: &'static [Self] = &[
+        SymbolsArg::Auto,
+        SymbolsArg::Set(Symbols::Half),
+        SymbolsArg::Set(Symbols::Quad),
+        SymbolsArg::Set(Symbols::Sextant),
+        SymbolsArg::Set(Symbols::Octant),
+    ];
+
+    fn choice(self) -> (&'static str, &'static str) {
+        match self {
+            SymbolsArg::Auto => (
+                "auto",
+                "The densest set the terminal is known to draw (half blocks elsewhere)",
+            ),
+            SymbolsArg::Set(s) => s.choice(),
+        }
+    }
+}
+
 impl Symbols {
     /// Sub-pixels per cell, across and down.
     pub(crate) fn grid(self) -> (u32, u32) {

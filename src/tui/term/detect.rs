@@ -3,7 +3,9 @@
 //! (XTSMGRAPHICS), a cell's size in pixels (`CSI 16t`, else the window
 //! size ioctl), and 24-bit colour (XTGETTCAP `RGB`/`Tc`, and an RGB
 //! background set and read back with DECRQSS, which terminals that keep
-//! only 256 colours answer with a palette index). DA1 goes last:
+//! only 256 colours answer with a palette index), and for block symbols
+//! the terminal's name and version (XTVERSION) and how far a sextant and
+//! an octant move the cursor (see `glyphs`). DA1 goes last:
 //! every terminal answers it, so its answer ends the wait, which is short
 //! when nothing answers at all.
 
@@ -30,6 +32,12 @@ const REGISTERS: &[u8] = b"\x1b[?1;1;0S";
 /// XTGETTCAP for `RGB` and `Tc`, hex-encoded; then background RGB 1,2,3
 /// set, read back (DECRQSS for SGR) and reset.
 const TRUECOLOR: &[u8] = b"\x1bP+q524742;5463\x1b\\\x1b[48;2;1;2;3m\x1bP$qm\x1b\\\x1b[m";
+/// XTVERSION: the terminal's name and version (`DCS >|kitty(0.40.1) ST`).
+const VERSION: &[u8] = b"\x1b[>0q";
+/// A sextant and an octant, each printed at the top left and followed by a
+/// cursor position report, then the line cleared (the first frame is drawn
+/// over it anyway).
+const ADVANCES: &[u8] = "\x1b[H\u{1FB00}\x1b[6n\x1b[H\u{1CD00}\x1b[6n\x1b[H\x1b[2K".as_bytes();
 const DA1: &[u8] = b"\x1b[c";
 
 /// What to ask.
@@ -37,6 +45,8 @@ const DA1: &[u8] = b"\x1b[c";
 pub(crate) struct Ask {
     pub(crate) graphics: bool,
     pub(crate) colour: bool,
+    /// Which block symbols the terminal draws.
+    pub(crate) symbols: bool,
     /// Inside tmux: tmux takes an unwrapped kitty query (an APC string)
     /// for the pane's title, so it goes only through passthrough, if at all.
     pub(crate) tmux: bool,
@@ -46,7 +56,7 @@ pub(crate) struct Ask {
 
 impl Ask {
     pub(crate) fn any(&self) -> bool {
-        self.graphics || self.colour
+        self.graphics || self.colour || self.symbols
     }
 
     /// The queries, DA1 last. The cell's size is asked whatever is asked:
@@ -69,6 +79,10 @@ impl Ask {
         if self.colour {
             q.extend_from_slice(TRUECOLOR);
         }
+        if self.symbols {
+            q.extend_from_slice(VERSION);
+            q.extend_from_slice(ADVANCES);
+        }
         q.extend_from_slice(DA1);
         q
     }
@@ -87,6 +101,10 @@ pub(crate) struct Answers {
     pub(crate) window: Option<(u32, u32)>,
     /// Whether the terminal shows 24-bit colour, where it said.
     pub(crate) rgb: Option<bool>,
+    /// The terminal's name and version (XTVERSION), as it said them.
+    pub(crate) version: Option<String>,
+    /// How many cells a sextant, then an octant, moved the cursor.
+    pub(crate) advances: Vec<u16>,
 }
 
 impl Answers {
@@ -104,6 +122,13 @@ impl Answers {
                 self.window = Some((*w as u32, *h as u32))
             }
             Reply::ColourRegisters(n) if *n > 0 => self.registers = Some(*n as usize),
+            // Only the glyph probes ask for the cursor during the round.
+            Reply::CursorPosition(_, col) if self.advances.len() < 2 => {
+                self.advances.push(col.saturating_sub(1))
+            }
+            Reply::Dcs(text) if text.starts_with(">|") => {
+                self.version = Some(text[2..].trim().to_string())
+            }
             Reply::Dcs(text) => {
                 let said = if text.starts_with("1+r") {
                     Some(true)
@@ -259,13 +284,16 @@ pub(crate) fn choose(
 }
 
 /// What tmux says of itself and of the terminal it runs in.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub(crate) struct Tmux {
     /// `allow-passthrough` is on.
     pub(crate) passthrough: bool,
     /// Whether the terminal it runs in has 24-bit colour (its `RGB`
     /// feature), when a client is attached.
     pub(crate) rgb: Option<bool>,
+    /// That terminal's name and version, as it told tmux (tmux 3.3 and
+    /// later ask it with XTVERSION).
+    pub(crate) terminal: Option<String>,
 }
 
 /// A cell's size in pixels: the terminal's answer, else the window size
@@ -292,7 +320,11 @@ pub(crate) fn tmux() -> Option<Tmux> {
     std::env::var_os("TMUX")?;
     let out = std::process::Command::new("tmux")
         .args(["show-options", "-Apv", "allow-passthrough", ";"])
-        .args(["display-message", "-p", "features:#{client_termfeatures}"])
+        .args([
+            "display-message",
+            "-p",
+            "features:#{client_termfeatures}\ntermtype:#{client_termtype}",
+        ])
         .stderr(std::process::Stdio::null())
         .output()
         .ok()?;
@@ -307,6 +339,12 @@ fn parse_tmux(text: &str) -> Tmux {
     Tmux {
         passthrough: text.lines().any(|l| matches!(l.trim(), "on" | "all")),
         rgb: features.map(|f| f.split(',').any(|f| f.trim() == "RGB")),
+        terminal: text
+            .lines()
+            .find_map(|l| l.strip_prefix("termtype:"))
+            .map(str::trim)
+            .filter(|t| !t.is_empty())
+            .map(str::to_string),
     }
 }
 
@@ -388,18 +426,20 @@ mod tests {
 
     #[test]
     fn tmux_says_passthrough_and_rgb() {
-        let t = parse_tmux("on\nfeatures:256,RGB,title,clipboard\n");
+        let t = parse_tmux("on\nfeatures:256,RGB,title,clipboard\ntermtype:kitty(0.40.1)\n");
         assert_eq!(
             t,
             Tmux {
                 passthrough: true,
-                rgb: Some(true)
+                rgb: Some(true),
+                terminal: Some("kitty(0.40.1)".into()),
             }
         );
         let t = parse_tmux("off\nfeatures:256,title\n");
         assert_eq!((t.passthrough, t.rgb), (false, Some(false)));
         // No client attached: nothing known of the terminal.
         assert_eq!(parse_tmux("off\nfeatures:\n").rgb, None);
+        assert_eq!(parse_tmux("off\nfeatures:\ntermtype:\n").terminal, None);
     }
 
     #[test]

@@ -4,6 +4,7 @@
 //! `pace`) and what it can do (`terminfo`).
 
 pub(crate) mod detect;
+pub(crate) mod glyphs;
 pub(crate) mod input;
 pub(crate) mod output;
 pub(crate) mod pace;

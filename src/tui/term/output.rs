@@ -17,6 +17,9 @@ pub(crate) struct Shown {
     pub(crate) generation: u64,
     /// A full-resolution pass (not the coarse preview, not an older view).
     pub(crate) full: bool,
+    /// Sent at full resolution: not a coarse image sent first over a slow
+    /// link.
+    pub(crate) sharp: bool,
 }
 
 /// The output's figures, for the Render panel.
@@ -28,9 +31,11 @@ pub(crate) struct Figures {
     pub(crate) frames: u64,
     /// The link's measured delivery rate in bytes per second.
     pub(crate) link_rate: Option<f64>,
-    /// The first full picture of a view to reach the screen: its
-    /// generation and when.
+    /// The first full picture of a view to reach the screen (coarse or
+    /// sharp): its generation and when.
     pub(crate) picture: Option<(u64, Instant)>,
+    /// The first sharp one.
+    pub(crate) sharp: Option<(u64, Instant)>,
 }
 
 #[derive(Default)]
@@ -162,12 +167,13 @@ impl TermOutput {
             }
             self.landing.pop_front();
             self.figures.frames += 1;
-            let new_view = self
-                .figures
-                .picture
-                .is_none_or(|(g, _)| g != shown.generation);
-            if shown.full && new_view {
+            let new =
+                |first: Option<(u64, Instant)>| first.is_none_or(|(g, _)| g != shown.generation);
+            if shown.full && new(self.figures.picture) {
                 self.figures.picture = Some((shown.generation, now));
+            }
+            if shown.full && shown.sharp && new(self.figures.sharp) {
+                self.figures.sharp = Some((shown.generation, now));
             }
         }
     }
@@ -200,6 +206,7 @@ mod tests {
         let shown = Shown {
             generation: 1,
             full: true,
+            sharp: true,
         };
         t.draw(|f| {
             for y in 0..10 {
@@ -225,6 +232,7 @@ mod tests {
         }
         assert_eq!(out.figures().frames, 1);
         assert_eq!(out.figures().picture, Some((1, later)));
+        assert_eq!(out.figures().sharp, Some((1, later)));
         let written = String::from_utf8_lossy(t.backend_mut().writer()).into_owned();
         assert!(written.starts_with("\x1b[6n"), "{written:?}");
         assert!(written.ends_with("\x1b[6n"), "{written:?}");

@@ -159,9 +159,21 @@ fn output_lines(app: &App, room: usize) -> Vec<Line<'static>> {
         room,
     ))];
     let link = app.meter.link_rate().map(|r| format!("link {}B/s", si(r)));
-    let shown = app
-        .view_shown_in()
-        .map(|s| format!("view shown in {}", words::ms(s * 1e3)));
+    // Over a slow link pixel graphics show a coarse picture first.
+    let shown = app.view_shown_in().map(|s| {
+        let sharp = app.view_sharp_in();
+        match sharp {
+            Some(t) if t > s => {
+                format!(
+                    "view shown in {}, sharp {}",
+                    words::ms(s * 1e3),
+                    words::ms(t * 1e3)
+                )
+            }
+            None => format!("view shown in {}, coarse", words::ms(s * 1e3)),
+            Some(_) => format!("view shown in {}", words::ms(s * 1e3)),
+        }
+    });
     v.extend(link.into_iter().chain(shown).map(Line::from));
     v
 }
