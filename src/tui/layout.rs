@@ -122,9 +122,10 @@ impl Layout {
             n = panels::feature_lines(app, right.width, false).len() as u16;
         }
         // Where even that leaves the render panel no line under its title
-        // (80x24), the BVH panel gives up its last lines first: the
-        // samples and error matter more than the tree's figures.
-        let bvh = BVH_PANEL.min(right.height.saturating_sub(1 + n + RENDER_LEAST).max(3));
+        // (80x24), the BVH panel gives up its last lines first, down to
+        // its first: the samples and error matter more than the tree's
+        // figures.
+        let bvh = BVH_PANEL.min(right.height.saturating_sub(1 + n + RENDER_LEAST).max(2));
         [self.bvh, self.features, self.render] = Split::vertical([
             Constraint::Length(bvh),
             Constraint::Length(1 + n),

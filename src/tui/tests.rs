@@ -103,6 +103,23 @@ fn a_frame_shows_every_panel() {
     );
 }
 
+/// At 80x24, with every feature listed, the Render panel still shows the
+/// samples and the error: the BVH panel gives up lines first.
+#[test]
+fn the_smallest_terminal_shows_samples_and_error() {
+    let mut app = app("cornell-area", &[]);
+    let mut t = terminal(80, 24);
+    settle(&mut t, &mut app);
+    let end = std::time::Instant::now() + WAIT;
+    while !app.current_frame().is_some_and(|f| f.spp >= 2) && std::time::Instant::now() < end {
+        app.poll().unwrap();
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let s = settle(&mut t, &mut app);
+    let render = &s[s.find("Render").expect("a Render panel")..];
+    assert!(render.contains("spp") && render.contains("error"), "{s}");
+}
+
 #[test]
 fn toggling_a_feature_changes_the_features_panel() {
     let mut app = app("cornell", &[]);
