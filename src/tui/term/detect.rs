@@ -349,11 +349,12 @@ fn parse_tmux(text: &str) -> Tmux {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::tui::term::input::Parser;
 
-    fn answers(bytes: &[u8]) -> Answers {
+    /// The terminal's answers to the probe round, as bytes.
+    pub(crate) fn answers(bytes: &[u8]) -> Answers {
         let mut a = Answers::default();
         for i in Parser::default().feed(bytes) {
             if let Input::Reply(r) = i {

@@ -132,19 +132,7 @@ pub(crate) fn choose(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tui::term::detect::Answers;
-    use crate::tui::term::input::{Input, Parser};
-
-    /// The terminal's answers to the probe round, as bytes.
-    fn answers(bytes: &[u8]) -> Answers {
-        let mut a = Answers::default();
-        for i in Parser::default().feed(bytes) {
-            if let Input::Reply(r) = i {
-                a.take(&r);
-            }
-        }
-        a
-    }
+    use crate::tui::term::detect::tests::answers;
 
     fn pick(arg: SymbolsArg, bytes: &[u8]) -> (Symbols, Option<String>) {
         let a = answers(bytes);
