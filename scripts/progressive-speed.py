@@ -53,7 +53,7 @@ def render(binary, out, scene, size, *args):
 
 
 def tui(binary, scene, size):
-    passes = "40" if size == "160x96" else "12"
+    passes = "40" if size == "160x96" else "20"
     r = subprocess.run(
         [binary, "bench", "tui", scene, "--terminal", TERMINAL[size], "--passes", passes],
         capture_output=True,

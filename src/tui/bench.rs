@@ -103,7 +103,10 @@ pub(crate) fn measure_pass(
     let mut first_spp = 0;
     while (pass_ms.len() as u32) < passes {
         let start = Instant::now();
-        let s = match worker.step(crate::interrupt::Cancel::Never) {
+        let s = match worker.step(
+            crate::interrupt::Cancel::Never,
+            crate::interrupt::Cancel::Never,
+        ) {
             Some(Msg::Frame(s)) => s,
             Some(_) => continue,
             None => break,

@@ -10,6 +10,9 @@ use super::layout::Layout;
 /// The viewport's way to the screen and the view size it gives.
 pub struct Display {
     pub(crate) color: ColorMode,
+    /// Over a slow link, block symbols are painted in 256 colours until
+    /// the view's first full picture is on screen (`tui::coarse_color`).
+    pub(crate) coarse_color: bool,
     /// The block symbols the viewport is drawn with, unless a pixel
     /// protocol shows it.
     pub(crate) symbols: Symbols,
@@ -30,6 +33,7 @@ impl Display {
     pub(crate) fn new(color: ColorMode) -> Display {
         Display {
             color,
+            coarse_color: false,
             symbols: Symbols::Half,
             pixels: None,
             cell: (8, 16),
@@ -37,6 +41,14 @@ impl Display {
             arrangement: Arrangement::default(),
             view_size: (0, 0),
             view_aspect: 1.0,
+        }
+    }
+
+    /// The colours the viewport is painted in now.
+    pub(crate) fn painted_color(&self) -> ColorMode {
+        match (self.coarse_color, self.color) {
+            (true, ColorMode::Truecolor) => ColorMode::Palette256,
+            (_, c) => c,
         }
     }
 

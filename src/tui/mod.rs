@@ -60,7 +60,7 @@ use graphics::symbols::SymbolsArg;
 use graphics::{GraphicsArg, PixelMode};
 use term::detect::{self, Ask};
 use term::input::{Input, Reader, Reply};
-use term::output::{Shown, TermOutput};
+use term::output::{Figures, Shown, TermOutput};
 use term::screen::Screen;
 
 /// At most this many frames per second are drawn.
@@ -290,11 +290,7 @@ fn event_loop<W: Write>(
         dirty |= std::mem::replace(&mut size, now_size) != now_size;
         dirty |= app.note_output(out.figures());
         if dirty && last_draw.elapsed() >= FRAME {
-            draw(terminal, app)?;
-            match app.display.pixels {
-                Some(_) => picture_due = true,
-                None => out.drawn(terminal.backend(), shown(app)),
-            }
+            picture_due |= draw_frame(terminal, app, out)?;
             last_draw = Instant::now();
             dirty = false;
         }
@@ -541,6 +537,38 @@ impl Images {
 
 /// What the viewport shows: the newest pass's view, and whether it is a
 /// full pass of the current one.
+/// Draws the app; with block symbols, notes what the viewport shows for
+/// the output to follow. True when a picture waits to be sent as images.
+fn draw_frame<W: Write>(
+    terminal: &mut Terminal<Screen<W>>,
+    app: &mut App,
+    out: &mut TermOutput,
+) -> Result<bool> {
+    app.display.coarse_color = coarse_color(app, &out.figures());
+    draw(terminal, app)?;
+    if app.display.pixels.is_some() {
+        return Ok(true);
+    }
+    let shown = Shown {
+        sharp: !app.display.coarse_color,
+        ..shown(app)
+    };
+    out.drawn(terminal.backend(), shown);
+    Ok(false)
+}
+
+/// Whether to paint block symbols in 256 colours for now: in 24-bit colour
+/// over a link too slow for the picture in it, until the view's first full
+/// picture is on screen (then, a change in the output's figures, the
+/// picture is drawn again in 24-bit colour).
+fn coarse_color(app: &App, figures: &Figures) -> bool {
+    let area = app.display.layout.image;
+    app.display.pixels.is_none()
+        && app.display.color == ColorMode::Truecolor
+        && figures.picture.is_none_or(|(g, _)| g != app.generation())
+        && graphics::truecolor_is_slow((area.width, area.height), figures.link_rate)
+}
+
 fn shown(app: &App) -> Shown {
     let frame = app.link.frame.as_deref();
     Shown {

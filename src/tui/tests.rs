@@ -680,6 +680,76 @@ fn the_render_panel_says_when_the_view_reached_the_screen() {
     assert!(b.contains("frames/s"), "{b}");
 }
 
+/// Over a link not yet measured (taken as slow), 24-bit colour's first
+/// picture of a view goes in 256 colours, and once it is on screen the
+/// picture is drawn again in 24-bit colour; the Render panel says both.
+#[test]
+fn a_slow_link_gets_256_colours_first_then_24_bit() {
+    use super::term::output::TermOutput;
+    use super::term::screen::Screen;
+    use ratatui::layout::Size;
+    use std::time::Instant;
+    let mut app = app("cornell", &[]);
+    assert_eq!(app.display.color, ColorMode::Truecolor);
+    let mut t = Terminal::new(Screen::new(Vec::new(), Some(Size::new(120, 40))).unwrap()).unwrap();
+    let mut out = TermOutput::default();
+    out.start(t.backend_mut(), Instant::now()).unwrap();
+    app.update(ratatui::layout::Rect::new(0, 0, 120, 40));
+    assert!(app.wait_frame(WAIT).unwrap());
+    // Writes the draw's cells as the terminal answers; the bytes written.
+    let mut land = |t: &mut Terminal<Screen<Vec<u8>>>, app: &mut App| {
+        out_draw(t, app, &mut out);
+        let bytes = String::from_utf8_lossy(&std::mem::take(t.backend_mut().writer())).into_owned();
+        app.note_output(out.figures());
+        bytes
+    };
+    fn out_draw(t: &mut Terminal<Screen<Vec<u8>>>, app: &mut App, out: &mut TermOutput) {
+        super::draw_frame(t, app, out).unwrap();
+        out.pump(t.backend_mut(), Instant::now()).unwrap();
+        while out.waiting() {
+            out.answered(Instant::now());
+            out.pump(t.backend_mut(), Instant::now()).unwrap();
+        }
+    }
+    let cells = {
+        let a = app.display.layout.image;
+        a.width as usize * a.height as usize
+    };
+    let first = land(&mut t, &mut app);
+    assert!(app.display.coarse_color);
+    let count = |s: &str, p: &str| s.matches(p).count();
+    // Colours are written where they change: runs of one 256-colour entry
+    // take one.
+    assert!(
+        count(&first, "8;5;") > cells / 4,
+        "{}",
+        count(&first, "8;5;")
+    );
+    assert!(
+        count(&first, "8;2;") < cells / 20,
+        "{}",
+        count(&first, "8;2;")
+    );
+    assert!(app.view_shown_in().is_some() && app.view_sharp_in().is_none());
+    let sharp = land(&mut t, &mut app);
+    assert!(!app.display.coarse_color);
+    assert!(
+        count(&sharp, "8;2;") > cells / 2,
+        "{}",
+        count(&sharp, "8;2;")
+    );
+    assert!(
+        count(&sharp, "8;5;") < cells / 20,
+        "{}",
+        count(&sharp, "8;5;")
+    );
+    assert!(app.view_sharp_in().is_some());
+    super::draw(&mut t, &mut app).unwrap();
+    let b = t.backend().wanted_text();
+    // "view shown in T in 256 colours, 24-bit T", wrapped in the panel.
+    assert!(b.contains("view shown in") && b.contains("24-bit"), "{b}");
+}
+
 #[test]
 fn kitty_and_sixel_frames_decode_to_the_viewport_picture() {
     use super::graphics::bands::{Bands, Picture};

@@ -1,15 +1,17 @@
 //! The render worker: owns the film on its own thread (rayon inside). Each
 //! view change restarts accumulation; the first frame of a view is a coarse
 //! pass (when full passes are slow) so something appears at once, then every
-//! full-resolution pass adds one sample per pixel and sends a snapshot. A
-//! newer view cancels the pass in flight between rows, so camera motion never
-//! waits for a pass. BVH overlays are computed here too, once per view, so
+//! full-resolution pass adds samples to every pixel and sends a snapshot;
+//! passes grow with the view's age. A newer view cancels the pass in flight
+//! between rows, so camera motion never waits for a pass, and any other
+//! command ends a long pass, keeping its rows. BVH overlays are computed here too, once per view, so
 //! drawing never traverses the BVH.
 
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
+use std::time::Instant;
 
 use anyhow::{Context, Result};
 use glam::Vec3;
@@ -35,6 +37,14 @@ const COARSE_ABOVE_MS: f64 = 20.0;
 /// samples in packets where the scene is quick, short enough to show the
 /// picture improve several times a second.
 const PASS_MS: f64 = 125.0;
+/// An older view's passes may take up to this share of its age, up to
+/// [`MAX_PASS_MS`]: each then adds about half again to the samples, so the
+/// noise visibly falls at every pass, while a pixel's samples, traced
+/// together, share what the caches hold and fill packets (passes of one
+/// sample per pixel of a dense mesh at 1024x768 trace at about 0.7x the
+/// rate of the same samples in one pass; BENCHMARKS.md).
+const AGE_SHARE: f64 = 0.5;
+const MAX_PASS_MS: f64 = 2000.0;
 /// Coarse passes render every `COARSE`-th pixel in each direction.
 const COARSE: u32 = 4;
 /// A view stops accumulating here: the image no longer visibly changes
@@ -43,6 +53,11 @@ pub(crate) const VIEW_SPP: u32 = 1024;
 /// A pixel counts as converged in the Render panel below this estimated
 /// relative error (the default target of `rayterm converge`).
 pub(crate) const CONVERGED_BELOW: f64 = 0.01;
+
+/// How long a pass of a view `age_s` seconds old may take.
+fn pass_budget(age_s: f64) -> f64 {
+    (age_s * 1e3 * AGE_SHARE).clamp(PASS_MS, MAX_PASS_MS)
+}
 
 /// What to render: a camera, the plan of what runs, and the size.
 #[derive(Clone, Debug, PartialEq)]
@@ -487,8 +502,9 @@ impl Worker {
     }
 
     /// Does the next piece of work: shows a kept film again, draws the
-    /// overlay, or runs a pass; `None` when idle or cancelled.
-    pub(crate) fn step(&mut self, cancel: Cancel) -> Option<Msg> {
+    /// overlay, or runs a pass; `None` when idle or cancelled. `waiting`
+    /// says a command waits: a pass then ends after [`PASS_MS`].
+    pub(crate) fn step(&mut self, cancel: Cancel, waiting: Cancel) -> Option<Msg> {
         if self.idle() {
             return None;
         }
@@ -541,12 +557,17 @@ impl Worker {
                 layer,
             })));
         }
-        self.full_pass(&view, cancel)
+        self.full_pass(&view, cancel, waiting)
             .map(|s| Msg::Frame(Box::new(s)))
     }
 
     /// One sample more for every pixel of the view.
-    fn full_pass(&mut self, view: &RenderView, cancel: Cancel) -> Option<Snapshot> {
+    fn full_pass(
+        &mut self,
+        view: &RenderView,
+        cancel: Cancel,
+        waiting: Cancel,
+    ) -> Option<Snapshot> {
         let t = Tracer::new(
             &self.scene,
             &self.bvh,
@@ -554,12 +575,22 @@ impl Worker {
             view.frame(view.size()),
             self.seed,
         );
-        self.film.cap_passes(self.pass_cap(view.plan.bvh));
+        let budget = pass_budget(self.started.elapsed().as_secs_f64());
+        self.film.cap_passes(self.pass_cap(view.plan.bvh, budget));
         let before = self.film.film().spp_range().1;
+        // A long pass gives way to a command that waits (a pixel's tree, an
+        // overlay): the rows it traced stay in the film.
+        let start = Instant::now();
+        let stop =
+            || cancel.is_set() || waiting.is_set() && start.elapsed().as_secs_f64() * 1e3 > PASS_MS;
+        let cancel = Cancel::When(&stop);
+        self.progress.begin(self.generation, view.height);
         // The first pass of a view counts BVH work for the panel; later ones
         // take the fast path.
         let pass = if self.film.film().spp == 0 && view.plan.bvh {
-            let (pass, work) = self.film.pass_with::<WorkCounter>(&t, cancel)?;
+            let pass = self.film.pass_with::<WorkCounter>(&t, cancel);
+            self.progress.end();
+            let (pass, work) = pass?;
             self.per_ray = Some(PerRay::of(&pass, &work));
             pass
         } else {
@@ -587,14 +618,14 @@ impl Worker {
     }
 
     /// The most samples per pixel the next pass may give: the most that
-    /// fit in [`PASS_MS`] at the last full pass's pace (with the BVH as
+    /// fit in `budget_ms` at the last full pass's pace (with the BVH as
     /// the view has it), in powers of two.
-    fn pass_cap(&self, bvh: bool) -> u32 {
+    fn pass_cap(&self, bvh: bool, budget_ms: f64) -> u32 {
         let Some(last) = self.last_full.filter(|l| l.bvh == bvh) else {
             return 1;
         };
         let mut n = 1;
-        while n < MAX_PASS_SPP && 2.0 * n as f64 * last.ms_per_spp <= PASS_MS {
+        while n < MAX_PASS_SPP && 2.0 * n as f64 * last.ms_per_spp <= budget_ms {
             n *= 2;
         }
         n
@@ -717,6 +748,8 @@ pub(crate) struct Handle {
     pub(crate) progress: Arc<PassProgress>,
     /// Generation of the newest command; passes of older ones stop.
     latest: Arc<AtomicU64>,
+    /// Commands sent: more than the worker has taken means one waits.
+    sent: Arc<AtomicU64>,
     thread: Option<JoinHandle<()>>,
 }
 
@@ -725,17 +758,19 @@ pub(crate) fn spawn(worker: Worker) -> Result<Handle> {
     let (tx, cmd_rx) = mpsc::channel();
     let (msg_tx, rx) = mpsc::channel();
     let latest = Arc::new(AtomicU64::new(0));
-    let seen = latest.clone();
+    let sent = Arc::new(AtomicU64::new(0));
+    let counters = (latest.clone(), sent.clone());
     let progress = worker.progress.clone();
     let thread = std::thread::Builder::new()
         .name("rayterm-render".into())
-        .spawn(move || run(worker, cmd_rx, msg_tx, seen))
+        .spawn(move || run(worker, cmd_rx, msg_tx, counters))
         .context("cannot start the render thread")?;
     Ok(Handle {
         tx,
         rx,
         progress,
         latest,
+        sent,
         thread: Some(thread),
     })
 }
@@ -746,6 +781,7 @@ impl Handle {
         if let Cmd::View(g, _) | Cmd::Builder(g, _) = cmd {
             self.latest.store(g, Ordering::SeqCst);
         }
+        self.sent.fetch_add(1, Ordering::SeqCst);
         // A worker that has gone away reports itself through `rx`.
         let _ = self.tx.send(cmd);
     }
@@ -761,7 +797,15 @@ impl Drop for Handle {
     }
 }
 
-fn run(mut w: Worker, rx: Receiver<Cmd>, tx: Sender<Msg>, latest: Arc<AtomicU64>) {
+/// The worker thread: `latest` is the newest generation sent, `sent` the
+/// commands sent so far.
+fn run(
+    mut w: Worker,
+    rx: Receiver<Cmd>,
+    tx: Sender<Msg>,
+    (latest, sent): (Arc<AtomicU64>, Arc<AtomicU64>),
+) {
+    let mut taken = 0u64;
     loop {
         // Block while idle; otherwise take whatever commands are waiting.
         let mut next = if w.idle() {
@@ -781,6 +825,7 @@ fn run(mut w: Worker, rx: Receiver<Cmd>, tx: Sender<Msg>, latest: Arc<AtomicU64>
                     Err(TryRecvError::Disconnected) => return,
                 },
             };
+            taken += 1;
             if matches!(cmd, Cmd::Quit) {
                 return;
             }
@@ -792,7 +837,8 @@ fn run(mut w: Worker, rx: Receiver<Cmd>, tx: Sender<Msg>, latest: Arc<AtomicU64>
         }
         let generation = w.generation;
         let cancel = || latest.load(Ordering::Relaxed) != generation;
-        if let Some(m) = w.step(Cancel::When(&cancel)) {
+        let waiting = || sent.load(Ordering::Relaxed) != taken;
+        if let Some(m) = w.step(Cancel::When(&cancel), Cancel::When(&waiting)) {
             if tx.send(m).is_err() {
                 return;
             }
@@ -829,7 +875,7 @@ mod tests {
     /// The next frame the worker sends; `None` once it is idle.
     fn next_frame(w: &mut Worker) -> Option<Box<Snapshot>> {
         loop {
-            match w.step(Cancel::Never)? {
+            match w.step(Cancel::Never, Cancel::Never)? {
                 Msg::Frame(s) => return Some(s),
                 _ => continue,
             }
@@ -872,27 +918,75 @@ mod tests {
         assert!((7.9..8.5).contains(&s.spp_mean), "{}", s.spp_mean);
     }
 
-    /// Passes grow while one would fit in `PASS_MS` at the last pass's
+    /// Passes grow while one would fit in the budget at the last pass's
     /// pace, in powers of two, and a view of another BVH setting starts
     /// again from one sample.
     #[test]
     fn passes_grow_as_far_as_the_pace_allows() {
         let mut w = worker(Features::all());
-        let at = |w: &mut Worker, ms_per_spp: f64| {
+        let at = |w: &mut Worker, ms_per_spp: f64, budget: f64| {
             w.last_full = Some(LastPass {
                 ms: 0.0,
                 ms_per_spp,
                 bvh: true,
             });
-            (w.pass_cap(true), w.pass_cap(false))
+            (w.pass_cap(true, budget), w.pass_cap(false, budget))
         };
-        assert_eq!(at(&mut w, 100.0), (1, 1));
-        assert_eq!(at(&mut w, PASS_MS / 3.0), (2, 1));
-        assert_eq!(at(&mut w, PASS_MS / 8.0), (8, 1));
-        assert_eq!(at(&mut w, 10.0), (8, 1));
-        assert_eq!(at(&mut w, 0.01), (MAX_PASS_SPP, 1));
+        assert_eq!(at(&mut w, 100.0, PASS_MS), (1, 1));
+        assert_eq!(at(&mut w, PASS_MS / 3.0, PASS_MS), (2, 1));
+        assert_eq!(at(&mut w, PASS_MS / 8.0, PASS_MS), (8, 1));
+        assert_eq!(at(&mut w, 10.0, PASS_MS), (8, 1));
+        assert_eq!(at(&mut w, 0.01, PASS_MS), (MAX_PASS_SPP, 1));
+        // An older view's budget lets slow passes grow too.
+        assert_eq!(at(&mut w, 400.0, pass_budget(1.5)), (1, 1));
+        assert_eq!(at(&mut w, 400.0, pass_budget(2.0)), (2, 1));
+        assert_eq!(at(&mut w, 400.0, pass_budget(4.0)), (4, 1));
         w.last_full = None;
-        assert_eq!(w.pass_cap(true), 1);
+        assert_eq!(w.pass_cap(true, MAX_PASS_MS), 1);
+    }
+
+    /// A pass may take half its view's age, from `PASS_MS` for a new view
+    /// to `MAX_PASS_MS`.
+    #[test]
+    fn the_pass_budget_grows_with_the_views_age() {
+        assert_eq!(pass_budget(0.0), PASS_MS);
+        assert_eq!(pass_budget(0.2), PASS_MS);
+        assert_eq!(pass_budget(1.0), 500.0);
+        assert_eq!(pass_budget(4.0), MAX_PASS_MS);
+        assert_eq!(pass_budget(1e6), MAX_PASS_MS);
+    }
+
+    /// A command that waits ends a pass once it has run `PASS_MS`, and the
+    /// rows it traced stay in the film; before that the pass runs on.
+    #[test]
+    fn a_waiting_command_ends_a_long_pass_and_keeps_its_rows() {
+        let s = session("cornell");
+        let mut w = Worker::new(s.scene.clone(), s.bvh.clone(), 1, None);
+        let mut v = view(&s, Features::all());
+        (v.width, v.height) = (64, 48);
+        w.apply(Cmd::View(1, Box::new(v)));
+        // The coarse pass, then a first full pass with no command waiting.
+        while w.film.film().spp == 0 {
+            w.step(Cancel::Never, Cancel::Never);
+        }
+        let before = w.film.film().image();
+        // A command waits from the start: a pass that has not yet run
+        // `PASS_MS` goes on, so only a slow pass stops.
+        let rows = w.progress.rows_done.clone();
+        let waiting = || {
+            // From the 8th row on, a check takes longer than `PASS_MS`, so
+            // the pass is old when it is answered.
+            if rows.load(Ordering::Relaxed) >= 8 {
+                std::thread::sleep(std::time::Duration::from_millis(PASS_MS as u64 + 10));
+            }
+            true
+        };
+        assert!(w.step(Cancel::Never, Cancel::When(&waiting)).is_none());
+        let after = w.film.film().image();
+        let changed = |y: usize| (0..64).any(|x| before[y * 64 + x] != after[y * 64 + x]);
+        assert!(changed(0), "the rows traced before the stop are kept");
+        assert!(!changed(47), "the pass stopped before the last row");
+        assert!(w.progress.current().is_none(), "no pass is in flight");
     }
 
     #[test]
@@ -991,7 +1085,7 @@ mod tests {
         w.apply(Cmd::ImageView(Some(viz::View::Leaves)));
         let mut overlays = 0;
         for _ in 0..6 {
-            if let Some(Msg::Overlay(o)) = w.step(Cancel::Never) {
+            if let Some(Msg::Overlay(o)) = w.step(Cancel::Never, Cancel::Never) {
                 let (layer, summary) = o.layer.unwrap();
                 assert_eq!((o.generation, layer.width, layer.height), (1, 16, 12));
                 assert!(!layer.is_blank() && summary.contains("leaf boxes"));
@@ -1004,7 +1098,7 @@ mod tests {
     #[test]
     fn cancelled_passes_send_nothing() {
         let mut w = worker(Features::all());
-        assert!(w.step(Cancel::When(&|| true)).is_none());
+        assert!(w.step(Cancel::When(&|| true), Cancel::Never).is_none());
     }
 
     #[test]

@@ -114,6 +114,19 @@ const BYTES_PER_PIXEL: f64 = 1.5;
 const SIXEL_BYTES_PER_BLOCK: f64 = 3.0;
 /// The link's rate assumed before it is measured: the first picture's.
 const UNMEASURED_RATE: f64 = 32e3;
+/// Bytes a cell of block symbols takes in 24-bit colour where neighbours
+/// differ, as in a first pass's noise: 15 to 21 (`bench tui`'s
+/// `first_frame_bytes` over 160x48 cells, `cornell` and `env`); in 256
+/// colours it takes 3 to 4.
+const TRUECOLOR_BYTES_PER_CELL: f64 = 16.0;
+
+/// Whether `cols x rows` cells of block symbols in 24-bit colour would
+/// take longer than [`COARSE_WITHIN`] over a link of `rate` bytes per
+/// second (`None`: not measured yet).
+pub(crate) fn truecolor_is_slow((cols, rows): (u16, u16), rate: Option<f64>) -> bool {
+    let bytes = cols as f64 * rows as f64 * TRUECOLOR_BYTES_PER_CELL;
+    bytes > rate.unwrap_or(UNMEASURED_RATE) * COARSE_WITHIN
+}
 
 /// By how much to shrink (each way) the `w x h` picture for `cols x rows`
 /// cells so that it reaches the terminal within [`COARSE_WITHIN`] over a
@@ -191,6 +204,17 @@ mod tests {
         let (gx, gy) = m.grid(300, 100);
         assert!(300 * 100 * (gx * gy) as u64 <= PIXEL_BUDGET, "{gx}x{gy}");
         assert_eq!((gx, gy), (3, 6));
+    }
+
+    /// 24-bit colour is slow where its cells would take over 0.8 s: a
+    /// 120x46 viewport (88 kB) at 32 kB/s or before the link is measured,
+    /// not at 1 MB/s; a 20x10 one (3.2 kB) never at 32 kB/s.
+    #[test]
+    fn truecolor_is_slow_where_its_cells_outlast_the_budget() {
+        assert!(truecolor_is_slow((120, 46), Some(32e3)));
+        assert!(truecolor_is_slow((120, 46), None));
+        assert!(!truecolor_is_slow((120, 46), Some(1e6)));
+        assert!(!truecolor_is_slow((20, 10), Some(32e3)));
     }
 
     #[test]

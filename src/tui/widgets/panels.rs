@@ -159,19 +159,20 @@ fn output_lines(app: &App, room: usize) -> Vec<Line<'static>> {
         room,
     ))];
     let link = app.meter.link_rate().map(|r| format!("link {}B/s", si(r)));
-    // Over a slow link pixel graphics show a coarse picture first.
+    // Over a slow link pixel graphics show a coarse picture first, and
+    // 24-bit colour one in 256 colours.
+    let (first, coarse, sharp) = match app.display.pixels {
+        Some(_) => ("", ", coarse", "sharp"),
+        None => (" in 256 colours", " in 256 colours", "24-bit"),
+    };
     let shown = app.view_shown_in().map(|s| {
-        let sharp = app.view_sharp_in();
-        match sharp {
+        let at = words::ms(s * 1e3);
+        match app.view_sharp_in() {
             Some(t) if t > s => {
-                format!(
-                    "view shown in {}, sharp {}",
-                    words::ms(s * 1e3),
-                    words::ms(t * 1e3)
-                )
+                format!("view shown in {at}{first}, {sharp} {}", words::ms(t * 1e3))
             }
-            None => format!("view shown in {}, coarse", words::ms(s * 1e3)),
-            Some(_) => format!("view shown in {}", words::ms(s * 1e3)),
+            None => format!("view shown in {at}{coarse}"),
+            Some(_) => format!("view shown in {at}"),
         }
     });
     v.extend(link.into_iter().chain(shown).map(Line::from));

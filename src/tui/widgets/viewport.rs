@@ -155,7 +155,7 @@ pub(crate) fn draw(f: &mut Frame, area: Rect, app: &App) {
             &pic.px,
             (pic.w, pic.h),
             app.display.symbols,
-            app.display.color,
+            app.display.painted_color(),
         );
     }
 }
