@@ -118,6 +118,8 @@ fn expected(protocol: Protocol, cell: (u32, u32)) -> Expected {
         cell,
         colours: 256,
         passthrough: false,
+        pane: None,
+        max: None,
     });
     app.update(Rect::new(0, 0, COLS, ROWS));
     assert!(app.wait_frame(PATIENCE).unwrap(), "no pass");

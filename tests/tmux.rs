@@ -189,3 +189,84 @@ fn defaults_come_from_the_environment_and_the_config_file() {
     assert!(screen.contains(&said), "{screen}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Through passthrough, each image band moves the cursor of the terminal
+/// tmux runs in itself, to its place in this pane (the pane's corner plus
+/// the viewport's cell), and puts it back: tmux moves that cursor only when
+/// it next draws, so a bare cursor move before the image went nowhere
+/// near it. Here that terminal is a second tmux's pane, whose input
+/// `pipe-pane` records.
+#[test]
+fn images_through_passthrough_land_in_the_pane() {
+    let Some(inner) = Tmux::start("inner", 120, 40) else {
+        return;
+    };
+    // Wide enough for two panes the TUI fits in: tmux sizes the inner
+    // window to its client's terminal.
+    let outer = Tmux::start("outer", 200, 50).unwrap();
+    inner.run(&["set-option", "-g", "allow-passthrough", "on"]);
+    let dir = std::env::temp_dir().join(format!("rayterm-tmux-place-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let log = dir.join("outer.log");
+    let pipe = format!("cat > '{}'", log.display());
+    outer.run(&["pipe-pane", "-o", "-t", "0", &pipe]);
+    outer.type_line(&format!(
+        "env -u TMUX tmux -L {} -f /dev/null attach",
+        inner.socket
+    ));
+    let end = Instant::now() + PATIENCE;
+    while inner.text(&["list-clients"]).trim().is_empty() {
+        assert!(Instant::now() < end, "the client did not attach");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    // The pane on the right: its corner is not the terminal's.
+    let pane = inner.text(&["split-window", "-h", "-P", "-F", "#{pane_id}", "sh"]);
+    let pane = pane.trim();
+    let place = inner.text(&[
+        "display-message",
+        "-p",
+        "-t",
+        pane,
+        "#{pane_left} #{pane_width}",
+    ]);
+    let (left, width): (u16, u16) = {
+        let mut v = place.split_whitespace().map(|n| n.parse().unwrap());
+        (v.next().unwrap(), v.next().unwrap())
+    };
+    assert!(left > 10, "{place}");
+    let line = format!(
+        "{} tui cornell --graphics sixel; echo rayterm-\"ended\"",
+        env!("CARGO_BIN_EXE_rayterm")
+    );
+    inner.run(&["send-keys", "-t", pane, "-l", &line]);
+    inner.run(&["send-keys", "-t", pane, "Enter"]);
+    // Bands: ESC 7, a cursor move, then a sixel image.
+    let bands = || -> Vec<(u16, u16)> {
+        let bytes = std::fs::read(&log).unwrap_or_default();
+        let text = String::from_utf8_lossy(&bytes);
+        text.split("\x1b7\x1b[")
+            .skip(1)
+            .filter_map(|s| {
+                let (at, rest) = s.split_once('H')?;
+                rest.starts_with("\x1bP").then_some(())?;
+                let (r, c) = at.split_once(';')?;
+                Some((r.parse().ok()?, c.parse().ok()?))
+            })
+            .collect()
+    };
+    let end = Instant::now() + PATIENCE;
+    while bands().len() < 2 {
+        assert!(Instant::now() < end, "no image bands reached the terminal");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    inner.run(&["send-keys", "-t", pane, "q"]);
+    let bands = bands();
+    // Every band starts in the pane's columns (cursor moves count from 1),
+    // and the bands go down the viewport.
+    for &(row, col) in &bands {
+        assert!(col > left && col <= left + width, "{bands:?} left {left}");
+        assert!((1..=50).contains(&row), "{bands:?}");
+    }
+    assert!(bands.iter().any(|b| b.0 != bands[0].0), "{bands:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -103,6 +103,16 @@ impl Layout {
         .areas(left);
         let titled = Block::new().borders(Borders::TOP);
         l.image = titled.inner(l.view);
+        // A terminal that draws no image wider than it says gets a picture
+        // that narrow, centred in the view.
+        if let Some(m) = &app.display.pixels {
+            if let Some((w, _)) = m.max {
+                let most = (w / m.cell.0.max(1)).clamp(1, u16::MAX as u32) as u16;
+                let cut = l.image.width.saturating_sub(most);
+                l.image.x += cut / 2;
+                l.image.width -= cut;
+            }
+        }
         l.grid = match &app.display.pixels {
             Some(m) => m.grid(l.image.width, l.image.height),
             None => app.display.symbols.grid(),

@@ -167,7 +167,11 @@ pub(crate) fn run(
         };
         let (set, symbols_hint) = term::glyphs::choose(symbols, named, &answers.advances);
         app.display.symbols = set;
-        app.display.pixels = pixels;
+        // Through tmux, images are placed from the pane's corner.
+        app.display.pixels = pixels.map(|m| PixelMode {
+            pane: tmux.as_ref().and_then(|t| t.pane),
+            ..m
+        });
         if let Some(cell) =
             detect::cell_size(&answers, cell_from_ioctl(), (size.width, size.height))
         {
@@ -287,7 +291,13 @@ fn event_loop<W: Write>(
     loop {
         dirty |= app.poll()?;
         let now_size = terminal.size()?;
-        dirty |= std::mem::replace(&mut size, now_size) != now_size;
+        if std::mem::replace(&mut size, now_size) != now_size {
+            dirty = true;
+            // A pane that tmux resized may have moved too.
+            if let Some(m) = app.display.pixels.as_mut().filter(|m| m.passthrough) {
+                m.pane = detect::tmux_pane().or(m.pane);
+            }
+        }
         dirty |= app.note_output(out.figures());
         if dirty && last_draw.elapsed() >= FRAME {
             picture_due |= draw_frame(terminal, app, out)?;

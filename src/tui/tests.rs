@@ -750,6 +750,48 @@ fn a_slow_link_gets_256_colours_first_then_24_bit() {
     assert!(b.contains("view shown in") && b.contains("24-bit"), "{b}");
 }
 
+/// A terminal that draws no sixel image wider than 1000 pixels (xterm's
+/// default) gets a picture that narrow, centred in the view, and every
+/// band within it.
+#[test]
+fn the_picture_keeps_within_the_largest_sixel_image() {
+    use super::graphics::bands::{Bands, Picture};
+    use super::graphics::{sixel, PixelMode, Protocol};
+    let mut app = app("cornell", &[]);
+    let mode = PixelMode {
+        protocol: Protocol::Sixel,
+        cell: (7, 14),
+        colours: 256,
+        passthrough: false,
+        pane: None,
+        max: Some((1000, 1000)),
+    };
+    app.display.pixels = Some(mode);
+    let mut t = terminal(240, 60);
+    settle(&mut t, &mut app);
+    let (view, image) = (app.display.layout.view, app.display.layout.image);
+    assert_eq!(image.width, 1000 / 7, "{view:?} {image:?}");
+    let (left, right) = (image.x - view.x, view.right() - image.right());
+    assert!(left.abs_diff(right) <= 1, "{view:?} {image:?}");
+    let pic = super::widgets::picture(&app).unwrap();
+    let pieces = Bands::default().update(
+        &mode,
+        &Picture {
+            px: &pic.px,
+            w: pic.w,
+            h: pic.h,
+            area: image,
+            coarse: false,
+        },
+        |_| false,
+    );
+    assert!(!pieces.is_empty());
+    for p in &pieces {
+        let (w, h, _) = sixel::decode(p).unwrap();
+        assert!(w <= 1000 && h <= 1000, "{w}x{h}");
+    }
+}
+
 #[test]
 fn kitty_and_sixel_frames_decode_to_the_viewport_picture() {
     use super::graphics::bands::{Bands, Picture};
@@ -761,6 +803,8 @@ fn kitty_and_sixel_frames_decode_to_the_viewport_picture() {
             cell: (6, 12),
             colours: 256,
             passthrough: false,
+            pane: None,
+            max: None,
         };
         app.display.pixels = Some(mode);
         let mut t = terminal(100, 30);
@@ -885,6 +929,8 @@ fn every_symbol_set_keeps_the_proportions_of_pixel_graphics() {
                     cell,
                     colours: 256,
                     passthrough: false,
+                    pane: None,
+                    max: None,
                 })
             }
         }

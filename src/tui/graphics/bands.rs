@@ -142,9 +142,24 @@ impl Batch {
                     }
                     (Protocol::Sixel, None) => Vec::new(),
                 };
-                let mut bytes = Vec::with_capacity(image.len() + 16);
-                let _ = write!(bytes, "\x1b[{};{}H", job.at.1 + 1, job.at.0 + 1);
-                bytes.extend(wrap(&mode, &image));
+                let mut bytes = Vec::with_capacity(image.len() + 32);
+                match (mode.passthrough, mode.pane) {
+                    // tmux moves its terminal's cursor only when it next
+                    // draws: the image carries its own move there, in that
+                    // terminal's cells, with the cursor saved and restored.
+                    (true, Some((x, y))) => {
+                        let mut seq = Vec::with_capacity(image.len() + 24);
+                        let (row, col) = (y + job.at.1 + 1, x + job.at.0 + 1);
+                        let _ = write!(seq, "\x1b7\x1b[{row};{col}H");
+                        seq.extend(image);
+                        seq.extend(b"\x1b8");
+                        bytes.extend(wrap(&mode, &seq));
+                    }
+                    _ => {
+                        let _ = write!(bytes, "\x1b[{};{}H", job.at.1 + 1, job.at.0 + 1);
+                        bytes.extend(wrap(&mode, &image));
+                    }
+                }
                 EncodedBand {
                     band: job.band,
                     epoch: job.epoch,
@@ -410,6 +425,8 @@ mod tests {
             cell: (4, 8),
             colours: 256,
             passthrough: false,
+            pane: None,
+            max: None,
         }
     }
 
@@ -483,6 +500,44 @@ mod tests {
         assert!(sixel
             .uncover(&mode(Protocol::Sixel), false, over)
             .is_empty());
+    }
+
+    /// Through tmux's passthrough a band moves the outer terminal's cursor
+    /// itself, to the band's cell plus the pane's place, and puts it back.
+    #[test]
+    fn bands_through_tmux_are_placed_in_the_outer_terminal() {
+        for protocol in [Protocol::Sixel, Protocol::Kitty, Protocol::Iterm2] {
+            let m = PixelMode {
+                passthrough: true,
+                pane: Some((10, 5)),
+                ..mode(protocol)
+            };
+            let (w, h) = (32, 16);
+            let px = picture(w, h, 2);
+            let pic = Picture {
+                px: &px,
+                w,
+                h,
+                area: Rect::new(3, 2, 8, 2),
+                coarse: false,
+            };
+            let pieces = Bands::default().update(&m, &pic, |_| false);
+            assert_eq!(pieces.len(), 1, "{protocol:?}");
+            // Row 5 + 2 + 1, column 10 + 3 + 1; escapes doubled inside.
+            assert!(
+                pieces[0].starts_with(b"\x1bPtmux;\x1b\x1b7\x1b\x1b[8;14H"),
+                "{protocol:?}: {}",
+                String::from_utf8_lossy(&pieces[0][..40])
+            );
+            assert!(pieces[0].ends_with(b"\x1b\x1b8\x1b\\"), "{protocol:?}");
+            // Without the pane's place: the cursor move goes to tmux.
+            let m = PixelMode { pane: None, ..m };
+            let pieces = Bands::default().update(&m, &pic, |_| false);
+            assert!(
+                pieces[0].starts_with(b"\x1b[3;4H\x1bPtmux;"),
+                "{protocol:?}"
+            );
+        }
     }
 
     #[test]

@@ -82,6 +82,14 @@ pub struct PixelMode {
     pub colours: usize,
     /// Inside tmux with `allow-passthrough`: images are wrapped for it.
     pub passthrough: bool,
+    /// Inside tmux: the pane's top-left cell (column, row) in the terminal
+    /// tmux runs in. Images sent through passthrough are placed from it,
+    /// with the cursor saved and restored around them, since tmux moves
+    /// that terminal's cursor only when it next draws.
+    pub pane: Option<(u16, u16)>,
+    /// The largest image the terminal draws, in its pixels (sixel, where
+    /// it says): the picture is kept within it.
+    pub max: Option<(u32, u32)>,
 }
 
 impl PixelMode {
@@ -199,6 +207,8 @@ mod tests {
             cell: (10, 20),
             colours: 256,
             passthrough: false,
+            pane: None,
+            max: None,
         };
         assert_eq!(m.grid(100, 30), (10, 20));
         let (gx, gy) = m.grid(300, 100);
@@ -224,6 +234,8 @@ mod tests {
             cell: (6, 13),
             colours: 256,
             passthrough: false,
+            pane: None,
+            max: None,
         };
         let (pic, cells) = ((684, 416), (114, 32));
         // 285k pixels: shrunk 5 times each way for 32 kB/s (17 kB, with

@@ -29,6 +29,9 @@ const KITTY_QUERY: &[u8] = b"\x1b_Gi=31,s=1,v=1,a=q,t=d,f=24;AAAA\x1b\\";
 const CELL_SIZE: &[u8] = b"\x1b[16t";
 const WINDOW_PIXELS: &[u8] = b"\x1b[14t";
 const REGISTERS: &[u8] = b"\x1b[?1;1;0S";
+/// XTSMGRAPHICS: the largest sixel image (xterm draws none wider than its
+/// `maxGraphicSize`, 1000x1000 by default).
+const SIXEL_GEOMETRY: &[u8] = b"\x1b[?2;1;0S";
 /// XTGETTCAP for `RGB` and `Tc`, hex-encoded; then background RGB 1,2,3
 /// set, read back (DECRQSS for SGR) and reset.
 const TRUECOLOR: &[u8] = b"\x1bP+q524742;5463\x1b\\\x1b[48;2;1;2;3m\x1bP$qm\x1b\\\x1b[m";
@@ -64,7 +67,13 @@ impl Ask {
     pub(crate) fn queries(&self) -> Vec<u8> {
         let mut q = Vec::new();
         let asked: &[&[u8]] = if self.graphics {
-            &[KITTY_QUERY, CELL_SIZE, WINDOW_PIXELS, REGISTERS]
+            &[
+                KITTY_QUERY,
+                CELL_SIZE,
+                WINDOW_PIXELS,
+                REGISTERS,
+                SIXEL_GEOMETRY,
+            ]
         } else {
             &[CELL_SIZE, WINDOW_PIXELS]
         };
@@ -83,8 +92,19 @@ impl Ask {
             q.extend_from_slice(VERSION);
             q.extend_from_slice(ADVANCES);
         }
+        // The terminal tmux runs in says through passthrough whether it
+        // draws sixel; tmux answers the bare DA1 at once, so its own
+        // answer comes first.
+        if self.passthrough {
+            q.extend(passthrough(DA1));
+        }
         q.extend_from_slice(DA1);
         q
+    }
+
+    /// How many answers to DA1 end the round.
+    fn da1_answers(&self) -> usize {
+        1 + self.passthrough as usize
     }
 }
 
@@ -94,8 +114,17 @@ pub(crate) struct Answers {
     /// DA1 came: the terminal answers queries.
     pub(crate) answered: bool,
     pub(crate) kitty: bool,
+    /// The first answer to DA1 lists sixel: the terminal draws it (inside
+    /// tmux, tmux itself does).
     pub(crate) sixel: bool,
+    /// Inside tmux with passthrough, the second answer to DA1 (the
+    /// terminal tmux runs in) lists sixel.
+    pub(crate) outer_sixel: bool,
+    /// Answers to DA1 so far.
+    pub(crate) da1: usize,
     pub(crate) registers: Option<usize>,
+    /// The largest sixel image, in pixels.
+    pub(crate) sixel_max: Option<(u32, u32)>,
     /// A cell's size (width, height) in pixels, and the text area's.
     pub(crate) cell: Option<(u32, u32)>,
     pub(crate) window: Option<(u32, u32)>,
@@ -113,7 +142,12 @@ impl Answers {
         match reply {
             Reply::DeviceAttributes(attrs) => {
                 self.answered = true;
-                self.sixel |= attrs.iter().skip(1).any(|&a| a == 4);
+                let sixel = attrs.iter().skip(1).any(|&a| a == 4);
+                match self.da1 {
+                    0 => self.sixel = sixel,
+                    _ => self.outer_sixel |= sixel,
+                }
+                self.da1 += 1;
                 return true;
             }
             Reply::Kitty(text) => self.kitty |= text.starts_with("i=31;OK"),
@@ -122,6 +156,9 @@ impl Answers {
                 self.window = Some((*w as u32, *h as u32))
             }
             Reply::ColourRegisters(n) if *n > 0 => self.registers = Some(*n as usize),
+            Reply::SixelGeometry(w, h) if *w > 0 && *h > 0 => {
+                self.sixel_max = Some((*w as u32, *h as u32))
+            }
             // Only the glyph probes ask for the cursor during the round.
             Reply::CursorPosition(_, col) if self.advances.len() < 2 => {
                 self.advances.push(col.saturating_sub(1))
@@ -185,8 +222,8 @@ pub(crate) fn ask(
         let left = end.saturating_duration_since(Instant::now());
         match reader.rx.recv_timeout(left) {
             Ok(Input::Reply(r)) => {
-                if answers.take(&r) {
-                    if !tmux {
+                if answers.take(&r) && answers.da1 >= ask.da1_answers() {
+                    if !tmux || ask.passthrough {
                         break;
                     }
                     end = end.min(Instant::now() + TMUX_GRACE);
@@ -225,7 +262,7 @@ pub(crate) fn choose(
         GraphicsArg::Sixel => Protocol::Sixel,
         GraphicsArg::Iterm2 => Protocol::Iterm2,
         GraphicsArg::Auto if answers.kitty => Protocol::Kitty,
-        GraphicsArg::Auto if answers.sixel => Protocol::Sixel,
+        GraphicsArg::Auto if answers.sixel || answers.outer_sixel => Protocol::Sixel,
         GraphicsArg::Auto if iterm => Protocol::Iterm2,
         GraphicsArg::Auto => {
             let why = match tmux_passthrough {
@@ -260,14 +297,18 @@ pub(crate) fn choose(
     }
     let claimed = match protocol {
         Protocol::Kitty => answers.kitty,
-        Protocol::Sixel => answers.sixel,
+        Protocol::Sixel => answers.sixel || answers.outer_sixel,
         Protocol::Iterm2 => iterm,
     };
     if answers.answered && !claimed {
         said += " (as asked: the terminal does not claim it)";
     }
+    let sixel_max = answers.sixel_max.filter(|_| protocol == Protocol::Sixel);
     if protocol == Protocol::Sixel {
         said += &format!(", {colours} colours");
+    }
+    if let Some((w, h)) = sixel_max {
+        said += &format!(", images up to {w}x{h} px");
     }
     if passthrough {
         said += ", through tmux";
@@ -278,6 +319,8 @@ pub(crate) fn choose(
             cell,
             colours,
             passthrough,
+            pane: None,
+            max: sixel_max,
         }),
         said,
     )
@@ -294,6 +337,8 @@ pub(crate) struct Tmux {
     /// That terminal's name and version, as it told tmux (tmux 3.3 and
     /// later ask it with XTVERSION).
     pub(crate) terminal: Option<String>,
+    /// This pane's top-left cell (column, row) in that terminal.
+    pub(crate) pane: Option<(u16, u16)>,
 }
 
 /// A cell's size in pixels: the terminal's answer, else the window size
@@ -324,11 +369,36 @@ pub(crate) fn tmux() -> Option<Tmux> {
             "display-message",
             "-p",
             "features:#{client_termfeatures}\ntermtype:#{client_termtype}",
+            ";",
         ])
+        .args(pane_query())
         .stderr(std::process::Stdio::null())
         .output()
         .ok()?;
     Some(parse_tmux(&String::from_utf8_lossy(&out.stdout)))
+}
+
+/// Inside tmux, where this pane is now: it moves when panes are split,
+/// resized or zoomed.
+pub(crate) fn tmux_pane() -> Option<(u16, u16)> {
+    std::env::var_os("TMUX")?;
+    let out = std::process::Command::new("tmux")
+        .args(pane_query())
+        .stderr(std::process::Stdio::null())
+        .output()
+        .ok()?;
+    parse_tmux(&String::from_utf8_lossy(&out.stdout)).pane
+}
+
+/// Asks for this pane's place (`TMUX_PANE` names it: the client's current
+/// pane may be another).
+fn pane_query() -> Vec<String> {
+    let mut q = vec!["display-message".to_string(), "-p".into()];
+    if let Some(p) = std::env::var("TMUX_PANE").ok().filter(|p| !p.is_empty()) {
+        q.extend(["-t".into(), p]);
+    }
+    q.push("pane:#{pane_left},#{pane_top}".into());
+    q
 }
 
 fn parse_tmux(text: &str) -> Tmux {
@@ -345,6 +415,11 @@ fn parse_tmux(text: &str) -> Tmux {
             .map(str::trim)
             .filter(|t| !t.is_empty())
             .map(str::to_string),
+        pane: text
+            .lines()
+            .find_map(|l| l.strip_prefix("pane:"))
+            .and_then(|p| p.trim().split_once(','))
+            .and_then(|(x, y)| Some((x.parse().ok()?, y.parse().ok()?))),
     }
 }
 
@@ -427,15 +502,22 @@ pub(crate) mod tests {
 
     #[test]
     fn tmux_says_passthrough_and_rgb() {
-        let t = parse_tmux("on\nfeatures:256,RGB,title,clipboard\ntermtype:kitty(0.40.1)\n");
+        let t = parse_tmux(
+            "on\nfeatures:256,RGB,title,clipboard\ntermtype:kitty(0.40.1)\npane:81,12\n",
+        );
         assert_eq!(
             t,
             Tmux {
                 passthrough: true,
                 rgb: Some(true),
                 terminal: Some("kitty(0.40.1)".into()),
+                pane: Some((81, 12)),
             }
         );
+        // A place that is not two numbers is no place.
+        for bad in ["pane:81\n", "pane:,\n", "pane:-1,2\n", "pane:99999,1\n"] {
+            assert_eq!(parse_tmux(bad).pane, None, "{bad}");
+        }
         let t = parse_tmux("off\nfeatures:256,title\n");
         assert_eq!((t.passthrough, t.rgb), (false, Some(false)));
         // No client attached: nothing known of the terminal.
@@ -461,10 +543,30 @@ pub(crate) mod tests {
         // The one there is wrapped: its ESC doubled.
         assert_eq!(apc(&q), 1);
         assert!(q.windows(3).any(|w| w == b"\x1b\x1b_"));
+        // DA1 goes both ways, tmux's last, and two answers end the round.
+        assert!(q.ends_with(&[&passthrough(DA1)[..], DA1].concat()));
+        assert_eq!((tmux.da1_answers(), through.da1_answers()), (1, 2));
     }
 
     #[test]
     fn tmux_needs_passthrough_unless_it_draws_sixel_itself() {
+        // tmux 3.3 in xterm -ti vt340: tmux answers first, without sixel,
+        // then xterm through passthrough, with it.
+        let outer = answers(b"\x1b[?1;2c\x1b[?1;0;1024S\x1b[?63;1;2;4;6;9;15;16;22;28c");
+        assert!(!outer.sixel && outer.outer_sixel && outer.da1 == 2);
+        let (m, said) = choose(GraphicsArg::Auto, &outer, None, (80, 24), none, Some(true));
+        let m = m.unwrap();
+        assert_eq!(
+            (m.protocol, m.passthrough, m.colours),
+            (Protocol::Sixel, true, 256)
+        );
+        assert!(!said.contains("does not claim"), "{said}");
+        // With the largest image it draws: kept, and said.
+        let mut sized = outer.clone();
+        sized.take(&Reply::SixelGeometry(1000, 1000));
+        let (m, said) = choose(GraphicsArg::Auto, &sized, None, (80, 24), none, Some(true));
+        assert_eq!(m.unwrap().max, Some((1000, 1000)));
+        assert!(said.contains("up to 1000x1000 px"), "{said}");
         let kitty = answers(b"\x1b_Gi=31;OK\x1b\\\x1b[?62c");
         let (m, said) = choose(GraphicsArg::Auto, &kitty, None, (80, 24), none, Some(false));
         assert!(m.is_none() && said.contains("allow-passthrough"), "{said}");

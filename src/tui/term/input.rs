@@ -29,6 +29,9 @@ pub(crate) enum Reply {
     WindowPixels(u16, u16),
     /// `CSI ? 1 ; 0 ; n S` (XTSMGRAPHICS): sixel colour registers.
     ColourRegisters(u16),
+    /// `CSI ? 2 ; 0 ; width ; height S` (XTSMGRAPHICS): the largest sixel
+    /// image in pixels.
+    SixelGeometry(u16, u16),
     /// `APC G ... ST`: a kitty graphics reply, without the `G`.
     Kitty(String),
     /// `DCS ... ST`: capability (XTGETTCAP) and setting (DECRQSS) replies.
@@ -230,6 +233,7 @@ fn parse_csi(b: &[u8]) -> Step {
         (Some(b'<'), b'M' | b'm') => mouse(num(0), num(1), num(2), final_byte == b'M'),
         (Some(b'?'), b'S') => match (num(0), num(1), num(2)) {
             (Some(1), Some(0), Some(n)) => Some(Input::Reply(Reply::ColourRegisters(n))),
+            (Some(2), Some(0), Some(w)) => num(3).map(|h| Input::Reply(Reply::SixelGeometry(w, h))),
             _ => None,
         },
         (Some(b'?'), b'c') => Some(Input::Reply(Reply::DeviceAttributes(
@@ -418,6 +422,10 @@ mod tests {
         assert_eq!(
             keys(b"\x1b[?1;0;16S\x1b[?1;3;0S"),
             vec![Input::Reply(Reply::ColourRegisters(16))]
+        );
+        assert_eq!(
+            keys(b"\x1b[?2;0;1000;800S\x1b[?2;0;1000S\x1b[?2;3;0S"),
+            vec![Input::Reply(Reply::SixelGeometry(1000, 800))]
         );
         let got = keys(b"\x1b_Gi=31;OK\x1b\\\x1bP1+r524742=\x1b\\\x1b[<0;10;5M");
         assert_eq!(got[0], Input::Reply(Reply::Kitty("i=31;OK".into())));
