@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """rayterm over a slow link in a real terminal on a virtual X display.
 
-Pixel graphics inside tmux need passthrough and do not land right, so
+Pixel graphics need a real terminal to draw them, so
 `scripts/slow-link.sh` (tmux) measures block symbols only; this runs the TUI
 in xterm (`-ti vt340`: sixel), kitty (kitty graphics, software OpenGL) or
 mlterm (sixel) on Xvfb, with rayterm's output throttled by `pv -L` on its
