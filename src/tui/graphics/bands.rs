@@ -149,7 +149,10 @@ impl Batch {
                     // terminal's cells, with the cursor saved and restored.
                     (true, Some((x, y))) => {
                         let mut seq = Vec::with_capacity(image.len() + 24);
-                        let (row, col) = (y + job.at.1 + 1, x + job.at.0 + 1);
+                        let (row, col) = (
+                            y as u32 + job.at.1 as u32 + 1,
+                            x as u32 + job.at.0 as u32 + 1,
+                        );
                         let _ = write!(seq, "\x1b7\x1b[{row};{col}H");
                         seq.extend(image);
                         seq.extend(b"\x1b8");

@@ -363,31 +363,51 @@ pub(crate) fn cell_size(
 /// Inside tmux, what it says (one `tmux` command).
 pub(crate) fn tmux() -> Option<Tmux> {
     std::env::var_os("TMUX")?;
-    let out = std::process::Command::new("tmux")
-        .args(["show-options", "-Apv", "allow-passthrough", ";"])
+    let mut cmd = std::process::Command::new("tmux");
+    cmd.args(["show-options", "-Apv", "allow-passthrough", ";"])
         .args([
             "display-message",
             "-p",
             "features:#{client_termfeatures}\ntermtype:#{client_termtype}",
             ";",
         ])
-        .args(pane_query())
-        .stderr(std::process::Stdio::null())
-        .output()
+        .args(pane_query());
+    Some(parse_tmux(&ask_tmux(cmd)?))
+}
+
+/// What a tmux command prints, if it ends within [`WAIT`]: a tmux server
+/// that does not answer must not hold the TUI up.
+fn ask_tmux(mut cmd: std::process::Command) -> Option<String> {
+    use std::io::Read;
+    use std::process::Stdio;
+    let mut child = cmd
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
         .ok()?;
-    Some(parse_tmux(&String::from_utf8_lossy(&out.stdout)))
+    let end = Instant::now() + WAIT;
+    // Its few lines fit the pipe: it can end before they are read.
+    while child.try_wait().ok()?.is_none() {
+        if Instant::now() >= end {
+            let _ = child.kill();
+            let _ = child.wait();
+            return None;
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let mut text = String::new();
+    child.stdout.take()?.read_to_string(&mut text).ok()?;
+    Some(text)
 }
 
 /// Inside tmux, where this pane is now: it moves when panes are split,
 /// resized or zoomed.
 pub(crate) fn tmux_pane() -> Option<(u16, u16)> {
     std::env::var_os("TMUX")?;
-    let out = std::process::Command::new("tmux")
-        .args(pane_query())
-        .stderr(std::process::Stdio::null())
-        .output()
-        .ok()?;
-    parse_tmux(&String::from_utf8_lossy(&out.stdout)).pane
+    let mut cmd = std::process::Command::new("tmux");
+    cmd.args(pane_query());
+    parse_tmux(&ask_tmux(cmd)?).pane
 }
 
 /// Asks for this pane's place (`TMUX_PANE` names it: the client's current
