@@ -696,53 +696,37 @@ fn a_slow_link_gets_256_colours_first_then_24_bit() {
     out.start(t.backend_mut(), Instant::now()).unwrap();
     app.update(ratatui::layout::Rect::new(0, 0, 120, 40));
     assert!(app.wait_frame(WAIT).unwrap());
-    // Writes the draw's cells as the terminal answers; the bytes written.
-    let mut land = |t: &mut Terminal<Screen<Vec<u8>>>, app: &mut App| {
-        out_draw(t, app, &mut out);
-        let bytes = String::from_utf8_lossy(&std::mem::take(t.backend_mut().writer())).into_owned();
-        app.note_output(out.figures());
-        bytes
-    };
-    fn out_draw(t: &mut Terminal<Screen<Vec<u8>>>, app: &mut App, out: &mut TermOutput) {
+    /// Draws, writes the cells as the terminal answers, and counts the
+    /// colours written: (256-colour, 24-bit).
+    fn land(
+        t: &mut Terminal<Screen<Vec<u8>>>,
+        app: &mut App,
+        out: &mut TermOutput,
+    ) -> (usize, usize) {
         super::draw_frame(t, app, out).unwrap();
         out.pump(t.backend_mut(), Instant::now()).unwrap();
         while out.waiting() {
             out.answered(Instant::now());
             out.pump(t.backend_mut(), Instant::now()).unwrap();
         }
+        app.note_output(out.figures());
+        let bytes = std::mem::take(t.backend_mut().writer());
+        let text = String::from_utf8_lossy(&bytes);
+        (text.matches("8;5;").count(), text.matches("8;2;").count())
     }
     let cells = {
         let a = app.display.layout.image;
         a.width as usize * a.height as usize
     };
-    let first = land(&mut t, &mut app);
-    assert!(app.display.coarse_color);
-    let count = |s: &str, p: &str| s.matches(p).count();
     // Colours are written where they change: runs of one 256-colour entry
     // take one.
-    assert!(
-        count(&first, "8;5;") > cells / 4,
-        "{}",
-        count(&first, "8;5;")
-    );
-    assert!(
-        count(&first, "8;2;") < cells / 20,
-        "{}",
-        count(&first, "8;2;")
-    );
+    let (indexed, rgb) = land(&mut t, &mut app, &mut out);
+    assert!(app.display.coarse_color);
+    assert!(indexed > cells / 4 && rgb < cells / 20, "{indexed} {rgb}");
     assert!(app.view_shown_in().is_some() && app.view_sharp_in().is_none());
-    let sharp = land(&mut t, &mut app);
+    let (indexed, rgb) = land(&mut t, &mut app, &mut out);
     assert!(!app.display.coarse_color);
-    assert!(
-        count(&sharp, "8;2;") > cells / 2,
-        "{}",
-        count(&sharp, "8;2;")
-    );
-    assert!(
-        count(&sharp, "8;5;") < cells / 20,
-        "{}",
-        count(&sharp, "8;5;")
-    );
+    assert!(rgb > cells / 2 && indexed < cells / 20, "{indexed} {rgb}");
     assert!(app.view_sharp_in().is_some());
     super::draw(&mut t, &mut app).unwrap();
     let b = t.backend().wanted_text();
