@@ -364,6 +364,9 @@ impl Progressive {
             }
             // The deadline never cuts the first pass (see `finished`).
             let first = self.film.spp == 0;
+            if let Some(d) = deadline.filter(|_| self.growing && !first) {
+                self.fill_half(d.saturating_duration_since(Instant::now()).as_secs_f64());
+            }
             let stop_rows = || cancel.is_set() || (!first && past());
             let pass = self.pass(tracer, Cancel::When(&stop_rows));
             if cancel.is_set() {
@@ -381,6 +384,23 @@ impl Progressive {
             rays: self.rays - rays,
             seconds: self.seconds - seconds,
         }
+    }
+
+    /// Before a deadline `left` seconds away, lets the next growing pass
+    /// take up to half that time at the pace so far, if that is more than
+    /// doubling gives: fewer, larger passes trace a pixel's samples
+    /// together, and a pass the deadline cuts keeps the rows it traced.
+    fn fill_half(&mut self, left: f64) {
+        let mean = self.film.spp_range().1;
+        if mean <= 0.0 || self.seconds <= 0.0 {
+            return;
+        }
+        let fit = (0.5 * left / (self.seconds / mean)).floor();
+        let cap = self.pass_cap.clamp(1, MAX_PASS_SPP);
+        self.samples_per_pass = self
+            .samples_per_pass
+            .max((fit.min(cap as f64)) as u32)
+            .max(1);
     }
 
     /// Traces the samples the film holds again from each pixel's `from`th
@@ -777,6 +797,30 @@ mod tests {
         req.size = Some((12, 8));
         req.features = req.features.without(off);
         Session::open(&req).unwrap().0
+    }
+
+    /// To a time, a growing pass may take half the time left at the pace
+    /// so far (never less than doubling gives, never more than the cap).
+    #[test]
+    fn a_pass_to_a_time_takes_up_to_half_the_time_left() {
+        let s = session(&[]);
+        let t = s.tracer();
+        let stop = Stop {
+            seconds: Some(60.0),
+            ..Stop::default()
+        };
+        let mut p = Job::of(&t, stop).growing().start();
+        p.pass(&t, Cancel::Never).unwrap();
+        assert_eq!((p.film.spp, p.samples_per_pass), (1, 1));
+        // A pace of a tenth of a second a sample per pixel.
+        p.seconds = 0.1;
+        p.fill_half(2.0);
+        assert_eq!(p.samples_per_pass, 10);
+        // Less time left than doubling needs: doubling's size stays.
+        p.fill_half(0.01);
+        assert_eq!(p.samples_per_pass, 10);
+        p.fill_half(1e6);
+        assert_eq!(p.samples_per_pass, MAX_PASS_SPP);
     }
 
     #[test]
