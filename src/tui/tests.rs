@@ -734,12 +734,32 @@ fn a_slow_link_gets_256_colours_first_then_24_bit() {
     assert!(b.contains("view shown in") && b.contains("24-bit"), "{b}");
 }
 
+/// The viewport's picture, and the bands that send it all in `mode`.
+fn picture_as_bands(
+    app: &App,
+    mode: &super::graphics::PixelMode,
+) -> (super::widgets::viewport::ViewPicture, Vec<Vec<u8>>) {
+    use super::graphics::bands::{Bands, Picture};
+    let pic = super::widgets::picture(app).unwrap();
+    let pieces = Bands::default().update(
+        mode,
+        &Picture {
+            px: &pic.px,
+            w: pic.w,
+            h: pic.h,
+            area: app.display.layout.image,
+            coarse: false,
+        },
+        |_| false,
+    );
+    (pic, pieces)
+}
+
 /// A terminal that draws no sixel image wider than 1000 pixels (xterm's
 /// default) gets a picture that narrow, centred in the view, and every
 /// band within it.
 #[test]
 fn the_picture_keeps_within_the_largest_sixel_image() {
-    use super::graphics::bands::{Bands, Picture};
     use super::graphics::{sixel, PixelMode, Protocol};
     let mut app = app("cornell", &[]);
     let mode = PixelMode {
@@ -757,18 +777,7 @@ fn the_picture_keeps_within_the_largest_sixel_image() {
     assert_eq!(image.width, 1000 / 7, "{view:?} {image:?}");
     let (left, right) = (image.x - view.x, view.right() - image.right());
     assert!(left.abs_diff(right) <= 1, "{view:?} {image:?}");
-    let pic = super::widgets::picture(&app).unwrap();
-    let pieces = Bands::default().update(
-        &mode,
-        &Picture {
-            px: &pic.px,
-            w: pic.w,
-            h: pic.h,
-            area: image,
-            coarse: false,
-        },
-        |_| false,
-    );
+    let pieces = picture_as_bands(&app, &mode).1;
     assert!(!pieces.is_empty());
     for p in &pieces {
         let (w, h, _) = sixel::decode(p).unwrap();
@@ -778,7 +787,6 @@ fn the_picture_keeps_within_the_largest_sixel_image() {
 
 #[test]
 fn kitty_and_sixel_frames_decode_to_the_viewport_picture() {
-    use super::graphics::bands::{Bands, Picture};
     use super::graphics::{kitty, sixel, PixelMode, Protocol};
     for protocol in [Protocol::Kitty, Protocol::Sixel] {
         let mut app = app("cornell", &[]);
@@ -805,19 +813,8 @@ fn kitty_and_sixel_frames_decode_to_the_viewport_picture() {
             .all(|y| (area.x..area.x + area.width).all(|x| b[(x, y)].symbol() == " ")));
         // A pixel selected: its mark is part of the picture sent.
         app.select(40, 30, 0);
-        let pic = super::widgets::picture(&app).unwrap();
+        let (pic, pieces) = picture_as_bands(&app, &mode);
         assert_eq!(pic.px[(30 * pic.w + 42) as usize], [255, 0, 255]);
-        let pieces = Bands::default().update(
-            &mode,
-            &Picture {
-                px: &pic.px,
-                w: pic.w,
-                h: pic.h,
-                area,
-                coarse: false,
-            },
-            |_| false,
-        );
         let mut got: Vec<[u8; 3]> = Vec::new();
         for p in &pieces {
             match protocol {
