@@ -318,6 +318,15 @@ fn sample_line(s: &LightSample) -> (LineKind, String) {
         mis_text(s.mis.as_ref(), true)
     );
     match (&s.shadow_ray, &s.occluder) {
+        // With shadows off no ray is traced, and a facing light counts.
+        (None, _) if s.visible => (
+            LineKind::Detail,
+            format!(
+                "not shadow-tested (shadows off), diffuse {} specular {}: {at}",
+                v(s.diffuse),
+                v(s.specular)
+            ),
+        ),
         (None, _) => (LineKind::Detail, format!("behind the surface: {at}")),
         (Some(r), Some((mesh, tri))) => (
             LineKind::Occluded,
@@ -343,13 +352,24 @@ fn sample_line(s: &LightSample) -> (LineKind, String) {
 /// How a light's samples ended: `12 clear, 4 occluded`, leaving out the
 /// kinds that did not occur.
 fn verdicts(samples: &[LightSample]) -> String {
-    let behind = samples.iter().filter(|s| s.shadow_ray.is_none()).count();
+    let untested = |s: &&LightSample| s.shadow_ray.is_none();
+    let behind = samples
+        .iter()
+        .filter(untested)
+        .filter(|s| !s.visible)
+        .count();
+    let unshadowed = samples
+        .iter()
+        .filter(untested)
+        .filter(|s| s.visible)
+        .count();
     let occluded = samples.iter().filter(|s| s.occluder.is_some()).count();
-    let clear = samples.len() - behind - occluded;
+    let clear = samples.len() - behind - unshadowed - occluded;
     let parts: Vec<String> = [
         (clear, "clear"),
         (occluded, "occluded"),
         (behind, "behind the surface"),
+        (unshadowed, "not shadow-tested"),
     ]
     .iter()
     .filter(|(n, _)| *n > 0)

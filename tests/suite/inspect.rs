@@ -139,6 +139,25 @@ fn cornell_floor_in_the_tall_box_shadow_is_occluded_by_it() {
     assert!(floor.iter().any(|t| point_light(t).visible));
 }
 
+/// With shadows off no shadow ray is traced: the tree says the light
+/// was not shadow-tested and counts it, not that it lies behind the surface.
+#[test]
+fn shadows_off_is_said_as_such_not_as_behind_the_surface() {
+    let req = SceneRequest {
+        seed: SEED,
+        features: rayterm::render::Features::all().without(&[rayterm::render::Feature::Shadows]),
+        ..SceneRequest::new("cornell")
+    };
+    let s = Session::open(&req).unwrap().0;
+    let t = s.tracer_for(&s.plan, &s.camera, (32, 32));
+    let tree = inspect_pixel(&t, 16, 16, 0);
+    let sample = &tree.root.lights[0].samples[0];
+    assert!(sample.visible && sample.shadow_ray.is_none(), "{sample:?}");
+    let text = rayterm::inspect::text::to_text(&tree, true);
+    assert!(text.contains("not shadow-tested (shadows off)"), "{text}");
+    assert!(!text.contains("behind the surface"), "{text}");
+}
+
 #[test]
 fn json_round_trips_through_serde() {
     // Scenes whose trees use every optional part: area light samples,
