@@ -4,8 +4,8 @@
 //! full-resolution pass adds samples to every pixel and sends a snapshot;
 //! passes grow with the view's age. A newer view cancels the pass in flight
 //! between rows, so camera motion never waits for a pass, and any other
-//! command ends a long pass, keeping its rows. BVH overlays are computed here too, once per view, so
-//! drawing never traverses the BVH.
+//! command ends a long pass, keeping its rows. BVH overlays are computed
+//! here too, once per view, so drawing never traverses the BVH.
 
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
@@ -44,6 +44,7 @@ const PASS_MS: f64 = 125.0;
 /// sample per pixel of a dense mesh at 1024x768 trace at about 0.7x the
 /// rate of the same samples in one pass; BENCHMARKS.md).
 const AGE_SHARE: f64 = 0.5;
+/// The longest a pass of an old view may take.
 const MAX_PASS_MS: f64 = 2000.0;
 /// Coarse passes render every `COARSE`-th pixel in each direction.
 const COARSE: u32 = 4;
