@@ -45,6 +45,7 @@ use std::ops::Range;
 use std::sync::OnceLock;
 
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
 use crate::geometry::sampling::{quadrant_is_black, PIXEL_GRID, PIXEL_STRATA, QUARTER};
 
@@ -755,73 +756,106 @@ impl Allocation {
     /// weight, and none less than [`WEIGHT_FLOOR`] of the mean.
     pub(crate) fn weigh(pixels: &[PixelStats], rays: &[u32], width: u32) -> Vec<f32> {
         let w = width.max(1) as usize;
+        let h = pixels.len() / w;
         // Relative variance, rays per sample and 1 for an estimable pixel;
         // zeros for one that is not.
-        let rel: Vec<[f64; 3]> = pixels
-            .iter()
-            .zip(rays)
-            .map(|(p, &r)| {
-                let lum = p.mean.dot(LUMA.as_dvec3());
-                let v = p.variance() / (lum * lum + REL_EPS);
-                let per_sample = r as f64 / p.n.max(1) as f64;
-                if p.n >= 2 && v.is_finite() {
-                    [v, per_sample, 1.0]
-                } else {
-                    [0.0; 3]
-                }
-            })
-            .collect();
-        let near = box_sums(&rel, w, 1);
-        let far = box_sums(&rel, w, WEIGHT_RADIUS);
+        let rel = |i: usize| {
+            let p = &pixels[i];
+            let lum = p.mean.dot(LUMA.as_dvec3());
+            let v = p.variance() / (lum * lum + REL_EPS);
+            let per_sample = rays[i] as f64 / p.n.max(1) as f64;
+            if p.n >= 2 && v.is_finite() {
+                [v, per_sample, 1.0]
+            } else {
+                [0.0; 3]
+            }
+        };
         // The neighbours' root mean relative variance over their mean rays
         // per sample (at least one): the window's sums less the pixel's own.
         let predict = |sum: [f64; 3], own: [f64; 3]| {
             let [v, t, n] = [0, 1, 2].map(|k| (sum[k] - own[k]).max(0.0));
             (n >= 0.5).then(|| (v / t.max(n)).sqrt())
         };
-        let weight: Vec<Option<f64>> = rel
-            .iter()
+        // Bands of rows in parallel, each summing the rows it reads into
+        // buffers its thread reuses (whole-film arrays of sums were 95 MB
+        // of fresh memory at 1024x768). Each sum is made in the same order
+        // whatever the bands, and as it was made over the whole film.
+        let mut weight = vec![0.0f64; pixels.len()];
+        weight
+            .par_chunks_mut(WEIGH_BAND * w)
             .enumerate()
-            .map(
-                |(i, &own)| match (predict(near[i], own), predict(far[i], own)) {
-                    (Some(a), Some(b)) => Some(0.5 * (a + b)),
-                    (a, b) => a.or(b),
-                },
-            )
-            .collect();
-        let top = weight.iter().flatten().copied().fold(0.0, f64::max);
-        let mean = weight.iter().map(|v| v.unwrap_or(top)).sum::<f64>() / weight.len() as f64;
+            .for_each_init(<[Vec<[f64; 3]>; 5]>::default, |bufs, (b, out)| {
+                let [own, near, far, near_y, far_y] = bufs;
+                let (y0, y1) = (b * WEIGH_BAND, ((b + 1) * WEIGH_BAND).min(h));
+                let rows = y0.saturating_sub(WEIGHT_RADIUS)..(y1 + WEIGHT_RADIUS).min(h);
+                own.clear();
+                own.extend((rows.start * w..rows.end * w).map(rel));
+                row_sums(own, w, 1, near);
+                row_sums(own, w, WEIGHT_RADIUS, far);
+                // A row's window sums: its rows' sums added in row order, a
+                // whole row at a time.
+                let column = |sums: &[[f64; 3]], y: usize, r: usize, into: &mut Vec<[f64; 3]>| {
+                    into.clear();
+                    into.resize(w, [0.0; 3]);
+                    for ny in window(y, h, r) {
+                        let row = &sums[(ny - rows.start) * w..][..w];
+                        for (a, b) in into.iter_mut().zip(row) {
+                            *a = add3(*a, b);
+                        }
+                    }
+                };
+                for (y, out) in (y0..y1).zip(out.chunks_mut(w)) {
+                    column(near, y, 1, near_y);
+                    column(far, y, WEIGHT_RADIUS, far_y);
+                    for (x, out) in out.iter_mut().enumerate() {
+                        let mine = own[(y - rows.start) * w + x];
+                        let (a, b) = (predict(near_y[x], mine), predict(far_y[x], mine));
+                        // NaN: no estimable neighbour.
+                        *out = match (a, b) {
+                            (Some(a), Some(b)) => 0.5 * (a + b),
+                            (a, b) => a.or(b).unwrap_or(f64::NAN),
+                        };
+                    }
+                }
+            });
+        let top = weight
+            .iter()
+            .copied()
+            .filter(|v| !v.is_nan())
+            .fold(0.0, f64::max);
+        let or_top = |v: f64| if v.is_nan() { top } else { v };
+        let mean = weight.iter().map(|&v| or_top(v)).sum::<f64>() / weight.len() as f64;
         // A floor, so that pixels whose neighbours' first blocks all missed
         // a rare path still gain samples; all equal on a film with no
         // variance at all.
         let floor = if mean > 0.0 { WEIGHT_FLOOR * mean } else { 1.0 };
         weight
             .iter()
-            .map(|v| v.unwrap_or(top).max(floor) as f32)
+            .map(|&v| or_top(v).max(floor) as f32)
             .collect()
     }
 }
 
-/// Each pixel's sums of `v` over the square of pixels within `r` of it
-/// (cut at the image's edges), by rows then columns: `2 (2r + 1)` additions
-/// a pixel rather than `(2r + 1)²`.
-fn box_sums(v: &[[f64; 3]], w: usize, r: usize) -> Vec<[f64; 3]> {
-    let h = v.len() / w;
-    let add = |a: [f64; 3], b: &[f64; 3]| [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
-    let window = |i: usize, n: usize| i.saturating_sub(r)..(i + r + 1).min(n);
-    let mut rows = vec![[0.0; 3]; v.len()];
-    for (src, dst) in v.chunks(w).zip(rows.chunks_mut(w)) {
-        for (x, d) in dst.iter_mut().enumerate() {
-            *d = src[window(x, w)].iter().fold([0.0; 3], add);
-        }
+/// Rows of output a band of [`Allocation::weigh`] makes.
+const WEIGH_BAND: usize = 64;
+
+/// The rows within `r` of row (or column) `i` of `n`, cut at the edges.
+fn window(i: usize, n: usize, r: usize) -> Range<usize> {
+    i.saturating_sub(r)..(i + r + 1).min(n)
+}
+
+#[inline(always)]
+fn add3(a: [f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+/// Each value's sum of `v` over the values within `r` of it in its row of
+/// `w` (cut at the row's ends), into `sums`.
+fn row_sums(v: &[[f64; 3]], w: usize, r: usize, sums: &mut Vec<[f64; 3]>) {
+    sums.clear();
+    for src in v.chunks(w) {
+        sums.extend((0..src.len()).map(|x| src[window(x, w, r)].iter().fold([0.0; 3], add3)));
     }
-    let mut out = vec![[0.0; 3]; v.len()];
-    for y in 0..h {
-        for x in 0..w {
-            out[y * w + x] = window(y, h).map(|ny| &rows[ny * w + x]).fold([0.0; 3], add);
-        }
-    }
-    out
 }
 
 #[derive(Clone, Debug)]

@@ -12,7 +12,7 @@ use std::sync::Arc;
 
 use super::film::Film;
 use super::progressive::{uniform_pass, ONE_PASS_SPP};
-use super::{Plan, Progressive, Stop, Tracer};
+use super::{Plan, Progressive, Stop, Tracer, MIN_SPP};
 use crate::geometry::sampling::PIXEL_STRATA;
 
 /// What is read of a job's film once its passes are done.
@@ -127,9 +127,11 @@ impl Job {
     /// each pixel's statistics brought through the cache once a block
     /// rather than once a sample; a render read only for its image takes
     /// all its samples in one pass up to [`ONE_PASS_SPP`], so that its film
-    /// keeps no statistics. To a time or an error, growing passes. Passes of
-    /// one sample between checkpoints (a pass cut short is undone), and for
-    /// an exact render's one pass.
+    /// keeps no statistics. To a time, growing passes; to an error alone,
+    /// a first pass of [`MIN_SPP`], the fewest that make the estimate
+    /// meaningful, then passes sized from it. Passes of one sample between
+    /// checkpoints (a pass cut short is undone), and for an exact render's
+    /// one pass.
     pub(crate) fn passes_for_stop(self) -> Self {
         Self {
             passes: Passes::ForStop,
@@ -164,11 +166,10 @@ impl Job {
         match self.passes {
             Passes::Of(n) => n,
             Passes::Growing => 1,
-            Passes::ForStop
-                if self.deterministic || !self.fixed() || self.needs == Needs::WholePasses =>
-            {
-                1
-            }
+            Passes::ForStop if self.deterministic || self.needs == Needs::WholePasses => 1,
+            // To an error alone, the samples its first estimate needs.
+            Passes::ForStop if self.stop.error.is_some() && self.stop.seconds.is_none() => MIN_SPP,
+            Passes::ForStop if !self.fixed() => 1,
             Passes::ForStop => match self.stop.spp {
                 Some(n) if self.needs == Needs::Image && n <= ONE_PASS_SPP => n.max(PIXEL_STRATA),
                 _ => PIXEL_STRATA,

@@ -128,12 +128,31 @@ pub struct Progressive {
     /// packet ([`PACKET_SAMPLES`]) and spread the work each pass repeats
     /// (the image, the error estimate, the adaptive weights) over more
     /// samples. One sample per pixel per pass ran at half the rays per
-    /// second of a one-pass render.
+    /// second of a one-pass render. To an error, once the estimate is
+    /// meaningful, the pass is sized from it instead
+    /// ([`Progressive::step_to_error`]).
     growing: bool,
     /// The most samples per pixel a growing pass gives: at most
     /// [`MAX_PASS_SPP`], less where a caller wants passes short (the TUI).
     pass_cap: u32,
+    /// Whether the next pass was sized to the stop's error
+    /// ([`Progressive::step_to_error`]).
+    sized_to_error: bool,
+    /// The mean an adaptive pass cut short was raising the film to: the
+    /// next pass finishes it before raising it further, so that passes cut
+    /// again and again (a key held down in the TUI) still reach the rows
+    /// below, where each started the rows above anew.
+    unfinished: Option<f64>,
 }
+
+/// What a render to an error aims its passes at, of the target: a little
+/// under it, so that an estimate a little high after the pass does not
+/// cost another.
+const ERROR_AIM: f64 = 0.95;
+
+/// The most pixels a pass sized to an error is predicted from: evenly
+/// spaced through the film.
+const PREDICTED_PIXELS: usize = 1 << 16;
 
 /// No film yet: 0 x 0 pixels, before the first job.
 impl Default for Progressive {
@@ -184,6 +203,8 @@ impl Progressive {
             whole_passes,
             growing,
             pass_cap: MAX_PASS_SPP,
+            sized_to_error: false,
+            unfinished: None,
         }
     }
 
@@ -220,22 +241,33 @@ impl Progressive {
     }
 
     /// What the next pass gives each pixel; `None` when no pixel needs more.
-    fn give(&self) -> Option<Give> {
+    /// With it, the mean an adaptive pass raises the film to.
+    fn give(&self) -> Option<(Give, Option<f64>)> {
         let cap = self.stop.spp.unwrap_or(u32::MAX);
         let f = &self.film;
         let Some(a) = &f.adaptive else {
-            return Some(Give::All(uniform_pass(
-                self.samples_per_pass,
-                cap.saturating_sub(f.spp),
-            )));
+            let n = uniform_pass(self.samples_per_pass, cap.saturating_sub(f.spp));
+            return Some((Give::All(n), None));
         };
         if f.spp < MIN_SPP.min(cap) {
             let upto = MIN_SPP
                 .min(cap)
                 .min(f.spp.saturating_add(self.samples_per_pass.max(1)));
-            return Some(Give::Each(
-                a.spp.iter().map(|&n| upto.saturating_sub(n)).collect(),
-            ));
+            let give = a.spp.iter().map(|&n| upto.saturating_sub(n)).collect();
+            return Some((Give::Each(give), None));
+        }
+        let to = |mean: f64| {
+            let counts = share(&a.weight, &a.ascending, mean, cap)?;
+            let give: Vec<u32> = counts
+                .iter()
+                .zip(&a.spp)
+                .map(|(&want, &has)| want.saturating_sub(has))
+                .collect();
+            give.iter().any(|&n| n > 0).then_some(give)
+        };
+        // A pass cut short is finished first: its rows done get nothing.
+        if let Some(give) = self.unfinished.and_then(to) {
+            return Some((Give::Each(give), self.unfinished));
         }
         // Each pass raises the mean by at least one sample, shared in
         // proportion to the weights.
@@ -243,16 +275,10 @@ impl Progressive {
         let mut mean = f.spp_range().1;
         loop {
             mean = (mean + step).min(cap as f64);
-            let counts = share(&a.weight, &a.ascending, mean, cap)?;
-            let give: Vec<u32> = counts
-                .iter()
-                .zip(&a.spp)
-                .map(|(&want, &has)| want.saturating_sub(has))
-                .collect();
-            if give.iter().any(|&n| n > 0) {
-                return Some(Give::Each(give));
+            if let Some(give) = to(mean) {
+                return Some((Give::Each(give), Some(mean)));
             }
-            if mean >= cap as f64 {
+            if mean >= cap as f64 || a.weight.is_empty() {
                 return None;
             }
         }
@@ -272,7 +298,7 @@ impl Progressive {
         cancel: Cancel,
     ) -> Option<(PassStats, R)> {
         let start = Instant::now();
-        let give = self.give();
+        let (give, target) = self.give().unzip();
         let (samples, pixels) = match &give {
             Some(Give::All(n)) => (*n, self.film.pixels_len() as u64),
             Some(Give::Each(g)) => (
@@ -290,14 +316,18 @@ impl Progressive {
             Some(g) => sample_rows(tracer, &mut self.film, g, cancel, rows, whole),
             None => R::default(),
         };
+        self.unfinished = target.flatten().filter(|_| cancel.is_set());
+        if self.growing {
+            let cap = self.pass_cap.clamp(1, MAX_PASS_SPP);
+            let to_error = self.stop.error.and_then(|e| self.step_to_error(e, cap));
+            self.sized_to_error = to_error.is_some();
+            let mean = self.film.spp_range().1 as u32;
+            self.samples_per_pass = to_error.unwrap_or(mean.clamp(1, cap));
+        }
         let ms = start.elapsed().as_secs_f64() * 1e3;
         let rays = rec.rays();
         self.rays += rays;
         self.seconds += ms / 1e3;
-        if self.growing {
-            let mean = self.film.spp_range().1 as u32;
-            self.samples_per_pass = mean.clamp(1, self.pass_cap.clamp(1, MAX_PASS_SPP));
-        }
         let stats = PassStats {
             samples,
             pixels,
@@ -392,7 +422,8 @@ impl Progressive {
     /// together, and a pass the deadline cuts keeps the rows it traced.
     fn fill_half(&mut self, left: f64) {
         let mean = self.film.spp_range().1;
-        if mean <= 0.0 || self.seconds <= 0.0 {
+        // A pass sized to the error already takes what the stop needs.
+        if mean <= 0.0 || self.seconds <= 0.0 || self.sized_to_error {
             return;
         }
         let fit = (0.5 * left / (self.seconds / mean)).floor();
@@ -401,6 +432,94 @@ impl Progressive {
             .samples_per_pass
             .max((fit.min(cap as f64)) as u32)
             .max(1);
+    }
+
+    /// The samples per pixel, in the mean, that the next pass adds to bring
+    /// the film's estimated relative error to [`ERROR_AIM`] of `target`,
+    /// were each pixel's variance of one sample what its estimate says now
+    /// and the samples shared as [`Progressive::give`] shares them: at
+    /// least one, at most `cap`; `None` until the estimate is meaningful
+    /// (and on a summarised film, which takes no more passes). Doubling
+    /// the film each pass instead took 1, 1, 2 and 4 samples per pixel
+    /// where renders to an error end at 8, each pass a walk over the whole
+    /// film, and overshot: the bunny at 1024x768 to 1 % ended at 0.33 %.
+    fn step_to_error(&self, target: f64, cap: u32) -> Option<u32> {
+        let f = &self.film;
+        if f.is_summary() {
+            return None;
+        }
+        // Each pixel's relative variance of one sample (of its mean, times
+        // its samples) and its samples, of every `stride`th pixel, once
+        // their estimates are meaningful: a prediction from all of a big
+        // film's pixels took a tenth of the pass it sized.
+        let len = f.pixels_len();
+        let stride = len.div_ceil(PREDICTED_PIXELS).max(1);
+        let has = |i: usize| f.adaptive.as_ref().map_or(f.spp, |a| a.spp[i]);
+        let pixels = f.pixels();
+        let one: Vec<(f64, u32, f32)> = (0..len)
+            .step_by(stride)
+            .map(|i| {
+                let p = &pixels[i];
+                let w = f.adaptive.as_ref().and_then(|a| a.weight.get(i)).copied();
+                let n = has(i);
+                let v = p.rel_variance().filter(|_| p.estimate_is_design_based());
+                v.map(|v| (v * n as f64, n, w.unwrap_or(1.0)))
+            })
+            .collect::<Option<_>>()?;
+        let n = one.len().max(1) as f64;
+        let now: f64 = one
+            .iter()
+            .map(|&(v, h, _)| v / h.max(1) as f64)
+            .sum::<f64>()
+            / n;
+        // Met already (where the whole film's estimate is not, a little
+        // more).
+        let goal = (ERROR_AIM * target).powi(2);
+        if now <= goal {
+            return Some(1);
+        }
+        let mean = f.spp_range().1;
+        // An estimate from quarters of a block cannot see what a whole
+        // block's strata gain: it foresaw twice the samples renders to an
+        // error at 160x96 needed. So a film below a block goes to one first.
+        let cap = if mean < PIXEL_STRATA as f64 {
+            cap.min(PIXEL_STRATA - mean as u32)
+        } else {
+            cap
+        };
+        let limit = self.stop.spp.unwrap_or(u32::MAX);
+        let weighted = f.adaptive.as_ref().is_some_and(|a| !a.weight.is_empty());
+        // The estimated relMSE once the pass has added `step` in the mean.
+        let after = |step: u32| -> f64 {
+            let to = (mean + step as f64).min(limit as f64);
+            let c = f
+                .adaptive
+                .as_ref()
+                .and_then(|a| scale(&a.ascending, to, limit))
+                .filter(|_| weighted);
+            let sum: f64 = one
+                .iter()
+                .map(|&(v, h, w)| {
+                    let k = c.map_or(to, |c| count(c, w, limit));
+                    v / k.max(h as f64).max(1.0)
+                })
+                .sum();
+            sum / n
+        };
+        if after(cap) > goal {
+            return Some(cap);
+        }
+        // The fewest samples that reach the goal, by bisection.
+        let (mut lo, mut hi) = (0, cap);
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            if after(mid) > goal {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Some(hi)
     }
 
     /// Traces the samples the film holds again from each pixel's `from`th
@@ -450,33 +569,40 @@ pub(super) fn uniform_pass(per_pass: u32, left: u32) -> u32 {
 /// `cap`); `None` without weights. `ascending` holds the same weights in
 /// ascending order.
 fn share(weight: &[f32], ascending: &[f32], mean: f64, cap: u32) -> Option<Vec<u32>> {
-    let lo = MIN_SPP.min(cap) as f64;
-    // Whole quarters below a block, whole blocks from there: a quarter cut
-    // short keeps part of the variance between the quadrants that a whole
-    // one cancels, and a block cut short part of that between its strata.
-    let count = |c: f64, w: f32| {
-        let n = c * w as f64;
-        let unit = if n <= PIXEL_STRATA as f64 {
-            QUARTER
-        } else {
-            PIXEL_STRATA
-        } as f64;
-        ((n / unit).ceil() * unit).clamp(lo, cap as f64)
-    };
-    if weight.is_empty() {
-        return None;
-    }
-    let n = ascending.len() as f64;
+    let c = scale(ascending, mean, cap)?;
+    Some(weight.iter().map(|&w| count(c, w, cap) as u32).collect())
+}
+
+/// A pixel's count in [`share`] at scale `c`: `c` times its weight, rounded
+/// up to whole quarters of a block below a block and to whole blocks
+/// above (a quarter cut short keeps part of the variance between the
+/// quadrants that a whole one cancels, and a block cut short part of that
+/// between its strata), within [`MIN_SPP`] and `cap`.
+fn count(c: f64, w: f32, cap: u32) -> f64 {
+    let n = c * w as f64;
+    let unit = if n <= PIXEL_STRATA as f64 {
+        QUARTER
+    } else {
+        PIXEL_STRATA
+    } as f64;
+    ((n / unit).ceil() * unit).clamp(MIN_SPP.min(cap) as f64, cap as f64)
+}
+
+/// The scale at which the counts of [`share`] have the mean `mean`, from
+/// the weights in ascending order; `None` without weights.
+fn scale(ascending: &[f32], mean: f64, cap: u32) -> Option<f64> {
+    let count = |c: f64, w: f32| count(c, w, cap);
+    let (&heaviest, n) = (ascending.last()?, ascending.len() as f64);
     // The counts' mean: summed pixel by pixel, or, where there are fewer
     // distinct counts than pixels by far (a big image), one step per
     // distinct count: a count grows with the weight, so every pixel from the
     // lightest not yet counted up has at least that one's count. Both sum
     // the same whole numbers exactly.
     let mean_at = |c: f64| {
-        let most = count(c, ascending[ascending.len() - 1]);
+        let most = count(c, heaviest);
         let steps = QUARTER as f64 + (most - PIXEL_STRATA as f64).max(0.0) / PIXEL_STRATA as f64;
         if steps * n.log2() > n {
-            return weight.iter().map(|&w| count(c, w)).sum::<f64>() / n;
+            return ascending.iter().map(|&w| count(c, w)).sum::<f64>() / n;
         }
         let (mut total, mut below, mut i) = (0.0, 0.0, 0);
         while let Some(&w) = ascending.get(i) {
@@ -498,8 +624,7 @@ fn share(weight: &[f32], ascending: &[f32], mean: f64, cap: u32) -> Option<Vec<u
             b = m;
         }
     }
-    let c = b.exp2();
-    Some(weight.iter().map(|&w| count(c, w) as u32).collect())
+    Some(b.exp2())
 }
 
 /// Samples placed and their camera rays made ahead of tracing them (see
@@ -607,11 +732,19 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
                 row.pixels.skipped();
                 return (rec, bad, false, Vec::new());
             }
-            // What a row cut short goes back to.
-            let before = match &row.pixels {
-                Samples::Stats(p) => p.to_vec(),
-                _ => Vec::new(),
+            // What a row cut short goes back to: kept for the film where
+            // whole passes are undone, else in the thread's scratch (a new
+            // row each time was a fresh, page-faulted allocation: a tenth of
+            // a render to an error at 1024x768).
+            let mut before = if whole {
+                Vec::new()
+            } else {
+                ROW_SCRATCH.take()
             };
+            before.clear();
+            if let Samples::Stats(p) = &row.pixels {
+                before.extend_from_slice(p);
+            }
             let rays_before = row.rays.as_deref().map(<[u32]>::to_vec);
             let y = row.y as u32;
             let give_of = |x: usize| match give {
@@ -714,7 +847,11 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
             if let Some(r) = rows_done {
                 r.fetch_add(1, Ordering::Relaxed);
             }
-            (rec, bad, true, if whole { before } else { Vec::new() })
+            if whole {
+                return (rec, bad, true, before);
+            }
+            ROW_SCRATCH.set(before);
+            (rec, bad, true, Vec::new())
         })
         .collect();
     let cut = results.iter().any(|r| !r.2);
@@ -755,6 +892,11 @@ fn sample_rows<R: Recorder + Default + Send + Merge>(
         }
     }
     total
+}
+
+thread_local! {
+    /// A row's statistics before its pass, reused from row to row.
+    static ROW_SCRATCH: std::cell::Cell<Vec<PixelStats>> = const { std::cell::Cell::new(Vec::new()) };
 }
 
 /// Recorders that can be summed across rows.
@@ -821,6 +963,102 @@ mod tests {
         assert_eq!(p.samples_per_pass, 10);
         p.fill_half(1e6);
         assert_eq!(p.samples_per_pass, MAX_PASS_SPP);
+    }
+
+    /// To an error, the first pass gives every pixel the samples of a
+    /// meaningful estimate, and the next is sized to bring the estimate to
+    /// the target, as though each pixel's variance of one sample were
+    /// what it is estimated to be.
+    #[test]
+    fn a_pass_to_an_error_is_sized_from_the_estimate() {
+        let s = session(&[]);
+        let t = s.tracer();
+        let start = |target: f64| {
+            let stop = Stop {
+                error: Some(target),
+                ..Stop::default()
+            };
+            let mut p = Job::of(&t, stop).passes_for_stop().start();
+            p.pass(&t, Cancel::Never).unwrap();
+            p
+        };
+        // A target about two and a half times the first pass's samples
+        // away (the first pass is the same whatever the target).
+        let e2 = start(1.0).film.estimated_rel_mse().unwrap();
+        let target = 0.7 * e2.sqrt();
+        let mut p = start(target);
+        assert_eq!(p.film.spp, MIN_SPP);
+        assert!(p.film.error_is_meaningful());
+        // relMSE falls as 1 / spp on a uniform film: the fewest samples
+        // that bring it under the aim.
+        let aim = (ERROR_AIM * target).powi(2);
+        let n = MIN_SPP as f64;
+        let want = ((n * e2 / aim - n).ceil() as u32).clamp(1, MAX_PASS_SPP);
+        let step = p.samples_per_pass;
+        assert!(want.abs_diff(step) <= 1, "step {step}, predicted {want}");
+        // The same when asked directly, and one sample once the aim is met.
+        assert_eq!(p.step_to_error(target, MAX_PASS_SPP), Some(step));
+        let met = e2.sqrt() * 1.01 / ERROR_AIM;
+        assert_eq!(p.step_to_error(met, MAX_PASS_SPP), Some(1));
+        // A target further than a block away: a block first.
+        let far = 0.2 * e2.sqrt();
+        assert_eq!(
+            p.step_to_error(far, MAX_PASS_SPP),
+            Some(PIXEL_STRATA - MIN_SPP)
+        );
+        let mut seen = Vec::new();
+        let o = p.run(&t, Cancel::Never, |f, _| seen.push(f.spp));
+        assert_eq!(o.ended, Ended::Error);
+        assert!(p.film.relative_error().unwrap() < target);
+        assert!(seen.len() <= 2, "passes after the first: {seen:?}");
+        // An adaptive film's pass, shared by the weights, is predicted the
+        // same way and reaches the target as soon.
+        let stop = Stop {
+            error: Some(target),
+            ..Stop::default()
+        };
+        let mut p = Job::of(&t, stop).passes_for_stop().adaptive(true).start();
+        let mut seen = Vec::new();
+        let o = p.run(&t, Cancel::Never, |f, _| seen.push(f.spp_range()));
+        assert_eq!(o.ended, Ended::Error);
+        assert!(p.film.relative_error().unwrap() < target);
+        assert!(seen.len() <= 3, "passes: {seen:?}");
+        assert_eq!(seen[0].1, MIN_SPP as f64);
+    }
+
+    /// An adaptive pass cut short is finished by the next before the mean
+    /// rises: the rows it did get nothing more, the others their share.
+    #[test]
+    fn a_cut_adaptive_pass_is_finished_before_the_mean_rises() {
+        let s = session(&[]);
+        let t = s.tracer();
+        let done = std::sync::Arc::new(AtomicU32::new(0));
+        let mut p = Job::of(&t, Stop::default())
+            .adaptive(true)
+            .passes_of(MIN_SPP)
+            .rows_done(done.clone())
+            .start();
+        p.pass(&t, Cancel::Never).unwrap();
+        let counts = |p: &Progressive| p.film.adaptive.as_ref().unwrap().spp.clone();
+        let before = counts(&p);
+        let cut = || done.load(Ordering::Relaxed) >= 2;
+        assert!(p.pass(&t, Cancel::When(&cut)).is_none());
+        let mid = counts(&p);
+        p.pass(&t, Cancel::Never).unwrap();
+        let after = counts(&p);
+        let rows = |c: &[u32]| c.chunks(12).map(<[u32]>::to_vec).collect::<Vec<_>>();
+        let (before, mid, after) = (rows(&before), rows(&mid), rows(&after));
+        let cut_rows: Vec<usize> = (0..8).filter(|&y| mid[y] != before[y]).collect();
+        assert!(!cut_rows.is_empty() && cut_rows.len() < 8, "{cut_rows:?}");
+        let mut gained = 0;
+        for y in 0..8 {
+            if cut_rows.contains(&y) {
+                assert_eq!(after[y], mid[y], "row {y} was done");
+            } else {
+                gained += after[y].iter().sum::<u32>() - mid[y].iter().sum::<u32>();
+            }
+        }
+        assert!(gained > 0);
     }
 
     #[test]
